@@ -1,0 +1,21 @@
+"""Exceptions raised by fastep_core. Every error a user can cause is a FastepError with a one-line message."""
+
+from __future__ import annotations
+
+__all__ = ['FastepError', 'ScenarioError', 'ParameterError', 'GoalError']
+
+
+class FastepError(Exception):
+    """Base class of every error fastep raises on purpose."""
+
+
+class ScenarioError(FastepError):
+    """A scenario file or mapping is malformed or describes an impossible setup."""
+
+
+class ParameterError(FastepError):
+    """A planner or model parameter is unknown or out of range."""
+
+
+class GoalError(FastepError):
+    """A goal cannot be accepted: outside the workspace, inside an obstacle, or not finite."""

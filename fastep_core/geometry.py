@@ -1,0 +1,132 @@
+"""Obstacle geometry: circles and line segments, vectorised over many query points.
+
+Line obstacles use the paper's "minimum distance technique": the distance from a point p to segment a-b is
+|p - (a + t (b - a))| with t = clip(((p - a).(b - a)) / |b - a|^2, 0, 1). All distances here are to the
+obstacle *surface* (a circle's centre distance minus its radius), so "clearance < r" means "a disc of radius
+r at that point touches the obstacle".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Iterable, Union
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    'Circle', 'Segment', 'Obstacle', 'Obstacles',
+    'point_segment_distance', 'segment_segment_distance',
+]
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class Circle:
+    """A disc obstacle."""
+
+    center: tuple[float, float]
+    radius: float
+
+
+@dataclass(frozen=True)
+class Segment:
+    """A line (wall) obstacle of zero thickness."""
+
+    start: tuple[float, float]
+    end: tuple[float, float]
+
+
+Obstacle = Union[Circle, Segment]
+
+
+def point_segment_distance(p: FloatArray, a: FloatArray, b: FloatArray) -> FloatArray:
+    """Distance from points p to segments a-b, broadcasting over leading axes (last axis is x, y)."""
+    px, py = p[..., 0], p[..., 1]
+    ax, ay = a[..., 0], a[..., 1]
+    abx, aby = b[..., 0] - ax, b[..., 1] - ay
+    denom = abx * abx + aby * aby
+    t = ((px - ax) * abx + (py - ay) * aby) / np.where(denom > 0.0, denom, 1.0)
+    t = np.minimum(np.maximum(t, 0.0), 1.0)
+    return np.hypot(px - ax - t * abx, py - ay - t * aby)
+
+
+def _cross(u: FloatArray, v: FloatArray) -> FloatArray:
+    return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
+
+
+def segment_segment_distance(p0: FloatArray, p1: FloatArray, q0: FloatArray, q1: FloatArray) -> FloatArray:
+    """Minimum distance between segments p0-p1 and q0-q1 (0 where they cross), broadcasting."""
+    d = np.minimum(
+        np.minimum(point_segment_distance(p0, q0, q1), point_segment_distance(p1, q0, q1)),
+        np.minimum(point_segment_distance(q0, p0, p1), point_segment_distance(q1, p0, p1)),
+    )
+    r, s = p1 - p0, q1 - q0
+    # Proper crossing: the endpoints of each segment lie strictly on opposite sides of the other.
+    o1, o2 = _cross(r, q0 - p0), _cross(r, q1 - p0)
+    o3, o4 = _cross(s, p0 - q0), _cross(s, p1 - q0)
+    crossing = (o1 * o2 < 0.0) & (o3 * o4 < 0.0)
+    return np.where(crossing, 0.0, d)
+
+
+class Obstacles:
+    """A fixed set of circle and segment obstacles stored as arrays for vectorised queries."""
+
+    def __init__(self, obstacles: Iterable[Obstacle] = ()) -> None:
+        items = tuple(obstacles)
+        circles = [o for o in items if isinstance(o, Circle)]
+        segments = [o for o in items if isinstance(o, Segment)]
+        self.items: tuple[Obstacle, ...] = tuple(circles) + tuple(segments)
+        self.centers: FloatArray = np.array([c.center for c in circles], dtype=float).reshape(-1, 2)
+        self.radii: FloatArray = np.array([c.radius for c in circles], dtype=float)
+        self.starts: FloatArray = np.array([s.start for s in segments], dtype=float).reshape(-1, 2)
+        self.ends: FloatArray = np.array([s.end for s in segments], dtype=float).reshape(-1, 2)
+
+    def __len__(self) -> int:
+        return len(self.items)
+
+    def subset(self, keep: NDArray[np.bool_]) -> 'Obstacles':
+        """The obstacles where `keep` (one bool per obstacle, circles first) is true."""
+        return Obstacles(item for item, k in zip(self.items, keep) if k)
+
+    @property
+    def n_circles(self) -> int:
+        return len(self.radii)
+
+    def distances(self, points: ArrayLike) -> FloatArray:
+        """Surface distance from each point to each obstacle: shape (..., n_obstacles), circles first."""
+        p = np.asarray(points, dtype=float)[..., None, :]
+        circ = np.hypot(p[..., 0] - self.centers[:, 0], p[..., 1] - self.centers[:, 1]) - self.radii
+        if not len(self.starts):
+            return circ
+        seg = point_segment_distance(p, self.starts, self.ends)
+        return np.concatenate([circ, seg], axis=-1)
+
+    def clearance(self, points: ArrayLike) -> FloatArray:
+        """Distance from each point to the nearest obstacle surface (inf when there are none)."""
+        d = self.distances(points)
+        if d.shape[-1] == 0:
+            return np.full(d.shape[:-1], np.inf)
+        return d.min(axis=-1)
+
+    def path_distances(self, a: ArrayLike, b: ArrayLike) -> FloatArray:
+        """Minimum distance from straight runs a-b to each obstacle surface: shape (..., n_obstacles)."""
+        a = np.asarray(a, dtype=float)[..., None, :]
+        b = np.asarray(b, dtype=float)[..., None, :]
+        circ = point_segment_distance(self.centers, a, b) - self.radii
+        if not len(self.starts):
+            return circ
+        seg = segment_segment_distance(a, b, self.starts, self.ends)
+        return np.concatenate([circ, seg], axis=-1)
+
+    def path_clearance(self, a: ArrayLike, b: ArrayLike) -> FloatArray:
+        """Closest approach of the straight runs a-b to any obstacle surface (inf when there are none)."""
+        d = self.path_distances(a, b)
+        if d.shape[-1] == 0:
+            return np.full(d.shape[:-1], np.inf)
+        return d.min(axis=-1)
+
+    def blocking(self, a: ArrayLike, b: ArrayLike, within: float) -> NDArray[np.bool_]:
+        """Which obstacles the straight run a-b passes within `within` of (one bool per obstacle)."""
+        return self.path_distances(a, b) < within

@@ -1,0 +1,71 @@
+"""Point-mass robot and its kinematic controller (eq. 12 of the paper).
+
+The controller dx/dt = alpha1 (x1 - x), dy/dt = alpha2 (y1 - y) drives the robot to the target (x1, y1);
+Theorem 1 shows V = ((x1 - x)^2 + (y1 - y)^2) / 2 decreases along it. An optional speed limit scales the
+velocity vector as a whole, so the direction of motion (and with equal gains, the straight path) is kept and
+dV/dt stays negative.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ['PointMass', 'PointMassController', 'lyapunov']
+
+FloatArray = NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class PointMass:
+    """A holonomic point: state (x, y), input (vx, vy) in the map frame."""
+
+    state_size: int = 2
+
+    def integrate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
+        """Exact zero-order-hold step: the velocity is constant over dt."""
+        return state + np.asarray(command, dtype=float) * dt
+
+    def velocity(self, state: FloatArray, command: FloatArray) -> FloatArray:
+        """Map-frame velocity of the reference point."""
+        return np.asarray(command, dtype=float)
+
+
+@dataclass
+class PointMassController:
+    """Eq. 12 with an optional speed limit (max_speed <= 0 means unlimited)."""
+
+    alpha1: float = 0.1
+    alpha2: float = 0.1
+    max_speed: float = 0.0
+
+    def reset(self, state: FloatArray, target: FloatArray) -> None:
+        """Stateless: nothing to reset (kept for a uniform controller interface)."""
+
+    def command(self, state: FloatArray, target: FloatArray, dt: float) -> FloatArray:
+        u = np.array([self.alpha1 * (target[0] - state[0]), self.alpha2 * (target[1] - state[1])])
+        speed = float(np.hypot(u[0], u[1]))
+        if self.max_speed > 0.0 and speed > self.max_speed:
+            u *= self.max_speed / speed
+        return u
+
+
+def lyapunov(state: FloatArray, target: FloatArray) -> float:
+    """V(x, y) = ((x1 - x)^2 + (y1 - y)^2) / 2 of Theorem 1."""
+    return 0.5 * float((target[0] - state[0]) ** 2 + (target[1] - state[1]) ** 2)
+
+
+def main() -> None:
+    """Drive a point mass from (5, 5) to (45, 45) and print V along the way."""
+    model, ctrl = PointMass(), PointMassController()
+    state, target = np.array([5.0, 5.0]), np.array([45.0, 45.0])
+    for k in range(601):
+        if k % 100 == 0:
+            print(f't={k * 0.1:5.1f}s  x={state[0]:6.2f} y={state[1]:6.2f}  V={lyapunov(state, target):8.3f}')
+        state = model.integrate(state, ctrl.command(state, target, 0.1), 0.1)
+
+
+if __name__ == '__main__':
+    main()

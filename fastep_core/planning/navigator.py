@@ -1,0 +1,331 @@
+"""FAStep-Kinematic and the ACO-Kinematic baseline: the per-robot decision loop.
+
+A navigator is called once per control tick with the robot's state and the other robots it knows of, and
+returns the command for the robot's kinematic model. The same object runs inside `fastep-sim` and inside the
+ROS planner node, so a live run and an offline run take the same decisions.
+
+FAStep-Kinematic (paper, Algorithm 1 and Fig. 1):
+1. While nothing blocks the straight run to the goal, the kinematic controller drives the robot to the goal.
+2. An obstacle is detected when its surface is nearer than `sensing_range` (eq. 11, epsilon) *and* the straight
+   run to the goal passes closer to it than the robot's clearance: only obstacles on the way count (Fig. 2).
+   Another robot is detected the same way, with the sum of both radii as its clearance (case study 2).
+3. On detection the swarm plans one step (a waypoint within `step_radius`); the controller drives the robot
+   there. At the waypoint, or as soon as the run to the goal is clear again, the loop goes back to step 1/2.
+ACO-Kinematic plans every step with continuous ACO, whether anything is in the way or not, with the same
+fitness, clearance rule and step radius, and drives straight to the goal only for the last step.
+
+Two safety nets surround the planner, as a navigation stack needs: a guard stops any motion that would bring
+the robot's centre within its radius of an obstacle or within the sum of radii (plus the other robot's
+travel in one tick) of another robot, and a progress checker fails the run when the robot does not come
+`progress_distance` closer to the goal within `progress_timeout` seconds.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from enum import Enum
+from typing import Protocol, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.geometry import point_segment_distance
+from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
+from fastep_core.planning.params import PlannerParams
+from fastep_core.planning.step import StepProblem, plan_step
+from fastep_core.world import World
+
+__all__ = ['ACOKinematic', 'FAStepKinematic', 'Mode', 'Navigator', 'OtherRobot', 'make_navigator',
+           'make_robot']
+
+FloatArray = NDArray[np.float64]
+
+
+class Mode(str, Enum):
+    """What a navigator is doing; the value is what the ROS status topic reports."""
+
+    IDLE = 'idle'            # no goal yet
+    KINEMATIC = 'kinematic'  # driving straight to the goal by the kinematic equations
+    AVOIDING = 'avoiding'    # driving to a waypoint planned by the swarm
+    ARRIVED = 'arrived'
+    FAILED = 'failed'
+
+
+@dataclass(frozen=True)
+class OtherRobot:
+    """Another robot as a moving obstacle: where it is, how fast it goes, how big it is."""
+
+    name: str
+    position: tuple[float, float]
+    velocity: tuple[float, float] = (0.0, 0.0)
+    radius: float = 0.5
+
+
+class Model(Protocol):
+    state_size: int
+
+    def integrate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray: ...
+
+    def velocity(self, state: FloatArray, command: FloatArray) -> FloatArray: ...
+
+
+class Controller(Protocol):
+    def reset(self, state: FloatArray, target: FloatArray) -> None: ...
+
+    def command(self, state: FloatArray, target: FloatArray, dt: float) -> FloatArray: ...
+
+
+class RobotLike(Protocol):
+    model: str
+    length: float
+    trailer_length: float
+    hitch_offset: float
+
+
+def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[Model, Controller]:
+    """The kinematic model and controller for a scenario robot ('point_mass' or 'tractor_trailer')."""
+    if spec.model == 'point_mass':
+        return PointMass(), PointMassController(params.alpha1, params.alpha2, params.max_speed)
+    if spec.model == 'tractor_trailer':
+        model = TractorTrailer(spec.length, spec.trailer_length, spec.hitch_offset)
+        return model, TractorTrailerController(model, params.speed_gain, params.max_speed)
+    raise ValueError(f'unknown robot model {spec.model!r}')
+
+
+class Navigator:
+    """The loop shared by both algorithms; subclasses decide when a step is planned."""
+
+    method = 'fastep'
+
+    def __init__(self, model: Model, controller: Controller, radius: float, world: World,
+                 params: PlannerParams | None = None, rng: np.random.Generator | int | None = None) -> None:
+        self.model = model
+        self.controller = controller
+        self.radius = float(radius)
+        self.world = world
+        self.params = params or PlannerParams()
+        self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
+        self.goal: FloatArray | None = None
+        self.mode = Mode.IDLE
+        self.reason = 'waiting for a goal'
+        self.waypoint: FloatArray | None = None
+        self.plan: list[FloatArray] = []
+        self.cost = 0.0
+        self.activations = 0
+        self._target: FloatArray | None = None
+        self._last_t: float | None = None
+        self._best_distance = math.inf
+        self._best_time = 0.0
+        self._detection: tuple[FloatArray, FloatArray, bool] | None = None  # (position, target, blocked)
+        self._free_disc: tuple[FloatArray, float] | None = None  # (centre, radius) known obstacle-free
+
+    # ----------------------------------------------------------------- goals
+    @property
+    def clearance(self) -> float:
+        """Distance a planned waypoint keeps from every obstacle surface."""
+        return self.radius + self.params.clearance_margin
+
+    def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
+        """Accept a new goal (raises GoalError if it is outside the map, occupied or not finite)."""
+        self.world.check_point(goal, self.radius)
+        self.goal = np.array([float(goal[0]), float(goal[1])])
+        self.mode = Mode.KINEMATIC
+        self.reason = 'goal accepted'
+        self.waypoint = None
+        self.plan = []
+        self.cost = 0.0
+        self._target = None
+        self._best_distance = math.inf
+        self._best_time = t
+
+    def fail(self, reason: str) -> None:
+        self.mode = Mode.FAILED
+        self.reason = reason
+        self.waypoint = None
+        self.cost = 0.0
+
+    @property
+    def target(self) -> FloatArray | None:
+        """The point the robot is driving to now: a waypoint or the goal."""
+        return self._target
+
+    # ------------------------------------------------------------- the loop
+    def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
+        """One control tick: returns the command for the model (zeros when stopped)."""
+        stop = np.zeros(2)
+        dt = self.params.dt if self._last_t is None or t <= self._last_t else t - self._last_t
+        self._last_t = t
+        if self.goal is None or self.mode in (Mode.ARRIVED, Mode.FAILED):
+            return stop
+        state = np.asarray(state, dtype=float)
+        if not np.all(np.isfinite(state)):
+            self.reason = 'robot state is not finite; holding still'
+            return stop
+        position = state[:2]
+        distance = float(np.hypot(*(self.goal - position)))
+        if distance <= self.params.goal_tolerance:
+            self.mode, self.reason, self.waypoint, self.cost = Mode.ARRIVED, 'goal reached', None, 0.0
+            self._target = None
+            return stop
+        if distance < self._best_distance - self.params.progress_distance or self._best_distance == math.inf:
+            self._best_distance, self._best_time = distance, t
+        elif self.params.progress_timeout > 0 and t - self._best_time > self.params.progress_timeout:
+            self.fail(f'failed to make progress: not {self.params.progress_distance:g} m closer to the goal '
+                      f'in {self.params.progress_timeout:g} s')
+            return stop
+
+        target = self.choose_target(position, others)
+        if target is None:
+            self._target = None
+            return stop
+        if self._target is None or not np.array_equal(target, self._target):
+            self.controller.reset(state, target)
+            self._target = target
+        command = self.controller.command(state, target, dt)
+        return self.guard(state, command, dt, others)
+
+    def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+        raise NotImplementedError
+
+    # --------------------------------------------------------------- checks
+    def _robot_arrays(self, others: Sequence[OtherRobot]) -> tuple[FloatArray, FloatArray]:
+        if not others:
+            return np.zeros((0, 2)), np.zeros(0)
+        centres = np.array([o.position for o in others], dtype=float)
+        sums = np.array([o.radius for o in others], dtype=float) + self.radius
+        return centres, sums
+
+    def blocked(self, position: FloatArray, target: FloatArray, others: Sequence[OtherRobot],
+                sensing_range: float | None = None) -> bool:
+        """Does something within sensing range lie on the straight run to target? (eq. 11 + 'on the way')
+
+        A run counts as clear if it keeps half the clearance margin beyond the radius: waypoints are placed
+        a full margin away, so a robot that just reached one does not see the obstacle it skirts as blocking.
+        """
+        rng = self.params.sensing_range if sensing_range is None else sensing_range
+        if self.robots_blocking(position, target, others, rng):
+            return True
+        # Static obstacles do not move: the answer is reused until the robot has travelled
+        # detection_interval or the target changed (a detector running at a fixed travel rate).
+        cached = self._detection
+        if cached is not None and sensing_range is None and np.array_equal(cached[1], target) and \
+                np.hypot(*(position - cached[0])) < self.params.detection_interval:
+            return cached[2]
+        within = self.radius + 0.5 * self.params.clearance_margin
+        obstacles = self.world.obstacles
+        blocked = False
+        if len(obstacles):
+            near = obstacles.distances(position) < rng
+            blocked = bool(near.any() and (obstacles.path_distances(position, target)[near] < within).any())
+        if sensing_range is None:
+            self._detection = (position.copy(), np.array(target, dtype=float), blocked)
+        return blocked
+
+    def robots_blocking(self, position: FloatArray, target: FloatArray, others: Sequence[OtherRobot],
+                        sensing_range: float) -> bool:
+        centres, sums = self._robot_arrays(others)
+        if not len(centres):
+            return False
+        near = np.hypot(*(centres - position).T) - sums < sensing_range
+        run = point_segment_distance(centres, position, target)
+        return bool(np.any(near & (run < sums + 0.5 * self.params.clearance_margin)))
+
+    def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+        """Run the swarm for one waypoint; None (and a status reason) when no feasible step exists."""
+        assert self.goal is not None
+        centres, sums = self._robot_arrays(others)
+        problem = StepProblem(self.world, position, self.goal, self.clearance, self.params.step_radius,
+                              self.params.a, self.params.b, self.params.c, centres,
+                              sums + self.params.clearance_margin)
+        self.activations += 1
+        step = plan_step(problem, self.params, self.rng, self.method)
+        if step is None:
+            self.mode, self.reason, self.waypoint, self.cost = Mode.AVOIDING, 'no valid step; waiting', None, 0.0
+            return None
+        self.mode, self.reason = Mode.AVOIDING, 'stepping around an obstacle'
+        self.waypoint, self.cost = step.waypoint, step.cost
+        self.plan.append(step.waypoint)
+        return step.waypoint
+
+    def keep_waypoint(self, position: FloatArray, others: Sequence[OtherRobot]) -> bool:
+        """Follow the current waypoint unless it is reached or a robot has moved onto the run to it."""
+        if self.waypoint is None:
+            return False
+        if np.hypot(*(self.waypoint - position)) <= self.params.waypoint_tolerance or \
+                self.robots_blocking(position, self.waypoint, others, self.params.sensing_range):
+            self.waypoint = None
+            return False
+        return True
+
+    def guard(self, state: FloatArray, command: FloatArray, dt: float,
+              others: Sequence[OtherRobot]) -> FloatArray:
+        """Stop instead of moving into an obstacle or within reach of another robot."""
+        position = state[:2]
+        travel = self.model.velocity(state, command) * dt
+        after = position + travel
+        obstacles = self.world.obstacles
+        # Any point within (clearance - radius) of a point whose clearance is known is safe (triangle
+        # inequality), so the obstacle distances are recomputed only when the robot leaves that disc.
+        free = self._free_disc
+        if len(obstacles) and (free is None or np.hypot(*(after - free[0])) >= free[1]):
+            then = float(obstacles.clearance(after))
+            if then < self.radius and then < float(obstacles.clearance(position)):
+                self.reason = 'stopped: an obstacle is within the robot radius ahead'
+                return np.zeros_like(command)
+            self._free_disc = (after, then - self.radius)
+        for other in others:
+            centre = np.asarray(other.position, dtype=float)
+            reach = (self.params.max_speed if self.params.max_speed > 0
+                     else float(np.hypot(*other.velocity))) * dt
+            gap_now = float(np.hypot(*(position - centre)))
+            gap_then = float(np.hypot(*(after - centre)))
+            if gap_then < self.radius + other.radius + reach and gap_then < gap_now:
+                self.reason = f'stopped: giving way to {other.name}'
+                return np.zeros_like(command)
+        return command
+
+
+class FAStepKinematic(Navigator):
+    """Kinematics to the goal; the Stepping Ahead Firefly swarm only when something blocks the way."""
+
+    method = 'fastep'
+
+    def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+        assert self.goal is not None
+        following = self.keep_waypoint(position, others)
+        if not self.blocked(position, self.goal, others):
+            self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'way is clear'
+            return self.goal
+        if following:
+            return self.waypoint
+        return self.plan_next_step(position, others)
+
+
+class ACOKinematic(Navigator):
+    """The baseline: continuous ACO plans every step; straight to the goal only for the last one."""
+
+    method = 'aco'
+
+    def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+        assert self.goal is not None
+        if self.keep_waypoint(position, others):
+            return self.waypoint
+        if self.waypoint is None and self._target is not None and np.array_equal(self._target, self.goal) \
+                and not self.blocked(position, self.goal, others):
+            return self.goal
+        reach = float(np.hypot(*(self.goal - position))) <= self.params.step_radius
+        if reach and not self.blocked(position, self.goal, others, sensing_range=math.inf):
+            self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'last step'
+            return self.goal
+        return self.plan_next_step(position, others)
+
+
+def make_navigator(algorithm: str, spec: RobotLike, radius: float, world: World, params: PlannerParams,
+                   rng: np.random.Generator | int | None = None) -> Navigator:
+    """A FAStep-Kinematic ('fastep') or ACO-Kinematic ('aco') navigator for a scenario robot."""
+    classes = {'fastep': FAStepKinematic, 'aco': ACOKinematic}
+    if algorithm not in classes:
+        raise ValueError(f'unknown algorithm {algorithm!r}; choose one of {", ".join(classes)}')
+    model, controller = make_robot(spec, params)
+    return classes[algorithm](model, controller, radius, world, params, rng)

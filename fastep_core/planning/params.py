@@ -1,0 +1,92 @@
+"""Planner parameters: Table 1 of the paper plus what a navigation stack needs and the paper leaves open.
+
+Each field carries a description and a valid range; the ROS planner node declares exactly these as ROS
+parameters, and a scenario's top-level `planner:` mapping overrides them by name.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field, fields, replace
+from typing import Any, Mapping
+
+from fastep_core.errors import ParameterError
+
+__all__ = ['PlannerParams']
+
+
+def _p(default: float | int, description: str, low: float, high: float = math.inf) -> Any:
+    return field(default=default, metadata={'description': description, 'range': (low, high)})
+
+
+@dataclass(frozen=True)
+class PlannerParams:
+    """Every tunable of FAStep-Kinematic and ACO-Kinematic, with the paper's Table 1 as defaults."""
+
+    # Stepping Ahead Firefly swarm (Table 1, rows 1-5; gamma from the authors' code).
+    n_fireflies: int = _p(50, 'fireflies in the swarm (Table 1: 50)', 2, 10_000)
+    gamma: float = _p(1.0, 'light absorption coefficient (authors\' code: 1)', 0.0)
+    beta0: float = _p(2.0, 'attraction at distance zero (Table 1: 2)', 0.0)
+    alpha: float = _p(0.2, 'random-move scale, fraction of the search box (Table 1: 0.2)', 0.0)
+    alpha_damping: float = _p(0.8, 'alpha multiplier per iteration (Table 1: 0.8)', 0.0, 1.0)
+    max_iter: int = _p(30, 'swarm iterations per step at most', 1, 10_000)
+    patience: int = _p(5, 'stop the swarm after this many iterations without improvement', 1, 10_000)
+    # Step fitness f = a/f1 + b/f2 + c*d (eq. 10; Table 1 rows 6-8).
+    a: float = _p(0.18, 'obstacle safety weight a, paper range [0.1, 1]', 0.0)
+    b: float = _p(0.18, 'robot safety weight b, paper range [0.1, 1]', 0.0)
+    c: float = _p(0.01, 'goal convergence weight c, paper range [1e-5, 0.01]', 0.0)
+    # Kinematic controller gains (Table 1 rows 9-10).
+    alpha1: float = _p(0.1, 'point-mass x gain: dx/dt = alpha1 (x1 - x) (1/s)', 1e-6)
+    alpha2: float = _p(0.1, 'point-mass y gain: dy/dt = alpha2 (y1 - y) (1/s)', 1e-6)
+    speed_gain: float = _p(0.1, 'tractor-trailer speed gain: v = speed_gain * distance (1/s)', 1e-6)
+    max_speed: float = _p(1.0, 'speed limit (m/s); 0 means unlimited', 0.0)
+    # What the paper leaves open: detection range, step size, tolerances, time step.
+    sensing_range: float = _p(3.0, 'epsilon of eq. 11: obstacles whose surface is nearer are detected (m)', 0.0)
+    detection_interval: float = _p(0.1, 'obstacle detection reruns after this much travel (m); every tick near '
+                                   'other robots', 0.0)
+    step_radius: float = _p(2.0, 'largest distance from the robot to a planned waypoint (m)', 0.05)
+    clearance_margin: float = _p(0.2, 'extra clearance beyond the robot radius for planned waypoints (m)', 0.0)
+    goal_tolerance: float = _p(0.1, 'the goal counts as reached within this distance (m)', 1e-4)
+    waypoint_tolerance: float = _p(0.3, 'a waypoint counts as reached within this distance (m)', 1e-4)
+    dt: float = _p(0.05, 'control and integration step (s)', 1e-4, 10.0)
+    progress_distance: float = _p(0.5, 'progress checker: come this much closer to the goal ... (m)', 0.0)
+    progress_timeout: float = _p(120.0, '... within this many seconds, else fail (s); 0 disables', 0.0)
+    max_sim_time: float = _p(1500.0, 'fastep-sim stops a run after this much simulated time (s)', 1.0)
+    # ACO_R for the ACO-Kinematic baseline (Socha & Dorigo 2008).
+    aco_archive: int = _p(10, 'ACO_R solution archive size k', 2, 10_000)
+    aco_ants: int = _p(40, 'ACO_R ants per iteration m', 1, 100_000)
+    aco_q: float = _p(0.5, 'ACO_R locality of the search q', 1e-6)
+    aco_xi: float = _p(1.0, 'ACO_R pheromone evaporation / spread xi', 1e-6)
+    aco_iter: int = _p(30, 'ACO_R iterations per step at most', 1, 10_000)
+
+    def __post_init__(self) -> None:
+        for f in fields(self):
+            value = getattr(self, f.name)
+            low, high = f.metadata['range']
+            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+                raise ParameterError(f'planner parameter {f.name} must be a finite number, got {value!r}')
+            if f.type in ('int', int) and value != int(value):
+                raise ParameterError(f'planner parameter {f.name} must be an integer, got {value!r}')
+            if not low <= value <= high:
+                raise ParameterError(f'planner parameter {f.name}={value!r} is outside [{low}, {high}]')
+
+    @classmethod
+    def names(cls) -> tuple[str, ...]:
+        return tuple(f.name for f in fields(cls))
+
+    @classmethod
+    def descriptions(cls) -> dict[str, str]:
+        return {f.name: f.metadata['description'] for f in fields(cls)}
+
+    def with_overrides(self, overrides: Mapping[str, Any]) -> 'PlannerParams':
+        """A copy with some fields replaced; unknown names raise ParameterError."""
+        unknown = sorted(set(overrides) - set(self.names()))
+        if unknown:
+            raise ParameterError(f'unknown planner parameter(s): {", ".join(unknown)}')
+        cast = {}
+        for f in fields(self):
+            if f.name in overrides:
+                value = overrides[f.name]
+                cast[f.name] = int(value) if f.type in ('int', int) and isinstance(value, (int, float)) \
+                    and not isinstance(value, bool) and float(value).is_integer() else value
+        return replace(self, **cast)

@@ -1,0 +1,120 @@
+"""One planned step: the eq. 10 fitness with a hard clearance rule, minimised by a swarm.
+
+f = a / f1 + b / f2 + c * d (eq. 10), f1 = sum of distances to the obstacles (eq. 6-7; surface distances,
+so circles and line segments are measured alike by the minimum distance technique), f2 = sum of distances to
+the other robots (eq. 8-9; the term is dropped when there are none), d = distance to the robot's target
+(eq. 5). With the paper's magnitudes c * d dominates, so f alone does not keep a robot safe; a candidate is
+feasible only if
+- it lies within `step_radius` of the robot and inside the workspace by `clearance`,
+- it and the straight run to it keep `clearance` from every obstacle surface,
+- it and the run to it keep `robot_clearance[k]` from every other robot's centre.
+Infeasible candidates score 1e6 + total violation, so any feasible candidate beats every infeasible one and
+the swarm is still pulled toward feasibility.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.geometry import point_segment_distance
+from fastep_core.optimize import OptimizeResult, aco_r, fastep
+from fastep_core.planning.params import PlannerParams
+from fastep_core.world import World
+
+__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step']
+
+FloatArray = NDArray[np.float64]
+INFEASIBLE = 1e6
+
+
+@dataclass
+class StepProblem:
+    """Everything one robot's swarm needs to score candidate waypoints at one moment."""
+
+    world: World
+    origin: FloatArray               # robot position (x, y)
+    target: FloatArray               # where the robot wants to end up (its goal)
+    clearance: float                 # required distance from obstacle surfaces (radius + margin)
+    step_radius: float
+    a: float = 0.18
+    b: float = 0.18
+    c: float = 0.01
+    others: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))       # other robots' centres
+    robot_clearance: FloatArray = field(default_factory=lambda: np.zeros(0))   # required centre distance
+
+    def __post_init__(self) -> None:
+        self.origin = np.asarray(self.origin, dtype=float)
+        self.target = np.asarray(self.target, dtype=float)
+        self.others = np.asarray(self.others, dtype=float).reshape(-1, 2)
+        self.robot_clearance = np.asarray(self.robot_clearance, dtype=float).reshape(-1)
+        # A robot already closer than required (a trailer swing, another robot approaching) must still be
+        # allowed to move away: the run may not get any closer than it is now.
+        here = self.world.obstacles.clearance(self.origin)
+        self._path_clearance = min(self.clearance, float(here)) - 1e-9
+        gap = np.hypot(*(self.others - self.origin).T) if len(self.others) else np.zeros(0)
+        self._path_robot_clearance = np.minimum(self.robot_clearance, gap) - 1e-9
+        # Only obstacles that reach into the step disk (plus clearance) can violate the clearance rule; the
+        # swarm evaluates thousands of candidates per step, so the rule is checked against those alone.
+        obstacles = self.world.obstacles
+        self._local = obstacles.distances(self.origin) < self.step_radius + self.clearance
+        self._local_obstacles = obstacles.subset(self._local)
+
+    def bounds(self) -> FloatArray:
+        return np.stack([self.origin - self.step_radius, self.origin + self.step_radius], axis=1)
+
+    def terms(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """(eq. 10 fitness, total constraint violation) of each candidate; violation 0 means feasible."""
+        X = np.asarray(X, dtype=float)
+        x, y = X[:, 0], X[:, 1]
+        viol = np.maximum(np.hypot(x - self.origin[0], y - self.origin[1]) - self.step_radius, 0.0)
+        viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
+        f = self.c * np.hypot(x - self.target[0], y - self.target[1])
+        if len(self.world.obstacles):
+            dist = self.world.obstacles.distances(X)
+            f += self.a / np.maximum(dist.sum(axis=1), 1e-9)
+            if len(self._local_obstacles):
+                viol += np.maximum(self.clearance - dist[:, self._local].min(axis=1), 0.0)
+                run = self._local_obstacles.path_clearance(self.origin, X)
+                viol += np.maximum(self._path_clearance - run, 0.0)
+        if len(self.others):
+            gap = np.hypot(x[:, None] - self.others[:, 0], y[:, None] - self.others[:, 1])
+            f += self.b / np.maximum(gap.sum(axis=1), 1e-9)
+            viol += np.maximum(self.robot_clearance - gap, 0.0).sum(axis=1)
+            run = point_segment_distance(self.others, self.origin, X[:, None, :])
+            viol += np.maximum(self._path_robot_clearance - run, 0.0).sum(axis=1)
+        return f, viol
+
+    def fitness(self, X: FloatArray) -> FloatArray:
+        """What the swarm minimises: eq. 10 where feasible, INFEASIBLE + violation elsewhere."""
+        f, viol = self.terms(X)
+        return np.where(viol > 0.0, INFEASIBLE + viol, f)
+
+
+@dataclass(frozen=True)
+class StepPlan:
+    """A planned waypoint, its fitness and the optimizer's result."""
+
+    waypoint: FloatArray
+    cost: float
+    result: OptimizeResult
+
+
+def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Generator,
+              method: str = 'fastep') -> StepPlan | None:
+    """Minimise the step fitness with FAStep (or ACO_R); None when no feasible waypoint was found."""
+    if method == 'fastep':
+        result = fastep(problem.fitness, problem.bounds(), n_fireflies=params.n_fireflies,
+                        max_iter=params.max_iter, patience=params.patience, gamma=params.gamma,
+                        beta0=params.beta0, alpha=params.alpha, alpha_damping=params.alpha_damping, rng=rng)
+    elif method == 'aco':
+        result = aco_r(problem.fitness, problem.bounds(), archive_size=params.aco_archive,
+                       n_ants=params.aco_ants, q=params.aco_q, xi=params.aco_xi, max_iter=params.aco_iter,
+                       patience=params.patience, rng=rng)
+    else:
+        raise ValueError(f'unknown step optimizer {method!r}')
+    if not result.fun < INFEASIBLE:
+        return None
+    return StepPlan(np.asarray(result.x, dtype=float), float(result.fun), result)

@@ -1,0 +1,177 @@
+"""In-process simulator: every robot of a scenario, its navigator and its kinematic model in one loop.
+
+It mirrors the ROS graph (a plant integrates each robot, a navigator commands it, each robot sees the others
+as moving obstacles) without DDS, so experiments run fast and are reproducible: each robot's swarm draws from
+its own Generator spawned from the run's seed.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.planning.navigator import Mode, Navigator, OtherRobot, make_navigator
+from fastep_core.scenario import Scenario
+
+__all__ = ['RobotRun', 'Run', 'Tick', 'simulate', 'ALGORITHMS']
+
+FloatArray = NDArray[np.float64]
+ALGORITHMS = ('fastep', 'aco')
+SAMPLE_SPACING = 0.1  # metres of travel between trajectory samples (DESIGN: at least every 0.1 m)
+
+
+@dataclass
+class RobotRun:
+    """What happened to one robot in one run (the JSON of fastep-sim, plus series for figures)."""
+
+    name: str
+    model: str
+    reached: bool = False
+    collided: bool = False
+    path_length: float = 0.0
+    sim_time: float | None = None
+    compute_time: float = 0.0
+    min_clearance: float = math.inf
+    activations: int = 0
+    status: str = ''
+    trajectory: list[list[float]] = field(default_factory=list)
+    waypoints: list[list[float]] = field(default_factory=list)
+    cost: list[tuple[float, float]] = field(default_factory=list)        # (t, fitness of the step in use)
+    velocity: list[tuple[float, float, float]] = field(default_factory=list)  # (t, vx, vy) map frame
+
+    def to_json(self) -> dict[str, object]:
+        return {
+            'name': self.name, 'model': self.model, 'reached': self.reached, 'collided': self.collided,
+            'path_length': round(self.path_length, 6),
+            'sim_time': None if self.sim_time is None else round(self.sim_time, 6),
+            'compute_time': round(self.compute_time, 6),
+            'min_clearance': None if math.isinf(self.min_clearance) else round(self.min_clearance, 6),
+            'activations': self.activations, 'status': self.status,
+            'waypoints': [[round(v, 6) for v in w] for w in self.waypoints],
+            'trajectory': [[round(v, 6) for v in row] for row in self.trajectory],
+        }
+
+
+@dataclass
+class Run:
+    seed: int
+    algorithm: str
+    robots: list[RobotRun]
+
+    def to_json(self) -> dict[str, object]:
+        return {'seed': self.seed, 'robots': [r.to_json() for r in self.robots]}
+
+
+@dataclass(frozen=True)
+class Tick:
+    """What an observer sees after each simulated step of one robot (used to record runs)."""
+
+    t: float
+    name: str
+    state: FloatArray
+    command: FloatArray
+    velocity: FloatArray
+    navigator: Navigator
+
+
+def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
+             observer: Callable[[Tick], None] | None = None) -> Run:
+    """Run every robot of the scenario until each has arrived, failed, or max_sim_time has passed.
+
+    min_clearance is the smallest margin a robot kept: distance from its reference point to the nearest
+    obstacle surface minus its radius, or to another robot's centre minus both radii; negative means it
+    collided.
+    """
+    params = scenario.planner
+    world = scenario.world
+    specs = scenario.robots
+    streams = np.random.SeedSequence(seed).spawn(len(specs))
+    navigators = [make_navigator(algorithm, spec, spec.radius, world, params, np.random.default_rng(s))
+                  for spec, s in zip(specs, streams)]
+    states = [np.array(spec.start, dtype=float) for spec in specs]
+    velocities = [np.zeros(2) for _ in specs]
+    runs = [RobotRun(spec.name, spec.model) for spec in specs]
+    for nav, spec, run, state in zip(navigators, specs, runs, states):
+        nav.set_goal(spec.goal)
+        run.trajectory.append([0.0, *state.tolist()])
+    radii = np.array([spec.radius for spec in specs])
+    last_sample = [s[:2].copy() for s in states]
+    pending: list[list[float] | None] = [None] * len(specs)
+    dt = params.dt
+    n_ticks = int(math.ceil(params.max_sim_time / dt))
+    obstacles = world.obstacles
+
+    for k in range(n_ticks):
+        t = k * dt
+        active = [nav.mode not in (Mode.ARRIVED, Mode.FAILED) for nav in navigators]
+        if not any(active):
+            break
+        commands = []
+        for i, nav in enumerate(navigators):
+            if not active[i]:
+                commands.append(np.zeros(2))
+                continue
+            others = [OtherRobot(specs[j].name, (states[j][0], states[j][1]),
+                                 (velocities[j][0], velocities[j][1]), specs[j].radius)
+                      for j in range(len(specs)) if j != i]
+            start = time.perf_counter()
+            commands.append(nav.update(t, states[i], others))
+            runs[i].compute_time += time.perf_counter() - start
+            if nav.mode is Mode.ARRIVED:
+                runs[i].reached, runs[i].sim_time = True, t
+                active[i] = False
+        t_next = t + dt
+        for i, nav in enumerate(navigators):
+            if not active[i]:
+                continue
+            start = time.perf_counter()
+            model = nav.model
+            velocities[i] = model.velocity(states[i], commands[i])
+            new_state = model.integrate(states[i], commands[i], dt)
+            runs[i].compute_time += time.perf_counter() - start
+            runs[i].path_length += float(np.hypot(*(new_state[:2] - states[i][:2])))
+            states[i] = new_state
+            run = runs[i]
+            run.cost.append((t_next, nav.cost))
+            run.velocity.append((t_next, float(velocities[i][0]), float(velocities[i][1])))
+            # Trajectory samples at most SAMPLE_SPACING apart: when the newest point is too far from the
+            # last sample, the point before it is sampled first.
+            row = [t_next, *new_state.tolist()]
+            if np.hypot(*(new_state[:2] - last_sample[i])) > SAMPLE_SPACING and pending[i] is not None:
+                run.trajectory.append(pending[i])
+                last_sample[i] = np.array(pending[i][1:3])
+                pending[i] = None
+            if np.hypot(*(new_state[:2] - last_sample[i])) >= SAMPLE_SPACING:
+                run.trajectory.append(row)
+                last_sample[i] = new_state[:2].copy()
+                pending[i] = None
+            else:
+                pending[i] = row
+            if observer is not None:
+                observer(Tick(t_next, specs[i].name, new_state, commands[i], velocities[i], nav))
+        positions = np.array([s[:2] for s in states])
+        margins = obstacles.clearance(positions) - radii if len(obstacles) else np.full(len(specs), np.inf)
+        if len(specs) > 1:
+            gaps = np.hypot(*np.moveaxis(positions[:, None, :] - positions[None, :, :], -1, 0))
+            gaps = gaps - radii[:, None] - radii[None, :]
+            np.fill_diagonal(gaps, np.inf)
+            margins = np.minimum(margins, gaps.min(axis=1))
+        for i, run in enumerate(runs):
+            run.min_clearance = min(run.min_clearance, float(margins[i]))
+            if margins[i] < 0.0:
+                run.collided = True
+
+    for i, (nav, run) in enumerate(zip(navigators, runs)):
+        if pending[i] is not None:
+            run.trajectory.append(pending[i])
+        if nav.mode not in (Mode.ARRIVED, Mode.FAILED):
+            nav.fail(f'not arrived within max_sim_time={params.max_sim_time:g} s')
+        run.status = f'{nav.mode.value}: {nav.reason}'
+        run.activations = nav.activations
+        run.waypoints = [w.tolist() for w in nav.plan]
+    return Run(seed, algorithm, runs)

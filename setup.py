@@ -1,0 +1,42 @@
+"""ament_python package fastep_ros: the fastep_core, fastep_ros and msg_tools Python packages."""
+from glob import glob
+
+from setuptools import find_packages, setup
+
+PACKAGE = 'fastep_ros'
+
+setup(
+    name=PACKAGE,
+    version='0.1.0',
+    description='FAStep-Kinematic robot navigation for ROS 2 Jazzy, with the ACO-Kinematic baseline',
+    packages=find_packages(include=['fastep_core', 'fastep_core.*', 'fastep_ros', 'fastep_ros.*',
+                                    'msg_tools', 'msg_tools.*']),
+    package_data={'fastep_core': ['py.typed', 'scenarios/*.yaml'],
+                  'fastep_ros': ['py.typed'], 'msg_tools': ['py.typed']},
+    data_files=[
+        ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
+        (f'share/{PACKAGE}', ['package.xml']),
+        (f'share/{PACKAGE}/scenarios', glob('fastep_core/scenarios/*.yaml')),
+    ],
+    python_requires='>=3.11',
+    install_requires=[
+        'ros-jazzy-rclpy[fastrtps]==7.1.6',
+        'ros-jazzy-common-interfaces==5.3.6',
+        'numpy>=2.0',
+        'scipy>=1.13',
+        'PyYAML>=6.0',
+        'matplotlib>=3.8',
+        'mcap>=1.2',
+        'rosbags>=0.10',
+    ],
+    extras_require={'test': ['pytest>=8', 'hypothesis>=6.100']},
+    zip_safe=True,
+    maintainer='fastep developers',
+    maintainer_email='dev@fastep.invalid',
+    license='Apache-2.0',
+    entry_points={
+        'console_scripts': [
+            'fastep-sim = fastep_core.cli:main',
+        ],
+    },
+)

@@ -1,0 +1,57 @@
+import numpy as np
+import pytest
+
+from fastep_core.geometry import Circle, Obstacles, Segment, point_segment_distance, segment_segment_distance
+
+
+def test_point_segment_distance_projects_and_clips():
+    a, b = np.array([0.0, 0.0]), np.array([10.0, 0.0])
+    pts = np.array([[5.0, 3.0], [-4.0, 3.0], [13.0, -4.0]])
+    assert point_segment_distance(pts, a, b) == pytest.approx([3.0, 5.0, 5.0])
+
+
+def test_degenerate_segment_is_a_point():
+    a = np.array([1.0, 1.0])
+    assert point_segment_distance(np.array([4.0, 5.0]), a, a) == pytest.approx(5.0)
+
+
+def test_segment_segment_crossing_parallel_and_apart():
+    z = np.array
+    assert segment_segment_distance(z([0, 0.]), z([2, 2.]), z([0, 2.]), z([2, 0.])) == 0.0
+    assert segment_segment_distance(z([0, 0.]), z([2, 0.]), z([0, 1.]), z([2, 1.])) == pytest.approx(1.0)
+    assert segment_segment_distance(z([0, 0.]), z([1, 0.]), z([3, 4.]), z([3, 9.])) == pytest.approx(np.hypot(2, 4))
+
+
+def test_clearance_is_surface_distance_to_nearest_obstacle():
+    obs = Obstacles([Circle((0.0, 0.0), 2.0), Segment((10.0, -5.0), (10.0, 5.0))])
+    pts = np.array([[5.0, 0.0], [3.0, 0.0], [12.0, 0.0], [0.0, 1.0]])
+    assert obs.clearance(pts) == pytest.approx([3.0, 1.0, 2.0, -1.0])
+    assert obs.distances(pts).shape == (4, 2)
+
+
+def test_no_obstacles_means_infinite_clearance():
+    obs = Obstacles([])
+    assert np.isinf(obs.clearance(np.zeros((3, 2)))).all()
+    assert np.isinf(obs.path_clearance(np.zeros(2), np.ones((3, 2)))).all()
+
+
+def test_path_clearance_and_blocking():
+    obs = Obstacles([Circle((5.0, 0.0), 1.0), Segment((0.0, 3.0), (10.0, 3.0))])
+    a = np.array([0.0, 0.0])
+    ends = np.array([[10.0, 0.0], [10.0, 1.5], [0.0, -5.0], [5.0, 6.0]])
+    d = obs.path_distances(a, ends)
+    assert d[0, 0] == pytest.approx(-1.0)                     # through the circle centre
+    assert d[2] == pytest.approx([np.hypot(5, 0) - 1.0, 3.0])  # away from both
+    assert d[3, 1] == 0.0                                      # crosses the wall
+    blocks = obs.blocking(a, np.array([10.0, 1.5]), within=0.5)
+    assert blocks.tolist() == [True, False]
+
+
+def test_vectorised_clearance_matches_pointwise():
+    rng = np.random.default_rng(3)
+    obs = Obstacles([Circle(tuple(c), r) for c, r in zip(rng.uniform(0, 50, (6, 2)), rng.uniform(1, 4, 6))]
+                    + [Segment(tuple(s), tuple(e)) for s, e in zip(rng.uniform(0, 50, (3, 2)), rng.uniform(0, 50, (3, 2)))])
+    pts = rng.uniform(0, 50, (40, 2))
+    assert obs.clearance(pts) == pytest.approx([float(obs.clearance(p)) for p in pts])
+    b = rng.uniform(0, 50, (40, 2))
+    assert obs.path_clearance(pts[0], b) == pytest.approx([float(obs.path_clearance(pts[0], q)) for q in b])
