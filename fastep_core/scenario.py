@@ -1,0 +1,473 @@
+"""Scenario files (format v1, YAML): a workspace, its obstacles, the robots and optional planner overrides.
+
+A scenario is loaded from a path or from a built-in name (the ``fastep_core/scenarios/*.yaml`` files that ship
+with the package), parsed with ``yaml.safe_load`` only, and validated strictly: unknown keys are an error at
+every level, every coordinate must be a real finite number, and starts and goals must be free. Every problem
+raises :class:`~fastep_core.errors.ScenarioError` with a one-line message that names the file (or scenario)
+and the offending key path, e.g. ``scenario 'x.yaml': robots[1].radius must be > 0, got -1``.
+
+The format is documented in ``docs/scenarios.md``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+from dataclasses import dataclass
+from importlib import resources
+from importlib.resources.abc import Traversable
+from pathlib import Path
+from typing import Any, Mapping, Sequence
+
+import yaml
+
+from fastep_core.errors import GoalError, ParameterError, ScenarioError
+from fastep_core.geometry import Circle, Obstacle, Segment
+from fastep_core.planning.params import PlannerParams
+from fastep_core.world import World
+
+__all__ = [
+    'MODELS', 'RobotSpec', 'Scenario',
+    'load_scenario', 'parse_scenario', 'builtin_names', 'builtin_path',
+]
+
+MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer')
+"""Robot models a scenario may name."""
+
+_START_LENGTH = {'point_mass': 2, 'tractor_trailer': 4}
+_TOP_KEYS = ('name', 'description', 'workspace', 'obstacles', 'robots', 'planner')
+_ROBOT_KEYS = ('name', 'model', 'start', 'goal', 'radius')
+_TRACTOR_KEYS = ('length', 'trailer_length', 'width', 'hitch_offset')
+_ROBOT_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
+_IGNORED_PREFIX = 'x_'
+_SUFFIX = '.yaml'
+# Numbers PyYAML (YAML 1.1) leaves as text: an exponent without a dot in the mantissa or a sign ('1e-3', '5.0e1').
+_TEXT_EXPONENT = re.compile(r'([-+]?)([0-9]+\.?[0-9]*|\.[0-9]+)[eE]([-+]?)([0-9]+)')
+# Relative slack when comparing a tractor-trailer's radius with its clearance sqrt(L^2 + b^2) / 2.
+_CLEARANCE_RTOL = 1e-9
+
+
+@dataclass(frozen=True)
+class RobotSpec:
+    """One robot of a scenario: its model, start pose, goal and body dimensions (metres, radians)."""
+
+    name: str
+    model: str                    # 'point_mass' | 'tractor_trailer'
+    start: tuple[float, ...]      # (x, y) for point_mass; (x, y, theta0, theta1) for tractor_trailer
+    goal: tuple[float, float]
+    radius: float                 # safety radius (m)
+    length: float = 1.0           # tractor_trailer only: L, tractor mid-axle length (m)
+    trailer_length: float = 1.0   # tractor_trailer only: Lt (m)
+    width: float = 0.5            # tractor_trailer only: b, tractor width (m)
+    hitch_offset: float = 0.0     # tractor_trailer only: c in eq. 13 (m)
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A validated scenario: the world, its robots and the planner parameters to use."""
+
+    name: str
+    world: World
+    robots: tuple[RobotSpec, ...]
+    planner: PlannerParams
+    description: str = ''
+
+
+class _Invalid(Exception):
+    """Raised by the validators below; turned into a ScenarioError prefixed with the scenario's label."""
+
+
+# ----------------------------------------------------------------------------------------------- messages
+
+def _one_line(text: str) -> str:
+    return ' '.join(text.split())
+
+
+def _show(value: Any, limit: int = 60) -> str:
+    """A short, single-line rendering of an offending value."""
+    text = 'null' if value is None else repr(value)
+    text = _one_line(text)
+    return text if len(text) <= limit else text[:limit - 3] + '...'
+
+
+def _fail(label: str, message: str) -> ScenarioError:
+    return ScenarioError(_one_line(f'scenario {label!r}: {message}'))
+
+
+def _key_path(path: str, key: str) -> str:
+    return f'{path}.{key}' if path else key
+
+
+# ----------------------------------------------------------------------------------------------- primitives
+
+def _mapping(value: Any, path: str) -> Mapping[str, Any]:
+    if not isinstance(value, dict):
+        raise _Invalid(f'{path} must be a mapping, got {_show(value)}')
+    for key in value:
+        if not isinstance(key, str):
+            raise _Invalid(f'{path}: keys must be strings, got {_show(key)}')
+    return value
+
+
+def _check_keys(data: Mapping[str, Any], path: str, allowed: Sequence[str], required: Sequence[str]) -> None:
+    for key in data:
+        if key not in allowed:
+            raise _Invalid(f'{path}: unknown key {key!r} (allowed: {", ".join(allowed)})')
+    for key in required:
+        if key not in data:
+            raise _Invalid(f'{path}: missing required key {key!r}')
+
+
+def _list(value: Any, path: str) -> list[Any]:
+    if not isinstance(value, list):
+        raise _Invalid(f'{path} must be a list, got {_show(value)}')
+    return value
+
+
+def _number(value: Any, path: str) -> float:
+    """A real, finite number (bool, strings, null, .nan and .inf are rejected)."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        try:
+            number = float(value)
+        except OverflowError:
+            number = math.inf
+        if math.isfinite(number):
+            return number
+    raise _Invalid(f'{path} must be a finite number, got {_show(value)}{_text_number_hint(value)}')
+
+
+def _text_number_hint(value: Any) -> str:
+    """Why a number-looking string is text: YAML 1.1 wants 1.0e-3 (a dot and a signed exponent), or quotes."""
+    if not isinstance(value, str):
+        return ''
+    match = _TEXT_EXPONENT.fullmatch(value.strip())
+    if match:
+        sign, mantissa, exp_sign, digits = match.groups()
+        fixed = f'{sign}{mantissa if "." in mantissa else mantissa + ".0"}e{exp_sign or "+"}{digits}'
+        if fixed.lower() != value.strip().lower():
+            return f' (YAML 1.1 reads exponents without a dot and a sign as text: write {fixed})'
+    try:
+        float(value)
+    except ValueError:
+        return ''
+    return ' (text, not a number: drop the quotes)'
+
+
+def _positive(value: Any, path: str) -> float:
+    number = _number(value, path)
+    if number <= 0.0:
+        raise _Invalid(f'{path} must be > 0, got {_show(value)}')
+    return number
+
+
+def _non_negative(value: Any, path: str) -> float:
+    number = _number(value, path)
+    if number < 0.0:
+        raise _Invalid(f'{path} must be >= 0, got {_show(value)}')
+    return number
+
+
+def _numbers(value: Any, path: str, count: int, what: str) -> tuple[float, ...]:
+    if not isinstance(value, list) or len(value) != count:
+        raise _Invalid(f'{path} must be a list of {count} numbers {what}, got {_show(value)}')
+    return tuple(_number(v, f'{path}[{i}]') for i, v in enumerate(value))
+
+
+def _point(value: Any, path: str) -> tuple[float, float]:
+    x, y = _numbers(value, path, 2, '[x, y]')
+    return x, y
+
+
+def _text(value: Any, path: str) -> str:
+    if not isinstance(value, str) or not value.strip():
+        raise _Invalid(f'{path} must be a non-empty string, got {_show(value)}')
+    if '\n' in value or '\r' in value:
+        raise _Invalid(f'{path} must be a single line, got {_show(value)}')
+    return value
+
+
+# ----------------------------------------------------------------------------------------------- sections
+
+def _workspace(value: Any) -> tuple[float, float, float, float]:
+    xmin, ymin, xmax, ymax = _numbers(value, 'workspace', 4, '[xmin, ymin, xmax, ymax]')
+    if not xmin < xmax:
+        raise _Invalid(f'workspace needs xmin < xmax, got xmin={xmin:g}, xmax={xmax:g}')
+    if not ymin < ymax:
+        raise _Invalid(f'workspace needs ymin < ymax, got ymin={ymin:g}, ymax={ymax:g}')
+    return xmin, ymin, xmax, ymax
+
+
+def _circle(value: Any, path: str) -> Circle:
+    body = _mapping(value, path)
+    _check_keys(body, path, ('center', 'radius'), ('center', 'radius'))
+    return Circle(_point(body['center'], f'{path}.center'), _positive(body['radius'], f'{path}.radius'))
+
+
+def _segment(value: Any, path: str) -> Segment:
+    body = _mapping(value, path)
+    _check_keys(body, path, ('start', 'end'), ('start', 'end'))
+    start, end = _point(body['start'], f'{path}.start'), _point(body['end'], f'{path}.end')
+    if start == end:
+        raise _Invalid(f'{path}: start and end must differ, both are [{start[0]:g}, {start[1]:g}]')
+    return Segment(start, end)
+
+
+_OBSTACLE_PARSERS = {'circle': _circle, 'segment': _segment}
+
+
+def _obstacle(value: Any, path: str) -> Obstacle:
+    entry = _mapping(value, path)
+    kinds = ', '.join(_OBSTACLE_PARSERS)
+    if len(entry) != 1:
+        raise _Invalid(f'{path} must have exactly one key ({kinds}), got {_show(sorted(entry))}')
+    (kind, body), = entry.items()
+    if kind not in _OBSTACLE_PARSERS:
+        raise _Invalid(f'{path}: unknown key {kind!r} (allowed: {kinds})')
+    return _OBSTACLE_PARSERS[kind](body, f'{path}.{kind}')
+
+
+def _obstacles(value: Any) -> tuple[Obstacle, ...]:
+    if value is None:
+        return ()
+    return tuple(_obstacle(v, f'obstacles[{i}]') for i, v in enumerate(_list(value, 'obstacles')))
+
+
+def _robot_name(value: Any, path: str) -> str:
+    if not isinstance(value, str) or not _ROBOT_NAME.fullmatch(value):
+        raise _Invalid(f'{path} must match [A-Za-z_][A-Za-z0-9_]* (it becomes a ROS namespace), '
+                       f'got {_show(value)}')
+    return value
+
+
+def _model(value: Any, path: str) -> str:
+    if value not in MODELS:
+        raise _Invalid(f'{path} must be one of {", ".join(MODELS)}, got {_show(value)}')
+    return str(value)
+
+
+def _tractor_dimensions(data: Mapping[str, Any], path: str) -> dict[str, float]:
+    dims = {}
+    for key in ('length', 'trailer_length', 'width'):
+        if key in data:
+            dims[key] = _positive(data[key], _key_path(path, key))
+    if 'hitch_offset' in data:
+        dims['hitch_offset'] = _non_negative(data['hitch_offset'], _key_path(path, 'hitch_offset'))
+    return dims
+
+
+def _robot(value: Any, path: str) -> RobotSpec:
+    data = _mapping(value, path)
+    _check_keys(data, path, _ROBOT_KEYS + _TRACTOR_KEYS, _ROBOT_KEYS)
+    name = _robot_name(data['name'], f'{path}.name')
+    model = _model(data['model'], f'{path}.model')
+    if model != 'tractor_trailer':
+        for key in _TRACTOR_KEYS:
+            if key in data:
+                raise _Invalid(f'{path}.{key} is only valid for model tractor_trailer, not {model}')
+    n = _START_LENGTH[model]
+    start = _numbers(data['start'], f'{path}.start', n, '[x, y]' if n == 2 else '[x, y, theta0, theta1]')
+    robot = RobotSpec(name=name, model=model, start=start, goal=_point(data['goal'], f'{path}.goal'),
+                      radius=_positive(data['radius'], f'{path}.radius'),
+                      **_tractor_dimensions(data, path))
+    if model == 'tractor_trailer':
+        _check_tractor_radius(robot, path)
+    return robot
+
+
+def _check_tractor_radius(robot: RobotSpec, path: str) -> None:
+    """The paper's clearance (section VII-C): the safety radius must cover the tractor, sqrt(L^2 + b^2) / 2."""
+    needed = math.hypot(robot.length, robot.width) / 2.0
+    if robot.radius < needed * (1.0 - _CLEARANCE_RTOL):
+        raise _Invalid(f'{path}.radius must be >= sqrt(length^2 + width^2)/2 = {needed:.4g} for a '
+                       f'tractor_trailer, got {robot.radius:g}')
+
+
+def _robots(value: Any) -> tuple[RobotSpec, ...]:
+    items = _list(value, 'robots')
+    if not items:
+        raise _Invalid('robots must list at least one robot, got []')
+    robots = tuple(_robot(v, f'robots[{i}]') for i, v in enumerate(items))
+    seen: dict[str, int] = {}
+    for i, robot in enumerate(robots):
+        if robot.name in seen:
+            raise _Invalid(f'robots[{i}].name {robot.name!r} is already used by robots[{seen[robot.name]}]')
+        seen[robot.name] = i
+    return robots
+
+
+def _planner(value: Any) -> PlannerParams:
+    defaults = PlannerParams()
+    if value is None:
+        return defaults
+    overrides = _mapping(value, 'planner')
+    unknown = {k: v for k, v in overrides.items() if k not in PlannerParams.names()}
+    if unknown:
+        _apply(defaults, unknown, 'planner')   # raises, naming every unknown parameter
+    for key, item in overrides.items():
+        if _text_number_hint(item):
+            _number(item, f'planner.{key}')   # raises, with the hint
+        _apply(defaults, {key: item}, f'planner.{key}')
+    return _apply(defaults, overrides, 'planner')
+
+
+def _apply(params: PlannerParams, overrides: Mapping[str, Any], path: str) -> PlannerParams:
+    try:
+        return params.with_overrides(overrides)
+    except ParameterError as exc:
+        raise _Invalid(f'{path}: {exc}') from None
+
+
+def _description(value: Any) -> str:
+    if not isinstance(value, str):
+        raise _Invalid(f'description must be a string, got {_show(value)}')
+    return value
+
+
+# ----------------------------------------------------------------------------------------------- placement
+
+def _check_placement(world: World, robots: Sequence[RobotSpec]) -> None:
+    """Starts and goals lie inside the workspace, clear of obstacles by each robot's radius."""
+    for i, robot in enumerate(robots):
+        for what, point in (('start', robot.start[:2]), ('goal', robot.goal)):
+            try:
+                world.check_point(point, robot.radius, what=what)
+            except GoalError as exc:
+                raise _Invalid(f'robots[{i}] ({robot.name}): {exc}') from None
+
+
+def _check_pairs(robots: Sequence[RobotSpec]) -> None:
+    """No two robots start (or end) closer than the sum of their radii."""
+    for i, first in enumerate(robots):
+        for j in range(i + 1, len(robots)):
+            second = robots[j]
+            reach = first.radius + second.radius
+            for what, p, q in (('starts', first.start, second.start), ('goals', first.goal, second.goal)):
+                gap = math.hypot(p[0] - q[0], p[1] - q[1])
+                if gap < reach:
+                    raise _Invalid(f'robots[{i}] ({first.name}) and robots[{j}] ({second.name}): {what} are '
+                                   f'{gap:.3g} m apart, closer than the sum of their radii {reach:g} m')
+
+
+# ----------------------------------------------------------------------------------------------- parsing
+
+def _scenario_name(data: Mapping[str, Any], default_name: str) -> str:
+    return _text(data['name'], 'name') if 'name' in data else default_name
+
+
+def _build(data: Any, default_name: str) -> Scenario:
+    if not isinstance(data, dict):
+        what = 'an empty document' if data is None else f'{type(data).__name__} {_show(data)}'
+        raise _Invalid(f'the top level must be a mapping, got {what}')
+    top = _mapping(data, 'top level')
+    for key in top:
+        if key not in _TOP_KEYS and not key.startswith(_IGNORED_PREFIX):
+            raise _Invalid(f'unknown top-level key {key!r} (allowed: {", ".join(_TOP_KEYS)}, '
+                           f'and keys starting with {_IGNORED_PREFIX!r}, which are ignored)')
+    for key in ('workspace', 'robots'):
+        if key not in top:
+            raise _Invalid(f'missing required top-level key {key!r}')
+    name = _scenario_name(top, default_name)
+    description = _description(top.get('description', ''))
+    world = World.from_obstacles(_workspace(top['workspace']), _obstacles(top.get('obstacles')))
+    robots = _robots(top['robots'])
+    planner = _planner(top.get('planner'))
+    _check_placement(world, robots)
+    _check_pairs(robots)
+    return Scenario(name=name, world=world, robots=robots, planner=planner, description=description)
+
+
+def _parse(data: Any, default_name: str, label: str) -> Scenario:
+    try:
+        return _build(data, default_name)
+    except _Invalid as exc:
+        raise _fail(label, str(exc)) from None
+
+
+def parse_scenario(data: object, *, default_name: str = 'scenario') -> Scenario:
+    """Validate an already-loaded mapping (e.g. from ``yaml.safe_load``) and build a Scenario.
+
+    ``default_name`` is the scenario's name when the mapping has no ``name:`` key; error messages name the
+    scenario by its ``name:`` if that is a usable string, else by ``default_name``.
+    """
+    label = default_name
+    if isinstance(data, dict) and isinstance(data.get('name'), str) and data['name'].strip():
+        label = data['name']
+    return _parse(data, default_name, label)
+
+
+# ----------------------------------------------------------------------------------------------- files
+
+def _yaml_error(exc: yaml.YAMLError) -> str:
+    """One line for a YAML error, with the (1-based) line and column where PyYAML knows them."""
+    if isinstance(exc, yaml.MarkedYAMLError):
+        mark = exc.problem_mark or exc.context_mark
+        parts = [p for p in (exc.context, exc.problem) if p]
+        where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark is not None else ''
+        return f'invalid YAML{where}: {"; ".join(parts) or type(exc).__name__}'
+    return f'invalid YAML: {_one_line(str(exc))}'
+
+
+def _load_bytes(raw: bytes, default_name: str, label: str) -> Scenario:
+    try:
+        data = yaml.safe_load(raw)
+    except yaml.YAMLError as exc:
+        raise _fail(label, _yaml_error(exc)) from None
+    return _parse(data, default_name, label)
+
+
+def _builtin_dir() -> Traversable:
+    return resources.files('fastep_core') / 'scenarios'
+
+
+def _builtin_resource(name: str) -> Traversable | None:
+    if name not in builtin_names():
+        return None
+    return _builtin_dir() / f'{name}{_SUFFIX}'
+
+
+def builtin_names() -> list[str]:
+    """Sorted names of the built-in scenarios (``fastep_core/scenarios/*.yaml``)."""
+    folder = _builtin_dir()
+    if not folder.is_dir():
+        return []
+    return sorted(entry.name[:-len(_SUFFIX)] for entry in folder.iterdir()
+                  if entry.name.endswith(_SUFFIX) and entry.is_file())
+
+
+def _unknown_builtin(name: str) -> ScenarioError:
+    names = builtin_names()
+    listed = ', '.join(names) if names else '(none installed)'
+    return _fail(name, f'no such file and no built-in scenario of that name (built-ins: {listed})')
+
+
+def builtin_path(name: str) -> Path:
+    """The file of built-in scenario ``name``; ScenarioError (listing the built-ins) if there is none."""
+    resource = _builtin_resource(name)
+    if resource is None:
+        raise _unknown_builtin(name)
+    return Path(str(resource))
+
+
+def _looks_like_path(text: str) -> bool:
+    return os.sep in text or (os.altsep is not None and os.altsep in text) or text.endswith(('.yaml', '.yml'))
+
+
+def load_scenario(source: str | os.PathLike[str]) -> Scenario:
+    """Load and validate a scenario from a YAML file path or a built-in name (a file path wins)."""
+    label = os.fspath(source)
+    path = Path(label)
+    if path.is_file():
+        try:
+            raw = path.read_bytes()
+        except OSError as exc:
+            raise _fail(label, f'cannot read the file: {exc.strerror or exc}') from None
+        return _load_bytes(raw, path.stem, label)
+    resource = _builtin_resource(label) if isinstance(source, str) else None
+    if resource is not None:
+        return _load_bytes(resource.read_bytes(), label, label)
+    if path.exists():
+        raise _fail(label, 'is not a regular file')
+    if _looks_like_path(label) or not isinstance(source, str):
+        raise _fail(label, 'file not found')
+    raise _unknown_builtin(label)

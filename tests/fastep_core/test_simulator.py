@@ -1,0 +1,124 @@
+"""Whole runs of the in-process simulator: arrival, safety, determinism, and the paper's claims."""
+
+import math
+
+import numpy as np
+import pytest
+
+from fastep_core.kinematics import hitch_angle, lyapunov
+from fastep_core.scenario import builtin_names, load_scenario, parse_scenario
+from fastep_core.simulator import simulate
+
+SEEDS = range(10)
+
+
+def straight_line(spec):
+    return math.hypot(spec.goal[0] - spec.start[0], spec.goal[1] - spec.start[1])
+
+
+def check_run_is_safe(scenario, run):
+    """Every trajectory sample keeps each robot's radius from every obstacle surface."""
+    for spec, robot in zip(scenario.robots, run.robots):
+        xy = np.array([row[1:3] for row in robot.trajectory])
+        assert scenario.world.obstacles.clearance(xy).min() >= spec.radius - 1e-9, robot.name
+        assert not robot.collided and robot.min_clearance >= 0.0, robot.name
+
+
+@pytest.mark.parametrize('name', builtin_names())
+def test_every_builtin_is_solved_safely_over_ten_seeds(name):
+    scenario = load_scenario(name)
+    for seed in SEEDS:
+        run = simulate(scenario, 'fastep', seed)
+        assert all(r.reached for r in run.robots), (seed, [r.status for r in run.robots])
+        check_run_is_safe(scenario, run)
+
+
+@pytest.mark.parametrize('name', ['table2_s2', 'case_study_2', 'application'])
+def test_aco_kinematic_baseline_also_arrives_safely(name):
+    scenario = load_scenario(name)
+    for seed in range(3):
+        run = simulate(scenario, 'aco', seed)
+        assert all(r.reached for r in run.robots), (seed, [r.status for r in run.robots])
+        check_run_is_safe(scenario, run)
+
+
+@pytest.mark.parametrize('algorithm', ['fastep', 'aco'])
+def test_same_seed_same_run_and_other_seed_differs(algorithm):
+    scenario = load_scenario('table2_s3')
+    a, b = simulate(scenario, algorithm, 7), simulate(scenario, algorithm, 7)
+    strip = lambda run: [{k: v for k, v in r.to_json().items() if k != 'compute_time'} for r in run.robots]
+    assert strip(a) == strip(b)
+    assert strip(simulate(scenario, algorithm, 8)) != strip(a)
+
+
+@pytest.mark.parametrize('name', ['open_field', 'table2_s1'])
+def test_nothing_on_the_way_means_no_swarm_and_a_straight_path(name):
+    scenario = load_scenario(name)
+    run = simulate(scenario, 'fastep', 0)
+    for spec, robot in zip(scenario.robots, run.robots):
+        assert robot.reached and robot.activations == 0 and robot.waypoints == []
+        assert robot.path_length <= 1.01 * straight_line(spec)
+        assert robot.cost and max(c for _, c in robot.cost) == 0.0
+
+
+def test_aco_kinematic_plans_steps_even_when_the_way_is_clear():
+    run = simulate(load_scenario('table2_s1'), 'aco', 0)
+    assert run.robots[0].reached and run.robots[0].activations > 10
+
+
+def test_point_mass_lyapunov_decreases_along_a_run():
+    scenario = load_scenario('open_field')
+    spec = scenario.robots[0]
+    run = simulate(scenario, 'fastep', 0)
+    goal = np.array(spec.goal)
+    v = [lyapunov(np.array(row[1:3]), goal) for row in run.robots[0].trajectory]
+    assert np.all(np.diff(v) < 0.0)
+
+
+def test_tractor_trailer_hitch_angle_stays_under_80_degrees():
+    scenario = load_scenario('application')
+    for seed in range(3):
+        run = simulate(scenario, 'fastep', seed)
+        for robot in run.robots:
+            hitch = [abs(math.degrees(hitch_angle(np.array(row[1:5])))) for row in robot.trajectory]
+            assert robot.reached and max(hitch) < 80.0, (seed, robot.name, max(hitch))
+
+
+def test_crossing_robots_keep_their_separation_every_tick():
+    scenario = load_scenario('case_study_2')
+    r1, r2 = scenario.robots
+    for seed in range(3):
+        positions: dict[float, dict[str, np.ndarray]] = {}
+        simulate(scenario, 'fastep', seed,
+                 observer=lambda tick: positions.setdefault(round(tick.t, 6), {}).__setitem__(tick.name, tick.state[:2]))
+        gaps = [np.hypot(*(p['r1'] - p['r2'])) for p in positions.values() if len(p) == 2]
+        assert len(gaps) > 100 and min(gaps) >= r1.radius + r2.radius
+
+
+def test_head_on_robots_in_open_space_get_past_each_other():
+    scenario = parse_scenario({
+        'name': 'swap', 'workspace': [0, 0, 30, 10],
+        'robots': [{'name': 'a', 'model': 'point_mass', 'start': [3, 5], 'goal': [27, 5], 'radius': 0.5},
+                   {'name': 'b', 'model': 'point_mass', 'start': [27, 5], 'goal': [3, 5], 'radius': 0.5}]})
+    run = simulate(scenario, 'fastep', 0)
+    assert all(r.reached and not r.collided for r in run.robots)
+    assert all(r.activations > 0 for r in run.robots)
+
+
+def test_unreachable_goal_fails_with_a_reason_instead_of_hanging():
+    walls = [{'segment': {'start': s, 'end': e}} for s, e in
+             [([20, 20], [30, 20]), ([30, 20], [30, 30]), ([30, 30], [20, 30]), ([20, 30], [20, 20])]]
+    scenario = parse_scenario({
+        'name': 'walled', 'workspace': [0, 0, 50, 50], 'obstacles': walls,
+        'planner': {'progress_timeout': 30, 'max_sim_time': 300},
+        'robots': [{'name': 'r1', 'model': 'point_mass', 'start': [5, 5], 'goal': [25, 25], 'radius': 0.5}]})
+    robot = simulate(scenario, 'fastep', 0).robots[0]
+    assert not robot.reached and robot.sim_time is None and not robot.collided
+    assert robot.status.startswith('failed: failed to make progress')
+
+
+def test_trajectory_samples_are_at_most_a_tenth_of_a_metre_apart():
+    run = simulate(load_scenario('table2_s3'), 'fastep', 0)
+    xy = np.array([row[1:3] for row in run.robots[0].trajectory])
+    assert np.hypot(*np.diff(xy, axis=0).T).max() <= 0.1 + 1e-9
+    assert run.robots[0].trajectory[0][0] == 0.0

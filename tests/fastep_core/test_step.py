@@ -1,0 +1,71 @@
+import numpy as np
+import pytest
+
+from fastep_core.geometry import Circle, Segment
+from fastep_core.planning import PlannerParams, StepProblem, plan_step
+from fastep_core.planning.step import INFEASIBLE
+from fastep_core.world import World
+
+WORLD = World.from_obstacles([0, 0, 50, 50], [Circle((10.0, 10.0), 2.0), Segment((14.0, 5.0), (14.0, 15.0))])
+
+
+def problem(origin=(7.0, 7.0), target=(20.0, 20.0), **kw):
+    return StepProblem(WORLD, np.array(origin), np.array(target), clearance=0.7, step_radius=2.0, **kw)
+
+
+def test_fitness_matches_eq10_where_feasible():
+    p = problem()
+    x = np.array([[6.0, 8.5]])
+    f1 = WORLD.obstacles.distances(x).sum()
+    expected = 0.18 / f1 + 0.01 * np.hypot(20 - 6.0, 20 - 8.5)
+    assert p.fitness(x)[0] == pytest.approx(expected)
+
+
+def test_infeasible_candidates_always_lose():
+    p = problem()
+    inside = np.array([[10.0, 10.0]])       # in the circle
+    too_far = np.array([[7.0, 9.5]])        # beyond the step radius
+    through = np.array([[8.6, 8.4]])        # clear itself? no: the run to it clips the circle's clearance
+    feasible = np.array([[5.5, 8.2]])
+    assert p.fitness(inside)[0] > INFEASIBLE
+    assert p.fitness(too_far)[0] > INFEASIBLE
+    assert p.fitness(through)[0] > INFEASIBLE
+    assert p.fitness(feasible)[0] < INFEASIBLE
+
+
+def test_run_crossing_a_wall_is_infeasible():
+    p = problem(origin=(13.0, 10.0))
+    assert p.fitness(np.array([[14.9, 10.0]]))[0] > INFEASIBLE
+
+
+@pytest.mark.parametrize('seed', range(5))
+def test_planned_waypoint_keeps_clearance_and_nears_the_target(seed):
+    p = problem()
+    step = plan_step(p, PlannerParams(), np.random.default_rng(seed))
+    assert step is not None
+    w = step.waypoint
+    assert np.hypot(*(w - p.origin)) <= 2.0 + 1e-9
+    assert WORLD.obstacles.clearance(w) >= 0.7 - 1e-9
+    assert WORLD.obstacles.path_clearance(p.origin, w) >= 0.7 - 1e-9
+    assert np.hypot(*(w - p.target)) < np.hypot(*(p.origin - p.target))
+
+
+def test_other_robots_are_kept_at_the_sum_of_radii():
+    p = problem(origin=(30.0, 30.0), target=(40.0, 40.0), others=np.array([[31.5, 31.5]]),
+                robot_clearance=np.array([1.2]))
+    step = plan_step(p, PlannerParams(), np.random.default_rng(1))
+    assert step is not None
+    assert np.hypot(*(step.waypoint - [31.5, 31.5])) >= 1.2 - 1e-9
+
+
+def test_boxed_in_robot_gets_no_step():
+    a, b = 9.4, 10.6  # a box whose centre is only 0.6 m from the walls: nowhere keeps 0.7 m
+    walls = [Segment((a, a), (b, a)), Segment((b, a), (b, b)), Segment((b, b), (a, b)), Segment((a, b), (a, a))]
+    world = World.from_obstacles([0, 0, 50, 50], walls)
+    p = StepProblem(world, np.array([10.0, 10.0]), np.array([30.0, 30.0]), clearance=0.7, step_radius=2.0)
+    assert plan_step(p, PlannerParams(), np.random.default_rng(0)) is None
+
+
+def test_aco_plans_feasible_steps_too():
+    step = plan_step(problem(), PlannerParams(), np.random.default_rng(0), method='aco')
+    assert step is not None and WORLD.obstacles.clearance(step.waypoint) >= 0.7 - 1e-9
