@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.geometry import point_segment_distance
+from fastep_core.geometry import norm, point_segment_distance
 from fastep_core.optimize import OptimizeResult, aco_r, fastep
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
@@ -69,18 +69,18 @@ class StepProblem:
         """(eq. 10 fitness, total constraint violation) of each candidate; violation 0 means feasible."""
         X = np.asarray(X, dtype=float)
         x, y = X[:, 0], X[:, 1]
-        viol = np.maximum(np.hypot(x - self.origin[0], y - self.origin[1]) - self.step_radius, 0.0)
+        viol = np.maximum(norm(x - self.origin[0], y - self.origin[1]) - self.step_radius, 0.0)
         viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
-        f = self.c * np.hypot(x - self.target[0], y - self.target[1])
+        f = self.c * norm(x - self.target[0], y - self.target[1])
         if len(self.world.obstacles):
             dist = self.world.obstacles.distances(X)
             f += self.a / np.maximum(dist.sum(axis=1), 1e-9)
             if len(self._local_obstacles):
                 viol += np.maximum(self.clearance - dist[:, self._local].min(axis=1), 0.0)
-                run = self._local_obstacles.path_clearance(self.origin, X)
+                run = self._local_obstacles.fan_clearance(self.origin, X)
                 viol += np.maximum(self._path_clearance - run, 0.0)
         if len(self.others):
-            gap = np.hypot(x[:, None] - self.others[:, 0], y[:, None] - self.others[:, 1])
+            gap = norm(x[:, None] - self.others[:, 0], y[:, None] - self.others[:, 1])
             f += self.b / np.maximum(gap.sum(axis=1), 1e-9)
             viol += np.maximum(self.robot_clearance - gap, 0.0).sum(axis=1)
             run = point_segment_distance(self.others, self.origin, X[:, None, :])
@@ -108,11 +108,12 @@ def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Genera
     if method == 'fastep':
         result = fastep(problem.fitness, problem.bounds(), n_fireflies=params.n_fireflies,
                         max_iter=params.max_iter, patience=params.patience, gamma=params.gamma,
-                        beta0=params.beta0, alpha=params.alpha, alpha_damping=params.alpha_damping, rng=rng)
+                        beta0=params.beta0, alpha=params.alpha, alpha_damping=params.alpha_damping, tol=params.tol,
+                        rng=rng)
     elif method == 'aco':
         result = aco_r(problem.fitness, problem.bounds(), archive_size=params.aco_archive,
                        n_ants=params.aco_ants, q=params.aco_q, xi=params.aco_xi, max_iter=params.aco_iter,
-                       patience=params.patience, rng=rng)
+                       patience=params.patience, tol=params.tol, rng=rng)
     else:
         raise ValueError(f'unknown step optimizer {method!r}')
     if not result.fun < INFEASIBLE:

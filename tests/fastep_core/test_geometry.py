@@ -55,3 +55,13 @@ def test_vectorised_clearance_matches_pointwise():
     assert obs.clearance(pts) == pytest.approx([float(obs.clearance(p)) for p in pts])
     b = rng.uniform(0, 50, (40, 2))
     assert obs.path_clearance(pts[0], b) == pytest.approx([float(obs.path_clearance(pts[0], q)) for q in b])
+
+
+def test_fan_clearance_equals_path_clearance():
+    rng = np.random.default_rng(11)
+    obs = Obstacles([Circle(tuple(c), r) for c, r in zip(rng.uniform(0, 20, (5, 2)), rng.uniform(0.5, 3, 5))]
+                    + [Segment(tuple(s), tuple(e)) for s, e in zip(rng.uniform(0, 20, (4, 2)), rng.uniform(0, 20, (4, 2)))])
+    origin = np.array([10.0, 10.0])
+    ends = np.vstack([rng.uniform(0, 20, (500, 2)), origin[None, :]])
+    assert obs.fan_clearance(origin, ends) == pytest.approx(obs.path_clearance(origin, ends), abs=1e-9)
+    assert (obs.fan_clearance(origin, ends) == 0.0).any()   # some runs cross a wall

@@ -1,0 +1,201 @@
+"""FAStep (fastep_core.optimize.fastep): convergence, reproducibility, bookkeeping, bounds, x0, inf values."""
+
+import warnings
+
+import numpy as np
+import pytest
+
+from benchmarks.fastep_loop import fastep_loop
+from fastep_core.errors import ParameterError
+from fastep_core.optimize import OptimizeResult, fastep, firefly
+
+CENTRE = np.array([0.7, -1.3])
+BOX = [[-2.0, 2.0], [-2.0, 2.0]]
+RASTRIGIN_BOX = [[-5.12, 5.12], [-5.12, 5.12]]
+
+
+def sphere(X):
+    return np.sum((X - CENTRE) ** 2, axis=1)
+
+
+def rastrigin(X):
+    return 10.0 * X.shape[1] + np.sum(X ** 2 - 10.0 * np.cos(2.0 * np.pi * X), axis=1)
+
+
+class Recorder:
+    """A vectorised objective that keeps every batch it is called with."""
+
+    def __init__(self, fun):
+        self.fun = fun
+        self.batches = []
+
+    def __call__(self, X):
+        assert X.ndim == 2
+        self.batches.append(np.array(X, copy=True))
+        return self.fun(X)
+
+    @property
+    def points(self):
+        return np.concatenate(self.batches)
+
+
+@pytest.mark.parametrize('seed', range(10))
+def test_reaches_the_sphere_minimum(seed):
+    r = fastep(sphere, BOX, max_iter=200, patience=50, rng=seed)
+    assert np.linalg.norm(r.x - CENTRE) < 1e-3
+    assert r.fun < 1e-6
+
+
+def test_solves_rastrigin_for_most_seeds():
+    funs = [fastep(rastrigin, RASTRIGIN_BOX, max_iter=200, patience=50, rng=seed).fun for seed in range(10)]
+    assert sum(f < 1e-2 for f in funs) >= 8, funs
+
+
+def test_stepping_ahead_beats_the_standard_algorithm_on_rastrigin():
+    # Same swarm, same budget (20 fireflies, the default 30 iterations / patience 5), same seeds: the
+    # stepping-ahead move and the preference rule are what differ.
+    def solved(optimizer):
+        return sum(optimizer(rastrigin, RASTRIGIN_BOX, n_fireflies=20, rng=seed).fun < 1e-2 for seed in range(30))
+    assert solved(fastep) >= solved(firefly) + 6
+
+
+def test_default_budget_on_the_planner_sized_problem():
+    r = fastep(sphere, BOX, rng=0)
+    assert r.nit <= 30 and r.fun < 1e-4
+
+
+def test_same_seed_same_result_different_seed_different_history():
+    a = fastep(rastrigin, RASTRIGIN_BOX, rng=7)
+    b = fastep(rastrigin, RASTRIGIN_BOX, rng=np.random.default_rng(7))
+    c = fastep(rastrigin, RASTRIGIN_BOX, rng=8)
+    assert np.array_equal(a.x, b.x) and a.fun == b.fun and a.nfev == b.nfev
+    assert np.array_equal(a.history, b.history)
+    assert not (len(a.history) == len(c.history) and np.array_equal(a.history, c.history))
+
+
+def test_generator_is_the_only_source_of_randomness():
+    np.random.seed(0)
+    a = fastep(sphere, BOX, rng=3)
+    np.random.seed(1)
+    b = fastep(sphere, BOX, rng=3)
+    assert np.array_equal(a.history, b.history)
+
+
+def test_history_nit_and_nfev_are_consistent():
+    rec = Recorder(rastrigin)
+    r = fastep(rec, RASTRIGIN_BOX, max_iter=25, patience=25, rng=1)
+    assert isinstance(r, OptimizeResult)
+    assert r.nit == len(r.history) <= 25
+    assert r.history.dtype == np.float64
+    assert np.all(np.diff(r.history) <= 0.0)
+    assert r.history[-1] == r.fun
+    assert r.nfev == len(rec.points)
+    assert len(rec.batches) <= 1 + 2 * r.nit          # vectorised: at most two calls per iteration
+    assert len(rec.batches[0]) == 50                   # the initial swarm, in one call
+    assert rastrigin(r.x[None, :])[0] == r.fun         # fun is the value of x
+    assert r.fun == rec.fun(rec.points).min()          # and the best of everything evaluated
+
+
+def test_stops_after_patience_iterations_without_improvement():
+    flat = fastep(lambda X: np.ones(len(X)), BOX, max_iter=30, patience=4, rng=0)
+    assert flat.nit == 4
+    assert fastep(sphere, BOX, max_iter=7, patience=100, rng=0).nit == 7
+    none = fastep(sphere, BOX, max_iter=0, rng=0)
+    assert none.nit == 0 and none.history.shape == (0,) and none.nfev == 50
+
+
+def test_every_candidate_is_inside_the_bounds():
+    # The minimum (5, 5) lies outside the box, so many moves would leave it without clipping.
+    bounds = np.array([[-1.0, 1.0], [0.0, 2.0]])
+    rec = Recorder(lambda X: np.sum((X - 5.0) ** 2, axis=1))
+    r = fastep(rec, bounds, rng=2)
+    P = rec.points
+    assert np.all(P >= bounds[:, 0]) and np.all(P <= bounds[:, 1])
+    assert np.allclose(r.x, [1.0, 2.0])
+
+
+def needle(centre):
+    """1 everywhere except within 1e-9 of centre: random search cannot find the 0."""
+    return lambda X: np.where(np.linalg.norm(X - centre, axis=1) < 1e-9, 0.0, 1.0)
+
+
+def test_x0_seeds_the_swarm():
+    p = np.array([0.123456, -1.654321])
+    with_x0 = fastep(needle(p), BOX, rng=0, x0=p[None, :])
+    without = fastep(needle(p), BOX, rng=0)
+    assert with_x0.fun == 0.0 and np.array_equal(with_x0.x, p)
+    assert without.fun == 1.0
+    rec = Recorder(sphere)
+    x0 = np.array([[0.5, 0.5], [-0.25, 1.0], [9.0, 0.0]])   # the last row is clipped into the box
+    fastep(rec, BOX, rng=0, x0=x0, max_iter=1)
+    assert np.array_equal(rec.batches[0][:3], [[0.5, 0.5], [-0.25, 1.0], [2.0, 0.0]])
+
+
+def test_the_brightest_firefly_never_accepts_a_worse_point():
+    # One firefly is always the brightest: its candidates (attraction random walk, then stepping ahead when
+    # that failed) must always be centred on the best point so far, although the preference rule lets other
+    # fireflies accept a step up to 1 % worse (here up to 1 unit, far more than the random step).
+    rec = Recorder(lambda X: 100.0 + np.abs(X[:, 0]))
+    r = fastep(rec, [[-1.0, 1.0]], n_fireflies=1, max_iter=30, patience=30, rng=0)
+    batches = iter(rec.batches)
+    best = next(batches)[0]
+    for t in range(r.nit):
+        radius = 0.2 * 0.8 ** t * 2.0 / 2 * (1 + 1e-12)
+        for _ in range(2):
+            c = next(batches)[0]
+            assert np.all(np.abs(c - best) <= radius)
+            if rec.fun(c[None])[0] < rec.fun(best[None])[0]:
+                best = c
+                break
+    assert next(batches, None) is None
+
+
+def half_infinite(X):
+    return np.where(X[:, 0] > 0.0, np.inf, np.sum((X - [-1.0, 0.5]) ** 2, axis=1))
+
+
+@pytest.mark.filterwarnings('error::RuntimeWarning')
+def test_infinite_and_huge_values_raise_no_warnings():
+    with warnings.catch_warnings(), np.errstate(over='raise', invalid='raise', divide='raise'):
+        warnings.simplefilter('error')
+        r = fastep(half_infinite, BOX, max_iter=100, patience=30, rng=3)
+        assert r.fun < 1e-6 and np.allclose(r.x, [-1.0, 0.5], atol=1e-3)
+        nowhere = fastep(lambda X: np.full(len(X), np.inf), BOX, rng=0)
+        assert nowhere.fun == np.inf and nowhere.nit == 5
+        huge = fastep(lambda X: np.where(X[:, 1] > 0, 1.7e308, -1.7e308 * (1 - 0.1 * X[:, 0] ** 2)), BOX, rng=0)
+        assert huge.fun == pytest.approx(-1.7e308, rel=1e-9) and np.isfinite(huge.history).all()
+        infeasible = fastep(lambda X: 1e6 + np.abs(X[:, 0]) + np.where(X[:, 1] > 1.5, -1e6, 0.0), BOX, rng=0)
+        assert infeasible.fun < 1.0
+
+
+def test_nan_counts_as_infinity():
+    r = fastep(lambda X: np.where(X[:, 0] > 0.0, np.nan, sphere(X)), BOX, rng=0)
+    assert r.x[0] <= 0.0 and np.isfinite(r.fun)
+
+
+def test_invalid_input_is_reported():
+    with pytest.raises(ParameterError):
+        fastep(sphere, [[1.0, -1.0], [0.0, 1.0]])
+    with pytest.raises(ParameterError):
+        fastep(sphere, [-1.0, 1.0])
+    with pytest.raises(ParameterError):
+        fastep(sphere, BOX, n_fireflies=0)
+    with pytest.raises(ParameterError):
+        fastep(sphere, BOX, x0=np.zeros((51, 2)))
+    with pytest.raises(ParameterError):
+        fastep(lambda X: np.zeros((len(X), 1)), BOX)
+    with pytest.raises(ParameterError):
+        fastep(sphere, BOX, rng='seed')
+
+
+def test_loop_reference_reaches_the_sphere_minimum():
+    r = fastep_loop(sphere, BOX, max_iter=60, patience=20, rng=0)
+    assert np.linalg.norm(r.x - CENTRE) < 1e-3 and r.fun < 1e-6
+
+
+@pytest.mark.parametrize('fun', [sphere, half_infinite], ids=['sphere', 'half-infinite'])
+def test_loop_reference_makes_exactly_the_same_moves(fun):
+    a = fastep(fun, BOX, max_iter=12, patience=12, rng=5)
+    b = fastep_loop(fun, BOX, max_iter=12, patience=12, rng=5)
+    assert np.array_equal(a.x, b.x) and a.fun == b.fun
+    assert np.array_equal(a.history, b.history) and (a.nit, a.nfev) == (b.nit, b.nfev)
