@@ -37,6 +37,11 @@ setup(
     entry_points={
         'console_scripts': [
             'fastep-sim = fastep_core.cli:main',
+            'fastep-plant = fastep_ros.plant:main',
+            'fastep-map = fastep_ros.map_server:main',
+            'fastep-planner = fastep_ros.planner:main',
+            'fastep-clock = fastep_ros.clock:main',
+            'fastep-launch = fastep_ros.launch:main',
         ],
     },
 )

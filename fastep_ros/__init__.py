@@ -1,1 +1,1 @@
-"""ROS 2 nodes of fastep: plant, map, planner-controller, clock, and the launcher."""
+"""fastep_ros: the rclpy nodes (plant, map, planner, clock) and the fastep-launch launcher."""

@@ -96,7 +96,7 @@ def aco_r(fun: VectorisedFunction, bounds: ArrayLike, *, archive_size: int = 10,
         keep = np.argsort(merged_f, kind='stable')[:k]
         S, fS = np.concatenate((S, A))[keep], merged_f[keep]
 
-        stall = 0 if previous - fS[0] > tol else stall + 1
+        stall = 0 if fS[0] < previous and previous - fS[0] > tol else stall + 1
         history.append(float(fS[0]))
         if stall >= patience:
             break
