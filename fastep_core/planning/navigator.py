@@ -239,7 +239,16 @@ class Navigator:
                               self.params.a, self.params.b, self.params.c, centres,
                               sums + self.params.clearance_margin)
         self.activations += 1
-        step = plan_step(problem, self.params, self.rng, self.method)
+        # Robots met ahead are passed on the right when that is possible at all.
+        offset = centres - position
+        ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (self.goal - position) > 0)
+        step = None
+        if ahead.any():
+            problem.pass_on_right = offset[ahead]
+            step = plan_step(problem, self.params, self.rng, self.method)
+            problem.pass_on_right = np.zeros((0, 2))
+        if step is None:
+            step = plan_step(problem, self.params, self.rng, self.method)
         if step is None:
             self.mode, self.reason, self.waypoint, self.cost = Mode.AVOIDING, 'no valid step; waiting', None, 0.0
             return None

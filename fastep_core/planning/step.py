@@ -7,7 +7,10 @@ the other robots (eq. 8-9; the term is dropped when there are none), d = distanc
 feasible only if
 - it lies within `step_radius` of the robot and inside the workspace by `clearance`,
 - it and the straight run to it keep `clearance` from every obstacle surface,
-- it and the run to it keep `robot_clearance[k]` from every other robot's centre.
+- it and the run to it keep `robot_clearance[k]` from every other robot's centre,
+- it lies to the right of the line from the robot to each robot in `pass_on_right` (a traffic rule: two
+  robots meeting head-on make mirror-image decisions, and without a shared convention they sidestep into
+  each other's way again and again; keeping right makes mirror images pass each other).
 Infeasible candidates score 1e6 + total violation, so any feasible candidate beats every infeasible one and
 the swarm is still pulled toward feasibility.
 """
@@ -44,12 +47,14 @@ class StepProblem:
     c: float = 0.01
     others: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))       # other robots' centres
     robot_clearance: FloatArray = field(default_factory=lambda: np.zeros(0))   # required centre distance
+    pass_on_right: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))  # robots to keep right of
 
     def __post_init__(self) -> None:
         self.origin = np.asarray(self.origin, dtype=float)
         self.target = np.asarray(self.target, dtype=float)
         self.others = np.asarray(self.others, dtype=float).reshape(-1, 2)
         self.robot_clearance = np.asarray(self.robot_clearance, dtype=float).reshape(-1)
+        self.pass_on_right = np.asarray(self.pass_on_right, dtype=float).reshape(-1, 2) - self.origin
         # A robot already closer than required (a trailer swing, another robot approaching) must still be
         # allowed to move away: the run may not get any closer than it is now.
         here = self.world.obstacles.clearance(self.origin)
@@ -85,6 +90,9 @@ class StepProblem:
             viol += np.maximum(self.robot_clearance - gap, 0.0).sum(axis=1)
             run = point_segment_distance(self.others, self.origin, X[:, None, :])
             viol += np.maximum(self._path_robot_clearance - run, 0.0).sum(axis=1)
+        for ox, oy in self.pass_on_right:
+            # cross(other - origin, X - origin) > 0 means X is left of the line toward the other robot.
+            viol += np.maximum(ox * (y - self.origin[1]) - oy * (x - self.origin[0]), 0.0)
         return f, viol
 
     def fitness(self, X: FloatArray) -> FloatArray:

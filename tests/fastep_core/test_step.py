@@ -69,3 +69,13 @@ def test_boxed_in_robot_gets_no_step():
 def test_aco_plans_feasible_steps_too():
     step = plan_step(problem(), PlannerParams(), np.random.default_rng(0), method='aco')
     assert step is not None and WORLD.obstacles.clearance(step.waypoint) >= 0.7 - 1e-9
+
+
+def test_pass_on_right_keeps_the_waypoint_right_of_the_oncoming_robot():
+    world = World.from_obstacles([0, 0, 30, 10], [])
+    p = StepProblem(world, np.array([13.0, 5.0]), np.array([27.0, 5.0]), clearance=0.7, step_radius=2.0,
+                    others=np.array([[16.0, 5.0]]), robot_clearance=np.array([1.2]),
+                    pass_on_right=np.array([[16.0, 5.0]]))
+    for seed in range(5):
+        step = plan_step(p, PlannerParams(), np.random.default_rng(seed))
+        assert step is not None and step.waypoint[1] <= 5.0 + 1e-9   # heading +x, right is -y
