@@ -87,6 +87,10 @@ class Obstacles:
         self.radii: FloatArray = np.array([c.radius for c in circles], dtype=float)
         self.starts: FloatArray = np.array([s.start for s in segments], dtype=float).reshape(-1, 2)
         self.ends: FloatArray = np.array([s.end for s in segments], dtype=float).reshape(-1, 2)
+        # Per-segment constants of the point-segment distance, hoisted out of the swarm's hot loop.
+        self._ab = self.ends - self.starts
+        length2 = np.einsum('ij,ij->i', self._ab, self._ab)
+        self._inv_length2 = np.where(length2 > 0.0, 1.0 / np.where(length2 > 0.0, length2, 1.0), 0.0)
 
     def __len__(self) -> int:
         return len(self.items)
@@ -105,8 +109,26 @@ class Obstacles:
         circ = norm(p[..., 0] - self.centers[:, 0], p[..., 1] - self.centers[:, 1]) - self.radii
         if not len(self.starts):
             return circ
-        seg = point_segment_distance(p, self.starts, self.ends)
+        ax, ay = p[..., 0] - self.starts[:, 0], p[..., 1] - self.starts[:, 1]
+        abx, aby = self._ab[:, 0], self._ab[:, 1]
+        t = np.minimum(np.maximum((ax * abx + ay * aby) * self._inv_length2, 0.0), 1.0)
+        seg = norm(ax - t * abx, ay - t * aby)
         return np.concatenate([circ, seg], axis=-1)
+
+    def distance_rows(self, x: FloatArray, y: FloatArray) -> FloatArray:
+        """distances() transposed: shape (n_obstacles, m) for m points given as coordinate arrays.
+
+        Each row is contiguous, so sums and minima over obstacles run along long rows; for the swarm's
+        ~1,200 candidates this is about twice as fast as the (m, n_obstacles) layout.
+        """
+        cx, cy = self.centers[:, 0, None], self.centers[:, 1, None]
+        circ = norm(x - cx, y - cy) - self.radii[:, None]
+        if not len(self.starts):
+            return circ
+        ax, ay = x - self.starts[:, 0, None], y - self.starts[:, 1, None]
+        abx, aby = self._ab[:, 0, None], self._ab[:, 1, None]
+        t = np.minimum(np.maximum((ax * abx + ay * aby) * self._inv_length2[:, None], 0.0), 1.0)
+        return np.concatenate([circ, norm(ax - t * abx, ay - t * aby)], axis=0)
 
     def clearance(self, points: ArrayLike) -> FloatArray:
         """Distance from each point to the nearest obstacle surface (inf when there are none)."""
@@ -135,32 +157,33 @@ class Obstacles:
     def fan_clearance(self, origin: ArrayLike, ends: ArrayLike) -> FloatArray:
         """path_clearance(origin, ends) for one origin and many ends (m, 2): the swarm's hot path.
 
-        Same result as path_clearance; the origin's own distance to each segment is computed once and the
-        arithmetic is written out on coordinate arrays, which halves the time for a few thousand runs.
+        Same result as path_clearance, computed in the (n_obstacles, m) layout of distance_rows with the
+        origin's own distance to each segment computed once.
         """
         o = np.asarray(origin, dtype=float)
         X = np.asarray(ends, dtype=float)
-        dx, dy = (X[:, 0] - o[0])[:, None], (X[:, 1] - o[1])[:, None]
-        length2 = np.maximum(dx * dx + dy * dy, 1e-300)
+        dx, dy = X[:, 0] - o[0], X[:, 1] - o[1]
+        inv_length2 = 1.0 / np.maximum(dx * dx + dy * dy, 1e-300)
+
+        def to_run(qx: FloatArray, qy: FloatArray) -> FloatArray:
+            """Distance from points q (relative to the origin, shape (k, 1)) to each run: (k, m)."""
+            t = np.minimum(np.maximum((qx * dx + qy * dy) * inv_length2, 0.0), 1.0)
+            return norm(qx - t * dx, qy - t * dy)
+
         out = np.full(len(X), np.inf)
         if len(self.radii):
-            ox, oy = self.centers[:, 0] - o[0], self.centers[:, 1] - o[1]
-            t = np.clip((ox * dx + oy * dy) / length2, 0.0, 1.0)
-            out = (norm(ox - t * dx, oy - t * dy) - self.radii).min(axis=1)
+            rel = self.centers - o
+            out = (to_run(rel[:, 0, None], rel[:, 1, None]) - self.radii[:, None]).min(axis=0)
         if len(self.starts):
-            from_origin = point_segment_distance(o, self.starts, self.ends)
-            ends_to_wall = point_segment_distance(X[:, None, :], self.starts, self.ends)
-            d = np.minimum(from_origin, ends_to_wall)
-            for q in (self.starts, self.ends):   # the wall's end points against each run
-                qx, qy = q[:, 0] - o[0], q[:, 1] - o[1]
-                t = np.clip((qx * dx + qy * dy) / length2, 0.0, 1.0)
-                d = np.minimum(d, norm(qx - t * dx, qy - t * dy))
-            wx, wy = self.ends[:, 0] - self.starts[:, 0], self.ends[:, 1] - self.starts[:, 1]
-            sx, sy = self.starts[:, 0] - o[0], self.starts[:, 1] - o[1]
-            ex, ey = self.ends[:, 0] - o[0], self.ends[:, 1] - o[1]
+            s, e = self.starts - o, self.ends - o
+            sx, sy, ex, ey = s[:, 0, None], s[:, 1, None], e[:, 0, None], e[:, 1, None]
+            wall = self.distance_rows(X[:, 0], X[:, 1])[self.n_circles:]          # run ends to each wall
+            from_origin = point_segment_distance(o, self.starts, self.ends)[:, None]
+            d = np.minimum(np.minimum(wall, from_origin), np.minimum(to_run(sx, sy), to_run(ex, ey)))
+            wx, wy = ex - sx, ey - sy
             crossing = ((dx * sy - dy * sx) * (dx * ey - dy * ex) < 0.0) & \
-                ((wx * -sy - wy * -sx) * (wx * (dy - sy) - wy * (dx - sx)) < 0.0)
-            out = np.minimum(out, np.where(crossing, 0.0, d).min(axis=1))
+                ((wy * sx - wx * sy) * (wx * (dy - sy) - wy * (dx - sx)) < 0.0)
+            out = np.minimum(out, np.where(crossing, 0.0, d).min(axis=0))
         return out
 
     def blocking(self, a: ArrayLike, b: ArrayLike, within: float) -> NDArray[np.bool_]:

@@ -21,7 +21,7 @@ from fastep_core.scenario import Scenario
 __all__ = ['RobotRun', 'Run', 'Tick', 'simulate', 'ALGORITHMS']
 
 FloatArray = NDArray[np.float64]
-ALGORITHMS = ('fastep', 'aco')
+ALGORITHMS = ('fastep', 'aco', 'optimal')  # optimal: exact shortest path (planning/optimal_kinematic.py)
 SAMPLE_SPACING = 0.1  # metres of travel between trajectory samples (DESIGN: at least every 0.1 m)
 
 

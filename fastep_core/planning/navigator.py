@@ -333,7 +333,8 @@ class ACOKinematic(Navigator):
 def make_navigator(algorithm: str, spec: RobotLike, radius: float, world: World, params: PlannerParams,
                    rng: np.random.Generator | int | None = None) -> Navigator:
     """A FAStep-Kinematic ('fastep') or ACO-Kinematic ('aco') navigator for a scenario robot."""
-    classes = {'fastep': FAStepKinematic, 'aco': ACOKinematic}
+    from fastep_core.planning.optimal_kinematic import OptimalKinematic  # exact-path reference; imports this module
+    classes = {'fastep': FAStepKinematic, 'aco': ACOKinematic, 'optimal': OptimalKinematic}
     if algorithm not in classes:
         raise ValueError(f'unknown algorithm {algorithm!r}; choose one of {", ".join(classes)}')
     model, controller = make_robot(spec, params)

@@ -31,8 +31,8 @@ class PlannerParams:
     alpha_damping: float = _p(0.8, 'alpha multiplier per iteration (Table 1: 0.8)', 0.0, 1.0)
     max_iter: int = _p(30, 'swarm iterations per step at most', 1, 10_000)
     patience: int = _p(3, 'stop the swarm after this many iterations without improvement', 1, 10_000)
-    tol: float = _p(1e-5, 'a swarm iteration improves only if the best fitness drops by more than this '
-                          '(with c = 0.01, 1e-5 is 1 mm closer to the goal)', 0.0)
+    tol: float = _p(1e-4, 'a swarm iteration improves only if the best fitness drops by more than this '
+                          '(with c = 0.01, 1e-4 is 1 cm closer to the goal)', 0.0)
     # Step fitness f = a/f1 + b/f2 + c*d (eq. 10; Table 1 rows 6-8).
     a: float = _p(0.18, 'obstacle safety weight a, paper range [0.1, 1]', 0.0)
     b: float = _p(0.18, 'robot safety weight b, paper range [0.1, 1]', 0.0)

@@ -78,10 +78,10 @@ class StepProblem:
         viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
         f = self.c * norm(x - self.target[0], y - self.target[1])
         if len(self.world.obstacles):
-            dist = self.world.obstacles.distances(X)
-            f += self.a / np.maximum(dist.sum(axis=1), 1e-9)
+            dist = self.world.obstacles.distance_rows(x, y)
+            f += self.a / np.maximum(dist.sum(axis=0), 1e-9)
             if len(self._local_obstacles):
-                viol += np.maximum(self.clearance - dist[:, self._local].min(axis=1), 0.0)
+                viol += np.maximum(self.clearance - dist[self._local].min(axis=0), 0.0)
                 run = self._local_obstacles.fan_clearance(self.origin, X)
                 viol += np.maximum(self._path_clearance - run, 0.0)
         if len(self.others):

@@ -65,3 +65,10 @@ def test_fan_clearance_equals_path_clearance():
     ends = np.vstack([rng.uniform(0, 20, (500, 2)), origin[None, :]])
     assert obs.fan_clearance(origin, ends) == pytest.approx(obs.path_clearance(origin, ends), abs=1e-9)
     assert (obs.fan_clearance(origin, ends) == 0.0).any()   # some runs cross a wall
+
+
+def test_distance_rows_is_distances_transposed():
+    rng = np.random.default_rng(5)
+    obs = Obstacles([Circle((3.0, 4.0), 1.0), Segment((0.0, 0.0), (5.0, 1.0)), Segment((2.0, 2.0), (2.0, 2.0))])
+    pts = rng.uniform(-5, 10, (50, 2))
+    assert obs.distance_rows(pts[:, 0], pts[:, 1]) == pytest.approx(obs.distances(pts).T)

@@ -1,0 +1,383 @@
+"""Batch experiments: many seeded runs of several planners on several scenarios, and their statistics.
+
+Why a module of pure functions: the paper's Table 2 (30 runs per planner and scenario, means, "enhancement"
+percentages) is the project's main claim, so regenerating it must be one reproducible call, usable from the
+`fastep-bench` console script, from `benchmarks/table2.py`, from tuning and from tests alike:
+
+- `run_batch` spreads (scenario, algorithm, seed) simulate calls over a process pool (one task = one run;
+  every run draws only from its own seed, so the records do not depend on the number of workers or on the
+  order the pool finishes them in; they are returned sorted);
+- `summarise` gives mean and sample standard deviation (ddof = 1) per scenario, planner and robot of path
+  length and simulated time to goal (over the runs that arrived without collision) and of compute time (all
+  runs);
+- `compare` puts two planners side by side on one metric: means, the paper's "enhancement"
+  (ACO - FAStep) / ACO * 100 and a two-sided Mann-Whitney U test (scipy.stats.mannwhitneyu), which assumes
+  no distribution: compute times are skewed and path lengths bounded below by the optimum;
+- `optimal_lengths` gives the exact shortest path (planning.optimal) per robot, the yardstick for the
+  optimality ratio path length / optimal length;
+- `markdown_report` and `figures` write what docs/table2.md shows.
+
+'optimal' (the exact path driven by the kinematic controller) draws no random numbers, so a batch runs it
+once, with the first seed, whatever `runs` says.
+
+Note on the ratio: a run ends within `goal_tolerance` (0.1 m) of the goal and the robot cuts the corners
+of its waypoints, so a ratio a little below 1 is possible; the optimum keeps clearance radius +
+clearance_margin, the rule that planned waypoints follow.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import multiprocessing
+import sys
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Callable, Iterable, Sequence
+
+import numpy as np
+
+__all__ = [
+    'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
+    'tasks', 'run_task', 'run_batch', 'summarise', 'compare', 'enhancement', 'optimal_lengths',
+    'markdown_report', 'figures',
+]
+
+TABLE2: tuple[str, ...] = ('table2_s1', 'table2_s2', 'table2_s3')
+"""The built-in scenarios of the paper's Table 2."""
+
+PAPER: dict[str, dict[str, dict[str, float]]] = {
+    # Table 2 of the paper: means of 30 runs; 'time' is MATLAB run time (s), dominated by step generation.
+    'table2_s1': {'fastep': {'path': 56.56, 'time': 69.62}, 'aco': {'path': 56.77, 'time': 133.76}},
+    'table2_s2': {'fastep': {'path': 59.69, 'time': 154.04}, 'aco': {'path': 65.75, 'time': 283.25}},
+    'table2_s3': {'fastep': {'path': 45.73, 'time': 95.80}, 'aco': {'path': 48.54, 'time': 173.27}},
+}
+
+DETERMINISTIC = frozenset({'optimal'})
+"""Algorithms without random draws: run once per scenario."""
+
+METRICS: dict[str, str] = {
+    'path_length': 'path length (m)',
+    'sim_time': 'simulated time to goal (s)',
+    'compute_time': 'compute time (s)',
+}
+
+NAMES = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
+
+
+@dataclass(frozen=True)
+class Record:
+    """One robot in one run (what fastep-sim reports, without the trajectory)."""
+
+    scenario: str
+    algorithm: str
+    seed: int
+    robot: str
+    reached: bool
+    collided: bool
+    path_length: float
+    sim_time: float | None
+    compute_time: float
+    min_clearance: float
+    activations: int
+    status: str
+
+    @property
+    def ok(self) -> bool:
+        """Arrived without touching anything."""
+        return self.reached and not self.collided
+
+    def to_json(self) -> dict[str, object]:
+        return asdict(self)
+
+
+Task = tuple[str, str, int]
+
+
+def tasks(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0: int = 0) -> list[Task]:
+    """Every (scenario, algorithm, seed) simulate call of a batch; deterministic algorithms get one seed."""
+    return [(s, a, seed) for s in scenarios for a in algorithms
+            for seed in range(seed0, seed0 + (1 if a in DETERMINISTIC else runs))]
+
+
+@functools.lru_cache(maxsize=64)
+def _scenario(source: str):  # type: ignore[no-untyped-def]
+    from fastep_core.scenario import load_scenario
+    return load_scenario(source)
+
+
+def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = ()) -> list[Record]:
+    """One simulate call (in a worker process); `overrides` replace planner parameters (used by tuning)."""
+    from dataclasses import replace
+
+    from fastep_core.simulator import simulate
+    source, algorithm, seed = task
+    scenario = _scenario(source)
+    if overrides:
+        scenario = replace(scenario, planner=scenario.planner.with_overrides(dict(overrides)))
+    run = simulate(scenario, algorithm, seed)
+    return [Record(source, algorithm, seed, r.name, r.reached, r.collided, r.path_length, r.sim_time,
+                   r.compute_time, r.min_clearance, r.activations, r.status) for r in run.robots]
+
+
+def _progress_printer(total: int, label: str) -> Callable[[int], None]:
+    tty = sys.stderr.isatty()
+    every = max(1, total // 20)
+
+    def show(done: int) -> None:
+        if tty:
+            sys.stderr.write(f'\r{label}: {done}/{total} runs')
+            if done == total:
+                sys.stderr.write('\n')
+        elif done % every == 0 or done == total:
+            sys.stderr.write(f'{label}: {done}/{total} runs\n')
+        sys.stderr.flush()
+    return show
+
+
+def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, workers: int = 2, *,
+              seed0: int = 0, progress: bool | str = False,
+              overrides: dict[str, float] | None = None) -> list[Record]:
+    """Simulate every scenario with every algorithm for seeds seed0..seed0+runs-1; records sorted.
+
+    workers <= 1 runs in this process. `progress` (True or a label) prints a counter on stderr.
+    """
+    if runs < 1:
+        raise ValueError(f'runs must be >= 1, got {runs}')
+    todo = tasks(scenarios, algorithms, runs, seed0)
+    frozen = tuple(sorted((overrides or {}).items()))
+    job = functools.partial(run_task, overrides=frozen)
+    show = _progress_printer(len(todo), progress if isinstance(progress, str) else 'runs') if progress else None
+    out: list[Record] = []
+    if workers <= 1 or len(todo) == 1:
+        for k, task in enumerate(todo, 1):
+            out.extend(job(task))
+            if show:
+                show(k)
+    else:
+        with multiprocessing.get_context('spawn').Pool(min(workers, len(todo))) as pool:
+            for k, records in enumerate(pool.imap_unordered(job, todo), 1):
+                out.extend(records)
+                if show:
+                    show(k)
+    order = {(s, a): i for i, (s, a) in enumerate((s, a) for s in scenarios for a in algorithms)}
+    out.sort(key=lambda r: (order[(r.scenario, r.algorithm)], r.seed, r.robot))
+    return out
+
+
+# ----------------------------------------------------------------------------------------- statistics
+
+@dataclass(frozen=True)
+class Summary:
+    """Per scenario, algorithm and robot: counts, and mean / sample std of each metric."""
+
+    scenario: str
+    algorithm: str
+    robot: str
+    runs: int
+    arrived: int           # arrived without collision
+    collided: int
+    mean: dict[str, float]
+    std: dict[str, float]
+
+
+def _values(records: Iterable[Record], metric: str) -> np.ndarray:
+    """The metric over the records it is defined for: compute time always, the rest for arrived runs."""
+    if metric == 'compute_time':
+        return np.array([r.compute_time for r in records], dtype=float)
+    return np.array([getattr(r, metric) for r in records if r.ok], dtype=float)
+
+
+def _mean_std(x: np.ndarray) -> tuple[float, float]:
+    if x.size == 0:
+        return math.nan, math.nan
+    return float(x.mean()), float(x.std(ddof=1)) if x.size > 1 else 0.0
+
+
+def summarise(records: Sequence[Record]) -> list[Summary]:
+    """One Summary per (scenario, algorithm, robot), in the order the records come in."""
+    groups: dict[tuple[str, str, str], list[Record]] = {}
+    for r in records:
+        groups.setdefault((r.scenario, r.algorithm, r.robot), []).append(r)
+    out = []
+    for (scenario, algorithm, robot), group in groups.items():
+        mean, std = {}, {}
+        for metric in METRICS:
+            mean[metric], std[metric] = _mean_std(_values(group, metric))
+        out.append(Summary(scenario, algorithm, robot, len(group), sum(r.ok for r in group),
+                           sum(r.collided for r in group), mean, std))
+    return out
+
+
+def enhancement(aco: float, fastep: float) -> float:
+    """The paper's enhancement of FAStep over ACO in percent: (ACO - FAStep) / ACO * 100."""
+    return (aco - fastep) / aco * 100.0 if aco else math.nan
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """Planner a (FAStep) against planner b (ACO) on one metric of one scenario (all robots pooled)."""
+
+    metric: str
+    mean_a: float
+    mean_b: float
+    enhancement: float     # (b - a) / b * 100
+    u: float
+    p_value: float         # two-sided Mann-Whitney U
+    n_a: int
+    n_b: int
+
+    @property
+    def a_better(self) -> bool:
+        """a has the smaller mean, significantly at p < 0.05."""
+        return self.mean_a < self.mean_b and self.p_value < 0.05
+
+
+def compare(records: Sequence[Record], scenario: str, metric: str, a: str = 'fastep',
+            b: str = 'aco') -> Comparison:
+    """Means, enhancement % and the two-sided Mann-Whitney U test of `metric` for planners a and b."""
+    from scipy.stats import mannwhitneyu
+    xa = _values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
+    xb = _values([r for r in records if r.scenario == scenario and r.algorithm == b], metric)
+    if xa.size == 0 or xb.size == 0:
+        return Comparison(metric, _mean_std(xa)[0], _mean_std(xb)[0], math.nan, math.nan, math.nan,
+                          int(xa.size), int(xb.size))
+    if np.ptp(np.concatenate([xa, xb])) == 0.0:
+        u, p = xa.size * xb.size / 2.0, 1.0            # all equal: nothing to tell apart
+    else:
+        res = mannwhitneyu(xa, xb, alternative='two-sided')
+        u, p = float(res.statistic), float(res.pvalue)
+    ma, mb = float(xa.mean()), float(xb.mean())
+    return Comparison(metric, ma, mb, enhancement(mb, ma), u, p, int(xa.size), int(xb.size))
+
+
+def optimal_lengths(source: str) -> dict[str, float | None]:
+    """Exact shortest path length per robot (clearance radius + clearance_margin); None when there is none."""
+    from fastep_core.planning.optimal import shortest_path
+    scenario = _scenario(source)
+    out: dict[str, float | None] = {}
+    for spec in scenario.robots:
+        path = shortest_path(scenario.world, spec.start[:2], spec.goal,
+                             spec.radius + scenario.planner.clearance_margin)
+        out[spec.name] = None if path is None else path.length
+    return out
+
+
+def straight_lengths(source: str) -> dict[str, float]:
+    scenario = _scenario(source)
+    return {spec.name: math.dist(spec.start[:2], spec.goal) for spec in scenario.robots}
+
+
+# ----------------------------------------------------------------------------------------- report
+
+def _pm(mean: float, std: float, digits: int = 2) -> str:
+    if math.isnan(mean):
+        return '-'
+    return f'{mean:.{digits}f} ± {std:.{digits}f}'
+
+
+def _num(x: float | None, digits: int = 2, suffix: str = '') -> str:
+    return '-' if x is None or (isinstance(x, float) and math.isnan(x)) else f'{x:.{digits}f}{suffix}'
+
+
+def _p(p: float) -> str:
+    if math.isnan(p):
+        return '-'
+    return f'{p:.2g}' if p >= 1e-3 else f'{p:.1e}'
+
+
+def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, float | None]], *,
+                    title: str = 'Table 2 regenerated', command: str = '') -> str:
+    """Markdown: the Table 2 layout with the paper's numbers, the comparisons, and optimality ratios."""
+    summaries = summarise(records)
+    scenarios = list(dict.fromkeys(r.scenario for r in records))
+    algorithms = list(dict.fromkeys(r.algorithm for r in records))
+    runs = {a: len({r.seed for r in records if r.algorithm == a}) for a in algorithms}
+    lines = [f'## {title}', '']
+    if command:
+        lines += ['```', command, '```', '']
+    lines += ['Runs per cell: ' + ', '.join(f'{NAMES.get(a, a)} {n}' for a, n in runs.items()) +
+              '. Means ± sample standard deviation; path length and simulated time over the runs that '
+              'arrived without collision, compute time (wall seconds planning and simulating the robot) over '
+              'all runs. "opt." is path length / exact shortest path keeping radius + clearance margin.', '']
+    lines += ['| scenario | robot | planner | arrived | path (m) | paper path | path / opt. | '
+              'sim time (s) | compute time (s) | paper time (s) |',
+              '|---|---|---|---|---|---|---|---|---|---|']
+    for s in summaries:
+        paper = PAPER.get(s.scenario, {}).get(s.algorithm, {})
+        opt = optimal.get(s.scenario, {}).get(s.robot)
+        ratio = s.mean['path_length'] / opt if opt else math.nan
+        lines.append(f'| {s.scenario} | {s.robot} | {NAMES.get(s.algorithm, s.algorithm)} | '
+                     f'{s.arrived}/{s.runs}{f" ({s.collided} collided)" if s.collided else ""} | '
+                     f'{_pm(s.mean["path_length"], s.std["path_length"])} | {_num(paper.get("path"))} | '
+                     f'{_num(ratio, 3)} | {_pm(s.mean["sim_time"], s.std["sim_time"], 1)} | '
+                     f'{_pm(s.mean["compute_time"], s.std["compute_time"], 3)} | {_num(paper.get("time"))} |')
+    if 'fastep' in algorithms and 'aco' in algorithms:
+        lines += ['', '### FAStep-Kinematic against ACO-Kinematic',
+                  '', 'Enhancement = (ACO - FAStep) / ACO * 100 (positive: FAStep better); p: two-sided '
+                  'Mann-Whitney U. The paper\'s "time" is MATLAB run time, so it compares with our compute '
+                  'time; simulated time to goal is shown as well.', '',
+                  '| scenario | path enh. | paper | p (path) | compute-time enh. | paper (time) | p (compute) | '
+                  'sim-time enh. | p (sim time) |',
+                  '|---|---|---|---|---|---|---|---|---|']
+        for scenario in scenarios:
+            c = {m: compare(records, scenario, m) for m in METRICS}
+            paper = PAPER.get(scenario)
+            pe = enhancement(paper['aco']['path'], paper['fastep']['path']) if paper else None
+            te = enhancement(paper['aco']['time'], paper['fastep']['time']) if paper else None
+            lines.append(f'| {scenario} | {_num(c["path_length"].enhancement, 2, " %")} | {_num(pe, 2, " %")} | '
+                         f'{_p(c["path_length"].p_value)} | {_num(c["compute_time"].enhancement, 2, " %")} | '
+                         f'{_num(te, 2, " %")} | {_p(c["compute_time"].p_value)} | '
+                         f'{_num(c["sim_time"].enhancement, 2, " %")} | {_p(c["sim_time"].p_value)} |')
+    lines += ['', '### Optimality', '',
+              '| scenario | robot | straight line (m) | optimal (m) | ' +
+              ' | '.join(f'{NAMES.get(a, a)} path / opt.' for a in algorithms) + ' |',
+              '|---|---|---|---|' + '---|' * len(algorithms)]
+    by_key = {(s.scenario, s.algorithm, s.robot): s for s in summaries}
+    for scenario in scenarios:
+        lines_for = straight_lengths(scenario)
+        for robot, opt in optimal.get(scenario, {}).items():
+            cells = []
+            for a in algorithms:
+                s = by_key.get((scenario, a, robot))
+                cells.append(_num(s.mean['path_length'] / opt, 3) if s and opt else '-')
+            lines.append(f'| {scenario} | {robot} | {lines_for[robot]:.2f} | {_num(opt)} | ' +
+                         ' | '.join(cells) + ' |')
+    return '\n'.join(lines) + '\n'
+
+
+def figures(records: Sequence[Record], optimal: dict[str, dict[str, float | None]], out_dir: Path,
+            prefix: str = 'table2') -> list[Path]:
+    """Box plots of path length and compute time per scenario and planner (PNG, matplotlib Agg)."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    out_dir.mkdir(parents=True, exist_ok=True)
+    scenarios = list(dict.fromkeys(r.scenario for r in records))
+    algorithms = list(dict.fromkeys(r.algorithm for r in records))
+    written = []
+    for metric in ('path_length', 'compute_time'):
+        fig, axes = plt.subplots(1, len(scenarios), figsize=(4.2 * len(scenarios), 4.0), squeeze=False)
+        for ax, scenario in zip(axes[0], scenarios):
+            data = [_values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
+                    for a in algorithms]
+            ax.boxplot(data, tick_labels=[NAMES.get(a, a).replace('-Kinematic', '') for a in algorithms])
+            paper = PAPER.get(scenario, {})
+            if metric == 'path_length':
+                for k, a in enumerate(algorithms, 1):
+                    if a in paper:
+                        ax.plot(k, paper[a]['path'], 'rx', ms=9, label='paper mean' if k == 1 else None)
+                for opt in {v for v in optimal.get(scenario, {}).values() if v}:
+                    ax.axhline(opt, color='green', ls='--', lw=1, label='optimal')
+                if ax.get_legend_handles_labels()[0]:
+                    ax.legend(fontsize=8)
+            ax.set_title(scenario)
+            ax.set_ylabel(METRICS[metric])
+            ax.grid(axis='y', alpha=0.3)
+        fig.tight_layout()
+        path = out_dir / f'{prefix}_{metric}.png'
+        fig.savefig(path, dpi=100)
+        plt.close(fig)
+        written.append(path)
+    return written

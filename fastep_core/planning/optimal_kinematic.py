@@ -1,0 +1,71 @@
+"""Optimal-Kinematic: the exact shortest path, planned once, driven by the same kinematic controller.
+
+Why: to tell how much of FAStep-Kinematic's extra path length comes from its step-by-step swarm and how much
+from simply driving a kinematic robot through waypoints, the reference must be driven the same way. This
+navigator plans `planning.optimal.shortest_path` (clearance = radius + clearance_margin, the rule planned
+waypoints follow) once per goal, on its first tick (the base class learns the robot's position only then,
+so the planning time is part of the run's compute time), and then steers to the polyline's vertices in
+turn: a vertex counts as passed within `waypoint_tolerance`, like any planned waypoint. Arcs become vertices
+at most `ARC_SPACING` apart on a circumscribed polygon, so every chord keeps the clearance (checked with the
+core's `Obstacles.path_clearance` when the path is built); the robot cuts the corners at the vertices by a
+few centimetres, well inside the 0.2 m margin.
+
+It knows static obstacles only: other robots are left to the navigator's guard (which stops the robot rather
+than let it close in), so it is a reference for single-robot runs, not a multi-robot planner. The path keeps
+the clearance from the border as well; a goal with no such path fails with 'no valid path'.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from fastep_core.planning.navigator import Mode, Navigator, OtherRobot
+from fastep_core.planning.optimal import OptimalPath, shortest_path
+
+__all__ = ['OptimalKinematic', 'ARC_SPACING']
+
+ARC_SPACING = 0.25
+"""Largest distance (m) between consecutive polyline vertices along an arc."""
+
+
+class OptimalKinematic(Navigator):
+    """Follow the exact shortest clearance-keeping path, vertex by vertex, with the kinematic controller."""
+
+    method = 'optimal'
+
+    def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
+        super().set_goal(goal, t)
+        self.path: OptimalPath | None = None
+        self._route: np.ndarray | None = None
+        self._index = 0
+
+    def _plan(self, position: np.ndarray) -> bool:
+        assert self.goal is not None
+        self.activations += 1
+        path = shortest_path(self.world, position, self.goal, self.clearance, spacing=ARC_SPACING)
+        if path is None:
+            self.fail(f'no valid path: nothing keeps {self.clearance:g} m from the obstacles and the border')
+            return False
+        self.path = path
+        self._route = path.points[1:] if len(path.points) > 1 else path.points
+        self._index = 0
+        self.plan = [p.copy() for p in self._route[:-1]]
+        return True
+
+    def choose_target(self, position: np.ndarray, others: Sequence[OtherRobot]) -> np.ndarray | None:
+        assert self.goal is not None
+        if self._route is None and not self._plan(position):
+            return None
+        assert self._route is not None
+        last = len(self._route) - 1
+        while self._index < last and \
+                np.hypot(*(self._route[self._index] - position)) <= self.params.waypoint_tolerance:
+            self._index += 1
+        if self._index >= last:
+            self.waypoint, self.mode, self.reason = None, Mode.KINEMATIC, 'last leg of the optimal path'
+            return self.goal
+        self.waypoint = self._route[self._index]
+        self.mode, self.reason = Mode.AVOIDING, 'following the optimal path'
+        return self.waypoint
