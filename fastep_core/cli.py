@@ -1,6 +1,7 @@
 """fastep-sim: run a scenario in-process (no ROS) and report what every robot did.
 
     fastep-sim SCENARIO [--algorithm fastep|aco] [--seed N] [--runs K] [--json OUT] [--plot OUT.png]
+               [--mcap OUT.mcap]
     fastep-sim --list
 
 Exit 0 when the runs were simulated (arrived or not), 2 with one line on stderr for bad input.
@@ -36,6 +37,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--runs', type=int, default=1, help='number of runs, seeds seed..seed+runs-1 (default: 1)')
     p.add_argument('--json', type=Path, metavar='OUT', help='write all runs as JSON')
     p.add_argument('--plot', type=Path, metavar='OUT.png', help='draw the first run like the paper\'s Fig. 2')
+    p.add_argument('--mcap', type=Path, metavar='OUT.mcap',
+                   help='record the first run as MCAP with the topics of a live run (msg_tools.sim_mcap)')
     p.add_argument('--list', action='store_true', help='list built-in scenarios and exit')
     return p
 
@@ -66,7 +69,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     except FastepError as exc:
         print(f'fastep-sim: error: {exc}', file=sys.stderr)
         return 2
-    runs = [simulate(scenario, args.algorithm, seed) for seed in range(args.seed, args.seed + args.runs)]
+    recorder = None
+    if args.mcap is not None:
+        try:  # the ROS message packages only when a recording is asked for
+            from msg_tools.sim_mcap import SimRecorder
+        except ImportError as exc:
+            print(f'fastep-sim: error: --mcap needs the ROS 2 message packages: {exc}', file=sys.stderr)
+            return 2
+        recorder = SimRecorder(scenario, args.algorithm, args.seed)
+    runs = [simulate(scenario, args.algorithm, seed,
+                     observer=recorder.observe if recorder is not None and seed == args.seed else None)
+            for seed in range(args.seed, args.seed + args.runs)]
     for run in runs:
         print(_summary(run))
     try:
@@ -80,8 +93,16 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.plot.parent.mkdir(parents=True, exist_ok=True)
             plot_paths(scenario, runs[0], args.plot)
             print(f'wrote {args.plot}')
+        if recorder is not None:
+            recorder.finish(runs[0])
+            args.mcap.parent.mkdir(parents=True, exist_ok=True)
+            count = recorder.write(args.mcap)
+            print(f'wrote {args.mcap} ({count} messages of the run with seed {args.seed})')
     except OSError as exc:
         print(f'fastep-sim: error: cannot write output: {exc}', file=sys.stderr)
+        return 2
+    except FastepError as exc:  # msg_tools.errors.RecordingError: e.g. the MCAP file cannot be created
+        print(f'fastep-sim: error: {exc}', file=sys.stderr)
         return 2
     return 0
 

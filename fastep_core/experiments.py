@@ -31,6 +31,7 @@ import functools
 import math
 import multiprocessing
 import sys
+import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Callable, Iterable, Sequence
@@ -60,6 +61,7 @@ METRICS: dict[str, str] = {
     'path_length': 'path length (m)',
     'sim_time': 'simulated time to goal (s)',
     'compute_time': 'compute time (s)',
+    'cpu_time': 'CPU time per run (s)',
 }
 
 NAMES = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
@@ -81,6 +83,7 @@ class Record:
     min_clearance: float
     activations: int
     status: str
+    cpu_time: float = math.nan   # CPU seconds of the whole simulate call (all robots): immune to other load
 
     @property
     def ok(self) -> bool:
@@ -115,9 +118,11 @@ def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = ()) -> list[
     scenario = _scenario(source)
     if overrides:
         scenario = replace(scenario, planner=scenario.planner.with_overrides(dict(overrides)))
+    cpu = time.process_time()
     run = simulate(scenario, algorithm, seed)
+    cpu = time.process_time() - cpu
     return [Record(source, algorithm, seed, r.name, r.reached, r.collided, r.path_length, r.sim_time,
-                   r.compute_time, r.min_clearance, r.activations, r.status) for r in run.robots]
+                   r.compute_time, r.min_clearance, r.activations, r.status, cpu) for r in run.robots]
 
 
 def _progress_printer(total: int, label: str) -> Callable[[int], None]:
@@ -145,6 +150,9 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     if runs < 1:
         raise ValueError(f'runs must be >= 1, got {runs}')
     todo = tasks(scenarios, algorithms, runs, seed0)
+    # A shuffled order spreads whatever else loads the machine evenly over planners and scenarios (in
+    # scenario-major order one planner's runs would share one stretch of background load).
+    todo = [todo[k] for k in np.random.default_rng(seed0).permutation(len(todo))]
     frozen = tuple(sorted((overrides or {}).items()))
     job = functools.partial(run_task, overrides=frozen)
     show = _progress_printer(len(todo), progress if isinstance(progress, str) else 'runs') if progress else None
@@ -183,8 +191,8 @@ class Summary:
 
 def _values(records: Iterable[Record], metric: str) -> np.ndarray:
     """The metric over the records it is defined for: compute time always, the rest for arrived runs."""
-    if metric == 'compute_time':
-        return np.array([r.compute_time for r in records], dtype=float)
+    if metric in ('compute_time', 'cpu_time'):
+        return np.array([getattr(r, metric) for r in records], dtype=float)
     return np.array([getattr(r, metric) for r in records if r.ok], dtype=float)
 
 
@@ -298,11 +306,13 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
         lines += ['```', command, '```', '']
     lines += ['Runs per cell: ' + ', '.join(f'{NAMES.get(a, a)} {n}' for a, n in runs.items()) +
               '. Means ± sample standard deviation; path length and simulated time over the runs that '
-              'arrived without collision, compute time (wall seconds planning and simulating the robot) over '
-              'all runs. "opt." is path length / exact shortest path keeping radius + clearance margin.', '']
+              'arrived without collision, compute time (wall seconds planning and simulating the robot, as '
+              'fastep-sim reports it) and CPU time (process CPU seconds of the whole run, not inflated by other '
+              'load on the machine) over all runs. "opt." is path length / exact shortest path keeping radius + '
+              'clearance margin.', '']
     lines += ['| scenario | robot | planner | arrived | path (m) | paper path | path / opt. | '
-              'sim time (s) | compute time (s) | paper time (s) |',
-              '|---|---|---|---|---|---|---|---|---|---|']
+              'sim time (s) | compute time (s) | CPU time (s) | paper time (s) |',
+              '|---|---|---|---|---|---|---|---|---|---|---|']
     for s in summaries:
         paper = PAPER.get(s.scenario, {}).get(s.algorithm, {})
         opt = optimal.get(s.scenario, {}).get(s.robot)
@@ -311,15 +321,16 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
                      f'{s.arrived}/{s.runs}{f" ({s.collided} collided)" if s.collided else ""} | '
                      f'{_pm(s.mean["path_length"], s.std["path_length"])} | {_num(paper.get("path"))} | '
                      f'{_num(ratio, 3)} | {_pm(s.mean["sim_time"], s.std["sim_time"], 1)} | '
-                     f'{_pm(s.mean["compute_time"], s.std["compute_time"], 3)} | {_num(paper.get("time"))} |')
+                     f'{_pm(s.mean["compute_time"], s.std["compute_time"], 3)} | '
+                     f'{_pm(s.mean["cpu_time"], s.std["cpu_time"], 3)} | {_num(paper.get("time"))} |')
     if 'fastep' in algorithms and 'aco' in algorithms:
         lines += ['', '### FAStep-Kinematic against ACO-Kinematic',
                   '', 'Enhancement = (ACO - FAStep) / ACO * 100 (positive: FAStep better); p: two-sided '
                   'Mann-Whitney U. The paper\'s "time" is MATLAB run time, so it compares with our compute '
                   'time; simulated time to goal is shown as well.', '',
                   '| scenario | path enh. | paper | p (path) | compute-time enh. | paper (time) | p (compute) | '
-                  'sim-time enh. | p (sim time) |',
-                  '|---|---|---|---|---|---|---|---|---|']
+                  'CPU-time enh. | p (CPU) | sim-time enh. | p (sim time) |',
+                  '|---|---|---|---|---|---|---|---|---|---|---|']
         for scenario in scenarios:
             c = {m: compare(records, scenario, m) for m in METRICS}
             paper = PAPER.get(scenario)
@@ -328,6 +339,7 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
             lines.append(f'| {scenario} | {_num(c["path_length"].enhancement, 2, " %")} | {_num(pe, 2, " %")} | '
                          f'{_p(c["path_length"].p_value)} | {_num(c["compute_time"].enhancement, 2, " %")} | '
                          f'{_num(te, 2, " %")} | {_p(c["compute_time"].p_value)} | '
+                         f'{_num(c["cpu_time"].enhancement, 2, " %")} | {_p(c["cpu_time"].p_value)} | '
                          f'{_num(c["sim_time"].enhancement, 2, " %")} | {_p(c["sim_time"].p_value)} |')
     lines += ['', '### Optimality', '',
               '| scenario | robot | straight line (m) | optimal (m) | ' +

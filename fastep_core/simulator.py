@@ -105,6 +105,8 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     dt = params.dt
     n_ticks = int(math.ceil(params.max_sim_time / dt))
     obstacles = world.obstacles
+    known_at = np.array([s[:2] for s in states])
+    known_margin = (obstacles.clearance(known_at) if len(obstacles) else np.full(len(specs), np.inf)) - radii
 
     for k in range(n_ticks):
         t = k * dt
@@ -155,7 +157,15 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             if observer is not None:
                 observer(Tick(t_next, specs[i].name, new_state, commands[i], velocities[i], nav))
         positions = np.array([s[:2] for s in states])
-        margins = obstacles.clearance(positions) - radii if len(obstacles) else np.full(len(specs), np.inf)
+        # Obstacle margins are recomputed only when they could set a new minimum: a robot within
+        # distance e of the last exactly-measured point has a margin of at least that margin - e.
+        bound = known_margin - np.hypot(*(positions - known_at).T)
+        exact = bound < np.array([run.min_clearance for run in runs])
+        if exact.any() and len(obstacles):
+            known_at[exact] = positions[exact]
+            known_margin[exact] = obstacles.clearance(positions[exact]) - radii[exact]
+            bound[exact] = known_margin[exact]
+        margins = bound
         if len(specs) > 1:
             gaps = np.hypot(*np.moveaxis(positions[:, None, :] - positions[None, :, :], -1, 0))
             gaps = gaps - radii[:, None] - radii[None, :]
