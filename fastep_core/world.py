@@ -47,6 +47,8 @@ class World:
         if not (xmin <= x <= xmax and ymin <= y <= ymax):
             raise GoalError(f'{what} ({x:g}, {y:g}) is outside the map [{xmin:g}, {ymin:g}, {xmax:g}, {ymax:g}]')
         clearance = float(self.obstacles.clearance(np.array([x, y])))
+        if clearance < 0.0:
+            raise GoalError(f'{what} ({x:g}, {y:g}) is occupied: inside an obstacle')
         if clearance < radius:
             raise GoalError(f'{what} ({x:g}, {y:g}) is occupied: {clearance:.3g} m from an obstacle, '
                             f'robot radius {radius:g} m')

@@ -40,6 +40,7 @@ __all__ = ['ACOKinematic', 'FAStepKinematic', 'Mode', 'Navigator', 'OtherRobot',
            'make_robot']
 
 FloatArray = NDArray[np.float64]
+HOLD_BEFORE_STEP = 1.0  # seconds a robot waits for another before stepping around it
 
 
 class Mode(str, Enum):
@@ -119,6 +120,8 @@ class Navigator:
         self._best_time = 0.0
         self._detection: tuple[FloatArray, FloatArray, bool] | None = None  # (position, target, blocked)
         self._free_disc: tuple[FloatArray, float] | None = None  # (centre, radius) known obstacle-free
+        self._held_since: float | None = None  # when the guard started holding the robot for another robot
+        self._committed = False  # follow the current waypoint to the end (a step taken to break a hold)
 
     # ----------------------------------------------------------------- goals
     @property
@@ -143,6 +146,7 @@ class Navigator:
         self.mode = Mode.FAILED
         self.reason = reason
         self.waypoint = None
+        self._target = None
         self.cost = 0.0
 
     @property
@@ -163,6 +167,7 @@ class Navigator:
             self.reason = 'robot state is not finite; holding still'
             return stop
         position = state[:2]
+        others = [o for o in others if math.isfinite(o.position[0]) and math.isfinite(o.position[1])]
         distance = float(np.hypot(*(self.goal - position)))
         if distance <= self.params.goal_tolerance:
             self.mode, self.reason, self.waypoint, self.cost = Mode.ARRIVED, 'goal reached', None, 0.0
@@ -175,7 +180,15 @@ class Navigator:
                       f'in {self.params.progress_timeout:g} s')
             return stop
 
-        target = self.choose_target(position, others)
+        # Two robots the guard holds for each other wait forever if each still sees its own way as clear:
+        # after `HOLD_BEFORE_STEP` seconds the held robot plans a step around the other instead.
+        held_too_long = self._held_since is not None and t - self._held_since >= HOLD_BEFORE_STEP
+        if held_too_long:
+            self._held_since = None
+            target = self.plan_next_step(position, others)
+            self._committed = target is not None
+        else:
+            target = self.choose_target(position, others)
         if target is None:
             self._target = None
             return stop
@@ -183,7 +196,12 @@ class Navigator:
             self.controller.reset(state, target)
             self._target = target
         command = self.controller.command(state, target, dt)
-        return self.guard(state, command, dt, others)
+        guarded = self.guard(state, command, dt, others)
+        if guarded is command:
+            self._held_since = None
+        elif self._held_since is None and self.reason.startswith('stopped: giving way'):
+            self._held_since = t
+        return guarded
 
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         raise NotImplementedError
@@ -223,13 +241,15 @@ class Navigator:
         return blocked
 
     def robots_blocking(self, position: FloatArray, target: FloatArray, others: Sequence[OtherRobot],
-                        sensing_range: float) -> bool:
+                        sensing_range: float, margin: float | None = None) -> bool:
+        """Is another robot within sensing range and closer to the run than both radii plus `margin`?"""
         centres, sums = self._robot_arrays(others)
         if not len(centres):
             return False
+        margin = 0.5 * self.params.clearance_margin if margin is None else margin
         near = np.hypot(*(centres - position).T) - sums < sensing_range
         run = point_segment_distance(centres, position, target)
-        return bool(np.any(near & (run < sums + 0.5 * self.params.clearance_margin)))
+        return bool(np.any(near & (run < sums + margin)))
 
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         """Run the swarm for one waypoint; None (and a status reason) when no feasible step exists."""
@@ -258,11 +278,15 @@ class Navigator:
         return step.waypoint
 
     def keep_waypoint(self, position: FloatArray, others: Sequence[OtherRobot]) -> bool:
-        """Follow the current waypoint unless it is reached or a robot has moved onto the run to it."""
+        """Follow the current waypoint unless it is reached or a robot has moved onto the run to it.
+
+        "Onto the run" means closer than both radii: the step was planned to pass at least that far from
+        every robot, possibly less than the full margin when the robots were already that close.
+        """
         if self.waypoint is None:
             return False
         if np.hypot(*(self.waypoint - position)) <= self.params.waypoint_tolerance or \
-                self.robots_blocking(position, self.waypoint, others, self.params.sensing_range):
+                self.robots_blocking(position, self.waypoint, others, self.params.sensing_range, margin=0.0):
             self.waypoint = None
             return False
         return True
@@ -285,8 +309,10 @@ class Navigator:
             self._free_disc = (after, then - self.radius)
         for other in others:
             centre = np.asarray(other.position, dtype=float)
+            # The other robot may move up to `reach` before we see it again; a quarter of the clearance margin
+            # more absorbs the delay of a real graph (odometry a tick old, a command a tick late).
             reach = (self.params.max_speed if self.params.max_speed > 0
-                     else float(np.hypot(*other.velocity))) * dt
+                     else float(np.hypot(*other.velocity))) * dt + 0.25 * self.params.clearance_margin
             gap_now = float(np.hypot(*(position - centre)))
             gap_then = float(np.hypot(*(after - centre)))
             if gap_then < self.radius + other.radius + reach and gap_then < gap_now:
@@ -303,6 +329,9 @@ class FAStepKinematic(Navigator):
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         assert self.goal is not None
         following = self.keep_waypoint(position, others)
+        self._committed = self._committed and following
+        if self._committed:
+            return self.waypoint
         if not self.blocked(position, self.goal, others):
             self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'way is clear'
             return self.goal

@@ -1,0 +1,206 @@
+"""fastep-clock: simulated time for the graph, published on /clock.
+
+    fastep-clock --ros-args -p rtf:=10.0 [-p step:=0.05] [-p max_rate_hz:=400.0]
+
+Every tick (a steady wall-clock timer) the simulated time advances by a fixed increment and is published as
+rosgraph_msgs/Clock. The tick period is step / rtf wall seconds, but never shorter than 1 / max_rate_hz; the
+increment is rtf times the period, so simulated time runs rtf times faster than wall time. With the default
+step of 0.05 s (the planners' control period, 1 / control_rate_hz): rtf 1 -> 20 ticks/s, rtf 10 -> 200
+ticks/s, rtf 20 -> 400 ticks/s, beyond that the increment grows. A finer step costs CPU in every node (each
+one handles every tick) without changing the results: plants integrate in their own fixed steps (1/rate_hz)
+whatever the tick size, and planners act once per control period. If the machine cannot keep up, ticks come
+late and simulated time simply runs slower: it never jumps.
+
+Plants and planners started with use_sim_time:=true integrate and decide on this time; started without it
+they run on wall time with the same code. With wait_for_subscribers N the clock holds the start time until N
+/clock subscriptions are matched (fastep-launch passes the number of nodes it started), so that no node
+misses the beginning of the run because DDS discovery took a while.
+
+Lock step (sync_topics: fastep-launch lists every plant's odom and every planner's cmd_vel, with step = the
+planners' control period, so each of them publishes once per tick): each tick waits, up to sync_timeout wall
+seconds, until every listed topic has delivered a message since the previous tick, i.e. every plant has
+integrated and every planner has acted on the last tick. Simulated time then never runs ahead of a busy node,
+so the live loop behaves like the in-process simulator whatever the machine's load, and rtf is an upper bound.
+A topic that timed out (its node died) is not waited for again until it publishes again.
+"""
+
+from __future__ import annotations
+
+import importlib
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+from rclpy.clock import Clock, ClockType
+from rclpy.node import Node
+from rclpy.qos import QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock as ClockMsg
+
+from fastep_ros.common import StartupError, declare, node_main
+from msg_tools import convert
+
+__all__ = ['ClockNode', 'main', 'tick_plan']
+
+SETTLE = 0.3        # wall seconds the start time is held after the expected subscribers matched
+HOLD_PERIOD = 0.1   # wall seconds between /clock messages while the start time is held
+
+
+@dataclass
+class _Sync:
+    sub: Any = None
+    fresh: bool = False
+    absent: bool = False   # timed out once: not waited for until it publishes again
+
+
+def _message_type(type_name: str) -> Any:
+    """The Python class of 'pkg/msg/Name', or None."""
+    try:
+        package, kind, name = type_name.split('/')
+        return getattr(importlib.import_module(f'{package}.{kind}'), name)
+    except (ValueError, ImportError, AttributeError):
+        return None
+
+
+def tick_plan(rtf: float, step: float, max_rate_hz: float) -> tuple[float, float]:
+    """(wall period, simulated increment) of one tick."""
+    period = max(step / rtf, 1.0 / max_rate_hz)
+    return period, rtf * period
+
+
+class ClockNode(Node):
+    """Publishes simulated time on /clock, rtf times faster than wall time."""
+
+    def __init__(self, node_name: str = 'clock', **kwargs: object) -> None:
+        super().__init__(node_name, **kwargs)  # type: ignore[arg-type]
+        if self.get_parameter('use_sim_time').value:
+            raise StartupError('the clock cannot itself run on simulated time (use_sim_time must be false)')
+        self.rtf = declare(self, 'rtf', 1.0, 'real-time factor: simulated seconds per wall second',
+                           constraints='> 0')
+        self.step = declare(self, 'step', 0.05, 'simulated seconds per tick, at most (it grows when the tick '
+                            'rate would exceed max_rate_hz); the default is the planners\' control period',
+                            constraints='> 0')
+        self.max_rate_hz = declare(self, 'max_rate_hz', 400.0, 'most ticks per wall second', constraints='> 0')
+        self.start = declare(self, 'start', 0.0, 'simulated time of the first tick minus one increment (s)',
+                             constraints='>= 0')
+        self.wait_for = declare(self, 'wait_for_subscribers', 0, 'hold the time at start until this many '
+                                '/clock subscriptions are matched (so no node misses the beginning)')
+        self.wait_timeout = declare(self, 'wait_timeout', 30.0, 'start anyway after this many wall seconds of '
+                                    'waiting for subscribers (s)')
+        topics = declare(self, 'sync_topics', [''], 'lock step: before each tick, wait until every one of these '
+                         'topics (e.g. the planners\' cmd_vel, published once per control period) has delivered a '
+                         'message since the previous tick; empty: free-running')
+        self.sync_timeout = declare(self, 'sync_timeout', 1.0, 'lock step: tick anyway after waiting this many '
+                                    'wall seconds, and stop waiting for a topic that did not answer until it '
+                                    'publishes again (a node that stopped does not freeze time)')
+        for name in ('rtf', 'step', 'max_rate_hz'):
+            if getattr(self, name) <= 0.0:
+                raise StartupError(f'parameter {name} must be > 0, got {getattr(self, name):g}')
+        if self.start < 0.0:
+            raise StartupError(f'parameter start must be >= 0, got {self.start:g}')
+        self.period, self.increment = tick_plan(self.rtf, self.step, self.max_rate_hz)
+        self.ticks = 0
+        self.steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.created = self.steady.now()
+        self.matched_at: float | None = None  # steady seconds when the subscribers were all there
+        self.held_at = -math.inf
+        self.sync: dict[str, _Sync] = {t: _Sync() for t in topics if t}
+        self.last_tick = -math.inf      # steady seconds of the last advancing tick
+        self.last_lookup = -math.inf    # steady seconds of the last graph look-up for sync topics
+        self.pub = self.create_publisher(ClockMsg, '/clock',
+                                         QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self.timer = self.create_timer(self.period, self.on_tick, clock=self.steady)
+        self.get_logger().info(f'simulated time at rtf {self.rtf:g}: {self.increment:g} s every '
+                               f'{self.period * 1e3:.3g} ms of wall time')
+
+    @property
+    def time(self) -> float:
+        return self.start + self.ticks * self.increment
+
+    def seconds(self) -> float:
+        return self.steady.now().nanoseconds * 1e-9
+
+    def subscribe_sync_topics(self) -> bool:
+        """Subscribe to the sync topics that are on the graph (their type is read from it); True when all
+        are subscribed and published."""
+        missing = [t for t, s in self.sync.items() if s.sub is None]
+        if missing and self.seconds() - self.last_lookup > 0.2:
+            self.last_lookup = self.seconds()
+            types = dict(self.get_topic_names_and_types())
+            for topic in missing:
+                for type_name in types.get(topic, []):
+                    msg_type = _message_type(type_name)
+                    if msg_type is not None:
+                        self.sync[topic].sub = self.create_subscription(
+                            msg_type, topic, lambda _msg, t=topic: self.on_sync(t), 10)
+                        break
+        return all(s.sub is not None and self.count_publishers(t) > 0 for t, s in self.sync.items())
+
+    def on_sync(self, topic: str) -> None:
+        self.sync[topic].fresh = True
+        self.sync[topic].absent = False
+        # The last answer came after the tick period: tick now rather than at the next timer event.
+        if self.matched_at is not None and self.seconds() - self.last_tick >= self.period \
+                and all(s.fresh for s in self.sync.values()) and not self.waiting():
+            self.advance()
+
+    def synced(self) -> bool:
+        """Every node we lock step with has answered the last tick (or stopped publishing)."""
+        if all(s.fresh or s.absent for s in self.sync.values()):
+            return True
+        late = [t for t, s in self.sync.items() if not (s.fresh or s.absent) and self.count_publishers(t) > 0]
+        if not late:
+            return True
+        if self.seconds() - self.last_tick > self.sync_timeout:
+            # A node that died (SIGKILL) stays on the graph until its DDS lease ends: stop waiting for it.
+            for topic in late:
+                self.sync[topic].absent = True
+            self.get_logger().warning(f'no answer on {", ".join(late)} for {self.sync_timeout:g} s of wall time; '
+                                      f'not waiting for it until it publishes again')
+            return True
+        return False
+
+    def waiting(self) -> bool:
+        """Hold the start time until the expected subscribers are matched, plus a short settling time."""
+        if self.sync and not self.subscribe_sync_topics() and self.matched_at is None:
+            if (self.steady.now() - self.created).nanoseconds * 1e-9 <= self.wait_timeout:
+                return True
+        if self.matched_at is not None:
+            return (self.steady.now() - self.created).nanoseconds * 1e-9 < self.matched_at + SETTLE
+        elapsed = (self.steady.now() - self.created).nanoseconds * 1e-9
+        if self.pub.get_subscription_count() >= self.wait_for:
+            self.matched_at = elapsed
+            return self.wait_for > 0
+        if elapsed > self.wait_timeout:
+            self.get_logger().warning(f'only {self.pub.get_subscription_count()} of {self.wait_for} /clock '
+                                      f'subscribers after {self.wait_timeout:g} s; starting anyway')
+            self.matched_at = elapsed - SETTLE
+            return False
+        return True
+
+    def on_tick(self) -> None:
+        if self.waiting():
+            # Holding: tell the nodes the start time now and then, without keeping them busy.
+            now = self.steady.now().nanoseconds * 1e-9
+            if now - self.held_at < HOLD_PERIOD:
+                return
+            self.held_at = now
+            self.pub.publish(convert.seconds_to_clock(self.time))
+        elif not self.sync or self.ticks == 0:  # nothing answers the hold
+            self.advance()
+        elif self.seconds() - self.last_tick >= 0.5 * self.period and self.synced():
+            self.advance()
+
+    def advance(self) -> None:
+        for sync in self.sync.values():
+            sync.fresh = False
+        self.last_tick = self.seconds()
+        self.ticks += 1
+        self.pub.publish(convert.seconds_to_clock(self.time))
+
+
+def main(args: Sequence[str] | None = None) -> int:
+    return node_main('fastep-clock', ClockNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,154 @@
+"""Small helpers shared by the fastep_ros nodes: QoS profiles, parameter declaration, the main() wrapper."""
+
+from __future__ import annotations
+
+import math
+import os
+import signal
+import sys
+from typing import Any, Callable, Sequence
+
+import rclpy
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.exceptions import ParameterException
+from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+__all__ = ['LATCHED', 'LATEST', 'RELIABLE', 'StartupError', 'declare', 'node_main']
+
+# The shared map and obstacles: reliable + transient-local, so late joiners get them (Nav2's map QoS).
+LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+RELIABLE = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+# Inputs where only the newest message matters (odometry into a controller, commands into a plant): a
+# deeper queue would make a busy node act on old messages, i.e. add delay to the control loop.
+LATEST = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                    durability=DurabilityPolicy.VOLATILE)
+
+
+class StartupError(Exception):
+    """A node cannot start with the parameters it was given: one line, exit code 2, no traceback."""
+
+
+_TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER, float: Parameter.Type.DOUBLE,
+          str: Parameter.Type.STRING}
+
+
+def _widen_integer_override(node: Node, name: str, default: Any) -> None:
+    """Let `-p rtf:=5` / `-p start:=[5, 25]` set a double (array) parameter, as a user would expect.
+
+    rclpy keeps command-line overrides in Node._parameter_overrides; if that ever changes, integers are
+    simply refused with the one-line error below.
+    """
+    overrides = getattr(node, '_parameter_overrides', None)
+    if not isinstance(overrides, dict) or name not in overrides:
+        return
+    given = overrides[name]
+    if isinstance(default, float) and given.type_ == Parameter.Type.INTEGER:
+        overrides[name] = Parameter(name, Parameter.Type.DOUBLE, float(given.value))
+    elif default is None and given.type_ == Parameter.Type.INTEGER_ARRAY:
+        overrides[name] = Parameter(name, Parameter.Type.DOUBLE_ARRAY, [float(v) for v in given.value])
+
+
+def declare(node: Node, name: str, default: Any, description: str, *, read_only: bool = True,
+            constraints: str = '') -> Any:
+    """Declare a statically typed parameter with a description and return its value.
+
+    `default` None declares a double array with no default (the value is then [] unless given).
+    Integers are accepted for doubles; any other wrong type is a StartupError with one line.
+    """
+    descriptor = ParameterDescriptor(name=name, description=description, read_only=read_only,
+                                     additional_constraints=constraints)
+    _widen_integer_override(node, name, default)
+    try:
+        if default is None:
+            value = node.declare_parameter(name, Parameter.Type.DOUBLE_ARRAY, descriptor).value
+            value = [] if value is None else list(value)
+        else:
+            value = node.declare_parameter(name, default, descriptor).value
+    except ParameterException as exc:
+        kind = _TYPES.get(type(default), Parameter.Type.DOUBLE_ARRAY).name.lower().replace('_', ' ')
+        raise StartupError(f'parameter {name} must be of type {kind}: {exc}') from None
+    if isinstance(value, float) and not math.isfinite(value):
+        raise StartupError(f'parameter {name} must be finite, got {value}')
+    if isinstance(value, list) and not all(math.isfinite(v) for v in value if isinstance(v, float)):
+        raise StartupError(f'parameter {name} must be finite, got {value}')
+    return value
+
+
+PARENT_ENV = 'FASTEP_PARENT_PID'
+
+
+def _die_with_parent() -> None:
+    """When started by fastep-launch (FASTEP_PARENT_PID set), get SIGINT if the launcher dies (Linux only)."""
+    parent = os.environ.get(PARENT_ENV)
+    if not parent or not sys.platform.startswith('linux'):
+        return
+    try:
+        import ctypes
+        libc = ctypes.CDLL(None, use_errno=True)
+        libc.prctl(1, signal.SIGINT)  # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if str(os.getppid()) != parent:  # the launcher is already gone
+        raise SystemExit(1)
+
+
+def _spin(node: Node) -> None:
+    """rclpy.spin, but quiet about the races of a stop: an error raised because the context was shut down
+    (Ctrl-C / SIGINT) while spinning ends the loop, and a message rclpy cannot convert (seen with Fast DDS
+    while a peer process stops) is dropped with one warning instead of ending the node."""
+    executor = SingleThreadedExecutor()
+    executor.add_node(node)
+    warned = False
+    try:
+        while rclpy.ok():
+            try:
+                executor.spin_once()
+            except (KeyboardInterrupt, ExternalShutdownException):
+                raise
+            except Exception as exc:
+                if not rclpy.ok():
+                    break
+                if not (isinstance(exc, RuntimeError) and 'Unable to convert call argument' in str(exc)):
+                    raise
+                if not warned:
+                    node.get_logger().warning(f'dropped a message rclpy could not convert: {exc}')
+                    warned = True
+    finally:
+        executor.shutdown()
+
+
+def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None = None) -> int:
+    """rclpy.init, build the node, spin until Ctrl-C / shutdown.
+
+    Returns the exit code: 0 after a normal stop, 2 (with one line on stderr, no traceback) when the node
+    cannot start with its parameters.
+    """
+    _die_with_parent()
+    # rclpy's own SIGINT handler shuts the context down (spin then ends); Python's default one would also raise
+    # KeyboardInterrupt at a random point, e.g. inside a destructor, printing a traceback.
+    signal.signal(signal.SIGINT, lambda signum, frame: None)
+    rclpy.init(args=args)
+    node = None
+    code = 0
+    try:
+        node = factory()
+        _spin(node)
+    except StartupError as exc:
+        print(f'{prog}: error: {exc}', file=sys.stderr)
+        code = 2
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    except Exception:
+        if rclpy.ok():
+            raise
+        # stopped (SIGINT) while the node was being built: rclpy calls fail on the shut-down context
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return code

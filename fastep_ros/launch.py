@@ -1,0 +1,513 @@
+"""fastep-launch: run a scenario through the live ROS 2 graph and report what every robot did.
+
+    fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco] [--seed N]
+                  [--json OUT] [--plot OUT.png] [--no-clock] [--verbose]
+
+Starts, each as its own process (`python -m fastep_ros.<node> --ros-args ...`): the map, then a plant and a
+planner per robot in the robot's namespace with its parameters from the scenario (the scenario's planner
+overrides included), and waits until every planner knows the world and the other robots. It then sends each
+goal on `/<name>/goal_pose`, starts the clock (simulated time at --rtf; --no-clock runs every node on wall
+time instead), follows every `status` and `odom`, and prints one line per robot: arrived or not, the path
+length measured from its odometry, the time taken. Every process it started is stopped at the end (SIGINT,
+then SIGKILL after a grace period), also on Ctrl-C.
+
+Exit 0 if every robot arrived (without colliding, as measured from the odometry), 1 otherwise, 2 with one
+line on stderr for bad input (or when --json / --plot cannot be written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import signal
+import subprocess
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NoReturn, Sequence
+
+import numpy as np
+
+from fastep_core.errors import FastepError
+from fastep_core.planning.params import PlannerParams
+from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
+
+__all__ = ['main']
+
+GRACE = 5.0             # wall seconds a process gets to stop after SIGINT
+STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the world and the other robots
+SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
+STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog='fastep-launch', description='Run a scenario through the live ROS 2 graph.')
+    p.add_argument('scenario', help='scenario YAML file or built-in name (' + ', '.join(builtin_names()) + ')')
+    p.add_argument('--rtf', type=float, default=1.0, help='real-time factor of the simulated clock, at most '
+                   '(default 1): each tick waits for every plant and planner, so a busy machine runs slower')
+    p.add_argument('--timeout', type=float, default=None,
+                   help='give up after this many simulated seconds (default: the scenario\'s max_sim_time)')
+    p.add_argument('--algorithm', choices=('fastep', 'aco'), default='fastep', help='planner (default fastep)')
+    p.add_argument('--seed', type=int, default=0, help='seed of the swarms (default 0; robot k uses stream k '
+                   'of the seed, as fastep-sim does)')
+    p.add_argument('--json', type=Path, metavar='OUT', help='write the summary and odometry trajectories')
+    p.add_argument('--plot', type=Path, metavar='OUT.png', help='draw the paths like fastep-sim --plot')
+    p.add_argument('--no-clock', action='store_true', help='no simulated clock: every node runs on wall time')
+    p.add_argument('--startup-timeout', type=float, default=STARTUP_TIMEOUT, help=argparse.SUPPRESS)
+    p.add_argument('--verbose', action='store_true', help='show the nodes\' INFO logs')
+    return p
+
+
+# ----------------------------------------------------------------------------------------------- processes
+
+def _ros_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, int):
+        return str(value)
+    if isinstance(value, float):
+        return repr(float(value))
+    if isinstance(value, (list, tuple)):
+        if all(isinstance(v, str) for v in value):
+            return '[' + ', '.join(value) + ']'
+        return '[' + ', '.join(_ros_value(float(v)) for v in value) + ']'
+    return str(value)
+
+
+def _command(module: str, namespace: str, params: dict[str, Any], verbose: bool) -> list[str]:
+    cmd = [sys.executable, '-m', f'fastep_ros.{module}', '--ros-args', '-r', f'__ns:={namespace}']
+    for name, value in params.items():
+        cmd += ['-p', f'{name}:={_ros_value(value)}']
+    cmd += ['--log-level', 'info' if verbose else 'warn']
+    return cmd
+
+
+def _planner_overrides(params: PlannerParams) -> dict[str, Any]:
+    defaults = PlannerParams()
+    return {name: getattr(params, name) for name in params.names() if getattr(params, name) != getattr(defaults, name)}
+
+
+def plant_params(spec: RobotSpec, sim_time: bool) -> dict[str, Any]:
+    out: dict[str, Any] = {'model': spec.model, 'start': [float(v) for v in spec.start], 'use_sim_time': sim_time}
+    if spec.model == 'tractor_trailer':
+        out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
+                   hitch_offset=float(spec.hitch_offset))
+    return out
+
+
+def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, sim_time: bool) -> dict[str, Any]:
+    spec = scenario.robots[index]
+    out: dict[str, Any] = {'algorithm': algorithm, 'model': spec.model, 'robot_radius': float(spec.radius),
+                           'seed': int(seed), 'seed_stream': index,
+                           'control_rate_hz': 1.0 / scenario.planner.dt, 'use_sim_time': sim_time}
+    if spec.model == 'tractor_trailer':
+        out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
+                   hitch_offset=float(spec.hitch_offset))
+    out.update(_planner_overrides(scenario.planner))
+    return out
+
+
+class Processes:
+    """The child processes of one launch; stop() ends every one of them."""
+
+    def __init__(self, verbose: bool) -> None:
+        self.verbose = verbose
+        self.items: list[tuple[str, subprocess.Popen[bytes]]] = []
+        self.env = dict(os.environ)
+        root = str(Path(__file__).resolve().parent.parent)
+        self.env['PYTHONPATH'] = os.pathsep.join(p for p in (root, self.env.get('PYTHONPATH', '')) if p)
+        self.env['FASTEP_PARENT_PID'] = str(os.getpid())
+        self.env.setdefault('PYTHONUNBUFFERED', '1')
+
+    def start(self, label: str, module: str, namespace: str, params: dict[str, Any]) -> None:
+        cmd = _command(module, namespace, params, self.verbose)
+        # A new session: Ctrl-C in a terminal reaches only the launcher, which then stops the nodes in order.
+        proc = subprocess.Popen(cmd, env=self.env, stdin=subprocess.DEVNULL, start_new_session=True)
+        self.items.append((label, proc))
+
+    def dead(self) -> list[tuple[str, int]]:
+        return [(label, proc.returncode) for label, proc in self.items if proc.poll() is not None]
+
+    def stop(self) -> None:
+        """SIGINT every process (the clock first, so time stops before the nodes do), SIGKILL after GRACE."""
+        clocks = [proc for label, proc in self.items if label == 'fastep-clock']
+        others = [proc for label, proc in reversed(self.items) if label != 'fastep-clock']
+        self._interrupt(clocks, GRACE / 2)
+        self._interrupt(others, GRACE)
+
+    @staticmethod
+    def _interrupt(procs: list[subprocess.Popen[bytes]], grace: float) -> None:
+        for proc in procs:
+            if proc.poll() is None:
+                try:
+                    proc.send_signal(signal.SIGINT)
+                except ProcessLookupError:
+                    pass
+        deadline = time.monotonic() + grace
+        for proc in procs:
+            try:
+                proc.wait(timeout=max(0.05, deadline - time.monotonic()))
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+
+
+# ----------------------------------------------------------------------------------------------- monitoring
+
+@dataclass
+class RobotLive:
+    spec: RobotSpec
+    status: dict[str, Any] = field(default_factory=dict)
+    rows: list[list[float]] = field(default_factory=list)   # [t, x, y] or [t, x, y, theta0, theta1]
+    trailer: float = 0.0
+    outcome: str = ''           # '' while running; 'arrived' / 'failed' / 'timeout'
+    reason: str = ''
+    end_time: float | None = None
+    activations: int = 0
+    waypoints: list[list[float]] = field(default_factory=list)
+
+    @property
+    def path_length(self) -> float:
+        if len(self.rows) < 2:
+            return 0.0
+        xy = np.array([r[1:3] for r in self.rows])
+        return float(np.hypot(*np.diff(xy, axis=0).T).sum())
+
+
+class Monitor:
+    """An rclpy node inside the launcher: sends goals, follows status and odometry of every robot."""
+
+    def __init__(self, scenario: Scenario) -> None:
+        import rclpy
+        import rclpy.executors
+        from diagnostic_msgs.msg import DiagnosticStatus
+        from geometry_msgs.msg import PoseStamped
+        from nav_msgs.msg import Odometry, Path as PathMsg
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rclpy.signals import SignalHandlerOptions
+
+        from fastep_ros.common import RELIABLE
+        from fastep_ros.planner import STATUS_QOS
+        from msg_tools import convert
+
+        self.convert = convert
+        self.rclpy = rclpy
+        self.context = rclpy.Context()
+        rclpy.init(args=[], context=self.context, signal_handler_options=SignalHandlerOptions.NO)
+        # Wall time: simulated time is read from /clock by follow_clock(), once the goals are in.
+        self.node = rclpy.create_node('fastep_launch', context=self.context)
+        self.sim_now: float | None = None
+        self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.robots = {spec.name: RobotLive(spec) for spec in scenario.robots}
+        self.goal_pubs = {}
+        depth = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # every odometry message
+        for name, robot in self.robots.items():
+            self.goal_pubs[name] = self.node.create_publisher(PoseStamped, f'/{name}/goal_pose', RELIABLE)
+            self.node.create_subscription(DiagnosticStatus, f'/{name}/status',
+                                          lambda m, r=robot: self.on_status(r, m), STATUS_QOS)
+            self.node.create_subscription(Odometry, f'/{name}/odom', lambda m, r=robot: self.on_odom(r, m), depth)
+            self.node.create_subscription(PathMsg, f'/{name}/plan', lambda m, r=robot: self.on_plan(r, m), RELIABLE)
+            if robot.spec.model == 'tractor_trailer':
+                self.node.create_subscription(PoseStamped, f'/{name}/trailer_pose',
+                                              lambda m, r=robot: self.on_trailer(r, m), depth)
+
+    def follow_clock(self) -> None:
+        """Subscribe to /clock: the clock, holding the start time until all its subscribers are there,
+        starts when this last one joins."""
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rosgraph_msgs.msg import Clock
+
+        def on_clock(msg: Any) -> None:
+            self.sim_now = self.convert.stamp_to_seconds(msg.clock)
+        self.node.create_subscription(Clock, '/clock', on_clock,
+                                      QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+
+    def now(self) -> float:
+        """Simulated time once /clock is followed (0 before its first message), wall time otherwise."""
+        if self.sim_now is not None:
+            return self.sim_now
+        return self.node.get_clock().now().nanoseconds * 1e-9
+
+    def spin(self, seconds: float) -> None:
+        self.executor.spin_once(timeout_sec=seconds)
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.rclpy.try_shutdown(context=self.context)
+
+    def on_status(self, robot: RobotLive, msg: Any) -> None:
+        robot.status = self.convert.diagnostic_to_dict(msg)
+        try:
+            robot.activations = int(robot.status.get('activations', 0))
+        except ValueError:
+            pass
+
+    def on_odom(self, robot: RobotLive, msg: Any) -> None:
+        try:
+            x, y = self.convert.odometry_position(msg)
+        except ValueError:
+            return
+        t = self.convert.stamp_to_seconds(msg.header.stamp)
+        if robot.rows and t <= robot.rows[-1][0]:
+            return
+        if robot.spec.model == 'tractor_trailer':
+            yaw = self.convert.quaternion_to_yaw(msg.pose.pose.orientation)
+            robot.rows.append([t, x, y, yaw, robot.trailer])
+        else:
+            robot.rows.append([t, x, y])
+
+    def on_trailer(self, robot: RobotLive, msg: Any) -> None:
+        try:
+            robot.trailer = self.convert.trailer_yaw(msg)
+        except ValueError:
+            pass
+
+    def on_plan(self, robot: RobotLive, msg: Any) -> None:
+        points = self.convert.path_to_waypoints(msg)
+        robot.waypoints = [list(p) for p in points[:-1]]  # the last pose is the goal
+
+    def send_goals(self) -> None:
+        for name, robot in self.robots.items():
+            goal = self.convert.point_to_pose_stamped(robot.spec.goal, self.node.get_clock().now().to_msg())
+            self.goal_pubs[name].publish(goal)
+
+
+# ----------------------------------------------------------------------------------------------- the run
+
+class LaunchError(Exception):
+    """Something went wrong while bringing the graph up (not the robots' fault)."""
+
+
+def _wait(monitor: Monitor, procs: Processes, deadline: float, ready: Any, what: str) -> None:
+    while not ready():
+        dead = procs.dead()
+        if dead:
+            label, code = dead[0]
+            raise LaunchError(f'{label} exited with code {code} while {what}')
+        if time.monotonic() > deadline:
+            raise LaunchError(f'timed out while {what}')
+        monitor.spin(0.05)
+
+
+def run(args: argparse.Namespace, scenario: Scenario) -> int:
+    sim_time = not args.no_clock
+    timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
+    procs = Processes(args.verbose)
+    monitor: Monitor | None = None
+    code = 1
+    try:
+        procs.start('fastep-map', 'map_server', '/', {'scenario': _scenario_arg(args.scenario),
+                                                       'use_sim_time': sim_time})
+        for i, spec in enumerate(scenario.robots):
+            procs.start(f'fastep-plant /{spec.name}', 'plant', f'/{spec.name}', plant_params(spec, sim_time))
+            procs.start(f'fastep-planner /{spec.name}', 'planner', f'/{spec.name}',
+                        planner_params(scenario, i, args.algorithm, args.seed, sim_time))
+        if sim_time:
+            # The clock holds time 0 until the map, every plant and planner and, last, the monitor follow it.
+            # Lock step: each tick of one control period waits for every plant's odometry and every planner's
+            # command, so simulated time never runs ahead of a busy node.
+            procs.start('fastep-clock', 'clock', '/', {
+                'rtf': float(args.rtf), 'step': scenario.planner.dt,
+                'wait_for_subscribers': 2 + 2 * len(scenario.robots),
+                'sync_topics': [f'/{spec.name}/{topic}' for spec in scenario.robots for topic in ('cmd_vel', 'odom')]})
+        monitor = Monitor(scenario)
+        robots = monitor.robots
+        names = set(robots)
+        deadline = time.monotonic() + args.startup_timeout
+
+        def planners_ready() -> bool:
+            for name, robot in robots.items():
+                if robot.status.get('message') != 'idle' or monitor.goal_pubs[name].get_subscription_count() < 1:
+                    return False
+                if not names - {name} <= set(robot.status.get('others', '').split()):
+                    return False
+            return True
+
+        _wait(monitor, procs, deadline, planners_ready, 'waiting for the planners to see the world and each other')
+        monitor.send_goals()
+        sent = time.monotonic()
+
+        def goals_taken() -> bool:
+            nonlocal sent
+            if time.monotonic() - sent > 1.0:  # a goal can be lost only if the planner was not yet matched
+                monitor.send_goals()
+                sent = time.monotonic()
+            return all(r.status.get('message') not in (None, 'idle') for r in robots.values())
+
+        _wait(monitor, procs, deadline, goals_taken, 'sending the goals')
+        if sim_time:
+            monitor.follow_clock()
+            monitor.sim_now = 0.0
+        t0 = monitor.now()
+        pace = f'simulated time at rtf {args.rtf:g} at most' if sim_time else 'wall time'
+        print(f'{scenario.name}: {len(robots)} robot(s) on their way ({args.algorithm}, seed {args.seed}, {pace})',
+              flush=True)
+        last_now, last_change = monitor.now(), time.monotonic()
+        while any(not r.outcome for r in robots.values()):
+            monitor.spin(0.05)
+            now = monitor.now() - t0
+            if now != last_now:
+                last_now, last_change = now, time.monotonic()
+            stalled = time.monotonic() - last_change > STALL
+            for robot in robots.values():
+                if robot.outcome:
+                    continue
+                message = robot.status.get('message')
+                if message == 'arrived':
+                    robot.outcome, robot.end_time = 'arrived', now
+                elif message == 'failed':
+                    robot.outcome, robot.end_time = 'failed', now
+                robot.reason = robot.status.get('reason', '')
+            dead = procs.dead()
+            if dead:
+                label, rc = dead[0]
+                for robot in robots.values():
+                    if not robot.outcome:
+                        robot.outcome, robot.reason = 'failed', f'{label} exited with code {rc}'
+            if now > timeout or stalled:
+                for robot in robots.values():
+                    if not robot.outcome:
+                        robot.outcome = 'timeout'
+                        why = f'simulated time stopped at {now:.1f} s' if stalled else \
+                            f'not arrived within {timeout:g} s'
+                        robot.reason = f'{why} ({robot.status.get("message")}: {robot.status.get("reason", "")})'
+        # Let the last odometry in before reporting.
+        end = time.monotonic() + 0.2
+        while time.monotonic() < end:
+            monitor.spin(0.02)
+        collided, written = report(args, scenario, monitor, t0, sim_time)
+        code = 0 if all(r.outcome == 'arrived' for r in robots.values()) and not collided else 1
+        if not written:
+            code = 2
+    except LaunchError as exc:
+        print(f'fastep-launch: error: {exc}', file=sys.stderr)
+        code = 1
+    except KeyboardInterrupt:
+        print('fastep-launch: interrupted; stopping every node', file=sys.stderr)
+        code = 1
+    finally:
+        if monitor is not None:
+            monitor.close()
+        procs.stop()
+    return code
+
+
+def _scenario_arg(source: str) -> str:
+    path = Path(source)
+    return str(path.resolve()) if path.is_file() else source
+
+
+def _min_clearance(scenario: Scenario, robots: dict[str, RobotLive]) -> dict[str, float]:
+    """Smallest margin each robot kept (negative: collided), from its odometry: to the obstacles, and to the
+    other robots at the same times (their positions interpolated at this robot's stamps, which with simulated
+    time are the same stamps: plants integrate on the same grid)."""
+    out = {}
+    obstacles = scenario.world.obstacles
+    tracks = {name: np.array([r[:3] for r in robot.rows]).reshape(-1, 3) for name, robot in robots.items()}
+    for name, robot in robots.items():
+        mine = tracks[name]
+        margin = math.inf
+        if len(mine) and len(obstacles):
+            margin = float(obstacles.clearance(mine[:, 1:3]).min()) - robot.spec.radius
+        for other, orobot in robots.items():
+            theirs = tracks[other]
+            if other == name or len(mine) == 0 or len(theirs) == 0:
+                continue
+            inside = (mine[:, 0] >= theirs[0, 0]) & (mine[:, 0] <= theirs[-1, 0])
+            if not inside.any():
+                continue
+            t = mine[inside, 0]
+            x, y = np.interp(t, theirs[:, 0], theirs[:, 1]), np.interp(t, theirs[:, 0], theirs[:, 2])
+            gap = float(np.hypot(mine[inside, 1] - x, mine[inside, 2] - y).min())
+            margin = min(margin, gap - robot.spec.radius - orobot.spec.radius)
+        out[name] = margin
+    return out
+
+
+def _sampled(rows: list[list[float]]) -> list[list[float]]:
+    if len(rows) < 3:
+        return rows
+    out = [rows[0]]
+    for row in rows[1:-1]:
+        if math.hypot(row[1] - out[-1][1], row[2] - out[-1][2]) >= SAMPLE_SPACING:
+            out.append(row)
+    out.append(rows[-1])
+    return out
+
+
+def report(args: argparse.Namespace, scenario: Scenario, monitor: Monitor, t0: float,
+           sim_time: bool) -> tuple[bool, bool]:
+    """Print one line per robot, write --json / --plot; (did any robot collide, were the files written)."""
+    from fastep_core.simulator import RobotRun, Run
+
+    clearance = _min_clearance(scenario, monitor.robots)
+    runs = []
+    for name, robot in monitor.robots.items():
+        rows = [[r[0] - t0, *r[1:]] for r in robot.rows]
+        when = f'{robot.end_time:.1f} s' if robot.end_time is not None else '-'
+        collided = clearance[name] < 0.0
+        print(f'{name}: {robot.outcome}{" COLLIDED" if collided else ""}, path {robot.path_length:.2f} m, '
+              f'time {when}, min clearance {clearance[name]:.2f} m, activations {robot.activations} '
+              f'({robot.reason})', flush=True)
+        runs.append(RobotRun(name=name, model=robot.spec.model, reached=robot.outcome == 'arrived',
+                             collided=collided, path_length=robot.path_length,
+                             sim_time=robot.end_time if robot.outcome == 'arrived' else None,
+                             min_clearance=clearance[name], activations=robot.activations,
+                             status=f'{robot.outcome}: {robot.reason}', trajectory=_sampled(rows),
+                             waypoints=robot.waypoints))
+    run = Run(args.seed, args.algorithm, runs)
+    try:
+        if args.json is not None:
+            doc = {'scenario': scenario.name, 'algorithm': args.algorithm, 'live': True,
+                   'rtf': None if not sim_time else args.rtf, 'runs': [run.to_json()]}
+            args.json.parent.mkdir(parents=True, exist_ok=True)
+            args.json.write_text(json.dumps(doc) + '\n')
+            print(f'wrote {args.json}')
+        if args.plot is not None:
+            from msg_tools.plots import plot_paths
+            args.plot.parent.mkdir(parents=True, exist_ok=True)
+            plot_paths(scenario, run, args.plot)
+            print(f'wrote {args.plot}')
+    except OSError as exc:
+        print(f'fastep-launch: error: cannot write output: {exc}', file=sys.stderr)
+        return any(r.collided for r in runs), False
+    return any(r.collided for r in runs), True
+
+
+def _on_sigterm(signum: int, frame: Any) -> None:
+    raise KeyboardInterrupt
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if not (math.isfinite(args.rtf) and args.rtf > 0.0):
+        parser.error(f'--rtf must be > 0, got {args.rtf:g}')
+    if args.timeout is not None and not (math.isfinite(args.timeout) and args.timeout > 0.0):
+        parser.error(f'--timeout must be > 0, got {args.timeout:g}')
+    if args.no_clock and args.rtf != 1.0:
+        parser.error('--no-clock runs on wall time: --rtf cannot be used with it')
+    try:
+        scenario = load_scenario(args.scenario)
+    except FastepError as exc:
+        print(f'fastep-launch: error: {exc}', file=sys.stderr)
+        return 2
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        return run(args, scenario)
+    finally:
+        signal.signal(signal.SIGTERM, previous)
+
+
+if __name__ == '__main__':
+    sys.exit(main())

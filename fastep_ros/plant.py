@@ -1,0 +1,169 @@
+"""fastep-plant: one simulated robot. It integrates the robot's kinematic model and publishes its odometry.
+
+    fastep-plant --ros-args -r __ns:=/r1 -p model:=point_mass -p start:=[5.0,25.0] [-p use_sim_time:=true]
+
+Subscribes `cmd_vel` (geometry_msgs/Twist, or TwistStamped when `use_stamped_cmd_vel` is true): for a point
+mass linear.x/y are the map-frame velocity (vx, vy); for a tractor-trailer linear.x is the speed v and
+angular.z the yaw rate omega. Publishes `odom` (nav_msgs/Odometry in the `map` frame, child `<ns>/base_link`)
+and, for tractor-trailers, `trailer_pose` (geometry_msgs/PoseStamped, the trailer axle, yaw theta1).
+
+Time: the model is integrated in fixed steps of 1 / rate_hz seconds of the node's clock (simulated time with
+use_sim_time, wall time otherwise) up to "now", on a timer and before each new command takes effect (a
+zero-order hold: a command acts from the step after it arrived). Odometry is stamped with the integrated
+time, which is always a whole number of steps, so the odometry of several plants lines up.
+A command older than cmd_timeout, or one that is not finite, counts as zero.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from rclpy.node import Node
+
+from fastep_core.kinematics import PointMass, TractorTrailer
+from fastep_ros.common import LATEST, RELIABLE, StartupError, declare, node_main
+from msg_tools import convert
+
+__all__ = ['PlantNode', 'main']
+
+MODELS = ('point_mass', 'tractor_trailer')
+MAX_CATCH_UP = 100_000  # integration steps done in one go at most (a clock jump beyond that is skipped)
+
+
+class PlantNode(Node):
+    """Integrates one robot's model from the commands on cmd_vel; publishes odom (and trailer_pose)."""
+
+    def __init__(self, node_name: str = 'plant', **kwargs: object) -> None:
+        super().__init__(node_name, **kwargs)  # type: ignore[arg-type]
+        self.model_name = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
+                                  constraints='point_mass | tractor_trailer')
+        start = declare(self, 'start', None, 'start state: [x, y] (point_mass) or [x, y, theta0, theta1] '
+                        '(tractor_trailer; metres, radians, map frame)')
+        length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)')
+        trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)')
+        hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
+        self.rate_hz = declare(self, 'rate_hz', 50.0, 'integration rate: fixed steps of 1/rate_hz s of the '
+                               'node clock (simulated time with use_sim_time)', constraints='> 0')
+        self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'stop (zero velocity) when no cmd_vel arrived '
+                                   'for this long (s, node clock)', constraints='> 0')
+        stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist')
+        self.frame_id = declare(self, 'frame_id', 'map', 'frame of the odometry pose (the simulated pose is '
+                                'the map pose)')
+
+        if self.model_name not in MODELS:
+            raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model_name!r}')
+        for name, value in (('rate_hz', self.rate_hz), ('cmd_timeout', self.cmd_timeout)):
+            if value <= 0.0:
+                raise StartupError(f'parameter {name} must be > 0, got {value:g}')
+        self.model: PointMass | TractorTrailer
+        if self.model_name == 'point_mass':
+            self.model = PointMass()
+            size = 2
+        else:
+            if length <= 0.0 or trailer_length <= 0.0 or hitch_offset < 0.0:
+                raise StartupError('tractor-trailer needs length > 0, trailer_length > 0, hitch_offset >= 0')
+            self.model = TractorTrailer(length, trailer_length, hitch_offset)
+            size = 4
+        if not start:
+            start = [0.0] * size
+        if len(start) != size:
+            raise StartupError(f'parameter start must have {size} values for {self.model_name}, got {start}')
+        self.state = np.array(start, dtype=float)
+
+        ns = self.get_namespace().strip('/')
+        self.child_frame_id = f'{ns}/base_link' if ns else 'base_link'
+        self.step = 1.0 / self.rate_hz
+        self.tick: int | None = None           # integrated time = tick * step
+        self.published_tick: int | None = None  # tick of the last odometry published
+        self.command = np.zeros(2)
+        self.command_time: float | None = None  # node-clock time the current command arrived
+        self.applied = np.zeros(2)              # command used in the last step (for the odometry twist)
+
+        self.odom_pub = self.create_publisher(Odometry, 'odom', RELIABLE)
+        self.trailer_pub = (self.create_publisher(PoseStamped, 'trailer_pose', RELIABLE)
+                            if self.model_name == 'tractor_trailer' else None)
+        self.create_subscription(TwistStamped if stamped else Twist, 'cmd_vel', self.on_cmd_vel, LATEST)
+        self.timer = self.create_timer(self.step, self.on_timer)
+        self.get_logger().info(f'{self.model_name} at {np.round(self.state, 3).tolist()}, '
+                               f'integrating at {self.rate_hz:g} Hz')
+
+    # ------------------------------------------------------------------------------------------- time
+    def now(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def advance(self, now: float) -> bool:
+        """Integrate in fixed steps up to `now`; True if the state moved on."""
+        target = int(math.floor(now / self.step + 1e-9))
+        if self.tick is None:
+            if now <= 0.0:
+                return False  # simulated time has not started yet
+            self.tick = target
+            return True
+        steps = target - self.tick
+        if steps <= 0:
+            return False
+        if steps > MAX_CATCH_UP:
+            self.get_logger().warning(f'clock jumped {steps * self.step:g} s ahead; not integrating the gap')
+            self.tick = target - 1
+            steps = 1
+        for _ in range(steps):
+            self.tick += 1
+            t = self.tick * self.step
+            command = self.command
+            if self.command_time is None or t - self.command_time > self.cmd_timeout:
+                command = np.zeros(2)
+            self.state = self.model.integrate(self.state, command, self.step)
+            self.applied = command
+        return True
+
+    # ------------------------------------------------------------------------------------------- callbacks
+    def on_cmd_vel(self, msg: Twist | TwistStamped) -> None:
+        now = self.now()
+        self.advance(now)  # the old command holds until now
+        try:
+            command = convert.twist_to_command(msg, self.model_name)
+        except ValueError as exc:
+            self.get_logger().warning(f'ignoring cmd_vel: {exc}; treating it as zero', once=True)
+            command = np.zeros(2)
+        self.command, self.command_time = command, now
+
+    def on_timer(self) -> None:
+        self.advance(self.now())
+        # Publish when the state moved on since the last odometry, here or in on_cmd_vel.
+        if self.tick is not None and self.tick != self.published_tick:
+            self.published_tick = self.tick
+            self.publish()
+
+    def publish(self) -> None:
+        assert self.tick is not None
+        stamp = convert.seconds_to_stamp(max(0.0, self.tick * self.step))
+        if self.model_name == 'tractor_trailer':
+            assert isinstance(self.model, TractorTrailer)
+            v, omega = (float(c) for c in self.applied)
+            linear: Sequence[float] = (v, 0.5 * self.model.length * omega)
+            angular = omega
+        else:
+            linear, angular = (float(self.applied[0]), float(self.applied[1])), 0.0
+        try:
+            odom = convert.state_to_odometry(self.state, stamp, child_frame_id=self.child_frame_id,
+                                             frame_id=self.frame_id, linear=linear, angular=angular)
+        except ValueError as exc:  # cannot happen with finite commands, but never crash a plant
+            self.get_logger().error(f'not publishing odometry: {exc}', throttle_duration_sec=5.0)
+            return
+        self.odom_pub.publish(odom)
+        if self.trailer_pub is not None:
+            assert isinstance(self.model, TractorTrailer)
+            self.trailer_pub.publish(convert.trailer_pose(self.state, self.model.trailer_length,
+                                                          self.model.hitch_offset, stamp, self.frame_id))
+
+
+def main(args: Sequence[str] | None = None) -> int:
+    return node_main('fastep-plant', PlantNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,393 @@
+"""Pure conversions between fastep_core types and ROS 2 messages (no node, no DDS needed).
+
+Conventions (DESIGN.md "ROS 2 interface", REP-103/105):
+- poses are in the `map` frame (the simulated pose *is* the map pose; there is no odometry drift);
+- a point mass has yaw 0, so its `base_link` axes are the map axes and its twist (vx, vy) is both the
+  child-frame and the map-frame velocity; its command is a Twist with linear.x = vx, linear.y = vy (map frame);
+- a tractor-trailer's yaw is the tractor heading theta0; its command is (v, omega) = (linear.x, angular.z);
+  its odometry twist is the reference point's velocity in the tractor frame: linear.x = v,
+  linear.y = L * omega / 2 (the mid-axle point slides sideways while turning, eq. 13) and angular.z = omega;
+  the trailer heading theta1 travels on `trailer_pose` (the trailer axle point, yaw theta1).
+
+Functions that read messages raise ValueError (with a one-line reason) for values that are not finite or
+malformed; the nodes turn that into a status message instead of crashing.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Iterable, Mapping, Sequence
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
+from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, Twist, TwistStamped
+from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry, Path
+from rosgraph_msgs.msg import Clock
+from visualization_msgs.msg import Marker, MarkerArray
+
+from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from fastep_core.world import World
+
+__all__ = [
+    'LEVELS', 'command_to_twist', 'diagnostic_to_dict', 'make_status', 'marker_array_to_obstacles',
+    'obstacles_to_marker_array', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
+    'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point',
+    'quaternion_to_yaw', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds', 'state_to_odometry',
+    'trailer_pose', 'trailer_yaw', 'twist_to_command', 'waypoints_to_path', 'world_to_occupancy_grid',
+    'yaw_to_quaternion',
+]
+
+CIRCLES_NS = 'circles'
+SEGMENTS_NS = 'segments'
+LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR,
+          'stale': DiagnosticStatus.STALE}
+
+
+def _finite(values: Iterable[float], what: str) -> None:
+    for v in values:
+        if not math.isfinite(v):
+            raise ValueError(f'{what} is not finite')
+
+
+# ------------------------------------------------------------------------------------------------- time
+
+def seconds_to_stamp(t: float) -> Time:
+    """Seconds (>= 0, finite) to builtin_interfaces/Time, nanoseconds rounded."""
+    if not math.isfinite(t) or t < 0.0:
+        raise ValueError(f'time {t!r} must be finite and >= 0')
+    total = int(round(t * 1e9))
+    return Time(sec=total // 1_000_000_000, nanosec=total % 1_000_000_000)
+
+
+def stamp_to_seconds(stamp: Time) -> float:
+    return stamp.sec + stamp.nanosec * 1e-9
+
+
+def seconds_to_clock(t: float) -> Clock:
+    return Clock(clock=seconds_to_stamp(t))
+
+
+# ------------------------------------------------------------------------------------------------- angles
+
+def yaw_to_quaternion(yaw: float) -> Quaternion:
+    """Rotation about z by yaw (radians, counter-clockwise)."""
+    if not math.isfinite(yaw):
+        raise ValueError(f'yaw {yaw!r} is not finite')
+    return Quaternion(x=0.0, y=0.0, z=math.sin(0.5 * yaw), w=math.cos(0.5 * yaw))
+
+
+def quaternion_to_yaw(q: Quaternion) -> float:
+    """Yaw in (-pi, pi] of a quaternion (normalised first); ValueError if not finite or of zero length."""
+    _finite((q.x, q.y, q.z, q.w), 'orientation')
+    norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
+    if norm < 1e-9:
+        raise ValueError('orientation quaternion has zero length')
+    x, y, z, w = q.x / norm, q.y / norm, q.z / norm, q.w / norm
+    return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
+
+
+# ------------------------------------------------------------------------------------------------- poses
+
+def point_to_pose_stamped(point: Sequence[float], stamp: Time | None = None, frame_id: str = 'map',
+                          yaw: float = 0.0) -> PoseStamped:
+    """A PoseStamped at (x, y) with the given yaw. Values are copied as they are (NaN stays NaN)."""
+    msg = PoseStamped()
+    msg.header.frame_id = frame_id
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.pose.position = Point(x=float(point[0]), y=float(point[1]), z=0.0)
+    msg.pose.orientation = yaw_to_quaternion(yaw)
+    return msg
+
+
+def pose_stamped_to_point(msg: PoseStamped) -> tuple[float, float]:
+    """(x, y) of a pose, as it is: the caller decides what a NaN means (a goal check refuses it)."""
+    return float(msg.pose.position.x), float(msg.pose.position.y)
+
+
+def waypoints_to_path(points: Iterable[Sequence[float]], stamp: Time | None = None,
+                      frame_id: str = 'map') -> Path:
+    msg = Path()
+    msg.header.frame_id = frame_id
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.poses = [point_to_pose_stamped(p, stamp, frame_id) for p in points]
+    return msg
+
+
+def path_to_waypoints(msg: Path) -> list[tuple[float, float]]:
+    return [pose_stamped_to_point(p) for p in msg.poses]
+
+
+# ------------------------------------------------------------------------------------------------- odometry
+
+def state_to_odometry(state: Sequence[float], stamp: Time | None = None, *, child_frame_id: str = 'base_link',
+                      frame_id: str = 'map', linear: Sequence[float] = (0.0, 0.0),
+                      angular: float = 0.0) -> Odometry:
+    """Odometry of a model state: (x, y) (point mass, yaw 0) or (x, y, theta0, theta1) (yaw theta0).
+
+    `linear` (x, y) and `angular` (z) are the twist in the child frame (see the module docstring).
+    """
+    s = [float(v) for v in state]
+    if len(s) not in (2, 4):
+        raise ValueError(f'state must have 2 or 4 values, got {len(s)}')
+    _finite(s, 'state')
+    _finite((*linear, angular), 'velocity')
+    msg = Odometry()
+    msg.header.frame_id = frame_id
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.child_frame_id = child_frame_id
+    msg.pose.pose.position = Point(x=s[0], y=s[1], z=0.0)
+    msg.pose.pose.orientation = yaw_to_quaternion(s[2] if len(s) == 4 else 0.0)
+    msg.twist.twist.linear.x = float(linear[0])
+    msg.twist.twist.linear.y = float(linear[1])
+    msg.twist.twist.angular.z = float(angular)
+    return msg
+
+
+def odometry_position(msg: Odometry) -> tuple[float, float]:
+    """(x, y) of an odometry message; ValueError if not finite."""
+    x, y = float(msg.pose.pose.position.x), float(msg.pose.pose.position.y)
+    _finite((x, y), 'odometry position')
+    return x, y
+
+
+def odometry_to_state(msg: Odometry, model: str = 'point_mass', trailer: float | None = None) -> np.ndarray:
+    """Model state from odometry: (x, y) for a point mass; (x, y, yaw, trailer) for a tractor-trailer.
+
+    `trailer` is theta1 (from `trailer_pose`), required for tractor-trailers. ValueError if not finite.
+    """
+    x, y = odometry_position(msg)
+    if model == 'point_mass':
+        return np.array([x, y])
+    if model == 'tractor_trailer':
+        if trailer is None:
+            raise ValueError('tractor-trailer state needs the trailer heading (trailer_pose)')
+        _finite((trailer,), 'trailer heading')
+        return np.array([x, y, quaternion_to_yaw(msg.pose.pose.orientation), float(trailer)])
+    raise ValueError(f'unknown robot model {model!r}')
+
+
+def odometry_velocity(msg: Odometry) -> tuple[float, float]:
+    """Map-frame velocity (vx, vy) of the reference point: the child-frame twist rotated by the yaw."""
+    vx, vy = float(msg.twist.twist.linear.x), float(msg.twist.twist.linear.y)
+    _finite((vx, vy), 'odometry twist')
+    yaw = quaternion_to_yaw(msg.pose.pose.orientation)
+    c, s = math.cos(yaw), math.sin(yaw)
+    return c * vx - s * vy, s * vx + c * vy
+
+
+def trailer_pose(state: Sequence[float], trailer_length: float, hitch_offset: float = 0.0,
+                 stamp: Time | None = None, frame_id: str = 'map') -> PoseStamped:
+    """Pose of the trailer axle point of a tractor-trailer state (x, y, theta0, theta1), yaw theta1.
+
+    The hitch is `hitch_offset` behind the tractor's mid-axle point, the trailer axle `trailer_length`
+    behind the hitch (eq. 13).
+    """
+    x, y, th0, th1 = (float(v) for v in state)
+    hx, hy = x - hitch_offset * math.cos(th0), y - hitch_offset * math.sin(th0)
+    point = (hx - trailer_length * math.cos(th1), hy - trailer_length * math.sin(th1))
+    return point_to_pose_stamped(point, stamp, frame_id, yaw=th1)
+
+
+def trailer_yaw(msg: PoseStamped) -> float:
+    """theta1 from a `trailer_pose` message (ValueError if not finite)."""
+    return quaternion_to_yaw(msg.pose.orientation)
+
+
+# ------------------------------------------------------------------------------------------------- commands
+
+def command_to_twist(command: Sequence[float], model: str = 'point_mass') -> Twist:
+    """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer (v, omega) -> linear.x,
+    angular.z."""
+    a, b = float(command[0]), float(command[1])
+    msg = Twist()
+    if model == 'tractor_trailer':
+        msg.linear.x, msg.angular.z = a, b
+    else:
+        msg.linear.x, msg.linear.y = a, b
+    return msg
+
+
+def twist_to_command(msg: Twist | TwistStamped, model: str = 'point_mass') -> np.ndarray:
+    """Inverse of command_to_twist (TwistStamped accepted); ValueError if the used fields are not finite."""
+    twist = msg.twist if isinstance(msg, TwistStamped) else msg
+    if model == 'tractor_trailer':
+        cmd = (float(twist.linear.x), float(twist.angular.z))
+    else:
+        cmd = (float(twist.linear.x), float(twist.linear.y))
+    _finite(cmd, 'velocity command')
+    return np.array(cmd)
+
+
+# ------------------------------------------------------------------------------------------------- obstacles
+
+def obstacles_to_marker_array(obstacles: Iterable[Obstacle], stamp: Time | None = None, frame_id: str = 'map',
+                              height: float = 1.0, line_width: float = 0.1) -> MarkerArray:
+    """One CYLINDER marker per circle (scale x = y = diameter) and one LINE_LIST for all segments.
+
+    A DELETEALL marker comes first, so a re-published array replaces an old one in RViz/Foxglove.
+    """
+    out = MarkerArray()
+    clear = Marker()
+    clear.header.frame_id = frame_id
+    clear.action = Marker.DELETEALL
+    out.markers.append(clear)
+    items = list(obstacles)
+    circles = [o for o in items if isinstance(o, Circle)]
+    segments = [o for o in items if isinstance(o, Segment)]
+    for i, c in enumerate(circles):
+        m = Marker()
+        m.header.frame_id = frame_id
+        if stamp is not None:
+            m.header.stamp = stamp
+        m.ns, m.id, m.type, m.action = CIRCLES_NS, i, Marker.CYLINDER, Marker.ADD
+        m.pose.position = Point(x=float(c.center[0]), y=float(c.center[1]), z=0.5 * height)
+        m.pose.orientation.w = 1.0
+        m.scale.x = m.scale.y = 2.0 * float(c.radius)
+        m.scale.z = height
+        m.color.r = m.color.g = m.color.b = 0.55
+        m.color.a = 0.9
+        out.markers.append(m)
+    if segments:
+        m = Marker()
+        m.header.frame_id = frame_id
+        if stamp is not None:
+            m.header.stamp = stamp
+        m.ns, m.id, m.type, m.action = SEGMENTS_NS, 0, Marker.LINE_LIST, Marker.ADD
+        m.pose.orientation.w = 1.0
+        m.scale.x = line_width
+        m.color.r = m.color.g = m.color.b = 0.25
+        m.color.a = 1.0
+        for s in segments:
+            m.points.append(Point(x=float(s.start[0]), y=float(s.start[1]), z=0.0))
+            m.points.append(Point(x=float(s.end[0]), y=float(s.end[1]), z=0.0))
+        out.markers.append(m)
+    return out
+
+
+def marker_array_to_obstacles(msg: MarkerArray) -> list[Obstacle]:
+    """Circles (CYLINDER: centre = pose position, radius = scale.x / 2) and segments (LINE_LIST point pairs).
+
+    Markers are applied in order: DELETEALL clears what came before, DELETE removes one (ns, id), ADD or
+    MODIFY replaces one. Other marker types are ignored. Poses are taken as given in the map frame (the
+    marker pose of a LINE_LIST must be the identity). ValueError for non-finite values, a radius <= 0, an odd
+    number of LINE_LIST points or a zero-length segment.
+    """
+    found: dict[tuple[str, int], list[Obstacle]] = {}
+    for m in msg.markers:
+        key = (m.ns, m.id)
+        if m.action == Marker.DELETEALL:
+            found.clear()
+            continue
+        if m.action == Marker.DELETE:
+            found.pop(key, None)
+            continue
+        if m.type == Marker.CYLINDER:
+            cx, cy, r = float(m.pose.position.x), float(m.pose.position.y), 0.5 * float(m.scale.x)
+            _finite((cx, cy, r), f'obstacle marker {m.ns}/{m.id}')
+            if r <= 0.0:
+                raise ValueError(f'obstacle marker {m.ns}/{m.id} has radius {r:g} <= 0')
+            found[key] = [Circle((cx, cy), r)]
+        elif m.type == Marker.LINE_LIST:
+            if len(m.points) % 2:
+                raise ValueError(f'obstacle marker {m.ns}/{m.id}: LINE_LIST has an odd number of points')
+            ox, oy = float(m.pose.position.x), float(m.pose.position.y)
+            segs: list[Obstacle] = []
+            for a, b in zip(m.points[0::2], m.points[1::2]):
+                coords = (a.x + ox, a.y + oy, b.x + ox, b.y + oy)
+                _finite(coords, f'obstacle marker {m.ns}/{m.id}')
+                if coords[:2] == coords[2:]:
+                    raise ValueError(f'obstacle marker {m.ns}/{m.id}: zero-length segment')
+                segs.append(Segment((coords[0], coords[1]), (coords[2], coords[3])))
+            found[key] = segs
+    return [o for group in found.values() for o in group]
+
+
+# ------------------------------------------------------------------------------------------------- the map
+
+def world_to_occupancy_grid(world: World, resolution: float = 0.1, stamp: Time | None = None,
+                            frame_id: str = 'map', thickness: float | None = None) -> OccupancyGrid:
+    """Rasterise the world: 100 where a cell centre is inside a circle or within thickness / 2 of a segment
+    (default thickness: one cell, so a wall has no gaps), 0 elsewhere. The grid covers the workspace
+    (origin at xmin, ymin; cells rounded up at the far edges)."""
+    if not (math.isfinite(resolution) and resolution > 0.0):
+        raise ValueError(f'resolution must be > 0, got {resolution!r}')
+    xmin, ymin, xmax, ymax = world.workspace
+    width = max(1, int(math.ceil((xmax - xmin) / resolution - 1e-9)))
+    height = max(1, int(math.ceil((ymax - ymin) / resolution - 1e-9)))
+    half = 0.5 * (resolution if thickness is None else thickness)
+    xs = xmin + (np.arange(width) + 0.5) * resolution
+    ys = ymin + (np.arange(height) + 0.5) * resolution
+    grid = np.zeros((height, width), dtype=bool)
+    centres = np.stack(np.meshgrid(xs, ys), axis=-1)  # (height, width, 2), row = y
+    for obstacle in world.obstacle_list:
+        if isinstance(obstacle, Circle):
+            cx, cy = obstacle.center
+            grid |= np.hypot(centres[..., 0] - cx, centres[..., 1] - cy) <= obstacle.radius
+        else:
+            d = Obstacles([obstacle]).distances(centres)[..., 0]
+            grid |= d <= half
+    msg = OccupancyGrid()
+    msg.header.frame_id = frame_id
+    if stamp is not None:
+        msg.header.stamp = stamp
+    info = MapMetaData()
+    if stamp is not None:
+        info.map_load_time = stamp
+    info.resolution = float(resolution)
+    info.width, info.height = width, height
+    info.origin = Pose()
+    info.origin.position = Point(x=float(xmin), y=float(ymin), z=0.0)
+    info.origin.orientation.w = 1.0
+    msg.info = info
+    msg.data = np.where(grid, 100, 0).astype(np.int8).ravel().tolist()
+    return msg
+
+
+def occupancy_grid_workspace(msg: OccupancyGrid) -> tuple[float, float, float, float]:
+    """The workspace (xmin, ymin, xmax, ymax) a grid covers (its orientation must be the identity)."""
+    info = msg.info
+    o = info.origin
+    values = (o.position.x, o.position.y, info.resolution)
+    _finite(values, 'map metadata')
+    if info.resolution <= 0.0 or info.width == 0 or info.height == 0:
+        raise ValueError('map metadata: empty grid or resolution <= 0')
+    if abs(o.orientation.z) > 1e-9 or abs(o.orientation.x) > 1e-9 or abs(o.orientation.y) > 1e-9:
+        raise ValueError('map metadata: a rotated map origin is not supported')
+    xmin, ymin = float(o.position.x), float(o.position.y)
+    # The resolution is a float32 on the wire (0.1 arrives as 0.10000000149...): undo that rounding.
+    resolution = float(f'{info.resolution:.7g}')
+    return xmin, ymin, round(xmin + info.width * resolution, 9), round(ymin + info.height * resolution, 9)
+
+
+# ------------------------------------------------------------------------------------------------- status
+
+def make_status(name: str, message: str, level: str | bytes, values: Mapping[str, Any] | None = None,
+                hardware_id: str = '') -> DiagnosticStatus:
+    """DiagnosticStatus with level 'ok' | 'warn' | 'error' | 'stale' (or a level byte); values as strings."""
+    msg = DiagnosticStatus()
+    msg.level = LEVELS[level] if isinstance(level, str) else level
+    msg.name, msg.message, msg.hardware_id = name, message, hardware_id
+    msg.values = [KeyValue(key=str(k), value=_value_text(v)) for k, v in (values or {}).items()]
+    return msg
+
+
+def _value_text(value: Any) -> str:
+    if value is None:
+        return ''
+    if isinstance(value, float):
+        return f'{value:.6g}'
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return ','.join(f'{float(v):.6g}' for v in value)
+    return str(value)
+
+
+def diagnostic_to_dict(msg: DiagnosticStatus) -> dict[str, Any]:
+    """{'name', 'message', 'level' ('ok'|'warn'|'error'|'stale'), and every key/value}."""
+    names = {v: k for k, v in LEVELS.items()}
+    out: dict[str, Any] = {kv.key: kv.value for kv in msg.values}
+    out.update(name=msg.name, message=msg.message, level=names.get(msg.level, repr(msg.level)))
+    return out

@@ -1,0 +1,79 @@
+"""The navigator's decisions tick by tick: goals, detection, the guard and its hold breaker."""
+
+import numpy as np
+import pytest
+
+from fastep_core.errors import GoalError
+from fastep_core.geometry import Circle
+from fastep_core.kinematics import PointMass
+from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator
+from fastep_core.scenario import RobotSpec
+from fastep_core.world import World
+
+WORLD = World.from_obstacles([0, 0, 50, 50], [Circle((25.0, 25.0), 3.0)])
+SPEC = RobotSpec('r1', 'point_mass', (5.0, 5.0), (45.0, 45.0), 0.5)
+
+
+def navigator(world=WORLD, seed=0):
+    return make_navigator('fastep', SPEC, 0.5, world, PlannerParams(), seed)
+
+
+@pytest.mark.parametrize('goal, words', [((25.0, 25.0), 'inside an obstacle'), ((60.0, 5.0), 'outside the map'),
+                                         ((float('nan'), 3.0), 'not finite'), ((25.0, 28.3), 'occupied')])
+def test_bad_goals_are_refused_with_a_reason(goal, words):
+    nav = navigator()
+    with pytest.raises(GoalError, match=words):
+        nav.set_goal(goal)
+    assert nav.mode is Mode.IDLE and np.all(nav.update(0.0, np.array([5.0, 5.0])) == 0.0)
+
+
+def test_far_obstacle_on_the_line_is_not_detected_until_near():
+    nav = navigator()
+    nav.set_goal((45.0, 45.0))
+    nav.update(0.0, np.array([5.0, 5.0]))
+    assert nav.mode is Mode.KINEMATIC and nav.activations == 0
+    nav.update(0.05, np.array([21.0, 21.0]))   # 2.66 m from the circle's surface, on the line
+    assert nav.mode is Mode.AVOIDING and nav.activations == 1 and nav.cost > 0.0
+
+
+def test_non_finite_state_holds_still_without_failing():
+    nav = navigator()
+    nav.set_goal((45.0, 45.0))
+    assert np.all(nav.update(0.0, np.array([np.nan, 5.0])) == 0.0)
+    assert nav.mode is Mode.KINEMATIC and 'not finite' in nav.reason
+
+
+def test_robot_held_by_the_guard_steps_around_after_a_second(monkeypatch):
+    world = World.from_obstacles([0, 0, 50, 50], [])
+    nav = navigator(world)
+    nav.set_goal((45.0, 5.0))
+    # Pretend detection misses the robot in the way, so only the guard stands between them.
+    monkeypatch.setattr(FAStepKinematic, 'blocked', lambda self, *a, **k: False)
+    other = [OtherRobot('r2', (6.1, 5.0), (0.0, 0.0), 0.5)]
+    state = np.array([5.0, 5.0])
+    t = 0.0
+    for _ in range(10):
+        assert np.all(nav.update(t, state, other) == 0.0) and 'giving way to r2' in nav.reason
+        t += 0.05
+    while t < 1.2:
+        command = nav.update(t, state, other)
+        t += 0.05
+    assert nav.activations == 1 and nav.waypoint is not None
+    assert np.hypot(*(nav.waypoint - [6.1, 5.0])) >= 1.2 - 1e-9
+    assert np.any(command != 0.0)
+
+
+def test_failure_clears_the_target():
+    nav = navigator()
+    nav.set_goal((45.0, 45.0))
+    nav.update(0.0, np.array([5.0, 5.0]))
+    assert nav.target is not None
+    nav.fail('test')
+    assert nav.target is None and nav.mode is Mode.FAILED
+
+
+def test_others_with_nan_positions_are_ignored():
+    nav = navigator()
+    nav.set_goal((45.0, 45.0))
+    command = nav.update(0.0, np.array([5.0, 5.0]), [OtherRobot('r2', (float('nan'), 5.0))])
+    assert np.all(np.isfinite(command)) and np.any(command != 0.0)

@@ -1,0 +1,279 @@
+"""Helpers for tests that run real fastep_ros node processes (imported by the test modules of this folder).
+
+Every graph lives on its own DDS domain (a free ROS_DOMAIN_ID in 1..100, see free_domain) with
+ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, and every process a test starts is stopped (SIGINT, wait, SIGKILL)
+in a finally block. The test process talks to the graph through a helper rclpy node in its own context on the
+same domain.
+"""
+
+from __future__ import annotations
+
+import fcntl
+import itertools
+import math
+import os
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import textwrap
+import time
+from pathlib import Path
+from typing import Any, Callable
+
+ROOT = Path(__file__).resolve().parents[2]
+_domains = itertools.count()
+
+# Small, fast scenarios: gains 0.5 and 2 m/s, so a run takes ~15-20 simulated seconds.
+ONE_CIRCLE = """\
+name: one_circle
+workspace: [0, 0, 20, 20]
+obstacles:
+  - circle: {center: [10, 10], radius: 1.5}
+robots:
+  - name: r1
+    model: point_mass
+    start: [2, 10]
+    goal: [18, 10.5]
+    radius: 0.5
+planner: {alpha1: 0.5, alpha2: 0.5, max_speed: 2.0}
+"""
+
+CROSSING = """\
+name: crossing
+workspace: [0, 0, 20, 20]
+robots:
+  - name: r1
+    model: point_mass
+    start: [3, 3]
+    goal: [17, 17]
+    radius: 0.5
+  - name: r2
+    model: point_mass
+    start: [17, 3]
+    goal: [3, 17]
+    radius: 0.5
+planner: {alpha1: 0.5, alpha2: 0.5, max_speed: 2.0}
+"""
+
+FAST = {'alpha1': 0.5, 'alpha2': 0.5, 'max_speed': 2.0}
+
+
+_held: dict[int, Any] = {}  # domain -> open lock file (flock released when this process exits)
+
+
+def _port_free(domain: int) -> bool:
+    """Is the discovery port of a domain's first DDS participant (7410 + 250 d) unbound, i.e. nobody on it?"""
+    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    try:
+        sock.bind(('0.0.0.0', 7410 + 250 * domain))
+        return True
+    except OSError:
+        return False
+    finally:
+        sock.close()
+
+
+def _lock(domain: int) -> Any:
+    path = Path(tempfile.gettempdir()) / f'fastep-ros-test-domain-{domain}.lock'
+    f = open(path, 'a')
+    try:
+        fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB)
+    except OSError:
+        f.close()
+        return None
+    return f
+
+
+def free_domain() -> int:
+    """A ROS_DOMAIN_ID in 1..100 that no other test process has taken (a lock file per domain, held until this
+    process exits) and on which no DDS participant runs now. Domains this process used before are taken again
+    only when all others are busy."""
+    start = os.getpid() * 7 + next(_domains) * 13
+    candidates = [1 + (start + k) % 100 for k in range(100)]
+    for domain in candidates:
+        if domain in _held or not _port_free(domain):
+            continue
+        lock = _lock(domain)
+        if lock is not None:
+            _held[domain] = lock
+            return domain
+    for domain in candidates:
+        if domain in _held and _port_free(domain):
+            return domain
+    raise RuntimeError('no free ROS domain in 1..100 for an isolated test graph')
+
+
+def isolated_env(domain: int, log_dir: Path) -> dict[str, str]:
+    env = dict(os.environ)
+    env.update(ROS_DOMAIN_ID=str(domain), ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST', ROS_LOG_DIR=str(log_dir),
+               PYTHONUNBUFFERED='1', RCUTILS_LOGGING_BUFFERED_STREAM='0')
+    env['PYTHONPATH'] = os.pathsep.join(p for p in (str(ROOT), env.get('PYTHONPATH', '')) if p)
+    env.pop('ROS_LOCALHOST_ONLY', None)
+    return env
+
+
+def ros_value(value: Any) -> str:
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, float):
+        return repr(value)
+    if isinstance(value, (list, tuple)):
+        if all(isinstance(v, str) for v in value):
+            return '[' + ', '.join(value) + ']'
+        return '[' + ', '.join(repr(float(v)) for v in value) + ']'
+    return str(value)
+
+
+class Graph:
+    """Node processes on one isolated domain, plus a helper node in this process."""
+
+    def __init__(self, tmp: Path) -> None:
+        self.domain = free_domain()
+        self.tmp = tmp
+        self.env = isolated_env(self.domain, tmp / 'roslog')
+        self.procs: dict[str, subprocess.Popen[bytes]] = {}
+        self.helper: Helper | None = None
+
+    def start(self, label: str, module: str, namespace: str = '/', **params: Any) -> subprocess.Popen[bytes]:
+        cmd = [sys.executable, '-m', f'fastep_ros.{module}', '--ros-args', '-r', f'__ns:={namespace}',
+               '--log-level', os.environ.get('FASTEP_TEST_LOG_LEVEL', 'warn')]
+        for name, value in params.items():
+            cmd += ['-p', f'{name}:={ros_value(value)}']
+        log = open(self.tmp / f'{label.replace("/", "_")}.log', 'wb')
+        proc = subprocess.Popen(cmd, env=self.env, stdout=log, stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+        log.close()
+        self.procs[label] = proc
+        return proc
+
+    def stop(self, label: str, sig: int = signal.SIGINT) -> int:
+        return stop_process(self.procs[label], sig)
+
+    def log(self, label: str) -> str:
+        return (self.tmp / f'{label.replace("/", "_")}.log').read_text(errors='replace')
+
+    def close(self) -> None:
+        try:
+            if self.helper is not None:
+                self.helper.close()
+        finally:
+            for proc in self.procs.values():
+                if proc.poll() is None:
+                    proc.send_signal(signal.SIGINT)
+            for proc in self.procs.values():
+                stop_process(proc)
+
+
+def stop_process(proc: subprocess.Popen[bytes], sig: int = signal.SIGINT, grace: float = 5.0) -> int:
+    if proc.poll() is None:
+        proc.send_signal(sig)
+        try:
+            proc.wait(timeout=grace)
+        except subprocess.TimeoutExpired:
+            proc.kill()
+            proc.wait()
+    return proc.returncode
+
+
+class Helper:
+    """An rclpy node in the test process (own context, same domain): publishes goals, records topics."""
+
+    def __init__(self, domain: int) -> None:
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.signals import SignalHandlerOptions
+
+        self.rclpy = rclpy
+        self.context = rclpy.Context()
+        saved = os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE')
+        os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'  # read when the context starts
+        try:
+            rclpy.init(args=[], context=self.context, domain_id=domain,
+                       signal_handler_options=SignalHandlerOptions.NO)
+        finally:
+            if saved is None:
+                del os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE']
+            else:
+                os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = saved
+        self.node = rclpy.create_node('test_helper', context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+        self.records: dict[str, list[Any]] = {}
+        self.goal_pubs: dict[str, Any] = {}
+
+    def record(self, topic: str, msg_type: Any, qos: Any = None) -> list[Any]:
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        if topic not in self.records:
+            self.records[topic] = []
+            self.node.create_subscription(msg_type, topic, self.records[topic].append,
+                                          qos or QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
+        return self.records[topic]
+
+    def follow_clock(self) -> list[Any]:
+        """Subscribe to /clock (a clock started with wait_for_subscribers counting this helper then runs)."""
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rosgraph_msgs.msg import Clock
+        return self.record('/clock', Clock, QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+
+    def record_status(self, namespace: str) -> list[dict[str, Any]]:
+        from diagnostic_msgs.msg import DiagnosticStatus
+        from fastep_ros.planner import STATUS_QOS
+        return self.record(f'{namespace}/status', DiagnosticStatus, STATUS_QOS)
+
+    def wait_status(self, namespace: str, accept: Callable[[dict[str, Any]], bool], timeout: float,
+                    what: str) -> dict[str, Any]:
+        """Spin until the latest status of `namespace` satisfies `accept`; return it."""
+        self.spin_until(lambda: bool(self.status(namespace)) and accept(self.status(namespace)), timeout,
+                        f'{what} (last status of {namespace}: {self.status(namespace)})')
+        return self.status(namespace)
+
+    def status(self, namespace: str) -> dict[str, Any]:
+        from msg_tools.convert import diagnostic_to_dict
+        seen = self.records.get(f'{namespace}/status') or []
+        return diagnostic_to_dict(seen[-1]) if seen else {}
+
+    def send_goal(self, namespace: str, goal: tuple[float, float]) -> None:
+        from geometry_msgs.msg import PoseStamped
+        from fastep_ros.common import RELIABLE
+        from msg_tools.convert import point_to_pose_stamped
+        topic = f'{namespace}/goal_pose'
+        if topic not in self.goal_pubs:
+            self.goal_pubs[topic] = self.node.create_publisher(PoseStamped, topic, RELIABLE)
+            self.spin_until(lambda: self.goal_pubs[topic].get_subscription_count() > 0, 20.0,
+                            f'a subscriber on {topic}')
+        self.goal_pubs[topic].publish(point_to_pose_stamped(goal))
+
+    def spin_until(self, predicate: Callable[[], bool], timeout: float, what: str = 'condition') -> None:
+        deadline = time.monotonic() + timeout
+        while not predicate():
+            if time.monotonic() > deadline:
+                raise AssertionError(f'timed out after {timeout:g} s waiting for {what}')
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def spin_for(self, seconds: float) -> None:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            self.executor.spin_once(timeout_sec=0.02)
+
+    def close(self) -> None:
+        self.executor.shutdown()
+        self.node.destroy_node()
+        self.rclpy.try_shutdown(context=self.context)
+
+
+def write(path: Path, text: str) -> Path:
+    path.write_text(textwrap.dedent(text))
+    return path
+
+
+def odom_xy(msg: Any) -> tuple[float, float]:
+    return msg.pose.pose.position.x, msg.pose.pose.position.y
+
+
+def stamp(msg: Any) -> float:
+    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+
+
+def distance(a: tuple[float, float], b: tuple[float, float]) -> float:
+    return math.hypot(a[0] - b[0], a[1] - b[1])

@@ -1,0 +1,121 @@
+"""fastep-launch end to end, and the one-line exit-2 errors of the launcher and the nodes."""
+
+from __future__ import annotations
+
+import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from fastep_core.scenario import load_scenario
+from fastep_core.simulator import simulate
+from graph_helpers import ONE_CIRCLE, free_domain, isolated_env, stop_process, write
+
+
+def run(cmd: list[str], env: dict[str, str], timeout: float) -> subprocess.CompletedProcess[str]:
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            stdin=subprocess.DEVNULL)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    finally:
+        stop_process(proc)  # type: ignore[arg-type]
+    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
+def children(pid: int) -> list[int]:
+    out = subprocess.run(['ps', '-o', 'pid=', '--ppid', str(pid)], capture_output=True, text=True).stdout
+    return [int(p) for p in out.split()]
+
+
+def alive(pid: int) -> bool:
+    try:
+        state = Path(f'/proc/{pid}/stat').read_text().split(')')[-1].split()[0]
+    except OSError:
+        return False
+    return state != 'Z'
+
+
+def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
+    scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+    out, plot = tmp_path / 'live.json', tmp_path / 'live.png'
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '10', '--seed', '0',
+                  '--json', str(out), '--plot', str(plot)], env, timeout=120)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert 'Traceback' not in result.stderr
+    assert 'one_circle: 1 robot(s) on their way' in result.stdout
+    lines = [line for line in result.stdout.splitlines() if line.startswith('r1:')]
+    assert len(lines) == 1 and 'arrived' in lines[0], result.stdout
+    assert plot.stat().st_size > 0
+
+    live = json.loads(out.read_text())
+    reference = simulate(load_scenario(str(scenario)), 'fastep', 0)
+    assert live['scenario'] == 'one_circle' and live['algorithm'] == 'fastep'
+    for robot, sim in zip(live['runs'][0]['robots'], reference.robots):
+        assert robot['name'] == sim.name
+        assert robot['reached'] and sim.reached
+        assert not robot['collided']
+        # The swarm draws the same random streams, but the live loop sees odometry a little later than the
+        # in-process one, so its steps differ slightly: compare with a tolerance.
+        assert robot['path_length'] == pytest.approx(sim.path_length, rel=0.05)
+        assert robot['sim_time'] == pytest.approx(sim.sim_time, rel=0.15)
+        rows = robot['trajectory']
+        assert rows[0][1:3] == pytest.approx([2.0, 10.0], abs=1e-6)
+        # one odometry message per control tick (lock step): at 2 m/s rows are at most ~0.12 m apart
+        assert max(((b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2) ** 0.5 for a, b in zip(rows, rows[1:])) <= 0.15
+
+
+def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path) -> None:
+    scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '0.5'], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()  # printed once the goals are in and the clock runs
+        assert 'on their way' in line, line
+        kids = children(proc.pid)
+        assert len(kids) == 4, f'expected 4 node processes (map, plant, planner, clock), found {kids}'
+        time.sleep(0.5)
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=20)
+    finally:
+        stop_process(proc)  # type: ignore[arg-type]
+    assert proc.returncode == 1
+    assert 'interrupted' in err and 'Traceback' not in err
+    assert not [pid for pid in kids if alive(pid)], 'a node outlived the launcher'
+
+
+@pytest.mark.parametrize('argv,words', [
+    (['no_such_scenario_here'], 'no built-in scenario'),
+    (['missing/file.yaml'], 'file not found'),
+    (['open_field', '--rtf', '-1'], '--rtf must be > 0'),
+])
+def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str], words: str) -> None:
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    result = run([sys.executable, '-m', 'fastep_ros.launch', *argv], env, timeout=60)
+    assert result.returncode == 2
+    assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr
+    assert result.stdout == ''
+
+
+@pytest.mark.parametrize('module,params,words', [
+    ('map_server', ['scenario:=no_such_scenario_here'], 'no built-in scenario'),
+    ('planner', ['algorithm:=dijkstra'], 'algorithm must be one of'),
+    ('planner', ['max_speed:=-1.0'], 'max_speed'),
+    ('plant', ['model:=tractor_trailer', 'start:=[1.0, 2.0]'], 'start must have 4 values'),
+])
+def test_nodes_refuse_bad_parameters_with_one_line(tmp_path: Path, module: str, params: list[str],
+                                                   words: str) -> None:
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    cmd = [sys.executable, '-m', f'fastep_ros.{module}', '--ros-args']
+    for p in params:
+        cmd += ['-p', p]
+    result = run(cmd, env, timeout=60)
+    assert result.returncode == 2
+    assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr
+    assert 'Traceback' not in result.stderr

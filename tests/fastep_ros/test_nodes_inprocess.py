@@ -1,0 +1,196 @@
+"""The nodes' logic without DDS traffic: each node is built in this process (own context, isolated domain) and
+its callbacks are called directly."""
+
+from __future__ import annotations
+
+import math
+import os
+from typing import Any, Iterator
+
+import numpy as np
+import pytest
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+from rclpy.parameter import Parameter
+
+from fastep_core.geometry import Circle
+from fastep_core.planning.params import PlannerParams
+from fastep_core.scenario import load_scenario
+from fastep_core.world import World
+from fastep_ros import launch
+from fastep_ros.clock import tick_plan
+from fastep_ros.plant import PlantNode
+from fastep_ros.planner import PlannerNode
+from graph_helpers import free_domain
+from msg_tools import convert
+
+
+@pytest.fixture
+def context() -> Iterator[Any]:
+    import rclpy
+    from rclpy.signals import SignalHandlerOptions
+    saved = os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE')
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    ctx = rclpy.Context()
+    try:
+        rclpy.init(args=[], context=ctx, domain_id=free_domain(), signal_handler_options=SignalHandlerOptions.NO)
+    finally:
+        if saved is None:
+            os.environ.pop('ROS_AUTOMATIC_DISCOVERY_RANGE', None)
+        else:
+            os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = saved
+    try:
+        yield ctx
+    finally:
+        rclpy.try_shutdown(context=ctx)
+
+
+def make(cls: type, context: Any, **params: Any) -> Any:
+    overrides = [Parameter(k, value=v) for k, v in params.items()]
+    return cls(context=context, parameter_overrides=overrides)
+
+
+def test_planner_declares_every_planner_parameter_with_its_description(context: Any) -> None:
+    node = make(PlannerNode, context, max_speed=2, n_fireflies=20, step_radius=1.5)
+    try:
+        defaults = PlannerParams()
+        descriptions = PlannerParams.descriptions()
+        for name in PlannerParams.names():
+            assert node.has_parameter(name), name
+            descriptor = node.describe_parameter(name)
+            assert descriptor.description == descriptions[name]
+            assert descriptor.read_only
+            assert 'range' in descriptor.additional_constraints
+        assert node.get_parameter('gamma').value == defaults.gamma
+        assert node.get_parameter('n_fireflies').value == 20
+        assert node.get_parameter('max_speed').value == 2.0  # an integer given for a double is accepted
+        assert node.params == defaults.with_overrides({'max_speed': 2.0, 'n_fireflies': 20, 'step_radius': 1.5})
+        for name in ('algorithm', 'model', 'robot_radius', 'length', 'trailer_length', 'hitch_offset', 'seed',
+                     'control_rate_hz', 'odom_timeout', 'use_stamped_cmd_vel', 'other_robot_radius', 'workspace'):
+            assert node.describe_parameter(name).description, name
+    finally:
+        node.destroy_node()
+
+
+def _world_messages(node: PlannerNode, world: World) -> None:
+    node.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
+    node.on_map(convert.world_to_occupancy_grid(world, 0.5))
+
+
+def test_planner_waits_for_the_world_then_takes_a_pending_goal(context: Any) -> None:
+    node = make(PlannerNode, context)
+    try:
+        assert node.status()[:2] == (DiagnosticStatus.WARN, 'waiting')
+        assert '/obstacles' in node.status()[2] and '/map' in node.status()[2]
+        node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))
+        assert node.navigator is None and node.pending_goal is not None
+        _world_messages(node, World.from_obstacles([0, 0, 10, 10], [Circle((5.0, 5.0), 1.0)]))
+        assert node.navigator is not None and node.world is not None
+        assert node.world.workspace == (0.0, 0.0, 10.0, 10.0)
+        assert node.goal == (8.0, 8.0) and node.navigator.mode.value == 'kinematic'
+        node.on_control()  # no odometry yet: hold still, say why
+        assert node.status() == (DiagnosticStatus.WARN, 'waiting', 'waiting for odometry on /odom')
+    finally:
+        node.destroy_node()
+
+
+def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) -> None:
+    node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0])
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        assert node.navigator is not None  # the workspace parameter stands in for /map
+        node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))
+        bad = convert.state_to_odometry([1.0, 1.0])
+        bad.pose.pose.position.x = math.nan
+        node.on_odom(bad)
+        node.on_control()
+        level, message, reason = node.status()
+        assert (level, message) == (DiagnosticStatus.WARN, 'stale') and 'not finite' in reason
+        assert np.all(node.last_command == 0.0)
+        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        assert node.odom_problem == ''
+        goal = convert.point_to_pose_stamped((5.0, 5.0), frame_id='odom')
+        node.on_goal(goal)
+        level, message, reason = node.status()
+        assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and "frame 'odom'" in reason
+    finally:
+        node.destroy_node()
+
+
+def test_plant_integrates_fixed_steps_and_zeroes_bad_or_old_commands(context: Any) -> None:
+    node = make(PlantNode, context, start=[1, 2], rate_hz=50.0, cmd_timeout=0.5)
+    try:
+        assert node.state.tolist() == [1.0, 2.0]
+        assert node.advance(10.0) and node.tick == 500
+        node.command, node.command_time = np.array([1.0, -0.5]), 10.0
+        node.advance(10.2)  # ten steps of 0.02 s
+        assert node.state == pytest.approx([1.2, 1.9])
+        node.advance(11.0)  # the command times out 0.5 s after it arrived
+        assert node.state == pytest.approx([1.5, 1.75])
+        twist = Twist()
+        twist.linear.x = math.nan
+        node.on_cmd_vel(twist)  # logged once, treated as zero
+        assert node.command.tolist() == [0.0, 0.0]
+    finally:
+        node.destroy_node()
+
+
+def test_plant_tractor_trailer_publishes_consistent_odometry(context: Any) -> None:
+    node = make(PlantNode, context, model='tractor_trailer', start=[0.0, 0.0, 0.5, 0.5], length=1.2)
+    seen: list[Odometry] = []
+    node.odom_pub.publish = seen.append  # type: ignore[method-assign]
+    try:
+        node.advance(1.0)
+        node.command, node.command_time = np.array([1.0, 0.2]), 1.0
+        node.advance(1.4)  # within cmd_timeout: the command still acts
+        node.publish()
+        odom = seen[-1]
+        assert convert.stamp_to_seconds(odom.header.stamp) == pytest.approx(1.4)
+        assert odom.header.frame_id == 'map' and odom.child_frame_id == 'base_link'
+        assert convert.quaternion_to_yaw(odom.pose.pose.orientation) == pytest.approx(node.state[2])
+        expected = node.model.velocity(node.state, np.array([1.0, 0.2]))
+        assert convert.odometry_velocity(odom) == pytest.approx(tuple(expected))
+    finally:
+        node.destroy_node()
+
+
+def test_clock_tick_plan() -> None:
+    assert tick_plan(1.0, 0.05, 400.0) == pytest.approx((0.05, 0.05))
+    assert tick_plan(20.0, 0.05, 400.0) == pytest.approx((0.0025, 0.05))
+    period, increment = tick_plan(100.0, 0.05, 400.0)
+    assert period == pytest.approx(0.0025) and increment == pytest.approx(0.25)
+
+
+def test_launch_passes_the_scenario_to_the_nodes() -> None:
+    scenario = load_scenario('application')
+    plant = launch.plant_params(scenario.robots[0], True)
+    assert plant['model'] == 'tractor_trailer' and len(plant['start']) == 4 and plant['use_sim_time'] is True
+    planner = launch.planner_params(scenario, 1, 'aco', 7, True)
+    assert planner['seed'] == 7 and planner['seed_stream'] == 1 and planner['algorithm'] == 'aco'
+    assert planner['robot_radius'] == scenario.robots[1].radius
+    assert planner['control_rate_hz'] == pytest.approx(1.0 / scenario.planner.dt)
+    cmd = launch._command('planner', '/r2', planner, verbose=False)
+    assert cmd[cmd.index('-r') + 1] == '__ns:=/r2'
+    assert 'robot_radius:=0.6' in cmd and 'seed:=7' in cmd
+    tiny = load_scenario('table2_s1')
+    overrides = launch._planner_overrides(tiny.planner.with_overrides({'max_speed': 2.0, 'c': 1e-5}))
+    assert overrides == {'max_speed': 2.0, 'c': 1e-5}
+    assert launch._ros_value(1e-5) == '1e-05' and launch._ros_value([5, 25]) == '[5.0, 25.0]'
+
+
+def test_stamped_cmd_vel_between_planner_and_plant(context: Any) -> None:
+    from geometry_msgs.msg import TwistStamped
+    planner = make(PlannerNode, context, use_stamped_cmd_vel=True, model='tractor_trailer', robot_radius=0.6)
+    plant = make(PlantNode, context, use_stamped_cmd_vel=True, model='tractor_trailer', start=[0, 0, 0, 0])
+    sent: list[Any] = []
+    planner.cmd_pub.publish = sent.append  # type: ignore[method-assign]
+    try:
+        planner.publish_command(np.array([0.5, -0.25]))
+        assert isinstance(sent[0], TwistStamped)
+        assert (sent[0].twist.linear.x, sent[0].twist.angular.z) == (0.5, -0.25)
+        plant.on_cmd_vel(sent[0])
+        assert plant.command.tolist() == [0.5, -0.25]
+    finally:
+        planner.destroy_node()
+        plant.destroy_node()

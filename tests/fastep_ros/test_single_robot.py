@@ -1,0 +1,132 @@
+"""One robot in a live graph (clock, map, plant, planner as separate processes, simulated time at rtf 10).
+
+The tests share one graph and run in file order; each one reads the robot's position when it starts, and the
+stale-odometry test, which kills the plant, comes last.
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+from typing import Any, Iterator
+
+import pytest
+from geometry_msgs.msg import Twist
+from nav_msgs.msg import Odometry
+
+from graph_helpers import FAST, ONE_CIRCLE, Graph, Helper, distance, odom_xy, stamp, write
+
+NS = '/r1'
+CIRCLE, CIRCLE_R, RADIUS = (10.0, 10.0), 1.5, 0.5
+ARRIVE = 120.0  # wall seconds at most for an arrival (normally 2-3 s)
+
+
+def goal_is(goal: tuple[float, float]) -> Any:
+    def check(status: dict[str, Any]) -> bool:
+        text = status.get('goal', '')
+        if not text:
+            return False
+        x, y = (float(v) for v in text.split(','))
+        return math.isclose(x, goal[0], abs_tol=1e-6) and math.isclose(y, goal[1], abs_tol=1e-6)
+    return check
+
+
+@pytest.fixture(scope='module')
+def one(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Graph]:
+    g = Graph(tmp_path_factory.mktemp('single'))
+    try:
+        scenario = write(g.tmp / 'one.yaml', ONE_CIRCLE)
+        g.start('map', 'map_server', scenario=str(scenario))
+        g.start('plant', 'plant', NS, model='point_mass', start=[2.0, 10.0], use_sim_time=True)
+        g.start('planner', 'planner', NS, model='point_mass', robot_radius=RADIUS, use_sim_time=True, **FAST)
+        # The clock holds time 0 until the plant, the planner and the helper (last) follow it, then runs in lock
+        # step with them (as fastep-launch does).
+        g.start('clock', 'clock', rtf=10.0, step=0.05, wait_for_subscribers=3,
+                sync_topics=[f'{NS}/cmd_vel', f'{NS}/odom'])
+        h = g.helper = Helper(g.domain)
+        h.record_status(NS)
+        h.record(f'{NS}/odom', Odometry)
+        h.record(f'{NS}/cmd_vel', Twist)
+        h.wait_status(NS, lambda s: s['message'] == 'idle', 60.0, 'the planner to know the world')
+        assert h.status(NS)['level'] == 'ok'
+        h.follow_clock()
+        h.spin_until(lambda: len(h.records[f'{NS}/odom']) > 0, 30.0, 'odometry')
+        yield g
+    finally:
+        g.close()
+
+
+def position(h: Helper) -> tuple[float, float]:
+    return odom_xy(h.records[f'{NS}/odom'][-1])
+
+
+def test_reaches_goal_past_an_obstacle(one: Graph) -> None:
+    h = one.helper
+    assert h is not None
+    goal = (18.0, 10.5)
+    odom = h.records[f'{NS}/odom']
+    first = len(odom)
+    h.send_goal(NS, goal)
+    status = h.wait_status(NS, lambda s: s['message'] == 'arrived' and goal_is(goal)(s), ARRIVE, 'arrival')
+    h.spin_for(0.2)
+    assert status['level'] == 'ok'
+    assert distance(position(h), goal) <= 0.1 + 0.02  # goal_tolerance, plus the last control tick
+    run = [odom_xy(m) for m in odom[first:]]
+    assert min(distance(p, CIRCLE) for p in run) - CIRCLE_R >= RADIUS, 'the robot touched the circle'
+    assert int(status['activations']) >= 1, 'the circle is on the way: the swarm must have planned a step'
+    stamps = [stamp(m) for m in odom[first:]]
+    assert all(b > a for a, b in zip(stamps, stamps[1:])), 'odometry stamps must increase'
+
+
+def test_goal_changed_mid_run_is_followed(one: Graph) -> None:
+    h = one.helper
+    assert h is not None
+    start = position(h)
+    first_goal, second_goal = (2.0, 3.0), (3.0, 17.0)
+    odom = h.records[f'{NS}/odom']
+    first = len(odom)
+    h.send_goal(NS, first_goal)
+    h.spin_until(lambda: distance(position(h), start) > 1.5, 60.0, 'the robot to move toward the first goal')
+    h.send_goal(NS, second_goal)
+    h.wait_status(NS, lambda s: s['message'] == 'arrived' and goal_is(second_goal)(s), ARRIVE,
+                  'arrival at the second goal')
+    h.spin_for(0.2)
+    assert distance(position(h), second_goal) <= 0.12
+    assert min(distance(odom_xy(m), first_goal) for m in odom[first:]) > 3.0, 'it went on to the first goal'
+
+
+@pytest.mark.parametrize('goal,words', [((10.0, 10.0), 'occupied'), ((25.0, 5.0), 'outside the map'),
+                                        ((math.nan, 5.0), 'not finite')])
+def test_bad_goal_is_refused_and_the_robot_does_not_move(one: Graph, goal: tuple[float, float],
+                                                         words: str) -> None:
+    h = one.helper
+    assert h is not None
+    odom, cmds = h.records[f'{NS}/odom'], h.records[f'{NS}/cmd_vel']
+    h.spin_for(0.3)  # let any motion from the previous test settle into odometry
+    h.send_goal(NS, goal)
+    status = h.wait_status(NS, lambda s: s['level'] == 'error' and words in s['reason'], 30.0,
+                           f'the goal to be refused ({words})')
+    assert status['message'] == 'failed' and 'goal refused' in status['reason']
+    before, first_cmd = position(h), len(cmds)
+    t0 = stamp(odom[-1])
+    h.spin_until(lambda: stamp(odom[-1]) > t0 + 3.0, 30.0, '3 simulated seconds')
+    assert distance(position(h), before) < 1e-9, 'the robot moved after its goal was refused'
+    assert len(cmds) > first_cmd
+    assert all(m.linear.x == 0.0 and m.linear.y == 0.0 and m.angular.z == 0.0 for m in cmds[first_cmd:])
+
+
+def test_stale_odometry_stops_the_robot(one: Graph) -> None:
+    h = one.helper
+    assert h is not None
+    cmds = h.records[f'{NS}/cmd_vel']
+    goal = (18.0, 3.0) if position(h)[0] < 10.0 else (2.0, 3.0)
+    h.send_goal(NS, goal)
+    h.spin_until(lambda: bool(cmds) and math.hypot(cmds[-1].linear.x, cmds[-1].linear.y) > 0.1, 30.0,
+                 'the robot to be commanded to move')
+    one.stop('plant', signal.SIGKILL)
+    status = h.wait_status(NS, lambda s: s['message'] == 'stale', 30.0, 'status stale')
+    assert status['level'] == 'warn' and 'odometry stale' in status['reason']
+    first = len(cmds)
+    h.spin_for(0.5)  # 5 simulated seconds: ~100 control ticks
+    assert len(cmds) - first > 10, 'the planner must keep publishing (zero) commands'
+    assert all(m.linear.x == 0.0 and m.linear.y == 0.0 for m in cmds[first:])

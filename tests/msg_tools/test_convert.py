@@ -1,0 +1,237 @@
+"""msg_tools.convert: round trips between core types and ROS messages, and rejection of bad values."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from diagnostic_msgs.msg import DiagnosticStatus
+from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
+from nav_msgs.msg import Odometry
+from visualization_msgs.msg import Marker, MarkerArray
+
+from fastep_core.geometry import Circle, Segment
+from fastep_core.kinematics import TractorTrailer
+from fastep_core.world import World
+from msg_tools import convert
+
+NAN = float('nan')
+
+
+@pytest.mark.parametrize('t', [0.0, 1e-9, 0.05, 1.5, 123.456789012, 1e6 + 0.25])
+def test_stamp_round_trip(t: float) -> None:
+    stamp = convert.seconds_to_stamp(t)
+    assert 0 <= stamp.nanosec < 1_000_000_000
+    assert convert.stamp_to_seconds(stamp) == pytest.approx(t, abs=1e-9)
+    assert convert.stamp_to_seconds(convert.seconds_to_clock(t).clock) == pytest.approx(t, abs=1e-9)
+
+
+@pytest.mark.parametrize('t', [-1.0, NAN, math.inf])
+def test_stamp_rejects_bad_times(t: float) -> None:
+    with pytest.raises(ValueError):
+        convert.seconds_to_stamp(t)
+
+
+@pytest.mark.parametrize('yaw', [0.0, 0.3, -2.0, math.pi - 1e-9, -math.pi + 1e-9, 1.0e-7])
+def test_yaw_round_trip(yaw: float) -> None:
+    assert convert.quaternion_to_yaw(convert.yaw_to_quaternion(yaw)) == pytest.approx(yaw, abs=1e-9)
+
+
+def test_yaw_wraps_and_normalises() -> None:
+    q = convert.yaw_to_quaternion(3 * math.pi / 2)
+    assert convert.quaternion_to_yaw(q) == pytest.approx(-math.pi / 2)
+    scaled = Quaternion(x=0.0, y=0.0, z=2 * q.z, w=2 * q.w)
+    assert convert.quaternion_to_yaw(scaled) == pytest.approx(-math.pi / 2)
+
+
+@pytest.mark.parametrize('q', [Quaternion(x=0.0, y=0.0, z=NAN, w=1.0), Quaternion(x=0.0, y=0.0, z=0.0, w=0.0)])
+def test_quaternion_rejects_bad_values(q: Quaternion) -> None:
+    with pytest.raises(ValueError):
+        convert.quaternion_to_yaw(q)
+    with pytest.raises(ValueError):
+        convert.yaw_to_quaternion(NAN)
+
+
+def test_point_mass_odometry_round_trip() -> None:
+    stamp = convert.seconds_to_stamp(2.5)
+    msg = convert.state_to_odometry([3.0, -4.5], stamp, child_frame_id='r1/base_link', linear=(0.3, -0.4))
+    assert msg.header.frame_id == 'map' and msg.child_frame_id == 'r1/base_link'
+    assert convert.quaternion_to_yaw(msg.pose.pose.orientation) == 0.0
+    np.testing.assert_array_equal(convert.odometry_to_state(msg), [3.0, -4.5])
+    assert convert.odometry_velocity(msg) == pytest.approx((0.3, -0.4))
+    assert convert.stamp_to_seconds(msg.header.stamp) == 2.5
+
+
+def test_tractor_odometry_round_trip_and_map_velocity() -> None:
+    state = [1.0, 2.0, math.pi / 2, math.pi / 3]
+    msg = convert.state_to_odometry(state, linear=(1.0, 0.25), angular=0.5)
+    np.testing.assert_allclose(convert.odometry_to_state(msg, 'tractor_trailer', trailer=state[3]), state)
+    # The child-frame twist (1, 0.25) of a robot heading +y is (-0.25, 1) in the map.
+    assert convert.odometry_velocity(msg) == pytest.approx((-0.25, 1.0))
+    with pytest.raises(ValueError, match='trailer'):
+        convert.odometry_to_state(msg, 'tractor_trailer')
+
+
+def test_odometry_velocity_matches_the_model() -> None:
+    model = TractorTrailer(1.2, 1.0, 0.1)
+    state, command = np.array([0.0, 0.0, 0.7, 0.5]), np.array([0.8, 0.4])
+    msg = convert.state_to_odometry(state, linear=(command[0], 0.5 * model.length * command[1]),
+                                    angular=command[1])
+    assert convert.odometry_velocity(msg) == pytest.approx(tuple(model.velocity(state, command)))
+
+
+@pytest.mark.parametrize('field', ['x', 'y'])
+def test_odometry_with_nan_position_is_rejected(field: str) -> None:
+    msg = Odometry()
+    msg.pose.pose.orientation.w = 1.0
+    setattr(msg.pose.pose.position, field, NAN)
+    with pytest.raises(ValueError, match='not finite'):
+        convert.odometry_to_state(msg)
+    with pytest.raises(ValueError):
+        convert.odometry_position(msg)
+
+
+def test_state_to_odometry_rejects_nan_and_bad_sizes() -> None:
+    with pytest.raises(ValueError):
+        convert.state_to_odometry([NAN, 0.0])
+    with pytest.raises(ValueError):
+        convert.state_to_odometry([0.0, 0.0], linear=(math.inf, 0.0))
+    with pytest.raises(ValueError):
+        convert.state_to_odometry([0.0, 0.0, 0.0])
+
+
+def test_trailer_pose_geometry() -> None:
+    msg = convert.trailer_pose([5.0, 5.0, 0.0, math.pi / 2], trailer_length=2.0, hitch_offset=0.5)
+    # hitch 0.5 behind the tractor (x), trailer axle 2 m behind the hitch along theta1 = +90 deg
+    assert (msg.pose.position.x, msg.pose.position.y) == pytest.approx((4.5, 3.0))
+    assert convert.trailer_yaw(msg) == pytest.approx(math.pi / 2)
+
+
+def test_pose_and_path_round_trip() -> None:
+    points = [(1.0, 2.0), (3.5, -1.25), (0.0, 0.0)]
+    path = convert.waypoints_to_path(points, convert.seconds_to_stamp(1.0))
+    assert path.header.frame_id == 'map' and all(p.header.frame_id == 'map' for p in path.poses)
+    assert convert.path_to_waypoints(path) == points
+    pose = convert.point_to_pose_stamped((NAN, 1.0))
+    x, y = convert.pose_stamped_to_point(pose)  # passed on as is: the goal check refuses it
+    assert math.isnan(x) and y == 1.0
+
+
+@pytest.mark.parametrize('model,command,fields', [
+    ('point_mass', (0.3, -0.7), ('linear.x', 'linear.y')),
+    ('tractor_trailer', (0.9, 0.2), ('linear.x', 'angular.z')),
+])
+def test_command_twist_round_trip(model: str, command: tuple[float, float], fields: tuple[str, str]) -> None:
+    twist = convert.command_to_twist(command, model)
+    for name, value in zip(fields, command):
+        part, axis = name.split('.')
+        assert getattr(getattr(twist, part), axis) == value
+    np.testing.assert_array_equal(convert.twist_to_command(twist, model), command)
+    stamped = TwistStamped()
+    stamped.twist = twist
+    np.testing.assert_array_equal(convert.twist_to_command(stamped, model), command)
+
+
+def test_twist_with_nan_is_rejected() -> None:
+    twist = Twist()
+    twist.linear.x = NAN
+    with pytest.raises(ValueError, match='not finite'):
+        convert.twist_to_command(twist)
+    twist = Twist()
+    twist.angular.z = math.inf
+    with pytest.raises(ValueError):
+        convert.twist_to_command(twist, 'tractor_trailer')
+    convert.twist_to_command(twist, 'point_mass')  # angular.z is not used by a point mass
+
+
+def test_obstacles_round_trip() -> None:
+    obstacles = [Circle((25.0, 25.0), 4.0), Segment((10.0, 30.0), (20.0, 30.0)), Circle((1.5, 2.5), 0.25),
+                 Segment((0.0, 0.0), (3.0, 4.0))]
+    msg = convert.obstacles_to_marker_array(obstacles, convert.seconds_to_stamp(0.0))
+    kinds = [m.type for m in msg.markers if m.action == Marker.ADD]
+    assert kinds.count(Marker.CYLINDER) == 2 and kinds.count(Marker.LINE_LIST) == 1
+    assert all(m.header.frame_id == 'map' for m in msg.markers)
+    back = convert.marker_array_to_obstacles(msg)
+    assert sorted(map(repr, back)) == sorted(map(repr, obstacles))
+    assert convert.marker_array_to_obstacles(convert.obstacles_to_marker_array([])) == []
+
+
+def test_marker_actions_are_applied_in_order() -> None:
+    first = convert.obstacles_to_marker_array([Circle((1.0, 1.0), 1.0)])
+    second = convert.obstacles_to_marker_array([Circle((5.0, 5.0), 2.0)])
+    joined = MarkerArray(markers=list(first.markers) + list(second.markers))  # DELETEALL in between
+    assert convert.marker_array_to_obstacles(joined) == [Circle((5.0, 5.0), 2.0)]
+    delete = Marker(ns='circles', id=0, action=Marker.DELETE)
+    assert convert.marker_array_to_obstacles(MarkerArray(markers=list(second.markers) + [delete])) == []
+
+
+@pytest.mark.parametrize('mutate', ['nan_centre', 'zero_radius', 'odd_points', 'nan_point'])
+def test_bad_markers_are_rejected(mutate: str) -> None:
+    msg = convert.obstacles_to_marker_array([Circle((1.0, 1.0), 1.0), Segment((0.0, 0.0), (1.0, 0.0))])
+    circle = next(m for m in msg.markers if m.type == Marker.CYLINDER)
+    lines = next(m for m in msg.markers if m.type == Marker.LINE_LIST)
+    if mutate == 'nan_centre':
+        circle.pose.position.x = NAN
+    elif mutate == 'zero_radius':
+        circle.scale.x = 0.0
+    elif mutate == 'odd_points':
+        lines.points.append(Point(x=5.0, y=5.0, z=0.0))
+    else:
+        lines.points[1].y = NAN
+    with pytest.raises(ValueError):
+        convert.marker_array_to_obstacles(msg)
+
+
+def test_occupancy_grid() -> None:
+    world = World.from_obstacles([0, 0, 10, 5], [Circle((2.0, 2.0), 1.0), Segment((6.0, 1.0), (9.0, 4.0))])
+    grid = convert.world_to_occupancy_grid(world, 0.1, convert.seconds_to_stamp(3.0))
+    assert (grid.info.width, grid.info.height) == (100, 50)
+    assert grid.header.frame_id == 'map'
+    assert convert.occupancy_grid_workspace(grid) == pytest.approx((0.0, 0.0, 10.0, 5.0))
+    cells = np.array(grid.data, dtype=np.int8).reshape(grid.info.height, grid.info.width)
+    assert set(np.unique(cells)) == {0, 100}
+
+    def at(x: float, y: float) -> int:
+        return int(cells[int(y / 0.1), int(x / 0.1)])
+    assert at(2.0, 2.0) == 100 and at(2.0, 2.85) == 100 and at(2.0, 3.2) == 0
+    assert at(7.52, 2.52) == 100 and at(7.0, 3.5) == 0 and at(0.5, 4.5) == 0
+    # circle area ~ pi r^2 (+ the wall's cells)
+    assert 0.9 * math.pi / 0.01 < (cells == 100).sum() < 1.1 * math.pi / 0.01 + 3 * math.sqrt(18) / 0.1
+    # the wall has no gaps along its length
+    for k in range(31):
+        x = 6.0 + 0.1 * k
+        y = 1.0 + 0.1 * k
+        assert (cells[int(y / 0.1) - 1:int(y / 0.1) + 2, int(x / 0.1) - 1:int(x / 0.1) + 2] == 100).any()
+
+
+def test_occupancy_grid_rounds_odd_sizes_up() -> None:
+    world = World.from_obstacles([-1.0, 2.0, 1.25, 3.0], [])
+    grid = convert.world_to_occupancy_grid(world, 0.5)
+    assert (grid.info.width, grid.info.height) == (5, 2)
+    assert convert.occupancy_grid_workspace(grid) == (-1.0, 2.0, 1.5, 3.0)
+    with pytest.raises(ValueError):
+        convert.world_to_occupancy_grid(world, 0.0)
+
+
+def test_status_round_trip() -> None:
+    msg = convert.make_status('/r1', 'avoiding', 'ok', {'reason': 'stepping around', 'activations': 3,
+                                                        'waypoint': np.array([1.5, 2.0]), 'goal': None})
+    assert msg.level == DiagnosticStatus.OK and msg.name == '/r1' and msg.message == 'avoiding'
+    d = convert.diagnostic_to_dict(msg)
+    assert d == {'name': '/r1', 'message': 'avoiding', 'level': 'ok', 'reason': 'stepping around',
+                 'activations': '3', 'waypoint': '1.5,2', 'goal': ''}
+    assert convert.diagnostic_to_dict(convert.make_status('x', 'failed', 'error'))['level'] == 'error'
+    assert convert.make_status('x', 'stale', DiagnosticStatus.WARN).level == DiagnosticStatus.WARN
+
+
+def test_pose_stamped_default_frame() -> None:
+    msg = convert.point_to_pose_stamped((1.0, 2.0), yaw=0.5)
+    assert isinstance(msg, PoseStamped) and msg.header.frame_id == 'map'
+    assert convert.quaternion_to_yaw(msg.pose.orientation) == pytest.approx(0.5)
+
+
+def test_occupancy_grid_workspace_survives_float32_resolution() -> None:
+    grid = convert.world_to_occupancy_grid(World.from_obstacles([0, 0, 50, 30], []), 0.1)
+    grid.info.resolution = float(np.float32(0.1))  # what arrives over DDS
+    assert convert.occupancy_grid_workspace(grid) == (0.0, 0.0, 50.0, 30.0)
