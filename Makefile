@@ -17,9 +17,11 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 	$(BIN)/python -m pip install --quiet --no-deps --no-build-isolation -e .
 	touch $(STAMP)
 
+# The two-robot case study on the live ROS 2 graph (separate node processes over DDS, simulated clock).
 demo: $(STAMP)
 	mkdir -p $(OUT)
-	$(BIN)/fastep-sim case_study_1 --seed 0 --json $(OUT)/demo.json --plot $(OUT)/demo.png
+	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(BIN)/fastep-launch case_study_1 --rtf 50 --seed 0 \
+		--json $(OUT)/demo.json --plot $(OUT)/demo.png
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q tests
