@@ -43,6 +43,8 @@ from visualization_msgs.msg import MarkerArray
 from fastep_core.errors import GoalError, ParameterError
 from fastep_core.planning.navigator import Mode, Navigator, OtherRobot, make_navigator
 from fastep_core.planning.params import PlannerParams
+from fastep_core.scenario import MODELS
+from fastep_core.simulator import ALGORITHMS
 from fastep_core.world import World
 from fastep_ros.common import LATCHED, LATEST, RELIABLE, StartupError, declare, node_main
 from msg_tools import convert
@@ -50,8 +52,6 @@ from msg_tools import convert
 __all__ = ['PlannerNode', 'main']
 
 ODOM_TYPE = 'nav_msgs/msg/Odometry'
-ALGORITHMS = ('fastep', 'aco')
-MODELS = ('point_mass', 'tractor_trailer')
 # Status is latched (transient-local) so a monitor that subscribes late sees the current state at once.
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots
 HEARTBEAT_TICKS = 4      # status, waypoint and plan are re-published every 4 * 0.25 s = 1 s of wall time

@@ -25,12 +25,12 @@ from nav_msgs.msg import Odometry
 from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
+from fastep_core.scenario import MODELS
 from fastep_ros.common import LATEST, RELIABLE, StartupError, declare, node_main
 from msg_tools import convert
 
 __all__ = ['PlantNode', 'main']
 
-MODELS = ('point_mass', 'tractor_trailer')
 MAX_CATCH_UP = 100_000  # integration steps done in one go at most (a clock jump beyond that is skipped)
 
 
