@@ -41,6 +41,7 @@ __all__ = ['ACOKinematic', 'FAStepKinematic', 'Mode', 'Navigator', 'OtherRobot',
 
 FloatArray = NDArray[np.float64]
 HOLD_BEFORE_STEP = 1.0  # seconds a robot waits for another before stepping around it
+RETRY_AFTER = 0.5       # seconds between step-planning attempts while no feasible step exists
 
 
 class Mode(str, Enum):
@@ -122,6 +123,7 @@ class Navigator:
         self._free_disc: tuple[FloatArray, float] | None = None  # (centre, radius) known obstacle-free
         self._held_since: float | None = None  # when the guard started holding the robot for another robot
         self._committed = False  # follow the current waypoint to the end (a step taken to break a hold)
+        self._retry_at = -math.inf  # no step planning before this time (after a failed attempt)
 
     # ----------------------------------------------------------------- goals
     @property
@@ -254,6 +256,8 @@ class Navigator:
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         """Run the swarm for one waypoint; None (and a status reason) when no feasible step exists."""
         assert self.goal is not None
+        if self._last_t is not None and self._last_t < self._retry_at:
+            return None
         centres, sums = self._robot_arrays(others)
         problem = StepProblem(self.world, position, self.goal, self.clearance, self.params.step_radius,
                               self.params.a, self.params.b, self.params.c, centres,
@@ -270,6 +274,8 @@ class Navigator:
         if step is None:
             step = plan_step(problem, self.params, self.rng, self.method)
         if step is None:
+            # Nothing feasible now; other robots may move away. Retry later rather than every tick.
+            self._retry_at = (self._last_t or 0.0) + RETRY_AFTER
             self.mode, self.reason, self.waypoint, self.cost = Mode.AVOIDING, 'no valid step; waiting', None, 0.0
             return None
         self.mode, self.reason = Mode.AVOIDING, 'stepping around an obstacle'

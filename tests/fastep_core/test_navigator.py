@@ -77,3 +77,19 @@ def test_others_with_nan_positions_are_ignored():
     nav.set_goal((45.0, 45.0))
     command = nav.update(0.0, np.array([5.0, 5.0]), [OtherRobot('r2', (float('nan'), 5.0))])
     assert np.all(np.isfinite(command)) and np.any(command != 0.0)
+
+
+def test_boxed_in_robot_retries_twice_a_second_then_fails_on_progress():
+    from fastep_core.geometry import Segment
+    a, b = 9.4, 10.6
+    walls = [Segment((a, a), (b, a)), Segment((b, a), (b, b)), Segment((b, b), (a, b)), Segment((a, b), (a, a))]
+    world = World.from_obstacles([0, 0, 50, 50], walls)
+    params = PlannerParams(progress_timeout=10.0)
+    nav = make_navigator('fastep', SPEC, 0.5, world, params, 0)
+    nav.set_goal((30.0, 30.0))
+    state, t = np.array([10.0, 10.0]), 0.0
+    while t < 12.0 and nav.mode is not Mode.FAILED:
+        assert np.all(nav.update(t, state) == 0.0)
+        t += 0.05
+    assert nav.mode is Mode.FAILED and 'progress' in nav.reason
+    assert 15 <= nav.activations <= 25   # about two attempts a second for 10 s, not one per tick
