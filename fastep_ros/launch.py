@@ -60,6 +60,8 @@ def _parser() -> argparse.ArgumentParser:
                    'of the seed, as fastep-sim does)')
     p.add_argument('--json', type=Path, metavar='OUT', help='write the summary and odometry trajectories')
     p.add_argument('--plot', type=Path, metavar='OUT.png', help='draw the paths like fastep-sim --plot')
+    p.add_argument('--record', type=Path, metavar='OUT.mcap',
+                   help='record every fastep topic into an MCAP file (fastep-record), finished on exit')
     p.add_argument('--no-clock', action='store_true', help='no simulated clock: every node runs on wall time')
     p.add_argument('--startup-timeout', type=float, default=STARTUP_TIMEOUT, help=argparse.SUPPRESS)
     p.add_argument('--verbose', action='store_true', help='show the nodes\' INFO logs')
@@ -171,6 +173,7 @@ class RobotLive:
     outcome: str = ''           # '' while running; 'arrived' / 'failed' / 'timeout'
     reason: str = ''
     end_time: float | None = None
+    started_at: float | None = None   # planner time of its first status after taking the goal
     activations: int = 0
     waypoints: list[list[float]] = field(default_factory=list)
 
@@ -238,7 +241,11 @@ class Monitor:
         return self.node.get_clock().now().nanoseconds * 1e-9
 
     def spin(self, seconds: float) -> None:
+        """Handle every callback that comes in for `seconds` (spin_once alone handles one, and falls behind)."""
+        end = time.monotonic() + seconds
         self.executor.spin_once(timeout_sec=seconds)
+        while (left := end - time.monotonic()) > 0:
+            self.executor.spin_once(timeout_sec=left)
 
     def close(self) -> None:
         self.executor.shutdown()
@@ -247,6 +254,11 @@ class Monitor:
 
     def on_status(self, robot: RobotLive, msg: Any) -> None:
         robot.status = self.convert.diagnostic_to_dict(msg)
+        if robot.started_at is None and robot.status.get('message') in ('kinematic', 'avoiding'):
+            try:
+                robot.started_at = float(robot.status['t'])
+            except (KeyError, ValueError):
+                pass
         try:
             robot.activations = int(robot.status.get('activations', 0))
         except ValueError:
@@ -312,22 +324,30 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             procs.start(f'fastep-plant /{spec.name}', 'plant', f'/{spec.name}', plant_params(spec, sim_time))
             procs.start(f'fastep-planner /{spec.name}', 'planner', f'/{spec.name}',
                         planner_params(scenario, i, args.algorithm, args.seed, sim_time))
+        if args.record is not None:
+            # Started before the goals and the clock, so the recording holds the whole run.
+            procs.start('fastep-record', 'recorder', '/', {'output': str(args.record.resolve()),
+                                                           'scenario': _scenario_arg(args.scenario),
+                                                           'use_sim_time': sim_time})
         if sim_time:
             # The clock holds time 0 until the map, every plant and planner and, last, the monitor follow it.
             # Lock step: each tick of one control period waits for every plant's odometry and every planner's
             # command, so simulated time never runs ahead of a busy node.
             procs.start('fastep-clock', 'clock', '/', {
                 'rtf': float(args.rtf), 'step': scenario.planner.dt,
-                'wait_for_subscribers': 2 + 2 * len(scenario.robots),
+                'wait_for_subscribers': 2 + 2 * len(scenario.robots) + (args.record is not None),
                 'sync_topics': [f'/{spec.name}/{topic}' for spec in scenario.robots for topic in ('cmd_vel', 'odom')]})
         monitor = Monitor(scenario)
         robots = monitor.robots
         names = set(robots)
         deadline = time.monotonic() + args.startup_timeout
 
+        goal_readers = 1 + (args.record is not None)   # the planner, and the recorder when recording
+
         def planners_ready() -> bool:
             for name, robot in robots.items():
-                if robot.status.get('message') != 'idle' or monitor.goal_pubs[name].get_subscription_count() < 1:
+                if robot.status.get('message') != 'idle' or \
+                        monitor.goal_pubs[name].get_subscription_count() < goal_readers:
                     return False
                 if not names - {name} <= set(robot.status.get('others', '').split()):
                     return False
@@ -363,10 +383,15 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 if robot.outcome:
                     continue
                 message = robot.status.get('message')
-                if message == 'arrived':
-                    robot.outcome, robot.end_time = 'arrived', now
-                elif message == 'failed':
-                    robot.outcome, robot.end_time = 'failed', now
+                if message in ('arrived', 'failed'):
+                    # The planner stamps its status with its own clock: that is when it happened, however late
+                    # this monitor gets to the message.
+                    try:
+                        stamped = float(robot.status['t']) - (robot.started_at if robot.started_at is not None
+                                                              else t0)
+                    except (KeyError, ValueError):
+                        stamped = now
+                    robot.outcome, robot.end_time = message, stamped
                 robot.reason = robot.status.get('reason', '')
             dead = procs.dead()
             if dead:
@@ -399,6 +424,12 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         if monitor is not None:
             monitor.close()
         procs.stop()
+    if args.record is not None:
+        if args.record.is_file():
+            print(f'wrote {args.record}')
+        else:
+            print(f'fastep-launch: error: the recorder wrote no {args.record}', file=sys.stderr)
+            code = code or 1
     return code
 
 

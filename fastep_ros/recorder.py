@@ -1,0 +1,236 @@
+"""fastep-record: records the fastep topics of the live graph into an MCAP file (a `ros2 bag record` stand-in).
+
+    fastep-record --ros-args -p output:=run.mcap [-p topics:="['/r1/odom', '/map']"] [-p scenario:=table2_s2]
+                  [-p use_sim_time:=true]
+    python -m fastep_ros.recorder --ros-args -p output:=run.mcap ...     (the same, e.g. from fastep-launch)
+
+Why our own recorder: rosbag2 is not on PyPI. This node writes what `ros2 bag record -s mcap` would (see
+msg_tools.mcap_io): the ROS 2 profile, schemas from the installed .msg files, and each topic's offered QoS in
+the channel metadata, so /map and /obstacles replay latched.
+
+Topics: the `topics` parameter (names, relative ones resolved in the node's namespace), or when it is empty
+every topic of the fastep interface: /obstacles, /map, /clock and /<robot>/{odom, cmd_vel, goal_pose, waypoint,
+plan, cost, status, trailer_pose}. The graph is polled every `discovery_period` seconds (wall time), so robots
+that start later are recorded from when they appear. Subscriptions are generic (raw CDR bytes are written
+as received, never deserialised) and ask for the QoS the publishers offer, like rosbag2: reliable and
+transient-local when every publisher offers it (so latched /map and /obstacles are received even though they
+were published before the recorder started). A topic seen before any publisher (e.g. goal_pose, known from
+the planner's subscription) is subscribed with the QoS the fastep nodes offer on it. Publishers that start
+after the recorder and send at once (goal_pose) are only recorded if their publisher matched the recorder's
+subscription first: wait until the publisher's subscription count includes the recorder.
+
+Time: log_time = publish_time = the receive time on the node's clock, i.e. simulated time with
+use_sim_time:=true (what fastep-launch uses; 0 until the first /clock arrives), wall time otherwise.
+
+Crash safety: data is written in chunks (`chunk_size`, 256 KiB) and the chunk in progress is flushed to the
+file every `flush_period` wall seconds. SIGINT or SIGTERM finish the file (summary, footer); after a SIGKILL
+everything up to the last flushed chunk is recovered by msg_tools.mcap_io.open_recording (the reader) and
+rewritten as a complete file by `fastep-recover IN.mcap OUT.mcap`.
+
+Parameters are read-only; a bad one (or an output that cannot be created) is one line on stderr, exit 2.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+import time
+from pathlib import Path
+from typing import Any, Sequence
+
+from rcl_interfaces.msg import ParameterDescriptor
+from rclpy.clock import Clock, ClockType
+from rclpy.exceptions import ParameterException
+from rclpy.logging import LoggingSeverity
+from rclpy.node import Node
+from rclpy.parameter import Parameter
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from fastep_core.errors import FastepError
+from fastep_ros.common import StartupError, declare, node_main
+from msg_tools.mcap_io import COMPRESSIONS, McapWriter, message_class, qos_profile_to_dict
+
+__all__ = ['RecorderNode', 'main', 'wanted_by_default']
+
+# The fastep interface (DESIGN.md): shared topics and per-robot topics in a namespace of one level.
+_SHARED = ('/obstacles', '/map', '/clock')
+_PER_ROBOT = re.compile(r'^/[A-Za-z_][A-Za-z0-9_]*/(odom|cmd_vel|goal_pose|waypoint|plan|cost|status|trailer_pose)$')
+METADATA_NAME = 'fastep'
+
+
+def wanted_by_default(topic: str) -> bool:
+    """Whether a topic belongs to the fastep interface (what the recorder takes when `topics` is empty)."""
+    return topic in _SHARED or _PER_ROBOT.match(topic) is not None
+
+
+def _offered_default(topic: str) -> list[dict[str, Any]]:
+    """What the fastep nodes offer on a topic (used before any publisher of it was seen)."""
+    from msg_tools.sim_mcap import topic_qos
+    return topic_qos(topic)
+
+
+class RecorderNode(Node):
+    """Subscribes (raw) to the wanted topics as they appear and writes every message to one MCAP file."""
+
+    def __init__(self, node_name: str = 'recorder', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        output = declare(self, 'output', '', 'MCAP file to write (replaced if it exists; folders are created); '
+                         'empty: fastep_<date>_<time>.mcap in the current folder')
+        self.wanted = self._declare_topics()
+        scenario = declare(self, 'scenario', '', 'optional scenario (YAML file or built-in name): its robots\' '
+                           'models, radii, starts and goals go into the `fastep` metadata record for fastep-report')
+        chunk_size = declare(self, 'chunk_size', 256 * 1024, 'bytes of messages per chunk (a chunk is the unit a '
+                             'crash loses at most)', constraints='>= 1024')
+        flush_period = declare(self, 'flush_period', 1.0, 'wall seconds between flushes of the chunk in progress '
+                               'to the file (bounds what a SIGKILL loses)', constraints='> 0')
+        compression = declare(self, 'compression', 'zstd', 'chunk compression: zstd | lz4 | none',
+                              constraints='zstd | lz4 | none')
+        discovery_period = declare(self, 'discovery_period', 0.5, 'wall seconds between looks at the graph for '
+                                   'new topics', constraints='> 0')
+        self.depth = declare(self, 'queue_depth', 1000, 'subscription queue depth (messages kept while the '
+                             'recorder is busy)', constraints='>= 1')
+        if chunk_size < 1024:
+            raise StartupError(f'parameter chunk_size must be >= 1024, got {chunk_size}')
+        for name, value in (('flush_period', flush_period), ('discovery_period', discovery_period)):
+            if value <= 0.0:
+                raise StartupError(f'parameter {name} must be > 0, got {value:g}')
+        if compression not in COMPRESSIONS:
+            raise StartupError(f'parameter compression must be one of {", ".join(COMPRESSIONS)}, got {compression!r}')
+        if self.depth < 1:
+            raise StartupError(f'parameter queue_depth must be >= 1, got {self.depth}')
+        metadata = self._scenario_metadata(scenario)
+
+        self.path = Path(output or time.strftime('fastep_%Y%m%d_%H%M%S.mcap'))
+        try:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
+            self.writer: McapWriter | None = McapWriter(self.path, chunk_size=chunk_size, compression=compression,
+                                                        library='fastep-record')
+        except (OSError, FastepError) as exc:
+            raise StartupError(f'cannot write {self.path}: {exc}') from None
+        self.writer.add_metadata(METADATA_NAME, metadata)
+        self.subscriptions_by_topic: dict[str, Any] = {}
+        self.types: dict[str, str] = {}
+        self.channels: dict[str, int] = {}
+        self.counts: dict[str, int] = {}
+        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.discovery_timer = self.create_timer(discovery_period, self.discover, clock=steady)
+        self.flush_timer = self.create_timer(flush_period, self.flush, clock=steady)
+        self.discover()
+        what = ', '.join(sorted(self.wanted)) if self.wanted else 'the fastep topics'
+        self.get_logger().info(f'recording {what} to {self.path}')
+
+    # ------------------------------------------------------------------------------------------- setup
+    def _declare_topics(self) -> set[str]:
+        descriptor = ParameterDescriptor(name='topics', type=Parameter.Type.STRING_ARRAY.value, read_only=True,
+                                         description='topics to record; empty: /obstacles, /map, /clock and '
+                                         '/<robot>/{odom, cmd_vel, goal_pose, waypoint, plan, cost, status, '
+                                         'trailer_pose} as they appear')
+        try:
+            value = self.declare_parameter('topics', Parameter.Type.STRING_ARRAY, descriptor).value
+        except ParameterException as exc:
+            raise StartupError(f'parameter topics must be a string array: {exc}') from None
+        out = set()
+        for name in value or []:
+            try:
+                out.add(self.resolve_topic_name(str(name)))
+            except Exception as exc:  # rclpy raises its own validation errors
+                raise StartupError(f'parameter topics: {name!r} is not a valid topic name ({exc})') from None
+        return out
+
+    @staticmethod
+    def _scenario_metadata(source: str) -> dict[str, str]:
+        meta = {'source': 'fastep-record', 'time_base': 'receive time on the recorder\'s ROS clock'}
+        if not source:
+            return meta
+        from fastep_core.scenario import load_scenario
+        from msg_tools.sim_mcap import robot_metadata
+        try:
+            meta.update(robot_metadata(load_scenario(source)))
+        except FastepError as exc:
+            raise StartupError(f'parameter scenario: {exc}') from None
+        return meta
+
+    # ------------------------------------------------------------------------------------------- graph
+    def wants(self, topic: str) -> bool:
+        return topic in self.wanted if self.wanted else wanted_by_default(topic)
+
+    def discover(self) -> None:
+        """Subscribe to every wanted topic now on the graph that is not recorded yet."""
+        if self.writer is None:
+            return
+        for topic, types in self.get_topic_names_and_types():
+            if topic in self.subscriptions_by_topic or not self.wants(topic) or not types:
+                continue
+            type_name = types[0]
+            if len(types) > 1:
+                self.get_logger().warning(f'{topic} has several types {types}; recording {type_name}')
+            try:
+                msg_type = message_class(type_name)
+            except FastepError as exc:
+                self.get_logger().warning(f'not recording {topic}: {exc}')
+                self.subscriptions_by_topic[topic] = None
+                continue
+            self.types[topic] = type_name
+            self.counts[topic] = 0
+            self.subscriptions_by_topic[topic] = self.create_subscription(
+                msg_type, topic, lambda data, name=topic: self.on_message(name, data), self.request_qos(topic),
+                raw=True)
+            self.get_logger().info(f'recording {topic} ({type_name})')
+
+    def offered(self, topic: str) -> list[dict[str, Any]]:
+        """The QoS profiles the topic's publishers offer, or what the fastep nodes offer on it."""
+        try:
+            infos = self.get_publishers_info_by_topic(topic)
+        except Exception:  # the graph can change under us; fall back to the interface's defaults
+            infos = []
+        return [qos_profile_to_dict(info.qos_profile) for info in infos] or _offered_default(topic)
+
+    def request_qos(self, topic: str) -> QoSProfile:
+        """Like rosbag2: reliable / transient-local only if every offer is; deep keep-last queue."""
+        offers = self.offered(topic)
+        reliable = all(o['reliability'] == 'reliable' for o in offers)
+        latched = all(o['durability'] == 'transient_local' for o in offers)
+        return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=self.depth,
+                          reliability=ReliabilityPolicy.RELIABLE if reliable else ReliabilityPolicy.BEST_EFFORT,
+                          durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
+
+    # ------------------------------------------------------------------------------------------- writing
+    def on_message(self, topic: str, data: bytes) -> None:
+        writer = self.writer
+        if writer is None:
+            return
+        now = self.get_clock().now().nanoseconds
+        channel = self.channels.get(topic)
+        if channel is None:  # registered at the first message, when the publishers' QoS is known
+            channel = self.channels[topic] = writer.add_channel(topic, self.types[topic], self.offered(topic))
+        writer.write_raw(channel, data, now, now)
+        self.counts[topic] += 1
+
+    def flush(self) -> None:
+        if self.writer is not None:
+            self.writer.flush()
+
+    def close(self) -> None:
+        """Finish the file (summary, footer). Safe to call twice."""
+        writer, self.writer = self.writer, None
+        if writer is None:
+            return
+        writer.finish()
+        text = f'wrote {sum(self.counts.values())} messages on {len(self.channels)} topics to {self.path}'
+        logger = self.get_logger()
+        if self.context.ok():
+            logger.info(text)
+        elif logger.get_effective_level() <= LoggingSeverity.INFO:  # after Ctrl-C /rosout is gone
+            print(f'[INFO] [{self.get_name()}]: {text}', file=sys.stderr)
+
+    def destroy_node(self) -> None:
+        self.close()
+        super().destroy_node()
+
+
+def main(args: Sequence[str] | None = None) -> int:
+    return node_main('fastep-record', RecorderNode, args)
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())

@@ -1,0 +1,195 @@
+"""fastep-replay: publish a recording on the live graph with its original timing (a `ros2 bag play` stand-in).
+
+    fastep-replay FILE.mcap [--rate R] [--loop] [--topics T [T ...]] [--clock [HZ]] [--delay S]
+                  [--wait-subscribers N] [--ros-args ...]
+
+Why: to look at a recorded or simulated run again in RViz/Foxglove, or to feed it to nodes, without rosbag2
+(not on PyPI). Messages are published as recorded (raw CDR bytes, never deserialised) in log-time order, the
+gap between two messages being their log-time difference divided by --rate. Each topic is published with the
+QoS its recorded publishers offered (channel metadata `offered_qos_profiles`): reliable / transient-local only
+if all of them were, keep-last with the recorded depth (10 when unknown), so /map and /obstacles are latched
+again and late subscribers still get them while the replay runs.
+
+--clock publishes rosgraph_msgs/Clock on /clock from the log times: at each message and HZ times per wall
+second in between (default 100), so nodes with use_sim_time follow the replay (--rate scales it). A recorded
+/clock topic is then not replayed (there would be two time sources).
+--delay waits that many wall seconds after creating the publishers (DDS discovery) before the first message;
+--wait-subscribers N waits (at most 30 s) until every replayed volatile topic has N matched subscriptions
+(transient-local ones reach late subscribers anyway).
+
+Exit 0 at the end of the recording (or on Ctrl-C / SIGTERM); 2 with one line on stderr for a file that cannot
+be read or bad options. A truncated file is replayed up to its last complete chunk, with a warning line.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import time
+from typing import Any, NoReturn, Sequence
+
+import rclpy
+from rclpy.executors import ExternalShutdownException
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+
+from fastep_core.errors import FastepError
+from msg_tools.mcap_io import Recording, message_class, open_recording, qos_from_dicts
+
+__all__ = ['ReplayNode', 'main']
+
+LINGER = 0.5          # wall seconds the publishers stay after the last message (reliable delivery)
+WAIT_TIMEOUT = 30.0   # wall seconds --wait-subscribers waits at most
+
+
+def _stamp(ns: int) -> Any:
+    from builtin_interfaces.msg import Time
+    return Time(sec=ns // 1_000_000_000, nanosec=ns % 1_000_000_000)
+
+
+class ReplayNode(Node):
+    """Publishers for the recorded topics; play() sends the messages with the recorded timing."""
+
+    def __init__(self, recording: Recording, topics: Sequence[str] | None = None, rate: float = 1.0,
+                 clock_hz: float | None = None, node_name: str = 'replay', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
+        self.recording = recording
+        self.rate = rate
+        self.clock_hz = clock_hz
+        chosen = set(topics) if topics else set(recording.topics)
+        if clock_hz is not None:
+            chosen.discard('/clock')
+        self.topics = sorted(chosen)
+        self.publishers_by_topic: dict[str, Any] = {}
+        for topic in self.topics:
+            info = recording.topics[topic]
+            self.publishers_by_topic[topic] = self.create_publisher(message_class(info.type), topic,
+                                                                    qos_from_dicts(info.qos))
+        self.clock_pub = (self.create_publisher(Clock, '/clock', QoSProfile(depth=10,
+                                                reliability=ReliabilityPolicy.RELIABLE))
+                          if clock_hz is not None else None)
+        self.last_clock = -1
+        self.played = 0
+
+    # ------------------------------------------------------------------------------------------- clock
+    def publish_clock(self, ns: int) -> None:
+        if self.clock_pub is not None and ns > self.last_clock:
+            self.last_clock = ns
+            self.clock_pub.publish(Clock(clock=_stamp(ns)))
+
+    def wait_until(self, target: float, origin_ns: int, origin_wall: float) -> None:
+        """Sleep until the wall time `target`; with --clock, tick the clock meanwhile."""
+        period = 1.0 / self.clock_hz if self.clock_hz else math.inf
+        while rclpy.ok():
+            now = time.monotonic()
+            if now >= target:
+                return
+            if self.clock_pub is not None:
+                self.publish_clock(origin_ns + int((now - origin_wall) * self.rate * 1e9))
+            time.sleep(min(target - now, period))
+
+    # ------------------------------------------------------------------------------------------- playing
+    def wait_for_subscribers(self, count: int) -> bool:
+        """Wait until every volatile topic has `count` subscribers (latched ones reach late joiners anyway)."""
+        volatile = [pub for pub in self.publishers_by_topic.values()
+                    if pub.qos_profile.durability != DurabilityPolicy.TRANSIENT_LOCAL]
+        deadline = time.monotonic() + WAIT_TIMEOUT
+        while rclpy.ok() and time.monotonic() < deadline:
+            if all(pub.get_subscription_count() >= count for pub in volatile):
+                return True
+            time.sleep(0.05)
+        return False
+
+    def play_once(self) -> int:
+        """Publish the recording once; return how many messages were sent."""
+        sent = 0
+        origin_ns: int | None = None
+        origin_wall = time.monotonic()
+        for raw in self.recording.raw_messages(self.topics):
+            if not rclpy.ok():
+                return sent
+            if origin_ns is None:
+                origin_ns, origin_wall = raw.log_time, time.monotonic()
+            self.wait_until(origin_wall + (raw.log_time - origin_ns) * 1e-9 / self.rate, origin_ns, origin_wall)
+            if not rclpy.ok():
+                return sent
+            self.publish_clock(raw.log_time)
+            self.publishers_by_topic[raw.topic].publish(raw.data)
+            self.played += 1
+            sent += 1
+        return sent
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog='fastep-replay', description='Publish an MCAP recording with its original timing.')
+    p.add_argument('file', help='MCAP recording')
+    p.add_argument('--rate', type=float, default=1.0, help='playback speed factor (default 1; 2 = twice as fast)')
+    p.add_argument('--loop', action='store_true', help='start again at the end, until stopped')
+    p.add_argument('--topics', nargs='+', metavar='TOPIC', help='replay only these topics')
+    p.add_argument('--clock', nargs='?', type=float, const=100.0, metavar='HZ',
+                   help='publish /clock from the log times (HZ ticks per wall second between messages, default 100)')
+    p.add_argument('--delay', type=float, default=0.5, help='wall seconds between creating the publishers and '
+                   'the first message (default 0.5, for DDS discovery)')
+    p.add_argument('--wait-subscribers', type=int, default=0, metavar='N',
+                   help='before playing, wait until every volatile topic has N subscribers (at most 30 s)')
+    return p
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    argv = list(sys.argv[1:] if argv is None else argv)
+    ros_args: list[str] = []
+    if '--ros-args' in argv:
+        cut = argv.index('--ros-args')
+        argv, ros_args = argv[:cut], argv[cut:]
+    parser = _parser()
+    args = parser.parse_args(argv)
+    if not (math.isfinite(args.rate) and args.rate > 0.0):
+        parser.error(f'--rate must be > 0, got {args.rate}')
+    if args.clock is not None and not (math.isfinite(args.clock) and args.clock > 0.0):
+        parser.error(f'--clock rate must be > 0, got {args.clock}')
+    if not (math.isfinite(args.delay) and args.delay >= 0.0):
+        parser.error(f'--delay must be >= 0, got {args.delay}')
+    try:
+        recording = open_recording(args.file)
+        for topic in args.topics or []:
+            if topic not in recording.topics:
+                raise FastepError(f'topic {topic} is not in {args.file} (it has {", ".join(sorted(recording.topics))})')
+        for topic in args.topics or recording.topics:
+            message_class(recording.topics[topic].type)
+    except FastepError as exc:
+        print(f'fastep-replay: error: {exc}', file=sys.stderr)
+        return 2
+    if recording.truncated:
+        print(f'fastep-replay: warning: {recording.warning()}', file=sys.stderr)
+
+    rclpy.init(args=['fastep-replay', *ros_args])
+    node = None
+    try:
+        node = ReplayNode(recording, args.topics, args.rate, args.clock)
+        if args.wait_subscribers > 0 and not node.wait_for_subscribers(args.wait_subscribers):
+            node.get_logger().warning(f'not every topic has {args.wait_subscribers} subscribers after '
+                                      f'{WAIT_TIMEOUT:g} s; playing anyway')
+        time.sleep(args.delay)
+        while rclpy.ok():
+            if node.play_once() == 0 or not args.loop:
+                break
+        time.sleep(LINGER)
+        print(f'fastep-replay: played {node.played} messages on {len(node.topics)} topics', file=sys.stderr)
+    except (KeyboardInterrupt, ExternalShutdownException):
+        pass
+    finally:
+        if node is not None:
+            node.destroy_node()
+        rclpy.try_shutdown()
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,66 @@
+"""fastep-recover: rewrite the readable part of a cut-off MCAP recording as a complete, valid file.
+
+    fastep-recover IN.mcap OUT.mcap
+
+Why: a recorder that was killed (SIGKILL, power loss, a crashed launcher) leaves a file without summary and
+footer. Our reader recovers it on the fly, but other tools (`ros2 bag info`, Foxglove, indexed readers)
+want a complete file. Every message up to the last complete chunk is copied with its schema, channel metadata
+(QoS) and the metadata records, in log-time order, and a summary with statistics is written. A complete input
+is simply copied (re-chunked). Exit 0 with one line saying how many messages were kept; 2 with one line on
+stderr when IN is not MCAP or holds no complete message, or OUT cannot be written. OUT must differ from IN.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import NoReturn, Sequence
+
+from fastep_core.errors import FastepError
+from msg_tools.mcap_io import copy_recording, open_recording
+
+__all__ = ['main', 'recover']
+
+
+def recover(source: str | Path, target: str | Path) -> tuple[int, str]:
+    """Copy what is readable from source into a complete file target; (messages written, warning or '')."""
+    source, target = Path(source), Path(target)
+    if target.exists() and source.exists() and target.resolve() == source.resolve():
+        raise FastepError(f'OUT must not be the input file {source}')
+    recording = open_recording(source)
+    target.parent.mkdir(parents=True, exist_ok=True)
+    temp = target.with_name(target.name + '.part')
+    try:
+        count = copy_recording(recording, temp)
+        temp.replace(target)
+    finally:
+        temp.unlink(missing_ok=True)
+    return count, recording.warning()
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    p = _Parser(prog='fastep-recover', description='Rewrite the readable part of an MCAP file as a valid file.')
+    p.add_argument('input', type=Path, metavar='IN.mcap')
+    p.add_argument('output', type=Path, metavar='OUT.mcap')
+    args = p.parse_args(argv)
+    try:
+        count, warning = recover(args.input, args.output)
+    except FastepError as exc:
+        print(f'fastep-recover: error: {exc}', file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f'fastep-recover: error: cannot write {args.output}: {exc.strerror or exc}', file=sys.stderr)
+        return 2
+    state = 'recovered' if warning else 'copied (the input was complete)'
+    print(f'{state} {count} messages from {args.input} into {args.output}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,529 @@
+"""fastep-report: metrics and the paper's figures from a recorded run (MCAP), live or offline alike.
+
+    fastep-report FILE.mcap [--out DIR] [--radius R]
+
+Why from the recording and not from the simulator: a live run (fastep-launch / fastep-record) has no
+simulator object to ask, and offline recordings (fastep-sim --mcap) use the same topics, so one tool reports
+both and the numbers can be checked against each other. Everything is measured from the messages:
+
+- path_length: sum of the distances between consecutive `odom` positions (log-time order);
+- reached / time_to_goal: the first `status` whose message is `arrived`, its log time minus the robot's first
+  `goal_pose` log time (or, without a goal_pose, its first odom);
+- min_clearance: smallest distance from an odom position to the surface of an obstacle of the file's
+  `/obstacles`, minus the robot radius (negative means it touched); min_robot_gap likewise against the other
+  robots (positions interpolated in time). The radius is, in this order: the `fastep` metadata record
+  (fastep-sim and fastep-record with a scenario write it), a `robot_radius` value in the robot's status, or
+  --radius (default 0.5); `radius_source` says which;
+- activations: the `activations` value of the last status (how often the swarm planned a step), or else the
+  number of distinct waypoints.
+
+Writes DIR/report.json and three PNG figures: paths.png (paths among the obstacles with the planned waypoints,
+start and goal; Fig. 2/5/8), cost.png (cost over time; Fig. 3/6/9) and velocity.png (the controller's
+commands from cmd_vel, or the odometry twist; Fig. 4). Times on the figures are seconds since the first goal.
+DIR defaults to <FILE without .mcap>_report next to the file. Exit 0 when the report was written (also from
+the recovered part of a truncated file, with a warning line), 2 with one line on stderr when the file cannot
+be read or holds no robot.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import re
+import struct
+import sys
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, NoReturn, Sequence
+
+import numpy as np
+
+from fastep_core.errors import FastepError
+from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from msg_tools.mcap_io import Recording, open_recording
+from msg_tools.sim_mcap import METADATA_NAME
+
+__all__ = ['RecordedRun', 'RobotRecord', 'float64_field', 'load_run', 'main', 'metrics', 'odometry_fields',
+           'twist_fields', 'write_figures', 'write_report']
+
+ROBOT_TOPIC = re.compile(r'^/([A-Za-z_][A-Za-z0-9_]*)/(odom|cmd_vel|goal_pose|waypoint|plan|cost|status|'
+                         r'trailer_pose)$')
+DEFAULT_RADIUS = 0.5
+
+
+@dataclass
+class RobotRecord:
+    """Time series of one robot, times in seconds of log time."""
+
+    name: str
+    model: str = 'point_mass'
+    odom: list[tuple[float, float, float]] = field(default_factory=list)           # t, x, y
+    odom_twist: list[tuple[float, float, float, float]] = field(default_factory=list)  # t, lin.x, lin.y, ang.z
+    cmd: list[tuple[float, float, float, float]] = field(default_factory=list)     # t, lin.x, lin.y, ang.z
+    cost: list[tuple[float, float]] = field(default_factory=list)
+    waypoints: list[tuple[float, float]] = field(default_factory=list)   # distinct, in order of appearance
+    plan: list[tuple[float, float]] = field(default_factory=list)        # the last plan (goal last)
+    statuses: list[tuple[float, dict[str, Any]]] = field(default_factory=list)
+    goal: tuple[float, float] | None = None
+    goal_time: float | None = None
+    radius: float | None = None
+    radius_source: str = ''
+
+
+@dataclass
+class RecordedRun:
+    """What a recording says about a run."""
+
+    path: Path
+    robots: dict[str, RobotRecord]
+    obstacles: list[Obstacle]
+    workspace: tuple[float, float, float, float] | None
+    metadata: dict[str, str]
+    algorithm: str
+    scenario: str
+    t0: float
+    truncated: bool
+    warning: str
+    message_count: int
+
+
+def _robot(robots: dict[str, RobotRecord], name: str) -> RobotRecord:
+    if name not in robots:
+        robots[name] = RobotRecord(name)
+    return robots[name]
+
+
+# Fast paths for the three high-rate types. rclpy's deserialize_message builds a full Python message (an
+# Odometry is ~15 objects and two numpy covariance arrays), which made reading a 10-minute recording take half
+# a minute; these read only the needed float64 fields of little-endian CDR (encapsulation 00 01) with struct.
+# Alignment is relative to the payload after the 4-byte encapsulation header. Tests compare them with rclpy.
+_CDR_LE = b'\x00\x01'
+_U32 = struct.Struct('<I')
+_ODOM = struct.Struct('<3d4d288x3d3d')  # position, orientation, (pose covariance), twist linear, angular
+_TWIST = struct.Struct('<3d3d')
+_F64 = struct.Struct('<d')
+
+
+def _string_end(data: bytes, offset: int) -> int:
+    """Offset after a CDR string starting at `offset` (payload offsets; data includes the 4-byte header)."""
+    offset = (offset + 3) & ~3
+    return offset + 4 + _U32.unpack_from(data, 4 + offset)[0]
+
+
+def odometry_fields(data: bytes) -> tuple[float, ...] | None:
+    """(x, y, qx, qy, qz, qw, linear.x, linear.y, angular.z) of a CDR Odometry, None if not little-endian CDR."""
+    if data[:2] != _CDR_LE:
+        return None
+    offset = _string_end(data, 8)           # header.stamp (8 bytes), header.frame_id
+    offset = _string_end(data, offset)      # child_frame_id
+    offset = (offset + 7) & ~7
+    v = _ODOM.unpack_from(data, 4 + offset)
+    return v[0], v[1], v[3], v[4], v[5], v[6], v[7], v[8], v[12]
+
+
+def twist_fields(data: bytes) -> tuple[float, float, float] | None:
+    """(linear.x, linear.y, angular.z) of a CDR Twist."""
+    if data[:2] != _CDR_LE:
+        return None
+    v = _TWIST.unpack_from(data, 4)
+    return v[0], v[1], v[5]
+
+
+def float64_field(data: bytes) -> float | None:
+    if data[:2] != _CDR_LE:
+        return None
+    return _F64.unpack_from(data, 4)[0]
+
+
+def load_run(recording: Recording) -> RecordedRun:
+    """Collect every robot's series, the obstacles and the workspace from a recording."""
+    from rclpy.serialization import deserialize_message
+
+    from msg_tools import convert
+    from msg_tools.mcap_io import message_class
+
+    robots: dict[str, RobotRecord] = {}
+    wanted = ['/obstacles', '/map']
+    kinds: dict[str, tuple[RobotRecord, str]] = {}
+    for topic in recording.topics:
+        match = ROBOT_TOPIC.match(topic)
+        if match:
+            robot = _robot(robots, match.group(1))
+            if match.group(2) == 'trailer_pose':
+                robot.model = 'tractor_trailer'
+            else:
+                wanted.append(topic)
+                kinds[topic] = (robot, match.group(2))
+    classes: dict[str, type] = {}
+
+    def decode(type_name: str, data: bytes) -> Any:
+        if type_name not in classes:
+            classes[type_name] = message_class(type_name)
+        try:
+            return deserialize_message(data, classes[type_name])
+        except Exception as exc:
+            raise FastepError(f'{recording.path}: cannot decode a {type_name} message: {exc}') from None
+
+    obstacles: tuple[float, list[Obstacle]] | None = None
+    workspace: tuple[float, tuple[float, float, float, float]] | None = None
+    waypoints: dict[str, list[tuple[float, tuple[float, float]]]] = {name: [] for name in robots}
+    plans: dict[str, tuple[float, list[tuple[float, float]]]] = {}
+    goals: dict[str, list[tuple[float, tuple[float, float]]]] = {name: [] for name in robots}
+    algorithm = ''
+    # File order (fast); every series is sorted by time below.
+    for topic, type_name, log_time, _, data, _ in recording.raw_messages(wanted, log_time_order=False):
+        t = log_time * 1e-9
+        if topic == '/obstacles':
+            if obstacles is None or t >= obstacles[0]:
+                try:
+                    obstacles = (t, convert.marker_array_to_obstacles(decode(type_name, data)))
+                except ValueError:
+                    pass
+            continue
+        if topic == '/map':
+            if workspace is None or t >= workspace[0]:
+                try:
+                    workspace = (t, convert.occupancy_grid_workspace(decode(type_name, data)))
+                except ValueError:
+                    pass
+            continue
+        robot, kind = kinds[topic]
+        if kind == 'odom':
+            v = odometry_fields(data) if type_name == 'nav_msgs/msg/Odometry' else None
+            if v is None:
+                m = decode(type_name, data)
+                p, q, tw = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist
+                v = (p.x, p.y, q.x, q.y, q.z, q.w, tw.linear.x, tw.linear.y, tw.angular.z)
+            robot.odom.append((t, v[0], v[1]))
+            robot.odom_twist.append((t, v[6], v[7], v[8]))
+        elif kind == 'cmd_vel':
+            c = twist_fields(data) if type_name == 'geometry_msgs/msg/Twist' else None
+            if c is None:
+                m = decode(type_name, data)
+                tw = m.twist if hasattr(m, 'twist') else m  # TwistStamped or Twist
+                c = (tw.linear.x, tw.linear.y, tw.angular.z)
+            robot.cmd.append((t, *c))
+        elif kind == 'cost':
+            f = float64_field(data) if type_name == 'std_msgs/msg/Float64' else None
+            robot.cost.append((t, float(decode(type_name, data).data) if f is None else f))
+        elif kind == 'waypoint':
+            waypoints[robot.name].append((t, convert.pose_stamped_to_point(decode(type_name, data))))
+        elif kind == 'plan':
+            if robot.name not in plans or t >= plans[robot.name][0]:
+                plans[robot.name] = (t, convert.path_to_waypoints(decode(type_name, data)))
+        elif kind == 'status':
+            values = convert.diagnostic_to_dict(decode(type_name, data))
+            robot.statuses.append((t, values))
+        elif kind == 'goal_pose':
+            goals[robot.name].append((t, convert.pose_stamped_to_point(decode(type_name, data))))
+    for robot in robots.values():
+        for series in (robot.odom, robot.odom_twist, robot.cmd, robot.cost, robot.statuses):
+            series.sort(key=lambda row: row[0])  # stable: equal times keep file order
+        for _, point in sorted(waypoints[robot.name], key=lambda row: row[0]):
+            if point not in robot.waypoints:
+                robot.waypoints.append(point)
+        if robot.name in plans:
+            robot.plan = plans[robot.name][1]
+        if goals[robot.name]:
+            first = min(goals[robot.name], key=lambda row: row[0])
+            robot.goal_time = first[0]
+            robot.goal = max(goals[robot.name], key=lambda row: row[0])[1]
+        for _, values in robot.statuses:
+            algorithm = values.get('algorithm') or algorithm
+    meta = recording.metadata.get(METADATA_NAME, {})
+    space = workspace[1] if workspace is not None else None
+    if space is None and meta.get('workspace'):
+        try:
+            space = tuple(float(v) for v in meta['workspace'].split(','))  # type: ignore[assignment]
+        except ValueError:
+            space = None
+    for robot in robots.values():
+        model = meta.get(f'model/{robot.name}')
+        if model:
+            robot.model = model
+    starts = [r.goal_time for r in robots.values() if r.goal_time is not None]
+    if not starts:
+        starts = [r.odom[0][0] for r in robots.values() if r.odom]
+    t0 = min(starts) if starts else recording.start_time * 1e-9
+    order = [n for n in meta.get('robots', '').split(',') if n in robots]
+    ordered = {n: robots[n] for n in order + sorted(n for n in robots if n not in order)}
+    return RecordedRun(recording.path, ordered, [] if obstacles is None else obstacles[1], space, meta,
+                       meta.get('algorithm', algorithm), meta.get('scenario', ''), t0, recording.truncated,
+                       recording.warning(), recording.message_count)
+
+
+# ----------------------------------------------------------------------------------------------- metrics
+
+def _radius(run: RecordedRun, robot: RobotRecord, default: float) -> tuple[float, str]:
+    text = run.metadata.get(f'radius/{robot.name}')
+    if text:
+        try:
+            return float(text), 'metadata'
+        except ValueError:
+            pass
+    for _, values in reversed(robot.statuses):
+        for key in ('robot_radius', 'radius'):
+            if values.get(key):
+                try:
+                    return float(values[key]), 'status'
+                except ValueError:
+                    pass
+    return default, 'default'
+
+
+def _positions_at(odom: np.ndarray, times: np.ndarray) -> np.ndarray:
+    """Positions (n, 2) of an odom array (rows t, x, y) at the given times, linearly interpolated and held
+    before the first and after the last message."""
+    return np.stack([np.interp(times, odom[:, 0], odom[:, 1]), np.interp(times, odom[:, 0], odom[:, 2])], axis=-1)
+
+
+def _int(text: Any) -> int | None:
+    try:
+        return int(float(text))
+    except (TypeError, ValueError):
+        return None
+
+
+def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[str, Any]:
+    """The report as a JSON-ready dict (see the module docstring)."""
+    world = Obstacles(run.obstacles) if run.obstacles else None
+    for robot in run.robots.values():
+        robot.radius, robot.radius_source = _radius(run, robot, default_radius)
+    rows = []
+    arrays = {name: np.array(r.odom, dtype=float).reshape(-1, 3) for name, r in run.robots.items()}
+    for name, robot in run.robots.items():
+        odom = arrays[name]
+        xy = odom[:, 1:3]
+        length = float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum()) if len(xy) > 1 else 0.0
+        start = robot.goal_time if robot.goal_time is not None else (float(odom[0, 0]) if len(odom) else None)
+        arrived = [t for t, s in robot.statuses if s.get('message') == 'arrived' and (start is None or t >= start)]
+        reached = bool(arrived)
+        time_to_goal = arrived[0] - start if reached and start is not None else None
+        clearance = None
+        if world is not None and len(xy):
+            clearance = float(world.clearance(xy).min()) - float(robot.radius)
+        gap = None
+        for other_name, other in run.robots.items():
+            theirs_odom = arrays[other_name]
+            if other_name == name or not len(theirs_odom) or not len(xy):
+                continue
+            times = np.union1d(odom[:, 0], theirs_odom[:, 0])
+            mine, theirs = _positions_at(odom, times), _positions_at(theirs_odom, times)
+            distance = float(np.sqrt(((mine - theirs) ** 2).sum(axis=1)).min())
+            value = distance - float(robot.radius) - float(other.radius or 0.0)
+            gap = value if gap is None else min(gap, value)
+        last = robot.statuses[-1][1] if robot.statuses else {}
+        activations = None
+        for _, values in reversed(robot.statuses):
+            activations = _int(values.get('activations'))
+            if activations is not None:
+                break
+        source = 'status'
+        if activations is None:
+            activations, source = len(robot.waypoints), 'waypoints'
+        margins = [v for v in (clearance, gap) if v is not None]
+        rows.append({
+            'name': name, 'model': robot.model, 'reached': reached,
+            'collided': bool(margins) and min(margins) < 0.0,
+            'path_length': round(length, 6),
+            'time_to_goal': None if time_to_goal is None else round(time_to_goal, 6),
+            'min_clearance': None if clearance is None else round(clearance, 6),
+            'min_robot_gap': None if gap is None else round(gap, 6),
+            'radius': robot.radius, 'radius_source': robot.radius_source,
+            'activations': activations, 'activations_source': source,
+            'waypoints': len(robot.waypoints),
+            'final_status': f'{last.get("message", "")}: {last.get("reason", "")}' if last else '',
+            'odom_messages': len(robot.odom),
+            'goal': None if robot.goal is None else list(robot.goal),
+        })
+    return {
+        'file': str(run.path), 'scenario': run.scenario, 'algorithm': run.algorithm,
+        'truncated': run.truncated, 'warning': run.warning, 'messages': run.message_count,
+        'obstacles': len(run.obstacles), 'workspace': None if run.workspace is None else list(run.workspace),
+        'robots': rows,
+    }
+
+
+# ----------------------------------------------------------------------------------------------- figures
+
+PLOT_POINTS = 5000  # rows drawn per line at most: long recordings are thinned for drawing only
+
+
+def _thin(rows: Sequence[Sequence[float]]) -> np.ndarray:
+    data = np.asarray(rows, dtype=float)
+    if len(data) <= PLOT_POINTS:
+        return data
+    step = int(math.ceil(len(data) / PLOT_POINTS))
+    return np.concatenate([data[::step], data[-1:]])
+
+
+def _title(run: RecordedRun) -> str:
+    algo = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic'}.get(run.algorithm, run.algorithm)
+    what = run.scenario or run.path.stem
+    return f'{what}: {algo}' if algo else what
+
+
+def write_figures(run: RecordedRun, out: Path) -> list[Path]:
+    """paths.png, cost.png and velocity.png in out; returns their paths."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    colours = plt.rcParams['axes.prop_cycle'].by_key()['color']
+    written = []
+
+    fig, ax = plt.subplots(figsize=(6.4, 6.4), dpi=110)
+    for obstacle in run.obstacles:
+        if isinstance(obstacle, Circle):
+            ax.add_patch(plt.Circle(obstacle.center, obstacle.radius, color='0.55', alpha=0.8, lw=0))
+        elif isinstance(obstacle, Segment):
+            ax.plot(*zip(obstacle.start, obstacle.end), color='0.25', lw=2.5, solid_capstyle='round')
+    for k, robot in enumerate(run.robots.values()):
+        colour = colours[k % len(colours)]
+        if robot.odom:
+            odom = np.array(robot.odom)
+            length = float(np.sqrt((np.diff(odom[:, 1:3], axis=0) ** 2).sum(axis=1)).sum())
+            odom = _thin(odom)
+            ax.plot(odom[:, 1], odom[:, 2], color=colour, lw=1.6, label=f'{robot.name} ({length:.1f} m)')
+            ax.plot(odom[0, 1], odom[0, 2], 'o', color=colour, ms=7, mfc='white', mew=2)
+        points = robot.plan[:-1] if robot.plan else robot.waypoints
+        if points:
+            wp = np.array(points)
+            ax.plot(wp[:, 0], wp[:, 1], 'x', color=colour, ms=5, mew=1.2)
+        if robot.goal is not None:
+            ax.plot(*robot.goal, '*', color=colour, ms=13)
+    if run.workspace is not None:
+        xmin, ymin, xmax, ymax = run.workspace
+        ax.set_xlim(xmin, xmax)
+        ax.set_ylim(ymin, ymax)
+    ax.set_aspect('equal')
+    ax.set_xlabel('x (m)')
+    ax.set_ylabel('y (m)')
+    ax.set_title(_title(run))
+    if run.robots:
+        ax.legend(loc='upper right', fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    written.append(out / 'paths.png')
+    fig.savefig(written[-1])
+    plt.close(fig)
+
+    fig, ax = plt.subplots(figsize=(7, 3.2), dpi=110)
+    for k, robot in enumerate(run.robots.values()):
+        if robot.cost:
+            series = _thin(robot.cost)
+            ax.plot(series[:, 0] - run.t0, series[:, 1], lw=1.2, color=colours[k % len(colours)], label=robot.name)
+    ax.set_xlabel('time since the goal (s)')
+    ax.set_ylabel('cost f (eq. 10)')
+    ax.set_title(_title(run))
+    if any(r.cost for r in run.robots.values()):
+        ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+    fig.tight_layout()
+    written.append(out / 'cost.png')
+    fig.savefig(written[-1])
+    plt.close(fig)
+
+    n = max(1, len(run.robots))
+    fig, axes = plt.subplots(n, 1, figsize=(7, 2.4 * n), dpi=110, sharex=True, squeeze=False)
+    for ax, robot in zip(axes[:, 0], run.robots.values()):
+        source, series = ('cmd_vel', robot.cmd) if robot.cmd else ('odom', robot.odom_twist)
+        if series:
+            data = _thin(series)
+            t = data[:, 0] - run.t0
+            if robot.model == 'tractor_trailer':
+                ax.plot(t, data[:, 1], lw=1.1, label='v (m/s)')
+                ax.plot(t, data[:, 3], lw=1.1, label='omega (rad/s)')
+            else:
+                ax.plot(t, data[:, 1], lw=1.1, label='vx (m/s)')
+                ax.plot(t, data[:, 2], lw=1.1, label='vy (m/s)')
+                ax.plot(t, np.hypot(data[:, 1], data[:, 2]), lw=0.9, ls='--', color='0.4', label='speed (m/s)')
+            ax.legend(fontsize=7, loc='upper right')
+        ax.set_ylabel(f'{robot.name}: {source}')
+        ax.grid(alpha=0.3)
+    axes[-1, 0].set_xlabel('time since the goal (s)')
+    axes[0, 0].set_title(f'{_title(run)}: controller velocities')
+    fig.tight_layout()
+    written.append(out / 'velocity.png')
+    fig.savefig(written[-1])
+    plt.close(fig)
+    return written
+
+
+def write_report(path: str | Path, out: str | Path | None = None, radius: float = DEFAULT_RADIUS,
+                 figures: bool = True) -> tuple[dict[str, Any], list[Path]]:
+    """Read a recording, write out/report.json (and the figures); return the report and the files written."""
+    recording = open_recording(path)
+    run = load_run(recording)
+    if not run.robots:
+        raise FastepError(f'{recording.path} holds no robot topics (/<name>/odom, status, ...): nothing to report')
+    report = metrics(run, radius)
+    folder = Path(out) if out is not None else recording.path.with_name(recording.path.stem + '_report')
+    folder.mkdir(parents=True, exist_ok=True)
+    files = [folder / 'report.json']
+    files[0].write_text(json.dumps(report, indent=1) + '\n')
+    if figures:
+        files += write_figures(run, folder)
+    return report, files
+
+
+# ----------------------------------------------------------------------------------------------- CLI
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = _Parser(prog='fastep-report', description='Metrics and figures of a recorded run (MCAP).')
+    p.add_argument('file', type=Path, help='MCAP recording (fastep-record or fastep-sim --mcap)')
+    p.add_argument('--out', type=Path, metavar='DIR', help='output folder (default: <file>_report next to it)')
+    p.add_argument('--radius', type=float, default=DEFAULT_RADIUS,
+                   help='robot radius when the file does not say (default 0.5 m)')
+    p.add_argument('--no-figures', action='store_true', help='write report.json only')
+    return p
+
+
+def _line(row: dict[str, Any]) -> str:
+    state = 'arrived' if row['reached'] else 'NOT arrived'
+    when = f'{row["time_to_goal"]:.1f} s' if row['time_to_goal'] is not None else '-'
+    clear = f'{row["min_clearance"]:.2f} m' if row['min_clearance'] is not None else '-'
+    return (f'{row["name"]}: {state}{" COLLIDED" if row["collided"] else ""}, path {row["path_length"]:.2f} m, '
+            f'time {when}, min clearance {clear}, activations {row["activations"]}')
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    try:
+        return _run(argv)
+    except KeyboardInterrupt:
+        print('fastep-report: interrupted', file=sys.stderr)
+        return 130
+    except BrokenPipeError:  # e.g. `fastep-report x.mcap | head -1`: stop quietly
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    args = _parser().parse_args(argv)
+    if not (math.isfinite(args.radius) and args.radius >= 0.0):
+        _parser().error(f'--radius must be a finite number >= 0, got {args.radius}')
+    try:
+        report, files = write_report(args.file, args.out, args.radius, figures=not args.no_figures)
+    except FastepError as exc:
+        print(f'fastep-report: error: {exc}', file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(f'fastep-report: error: cannot write the report: {exc}', file=sys.stderr)
+        return 2
+    if report['warning']:
+        print(f'fastep-report: warning: {report["warning"]}', file=sys.stderr)
+    for row in report['robots']:
+        print(_line(row))
+    print('wrote ' + ', '.join(str(f) for f in files))
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())

@@ -1,0 +1,217 @@
+"""`fastep-sim --mcap`: an in-process run written with the same topics, types and QoS as a live recording.
+
+Why: the report, replay and plotting tools, Foxglove and `ros2 bag play` should not care whether a run came
+from the live ROS graph (fastep-launch + fastep-record) or from the in-process simulator, and offline runs
+are fast and reproducible. So this writes what the live nodes publish (DESIGN.md "ROS 2 interface"), with the
+conversions of msg_tools.convert:
+
+- per robot `/<name>/`: `odom` (every simulated step, and the start pose at t = 0), `cmd_vel` (every step),
+  `cost` (every step), `waypoint` (when the point driven to changes), `plan` (when it changes; the goal is its
+  last pose), `status` (when level, mode or reason change; the values the planner node sends plus
+  `robot_radius`), `trailer_pose` with every odom of a tractor-trailer, `goal_pose` at t = 0;
+- `/obstacles` and `/map` at t = 0 (transient-local) and `/clock` at every simulated step.
+
+Time base: log_time = publish_time = header.stamp = simulated seconds since the start of the run (t = 0 is
+1970-01-01T00:00:00 as a ROS time), exactly what a live graph on simulated time (fastep-clock starts at 0)
+records. A decision made at time t (cmd_vel, cost, waypoint, plan, status) is logged at t; the odometry it
+leads to at t + dt, as the live planner and plant do. Messages are buffered during the run and written in
+log-time order when it ends (the run is held in memory anyway).
+
+A metadata record `fastep` holds what a report cannot get from the topics alone: scenario, algorithm, seed and
+each robot's model and radius.
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass, field
+from typing import IO, Any
+
+import numpy as np
+from geometry_msgs.msg import Twist
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Float64
+
+from fastep_core.planning.navigator import Mode
+from fastep_core.scenario import RobotSpec, Scenario
+from fastep_core.simulator import Run, Tick, simulate
+from msg_tools import convert
+from msg_tools.mcap_io import DEFAULT_CHUNK_SIZE, McapWriter, qos_dict
+
+__all__ = ['METADATA_NAME', 'SimRecorder', 'record_run', 'robot_metadata', 'topic_qos']
+
+METADATA_NAME = 'fastep'
+FRAME = 'map'
+
+# The QoS the live nodes offer (fastep_ros.common / fastep_ros.planner), so a replay recreates them.
+_LATCHED = [qos_dict(depth=1, transient_local=True)]        # /map, /obstacles (map node)
+_STATUS = [qos_dict(depth=10, transient_local=True)]        # status (planner STATUS_QOS)
+_RELIABLE = [qos_dict(depth=10)]                            # everything else
+
+
+def topic_qos(topic: str) -> list[dict[str, Any]]:
+    """The offered QoS profiles recorded for a topic of the fastep interface."""
+    if topic in ('/map', '/obstacles'):
+        return _LATCHED
+    if topic.endswith('/status'):
+        return _STATUS
+    return _RELIABLE
+
+
+def robot_metadata(scenario: Scenario) -> dict[str, str]:
+    """The `fastep` metadata entries describing a scenario's robots (also written by fastep-record)."""
+    out = {'scenario': scenario.name, 'robots': ','.join(r.name for r in scenario.robots),
+           'workspace': ','.join(f'{v:g}' for v in scenario.world.workspace)}
+    for r in scenario.robots:
+        out[f'model/{r.name}'] = r.model
+        out[f'radius/{r.name}'] = f'{r.radius:g}'
+        out[f'start/{r.name}'] = ','.join(f'{v:g}' for v in r.start)
+        out[f'goal/{r.name}'] = ','.join(f'{v:g}' for v in r.goal)
+        if r.model == 'tractor_trailer':
+            out[f'length/{r.name}'] = f'{r.length:g}'
+    return out
+
+
+def _ns(t: float) -> int:
+    return int(round(t * 1e9))
+
+
+@dataclass
+class _RobotState:
+    spec: RobotSpec
+    target: tuple[float, ...] | None = None
+    plan: tuple[tuple[float, float], ...] | None = None
+    status: tuple[str, str, str] | None = None
+    last_t: float = 0.0
+
+
+@dataclass
+class SimRecorder:
+    """Observer for fastep_core.simulator.simulate that collects the messages of a live recording."""
+
+    scenario: Scenario
+    algorithm: str
+    seed: int
+    items: list[tuple[int, int, str, Any]] = field(default_factory=list)  # (log_time, order, topic, message)
+    robots: dict[str, _RobotState] = field(default_factory=dict)
+    last_clock: int = -1
+
+    def __post_init__(self) -> None:
+        world = self.scenario.world
+        stamp = convert.seconds_to_stamp(0.0)
+        self.dt = self.scenario.planner.dt
+        self._clock(0.0)
+        self._add(0.0, '/obstacles', convert.obstacles_to_marker_array(world.obstacle_list, stamp, FRAME))
+        self._add(0.0, '/map', convert.world_to_occupancy_grid(world, 0.1, stamp, FRAME))
+        for spec in self.scenario.robots:
+            state = _RobotState(spec)
+            self.robots[spec.name] = state
+            ns = f'/{spec.name}'
+            self._add(0.0, f'{ns}/goal_pose', convert.point_to_pose_stamped(spec.goal, stamp, FRAME))
+            self._odom(spec, 0.0, np.array(spec.start, dtype=float), np.zeros(2))
+            goal = (float(spec.goal[0]), float(spec.goal[1]))
+            state.plan = (goal,)
+            self._add(0.0, f'{ns}/plan', convert.waypoints_to_path([goal], stamp, FRAME))
+
+    # ------------------------------------------------------------------------------------------- helpers
+    def _add(self, t: float, topic: str, message: Any) -> None:
+        self.items.append((_ns(t), len(self.items), topic, message))
+
+    def _clock(self, t: float) -> None:
+        ns = _ns(t)
+        if ns > self.last_clock:
+            self.last_clock = ns
+            self._add(t, '/clock', Clock(clock=convert.seconds_to_stamp(t)))
+
+    def _odom(self, spec: RobotSpec, t: float, state: np.ndarray, command: np.ndarray) -> None:
+        stamp = convert.seconds_to_stamp(t)
+        if spec.model == 'tractor_trailer':
+            v, omega = float(command[0]), float(command[1])
+            linear: tuple[float, float] = (v, 0.5 * spec.length * omega)
+            angular = omega
+        else:
+            linear, angular = (float(command[0]), float(command[1])), 0.0
+        self._add(t, f'/{spec.name}/odom', convert.state_to_odometry(
+            state, stamp, child_frame_id=f'{spec.name}/base_link', frame_id=FRAME, linear=linear,
+            angular=angular))
+        if spec.model == 'tractor_trailer':
+            self._add(t, f'/{spec.name}/trailer_pose',
+                      convert.trailer_pose(state, spec.trailer_length, spec.hitch_offset, stamp, FRAME))
+
+    def _status(self, robot: _RobotState, t: float, mode: str, reason: str, activations: int,
+                waypoint: Any, cost: float) -> None:
+        level = 'error' if mode == Mode.FAILED.value else 'ok'
+        key = (level, mode, reason)
+        if key == robot.status:
+            return
+        robot.status = key
+        spec = robot.spec
+        others = ' '.join(sorted(r for r in self.robots if r != spec.name))
+        values = {'reason': reason, 'activations': activations, 'waypoint': waypoint, 'goal': spec.goal,
+                  'cost': float(cost), 'others': others, 'algorithm': self.algorithm, 't': t,
+                  'robot_radius': float(spec.radius)}
+        self._add(t, f'/{spec.name}/status', convert.make_status(f'/{spec.name}', mode, level, values))
+
+    def _plan(self, robot: _RobotState, t: float, points: list[tuple[float, float]]) -> None:
+        key = tuple(points)
+        if key != robot.plan:
+            robot.plan = key
+            self._add(t, f'/{robot.spec.name}/plan',
+                      convert.waypoints_to_path(points, convert.seconds_to_stamp(t), FRAME))
+
+    # ------------------------------------------------------------------------------------------- observer
+    def observe(self, tick: Tick) -> None:
+        """Called by simulate() after each step of one robot: tick.t is the time after the step."""
+        robot = self.robots[tick.name]
+        spec, nav = robot.spec, tick.navigator
+        t = tick.t
+        decided = max(0.0, round(t - self.dt, 9))
+        ns = f'/{spec.name}'
+        stamp = convert.seconds_to_stamp(decided)
+        # What the planner published at the decision time...
+        self._add(decided, f'{ns}/cmd_vel', convert.command_to_twist(tick.command, spec.model))
+        self._add(decided, f'{ns}/cost', Float64(data=float(nav.cost)))
+        target = nav.target
+        key = None if target is None else tuple(float(v) for v in target)
+        if key is not None and key != robot.target:
+            self._add(decided, f'{ns}/waypoint', convert.point_to_pose_stamped(key, stamp, FRAME))
+        robot.target = key
+        goal = (float(spec.goal[0]), float(spec.goal[1]))
+        self._plan(robot, decided, [(float(p[0]), float(p[1])) for p in nav.plan] + [goal])
+        self._status(robot, decided, nav.mode.value, nav.reason, nav.activations, nav.waypoint, nav.cost)
+        # ... and what the plant published after the step.
+        self._clock(t)
+        self._odom(spec, t, tick.state, tick.command)
+        robot.last_t = t
+
+    def finish(self, run: Run) -> None:
+        """Final status (arrived / failed), plan and a stop command of every robot, at the time it ended."""
+        for result in run.robots:
+            robot = self.robots[result.name]
+            t = result.sim_time if result.sim_time is not None else robot.last_t
+            mode, _, reason = result.status.partition(': ')
+            goal = (float(robot.spec.goal[0]), float(robot.spec.goal[1]))
+            self._plan(robot, t, [(float(w[0]), float(w[1])) for w in result.waypoints] + [goal])
+            self._status(robot, t, mode, reason, result.activations, None, 0.0)
+            self._add(t, f'/{result.name}/cmd_vel', Twist())
+            self._add(t, f'/{result.name}/cost', Float64(data=0.0))
+
+    def write(self, output: str | os.PathLike[str] | IO[bytes], chunk_size: int = DEFAULT_CHUNK_SIZE) -> int:
+        """Write the collected messages in log-time order; return how many."""
+        with McapWriter(output, chunk_size=chunk_size) as writer:
+            meta = robot_metadata(self.scenario)
+            meta.update(algorithm=self.algorithm, seed=str(self.seed), source='fastep-sim',
+                        time_base='simulated seconds since the start of the run')
+            writer.add_metadata(METADATA_NAME, meta)
+            for log_time, _, topic, message in sorted(self.items, key=lambda item: item[:2]):
+                writer.write(topic, message, log_time, qos=topic_qos(topic))
+            return writer.message_count
+
+
+def record_run(scenario: Scenario, algorithm: str, seed: int,
+               output: str | os.PathLike[str] | IO[bytes]) -> tuple[Run, int]:
+    """Simulate one run and write it as MCAP; returns the run and the number of messages written."""
+    recorder = SimRecorder(scenario, algorithm, seed)
+    run = simulate(scenario, algorithm, seed, observer=recorder.observe)
+    recorder.finish(run)
+    return run, recorder.write(output)

@@ -1,0 +1,161 @@
+"""fastep-replay: a recording is received on the graph in order, with its timing (scaled by --rate), latched
+topics stay latched, --clock follows the log times, and Ctrl-C or a bad file end it cleanly.
+
+Timing is measured where it matters, at a subscriber in another process. On a loaded machine a sample can be
+late once in a while (DDS resends a lost packet after a heartbeat, ~0.1 s), so a timing check that fails is
+repeated (up to ATTEMPTS replays); order and completeness must hold every time.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+from typing import Any, Iterator
+
+import numpy as np
+import pytest
+from nav_msgs.msg import OccupancyGrid
+from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock
+from std_msgs.msg import Float64
+
+from fastep_core.world import World
+from fastep_ros import replay
+from graph_helpers import ROOT, Helper, free_domain, isolated_env, stop_process
+from msg_tools import convert
+from msg_tools.mcap_io import McapWriter, qos_dict
+
+# Irregular gaps (s) between the cost messages; the recording starts at 5 s of log time.
+TIMES = 5.0 + np.array([0.0, 0.1, 0.15, 0.35, 0.4, 0.6, 0.9, 0.95, 1.2, 1.25, 1.45, 1.5])
+TOLERANCE = 0.02  # s, per inter-message gap
+ATTEMPTS = 3
+RELIABLE = QoSProfile(depth=100, reliability=ReliabilityPolicy.RELIABLE)
+COST = f'/replay{os.getpid()}/cost'  # of this test run only (another run may share the DDS domain)
+
+
+@pytest.fixture(scope='module')
+def recording(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    path = tmp_path_factory.mktemp('replay') / 'gaps.mcap'
+    with McapWriter(path) as writer:
+        grid = convert.world_to_occupancy_grid(World.from_obstacles([0, 0, 4, 4], []), 1.0)
+        writer.write('/map', grid, int(TIMES[0] * 1e9), qos=[qos_dict(depth=1, transient_local=True)])
+        for i, t in enumerate(TIMES):
+            writer.write(COST, Float64(data=float(i)), int(round(t * 1e9)))
+    return path
+
+
+@pytest.fixture(scope='module')
+def helper(tmp_path_factory: pytest.TempPathFactory) -> Iterator[tuple[Helper, dict[str, str]]]:
+    domain = free_domain()
+    env = isolated_env(domain, tmp_path_factory.mktemp('replay_log'))
+    h = Helper(domain)
+    try:
+        yield h, env
+    finally:
+        h.close()
+
+
+def start(env: dict[str, str], *args: str) -> subprocess.Popen[str]:
+    return subprocess.Popen([sys.executable, '-m', 'fastep_ros.replay', *args], env=env, cwd=ROOT, text=True,
+                            stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+
+
+def play(h: Helper, env: dict[str, str], path: Path, rate: float, clock: bool = False) -> dict[str, Any]:
+    """Replay at `rate`; return receive times and values of COST (and /clock, and the late /map)."""
+    cost: list[tuple[float, float]] = []
+    clocks: list[float] = []
+    maps: list[OccupancyGrid] = []
+    subs = [h.node.create_subscription(Float64, COST, lambda m: cost.append((time.monotonic(), m.data)), RELIABLE)]
+    if clock:
+        subs.append(h.node.create_subscription(Clock, '/clock', lambda m: clocks.append(
+            convert.stamp_to_seconds(m.clock)), RELIABLE))
+    args = [str(path), '--rate', str(rate), '--wait-subscribers', '1', '--delay', '0.5']
+    proc = start(env, *args, *(['--clock', '200'] if clock else []))
+    try:
+        h.spin_until(lambda: len(cost) >= 1, 60.0, 'the first replayed message')
+        # A subscriber that joins now still gets the latched /map.
+        latched = QoSProfile(depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        subs.append(h.node.create_subscription(OccupancyGrid, '/map', maps.append, latched))
+        durabilities = [i.qos_profile.durability for i in h.node.get_publishers_info_by_topic('/map')]
+        h.spin_until(lambda: len(cost) == len(TIMES) and bool(maps), 30.0, 'every message and the map')
+        h.spin_for(0.3)  # the last /clock may come after the last cost message
+        out, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)  # type: ignore[arg-type]
+        for sub in subs:
+            h.node.destroy_subscription(sub)
+    assert proc.returncode == 0, err
+    return {'cost': cost, 'clock': clocks, 'maps': maps, 'durability': durabilities, 'stderr': err}
+
+
+def timing_error(cost: list[tuple[float, float]], rate: float) -> float:
+    """Largest difference (s) between a received and the recorded inter-message gap divided by rate."""
+    assert [v for _, v in cost] == [float(i) for i in range(len(TIMES))]  # all, in order
+    received = np.diff([t for t, _ in cost])
+    return float(np.max(np.abs(received - np.diff(TIMES) / rate)))
+
+
+def play_in_time(h: Helper, env: dict[str, str], path: Path, rate: float, clock: bool = False) -> dict[str, Any]:
+    errors = []
+    for _ in range(ATTEMPTS):
+        result = play(h, env, path, rate, clock)
+        errors.append(timing_error(result['cost'], rate))
+        if errors[-1] < TOLERANCE:
+            return result
+    raise AssertionError(f'inter-message gaps off by {[round(e, 4) for e in errors]} s in {ATTEMPTS} replays')
+
+
+def test_replay_keeps_order_timing_and_latching(helper: tuple[Helper, dict[str, str]], recording: Path) -> None:
+    h, env = helper
+    result = play_in_time(h, env, recording, 1.0)
+    assert result['cost'][-1][0] - result['cost'][0][0] == pytest.approx(TIMES[-1] - TIMES[0], abs=TOLERANCE)
+    assert result['maps'][0].info.width == 4 and result['durability'] == [DurabilityPolicy.TRANSIENT_LOCAL]
+    assert 'played 13 messages on 2 topics' in result['stderr']
+
+
+def test_rate_two_halves_durations_and_clock_follows(helper: tuple[Helper, dict[str, str]],
+                                                     recording: Path) -> None:
+    h, env = helper
+    result = play_in_time(h, env, recording, 2.0, clock=True)
+    assert result['cost'][-1][0] - result['cost'][0][0] == pytest.approx((TIMES[-1] - TIMES[0]) / 2,
+                                                                         abs=TOLERANCE)
+    clocks = result['clock']
+    assert clocks == sorted(clocks) and len(clocks) > len(TIMES)
+    assert clocks[0] >= TIMES[0] - 1e-9 and clocks[-1] == pytest.approx(TIMES[-1], abs=1e-6)
+
+
+def test_ctrl_c_ends_a_looping_replay(helper: tuple[Helper, dict[str, str]], recording: Path) -> None:
+    h, env = helper
+    got: list[float] = []
+    sub = h.node.create_subscription(Float64, COST, lambda m: got.append(m.data), RELIABLE)
+    proc = start(env, str(recording), '--loop', '--rate', '4', '--wait-subscribers', '1')
+    try:
+        h.spin_until(lambda: len(got) > len(TIMES) + 2, 60.0, 'the second loop')  # it started over
+        assert proc.poll() is None
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=15)
+    finally:
+        stop_process(proc)  # type: ignore[arg-type]
+        h.node.destroy_subscription(sub)
+    assert proc.returncode == 0 and 'Traceback' not in err
+
+
+def test_bad_input_is_one_line_and_exit_2(tmp_path: Path, recording: Path,
+                                          capsys: pytest.CaptureFixture[str]) -> None:
+    bad = tmp_path / 'bad.mcap'
+    bad.write_text('hello\n')
+    cases = [[str(bad)], [str(tmp_path / 'missing.mcap')], [str(recording), '--rate', '0'],
+             [str(recording), '--topics', '/nope']]
+    for args in cases:
+        try:
+            code = replay.main(args)
+        except SystemExit as exc:  # argparse errors
+            code = exc.code
+        assert code == 2
+        err = capsys.readouterr().err
+        assert err.startswith('fastep-replay: error:') and err.count('\n') == 1, err
