@@ -21,7 +21,8 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 demo: $(STAMP)
 	mkdir -p $(OUT)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(BIN)/fastep-launch case_study_1 --rtf 50 --seed 0 \
-		--json $(OUT)/demo.json --plot $(OUT)/demo.png
+		--record $(OUT)/demo.mcap --json $(OUT)/demo.json --plot $(OUT)/demo.png
+	$(BIN)/fastep-report $(OUT)/demo.mcap --out $(OUT)/demo_report
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q tests
