@@ -335,7 +335,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             # command, so simulated time never runs ahead of a busy node.
             procs.start('fastep-clock', 'clock', '/', {
                 'rtf': float(args.rtf), 'step': scenario.planner.dt,
-                'wait_for_subscribers': 2 + 2 * len(scenario.robots) + (args.record is not None),
+                # The recorder subscribes to /clock twice: for its own time, and to record it.
+                'wait_for_subscribers': 2 + 2 * len(scenario.robots) + 2 * (args.record is not None),
                 'sync_topics': [f'/{spec.name}/{topic}' for spec in scenario.robots for topic in ('cmd_vel', 'odom')]})
         monitor = Monitor(scenario)
         robots = monitor.robots
