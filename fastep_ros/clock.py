@@ -6,7 +6,8 @@ Every tick (a steady wall-clock timer) the simulated time advances by a fixed in
 rosgraph_msgs/Clock. The tick period is step / rtf wall seconds, but never shorter than 1 / max_rate_hz; the
 increment is rtf times the period, so simulated time runs rtf times faster than wall time. With the default
 step of 0.05 s (the planners' control period, 1 / control_rate_hz): rtf 1 -> 20 ticks/s, rtf 10 -> 200
-ticks/s, rtf 20 -> 400 ticks/s, beyond that the increment grows. A finer step costs CPU in every node (each
+ticks/s, rtf 20 -> 400 ticks/s, beyond that the increment grows (except in lock step, where a tick is
+always one step and rtf beyond max_rate_hz * step is not reached). A finer step costs CPU in every node (each
 one handles every tick) without changing the results: plants integrate in their own fixed steps (1/rate_hz)
 whatever the tick size, and planners act once per control period. If the machine cannot keep up, ticks come
 late and simulated time simply runs slower: it never jumps.
@@ -98,6 +99,11 @@ class ClockNode(Node):
         if self.start < 0.0:
             raise StartupError(f'parameter start must be >= 0, got {self.start:g}')
         self.period, self.increment = tick_plan(self.rtf, self.step, self.max_rate_hz)
+        if topics and any(topics):
+            # Lock step: every tick is one control period, as in the in-process simulator. A bigger increment
+            # would make rcl timers skip periods (planners at 8 Hz instead of 20 Hz of simulated time), so
+            # beyond max_rate_hz the clock runs slower than rtf instead (rtf is an upper bound here anyway).
+            self.increment = self.step
         self.ticks = 0
         self.steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.created = self.steady.now()
