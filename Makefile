@@ -27,10 +27,14 @@ demo: $(STAMP)
 test: $(STAMP)
 	$(BIN)/python -m pytest -q tests
 
+# Measurements run by hand (minutes, not seconds); results and commands are in docs/benchmarks.md.
 bench: $(STAMP)
 	$(BIN)/python -m benchmarks.step_latency
 	$(BIN)/python -m benchmarks.run_time
 	$(BIN)/python -m benchmarks.path_length
+	$(BIN)/fastep-bench --runs 30 --out docs/
+	$(BIN)/python -m benchmarks.graph_latency
+	$(BIN)/python -m benchmarks.graph_scaling
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info

@@ -40,8 +40,8 @@ import numpy as np
 
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
-    'tasks', 'run_task', 'run_batch', 'summarise', 'compare', 'enhancement', 'optimal_lengths',
-    'markdown_report', 'figures',
+    'tasks', 'run_task', 'run_batch', 'pool_context', 'summarise', 'compare', 'enhancement',
+    'optimal_lengths', 'straight_lengths', 'markdown_report', 'figures',
 ]
 
 TABLE2: tuple[str, ...] = ('table2_s1', 'table2_s2', 'table2_s3')
@@ -125,6 +125,12 @@ def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = ()) -> list[
                    r.compute_time, r.min_clearance, r.activations, r.status, cpu) for r in run.robots]
 
 
+def pool_context() -> multiprocessing.context.BaseContext:
+    """fork where the platform has it: workers start fast and need no importable __main__ (a script read
+    from stdin, a notebook); elsewhere the platform's default."""
+    return multiprocessing.get_context('fork' if 'fork' in multiprocessing.get_all_start_methods() else None)
+
+
 def _progress_printer(total: int, label: str) -> Callable[[int], None]:
     tty = sys.stderr.isatty()
     every = max(1, total // 20)
@@ -163,7 +169,7 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
             if show:
                 show(k)
     else:
-        with multiprocessing.get_context('spawn').Pool(min(workers, len(todo))) as pool:
+        with pool_context().Pool(min(workers, len(todo))) as pool:
             for k, records in enumerate(pool.imap_unordered(job, todo), 1):
                 out.extend(records)
                 if show:
@@ -358,9 +364,15 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
     return '\n'.join(lines) + '\n'
 
 
+def _grid(n: int, max_cols: int = 4) -> tuple[int, int]:
+    """Rows and columns for n panels, at most max_cols wide."""
+    cols = min(n, max_cols)
+    return -(-n // cols), cols
+
+
 def figures(records: Sequence[Record], optimal: dict[str, dict[str, float | None]], out_dir: Path,
             prefix: str = 'table2') -> list[Path]:
-    """Box plots of path length and compute time per scenario and planner (PNG, matplotlib Agg)."""
+    """Box plots of path length and compute time per scenario and planner, and the paths (PNG, Agg)."""
     import matplotlib
     matplotlib.use('Agg')
     import matplotlib.pyplot as plt
@@ -370,8 +382,11 @@ def figures(records: Sequence[Record], optimal: dict[str, dict[str, float | None
     algorithms = list(dict.fromkeys(r.algorithm for r in records))
     written = []
     for metric in ('path_length', 'compute_time'):
-        fig, axes = plt.subplots(1, len(scenarios), figsize=(4.2 * len(scenarios), 4.0), squeeze=False)
-        for ax, scenario in zip(axes[0], scenarios):
+        rows, cols = _grid(len(scenarios))
+        fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
+        for ax in axes.flat[len(scenarios):]:
+            ax.set_visible(False)
+        for ax, scenario in zip(axes.flat, scenarios):
             data = [_values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
                     for a in algorithms]
             ax.boxplot(data, tick_labels=[NAMES.get(a, a).replace('-Kinematic', '') for a in algorithms])
@@ -392,4 +407,54 @@ def figures(records: Sequence[Record], optimal: dict[str, dict[str, float | None
         fig.savefig(path, dpi=100)
         plt.close(fig)
         written.append(path)
+    written.append(paths_figure(scenarios, algorithms, out_dir / f'{prefix}_paths.png',
+                                seed=min(r.seed for r in records)))
     return written
+
+
+def paths_figure(scenarios: Sequence[str], algorithms: Sequence[str], out: Path, seed: int = 0) -> Path:
+    """Each scenario's obstacles, one run of every planner (the given seed) and the exact optimal path."""
+    import matplotlib
+    matplotlib.use('Agg')
+    import matplotlib.pyplot as plt
+
+    from fastep_core.geometry import Circle
+    from fastep_core.planning.optimal import shortest_path
+    from fastep_core.simulator import simulate
+
+    colours = {'fastep': 'tab:red', 'aco': 'tab:blue', 'optimal': 'tab:olive'}
+    rows, cols = _grid(len(scenarios))
+    fig, axes = plt.subplots(rows, cols, figsize=(5.0 * cols, 5.2 * rows), squeeze=False)
+    for ax in axes.flat[len(scenarios):]:
+        ax.set_visible(False)
+    for ax, source in zip(axes.flat, scenarios):
+        scenario = _scenario(source)
+        for o in scenario.world.obstacle_list:
+            if isinstance(o, Circle):
+                ax.add_patch(plt.Circle(o.center, o.radius, color='0.6'))
+            else:
+                ax.plot([o.start[0], o.end[0]], [o.start[1], o.end[1]], color='0.3', lw=2.5)
+        for k, spec in enumerate(scenario.robots):
+            exact = shortest_path(scenario.world, spec.start[:2], spec.goal,
+                                  spec.radius + scenario.planner.clearance_margin)
+            if exact is not None:
+                ax.plot(*exact.points.T, color='tab:green', lw=3, alpha=0.5,
+                        label=f'optimal {exact.length:.2f} m' if k == 0 else None)
+        for algorithm in algorithms:
+            if algorithm == 'optimal':
+                continue
+            run = simulate(scenario, algorithm, seed)
+            for k, robot in enumerate(run.robots):
+                xy = np.array(robot.trajectory)[:, 1:3]
+                ax.plot(*xy.T, color=colours.get(algorithm), lw=1.2,
+                        label=f'{NAMES.get(algorithm, algorithm)} {robot.path_length:.2f} m' if k == 0 else None)
+        xmin, ymin, xmax, ymax = scenario.world.workspace
+        ax.set_xlim(xmin, xmax)
+        ax.set_ylim(ymin, ymax)
+        ax.set_aspect('equal')
+        ax.set_title(f'{source} (seed {seed})')
+        ax.legend(fontsize=7, loc='best')
+    fig.tight_layout()
+    fig.savefig(out, dpi=90)
+    plt.close(fig)
+    return out

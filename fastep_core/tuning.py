@@ -33,7 +33,6 @@ import argparse
 import functools
 import json
 import math
-import multiprocessing
 import shlex
 import sys
 import time
@@ -121,7 +120,7 @@ def tune(train: Sequence[str] = TRAIN, seeds: Sequence[int] = (0, 1), *, popsize
                                   tol=0.0, atol=0.0, updating='deferred', rng=np.random.default_rng(seed),
                                   callback=callback)
     if workers > 1:
-        with multiprocessing.get_context('spawn').Pool(workers) as pool:
+        with experiments.pool_context().Pool(workers) as pool:
             result = differential_evolution(fun, bounds, workers=pool.map, **kwargs)
     else:
         result = differential_evolution(fun, bounds, **kwargs)

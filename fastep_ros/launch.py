@@ -34,6 +34,7 @@ import numpy as np
 from fastep_core.errors import FastepError
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
+from fastep_core.simulator import ALGORITHMS
 
 __all__ = ['main']
 
@@ -55,7 +56,7 @@ def _parser() -> argparse.ArgumentParser:
                    '(default 1): each tick waits for every plant and planner, so a busy machine runs slower')
     p.add_argument('--timeout', type=float, default=None,
                    help='give up after this many simulated seconds (default: the scenario\'s max_sim_time)')
-    p.add_argument('--algorithm', choices=('fastep', 'aco'), default='fastep', help='planner (default fastep)')
+    p.add_argument('--algorithm', choices=ALGORITHMS, default='fastep', help='planner (default fastep)')
     p.add_argument('--seed', type=int, default=0, help='seed of the swarms (default 0; robot k uses stream k '
                    'of the seed, as fastep-sim does)')
     p.add_argument('--json', type=Path, metavar='OUT', help='write the summary and odometry trajectories')

@@ -98,7 +98,8 @@ def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[Model, Controlle
 class Navigator:
     """The loop shared by both algorithms; subclasses decide when a step is planned."""
 
-    method = 'fastep'
+    method = 'fastep'        # the algorithm's name
+    step_method = 'fastep'   # the optimizer that plans a step (plan_step's `method`)
 
     def __init__(self, model: Model, controller: Controller, radius: float, world: World,
                  params: PlannerParams | None = None, rng: np.random.Generator | int | None = None) -> None:
@@ -269,10 +270,10 @@ class Navigator:
         step = None
         if ahead.any():
             problem.pass_on_right = offset[ahead]
-            step = plan_step(problem, self.params, self.rng, self.method)
+            step = plan_step(problem, self.params, self.rng, self.step_method)
             problem.pass_on_right = np.zeros((0, 2))
         if step is None:
-            step = plan_step(problem, self.params, self.rng, self.method)
+            step = plan_step(problem, self.params, self.rng, self.step_method)
         if step is None:
             # Nothing feasible now; other robots may move away. Retry later rather than every tick.
             self._retry_at = (self._last_t or 0.0) + RETRY_AFTER
@@ -350,6 +351,7 @@ class ACOKinematic(Navigator):
     """The baseline: continuous ACO plans every step; straight to the goal only for the last one."""
 
     method = 'aco'
+    step_method = 'aco'
 
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         assert self.goal is not None

@@ -11,8 +11,12 @@ core's `Obstacles.path_clearance` when the path is built); the robot cuts the co
 few centimetres, well inside the 0.2 m margin.
 
 It knows static obstacles only: other robots are left to the navigator's guard (which stops the robot rather
-than let it close in), so it is a reference for single-robot runs, not a multi-robot planner. The path keeps
-the clearance from the border as well; a goal with no such path fails with 'no valid path'.
+than let it close in) and to the base class's hold breaker, which after a while plans one step around the
+other robot; that step is planned by the FAStep swarm (`step_method`), and once it is done the exact path is
+planned again from where the robot is. So it is a reference for single-robot runs, not a multi-robot
+planner. The path keeps the clearance from the border as well; a goal with no such path fails with 'no valid
+path'. A robot already closer than the clearance to an obstacle (after a side step, or a corner cut) plans
+with the clearance it has, never less than its radius.
 """
 
 from __future__ import annotations
@@ -28,23 +32,28 @@ __all__ = ['OptimalKinematic', 'ARC_SPACING']
 
 ARC_SPACING = 0.25
 """Largest distance (m) between consecutive polyline vertices along an arc."""
-
-
 class OptimalKinematic(Navigator):
     """Follow the exact shortest clearance-keeping path, vertex by vertex, with the kinematic controller."""
 
     method = 'optimal'
+    path: OptimalPath | None = None          # the exact path of the current goal, once planned
+    _route: np.ndarray | None = None         # its polyline vertices after the start
+    _index = 0                               # the vertex driven to now
+    _detour = False                          # following a swarm step around another robot
 
     def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
         super().set_goal(goal, t)
-        self.path: OptimalPath | None = None
-        self._route: np.ndarray | None = None
-        self._index = 0
+        self.path, self._route, self._index, self._detour = None, None, 0, False
 
     def _plan(self, position: np.ndarray) -> bool:
         assert self.goal is not None
         self.activations += 1
-        path = shortest_path(self.world, position, self.goal, self.clearance, spacing=ARC_SPACING)
+        clearance = self.clearance
+        if len(self.world.obstacles):
+            clearance = min(clearance, float(self.world.obstacles.clearance(position)) - 1e-9)
+        path = None
+        if clearance >= self.radius:
+            path = shortest_path(self.world, position, self.goal, clearance, spacing=ARC_SPACING)
         if path is None:
             self.fail(f'no valid path: nothing keeps {self.clearance:g} m from the obstacles and the border')
             return False
@@ -54,8 +63,19 @@ class OptimalKinematic(Navigator):
         self.plan = [p.copy() for p in self._route[:-1]]
         return True
 
+    def plan_next_step(self, position: np.ndarray, others: Sequence[OtherRobot]) -> np.ndarray | None:
+        """A swarm step around another robot (the hold breaker); the exact path is replanned after it."""
+        step = super().plan_next_step(position, others)   # with the FAStep swarm (step_method)
+        if step is not None:
+            self._detour, self._route = True, None
+        return step
+
     def choose_target(self, position: np.ndarray, others: Sequence[OtherRobot]) -> np.ndarray | None:
         assert self.goal is not None
+        if self._detour:
+            if self.keep_waypoint(position, others):
+                return self.waypoint
+            self._detour = False
         if self._route is None and not self._plan(position):
             return None
         assert self._route is not None

@@ -1,0 +1,116 @@
+"""Batch experiments, their statistics, the fastep-bench and fastep-tune command lines (small and fast)."""
+
+import math
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from fastep_core import experiments, tuning
+from fastep_core.bench_cli import main as bench_main
+from fastep_core.experiments import Record
+
+
+def record(algorithm, seed, path, compute, scenario='s', ok=True, robot='r1'):
+    return Record(scenario, algorithm, seed, robot, ok, False, path, 100.0 + path if ok else None, compute, 0.3,
+                  1, 'arrived' if ok else 'failed', compute)
+
+
+def synthetic(n=20, seed=0):
+    rng = np.random.default_rng(seed)
+    return ([record('fastep', k, 50.0 + rng.normal(0, 0.1), 0.1 + rng.uniform(0, 0.01)) for k in range(n)] +
+            [record('aco', k, 52.0 + rng.normal(0, 0.1), 0.3 + rng.uniform(0, 0.01)) for k in range(n)])
+
+
+def test_enhancement_is_the_papers_formula():
+    # Table 2, scenario 2: path 65.75 -> 59.69 is 9.22 %, time 283.25 -> 154.04 is 45.62 %.
+    assert experiments.enhancement(65.75, 59.69) == pytest.approx(9.22, abs=0.005)
+    assert experiments.enhancement(283.25, 154.04) == pytest.approx(45.62, abs=0.005)
+
+
+def test_summary_statistics_on_synthetic_records():
+    records = [record('fastep', k, p, 0.1) for k, p in enumerate([50.0, 52.0, 54.0])]
+    records.append(record('fastep', 3, 999.0, 0.5, ok=False))       # a failed run: no path or time, but compute
+    (s,) = experiments.summarise(records)
+    assert (s.runs, s.arrived, s.collided) == (4, 3, 0)
+    assert s.mean['path_length'] == pytest.approx(52.0)
+    assert s.std['path_length'] == pytest.approx(2.0)                 # sample std, ddof = 1
+    assert s.mean['sim_time'] == pytest.approx(152.0)
+    assert s.mean['compute_time'] == pytest.approx(0.2)
+
+
+def test_compare_finds_a_clear_difference_and_none_between_equals():
+    records = synthetic()
+    c = experiments.compare(records, 's', 'path_length')
+    assert c.a_better and c.p_value < 1e-6
+    assert c.enhancement == pytest.approx((52.0 - 50.0) / 52.0 * 100, abs=0.2)
+    same = [record('fastep', k, 50.0, 0.1) for k in range(5)] + [record('aco', k, 50.0, 0.1) for k in range(5)]
+    c = experiments.compare(same, 's', 'path_length')
+    assert c.p_value == 1.0 and not c.a_better
+    assert math.isnan(experiments.compare(records, 'other', 'path_length').p_value)
+
+
+def test_markdown_report_has_the_papers_numbers_and_ours():
+    records = [Record('table2_s3', r.algorithm, r.seed, 'r1', True, False, r.path_length, r.sim_time,
+                      r.compute_time, 0.3, 1, '', r.compute_time) for r in synthetic(5)]
+    text = experiments.markdown_report(records, {'table2_s3': {'r1': 45.51}})
+    assert '45.73' in text and '48.54' in text and '5.79 %' in text       # the paper's row for scenario 3
+    assert '| table2_s3 | r1 | FAStep-Kinematic | 5/5 |' in text
+    assert f'{50.0 / 45.51:.3f}'[:4] in text                              # the optimality ratio
+
+
+def test_run_batch_is_reproducible_and_independent_of_workers():
+    serial = experiments.run_batch(['table2_s3'], ['fastep', 'optimal'], 2, workers=1)
+    pooled = experiments.run_batch(['table2_s3'], ['fastep', 'optimal'], 2, workers=2)
+    assert [(r.algorithm, r.seed) for r in serial] == [('fastep', 0), ('fastep', 1), ('optimal', 0)]
+    assert [(r.path_length, r.reached) for r in serial] == [(r.path_length, r.reached) for r in pooled]
+    assert all(r.ok for r in serial)
+
+
+def test_fastep_bench_writes_the_table_and_figures(tmp_path, capsys):
+    assert bench_main(['--runs', '2', '--scenarios', 'table2_s3', '--workers', '1', '--out', str(tmp_path)]) == 0
+    text = (tmp_path / 'table2.md').read_text()
+    assert 'FAStep-Kinematic against ACO-Kinematic' in text and 'Optimal-Kinematic' in text
+    for metric in ('path_length', 'compute_time'):
+        assert (tmp_path / 'figures' / f'table2_{metric}.png').stat().st_size > 1000
+
+
+@pytest.mark.parametrize('module, args', [
+    ('fastep_core.bench_cli', ['--runs', '0']),
+    ('fastep_core.bench_cli', ['--algorithms', 'nope']),
+    ('fastep_core.bench_cli', ['--scenarios', 'no_such_scenario']),
+    ('fastep_core.bench_cli', ['--bogus']),
+    ('fastep_core.tuning', ['--popsize', '0']),
+    ('fastep_core.tuning', ['--train', 'table2_s1', '--test', 'table2_s1']),
+    ('fastep_core.tuning', ['--test', 'no_such_scenario']),
+    ('fastep_core.tuning', ['--bogus']),
+])
+def test_command_lines_exit_2_with_one_line(module, args):
+    done = subprocess.run([sys.executable, '-m', module, *args], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 2
+    assert len(done.stderr.strip().splitlines()) == 1 and 'Traceback' not in done.stderr
+    assert done.stdout == ''
+
+
+def test_tuning_decodes_the_paper_ranges():
+    assert tuning.decode([0.18, 0.18, -2.0, 2.0]) == pytest.approx({'a': 0.18, 'b': 0.18, 'c': 0.01,
+                                                                    'step_radius': 2.0})
+    low, high = np.array(list(tuning.PARAMETERS.values())).T
+    assert tuning.decode(low)['c'] == pytest.approx(1e-5) and tuning.decode(high)['c'] == pytest.approx(0.01)
+
+
+def test_tuning_penalises_failures():
+    ok = [record('fastep', 0, 50.0, 0.1)]
+    failed = ok + [record('fastep', 1, 10.0, 0.1, ok=False)]
+    assert tuning.run_cost(ok) == 50.0
+    assert tuning.run_cost(failed) == pytest.approx((50.0 + 10.0 + tuning.PENALTY) / 2)
+
+
+def test_a_tiny_search_is_seeded_and_never_worse_than_table_1():
+    kwargs = dict(train=('table2_s3',), seeds=(0,), popsize=1, maxiter=1, workers=1, seed=3)
+    first, again = tuning.tune(**kwargs), tuning.tune(**kwargs)
+    assert first.params == again.params and first.cost == again.cost
+    assert first.cost <= first.table1_cost
+    assert set(first.params) == {'a', 'b', 'c', 'step_radius'}
+    assert 0.1 <= first.params['a'] <= 1.0 and 1e-5 <= first.params['c'] <= 0.01
