@@ -36,6 +36,7 @@ class RobotRun:
     path_length: float = 0.0
     sim_time: float | None = None
     compute_time: float = 0.0
+    plan_time: float = 0.0        # the part of compute_time spent inside the step optimizer
     min_clearance: float = math.inf
     activations: int = 0
     status: str = ''
@@ -49,7 +50,7 @@ class RobotRun:
             'name': self.name, 'model': self.model, 'reached': self.reached, 'collided': self.collided,
             'path_length': round(self.path_length, 6),
             'sim_time': None if self.sim_time is None else round(self.sim_time, 6),
-            'compute_time': round(self.compute_time, 6),
+            'compute_time': round(self.compute_time, 6), 'plan_time': round(self.plan_time, 6),
             'min_clearance': None if math.isinf(self.min_clearance) else round(self.min_clearance, 6),
             'activations': self.activations, 'status': self.status,
             'waypoints': [[round(v, 6) for v in w] for w in self.waypoints],
@@ -183,5 +184,6 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             nav.fail(f'not arrived within max_sim_time={params.max_sim_time:g} s')
         run.status = f'{nav.mode.value}: {nav.reason}'
         run.activations = nav.activations
+        run.plan_time = nav.plan_time
         run.waypoints = [w.tolist() for w in nav.plan]
     return Run(seed, algorithm, runs)

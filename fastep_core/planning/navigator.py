@@ -23,6 +23,7 @@ travel in one tick) of another robot, and a progress checker fails the run when 
 from __future__ import annotations
 
 import math
+import time
 from dataclasses import dataclass
 from enum import Enum
 from typing import Protocol, Sequence
@@ -116,6 +117,7 @@ class Navigator:
         self.plan: list[FloatArray] = []
         self.cost = 0.0
         self.activations = 0
+        self.plan_time = 0.0   # wall seconds spent inside the step optimizer
         self._target: FloatArray | None = None
         self._last_t: float | None = None
         self._best_distance = math.inf
@@ -166,12 +168,12 @@ class Navigator:
         if self.goal is None or self.mode in (Mode.ARRIVED, Mode.FAILED):
             return stop
         state = np.asarray(state, dtype=float)
-        if not np.all(np.isfinite(state)):
+        if not all(map(math.isfinite, state)):
             self.reason = 'robot state is not finite; holding still'
             return stop
         position = state[:2]
         others = [o for o in others if math.isfinite(o.position[0]) and math.isfinite(o.position[1])]
-        distance = float(np.hypot(*(self.goal - position)))
+        distance = math.hypot(self.goal[0] - position[0], self.goal[1] - position[1])
         if distance <= self.params.goal_tolerance:
             self.mode, self.reason, self.waypoint, self.cost = Mode.ARRIVED, 'goal reached', None, 0.0
             self._target = None
@@ -195,7 +197,8 @@ class Navigator:
         if target is None:
             self._target = None
             return stop
-        if self._target is None or not np.array_equal(target, self._target):
+        # Targets are the goal or a waypoint array, never changed in place: identity tells a new target.
+        if target is not self._target:
             self.controller.reset(state, target)
             self._target = target
         command = self.controller.command(state, target, dt)
@@ -230,8 +233,8 @@ class Navigator:
         # Static obstacles do not move: the answer is reused until the robot has travelled
         # detection_interval or the target changed (a detector running at a fixed travel rate).
         cached = self._detection
-        if cached is not None and sensing_range is None and np.array_equal(cached[1], target) and \
-                np.hypot(*(position - cached[0])) < self.params.detection_interval:
+        if cached is not None and sensing_range is None and cached[1] is target and \
+                math.hypot(position[0] - cached[0][0], position[1] - cached[0][1]) < self.params.detection_interval:
             return cached[2]
         within = self.radius + 0.5 * self.params.clearance_margin
         obstacles = self.world.obstacles
@@ -240,15 +243,15 @@ class Navigator:
             near = obstacles.distances(position) < rng
             blocked = bool(near.any() and (obstacles.path_distances(position, target)[near] < within).any())
         if sensing_range is None:
-            self._detection = (position.copy(), np.array(target, dtype=float), blocked)
+            self._detection = (position.copy(), target, blocked)
         return blocked
 
     def robots_blocking(self, position: FloatArray, target: FloatArray, others: Sequence[OtherRobot],
                         sensing_range: float, margin: float | None = None) -> bool:
         """Is another robot within sensing range and closer to the run than both radii plus `margin`?"""
-        centres, sums = self._robot_arrays(others)
-        if not len(centres):
+        if not others:
             return False
+        centres, sums = self._robot_arrays(others)
         margin = 0.5 * self.params.clearance_margin if margin is None else margin
         near = np.hypot(*(centres - position).T) - sums < sensing_range
         run = point_segment_distance(centres, position, target)
@@ -268,12 +271,14 @@ class Navigator:
         offset = centres - position
         ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (self.goal - position) > 0)
         step = None
+        start = time.perf_counter()
         if ahead.any():
             problem.pass_on_right = offset[ahead]
             step = plan_step(problem, self.params, self.rng, self.step_method)
             problem.pass_on_right = np.zeros((0, 2))
         if step is None:
             step = plan_step(problem, self.params, self.rng, self.step_method)
+        self.plan_time += time.perf_counter() - start
         if step is None:
             # Nothing feasible now; other robots may move away. Retry later rather than every tick.
             self._retry_at = (self._last_t or 0.0) + RETRY_AFTER
@@ -292,7 +297,8 @@ class Navigator:
         """
         if self.waypoint is None:
             return False
-        if np.hypot(*(self.waypoint - position)) <= self.params.waypoint_tolerance or \
+        if math.hypot(self.waypoint[0] - position[0], self.waypoint[1] - position[1]) <= \
+                self.params.waypoint_tolerance or \
                 self.robots_blocking(position, self.waypoint, others, self.params.sensing_range, margin=0.0):
             self.waypoint = None
             return False
@@ -308,7 +314,7 @@ class Navigator:
         # Any point within (clearance - radius) of a point whose clearance is known is safe (triangle
         # inequality), so the obstacle distances are recomputed only when the robot leaves that disc.
         free = self._free_disc
-        if len(obstacles) and (free is None or np.hypot(*(after - free[0])) >= free[1]):
+        if len(obstacles) and (free is None or math.hypot(after[0] - free[0][0], after[1] - free[0][1]) >= free[1]):
             then = float(obstacles.clearance(after))
             if then < self.radius and then < float(obstacles.clearance(position)):
                 self.reason = 'stopped: an obstacle is within the robot radius ahead'
