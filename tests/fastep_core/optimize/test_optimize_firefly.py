@@ -8,34 +8,10 @@ import pytest
 from fastep_core.errors import ParameterError
 from fastep_core.optimize import firefly
 
+from optimize_objectives import BOX, RASTRIGIN_BOX, Recorder, rastrigin, shifted_sphere
+
 CENTRE = np.array([-0.4, 1.1])
-BOX = [[-2.0, 2.0], [-2.0, 2.0]]
-RASTRIGIN_BOX = [[-5.12, 5.12], [-5.12, 5.12]]
-
-
-def sphere(X):
-    return np.sum((X - CENTRE) ** 2, axis=1)
-
-
-def rastrigin(X):
-    return 10.0 * X.shape[1] + np.sum(X ** 2 - 10.0 * np.cos(2.0 * np.pi * X), axis=1)
-
-
-class Recorder:
-    """A vectorised objective that keeps every batch it is called with."""
-
-    def __init__(self, fun):
-        self.fun = fun
-        self.batches = []
-
-    def __call__(self, X):
-        assert X.ndim == 2
-        self.batches.append(np.array(X, copy=True))
-        return self.fun(X)
-
-    @property
-    def points(self):
-        return np.concatenate(self.batches)
+sphere = shifted_sphere(CENTRE)
 
 
 @pytest.mark.parametrize('seed', range(10))
