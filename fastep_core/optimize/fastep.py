@@ -54,7 +54,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from fastep_core.optimize.firefly import Swarm, _check_swarm_parameters
+from fastep_core.optimize.firefly import Elite, Swarm, _check_swarm_parameters
 from fastep_core.optimize.result import (FloatArray, Objective, OptimizeResult, RngLike, VectorisedFunction,
                                          check_number,
                                          check_problem, initial_population)
@@ -104,11 +104,9 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
 
     X = initial_population(n_fireflies, low, high, gen, x0).T.copy()   # (d, n), see firefly.Swarm
     F = objective(X.T)
-    best = int(F.argmin())
-    best_x, best_f = X[:, best].copy(), float(F[best])
+    elite = Elite(X, F, tol=tol, patience=patience)
 
-    history: list[float] = []
-    alpha_t, stall = float(alpha), 0
+    alpha_t = float(alpha)
     for _ in range(max_iter):
         scale = alpha_t * swarm.span                     # alpha_t * span, a (d, 1) column
         X, F = swarm.rank(X, F)                          # 0. brightest first
@@ -136,15 +134,7 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
             F[better] = fs[take]
 
         # 4. Elitism and damping.
-        i = int(F.argmin())
-        if F[i] < best_f:
-            stall = 0 if best_f - F[i] > tol else stall + 1
-            best_x, best_f = X[:, i].copy(), float(F[i])
-        else:
-            stall += 1
-        history.append(best_f)
         alpha_t *= alpha_damping
-        if stall >= patience:
+        if elite.update(X, F):
             break
-    return OptimizeResult(x=best_x, fun=best_f, nit=len(history), nfev=objective.nfev,
-                          history=np.asarray(history, dtype=np.float64))
+    return elite.result(objective.nfev)

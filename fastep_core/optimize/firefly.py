@@ -64,27 +64,46 @@ def firefly(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50
 
     X = initial_population(n_fireflies, low, high, gen, x0).T.copy()   # (d, n): see Swarm
     F = objective(X.T)
-    best = int(F.argmin())
-    best_x, best_f = X[:, best].copy(), float(F[best])
+    elite = Elite(X, F, tol=tol, patience=patience)
 
-    history: list[float] = []
-    alpha_t, stall = float(alpha), 0
+    alpha_t = float(alpha)
     for _ in range(max_iter):
         X, F = swarm.rank(X, F)
         # Classic behaviour: every firefly moves to its best candidate, better or not.
         X, F = swarm.attraction(X, F, objective, gen, alpha_t * swarm.span)
-        i = int(F.argmin())
-        if F[i] < best_f:
-            stall = 0 if best_f - F[i] > tol else stall + 1
-            best_x, best_f = X[:, i].copy(), float(F[i])
-        else:
-            stall += 1
-        history.append(best_f)
         alpha_t *= alpha_damping
-        if stall >= patience:
+        if elite.update(X, F):
             break
-    return OptimizeResult(x=best_x, fun=best_f, nit=len(history), nfev=objective.nfev,
-                          history=np.asarray(history, dtype=np.float64))
+    return elite.result(objective.nfev)
+
+class Elite:
+    """The best point ever evaluated, its history per iteration, and the stopping rule shared by the swarms.
+
+    An iteration counts as an improvement only if the best value drops by more than `tol`; after `patience`
+    iterations without one the run stops. Smaller gains still update the best point.
+    """
+
+    def __init__(self, X: FloatArray, F: FloatArray, *, tol: float, patience: int) -> None:
+        i = int(F.argmin())
+        self.x, self.f = X[:, i].copy(), float(F[i])
+        self.tol, self.patience = tol, patience
+        self.stall = 0
+        self.history: list[float] = []
+
+    def update(self, X: FloatArray, F: FloatArray) -> bool:
+        """Take in one iteration's swarm (X is (d, n)); True when the run should stop."""
+        i = int(F.argmin())
+        if F[i] < self.f:
+            self.stall = 0 if self.f - F[i] > self.tol else self.stall + 1
+            self.x, self.f = X[:, i].copy(), float(F[i])
+        else:
+            self.stall += 1
+        self.history.append(self.f)
+        return self.stall >= self.patience
+
+    def result(self, nfev: int) -> OptimizeResult:
+        return OptimizeResult(x=self.x, fun=self.f, nit=len(self.history), nfev=nfev,
+                              history=np.asarray(self.history, dtype=np.float64))
 
 
 class Swarm:
