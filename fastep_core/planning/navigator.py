@@ -14,10 +14,19 @@ FAStep-Kinematic (paper, Algorithm 1 and Fig. 1):
 ACO-Kinematic plans every step with continuous ACO, whether anything is in the way or not, with the same
 fitness, clearance rule and step radius, and drives straight to the goal only for the last step.
 
-Two safety nets surround the planner, as a navigation stack needs: a guard stops any motion that would bring
-the robot's centre within its radius of an obstacle or within the sum of radii (plus the other robot's
-travel in one tick) of another robot, and a progress checker fails the run when the robot does not come
-`progress_distance` closer to the goal within `progress_timeout` seconds.
+Safety nets surround the planner, as a navigation stack needs:
+- A guard stops any motion that would bring the robot's centre within its radius of an obstacle or within the
+  sum of radii (plus the other robot's travel in one tick) of another robot.
+- A goal with no path at all (walled in, or behind a gap narrower than the robot) is refused on the first
+  tick with 'no valid path', from the exact planner (planning/optimal.py), instead of wandering until a timeout.
+- Trap escape: greedy steps (stay far from obstacles, get closer to the goal) settle in local minima such as
+  the inside of a U-shaped wall. When the robot has not come `progress_distance` closer to the goal within
+  `trap_timeout` seconds, it follows the exact shortest path out, aiming at the farthest path vertex it can
+  see within `step_radius`, and hands back to the algorithm once it is `progress_distance` closer to the goal
+  than it ever was in the trap (the leave rule of the Bug algorithms). Each escape ends strictly closer to the
+  goal, so escapes cannot cycle.
+- A progress checker fails the run when the robot does not come `progress_distance` closer to the goal (or
+  reach the next vertex of an escape path) within `progress_timeout` seconds.
 """
 
 from __future__ import annotations
@@ -33,6 +42,7 @@ from numpy.typing import NDArray
 
 from fastep_core.geometry import point_segment_distance
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
+from fastep_core.planning.optimal import OptimalPath, shortest_path
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.step import StepProblem, plan_step
 from fastep_core.world import World
@@ -43,6 +53,9 @@ __all__ = ['ACOKinematic', 'FAStepKinematic', 'Mode', 'Navigator', 'OtherRobot',
 FloatArray = NDArray[np.float64]
 HOLD_BEFORE_STEP = 1.0  # seconds a robot waits for another before stepping around it
 RETRY_AFTER = 0.5       # seconds between step-planning attempts while no feasible step exists
+BACKUP_SPEED = 0.25     # m/s of the backing-up recovery ...
+BACKUP_TIME = 4.0       # ... for this many seconds (1 m), after the guard held the robot for HOLD_BEFORE_STEP
+PATH_SPACING = 0.25     # metres between exact-path vertices along arcs (escape paths, the optimal reference)
 
 
 class Mode(str, Enum):
@@ -101,6 +114,7 @@ class Navigator:
 
     method = 'fastep'        # the algorithm's name
     step_method = 'fastep'   # the optimizer that plans a step (plan_step's `method`)
+    escapes_traps = True     # False for a navigator that already follows the exact path
 
     def __init__(self, model: Model, controller: Controller, radius: float, world: World,
                  params: PlannerParams | None = None, rng: np.random.Generator | int | None = None) -> None:
@@ -127,6 +141,20 @@ class Navigator:
         self._held_since: float | None = None  # when the guard started holding the robot for another robot
         self._committed = False  # follow the current waypoint to the end (a step taken to break a hold)
         self._retry_at = -math.inf  # no step planning before this time (after a failed attempt)
+        self._stuck_since: float | None = None  # when the guard started stopping the robot at an obstacle
+        self._backup_until = -math.inf     # backing up (the recovery from being stuck) until this time ...
+        self._backup_command: FloatArray | None = None  # ... with this command (a tractor-trailer's choice)
+        self.reference: OptimalPath | None = None  # the exact shortest path, computed when the goal is taken
+        self.escapes = 0                   # trap escapes started
+        self._path_checked = False         # has the goal been checked for a path (first tick after set_goal)
+        self._trap_distance = math.inf     # trap checker: best distance to the goal since the last reset ...
+        self._trap_time = 0.0              # ... and when it was reached
+        self._escape: list[FloatArray] | None = None  # the escape path's vertices after the start (while escaping)
+        self._escape_index = 0             # the vertex aimed at
+        self._escape_rest = np.zeros(0)    # path length from each vertex to the goal
+        self._escape_best = math.inf       # the shortest remaining path length so far (progress on an escape)
+        self._escape_planned_at = -math.inf  # when the escape path was last planned
+        self._escape_exit = 0.0            # hand back to the algorithm once this close to the goal
 
     # ----------------------------------------------------------------- goals
     @property
@@ -146,6 +174,11 @@ class Navigator:
         self._target = None
         self._best_distance = math.inf
         self._best_time = t
+        self.reference = None
+        self._path_checked = False
+        self._trap_distance, self._trap_time = math.inf, t
+        self._escape = None
+        self._committed = False
 
     def fail(self, reason: str) -> None:
         self.mode = Mode.FAILED
@@ -178,13 +211,23 @@ class Navigator:
             self.mode, self.reason, self.waypoint, self.cost = Mode.ARRIVED, 'goal reached', None, 0.0
             self._target = None
             return stop
+        if not self._path_checked:
+            self._path_checked = True
+            self.reference = self.exact_path(position)
+            if self.reference is None:
+                self.fail(self.no_path_reason(position))
+                return stop
         if distance < self._best_distance - self.params.progress_distance or self._best_distance == math.inf:
             self._best_distance, self._best_time = distance, t
         elif self.params.progress_timeout > 0 and t - self._best_time > self.params.progress_timeout:
             self.fail(f'failed to make progress: not {self.params.progress_distance:g} m closer to the goal '
                       f'in {self.params.progress_timeout:g} s')
             return stop
+        if self.trapped(t, distance) and not self.start_escape(position, distance, t):
+            return stop
 
+        if t < self._backup_until:
+            return self.back_up(state, dt, others)
         # Two robots the guard holds for each other wait forever if each still sees its own way as clear:
         # after `HOLD_BEFORE_STEP` seconds the held robot plans a step around the other instead.
         held_too_long = self._held_since is not None and t - self._held_since >= HOLD_BEFORE_STEP
@@ -193,7 +236,11 @@ class Navigator:
             target = self.plan_next_step(position, others)
             self._committed = target is not None
         else:
-            target = self.choose_target(position, others)
+            target = self.follow_escape(position, distance, t, others) if self._escape is not None else None
+            if self.mode is Mode.FAILED:
+                return stop
+            if self._escape is None:
+                target = self.choose_target(position, others)
         if target is None:
             self._target = None
             return stop
@@ -204,13 +251,196 @@ class Navigator:
         command = self.controller.command(state, target, dt)
         guarded = self.guard(state, command, dt, others)
         if guarded is command:
-            self._held_since = None
+            self._held_since = self._stuck_since = None
         elif self._held_since is None and self.reason.startswith('stopped: giving way'):
             self._held_since = t
+        elif self.reason.startswith('stopped: an obstacle'):
+            # A tractor-trailer turns only while moving, so a target behind it next to a wall pins it there:
+            # after HOLD_BEFORE_STEP seconds it backs up (Nav2's backup recovery) to get room to turn.
+            if self._stuck_since is None:
+                self._stuck_since = t
+            elif t - self._stuck_since >= HOLD_BEFORE_STEP:
+                self._stuck_since, self._backup_until, self._backup_command = None, t + BACKUP_TIME, None
+                self._target = None   # the controller starts afresh after the backup
+        return guarded
+
+    def back_up(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
+        """The recovery command: straight back for a tractor-trailer, away from the nearest obstacle for a
+        point mass; the guard still applies, and the recovery ends early where it stops the robot."""
+        if self.model.state_size == 4:
+            command = self._backup_command
+            if command is None:
+                # Of straight back and back (or forward) at full lock either way, the one that gains the most
+                # clearance over the recovery's first second: a wall alongside pins straight moves too.
+                lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
+                options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
+                gains = []
+                for option in options:
+                    probe = state
+                    for _ in range(int(round(1.0 / dt))):
+                        probe = self.model.integrate(probe, option, dt)
+                    gains.append(float(self.world.obstacles.clearance(probe[:2])) if len(self.world.obstacles)
+                                 else 0.0)
+                command = self._backup_command = options[int(np.argmax(gains))]
+        else:
+            h = 1e-4
+            probes = state[:2] + np.array([[h, 0.0], [-h, 0.0], [0.0, h], [0.0, -h]])
+            clear = self.world.obstacles.clearance(probes) if len(self.world.obstacles) else np.zeros(4)
+            away = np.array([clear[0] - clear[1], clear[2] - clear[3]])
+            norm = float(np.hypot(*away))
+            command = away * (BACKUP_SPEED / norm) if norm > 0 else np.zeros(2)
+        guarded = self.guard(state, command, dt, others)
+        if guarded is not command:
+            self._backup_until = -math.inf
+        else:
+            self.reason = 'backing up: stuck at an obstacle'
         return guarded
 
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         raise NotImplementedError
+
+    # ---------------------------------------------------- paths and traps
+    def exact_path(self, position: FloatArray) -> OptimalPath | None:
+        """The exact shortest path from position to the goal, or None when there is none.
+
+        It keeps the planner's clearance (radius + margin) where it can, and only the radius when the one way
+        through is narrower: a robot that fits through a gap has a path, even if its steps never go there.
+        A start or goal already nearer an obstacle than the clearance lowers it to that distance.
+        """
+        assert self.goal is not None
+        clearance = self.clearance
+        if len(self.world.obstacles):
+            ends = np.array([position, self.goal])
+            clearance = min(clearance, float(self.world.obstacles.clearance(ends).min()) - 1e-9)
+        path = None
+        for keep in dict.fromkeys((clearance, min(clearance, self.radius))):
+            if keep >= self.radius - 1e-9 and keep > 0.0:
+                path = shortest_path(self.world, position, self.goal, keep, spacing=PATH_SPACING)
+                if path is not None:
+                    break
+        return path
+
+    def no_path_reason(self, position: FloatArray) -> str:
+        assert self.goal is not None
+        return (f'no valid path: nothing keeps the robot radius {self.radius:g} m from the obstacles and the '
+                f'border between ({position[0]:.3g}, {position[1]:.3g}) and the goal '
+                f'({self.goal[0]:.3g}, {self.goal[1]:.3g})')
+
+    def trapped(self, t: float, distance: float) -> bool:
+        """Has the robot failed to come closer to the goal for trap_timeout seconds (outside an escape)?
+
+        Near the goal the kinematic approach slows down (speed proportional to distance), so there half the
+        distance counts as progress: a robot driving straight to its goal is never taken for trapped.
+        """
+        if not self.escapes_traps or self.params.trap_timeout <= 0 or self._escape is not None:
+            return False
+        needed = min(self.params.progress_distance, 0.5 * self._trap_distance)
+        if distance < self._trap_distance - needed or self._trap_distance == math.inf:
+            self._trap_distance, self._trap_time = distance, t
+            return False
+        return t - self._trap_time > self.params.trap_timeout
+
+    def start_escape(self, position: FloatArray, distance: float, t: float) -> bool:
+        """Leave a trap along the exact shortest path; False (and failed) if there is no path."""
+        path = self.exact_path(position)
+        if path is None:
+            self.fail(self.no_path_reason(position))
+            return False
+        self.escapes += 1
+        self.set_escape_path(path)
+        self._escape_best, self._escape_planned_at = math.inf, t
+        self._escape_exit = min(distance, self._trap_distance) - self.params.progress_distance
+        self.waypoint, self._committed, self._best_time = None, False, t
+        self.mode, self.reason = Mode.AVOIDING, 'escaping a trap along the exact shortest path'
+        return True
+
+    def follow_escape(self, position: FloatArray, distance: float, t: float,
+                      others: Sequence[OtherRobot]) -> FloatArray | None:
+        """The escape target: the farthest path vertex within step_radius that the robot can see (at least the
+        next one, which the path leads to), as a pure-pursuit carrot.
+
+        A step around another robot (the hold breaker) leaves the path; the path is replanned after it.
+        """
+        assert self._escape is not None and self.goal is not None
+        if distance <= self._escape_exit:
+            self._escape = None
+            self._trap_distance, self._trap_time = distance, t
+            return None
+        if self._committed:
+            if self.keep_waypoint(position, others):
+                return self.waypoint
+            self._committed = False
+            if not self.replan_escape(position):
+                return None
+        # Off the path (a backup, a tractor-trailer's swing) no vertex ahead may be in sight: the path is
+        # planned again from here, at most every RETRY_AFTER seconds (the next vertex is aimed at meanwhile).
+        recent = t - self._escape_planned_at < RETRY_AFTER
+        target = self.escape_target(position, t, fresh=recent)
+        if target is None:
+            if not self.replan_escape(position):
+                return None
+            self._escape_planned_at = t
+            target = self.escape_target(position, t, fresh=True)
+        return target
+
+    def replan_escape(self, position: FloatArray) -> bool:
+        path = self.exact_path(position)
+        if path is None:
+            self.fail(self.no_path_reason(position))
+            return False
+        self.set_escape_path(path)
+        return True
+
+    def set_escape_path(self, path: OptimalPath) -> None:
+        points = _densify(path.points)
+        legs = np.hypot(*np.diff(np.array(points), axis=0).T)
+        self._escape = points[1:]
+        self._escape_rest = np.concatenate([np.cumsum(legs[::-1])[::-1][1:], [0.0]])
+        self._escape_index = 0
+
+    def escape_target(self, position: FloatArray, t: float, fresh: bool = False) -> FloatArray | None:
+        """The farthest visible vertex within step_radius, pushed out to a carrot; None if the next vertex
+        cannot be seen (unless the path is `fresh`, planned from here, so its next vertex is reachable)."""
+        assert self._escape is not None
+        route = self._escape
+        gaps = np.hypot(*(np.array(route[self._escape_index:]) - position).T)
+        beyond = gaps > self.params.step_radius
+        reach = max(1, int(np.argmax(beyond)) if beyond.any() else len(gaps))
+        candidates = np.array(route[self._escape_index:self._escape_index + reach])
+        obstacles = self.world.obstacles
+        # A path vertex sits exactly at the path's clearance, so "visible" allows a little less: half the margin,
+        # or what the robot has now, whichever is smaller (the guard still keeps the radius).
+        within = self.radius + 0.5 * self.params.clearance_margin
+        if len(obstacles):
+            within = min(within, float(obstacles.clearance(position)) - 1e-6)
+            seen = obstacles.fan_clearance(position, candidates) >= within
+        else:
+            seen = np.ones(len(candidates), dtype=bool)
+        if not seen.any():
+            if not fresh:
+                return None
+            seen[0] = True   # the first vertex of a fresh path is reachable: the path leads there
+        last = int(np.flatnonzero(seen)[-1])
+        self._escape_index += last
+        # Progress on an escape is a shorter way left to go (path length), not a smaller distance to the goal.
+        rest = math.hypot(*(route[self._escape_index] - position)) + float(self._escape_rest[self._escape_index])
+        if rest < self._escape_best - self.params.progress_distance:
+            self._escape_best, self._best_time = rest, t
+        self.mode, self.reason = Mode.AVOIDING, 'escaping a trap along the exact shortest path'
+        aim = route[self._escape_index]
+        if self._escape_index == len(route) - 1:
+            return aim   # the goal itself
+        # The kinematic controllers slow down in proportion to the distance to their target, so a vertex a few
+        # centimetres ahead on a tight arc would crawl: the carrot is pushed out to step_radius along the same
+        # bearing when that run is free too (a new carrot each tick, like pure pursuit).
+        gap = math.hypot(*(aim - position))
+        if gap < 1e-9:
+            return aim
+        carrot = position + (aim - position) * (self.params.step_radius / gap)
+        if gap >= self.params.step_radius or float(self.world.wall_distance(carrot)) < self.clearance or \
+                (len(obstacles) and float(obstacles.fan_clearance(position, carrot[None])[0]) < within):
+            return aim
+        return carrot
 
     # --------------------------------------------------------------- checks
     def _robot_arrays(self, others: Sequence[OtherRobot]) -> tuple[FloatArray, FloatArray]:
@@ -332,6 +562,18 @@ class Navigator:
                 self.reason = f'stopped: giving way to {other.name}'
                 return np.zeros_like(command)
         return command
+
+
+def _densify(points: FloatArray, spacing: float = 0.5) -> list[FloatArray]:
+    """The polyline with extra vertices on long edges, so a pursuit carrot never lags far behind the lookahead.
+
+    One array per vertex: the navigator tells a new target by its identity.
+    """
+    out = [points[0]]
+    for a, b in zip(points[:-1], points[1:]):
+        n = max(1, int(math.ceil(math.hypot(*(b - a)) / spacing)))
+        out.extend(a + (b - a) * (k / n) for k in range(1, n + 1))
+    return out
 
 
 class FAStepKinematic(Navigator):

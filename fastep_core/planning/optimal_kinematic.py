@@ -14,9 +14,10 @@ It knows static obstacles only: other robots are left to the navigator's guard (
 than let it close in) and to the base class's hold breaker, which after a while plans one step around the
 other robot; that step is planned by the FAStep swarm (`step_method`), and once it is done the exact path is
 planned again from where the robot is. So it is a reference for single-robot runs, not a multi-robot
-planner. The path keeps the clearance from the border as well; a goal with no such path fails with 'no valid
-path'. A robot already closer than the clearance to an obstacle (after a side step, or a corner cut) plans
-with the clearance it has, never less than its radius.
+planner. The path keeps the clearance from the border as well (`Navigator.exact_path`); where the only way
+through is narrower, it keeps the radius alone, and a goal with no path at all fails with 'no valid path'.
+A robot already closer than the clearance to an obstacle (after a side step, or a corner cut) plans with the
+clearance it has, never less than its radius.
 """
 
 from __future__ import annotations
@@ -25,17 +26,18 @@ from typing import Sequence
 
 import numpy as np
 
-from fastep_core.planning.navigator import Mode, Navigator, OtherRobot
-from fastep_core.planning.optimal import OptimalPath, shortest_path
+from fastep_core.planning.navigator import PATH_SPACING, Mode, Navigator, OtherRobot
+from fastep_core.planning.optimal import OptimalPath
 
 __all__ = ['OptimalKinematic', 'ARC_SPACING']
 
-ARC_SPACING = 0.25
-"""Largest distance (m) between consecutive polyline vertices along an arc."""
+ARC_SPACING = PATH_SPACING
+"""Largest distance (m) between consecutive polyline vertices along an arc (the navigator's exact_path)."""
 class OptimalKinematic(Navigator):
     """Follow the exact shortest clearance-keeping path, vertex by vertex, with the kinematic controller."""
 
     method = 'optimal'
+    escapes_traps = False                    # it follows the exact path already
     path: OptimalPath | None = None          # the exact path of the current goal, once planned
     _route: np.ndarray | None = None         # its polyline vertices after the start
     _index = 0                               # the vertex driven to now
@@ -48,14 +50,10 @@ class OptimalKinematic(Navigator):
     def _plan(self, position: np.ndarray) -> bool:
         assert self.goal is not None
         self.activations += 1
-        clearance = self.clearance
-        if len(self.world.obstacles):
-            clearance = min(clearance, float(self.world.obstacles.clearance(position)) - 1e-9)
-        path = None
-        if clearance >= self.radius:
-            path = shortest_path(self.world, position, self.goal, clearance, spacing=ARC_SPACING)
+        path = self.reference if self.reference is not None and np.array_equal(self.reference.points[0], position) \
+            else self.exact_path(position)
         if path is None:
-            self.fail(f'no valid path: nothing keeps {self.clearance:g} m from the obstacles and the border')
+            self.fail(self.no_path_reason(position))
             return False
         self.path = path
         self._route = path.points[1:] if len(path.points) > 1 else path.points

@@ -53,6 +53,9 @@ class PlannerParams:
     dt: float = _p(0.05, 'control and integration step (s)', 1e-4, 10.0)
     progress_distance: float = _p(0.5, 'progress checker: come this much closer to the goal ... (m)', 0.0)
     progress_timeout: float = _p(120.0, '... within this many seconds, else fail (s); 0 disables', 0.0)
+    trap_timeout: float = _p(20.0, 'trap escape: no progress_distance (near the goal: half the distance) closer '
+                                   'to the goal in this many seconds starts an escape along the exact shortest '
+                                   'path (s); 0 disables', 0.0)
     max_sim_time: float = _p(1500.0, 'fastep-sim stops a run after this much simulated time (s)', 1.0)
     # ACO_R for the ACO-Kinematic baseline (Socha & Dorigo 2008).
     aco_archive: int = _p(10, 'ACO_R solution archive size k', 2, 10_000)

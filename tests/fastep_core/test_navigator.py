@@ -79,17 +79,28 @@ def test_others_with_nan_positions_are_ignored():
     assert np.all(np.isfinite(command)) and np.any(command != 0.0)
 
 
-def test_boxed_in_robot_retries_twice_a_second_then_fails_on_progress():
+def test_robot_boxed_in_by_robots_retries_twice_a_second_then_fails_on_progress():
+    params = PlannerParams(progress_timeout=10.0)
+    nav = make_navigator('fastep', SPEC, 0.5, WORLD, params, 0)
+    nav.set_goal((30.0, 10.0))
+    state, t = np.array([10.0, 10.0]), 0.0
+    ring = [OtherRobot(f'o{k}', (10.0 + 1.05 * np.cos(k * np.pi / 4), 10.0 + 1.05 * np.sin(k * np.pi / 4)))
+            for k in range(8)]
+    while t < 12.0 and nav.mode is not Mode.FAILED:
+        assert np.all(nav.update(t, state, ring) == 0.0)
+        t += 0.05
+    assert nav.mode is Mode.FAILED and 'progress' in nav.reason
+    assert 15 <= nav.activations <= 25   # about two attempts a second for 10 s, not one per tick
+
+
+def test_walled_in_robot_reports_no_valid_path_on_the_first_tick():
     from fastep_core.geometry import Segment
     a, b = 9.4, 10.6
     walls = [Segment((a, a), (b, a)), Segment((b, a), (b, b)), Segment((b, b), (a, b)), Segment((a, b), (a, a))]
     world = World.from_obstacles([0, 0, 50, 50], walls)
-    params = PlannerParams(progress_timeout=10.0)
-    nav = make_navigator('fastep', SPEC, 0.5, world, params, 0)
-    nav.set_goal((30.0, 30.0))
-    state, t = np.array([10.0, 10.0]), 0.0
-    while t < 12.0 and nav.mode is not Mode.FAILED:
-        assert np.all(nav.update(t, state) == 0.0)
-        t += 0.05
-    assert nav.mode is Mode.FAILED and 'progress' in nav.reason
-    assert 15 <= nav.activations <= 25   # about two attempts a second for 10 s, not one per tick
+    for algorithm in ('fastep', 'aco', 'optimal'):
+        nav = make_navigator(algorithm, SPEC, 0.5, world, PlannerParams(), 0)
+        nav.set_goal((30.0, 30.0))
+        assert np.all(nav.update(0.0, np.array([10.0, 10.0])) == 0.0)
+        assert nav.mode is Mode.FAILED and nav.reason.startswith('no valid path'), algorithm
+        assert nav.activations == 0 or algorithm == 'optimal'

@@ -1,0 +1,183 @@
+"""Random solvable scenarios: circles, wall segments and U-shaped traps, 1-4 robots of either model.
+
+Why: hand-made scenarios show what their author thought of. A soak over hundreds of random worlds finds
+what nobody did: a trap the escape cannot leave, a pair of robots that deadlock, a tractor-trailer that
+cannot turn where a point mass could. Every scenario is built as a scenario mapping (the YAML format of
+docs/scenarios.md) and validated by `parse_scenario`, so any one of them can be written to a file and rerun
+with `fastep-sim`.
+
+"Solvable" is decided by the exact planner, not by running a navigator: each robot has a path from its start
+to its goal that keeps `radius + clearance_margin` from every obstacle and from the border, with the robots
+parked at the other goals counted as obstacles (robots stay at their goals, so a goal in another robot's only
+corridor would make that robot's task impossible).
+
+U-shaped traps are what greedy steps fall into: three walls around a pocket whose open side faces a robot's
+start, placed across the straight line to its goal, so the goal lies behind the pocket's back wall.
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import numpy as np
+
+from fastep_core.geometry import Circle
+from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.params import PlannerParams
+from fastep_core.scenario import Scenario, parse_scenario
+from fastep_core.world import World
+
+__all__ = ['MODELS_MIX', 'u_trap', 'random_scenario', 'random_scenario_data', 'solvable', 'main']
+
+MODELS_MIX = 0.3
+"""Share of tractor-trailers among random robots (the rest are point masses)."""
+_ATTEMPTS = 200  # random layouts tried per scenario before giving up (a few are usually enough)
+
+
+def u_trap(center: Sequence[float], width: float, depth: float, facing: float) -> list[dict[str, Any]]:
+    """Three wall segments forming a U: the opening looks towards `facing` (radians), `width` across.
+
+    `center` is the middle of the pocket; the back wall lies depth/2 behind it, away from the opening.
+    """
+    cx, cy = float(center[0]), float(center[1])
+    ux, uy = math.cos(facing), math.sin(facing)     # towards the opening
+    vx, vy = -uy, ux                                # across the pocket
+    half_w, half_d = width / 2.0, depth / 2.0
+
+    def point(along: float, across: float) -> list[float]:
+        return [round(cx + ux * along + vx * across, 6), round(cy + uy * along + vy * across, 6)]
+
+    back_left, back_right = point(-half_d, half_w), point(-half_d, -half_w)
+    open_left, open_right = point(half_d, half_w), point(half_d, -half_w)
+    return [{'segment': {'start': open_left, 'end': back_left}},
+            {'segment': {'start': back_left, 'end': back_right}},
+            {'segment': {'start': back_right, 'end': open_right}}]
+
+
+def _robot(rng: np.random.Generator, name: str, start: np.ndarray, goal: np.ndarray,
+           tractor: bool) -> dict[str, Any]:
+    if not tractor:
+        return {'name': name, 'model': 'point_mass', 'start': [round(float(v), 3) for v in start],
+                'goal': [round(float(v), 3) for v in goal], 'radius': 0.5}
+    # Headed roughly towards the goal, like the paper's application; the trailer in line.
+    heading = math.atan2(goal[1] - start[1], goal[0] - start[0]) + float(rng.uniform(-0.5, 0.5))
+    return {'name': name, 'model': 'tractor_trailer',
+            'start': [round(float(start[0]), 3), round(float(start[1]), 3), round(heading, 6), round(heading, 6)],
+            'goal': [round(float(v), 3) for v in goal], 'radius': 0.6, 'length': 1.0, 'trailer_length': 1.0,
+            'width': 0.5}
+
+
+def solvable(scenario: Scenario) -> bool:
+    """Does every robot have an exact path keeping radius + margin, with the others parked at their goals?"""
+    margin = scenario.planner.clearance_margin
+    for i, spec in enumerate(scenario.robots):
+        parked = [Circle(tuple(other.goal), other.radius) for j, other in enumerate(scenario.robots) if j != i]
+        world = World(scenario.world.workspace, scenario.world.obstacle_list + tuple(parked))
+        if shortest_path(world, spec.start[:2], spec.goal, spec.radius + margin) is None:
+            return False
+    return True
+
+
+def _layout(rng: np.random.Generator, n_robots: int, tractor_share: float) -> dict[str, Any]:
+    width, height = (float(v) for v in rng.uniform(30.0, 50.0, 2))
+    border = 3.0
+    low, high = np.array([border, border]), np.array([width - border, height - border])
+    robots: list[dict[str, Any]] = []
+    ends: list[np.ndarray] = []   # every start and goal so far: robots keep 3 m apart at both
+    for k in range(n_robots):
+        for _ in range(50):
+            start, goal = rng.uniform(low, high), rng.uniform(low, high)
+            if np.hypot(*(goal - start)) < 0.5 * max(width, height):
+                continue
+            if all(np.hypot(*(p - q)) >= 3.0 for p in (start, goal) for q in ends):
+                break
+        else:
+            continue
+        ends += [start, goal]
+        robots.append(_robot(rng, f'r{k + 1}', start, goal, bool(rng.random() < tractor_share)))
+    obstacles: list[dict[str, Any]] = []
+    # U-traps across some robots' straight runs, open towards the start, the goal behind the back wall.
+    for robot in robots:
+        if rng.random() >= 0.6:
+            continue
+        start, goal = np.array(robot['start'][:2]), np.array(robot['goal'])
+        line = goal - start
+        facing = math.atan2(-line[1], -line[0])
+        trap_width, depth = float(rng.uniform(3.0, 9.0)), float(rng.uniform(2.0, 5.0))
+        where = start + line * float(rng.uniform(0.35, 0.65))
+        obstacles += u_trap(where, trap_width, depth, facing + float(rng.uniform(-0.3, 0.3)))
+    for _ in range(int(rng.integers(3, 11))):
+        centre = rng.uniform([0.0, 0.0], [width, height])
+        obstacles.append({'circle': {'center': [round(float(v), 3) for v in centre],
+                                     'radius': round(float(rng.uniform(0.5, 3.0)), 3)}})
+    for _ in range(int(rng.integers(0, 4))):
+        a = rng.uniform([0.0, 0.0], [width, height])
+        angle, length = float(rng.uniform(0.0, math.pi)), float(rng.uniform(2.0, 8.0))
+        b = a + length * np.array([math.cos(angle), math.sin(angle)])
+        obstacles.append({'segment': {'start': [round(float(v), 3) for v in a],
+                                      'end': [round(float(v), 3) for v in b]}})
+    return {'workspace': [0.0, 0.0, round(width, 3), round(height, 3)], 'obstacles': obstacles, 'robots': robots}
+
+
+def _clear_of_robots(data: dict[str, Any], margin: float) -> list[dict[str, Any]]:
+    """Drop the obstacles that come within a robot's clearance (plus half a metre) of a start or goal."""
+    ends = np.array([p for r in data['robots'] for p in (r['start'][:2], r['goal'])], dtype=float)
+    reach = np.array([r['radius'] + margin + 0.5 for r in data['robots'] for _ in (0, 1)])
+    kept = []
+    for item in data['obstacles']:
+        world = World.from_obstacles(data['workspace'], [_parse_obstacle(item)])
+        if np.all(world.obstacles.clearance(ends) >= reach):
+            kept.append(item)
+    return kept
+
+
+def _parse_obstacle(item: dict[str, Any]) -> Any:
+    from fastep_core.geometry import Segment
+    if 'circle' in item:
+        return Circle(tuple(item['circle']['center']), item['circle']['radius'])
+    return Segment(tuple(item['segment']['start']), tuple(item['segment']['end']))
+
+
+def random_scenario_data(seed: int, *, n_robots: int | None = None,
+                         tractor_share: float = MODELS_MIX) -> dict[str, Any]:
+    """The scenario mapping of random scenario `seed` (same seed, same scenario), solvable by construction.
+
+    n_robots: 1-4, drawn when None. Raises RuntimeError if no solvable layout turns up (has not happened).
+    """
+    if n_robots is not None and not 1 <= n_robots <= 4:
+        raise ValueError(f'n_robots must be 1-4, got {n_robots}')
+    rng = np.random.default_rng(seed)
+    margin = PlannerParams().clearance_margin
+    for _ in range(_ATTEMPTS):
+        count = int(rng.integers(1, 5)) if n_robots is None else n_robots
+        data = _layout(rng, count, tractor_share)
+        if len(data['robots']) < count:
+            continue
+        data['obstacles'] = _clear_of_robots(data, margin)
+        data = {'name': f'random_{seed}',
+                'description': f'random scenario {seed}: {len(data["robots"])} robot(s), '
+                               f'{len(data["obstacles"])} obstacle(s)', **data}
+        if solvable(parse_scenario(data)):
+            return data
+    raise RuntimeError(f'no solvable layout for random scenario {seed} in {_ATTEMPTS} attempts')
+
+
+def random_scenario(seed: int, *, n_robots: int | None = None, tractor_share: float = MODELS_MIX) -> Scenario:
+    """Random scenario `seed`, validated (see random_scenario_data)."""
+    return parse_scenario(random_scenario_data(seed, n_robots=n_robots, tractor_share=tractor_share))
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Print random scenario SEED (default 0) as YAML, ready for `fastep-sim FILE`."""
+    import sys
+
+    import yaml
+    args = list(sys.argv[1:] if argv is None else argv)
+    seed = int(args[0]) if args else 0
+    print(yaml.safe_dump(random_scenario_data(seed), sort_keys=False), end='')
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
