@@ -154,6 +154,7 @@ class Navigator:
         self._escape_rest = np.zeros(0)    # path length from each vertex to the goal
         self._escape_best = math.inf       # the shortest remaining path length so far (progress on an escape)
         self._escape_planned_at = -math.inf  # when the escape path was last planned
+        self._escape_keep = 0.0            # the clearance the escape path keeps
         self._escape_exit = 0.0            # hand back to the algorithm once this close to the goal
 
     # ----------------------------------------------------------------- goals
@@ -303,8 +304,8 @@ class Navigator:
     def exact_path(self, position: FloatArray) -> OptimalPath | None:
         """The exact shortest path from position to the goal, or None when there is none.
 
-        It keeps the planner's clearance (radius + margin) where it can, and only the radius when the one way
-        through is narrower: a robot that fits through a gap has a path, even if its steps never go there.
+        It keeps the planner's clearance (radius + margin) where it can, and less (down to the radius) when the
+        one way through is narrower: a robot that fits through a gap has a path, even if its steps never go there.
         A start or goal already nearer an obstacle than the clearance lowers it to that distance.
         """
         assert self.goal is not None
@@ -313,7 +314,10 @@ class Navigator:
             ends = np.array([position, self.goal])
             clearance = min(clearance, float(self.world.obstacles.clearance(ends).min()) - 1e-9)
         path = None
-        for keep in dict.fromkeys((clearance, min(clearance, self.radius))):
+        # Through a narrow gap the path keeps a quarter margin when it can (the guard stops at the radius
+        # itself, so a path at exactly the radius would leave no slack for the controller).
+        narrow = (min(clearance, self.radius + 0.25 * self.params.clearance_margin), min(clearance, self.radius))
+        for keep in dict.fromkeys((clearance, *narrow)):
             if keep >= self.radius - 1e-9 and keep > 0.0:
                 path = shortest_path(self.world, position, self.goal, keep, spacing=PATH_SPACING)
                 if path is not None:
@@ -395,6 +399,7 @@ class Navigator:
         points = _densify(path.points)
         legs = np.hypot(*np.diff(np.array(points), axis=0).T)
         self._escape = points[1:]
+        self._escape_keep = path.clearance
         self._escape_rest = np.concatenate([np.cumsum(legs[::-1])[::-1][1:], [0.0]])
         self._escape_index = 0
 
@@ -409,8 +414,9 @@ class Navigator:
         candidates = np.array(route[self._escape_index:self._escape_index + reach])
         obstacles = self.world.obstacles
         # A path vertex sits exactly at the path's clearance, so "visible" allows a little less: half the margin,
-        # or what the robot has now, whichever is smaller (the guard still keeps the radius).
-        within = self.radius + 0.5 * self.params.clearance_margin
+        # what the path keeps (in a narrow gap), or what the robot has now, whichever is smallest (the guard
+        # still keeps the radius).
+        within = min(self.radius + 0.5 * self.params.clearance_margin, self._escape_keep - 1e-3)
         if len(obstacles):
             within = min(within, float(obstacles.clearance(position)) - 1e-6)
             seen = obstacles.fan_clearance(position, candidates) >= within
@@ -421,6 +427,8 @@ class Navigator:
                 return None
             seen[0] = True   # the first vertex of a fresh path is reachable: the path leads there
         last = int(np.flatnonzero(seen)[-1])
+        if last == 0 and gaps[0] <= self.params.waypoint_tolerance and len(gaps) > 1 and not fresh:
+            return None   # on the aimed vertex and nothing after it in sight
         self._escape_index += last
         # Progress on an escape is a shorter way left to go (path length), not a smaller distance to the goal.
         rest = math.hypot(*(route[self._escape_index] - position)) + float(self._escape_rest[self._escape_index])
