@@ -40,8 +40,9 @@ from typing import Protocol, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.geometry import point_segment_distance
+from fastep_core.geometry import Circle, point_segment_distance
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
+from fastep_core.kinematics.tractor_trailer import hitch_angle
 from fastep_core.planning.optimal import OptimalPath, shortest_path
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.step import StepProblem, plan_step
@@ -55,6 +56,9 @@ HOLD_BEFORE_STEP = 1.0  # seconds a robot waits for another before stepping arou
 RETRY_AFTER = 0.5       # seconds between step-planning attempts while no feasible step exists
 BACKUP_SPEED = 0.25     # m/s of the backing-up recovery ...
 BACKUP_TIME = 4.0       # ... for this many seconds (1 m), after the guard held the robot for HOLD_BEFORE_STEP
+MAX_RECOVERY_HITCH = 1.0  # rad: a recovery move may not fold the trailer beyond this (or beyond where it is)
+TURN_ROOM = 1.0         # extra clearance (m) of a tractor-trailer's exact path, where there is room for it
+PARKED_SPEED = 0.05     # m/s: another robot slower than this is planned around like an obstacle
 PATH_SPACING = 0.25     # metres between exact-path vertices along arcs (escape paths, the optimal reference)
 
 
@@ -154,7 +158,9 @@ class Navigator:
         self._escape_rest = np.zeros(0)    # path length from each vertex to the goal
         self._escape_best = math.inf       # the shortest remaining path length so far (progress on an escape)
         self._escape_planned_at = -math.inf  # when the escape path was last planned
-        self._escape_keep = 0.0            # the clearance the escape path keeps
+        self._escape_keep = 0.0            # the clearance the escape path keeps ...
+        self._escape_world = world         # ... from the obstacles of this world (parked robots included)
+        self.path_world = world            # the world the last exact_path was planned in
         self._escape_exit = 0.0            # hand back to the algorithm once this close to the goal
 
     # ----------------------------------------------------------------- goals
@@ -224,7 +230,7 @@ class Navigator:
             self.fail(f'failed to make progress: not {self.params.progress_distance:g} m closer to the goal '
                       f'in {self.params.progress_timeout:g} s')
             return stop
-        if self.trapped(t, distance) and not self.start_escape(position, distance, t):
+        if self.trapped(t, distance) and not self.start_escape(position, distance, t, others):
             return stop
 
         if t < self._backup_until:
@@ -265,24 +271,29 @@ class Navigator:
                 self._target = None   # the controller starts afresh after the backup
         return guarded
 
+    def _tractor_recovery(self, state: FloatArray, dt: float) -> FloatArray:
+        """Of straight back and forward or back at full lock either way, the move that gains the most clearance
+        over the recovery without folding the trailer (hitch angle over MAX_RECOVERY_HITCH): a wall alongside
+        pins straight moves too, and reversing a trailer far folds it."""
+        lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
+        options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
+        scores = []
+        for option in options:
+            probe, folds = state, False
+            for _ in range(int(round(BACKUP_TIME / dt))):
+                probe = self.model.integrate(probe, option, dt)
+                folds = folds or abs(hitch_angle(probe)) > max(MAX_RECOVERY_HITCH, abs(hitch_angle(state)))
+            clear = float(self.world.obstacles.clearance(probe[:2])) if len(self.world.obstacles) else 0.0
+            scores.append(-math.inf if folds else clear)
+        return options[int(np.argmax(scores))]
+
     def back_up(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
         """The recovery command: straight back for a tractor-trailer, away from the nearest obstacle for a
         point mass; the guard still applies, and the recovery ends early where it stops the robot."""
         if self.model.state_size == 4:
             command = self._backup_command
             if command is None:
-                # Of straight back and back (or forward) at full lock either way, the one that gains the most
-                # clearance over the recovery's first second: a wall alongside pins straight moves too.
-                lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
-                options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
-                gains = []
-                for option in options:
-                    probe = state
-                    for _ in range(int(round(1.0 / dt))):
-                        probe = self.model.integrate(probe, option, dt)
-                    gains.append(float(self.world.obstacles.clearance(probe[:2])) if len(self.world.obstacles)
-                                 else 0.0)
-                command = self._backup_command = options[int(np.argmax(gains))]
+                command = self._backup_command = self._tractor_recovery(state, dt)
         else:
             h = 1e-4
             probes = state[:2] + np.array([[h, 0.0], [-h, 0.0], [0.0, h], [0.0, -h]])
@@ -301,25 +312,49 @@ class Navigator:
         raise NotImplementedError
 
     # ---------------------------------------------------- paths and traps
-    def exact_path(self, position: FloatArray) -> OptimalPath | None:
+    def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:
         """The exact shortest path from position to the goal, or None when there is none.
 
         It keeps the planner's clearance (radius + margin) where it can, and less (down to the radius) when the
         one way through is narrower: a robot that fits through a gap has a path, even if its steps never go there.
-        A start or goal already nearer an obstacle than the clearance lowers it to that distance.
+        A start or goal already nearer an obstacle than the clearance lowers it to that distance. Other robots
+        standing still (parked at their goals, most likely) are avoided like obstacles when a path round them
+        exists; moving ones are left to the guard.
         """
         assert self.goal is not None
+        parked = [o for o in others if math.hypot(*o.velocity) < PARKED_SPEED
+                  and math.hypot(o.position[0] - self.goal[0], o.position[1] - self.goal[1]) > o.radius + self.radius]
+        if parked:
+            # Inflated by what the guard adds for another robot (a tick's travel and a quarter margin), so a
+            # path round a parked robot is not one the guard stops on.
+            reach = self.params.max_speed * self.params.dt + 0.25 * self.params.clearance_margin + 0.01
+            world = World(self.world.workspace, self.world.obstacle_list + tuple(
+                Circle((float(o.position[0]), float(o.position[1])), o.radius + reach) for o in parked))
+            # The robot may already stand within that inflation (it was held there): the path then starts
+            # with what it has, down to almost nothing, and moves away.
+            path = self._exact_path(world, position, floor=0.01)
+            if path is not None:
+                self.path_world = world
+                return path
+        self.path_world = self.world
+        return self._exact_path(self.world, position)
+
+    def _exact_path(self, world: World, position: FloatArray, floor: float | None = None) -> OptimalPath | None:
+        assert self.goal is not None
         clearance = self.clearance
-        if len(self.world.obstacles):
+        if len(world.obstacles):
             ends = np.array([position, self.goal])
-            clearance = min(clearance, float(self.world.obstacles.clearance(ends).min()) - 1e-9)
+            clearance = min(clearance, float(world.obstacles.clearance(ends).min()) - 1e-9)
         path = None
         # Through a narrow gap the path keeps a quarter margin when it can (the guard stops at the radius
         # itself, so a path at exactly the radius would leave no slack for the controller).
         narrow = (min(clearance, self.radius + 0.25 * self.params.clearance_margin), min(clearance, self.radius))
-        for keep in dict.fromkeys((clearance, *narrow)):
-            if keep >= self.radius - 1e-9 and keep > 0.0:
-                path = shortest_path(self.world, position, self.goal, keep, spacing=PATH_SPACING)
+        # A tractor-trailer cannot wrap tightly round a wall's end (it circles there): give it room to turn.
+        wide = (clearance + TURN_ROOM,) if self.model.state_size == 4 else ()
+        floor = self.radius - 1e-9 if floor is None else floor
+        for keep in dict.fromkeys((*wide, clearance, *narrow)):
+            if keep >= floor and keep > 0.0:
+                path = shortest_path(world, position, self.goal, keep, spacing=PATH_SPACING)
                 if path is not None:
                     break
         return path
@@ -344,9 +379,10 @@ class Navigator:
             return False
         return t - self._trap_time > self.params.trap_timeout
 
-    def start_escape(self, position: FloatArray, distance: float, t: float) -> bool:
+    def start_escape(self, position: FloatArray, distance: float, t: float,
+                     others: Sequence[OtherRobot] = ()) -> bool:
         """Leave a trap along the exact shortest path; False (and failed) if there is no path."""
-        path = self.exact_path(position)
+        path = self.exact_path(position, others)
         if path is None:
             self.fail(self.no_path_reason(position))
             return False
@@ -374,21 +410,21 @@ class Navigator:
             if self.keep_waypoint(position, others):
                 return self.waypoint
             self._committed = False
-            if not self.replan_escape(position):
+            if not self.replan_escape(position, others):
                 return None
         # Off the path (a backup, a tractor-trailer's swing) no vertex ahead may be in sight: the path is
         # planned again from here, at most every RETRY_AFTER seconds (the next vertex is aimed at meanwhile).
         recent = t - self._escape_planned_at < RETRY_AFTER
         target = self.escape_target(position, t, fresh=recent)
         if target is None:
-            if not self.replan_escape(position):
+            if not self.replan_escape(position, others):
                 return None
             self._escape_planned_at = t
             target = self.escape_target(position, t, fresh=True)
         return target
 
-    def replan_escape(self, position: FloatArray) -> bool:
-        path = self.exact_path(position)
+    def replan_escape(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> bool:
+        path = self.exact_path(position, others)
         if path is None:
             self.fail(self.no_path_reason(position))
             return False
@@ -400,6 +436,7 @@ class Navigator:
         legs = np.hypot(*np.diff(np.array(points), axis=0).T)
         self._escape = points[1:]
         self._escape_keep = path.clearance
+        self._escape_world = self.path_world
         self._escape_rest = np.concatenate([np.cumsum(legs[::-1])[::-1][1:], [0.0]])
         self._escape_index = 0
 
@@ -412,7 +449,7 @@ class Navigator:
         beyond = gaps > self.params.step_radius
         reach = max(1, int(np.argmax(beyond)) if beyond.any() else len(gaps))
         candidates = np.array(route[self._escape_index:self._escape_index + reach])
-        obstacles = self.world.obstacles
+        obstacles = self._escape_world.obstacles
         # A path vertex sits exactly at the path's clearance, so "visible" allows a little less: half the margin,
         # what the path keeps (in a narrow gap), or what the robot has now, whichever is smallest (the guard
         # still keeps the radius).

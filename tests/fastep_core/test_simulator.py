@@ -115,7 +115,7 @@ def test_unreachable_goal_fails_with_a_reason_instead_of_hanging():
         'robots': [{'name': 'r1', 'model': 'point_mass', 'start': [5, 5], 'goal': [25, 25], 'radius': 0.5}]})
     robot = simulate(scenario, 'fastep', 0).robots[0]
     assert not robot.reached and robot.sim_time is None and not robot.collided
-    assert robot.status.startswith('failed: failed to make progress')
+    assert robot.status.startswith('failed: no valid path') and robot.path_length == 0.0
 
 
 def test_trajectory_samples_are_at_most_a_tenth_of_a_metre_apart():
