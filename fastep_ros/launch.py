@@ -198,7 +198,7 @@ class Monitor:
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rclpy.signals import SignalHandlerOptions
 
-        from fastep_ros.common import RELIABLE
+        from fastep_ros.common import LATCHED, RELIABLE
         from fastep_ros.planner import STATUS_QOS
         from msg_tools import convert
 
@@ -215,7 +215,7 @@ class Monitor:
         self.goal_pubs = {}
         depth = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # every odometry message
         for name, robot in self.robots.items():
-            self.goal_pubs[name] = self.node.create_publisher(PoseStamped, f'/{name}/goal_pose', RELIABLE)
+            self.goal_pubs[name] = self.node.create_publisher(PoseStamped, f'/{name}/goal_pose', LATCHED)
             self.node.create_subscription(DiagnosticStatus, f'/{name}/status',
                                           lambda m, r=robot: self.on_status(r, m), STATUS_QOS)
             self.node.create_subscription(Odometry, f'/{name}/odom', lambda m, r=robot: self.on_odom(r, m), depth)

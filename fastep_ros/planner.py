@@ -15,7 +15,7 @@ up for the transport delay.
 Outputs, on a control timer of the node clock (simulated time with use_sim_time): `cmd_vel`, `cost`; and when
 they change (and once a wall second): `waypoint` (the point driven to now), `plan` (the waypoints planned so
 far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the namespace, message = mode, values
-reason / activations / waypoint / goal / cost / others / t).
+reason / activations / waypoint / goal / cost / others / t / obstacles).
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
 run it, `waiting` (world or odometry not received yet) or `stale` (odometry older than odom_timeout or not
@@ -151,7 +151,10 @@ class PlannerNode(Node):
         self.odom_sub = self.create_subscription(Odometry, 'odom', self.on_odom, LATEST)
         if self.model == 'tractor_trailer':
             self.create_subscription(PoseStamped, 'trailer_pose', self.on_trailer, LATEST)
+        # Goals from anyone (volatile, as `ros2 topic pub` sends them) and from latched publishers (fastep-launch):
+        # a planner restarted mid-run gets the goal it was driving to again and resumes from the odometry.
         self.create_subscription(PoseStamped, 'goal_pose', self.on_goal, RELIABLE)
+        self.create_subscription(PoseStamped, 'goal_pose', self.on_goal, LATCHED)
         self.create_subscription(MarkerArray, '/obstacles', self.on_obstacles, LATCHED)
         if self.workspace_param is None:
             self.create_subscription(OccupancyGrid, '/map', self.on_map, LATCHED)
@@ -231,6 +234,7 @@ class PlannerNode(Node):
         else:
             self.navigator.world = self.world
             self.get_logger().info(f'world updated: {len(self.obstacles)} obstacles')
+        self._status_key = None   # the obstacle count is part of the status
         if self.pending_goal is not None:
             goal, self.pending_goal = self.pending_goal, None
             self.on_goal(goal)
@@ -262,6 +266,10 @@ class PlannerNode(Node):
             self.publish_status()
             return
         frame = msg.header.frame_id
+        nav = self.navigator
+        if self.goal is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING) and \
+                tuple(float(v) for v in point) == self.goal:
+            return   # the goal driven to already (a latched goal seen twice, or sent again): nothing changes
         try:
             if frame not in ('', 'map', self.frame_id):
                 raise GoalError(f'goal frame {frame!r} is not {self.frame_id!r} (no transforms here)')
@@ -444,6 +452,7 @@ class PlannerNode(Node):
             'algorithm': self.algorithm,
             't': self.now(),
             'odom_lag': self.odom_lag,
+            'obstacles': -1 if self.obstacles is None else len(self.obstacles),
         }
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 

@@ -1,0 +1,175 @@
+"""Faults injected into a live graph (wall time, no /clock): every one is survived and the robot arrives.
+
+- the planner is killed (SIGKILL) mid-run and started again: it takes the latched goal and the odometry and
+  finishes the run from where the robot stopped;
+- the plant is killed mid-run and started again where the robot stood (a driver restart): the planner holds
+  the robot while odometry is stale, then resumes;
+- the map server is killed and started again with one more obstacle: the planner receives the new
+  (transient-local) map and the run avoids it;
+- odometry stops (the plant is frozen with SIGSTOP) and resumes (SIGCONT): 'stale' while it is frozen,
+  arrival after.
+(A recorder killed with SIGKILL keeps what it wrote: tests/fastep_ros/test_recorder.py.)
+"""
+
+from __future__ import annotations
+
+import math
+import signal
+from pathlib import Path
+from typing import Any, Iterator
+
+import pytest
+from nav_msgs.msg import Odometry
+
+from graph_helpers import Graph, Helper, distance, odom_xy, write
+
+NS = '/r1'
+START, GOAL, RADIUS = (2.0, 10.0), (18.0, 10.5), 0.5
+FAST = {'alpha1': 1.0, 'alpha2': 1.0, 'max_speed': 3.0}
+ARRIVE = 90.0   # wall seconds at most for the rest of a run (normally a few)
+WORLD = """\
+name: fault_world
+workspace: [0, 0, 20, 20]
+obstacles:
+  - circle: {{center: [10, 10], radius: 1.5}}
+{extra}robots:
+  - name: r1
+    model: point_mass
+    start: [2, 10]
+    goal: [18, 10.5]
+    radius: 0.5
+"""
+
+
+@pytest.fixture()
+def graph(tmp_path: Path) -> Iterator[Graph]:
+    g = Graph(tmp_path)
+    try:
+        yield g
+    finally:
+        g.close()
+
+
+def start_robot(g: Graph, world: str = WORLD.format(extra=''), goal: bool = True) -> Helper:
+    scenario = write(g.tmp / 'world.yaml', world)
+    g.start('map', 'map_server', scenario=str(scenario))
+    g.start('plant', 'plant', NS, model='point_mass', start=list(START))
+    start_planner(g)
+    h = g.helper = Helper(g.domain)
+    h.record_status(NS)
+    h.record(f'{NS}/odom', Odometry)
+    h.wait_status(NS, lambda s: s['message'] == 'idle', 60.0, 'the planner to know the world')
+    if goal:
+        send_latched_goal(h, GOAL)
+    return h
+
+
+def start_planner(g: Graph) -> None:
+    g.start('planner', 'planner', NS, model='point_mass', robot_radius=RADIUS, **FAST)
+
+
+def send_latched_goal(h: Helper, goal: tuple[float, float]) -> None:
+    """As fastep-launch does: a transient-local publisher, so a planner that starts later still gets it."""
+    from geometry_msgs.msg import PoseStamped
+
+    from fastep_ros.common import LATCHED
+    from msg_tools.convert import point_to_pose_stamped
+    pub = h.node.create_publisher(PoseStamped, f'{NS}/goal_pose', LATCHED)
+    h.spin_until(lambda: pub.get_subscription_count() > 0, 20.0, 'the planner to match the goal publisher')
+    pub.publish(point_to_pose_stamped(goal))
+    h.goal_pubs['latched'] = pub   # keep it (and its latched goal) alive for the whole test
+
+
+def position(h: Helper) -> tuple[float, float]:
+    return odom_xy(h.records[f'{NS}/odom'][-1])
+
+
+def wait_until_past(h: Helper, x: float) -> None:
+    h.spin_until(lambda: bool(h.records[f'{NS}/odom']) and position(h)[0] >= x, ARRIVE, f'the robot past x = {x}')
+
+
+def wait_arrival(h: Helper) -> dict[str, Any]:
+    status = h.wait_status(NS, lambda s: s['message'] == 'arrived', ARRIVE, 'arrival')
+    h.spin_for(0.3)
+    assert distance(position(h), GOAL) <= 0.1 + 0.05
+    return status
+
+
+def min_circle_margin(h: Helper, first: int = 0) -> float:
+    return min(distance(odom_xy(m), (10.0, 10.0)) for m in h.records[f'{NS}/odom'][first:]) - 1.5 - RADIUS
+
+
+def test_planner_killed_and_restarted_mid_run_resumes_and_arrives(graph: Graph) -> None:
+    h = start_robot(graph)
+    wait_until_past(h, 6.0)
+    graph.stop('planner', signal.SIGKILL)
+    # Without commands the plant stops on its own (cmd_timeout): the robot waits where it is.
+    h.spin_for(1.5)
+    stopped_at = position(h)
+    h.spin_for(1.0)
+    assert distance(position(h), stopped_at) < 0.01, 'the robot kept moving without a planner'
+    first = len(h.records[f'{NS}/odom'])
+    h.records[f'{NS}/status'].clear()
+    start_planner(graph)
+    wait_arrival(h)
+    resumed = [odom_xy(m) for m in h.records[f'{NS}/odom'][first:]]
+    assert distance(resumed[0], stopped_at) < 0.05, 'the run must go on from where the robot stopped'
+    assert min_circle_margin(h) >= 0.0
+
+
+def test_plant_restarted_mid_run_the_planner_holds_then_resumes(graph: Graph) -> None:
+    h = start_robot(graph)
+    wait_until_past(h, 6.0)
+    graph.stop('plant', signal.SIGKILL)
+    last = position(h)
+    h.wait_status(NS, lambda s: s['message'] == 'stale' and s['level'] == 'warn', 20.0, 'stale odometry')
+    # A driver restart: the robot is where it was.
+    graph.start('plant', 'plant', NS, model='point_mass', start=list(last))
+    wait_arrival(h)
+    assert min_circle_margin(h) >= 0.0
+
+
+def test_map_server_restarted_with_a_new_obstacle_is_re_received(graph: Graph) -> None:
+    h = start_robot(graph, goal=False)
+    h.wait_status(NS, lambda s: s.get('obstacles') == '1', 20.0, 'one obstacle known')
+    graph.stop('map', signal.SIGKILL)
+    extra = '  - circle: {center: [15, 10.3], radius: 1.0}\n'
+    write(graph.tmp / 'world.yaml', WORLD.format(extra=extra))
+    graph.start('map', 'map_server', scenario=str(graph.tmp / 'world.yaml'))
+    h.wait_status(NS, lambda s: s.get('obstacles') == '2', 30.0, 'the restarted map to be received')
+    send_latched_goal(h, GOAL)
+    wait_arrival(h)
+    run = [odom_xy(m) for m in h.records[f'{NS}/odom']]
+    assert min(distance(p, (15.0, 10.3)) for p in run) - 1.0 - RADIUS >= 0.0, 'the new circle was hit'
+    assert min_circle_margin(h) >= 0.0
+
+
+def test_odometry_stops_and_resumes(graph: Graph) -> None:
+    h = start_robot(graph)
+    wait_until_past(h, 5.0)
+    plant = graph.procs['plant']
+    plant.send_signal(signal.SIGSTOP)
+    try:
+        status = h.wait_status(NS, lambda s: s['message'] == 'stale', 20.0, 'stale odometry')
+        assert 'odometry stale' in status['reason']
+        frozen_at = position(h)
+    finally:
+        plant.send_signal(signal.SIGCONT)
+    h.wait_status(NS, lambda s: s['message'] in ('kinematic', 'avoiding', 'arrived'), 20.0, 'odometry back')
+    wait_arrival(h)
+    # While frozen the plant had no commands to apply: after it woke, the robot went on from where it stood.
+    assert math.isfinite(frozen_at[0])
+    assert min_circle_margin(h) >= 0.0
+
+
+def test_a_second_identical_latched_goal_does_not_restart_the_run(graph: Graph) -> None:
+    from nav_msgs.msg import Path as PathMsg
+    h = start_robot(graph)
+    plans = h.record(f'{NS}/plan', PathMsg)
+    h.spin_until(lambda: bool(plans) and len(plans[-1].poses) >= 2, ARRIVE, 'a planned step around the circle')
+    steps = len(plans[-1].poses)
+    send_latched_goal(h, GOAL)   # a second latched publisher: the planner sees the same goal again
+    h.spin_for(1.0)
+    # A new goal would clear the plan to the goal alone; the same goal again leaves the run as it was.
+    assert len(plans[-1].poses) >= steps
+    wait_arrival(h)
