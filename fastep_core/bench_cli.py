@@ -19,6 +19,7 @@ from pathlib import Path
 from typing import NoReturn, Sequence
 
 from fastep_core import experiments
+from fastep_core.cli import seed
 from fastep_core.errors import FastepError
 from fastep_core.scenario import builtin_names, load_scenario
 from fastep_core.simulator import ALGORITHMS
@@ -41,7 +42,7 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument('--algorithms', nargs='+', default=list(ALGORITHMS), choices=ALGORITHMS, metavar='ALG',
                    help=f'planners among {", ".join(ALGORITHMS)} (default: all; optimal runs once)')
     p.add_argument('--workers', type=int, default=2, help='worker processes (default 2)')
-    p.add_argument('--seed', type=int, default=0, help='first seed (default 0)')
+    p.add_argument('--seed', type=seed, default=0, help='first seed (default 0)')
     p.add_argument('--out', type=Path, default=Path('docs'), help='output folder (default docs/)')
     p.add_argument('--report', default='table2', help='report name: OUT/REPORT.md, figures/REPORT_*.png')
     p.add_argument('--json', type=Path, metavar='FILE', help='also write every run record as JSON')

@@ -30,11 +30,19 @@ class _Parser(argparse.ArgumentParser):
         self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
 
 
+def seed(text: str) -> int:
+    """argparse type of a seed: a whole number >= 0 (numpy's SeedSequence takes no negative seeds)."""
+    value = int(text)
+    if value < 0:
+        raise argparse.ArgumentTypeError(f'a seed must be >= 0, got {value}')
+    return value
+
+
 def _parser() -> argparse.ArgumentParser:
     p = _Parser(prog='fastep-sim', description='Simulate a scenario with FAStep-Kinematic or ACO-Kinematic.')
     p.add_argument('scenario', nargs='?', help='scenario YAML file or built-in name (see --list)')
     p.add_argument('--algorithm', choices=ALGORITHMS, default='fastep', help='planner (default: fastep)')
-    p.add_argument('--seed', type=int, default=0, help='seed of the first run (default: 0)')
+    p.add_argument('--seed', type=seed, default=0, help='seed of the first run (default: 0)')
     p.add_argument('--runs', type=int, default=1, help='number of runs, seeds seed..seed+runs-1 (default: 1)')
     p.add_argument('--json', type=Path, metavar='OUT', help='write all runs as JSON')
     p.add_argument('--plot', type=Path, metavar='OUT.png', help='draw the first run like the paper\'s Fig. 2')

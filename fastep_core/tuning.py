@@ -43,6 +43,7 @@ from typing import Any, Callable, NoReturn, Sequence
 import numpy as np
 
 from fastep_core import experiments
+from fastep_core.cli import seed
 from fastep_core.errors import FastepError
 from fastep_core.planning.params import PlannerParams
 
@@ -185,7 +186,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--popsize', type=int, default=5, help='DE population = popsize x 4 (default 5)')
     p.add_argument('--maxiter', type=int, default=3, help='DE generations (default 3)')
     p.add_argument('--workers', type=int, default=2, help='worker processes (default 2)')
-    p.add_argument('--seed', type=int, default=0, help='seed of the search (default 0)')
+    p.add_argument('--seed', type=seed, default=0, help='seed of the search (default 0)')
     p.add_argument('--out', type=Path, metavar='FILE.md', help='also write the Markdown report here')
     p.add_argument('--json', type=Path, metavar='FILE', help='write the tuned parameters as JSON')
     return p

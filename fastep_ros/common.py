@@ -132,7 +132,11 @@ def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None
     # rclpy's own SIGINT handler shuts the context down (spin then ends); Python's default one would also raise
     # KeyboardInterrupt at a random point, e.g. inside a destructor, printing a traceback.
     signal.signal(signal.SIGINT, lambda signum, frame: None)
-    rclpy.init(args=args)
+    try:
+        rclpy.init(args=args)
+    except Exception as exc:   # e.g. UnknownROSArgsError for a mistyped --ros-args
+        print(f'{prog}: error: cannot start ROS: {type(exc).__name__}: {exc}'.splitlines()[0], file=sys.stderr)
+        return 2
     node = None
     code = 0
     try:

@@ -31,6 +31,7 @@ from typing import Any, NoReturn, Sequence
 
 import numpy as np
 
+from fastep_core.cli import seed
 from fastep_core.errors import FastepError
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
@@ -57,7 +58,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--timeout', type=float, default=None,
                    help='give up after this many simulated seconds (default: the scenario\'s max_sim_time)')
     p.add_argument('--algorithm', choices=ALGORITHMS, default='fastep', help='planner (default fastep)')
-    p.add_argument('--seed', type=int, default=0, help='seed of the swarms (default 0; robot k uses stream k '
+    p.add_argument('--seed', type=seed, default=0, help='seed of the swarms (default 0; robot k uses stream k '
                    'of the seed, as fastep-sim does)')
     p.add_argument('--json', type=Path, metavar='OUT', help='write the summary and odometry trajectories')
     p.add_argument('--plot', type=Path, metavar='OUT.png', help='draw the paths like fastep-sim --plot')

@@ -193,6 +193,9 @@ class PlannerNode(Node):
                             ('trailer_length', trailer_length)):
             if value <= 0.0:
                 raise StartupError(f'parameter {name} must be > 0, got {value:g}')
+        if self.seed < 0 or self.seed_stream < -1:
+            raise StartupError(f'parameter seed must be >= 0 and seed_stream >= -1, got {self.seed} and '
+                               f'{self.seed_stream}')
         if hitch_offset < 0.0 or other_radius < 0.0 or self.max_extrapolation < 0.0:
             raise StartupError('parameters hitch_offset, other_robot_radius and max_extrapolation must be >= 0')
         if workspace and (len(workspace) != 4 or not (workspace[0] < workspace[2] and workspace[1] < workspace[3])):

@@ -105,8 +105,10 @@ class RecorderNode(Node):
             self.path.parent.mkdir(parents=True, exist_ok=True)
             self.writer: McapWriter | None = McapWriter(self.path, chunk_size=chunk_size, compression=compression,
                                                         library='fastep-record')
-        except (OSError, FastepError) as exc:
-            raise StartupError(f'cannot write {self.path}: {exc}') from None
+        except OSError as exc:
+            raise StartupError(f'cannot write {self.path}: {exc.strerror or exc}') from None
+        except FastepError as exc:   # already names the file
+            raise StartupError(str(exc)) from None
         self.writer.add_metadata(METADATA_NAME, metadata)
         self.subscriptions_by_topic: dict[str, Any] = {}
         self.types: dict[str, str] = {}

@@ -78,7 +78,8 @@ def test_bad_scenario_exits_2_with_one_line(tmp_path, case):
 
 
 @pytest.mark.parametrize('args', [['no_such_scenario'], ['table2_s1', '--algorithm', 'pso'],
-                                  ['table2_s1', '--runs', '0'], ['table2_s1', '--seed', 'x'], []])
+                                  ['table2_s1', '--runs', '0'], ['table2_s1', '--seed', 'x'],
+                                  ['table2_s1', '--seed', '-1'], []])
 def test_bad_arguments_exit_2_with_one_line(args):
     proc = run_cli(*args)
     assert proc.returncode == 2

@@ -94,6 +94,7 @@ def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path) -> None:
     (['no_such_scenario_here'], 'no built-in scenario'),
     (['missing/file.yaml'], 'file not found'),
     (['open_field', '--rtf', '-1'], '--rtf must be > 0'),
+    (['open_field', '--seed', '-1'], 'a seed must be >= 0'),
 ])
 def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str], words: str) -> None:
     env = isolated_env(free_domain(), tmp_path / 'roslog')
@@ -108,13 +109,20 @@ def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str]
     ('planner', ['algorithm:=dijkstra'], 'algorithm must be one of'),
     ('planner', ['max_speed:=-1.0'], 'max_speed'),
     ('plant', ['model:=tractor_trailer', 'start:=[1.0, 2.0]'], 'start must have 4 values'),
+    ('plant', ['start:=[.nan, 2.0]'], 'start must be finite'),
+    ('planner', ['seed:=-4'], 'seed must be >= 0'),
+    ('planner', ['a:=.inf'], 'must be finite'),
+    ('planner', ['trap_timeout:=-1.0'], 'trap_timeout'),
+    ('planner', ['n_fireflies:=many'], 'n_fireflies'),
+    ('planner', ['workspace:=[0.0, 1.0]'], 'workspace must be'),
+    ('planner', ['--garbage'], 'cannot start ROS'),
 ])
 def test_nodes_refuse_bad_parameters_with_one_line(tmp_path: Path, module: str, params: list[str],
                                                    words: str) -> None:
     env = isolated_env(free_domain(), tmp_path / 'roslog')
     cmd = [sys.executable, '-m', f'fastep_ros.{module}', '--ros-args']
     for p in params:
-        cmd += ['-p', p]
+        cmd += [p] if p.startswith('--') else ['-p', p]
     result = run(cmd, env, timeout=60)
     assert result.returncode == 2
     assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr

@@ -118,6 +118,34 @@ def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) ->
         node.destroy_node()
 
 
+def test_planner_survives_bad_messages_from_unknown_robots_and_bad_goals(context: Any) -> None:
+    from fastep_ros.planner import _Other
+    node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0])
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
+        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        # Robots nobody announced: one sends NaN, one infinity, one a sound pose.
+        for name, x in (('ghost', math.nan), ('far', math.inf), ('known', 3.0)):
+            topic = f'/{name}/odom'
+            node.others[topic] = _Other(name)
+            msg = convert.state_to_odometry([3.0, 3.0])
+            msg.pose.pose.position.x = x
+            node.on_other_odom(topic, msg)
+        assert [o.name for o in node.other_robots(node.now())] == ['known']
+        for goal, words in (((50.0, 5.0), 'outside the map'), ((5.0, 5.0), 'inside an obstacle'),
+                            ((math.nan, 1.0), 'not finite'), ((5.0, 6.2), 'occupied')):
+            node.on_goal(convert.point_to_pose_stamped(goal))
+            node.on_control()
+            level, message, reason = node.status()
+            assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and words in reason, reason
+            assert np.all(node.last_command == 0.0)
+        node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))   # a good goal after bad ones is taken
+        node.on_control()
+        assert node.status()[1] in ('kinematic', 'avoiding') and np.any(node.last_command != 0.0)
+    finally:
+        node.destroy_node()
+
+
 def test_plant_integrates_fixed_steps_and_zeroes_bad_or_old_commands(context: Any) -> None:
     node = make(PlantNode, context, start=[1, 2], rate_hz=50.0, cmd_timeout=0.5)
     try:
