@@ -28,7 +28,8 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.world import World
 
-__all__ = ['MODELS_MIX', 'u_trap', 'random_scenario', 'random_scenario_data', 'solvable', 'main']
+__all__ = ['MODELS_MIX', 'u_trap', 'u_trap_scenario_data', 'random_scenario', 'random_scenario_data', 'solvable',
+           'main']
 
 MODELS_MIX = 0.3
 """Share of tractor-trailers among random robots (the rest are point masses)."""
@@ -161,6 +162,37 @@ def random_scenario_data(seed: int, *, n_robots: int | None = None,
         if solvable(parse_scenario(data)):
             return data
     raise RuntimeError(f'no solvable layout for random scenario {seed} in {_ATTEMPTS} attempts')
+
+
+def u_trap_scenario_data(seed: int, model: str = 'point_mass') -> dict[str, Any]:
+    """One robot and one U-shaped trap across its straight line, open towards it (and a few circles away
+    from that line): the trap-escape benchmark's scenarios. Same seed, same scenario."""
+    if model not in ('point_mass', 'tractor_trailer'):
+        raise ValueError(f'model must be point_mass or tractor_trailer, got {model!r}')
+    rng = np.random.default_rng(seed)
+    margin = PlannerParams().clearance_margin
+    for _ in range(_ATTEMPTS):
+        width, height = (float(v) for v in rng.uniform(30.0, 45.0, 2))
+        angle = float(rng.uniform(-math.pi, math.pi))
+        centre = np.array([width, height]) / 2.0
+        reach = 0.4 * min(width, height)
+        way = np.array([math.cos(angle), math.sin(angle)])
+        start, goal = centre - reach * way, centre + reach * way
+        trap_width, depth = float(rng.uniform(3.0, 9.0)), float(rng.uniform(2.0, 5.0))
+        facing = angle + math.pi + float(rng.uniform(-0.3, 0.3))
+        obstacles = u_trap(centre + way * float(rng.uniform(-1.0, 1.0)), trap_width, depth, facing)
+        for _ in range(int(rng.integers(0, 6))):
+            c = rng.uniform([0.0, 0.0], [width, height])
+            if float(np.hypot(*(c - centre))) > 7.0:   # clear of the trap
+                obstacles.append({'circle': {'center': [round(float(v), 3) for v in c],
+                                             'radius': round(float(rng.uniform(0.5, 2.0)), 3)}})
+        data = {'name': f'u_trap_{seed}', 'description': f'U-trap scenario {seed} ({model})',
+                'workspace': [0.0, 0.0, round(width, 3), round(height, 3)],
+                'obstacles': obstacles, 'robots': [_robot(rng, 'r1', start, goal, model == 'tractor_trailer')]}
+        data['obstacles'] = _clear_of_robots(data, margin)
+        if len(data['obstacles']) >= 3 and solvable(parse_scenario(data)):
+            return data
+    raise RuntimeError(f'no solvable U-trap layout for seed {seed}')
 
 
 def random_scenario(seed: int, *, n_robots: int | None = None, tractor_share: float = MODELS_MIX) -> Scenario:

@@ -277,14 +277,20 @@ class Navigator:
         pins straight moves too, and reversing a trailer far folds it."""
         lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
         options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
+        obstacles = self.world.obstacles
+        if not len(obstacles):
+            return options[0]
+        now = float(obstacles.clearance(state[:2]))
         scores = []
         for option in options:
-            probe, folds = state, False
-            for _ in range(int(round(BACKUP_TIME / dt))):
+            probe, blocked = state, False
+            for k in range(int(round(BACKUP_TIME / dt))):
                 probe = self.model.integrate(probe, option, dt)
-                folds = folds or abs(hitch_angle(probe)) > max(MAX_RECOVERY_HITCH, abs(hitch_angle(state)))
-            clear = float(self.world.obstacles.clearance(probe[:2])) if len(self.world.obstacles) else 0.0
-            scores.append(-math.inf if folds else clear)
+                blocked = blocked or abs(hitch_angle(probe)) > max(MAX_RECOVERY_HITCH, abs(hitch_angle(state)))
+                if k == 0:   # a first step the guard would stop is no way out
+                    first = float(obstacles.clearance(probe[:2]))
+                    blocked = blocked or (first < self.radius and first < now)
+            scores.append(-math.inf if blocked else float(obstacles.clearance(probe[:2])))
         return options[int(np.argmax(scores))]
 
     def back_up(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
