@@ -145,7 +145,7 @@ class Navigator:
         self._held_since: float | None = None  # when the guard started holding the robot for another robot
         self._committed = False  # follow the current waypoint to the end (a step taken to break a hold)
         self._retry_at = -math.inf  # no step planning before this time (after a failed attempt)
-        self._stuck_since: float | None = None  # when the guard started stopping the robot at an obstacle
+        self._stuck_since: float | None = None  # since when the guard has stopped the robot without a break
         self._backup_until = -math.inf     # backing up (the recovery from being stuck) until this time ...
         self._backup_command: FloatArray | None = None  # ... with this command (a tractor-trailer's choice)
         self.reference: OptimalPath | None = None  # the exact shortest path, computed when the goal is taken
@@ -259,59 +259,64 @@ class Navigator:
         guarded = self.guard(state, command, dt, others)
         if guarded is command:
             self._held_since = self._stuck_since = None
-        elif self._held_since is None and self.reason.startswith('stopped: giving way'):
+            return guarded
+        if self._held_since is None and self.reason.startswith('stopped: giving way'):
             self._held_since = t
-        elif self.reason.startswith('stopped: an obstacle'):
-            # A tractor-trailer turns only while moving, so a target behind it next to a wall pins it there:
-            # after HOLD_BEFORE_STEP seconds it backs up (Nav2's backup recovery) to get room to turn.
-            if self._stuck_since is None:
-                self._stuck_since = t
-            elif t - self._stuck_since >= HOLD_BEFORE_STEP:
-                self._stuck_since, self._backup_until, self._backup_command = None, t + BACKUP_TIME, None
-                self._target = None   # the controller starts afresh after the backup
+        # A tractor-trailer turns only while moving, so a target behind it next to a wall (or a parked robot)
+        # pins it there: after HOLD_BEFORE_STEP seconds stopped at a wall, or three times that at a robot (the
+        # hold breaker's step has had its chance), it backs up (Nav2's backup recovery) to get room.
+        if self._stuck_since is None:
+            self._stuck_since = t
+        patience = HOLD_BEFORE_STEP * (1.0 if self.reason.startswith('stopped: an obstacle') else 3.0)
+        if t - self._stuck_since >= patience:
+            self._stuck_since, self._backup_until, self._backup_command = None, t + BACKUP_TIME, None
+            self._target = None   # the controller starts afresh after the backup
         return guarded
 
-    def _tractor_recovery(self, state: FloatArray, dt: float) -> FloatArray:
-        """Of straight back and forward or back at full lock either way, the move that gains the most clearance
-        over the recovery without folding the trailer (hitch angle over MAX_RECOVERY_HITCH): a wall alongside
-        pins straight moves too, and reversing a trailer far folds it."""
+    def _room(self, points: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
+        """Free room at points (n, 2): distance to the nearest obstacle surface or other robot's body."""
+        room = self.world.obstacles.clearance(points) if len(self.world.obstacles) else np.full(len(points), 1e9)
+        for other in others:
+            room = np.minimum(room, np.hypot(*(points - np.asarray(other.position)).T) - other.radius)
+        return room
+
+    def _tractor_recovery(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
+        """Of straight back and forward or back at full lock either way, the move that gains the most room over
+        the recovery without folding the trailer (hitch angle over MAX_RECOVERY_HITCH) and whose first step
+        the guard allows: a wall alongside pins straight moves too, and reversing a trailer far folds it."""
         lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
         options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
-        obstacles = self.world.obstacles
-        if not len(obstacles):
-            return options[0]
-        now = float(obstacles.clearance(state[:2]))
         scores = []
         for option in options:
-            probe, blocked = state, False
-            for k in range(int(round(BACKUP_TIME / dt))):
+            if self.guard(state, option, dt, others) is not option:
+                scores.append(-math.inf)
+                continue
+            probe, folds = state, False
+            for _ in range(int(round(BACKUP_TIME / dt))):
                 probe = self.model.integrate(probe, option, dt)
-                blocked = blocked or abs(hitch_angle(probe)) > max(MAX_RECOVERY_HITCH, abs(hitch_angle(state)))
-                if k == 0:   # a first step the guard would stop is no way out
-                    first = float(obstacles.clearance(probe[:2]))
-                    blocked = blocked or (first < self.radius and first < now)
-            scores.append(-math.inf if blocked else float(obstacles.clearance(probe[:2])))
+                folds = folds or abs(hitch_angle(probe)) > max(MAX_RECOVERY_HITCH, abs(hitch_angle(state)))
+            scores.append(-math.inf if folds else float(self._room(probe[None, :2], others)[0]))
         return options[int(np.argmax(scores))]
 
     def back_up(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
-        """The recovery command: straight back for a tractor-trailer, away from the nearest obstacle for a
-        point mass; the guard still applies, and the recovery ends early where it stops the robot."""
+        """The recovery command: a tractor-trailer's best move (see _tractor_recovery), or for a point mass
+        straight away from what is nearest; the guard still applies, and the recovery ends where it stops."""
         if self.model.state_size == 4:
             command = self._backup_command
             if command is None:
-                command = self._backup_command = self._tractor_recovery(state, dt)
+                command = self._backup_command = self._tractor_recovery(state, dt, others)
         else:
             h = 1e-4
             probes = state[:2] + np.array([[h, 0.0], [-h, 0.0], [0.0, h], [0.0, -h]])
-            clear = self.world.obstacles.clearance(probes) if len(self.world.obstacles) else np.zeros(4)
-            away = np.array([clear[0] - clear[1], clear[2] - clear[3]])
+            room = self._room(probes, others)
+            away = np.array([room[0] - room[1], room[2] - room[3]])
             norm = float(np.hypot(*away))
             command = away * (BACKUP_SPEED / norm) if norm > 0 else np.zeros(2)
         guarded = self.guard(state, command, dt, others)
         if guarded is not command:
             self._backup_until = -math.inf
         else:
-            self.reason = 'backing up: stuck at an obstacle'
+            self.reason = 'backing up: stuck'
         return guarded
 
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
