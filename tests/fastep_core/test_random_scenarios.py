@@ -1,0 +1,68 @@
+"""Random solvable scenarios: reproducible, valid, solvable, and (a few of them) solved."""
+
+import math
+
+import numpy as np
+import pytest
+import yaml
+
+from fastep_core.geometry import Circle
+from fastep_core.random_scenarios import (main, random_scenario, random_scenario_data, solvable,
+                                          u_trap_scenario_data)
+from fastep_core.scenario import parse_scenario
+from fastep_core.simulator import simulate
+from fastep_core.world import World
+
+
+def test_same_seed_same_scenario_other_seed_other_scenario():
+    assert random_scenario_data(7) == random_scenario_data(7)
+    assert random_scenario_data(7) != random_scenario_data(8)
+
+
+@pytest.mark.parametrize('seed', range(12))
+def test_random_scenarios_are_valid_and_solvable_with_robots_parked_at_goals(seed):
+    scenario = random_scenario(seed)
+    assert 1 <= len(scenario.robots) <= 4
+    assert solvable(scenario)
+    for robot in scenario.robots:
+        assert math.dist(robot.start[:2], robot.goal) >= 0.5 * max(scenario.world.workspace[2:])
+
+
+def test_the_mix_has_tractor_trailers_u_traps_and_every_robot_count():
+    scenarios = [random_scenario(seed) for seed in range(30)]
+    models = {r.model for s in scenarios for r in s.robots}
+    assert models == {'point_mass', 'tractor_trailer'}
+    assert {len(s.robots) for s in scenarios} == {1, 2, 3, 4}
+    assert sum(len([o for o in s.world.obstacle_list if not isinstance(o, Circle)]) >= 3 for s in scenarios) >= 10
+
+
+def test_solvable_counts_robots_parked_at_their_goals():
+    # r2 parks on the only gap r1 has: the obstacles alone leave a way, the parked robot does not.
+    data = {'name': 'corridor', 'workspace': [0, 0, 20, 10],
+            'obstacles': [{'segment': {'start': [10, 0], 'end': [10, 4]}},
+                          {'segment': {'start': [10, 6], 'end': [10, 10]}}],
+            'robots': [{'name': 'r1', 'model': 'point_mass', 'start': [2, 5], 'goal': [18, 5], 'radius': 0.5},
+                       {'name': 'r2', 'model': 'point_mass', 'start': [2, 2], 'goal': [10, 5], 'radius': 0.5}]}
+    assert not solvable(parse_scenario(data))
+    data['robots'][1]['goal'] = [5, 2]
+    assert solvable(parse_scenario(data))
+
+
+@pytest.mark.parametrize('model', ['point_mass', 'tractor_trailer'])
+def test_u_trap_scenarios_put_the_trap_across_the_straight_line(model):
+    scenario = parse_scenario(u_trap_scenario_data(3, model))
+    robot = scenario.robots[0]
+    assert robot.model == model
+    walls = World(scenario.world.workspace, scenario.world.obstacle_list[:3]).obstacles
+    assert walls.path_clearance(np.array(robot.start[:2]), np.array(robot.goal)) <= 0.0   # the U blocks it
+
+
+def test_main_prints_the_scenario_as_yaml(capsys):
+    assert main(['5']) == 0
+    assert yaml.safe_load(capsys.readouterr().out) == random_scenario_data(5)
+
+
+@pytest.mark.parametrize('seed', [0, 4, 10])
+def test_a_small_soak_every_robot_arrives_and_none_collides(seed):
+    run = simulate(random_scenario(seed), 'fastep', seed)
+    assert all(r.reached and not r.collided for r in run.robots), [r.status for r in run.robots]
