@@ -146,6 +146,23 @@ def test_planner_survives_bad_messages_from_unknown_robots_and_bad_goals(context
         node.destroy_node()
 
 
+def test_planner_reports_no_valid_path_for_a_walled_in_goal(context: Any) -> None:
+    from fastep_core.geometry import Segment
+    node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0])
+    try:
+        box = [Segment((6.0, 6.0), (8.0, 6.0)), Segment((8.0, 6.0), (8.0, 8.0)), Segment((8.0, 8.0), (6.0, 8.0)),
+               Segment((6.0, 8.0), (6.0, 6.0))]
+        node.on_obstacles(convert.obstacles_to_marker_array(box))
+        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        node.on_goal(convert.point_to_pose_stamped((7.0, 7.0)))
+        node.on_control()
+        level, message, reason = node.status()
+        assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and reason.startswith('no valid path'), reason
+        assert np.all(node.last_command == 0.0)
+    finally:
+        node.destroy_node()
+
+
 def test_plant_integrates_fixed_steps_and_zeroes_bad_or_old_commands(context: Any) -> None:
     node = make(PlantNode, context, start=[1, 2], rate_hz=50.0, cmd_timeout=0.5)
     try:
