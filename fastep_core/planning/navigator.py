@@ -21,12 +21,15 @@ Safety nets surround the planner, as a navigation stack needs:
   tick with 'no valid path', from the exact planner (planning/optimal.py), instead of wandering until a timeout.
 - Trap escape: greedy steps (stay far from obstacles, get closer to the goal) settle in local minima such as
   the inside of a U-shaped wall. When the robot has not come `progress_distance` closer to the goal within
-  `trap_timeout` seconds, it follows the exact shortest path out, aiming at the farthest path vertex it can
-  see within `step_radius`, and hands back to the algorithm once it is `progress_distance` closer to the goal
+  `trap_timeout` seconds, it follows the exact shortest path out (planning/escape.py), round robots parked at
+  their goals too, and hands back to the algorithm once it is `progress_distance` closer to the goal
   than it ever was in the trap (the leave rule of the Bug algorithms). Each escape ends strictly closer to the
   goal, so escapes cannot cycle.
+- Backup recovery: a robot the guard keeps stopped (1 s at a wall, 3 s at another robot) moves away for
+  BACKUP_TIME seconds: a point mass straight away from what is nearest, a tractor-trailer the move (back or
+  forward, straight or at full lock) that gains the most room without folding its trailer.
 - A progress checker fails the run when the robot does not come `progress_distance` closer to the goal (or
-  reach the next vertex of an escape path) within `progress_timeout` seconds.
+  `progress_distance` shorter on its escape path) within `progress_timeout` seconds.
 """
 
 from __future__ import annotations
@@ -43,6 +46,7 @@ from numpy.typing import NDArray
 from fastep_core.geometry import Circle, point_segment_distance
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
 from fastep_core.kinematics.tractor_trailer import hitch_angle
+from fastep_core.planning.escape import EscapePath
 from fastep_core.planning.optimal import OptimalPath, shortest_path
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.step import StepProblem, plan_step
@@ -153,13 +157,9 @@ class Navigator:
         self._path_checked = False         # has the goal been checked for a path (first tick after set_goal)
         self._trap_distance = math.inf     # trap checker: best distance to the goal since the last reset ...
         self._trap_time = 0.0              # ... and when it was reached
-        self._escape: list[FloatArray] | None = None  # the escape path's vertices after the start (while escaping)
-        self._escape_index = 0             # the vertex aimed at
-        self._escape_rest = np.zeros(0)    # path length from each vertex to the goal
+        self._escape: EscapePath | None = None   # the way out of a trap, while escaping
         self._escape_best = math.inf       # the shortest remaining path length so far (progress on an escape)
         self._escape_planned_at = -math.inf  # when the escape path was last planned
-        self._escape_keep = 0.0            # the clearance the escape path keeps ...
-        self._escape_world = world         # ... from the obstacles of this world (parked robots included)
         self.path_world = world            # the world the last exact_path was planned in
         self._escape_exit = 0.0            # hand back to the algorithm once this close to the goal
 
@@ -398,8 +398,8 @@ class Navigator:
             self.fail(self.no_path_reason(position))
             return False
         self.escapes += 1
-        self.set_escape_path(path)
-        self._escape_best, self._escape_planned_at = math.inf, t
+        self._escape, self._escape_planned_at = EscapePath.from_path(path, self.path_world), t
+        self._escape_best = math.inf
         self._escape_exit = min(distance, self._trap_distance) - self.params.progress_distance
         self.waypoint, self._committed, self._best_time = None, False, t
         self.mode, self.reason = Mode.AVOIDING, 'escaping a trap along the exact shortest path'
@@ -407,10 +407,10 @@ class Navigator:
 
     def follow_escape(self, position: FloatArray, distance: float, t: float,
                       others: Sequence[OtherRobot]) -> FloatArray | None:
-        """The escape target: the farthest path vertex within step_radius that the robot can see (at least the
-        next one, which the path leads to), as a pure-pursuit carrot.
+        """The escape target (planning/escape.py); None once the robot has left the trap (or failed).
 
-        A step around another robot (the hold breaker) leaves the path; the path is replanned after it.
+        A step around another robot (the hold breaker) leaves the path; the path is replanned after it, and
+        whenever no vertex ahead is in sight, at most every RETRY_AFTER seconds.
         """
         assert self._escape is not None and self.goal is not None
         if distance <= self._escape_exit:
@@ -421,82 +421,35 @@ class Navigator:
             if self.keep_waypoint(position, others):
                 return self.waypoint
             self._committed = False
-            if not self.replan_escape(position, others):
+            if not self.replan_escape(position, t, others):
                 return None
-        # Off the path (a backup, a tractor-trailer's swing) no vertex ahead may be in sight: the path is
-        # planned again from here, at most every RETRY_AFTER seconds (the next vertex is aimed at meanwhile).
-        recent = t - self._escape_planned_at < RETRY_AFTER
-        target = self.escape_target(position, t, fresh=recent)
+        target = self.escape_target(position, t, fresh=t - self._escape_planned_at < RETRY_AFTER)
         if target is None:
-            if not self.replan_escape(position, others):
+            if not self.replan_escape(position, t, others):
                 return None
-            self._escape_planned_at = t
             target = self.escape_target(position, t, fresh=True)
         return target
 
-    def replan_escape(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> bool:
+    def replan_escape(self, position: FloatArray, t: float, others: Sequence[OtherRobot] = ()) -> bool:
         path = self.exact_path(position, others)
         if path is None:
             self.fail(self.no_path_reason(position))
             return False
-        self.set_escape_path(path)
+        self._escape, self._escape_planned_at = EscapePath.from_path(path, self.path_world), t
         return True
 
-    def set_escape_path(self, path: OptimalPath) -> None:
-        points = _densify(path.points)
-        legs = np.hypot(*np.diff(np.array(points), axis=0).T)
-        self._escape = points[1:]
-        self._escape_keep = path.clearance
-        self._escape_world = self.path_world
-        self._escape_rest = np.concatenate([np.cumsum(legs[::-1])[::-1][1:], [0.0]])
-        self._escape_index = 0
-
     def escape_target(self, position: FloatArray, t: float, fresh: bool = False) -> FloatArray | None:
-        """The farthest visible vertex within step_radius, pushed out to a carrot; None if the next vertex
-        cannot be seen (unless the path is `fresh`, planned from here, so its next vertex is reachable)."""
         assert self._escape is not None
-        route = self._escape
-        gaps = np.hypot(*(np.array(route[self._escape_index:]) - position).T)
-        beyond = gaps > self.params.step_radius
-        reach = max(1, int(np.argmax(beyond)) if beyond.any() else len(gaps))
-        candidates = np.array(route[self._escape_index:self._escape_index + reach])
-        obstacles = self._escape_world.obstacles
-        # A path vertex sits exactly at the path's clearance, so "visible" allows a little less: half the margin,
-        # what the path keeps (in a narrow gap), or what the robot has now, whichever is smallest (the guard
-        # still keeps the radius).
-        within = min(self.radius + 0.5 * self.params.clearance_margin, self._escape_keep - 1e-3)
-        if len(obstacles):
-            within = min(within, float(obstacles.clearance(position)) - 1e-6)
-            seen = obstacles.fan_clearance(position, candidates) >= within
-        else:
-            seen = np.ones(len(candidates), dtype=bool)
-        if not seen.any():
-            if not fresh:
-                return None
-            seen[0] = True   # the first vertex of a fresh path is reachable: the path leads there
-        last = int(np.flatnonzero(seen)[-1])
-        if last == 0 and gaps[0] <= self.params.waypoint_tolerance and len(gaps) > 1 and not fresh:
-            return None   # on the aimed vertex and nothing after it in sight
-        self._escape_index += last
-        # Progress on an escape is a shorter way left to go (path length), not a smaller distance to the goal.
-        rest = math.hypot(*(route[self._escape_index] - position)) + float(self._escape_rest[self._escape_index])
-        if rest < self._escape_best - self.params.progress_distance:
-            self._escape_best, self._best_time = rest, t
-        self.mode, self.reason = Mode.AVOIDING, 'escaping a trap along the exact shortest path'
-        aim = route[self._escape_index]
-        if self._escape_index == len(route) - 1:
-            return aim   # the goal itself
-        # The kinematic controllers slow down in proportion to the distance to their target, so a vertex a few
-        # centimetres ahead on a tight arc would crawl: the carrot is pushed out to step_radius along the same
-        # bearing when that run is free too (a new carrot each tick, like pure pursuit).
-        gap = math.hypot(*(aim - position))
-        if gap < 1e-9:
-            return aim
-        carrot = position + (aim - position) * (self.params.step_radius / gap)
-        if gap >= self.params.step_radius or float(self.world.wall_distance(carrot)) < self.clearance or \
-                (len(obstacles) and float(obstacles.fan_clearance(position, carrot[None])[0]) < within):
-            return aim
-        return carrot
+        p = self.params
+        target = self._escape.target(position, self.radius, p.clearance_margin, p.step_radius,
+                                     p.waypoint_tolerance, self.clearance, fresh)
+        if target is not None:
+            # Progress on an escape is a shorter way left to go (path length), not a smaller distance to the goal.
+            rest = self._escape.remaining(position)
+            if rest < self._escape_best - p.progress_distance:
+                self._escape_best, self._best_time = rest, t
+            self.mode, self.reason = Mode.AVOIDING, 'escaping a trap along the exact shortest path'
+        return target
 
     # --------------------------------------------------------------- checks
     def _robot_arrays(self, others: Sequence[OtherRobot]) -> tuple[FloatArray, FloatArray]:
@@ -618,18 +571,6 @@ class Navigator:
                 self.reason = f'stopped: giving way to {other.name}'
                 return np.zeros_like(command)
         return command
-
-
-def _densify(points: FloatArray, spacing: float = 0.5) -> list[FloatArray]:
-    """The polyline with extra vertices on long edges, so a pursuit carrot never lags far behind the lookahead.
-
-    One array per vertex: the navigator tells a new target by its identity.
-    """
-    out = [points[0]]
-    for a, b in zip(points[:-1], points[1:]):
-        n = max(1, int(math.ceil(math.hypot(*(b - a)) / spacing)))
-        out.extend(a + (b - a) * (k / n) for k in range(1, n + 1))
-    return out
 
 
 class FAStepKinematic(Navigator):

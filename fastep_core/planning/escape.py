@@ -1,0 +1,104 @@
+"""The way out of a trap: the exact shortest path, followed by a pure-pursuit carrot.
+
+Why: greedy steps (far from obstacles, closer to the goal) settle in local minima such as the inside of a
+U-shaped wall, and no step radius or weight removes every such minimum. The exact planner
+(planning/optimal.py) knows the way out; the navigator drives it with its own kinematic controller.
+
+How the path is driven: the target is the farthest path vertex within `step_radius` that the robot can see (a
+straight run keeping the path's clearance, a hair less), pushed out along the same bearing to `step_radius`
+when that run is free too. The kinematic controllers slow down in proportion to the distance to their target,
+so aiming at a vertex a few centimetres ahead on a tight arc would make the robot crawl. When not even the next
+vertex is in sight (after a backup, or a tractor-trailer's swing), the caller plans the path again from where
+the robot is.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.planning.optimal import OptimalPath
+from fastep_core.world import World
+
+__all__ = ['EscapePath', 'densify']
+
+FloatArray = NDArray[np.float64]
+
+
+def densify(points: FloatArray, spacing: float = 0.5) -> list[FloatArray]:
+    """The polyline with extra vertices on long edges, so a pursuit carrot never lags far behind the lookahead.
+
+    One array per vertex: the navigator tells a new target by its identity.
+    """
+    out = [points[0]]
+    for a, b in zip(points[:-1], points[1:]):
+        n = max(1, int(math.ceil(math.hypot(*(b - a)) / spacing)))
+        out.extend(a + (b - a) * (k / n) for k in range(1, n + 1))
+    return out
+
+
+@dataclass
+class EscapePath:
+    """An exact path being followed: its vertices after the start, what they keep, and how far along we are."""
+
+    vertices: list[FloatArray]   # after the start, the goal last
+    rest: FloatArray             # path length from each vertex to the goal
+    keep: float                  # the clearance the path keeps ...
+    world: World                 # ... from the obstacles of this world (parked robots included)
+    index: int = 0               # the vertex aimed at
+
+    @classmethod
+    def from_path(cls, path: OptimalPath, world: World) -> 'EscapePath':
+        points = densify(path.points)
+        legs = np.hypot(*np.diff(np.array(points), axis=0).T)
+        rest = np.concatenate([np.cumsum(legs[::-1])[::-1][1:], [0.0]])
+        return cls(points[1:], rest, path.clearance, world)
+
+    def remaining(self, position: FloatArray) -> float:
+        """Path length left from position (via the vertex aimed at)."""
+        return math.hypot(*(self.vertices[self.index] - position)) + float(self.rest[self.index])
+
+    def target(self, position: FloatArray, radius: float, margin: float, step_radius: float,
+               waypoint_tolerance: float, clearance: float, fresh: bool = False) -> FloatArray | None:
+        """The pursuit target, or None when no vertex ahead is in sight (unless the path is `fresh`, planned
+        from this position, so its first vertex is reachable by construction).
+
+        radius, margin: the robot's; clearance: radius + margin, kept from the border by a pushed-out carrot.
+        """
+        route = self.vertices
+        gaps = np.hypot(*(np.array(route[self.index:]) - position).T)
+        beyond = gaps > step_radius
+        reach = max(1, int(np.argmax(beyond)) if beyond.any() else len(gaps))
+        candidates = np.array(route[self.index:self.index + reach])
+        obstacles = self.world.obstacles
+        # A path vertex sits exactly at the path's clearance, so "visible" allows a little less: half the margin,
+        # what the path keeps (in a narrow gap), or what the robot has now, whichever is smallest (the guard
+        # still keeps the radius).
+        within = min(radius + 0.5 * margin, self.keep - 1e-3)
+        if len(obstacles):
+            within = min(within, float(obstacles.clearance(position)) - 1e-6)
+            seen = obstacles.fan_clearance(position, candidates) >= within
+        else:
+            seen = np.ones(len(candidates), dtype=bool)
+        if not seen.any():
+            if not fresh:
+                return None
+            seen[0] = True
+        last = int(np.flatnonzero(seen)[-1])
+        if last == 0 and gaps[0] <= waypoint_tolerance and len(gaps) > 1 and not fresh:
+            return None   # on the aimed vertex and nothing after it in sight
+        self.index += last
+        aim = route[self.index]
+        if self.index == len(route) - 1:
+            return aim   # the goal itself
+        gap = math.hypot(*(aim - position))
+        if gap < 1e-9 or gap >= step_radius:
+            return aim
+        carrot = position + (aim - position) * (step_radius / gap)
+        if float(self.world.wall_distance(carrot)) < clearance or \
+                (len(obstacles) and float(obstacles.fan_clearance(position, carrot[None])[0]) < within):
+            return aim
+        return carrot   # a new array each tick: the controller is reset, as pure pursuit needs

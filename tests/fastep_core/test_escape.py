@@ -1,0 +1,42 @@
+"""Following an exact path out of a trap: densified vertices and the pursuit target."""
+
+import numpy as np
+
+from fastep_core.geometry import Segment
+from fastep_core.planning.escape import EscapePath, densify
+from fastep_core.planning.optimal import shortest_path
+from fastep_core.world import World
+
+
+def test_densify_keeps_the_vertices_and_splits_long_edges():
+    points = np.array([[0.0, 0.0], [2.0, 0.0], [2.0, 0.2]])
+    out = densify(points, spacing=0.5)
+    assert np.allclose(out[0], [0, 0]) and np.allclose(out[4], [2, 0]) and np.allclose(out[-1], [2, 0.2])
+    assert len(out) == 6
+    assert max(np.hypot(*(b - a)) for a, b in zip(out, out[1:])) <= 0.5 + 1e-12
+
+
+def wall_world():
+    return World.from_obstacles([0, 0, 20, 20], [Segment((10.0, 4.0), (10.0, 16.0))])
+
+
+def test_target_is_a_carrot_step_radius_ahead_on_a_visible_vertex():
+    world = wall_world()
+    path = shortest_path(world, (5.0, 10.0), (15.0, 10.0), 0.7)
+    escape = EscapePath.from_path(path, world)
+    assert escape.rest[-1] == 0.0 and np.isclose(escape.rest[0] + np.hypot(*(escape.vertices[0] - [5, 10])),
+                                                   path.polyline_length)
+    position = np.array([5.0, 10.0])
+    target = escape.target(position, 0.5, 0.2, 2.0, 0.3, 0.7)
+    assert target is not None and np.isclose(np.hypot(*(target - position)), 2.0)
+    assert world.obstacles.path_clearance(position, target) >= 0.6 - 1e-9   # the run to it is free
+
+
+def test_no_target_when_nothing_ahead_is_in_sight_unless_the_path_is_fresh():
+    world = wall_world()
+    path = shortest_path(world, (5.0, 10.0), (15.0, 10.0), 0.7)
+    escape = EscapePath.from_path(path, world)
+    behind_the_wall = np.array([11.0, 10.0])   # knocked off the path, to the far side of the wall
+    escape.index = 1
+    assert escape.target(behind_the_wall, 0.5, 0.2, 2.0, 0.3, 0.7) is None
+    assert escape.target(behind_the_wall, 0.5, 0.2, 2.0, 0.3, 0.7, fresh=True) is not None
