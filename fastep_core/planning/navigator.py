@@ -442,7 +442,7 @@ class Navigator:
         assert self._escape is not None
         p = self.params
         target = self._escape.target(position, self.radius, p.clearance_margin, p.step_radius,
-                                     p.waypoint_tolerance, self.clearance, fresh)
+                                     p.waypoint_tolerance, self.clearance, fresh, carrot=self.model.state_size == 2)
         if target is not None:
             # Progress on an escape is a shorter way left to go (path length), not a smaller distance to the goal.
             rest = self._escape.remaining(position)
