@@ -35,6 +35,8 @@ bench: $(STAMP)
 	$(BIN)/fastep-bench --runs 30 --out docs/
 	$(BIN)/python -m benchmarks.graph_latency
 	$(BIN)/python -m benchmarks.graph_scaling
+	$(BIN)/python -m benchmarks.soak --scenarios 500
+	$(BIN)/python -m benchmarks.trap_escape --scenarios 60
 
 clean:
 	rm -rf $(VENV) $(OUT) build *.egg-info
