@@ -62,15 +62,11 @@ class EscapePath:
         return math.hypot(*(self.vertices[self.index] - position)) + float(self.rest[self.index])
 
     def target(self, position: FloatArray, radius: float, margin: float, step_radius: float,
-               waypoint_tolerance: float, clearance: float, fresh: bool = False,
-               carrot: bool = True) -> FloatArray | None:
+               waypoint_tolerance: float, clearance: float, fresh: bool = False) -> FloatArray | None:
         """The pursuit target, or None when no vertex ahead is in sight (unless the path is `fresh`, planned
         from this position, so its first vertex is reachable by construction).
 
         radius, margin: the robot's; clearance: radius + margin, kept from the border by a pushed-out carrot.
-        carrot=False aims at the vertex itself, which changes only as the robot advances: a tractor-trailer's
-        controller filters its heading error, and a target new every tick would reset that filter each tick
-        and fold the trailer.
         """
         route = self.vertices
         gaps = np.hypot(*(np.array(route[self.index:]) - position).T)
@@ -96,8 +92,8 @@ class EscapePath:
             return None   # on the aimed vertex and nothing after it in sight
         self.index += last
         aim = route[self.index]
-        if self.index == len(route) - 1 or not carrot:
-            return aim   # the goal itself, or the vertex
+        if self.index == len(route) - 1:
+            return aim   # the goal itself
         gap = math.hypot(*(aim - position))
         if gap < 1e-9 or gap >= step_radius:
             return aim

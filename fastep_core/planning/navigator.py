@@ -25,10 +25,9 @@ Safety nets surround the planner, as a navigation stack needs:
   their goals too, and hands back to the algorithm once it is `progress_distance` closer to the goal
   than it ever was in the trap (the leave rule of the Bug algorithms). Each escape ends strictly closer to the
   goal, so escapes cannot cycle.
-- Backup recovery: a robot the guard keeps stopped (1 s at a wall, 3 s at another robot) moves away for up to
+- Backup recovery: a robot the guard keeps stopped (1 s at a wall, 3 s at another robot) moves away for
   BACKUP_TIME seconds: a point mass straight away from what is nearest, a tractor-trailer the move (back or
-  forward, straight or at full lock) that gains the most room without folding its trailer. The way on is then
-  planned afresh from where it ends up.
+  forward, straight or at full lock) that gains the most room without folding its trailer.
 - A progress checker fails the run when the robot does not come `progress_distance` closer to the goal (or
   `progress_distance` shorter on its escape path) within `progress_timeout` seconds.
 """
@@ -61,9 +60,7 @@ HOLD_BEFORE_STEP = 1.0  # seconds a robot waits for another before stepping arou
 RETRY_AFTER = 0.5       # seconds between step-planning attempts while no feasible step exists
 BACKUP_SPEED = 0.25     # m/s of the backing-up recovery ...
 BACKUP_TIME = 4.0       # ... for this many seconds (1 m), after the guard held the robot for HOLD_BEFORE_STEP
-MAX_RECOVERY_HITCH = 1.0  # rad: a recovery move may not fold the trailer beyond this (or beyond where it is) ...
-FOLDED_HITCH = 1.4        # ... unless no move gets MIN_RECOVERY_TRAVEL without: then up to this (80 degrees)
-MIN_RECOVERY_TRAVEL = 0.25  # m
+MAX_RECOVERY_HITCH = 1.0  # rad: a recovery move may not fold the trailer beyond this (or beyond where it is)
 TURN_ROOM = 1.0         # extra clearance (m) of a tractor-trailer's exact path, where there is room for it
 PARKED_SPEED = 0.05     # m/s: another robot slower than this is planned around like an obstacle
 PATH_SPACING = 0.25     # metres between exact-path vertices along arcs (escape paths, the optimal reference)
@@ -258,7 +255,7 @@ class Navigator:
         if target is not self._target:
             self.controller.reset(state, target)
             self._target = target
-        command = self.controller.command(state, self.pace(position, target), dt)
+        command = self.controller.command(state, target, dt)
         guarded = self.guard(state, command, dt, others)
         if guarded is command:
             self._held_since = self._stuck_since = None
@@ -273,22 +270,8 @@ class Navigator:
         patience = HOLD_BEFORE_STEP * (1.0 if self.reason.startswith('stopped: an obstacle') else 3.0)
         if t - self._stuck_since >= patience:
             self._stuck_since, self._backup_until, self._backup_command = None, t + BACKUP_TIME, None
-            # Afterwards the controller starts afresh and the way on is planned from where the robot ends up:
-            # a waypoint (or an escape path's vertex) it was pinned short of may lie inside its turning circle.
-            self._target, self.waypoint = None, None
+            self._target = None   # the controller starts afresh after the backup
         return guarded
-
-    def pace(self, position: FloatArray, target: FloatArray) -> FloatArray:
-        """Where the controller is told the target is. Its speed is proportional to the distance, so a
-        tractor-trailer on an escape path, aiming at the path vertex it can see (maybe a few centimetres ahead
-        round a corner), would crawl: it is given a point on the same bearing at step_radius instead, which
-        steers exactly the same (the steering law sees only the bearing) at a walking pace."""
-        if self._escape is None or self.model.state_size != 4 or target is self.goal or self._committed:
-            return target
-        gap = math.hypot(target[0] - position[0], target[1] - position[1])
-        if gap < 1e-9 or gap >= self.params.step_radius:
-            return target
-        return position + (target - position) * (self.params.step_radius / gap)
 
     def _room(self, points: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
         """Free room at points (n, 2): distance to the nearest obstacle surface or other robot's body."""
@@ -297,42 +280,23 @@ class Navigator:
             room = np.minimum(room, np.hypot(*(points - np.asarray(other.position)).T) - other.radius)
         return room
 
-    def _tractor_recovery(self, state: FloatArray, dt: float,
-                          others: Sequence[OtherRobot]) -> tuple[FloatArray, int]:
-        """Of straight back and forward or back at full lock either way (the first step allowed by the guard),
-        the move that gains the most room, and for how many ticks (at most BACKUP_TIME).
-
-        Each move is cut short before it folds the trailer past MAX_RECOVERY_HITCH (or past where it is) or
-        brings the tractor within its radius of an obstacle or robot. Reversing folds a trailer fast, and past
-        90 degrees the steering law's anti-jack-knife term (beta / cos of the hitch angle) changes sign and
-        folds it further, so only when no move gets MIN_RECOVERY_TRAVEL within that limit may it bend up to
-        FOLDED_HITCH. No move at all: (zeros, 0), and the robot stays where it is.
-        """
+    def _tractor_recovery(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
+        """Of straight back and forward or back at full lock either way, the move that gains the most room over
+        the recovery without folding the trailer (hitch angle over MAX_RECOVERY_HITCH) and whose first step
+        the guard allows: a wall alongside pins straight moves too, and reversing a trailer far folds it."""
         lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
         options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
-        options = [o for o in options if self.guard(state, o, dt, others) is o]
-        now = abs(hitch_angle(state))
-        # Pinned with the trailer already bent, every move may fold it further: then it may bend up to
-        # FOLDED_HITCH, short of the 90 degrees past which the steering law cannot straighten it.
-        for limit in dict.fromkeys((max(MAX_RECOVERY_HITCH, now), max(FOLDED_HITCH, now))):
-            best, best_room, best_ticks = np.zeros(2), -math.inf, 0
-            for option in options:
-                probes, probe = [], state
-                for _ in range(int(round(BACKUP_TIME / dt))):
-                    probe = self.model.integrate(probe, option, dt)
-                    if abs(hitch_angle(probe)) > limit:
-                        break
-                    probes.append(probe)
-                if not probes:
-                    continue
-                room = self._room(np.array(probes)[:, :2], others)
-                hits = np.flatnonzero(room < self.radius)
-                ticks = int(hits[0]) if hits.size else len(probes)
-                if ticks > 0 and room[ticks - 1] > best_room:
-                    best, best_room, best_ticks = option, float(room[ticks - 1]), ticks
-            if best_ticks * dt * BACKUP_SPEED >= MIN_RECOVERY_TRAVEL:
-                break
-        return best, best_ticks
+        scores = []
+        for option in options:
+            if self.guard(state, option, dt, others) is not option:
+                scores.append(-math.inf)
+                continue
+            probe, folds = state, False
+            for _ in range(int(round(BACKUP_TIME / dt))):
+                probe = self.model.integrate(probe, option, dt)
+                folds = folds or abs(hitch_angle(probe)) > max(MAX_RECOVERY_HITCH, abs(hitch_angle(state)))
+            scores.append(-math.inf if folds else float(self._room(probe[None, :2], others)[0]))
+        return options[int(np.argmax(scores))]
 
     def back_up(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
         """The recovery command: a tractor-trailer's best move (see _tractor_recovery), or for a point mass
@@ -340,11 +304,7 @@ class Navigator:
         if self.model.state_size == 4:
             command = self._backup_command
             if command is None:
-                command, ticks = self._tractor_recovery(state, dt, others)
-                self._backup_command = command
-                self._backup_until = min(self._backup_until, (self._last_t or 0.0) + ticks * dt)
-                if ticks == 0:
-                    return command
+                command = self._backup_command = self._tractor_recovery(state, dt, others)
         else:
             h = 1e-4
             probes = state[:2] + np.array([[h, 0.0], [-h, 0.0], [0.0, h], [0.0, -h]])
@@ -482,7 +442,7 @@ class Navigator:
         assert self._escape is not None
         p = self.params
         target = self._escape.target(position, self.radius, p.clearance_margin, p.step_radius,
-                                     p.waypoint_tolerance, self.clearance, fresh, carrot=self.model.state_size == 2)
+                                     p.waypoint_tolerance, self.clearance, fresh)
         if target is not None:
             # Progress on an escape is a shorter way left to go (path length), not a smaller distance to the goal.
             rest = self._escape.remaining(position)
