@@ -214,12 +214,14 @@ class Monitor:
         self.executor.add_node(self.node)
         self.robots = {spec.name: RobotLive(spec) for spec in scenario.robots}
         self.goal_pubs = {}
+        self.odom_subs = {}
         depth = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # every odometry message
         for name, robot in self.robots.items():
             self.goal_pubs[name] = self.node.create_publisher(PoseStamped, f'/{name}/goal_pose', LATCHED)
             self.node.create_subscription(DiagnosticStatus, f'/{name}/status',
                                           lambda m, r=robot: self.on_status(r, m), STATUS_QOS)
-            self.node.create_subscription(Odometry, f'/{name}/odom', lambda m, r=robot: self.on_odom(r, m), depth)
+            self.odom_subs[name] = self.node.create_subscription(
+                Odometry, f'/{name}/odom', lambda m, r=robot: self.on_odom(r, m), depth)
             self.node.create_subscription(PathMsg, f'/{name}/plan', lambda m, r=robot: self.on_plan(r, m), RELIABLE)
             if robot.spec.model == 'tractor_trailer':
                 self.node.create_subscription(PoseStamped, f'/{name}/trailer_pose',
@@ -352,11 +354,16 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 if robot.status.get('message') != 'idle' or \
                         monitor.goal_pubs[name].get_subscription_count() < goal_readers:
                     return False
+                # Odometry is volatile: a plant this monitor has not matched yet when the clock starts would
+                # drive a run it never sees (on a loaded machine, discovery can take longer than a short run).
+                if monitor.odom_subs[name].get_publisher_count() < 1:
+                    return False
                 if not names - {name} <= set(robot.status.get('others', '').split()):
                     return False
             return True
 
-        _wait(monitor, procs, deadline, planners_ready, 'waiting for the planners to see the world and each other')
+        _wait(monitor, procs, deadline, planners_ready,
+              'waiting for the planners to see the world and each other, and for every odometry topic')
         monitor.send_goals()
         sent = time.monotonic()
 

@@ -37,7 +37,8 @@ def plot_paths(scenario: 'Scenario', run: 'Run', out: str | Path) -> Path:
     specs = {spec.name: spec for spec in scenario.robots}
     for k, robot in enumerate(run.robots):
         colour = colours[k % len(colours)]
-        path = np.array([row[1:3] for row in robot.trajectory])
+        path = np.array([row[1:3] for row in robot.trajectory], dtype=float).reshape(-1, 2)
+        # A robot with no trajectory (nothing recorded) still gets its start, goal and legend entry.
         ax.plot(path[:, 0], path[:, 1], color=colour, lw=1.6, label=f'{robot.name} ({robot.path_length:.1f} m)')
         if robot.waypoints:
             wp = np.array(robot.waypoints)
