@@ -37,7 +37,7 @@ def run_one(job: tuple[int, str, float | None]) -> dict[str, Any]:
     return {
         'seed': seed, 'wall': time.perf_counter() - start, 'data': data,
         'robots': [{'name': r.name, 'model': r.model, 'reached': r.reached, 'collided': r.collided,
-                    'escapes': r.escapes, 'status': r.status, 'sim_time': r.sim_time,
+                    'escapes': r.escapes, 'manoeuvres': r.manoeuvres, 'status': r.status, 'sim_time': r.sim_time,
                     'min_clearance': r.min_clearance} for r in run.robots],
     }
 
@@ -54,6 +54,7 @@ def summarise(results: list[dict[str, Any]]) -> dict[str, Any]:
         'collided': sum(r['collided'] for r in robots),
         'robots_that_escaped': sum(r['escapes'] > 0 for r in robots),
         'escapes': sum(r['escapes'] for r in robots),
+        'robots_that_manoeuvred': sum(r.get('manoeuvres', 0) > 0 for r in robots),
         'min_clearance': min(r['min_clearance'] for r in robots),
         'failed_scenarios': failures,
         'statuses_of_failures': dict(Counter(r['status'] for r in robots if not r['reached'])),
@@ -73,8 +74,14 @@ def main() -> int:
     args = p.parse_args()
     jobs = [(seed, args.algorithm, args.trap_timeout) for seed in range(args.first, args.first + args.scenarios)]
     start = time.perf_counter()
+    results = []
     with ProcessPoolExecutor(args.workers) as pool:
-        results = list(pool.map(run_one, jobs, chunksize=4))
+        for result in pool.map(run_one, jobs, chunksize=4):
+            results.append(result)
+            if len(results) % 50 == 0:   # a soak takes most of an hour on two cores: show it is moving
+                failed = sum(any(not r['reached'] or r['collided'] for r in res['robots']) for res in results)
+                print(f'{len(results)}/{len(jobs)} scenarios, {failed} with a failure, '
+                      f'{time.perf_counter() - start:.0f} s', flush=True)
     summary = summarise(results)
     summary.update(algorithm=args.algorithm, first_seed=args.first, trap_timeout=args.trap_timeout,
                    wall_seconds=round(time.perf_counter() - start, 1))

@@ -39,7 +39,8 @@ class RobotRun:
     plan_time: float = 0.0        # the part of compute_time spent inside the step optimizer
     min_clearance: float = math.inf
     activations: int = 0
-    escapes: int = 0              # trap escapes along the exact path (planning/navigator.py)
+    escapes: int = 0              # trap escapes (planning/navigator.py)
+    manoeuvres: int = 0           # tractor-trailer manoeuvres planned (planning/manoeuvre.py), replans included
     status: str = ''
     trajectory: list[list[float]] = field(default_factory=list)
     waypoints: list[list[float]] = field(default_factory=list)
@@ -53,7 +54,8 @@ class RobotRun:
             'sim_time': None if self.sim_time is None else round(self.sim_time, 6),
             'compute_time': round(self.compute_time, 6), 'plan_time': round(self.plan_time, 6),
             'min_clearance': None if math.isinf(self.min_clearance) else round(self.min_clearance, 6),
-            'activations': self.activations, 'escapes': self.escapes, 'status': self.status,
+            'activations': self.activations, 'escapes': self.escapes, 'manoeuvres': self.manoeuvres,
+            'status': self.status,
             'waypoints': [[round(v, 6) for v in w] for w in self.waypoints],
             'trajectory': [[round(v, 6) for v in row] for row in self.trajectory],
         }
@@ -186,6 +188,7 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
         run.status = f'{nav.mode.value}: {nav.reason}'
         run.activations = nav.activations
         run.escapes = nav.escapes
+        run.manoeuvres = nav.manoeuvres
         run.plan_time = nav.plan_time
         run.waypoints = [w.tolist() for w in nav.plan]
     return Run(seed, algorithm, runs)

@@ -15,7 +15,7 @@ up for the transport delay.
 Outputs, on a control timer of the node clock (simulated time with use_sim_time): `cmd_vel`, `cost`; and when
 they change (and once a wall second): `waypoint` (the point driven to now), `plan` (the waypoints planned so
 far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the namespace, message = mode, values
-reason / activations / waypoint / goal / cost / others / t / obstacles).
+reason / activations / escapes / manoeuvres / waypoint / goal / cost / others / t / obstacles).
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
 run it, `waiting` (world or odometry not received yet) or `stale` (odometry older than odom_timeout or not
@@ -448,6 +448,8 @@ class PlannerNode(Node):
         values = {
             'reason': reason,
             'activations': 0 if nav is None else nav.activations,
+            'escapes': 0 if nav is None else nav.escapes,
+            'manoeuvres': 0 if nav is None else nav.manoeuvres,
             'waypoint': waypoint,
             'goal': self.goal,
             'cost': 0.0 if nav is None else float(nav.cost),

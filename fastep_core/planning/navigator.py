@@ -25,9 +25,13 @@ Safety nets surround the planner, as a navigation stack needs:
   their goals too, and hands back to the algorithm once it is `progress_distance` closer to the goal
   than it ever was in the trap (the leave rule of the Bug algorithms). Each escape ends strictly closer to the
   goal, so escapes cannot cycle.
-- Backup recovery: a robot the guard keeps stopped (1 s at a wall, 3 s at another robot) moves away for
-  BACKUP_TIME seconds: a point mass straight away from what is nearest, a tractor-trailer the move (back or
-  forward, straight or at full lock) that gains the most room without folding its trailer.
+- Tractor-trailer manoeuvres: a forward-steered vehicle cannot follow a point path out of a tight corner. A
+  trapped tractor-trailer, or one the guard keeps stopped (1 s at a wall, 3 s at another robot), drives a
+  manoeuvre instead: a hybrid-A* search over its own forward and reverse arcs (planning/manoeuvre.py) to where
+  the goal is in clear sight ahead, replayed tick by tick and planned again if the robot drifts off it.
+- Backup recovery: a point mass the guard keeps stopped moves straight away from what is nearest for
+  BACKUP_TIME seconds; a tractor-trailer whose manoeuvre search found nothing, the move (back or forward,
+  straight or at full lock) that gains the most room without folding its trailer.
 - A progress checker fails the run when the robot does not come `progress_distance` closer to the goal (or
   `progress_distance` shorter on its escape path) within `progress_timeout` seconds.
 """
@@ -45,8 +49,9 @@ from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle, point_segment_distance
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
-from fastep_core.kinematics.tractor_trailer import hitch_angle
+from fastep_core.kinematics.tractor_trailer import hitch_angle, wrap_angle
 from fastep_core.planning.escape import EscapePath
+from fastep_core.planning.manoeuvre import Manoeuvre, plan_manoeuvre
 from fastep_core.planning.optimal import OptimalPath, shortest_path
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.step import StepProblem, plan_step
@@ -64,6 +69,7 @@ MAX_RECOVERY_HITCH = 1.0  # rad: a recovery move may not fold the trailer beyond
 TURN_ROOM = 1.0         # extra clearance (m) of a tractor-trailer's exact path, where there is room for it
 PARKED_SPEED = 0.05     # m/s: another robot slower than this is planned around like an obstacle
 PATH_SPACING = 0.25     # metres between exact-path vertices along arcs (escape paths, the optimal reference)
+OFF_MANOEUVRE = 0.3     # m or rad: a tractor-trailer this far off its manoeuvre's states plans it again
 
 
 class Mode(str, Enum):
@@ -162,6 +168,11 @@ class Navigator:
         self._escape_planned_at = -math.inf  # when the escape path was last planned
         self.path_world = world            # the world the last exact_path was planned in
         self._escape_exit = 0.0            # hand back to the algorithm once this close to the goal
+        self.manoeuvres = 0                # tractor-trailer manoeuvres started (planning/manoeuvre.py)
+        self._manoeuvre: Manoeuvre | None = None  # the manoeuvre being driven ...
+        self._manoeuvre_tick = 0           # ... and the tick of it that comes next
+        self._manoeuvre_retry_at = -math.inf  # no manoeuvre search before this time (after a failed one)
+        self._manoeuvre_held_since: float | None = None  # since when the guard holds the manoeuvre
 
     # ----------------------------------------------------------------- goals
     @property
@@ -185,6 +196,8 @@ class Navigator:
         self._path_checked = False
         self._trap_distance, self._trap_time = math.inf, t
         self._escape = None
+        self._manoeuvre = None
+        self._manoeuvre_retry_at = -math.inf
         self._committed = False
 
     def fail(self, reason: str) -> None:
@@ -230,8 +243,17 @@ class Navigator:
             self.fail(f'failed to make progress: not {self.params.progress_distance:g} m closer to the goal '
                       f'in {self.params.progress_timeout:g} s')
             return stop
-        if self.trapped(t, distance) and not self.start_escape(position, distance, t, others):
-            return stop
+        if self.trapped(t, distance):
+            # A tractor-trailer leaves a trap by a manoeuvre of its own motions; a point mass (or a
+            # tractor-trailer whose search found none) along the exact shortest path.
+            if self.model.state_size == 4 and self.start_manoeuvre(state, t, others):
+                self.escapes += 1
+            elif not self.start_escape(position, distance, t, others):
+                return stop
+        if self._manoeuvre is not None:
+            command = self.drive_manoeuvre(state, t, dt, distance, others)
+            if command is not None:
+                return command
 
         if t < self._backup_until:
             return self.back_up(state, dt, others)
@@ -269,8 +291,11 @@ class Navigator:
             self._stuck_since = t
         patience = HOLD_BEFORE_STEP * (1.0 if self.reason.startswith('stopped: an obstacle') else 3.0)
         if t - self._stuck_since >= patience:
-            self._stuck_since, self._backup_until, self._backup_command = None, t + BACKUP_TIME, None
-            self._target = None   # the controller starts afresh after the backup
+            self._stuck_since = None
+            self._target = None   # the controller starts afresh after the recovery
+            if self.model.state_size == 4 and self.start_manoeuvre(state, t, others):
+                return guarded    # the manoeuvre drives from the next tick
+            self._backup_until, self._backup_command = t + BACKUP_TIME, None
         return guarded
 
     def _room(self, points: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
@@ -283,7 +308,9 @@ class Navigator:
     def _tractor_recovery(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
         """Of straight back and forward or back at full lock either way, the move that gains the most room over
         the recovery without folding the trailer (hitch angle over MAX_RECOVERY_HITCH) and whose first step
-        the guard allows: a wall alongside pins straight moves too, and reversing a trailer far folds it."""
+        the guard allows: a wall alongside pins straight moves too, and reversing a trailer far folds it.
+        When every move would fold it, straight back (the first option) all the same: cutting moves short
+        instead kept trailers straighter but landed fewer robots (docs/robustness.md, "What did not help")."""
         lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
         options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
         scores = []
@@ -322,6 +349,71 @@ class Navigator:
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         raise NotImplementedError
 
+    # ------------------------------------------------ tractor-trailer manoeuvres
+    def start_manoeuvre(self, state: FloatArray, t: float, others: Sequence[OtherRobot]) -> bool:
+        """Search a manoeuvre (planning/manoeuvre.py) from state to where the goal is in clear sight ahead.
+
+        It keeps the radius plus a quarter margin from the obstacles and robots parked (those the guard
+        leaves, less if the robot already stands closer); False, and no search for 5 s, if none is found.
+        """
+        assert self.goal is not None and isinstance(self.model, TractorTrailer)
+        if t < self._manoeuvre_retry_at:
+            return False
+        world = self.parked_world(others) or self.world
+        position = state[:2]
+        room = float(world.wall_distance(position))
+        if len(world.obstacles):
+            room = min(room, float(world.obstacles.clearance(position)))
+        keep = min(self.radius + 0.25 * self.params.clearance_margin, room - 1e-3)
+        found = plan_manoeuvre(self.model, world, state, self.goal, keep, self.params.dt,
+                               clear_within=self.radius + 0.5 * self.params.clearance_margin,
+                               reach=max(1.0, self.params.goal_tolerance))
+        if found is None or found.ticks == 0:
+            self._manoeuvre, self._manoeuvre_retry_at = None, t + 5.0
+            return False
+        self.manoeuvres += 1
+        self._manoeuvre, self._manoeuvre_tick, self._manoeuvre_held_since = found, 0, None
+        self._escape, self._backup_until = None, -math.inf
+        self.waypoint, self._committed, self._target, self._best_time = None, False, None, t
+        self.mode = Mode.AVOIDING
+        self.reason = f'manoeuvring: {found.arcs} arcs, {found.reversals} reversals'
+        return True
+
+    def drive_manoeuvre(self, state: FloatArray, t: float, dt: float, distance: float,
+                        others: Sequence[OtherRobot]) -> FloatArray | None:
+        """The manoeuvre's command for this tick, guarded; None once it is over (the usual loop takes over).
+
+        The commands are replayed open loop while the robot is where the manoeuvre expects it; off by more
+        than OFF_MANOEUVRE (a late command on a real graph) or held by the guard for 3 s (a robot in the
+        way), it is planned again from where the robot is.
+        """
+        m = self._manoeuvre
+        assert m is not None
+        if self._manoeuvre_tick >= m.ticks:
+            self._manoeuvre = None
+            self._trap_distance, self._trap_time, self._best_time = distance, t, t
+            return None
+        expected = m.states[self._manoeuvre_tick]
+        off = max(math.hypot(state[0] - expected[0], state[1] - expected[1]),
+                  abs(wrap_angle(float(state[2]) - float(expected[2]))))
+        held = self._manoeuvre_held_since is not None and t - self._manoeuvre_held_since >= 3 * HOLD_BEFORE_STEP
+        if off > OFF_MANOEUVRE or held:
+            self._manoeuvre_retry_at = -math.inf
+            if not self.start_manoeuvre(state, t, others):
+                self._manoeuvre = None
+                return None
+            m = self._manoeuvre
+            assert m is not None
+        command = m.commands[self._manoeuvre_tick]
+        guarded = self.guard(state, command, dt, others)
+        if guarded is command:
+            self._manoeuvre_tick += 1
+            self._manoeuvre_held_since = None
+            self.mode, self.reason = Mode.AVOIDING, f'manoeuvring: {m.arcs} arcs, {m.reversals} reversals'
+        elif self._manoeuvre_held_since is None:
+            self._manoeuvre_held_since = t
+        return guarded
+
     # ---------------------------------------------------- paths and traps
     def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:
         """The exact shortest path from position to the goal, or None when there is none.
@@ -333,22 +425,31 @@ class Navigator:
         exists; moving ones are left to the guard.
         """
         assert self.goal is not None
-        parked = [o for o in others if math.hypot(*o.velocity) < PARKED_SPEED
-                  and math.hypot(o.position[0] - self.goal[0], o.position[1] - self.goal[1]) > o.radius + self.radius]
-        if parked:
-            # Inflated by what the guard adds for another robot (a tick's travel and a quarter margin), so a
-            # path round a parked robot is not one the guard stops on.
-            reach = self.params.max_speed * self.params.dt + 0.25 * self.params.clearance_margin + 0.01
-            world = World(self.world.workspace, self.world.obstacle_list + tuple(
-                Circle((float(o.position[0]), float(o.position[1])), o.radius + reach) for o in parked))
-            # The robot may already stand within that inflation (it was held there): the path then starts
-            # with what it has, down to almost nothing, and moves away.
+        world = self.parked_world(others)
+        if world is not None:
+            # The robot may already stand within a parked robot's inflation (it was held there): the path then
+            # starts with what it has, down to almost nothing, and moves away.
             path = self._exact_path(world, position, floor=0.01)
             if path is not None:
                 self.path_world = world
                 return path
         self.path_world = self.world
         return self._exact_path(self.world, position)
+
+    def parked_world(self, others: Sequence[OtherRobot]) -> World | None:
+        """The world with the robots standing still (not at this robot's goal) as circles; None if none is.
+
+        They are inflated by what the guard adds for another robot (a tick's travel and a quarter margin), so a
+        way round a parked robot is not one the guard stops on.
+        """
+        assert self.goal is not None
+        parked = [o for o in others if math.hypot(*o.velocity) < PARKED_SPEED
+                  and math.hypot(o.position[0] - self.goal[0], o.position[1] - self.goal[1]) > o.radius + self.radius]
+        if not parked:
+            return None
+        reach = self.params.max_speed * self.params.dt + 0.25 * self.params.clearance_margin + 0.01
+        return World(self.world.workspace, self.world.obstacle_list + tuple(
+            Circle((float(o.position[0]), float(o.position[1])), o.radius + reach) for o in parked))
 
     def _exact_path(self, world: World, position: FloatArray, floor: float | None = None) -> OptimalPath | None:
         assert self.goal is not None
@@ -382,7 +483,8 @@ class Navigator:
         Near the goal the kinematic approach slows down (speed proportional to distance), so there half the
         distance counts as progress: a robot driving straight to its goal is never taken for trapped.
         """
-        if not self.escapes_traps or self.params.trap_timeout <= 0 or self._escape is not None:
+        if not self.escapes_traps or self.params.trap_timeout <= 0 or self._escape is not None or \
+                self._manoeuvre is not None:
             return False
         needed = min(self.params.progress_distance, 0.5 * self._trap_distance)
         if distance < self._trap_distance - needed or self._trap_distance == math.inf:

@@ -1,6 +1,7 @@
 """Trap escape and 'no valid path': greedy steps settle inside a U; the exact path leads out."""
 
 import json
+import math
 
 import numpy as np
 import pytest
@@ -44,9 +45,12 @@ def test_escape_leads_out_of_the_u_trap_without_touching_it(algorithm):
     assert max(abs(row[2] - 15.0) for row in robot.trajectory) > 3.0
 
 
-def test_tractor_trailer_escapes_the_u_trap():
-    robot = simulate(u_scenario('tractor_trailer'), 'fastep', 0).robots[0]
-    assert robot.reached and not robot.collided and robot.escapes >= 1
+@pytest.mark.parametrize('width', [6.0, 3.5])
+def test_tractor_trailer_manoeuvres_out_of_the_u_trap_without_folding_its_trailer(width):
+    robot = simulate(u_scenario('tractor_trailer', width=width, depth=3.0), 'fastep', 0).robots[0]
+    assert robot.reached and not robot.collided and robot.escapes == 1 and robot.manoeuvres >= 1
+    hitch = [abs(math.remainder(row[4] - row[3], 2 * math.pi)) for row in robot.trajectory]
+    assert max(hitch) < 1.0 + 1e-6   # the manoeuvre's limit; past pi/2 the steering law folds it further
 
 
 def test_escape_hands_back_to_fastep_before_the_goal():

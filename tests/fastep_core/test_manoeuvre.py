@@ -1,0 +1,67 @@
+"""Tractor-trailer manoeuvres (hybrid A*): they keep their clearance, never fold the trailer, and end where
+plain kinematic driving reaches the goal."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from fastep_core.geometry import Circle, Segment
+from fastep_core.kinematics import TractorTrailer
+from fastep_core.kinematics.tractor_trailer import hitch_angle
+from fastep_core.planning.manoeuvre import DistanceField, plan_manoeuvre
+from fastep_core.world import World
+
+MODEL = TractorTrailer(1.0, 1.0, 0.0)
+DT = 0.05
+
+
+def pocket(width: float) -> World:
+    """A dead end open towards -x: walls along y = 10 -+ width/2 from x = 4 to 12, closed at x = 12."""
+    lo, hi = 10.0 - width / 2, 10.0 + width / 2
+    return World((0.0, 0.0, 20.0, 20.0), (Segment((4.0, lo), (12.0, lo)), Segment((12.0, lo), (12.0, hi)),
+                                          Segment((12.0, hi), (4.0, hi))))
+
+
+def room(world: World, points: np.ndarray) -> np.ndarray:
+    return np.minimum(world.wall_distance(points), world.obstacles.clearance(points))
+
+
+@pytest.mark.parametrize('width', [4.0, 1.6])
+def test_a_manoeuvre_out_of_a_dead_end_keeps_its_clearance_and_the_trailer_straight(width: float) -> None:
+    world, goal, keep = pocket(width), np.array([2.0, 10.0]), 0.65
+    found = plan_manoeuvre(MODEL, world, [10.5, 10.0, 0.0, 0.0], goal, keep, DT)
+    assert found is not None and found.ticks == len(found.commands) == len(found.states) - 1
+    assert room(world, found.states[:, :2]).min() >= keep - 0.02
+    assert max(abs(hitch_angle(s)) for s in found.states) <= 1.0 + 1e-6
+    # The states are the plant's: replaying the commands with the model's integrator gives them back.
+    state = found.states[0]
+    for command in found.commands:
+        state = MODEL.integrate(state, command, DT)
+    assert np.allclose(state, found.states[-1])
+    end = found.states[-1]
+    ahead = abs(math.remainder(math.atan2(goal[1] - end[1], goal[0] - end[0]) - end[2], 2 * math.pi))
+    assert math.dist(end[:2], goal) <= 1.0 or (ahead <= math.radians(30) and end[0] < 4.0)
+    if width == 1.6:
+        # Too narrow to turn (the reference point has 0.15 m either side): it has to reverse out.
+        assert (found.commands[:, 0] < 0).any()
+
+
+def test_no_manoeuvre_to_a_walled_in_goal() -> None:
+    ring = tuple(Circle((10.0 + 3 * math.cos(a), 10.0 + 3 * math.sin(a)), 0.9) for a in np.linspace(0, 2 * np.pi, 13)[:-1])
+    world = World((0.0, 0.0, 20.0, 20.0), ring)
+    assert plan_manoeuvre(MODEL, world, [2.0, 2.0, 0.0, 0.0], [10.0, 10.0], 0.6, DT) is None
+
+
+def test_distance_field_is_straight_in_the_open_and_goes_round_a_wall() -> None:
+    open_field = DistanceField(World((0.0, 0.0, 20.0, 20.0)), [15.0, 10.0], keep=0.5)
+    assert open_field(np.array([[5.0, 10.0]]))[0] == pytest.approx(10.0, abs=0.3)
+    wall = World((0.0, 0.0, 20.0, 20.0), (Segment((10.0, 2.0), (10.0, 18.0)),))
+    around = DistanceField(wall, [15.0, 10.0], keep=0.5)
+    # Round the wall's end at (10, 18): at least the two straight legs via that end.
+    legs = math.dist((5.0, 10.0), (10.0, 18.5)) + math.dist((10.0, 18.5), (15.0, 10.0))
+    assert around(np.array([[5.0, 10.0]]))[0] >= legs - 0.5
+    assert math.isinf(DistanceField(World((0.0, 0.0, 20.0, 20.0), (Segment((10.0, 0.0), (10.0, 20.0)),)),
+                                    [15.0, 10.0], keep=0.5)(np.array([[5.0, 10.0]]))[0])
