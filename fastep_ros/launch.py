@@ -177,6 +177,8 @@ class RobotLive:
     end_time: float | None = None
     started_at: float | None = None   # planner time of its first status after taking the goal
     activations: int = 0
+    escapes: int = 0
+    manoeuvres: int = 0
     waypoints: list[list[float]] = field(default_factory=list)
 
     @property
@@ -263,10 +265,11 @@ class Monitor:
                 robot.started_at = float(robot.status['t'])
             except (KeyError, ValueError):
                 pass
-        try:
-            robot.activations = int(robot.status.get('activations', 0))
-        except ValueError:
-            pass
+        for key in ('activations', 'escapes', 'manoeuvres'):
+            try:
+                setattr(robot, key, int(robot.status.get(key, 0)))
+            except ValueError:
+                pass
 
     def on_odom(self, robot: RobotLive, msg: Any) -> None:
         try:
@@ -504,6 +507,7 @@ def report(args: argparse.Namespace, scenario: Scenario, monitor: Monitor, t0: f
                              collided=collided, path_length=robot.path_length,
                              sim_time=robot.end_time if robot.outcome == 'arrived' else None,
                              min_clearance=clearance[name], activations=robot.activations,
+                             escapes=robot.escapes, manoeuvres=robot.manoeuvres,
                              status=f'{robot.outcome}: {robot.reason}', trajectory=_sampled(rows),
                              waypoints=robot.waypoints))
     run = Run(args.seed, args.algorithm, runs)

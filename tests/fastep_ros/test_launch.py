@@ -127,3 +127,24 @@ def test_nodes_refuse_bad_parameters_with_one_line(tmp_path: Path, module: str, 
     assert result.returncode == 2
     assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr
     assert 'Traceback' not in result.stderr
+
+
+def test_a_trapped_tractor_trailer_manoeuvres_out_on_the_live_graph(tmp_path: Path) -> None:
+    # The navigator's manoeuvre (planning/manoeuvre.py) replayed through the plant over DDS: commands a tick
+    # late on a real graph must not throw it off its planned states for good.
+    import yaml
+
+    from fastep_core.random_scenarios import u_trap
+    robot = {'name': 'r1', 'model': 'tractor_trailer', 'start': [5, 15, 0.0, 0.0], 'goal': [35, 15], 'radius': 0.6,
+             'length': 1.0, 'trailer_length': 1.0, 'width': 0.5}
+    data = {'name': 'u_tractor', 'workspace': [0, 0, 40, 30], 'obstacles': u_trap((20, 15), 3.5, 3.0, 3.141592653589793),
+            'robots': [robot]}
+    scenario = tmp_path / 'u.yaml'
+    scenario.write_text(yaml.safe_dump(data))
+    out = tmp_path / 'live.json'
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '20', '--seed', '0',
+                  '--json', str(out)], env, timeout=240)
+    assert result.returncode == 0, result.stdout + result.stderr
+    live = json.loads(out.read_text())['runs'][0]['robots'][0]
+    assert live['reached'] and not live['collided'] and live['escapes'] == 1 and live['manoeuvres'] >= 1
