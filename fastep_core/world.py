@@ -38,6 +38,13 @@ class World:
         return np.minimum(np.minimum(p[..., 0] - xmin, xmax - p[..., 0]),
                           np.minimum(p[..., 1] - ymin, ymax - p[..., 1]))
 
+    def room(self, points: ArrayLike) -> NDArray[np.float64]:
+        """Distance from points to the nearest obstacle surface or the workspace border."""
+        room = self.wall_distance(points)
+        if len(self.obstacles):
+            room = np.minimum(room, self.obstacles.clearance(points))
+        return room
+
     def check_point(self, point: Sequence[float], radius: float, what: str = 'goal') -> None:
         """Raise GoalError unless a disc of `radius` at `point` is finite, inside the map and obstacle-free."""
         x, y = float(point[0]), float(point[1])

@@ -35,7 +35,7 @@ from numpy.typing import NDArray
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import dijkstra
 
-from fastep_core.kinematics.tractor_trailer import MAX_STEER, TractorTrailer, wrap_angle
+from fastep_core.kinematics.tractor_trailer import MAX_STEER, TractorTrailer, hitch_angle, wrap_angle
 from fastep_core.world import World
 
 __all__ = ['DistanceField', 'Manoeuvre', 'plan_manoeuvre', 'main']
@@ -85,10 +85,7 @@ class DistanceField:
         xs = xmin + (np.arange(nx) + 0.5) * cell
         ys = ymin + (np.arange(ny) + 0.5) * cell
         centres = np.stack(np.meshgrid(xs, ys), axis=-1).reshape(-1, 2)
-        room = world.wall_distance(centres)
-        if len(world.obstacles):
-            room = np.minimum(room, world.obstacles.clearance(centres))
-        free = room >= keep - cell
+        free = world.room(centres) >= keep - cell
         goal_index = self.index(np.asarray(goal, dtype=float)[None, :])[0]
         free[goal_index] = True
         ids = np.arange(ny * nx).reshape(ny, nx)
@@ -142,6 +139,7 @@ def _drive(model: TractorTrailer, state: FloatArray, v: FloatArray, omega: Float
 
 
 def _hitch(states: FloatArray) -> FloatArray:
+    """hitch_angle for an array of states (..., 4)."""
     return np.arctan2(np.sin(states[..., 3] - states[..., 2]), np.cos(states[..., 3] - states[..., 2]))
 
 
@@ -168,20 +166,20 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
     duration = arc_ticks * dt
     arc_cost = speed * duration * np.where(v > 0, 1.0, REVERSE_COST) + \
         STEER_COST * np.abs(np.concatenate([lock, lock])) / MAX_STEER
-    hitch_limit = max(max_hitch, abs(float(_hitch(start))) + 1e-6)
+    hitch_limit = max(max_hitch, abs(hitch_angle(start)) + 1e-6)
     obstacles = world.obstacles
 
     def key(s: FloatArray) -> tuple[int, int, int, int]:
         return (int(math.floor(s[0] / XY_CELL)), int(math.floor(s[1] / XY_CELL)),
                 int(round(wrap_angle(float(s[2])) / (2 * math.pi / HEADING_CELLS))) % HEADING_CELLS,
-                int(round(float(_hitch(s)) / HITCH_CELL)))
+                int(round(hitch_angle(s) / HITCH_CELL)))
 
     def arrives(s: FloatArray) -> bool:
         to_goal = goal - s[:2]
         distance = math.hypot(*to_goal)
         if distance <= reach:
             return True
-        if abs(float(_hitch(s))) > STRAIGHT_HITCH or \
+        if abs(hitch_angle(s)) > STRAIGHT_HITCH or \
                 abs(wrap_angle(math.atan2(to_goal[1], to_goal[0]) - float(s[2]))) > AHEAD:
             return False
         return not len(obstacles) or float(obstacles.path_clearance(s[:2], goal)) >= clear_within
@@ -202,11 +200,7 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
             continue   # a cheaper way into this cell was found after this entry was queued
         expansions += 1
         path = _drive(model, s, v, omega, duration, SUBSTEPS)      # (SUBSTEPS, 10, 4)
-        points = path[..., :2].reshape(-1, 2)
-        room = world.wall_distance(points)
-        if len(obstacles):
-            room = np.minimum(room, obstacles.clearance(points))
-        ok = (room.reshape(SUBSTEPS, -1) >= keep).all(axis=0) & \
+        ok = (world.room(path[..., :2]) >= keep).all(axis=0) & \
             (np.abs(_hitch(path)) <= hitch_limit).all(axis=0)
         ends = path[-1]
         h = field(ends[:, :2])
@@ -242,10 +236,7 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
     replayed = np.array(replay)
     # The search checked each arc at a few sub-steps; the replay is what the robot drives, so it must keep
     # the clearance too (a corner passed between two sub-steps).
-    room = world.wall_distance(replayed[:, :2])
-    if len(obstacles):
-        room = np.minimum(room, obstacles.clearance(replayed[:, :2]))
-    if float(room.min()) < keep - REPLAY_SLACK:
+    if float(world.room(replayed[:, :2]).min()) < keep - REPLAY_SLACK:
         return None
     reversals = sum(1 for a, b in zip(chain, chain[1:]) if np.sign(v[a]) != np.sign(v[b]))
     return Manoeuvre(commands, replayed, len(chain), reversals, expansions)

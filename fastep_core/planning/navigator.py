@@ -310,7 +310,7 @@ class Navigator:
         the recovery without folding the trailer (hitch angle over MAX_RECOVERY_HITCH) and whose first step
         the guard allows: a wall alongside pins straight moves too, and reversing a trailer far folds it.
         When every move would fold it, straight back (the first option) all the same: cutting moves short
-        instead kept trailers straighter but landed fewer robots (docs/robustness.md, "What did not help")."""
+        instead kept trailers straighter but landed fewer robots (docs/robustness.md, "Tractor-trailers before manoeuvres")."""
         lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
         options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
         scores = []
@@ -360,11 +360,7 @@ class Navigator:
         if t < self._manoeuvre_retry_at:
             return False
         world = self.parked_world(others) or self.world
-        position = state[:2]
-        room = float(world.wall_distance(position))
-        if len(world.obstacles):
-            room = min(room, float(world.obstacles.clearance(position)))
-        keep = min(self.radius + 0.25 * self.params.clearance_margin, room - 1e-3)
+        keep = min(self.radius + 0.25 * self.params.clearance_margin, float(world.room(state[:2])) - 1e-3)
         found = plan_manoeuvre(self.model, world, state, self.goal, keep, self.params.dt,
                                clear_within=self.radius + 0.5 * self.params.clearance_margin,
                                reach=max(1.0, self.params.goal_tolerance))
