@@ -11,6 +11,9 @@ motions instead:
   plant does (RK4, four sub-steps per arc in the search; the found arcs are replayed tick by tick).
 - An arc is kept if the reference point stays `keep` from every obstacle and from the border and the trailer
   does not fold past `max_hitch` (past 90 degrees the steering law's anti-jack-knife term folds it further).
+  A robot already nearer than `keep` (held at a wall) may not come more than a millimetre nearer on an arc,
+  and with a `floor` (the robot's radius) no tick of the replay may end below it while getting nearer: that
+  is the navigator's guard, which would stop the manoeuvre there.
 - States are merged on a grid of (x, y, theta0, hitch angle); the cost is the distance driven, reverse
   driving and changes of direction costing extra, as they do for a truck.
 - The heuristic is the shortest grid distance to the goal round the obstacles (Dijkstra on an 8-connected
@@ -144,20 +147,24 @@ def _hitch(states: FloatArray) -> FloatArray:
 
 
 def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], goal: Sequence[float],
-                   keep: float, dt: float, *, clear_within: float | None = None, speed: float = 0.5,
-                   arc_ticks: int = 30, reach: float = 1.0, max_hitch: float = 1.0,
+                   keep: float, dt: float, *, floor: float | None = None, clear_within: float | None = None,
+                   speed: float = 0.5, arc_ticks: int = 30, reach: float = 1.0, max_hitch: float = 1.0,
                    max_expansions: int = 6000) -> Manoeuvre | None:
     """A manoeuvre from `state` to where kinematic driving reaches `goal`, or None if the search finds none.
 
-    keep: clearance of the reference point from obstacles and border along the way (at least the robot's
-    radius); clear_within: how far the straight run to the goal must stay from every obstacle for the goal to
-    count as in sight (default keep); speed: m/s of every arc; arc_ticks: control ticks of dt per arc;
-    max_hitch: the trailer may not fold further than this (rad), or than it already is.
+    keep: clearance of the reference point from obstacles and border along the way, or from a start nearer
+    than that, no nearer than it already is (less a millimetre); floor: a clearance no tick may end below while
+    getting nearer (the robot's radius: what the guard enforces; default none); clear_within: how far the
+    straight run to the goal must stay from every obstacle for the goal to count as in sight (default keep;
+    inf: only the goal within reach ends a manoeuvre); speed: m/s of every arc; arc_ticks: control ticks of dt
+    per arc; max_hitch: the trailer may not fold further than this (rad), or than it already is.
     """
     start = np.asarray(state, dtype=float)
     goal = np.asarray(goal, dtype=float)
     clear_within = keep if clear_within is None else clear_within
-    field = DistanceField(world, goal, keep)
+    start_room = float(world.room(start[None, :2])[0])
+    lowest = -math.inf if floor is None else floor
+    field = DistanceField(world, goal, min(keep, start_room - 1e-3))
     if not math.isfinite(float(field(start[None, :2])[0])):
         return None
     lock = np.array([-MAX_STEER, -0.5 * MAX_STEER, 0.0, 0.5 * MAX_STEER, MAX_STEER])
@@ -179,16 +186,17 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
         distance = math.hypot(*to_goal)
         if distance <= reach:
             return True
-        if abs(hitch_angle(s)) > STRAIGHT_HITCH or \
+        if clear_within == math.inf or abs(hitch_angle(s)) > STRAIGHT_HITCH or \
                 abs(wrap_angle(math.atan2(to_goal[1], to_goal[0]) - float(s[2]))) > AHEAD:
             return False
         return not len(obstacles) or float(obstacles.path_clearance(s[:2], goal)) >= clear_within
 
-    # Nodes: state, parent index, arc index (-1 for the start), cost so far.
+    # Nodes: state, parent index, arc index (-1 for the start), cost so far, room (clearance) at the state.
     states: list[FloatArray] = [start]
     parents: list[int] = [-1]
     arcs_of: list[int] = [-1]
     costs: list[float] = [0.0]
+    rooms: list[float] = [start_room]
     best: dict[tuple[int, int, int, int], float] = {key(start): 0.0}
     frontier = [(HEURISTIC_WEIGHT * float(field(start[None, :2])[0]), 0)]
     expansions = 0
@@ -200,8 +208,9 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
             continue   # a cheaper way into this cell was found after this entry was queued
         expansions += 1
         path = _drive(model, s, v, omega, duration, SUBSTEPS)      # (SUBSTEPS, 10, 4)
-        ok = (world.room(path[..., :2]) >= keep).all(axis=0) & \
-            (np.abs(_hitch(path)) <= hitch_limit).all(axis=0)
+        room = world.room(path[..., :2])                             # (SUBSTEPS, 10)
+        need = min(keep, max(lowest, rooms[node] - 1e-3))
+        ok = (room >= need).all(axis=0) & (np.abs(_hitch(path)) <= hitch_limit).all(axis=0)
         ends = path[-1]
         h = field(ends[:, :2])
         switch = SWITCH_COST * (np.sign(v) != np.sign(v[arcs_of[node]])) if arcs_of[node] >= 0 else np.zeros(10)
@@ -216,6 +225,7 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
             parents.append(node)
             arcs_of.append(int(arc))
             costs.append(cost)
+            rooms.append(float(room[-1, arc]))
             if arrives(end):
                 found = len(states) - 1
                 break
@@ -235,8 +245,10 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
         replay.append(model.integrate(replay[-1], command, dt))
     replayed = np.array(replay)
     # The search checked each arc at a few sub-steps; the replay is what the robot drives, so it must keep
-    # the clearance too (a corner passed between two sub-steps).
-    if float(world.room(replayed[:, :2]).min()) < keep - REPLAY_SLACK:
+    # the clearance too (a corner passed between two sub-steps), and never get nearer below the floor.
+    room = world.room(replayed[:, :2])
+    if float(room.min()) < min(keep, start_room - 1e-3) - REPLAY_SLACK or \
+            bool(np.any((room[1:] < lowest) & (room[1:] < room[:-1]))):
         return None
     reversals = sum(1 for a, b in zip(chain, chain[1:]) if np.sign(v[a]) != np.sign(v[b]))
     return Manoeuvre(commands, replayed, len(chain), reversals, expansions)

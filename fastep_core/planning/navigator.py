@@ -172,6 +172,7 @@ class Navigator:
         self._manoeuvre: Manoeuvre | None = None  # the manoeuvre being driven ...
         self._manoeuvre_tick = 0           # ... and the tick of it that comes next
         self._manoeuvre_retry_at = -math.inf  # no manoeuvre search before this time (after a failed one)
+        self._manoeuvre_left_at = math.inf    # distance to the goal where the last manoeuvre ended
         self._manoeuvre_held_since: float | None = None  # since when the guard holds the manoeuvre
 
     # ----------------------------------------------------------------- goals
@@ -198,6 +199,7 @@ class Navigator:
         self._escape = None
         self._manoeuvre = None
         self._manoeuvre_retry_at = -math.inf
+        self._manoeuvre_left_at = math.inf
         self._committed = False
 
     def fail(self, reason: str) -> None:
@@ -354,16 +356,22 @@ class Navigator:
         """Search a manoeuvre (planning/manoeuvre.py) from state to where the goal is in clear sight ahead.
 
         It keeps the radius plus a quarter margin from the obstacles and robots parked (those the guard
-        leaves, less if the robot already stands closer); False, and no search for 5 s, if none is found.
+        leaves; a robot already nearer gets no nearer), and no tick of it gets nearer within the radius, which
+        the guard would stop; False, and no search for 5 s, if none is found.
         """
         assert self.goal is not None and isinstance(self.model, TractorTrailer)
         if t < self._manoeuvre_retry_at:
             return False
         world = self.parked_world(others) or self.world
-        keep = min(self.radius + 0.25 * self.params.clearance_margin, float(world.room(state[:2])) - 1e-3)
-        found = plan_manoeuvre(self.model, world, state, self.goal, keep, self.params.dt,
-                               clear_within=self.radius + 0.5 * self.params.clearance_margin,
-                               reach=max(1.0, self.params.goal_tolerance))
+        keep = self.radius + 0.25 * self.params.clearance_margin
+        # A manoeuvre ends where the goal is in clear sight; if kinematic driving from there got stuck again
+        # before coming progress_distance nearer, "in sight" was not enough (it had looped hundreds of times in
+        # a soak scenario): this one goes on until the goal is within reach.
+        distance = math.hypot(self.goal[0] - state[0], self.goal[1] - state[1])
+        again = distance > self._manoeuvre_left_at - self.params.progress_distance
+        clear_within = math.inf if again else self.radius + 0.5 * self.params.clearance_margin
+        found = plan_manoeuvre(self.model, world, state, self.goal, keep, self.params.dt, floor=self.radius,
+                               clear_within=clear_within, reach=max(1.0, self.params.goal_tolerance))
         if found is None or found.ticks == 0:
             self._manoeuvre, self._manoeuvre_retry_at = None, t + 5.0
             return False
@@ -386,7 +394,7 @@ class Navigator:
         m = self._manoeuvre
         assert m is not None
         if self._manoeuvre_tick >= m.ticks:
-            self._manoeuvre = None
+            self._manoeuvre, self._manoeuvre_left_at = None, distance
             self._trap_distance, self._trap_time, self._best_time = distance, t, t
             return None
         expected = m.states[self._manoeuvre_tick]
@@ -645,8 +653,9 @@ class Navigator:
               others: Sequence[OtherRobot]) -> FloatArray:
         """Stop instead of moving into an obstacle or within reach of another robot."""
         position = state[:2]
-        travel = self.model.velocity(state, command) * dt
-        after = position + travel
+        # The plant integrates the command exactly as the model does (RK4 for a tractor-trailer); a straight
+        # Euler guess cuts the corner of a tight turn and once let a robot end a tick 2.3 mm inside its radius.
+        after = self.model.integrate(state, command, dt)[:2]
         obstacles = self.world.obstacles
         # Any point within (clearance - radius) of a point whose clearance is known is safe (triangle
         # inequality), so the obstacle distances are recomputed only when the robot leaves that disc.
