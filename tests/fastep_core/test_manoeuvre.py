@@ -65,3 +65,16 @@ def test_distance_field_is_straight_in_the_open_and_goes_round_a_wall() -> None:
     assert around(np.array([[5.0, 10.0]]))[0] >= legs - 0.5
     assert math.isinf(DistanceField(World((0.0, 0.0, 20.0, 20.0), (Segment((10.0, 0.0), (10.0, 20.0)),)),
                                     [15.0, 10.0], keep=0.5)(np.array([[5.0, 10.0]]))[0])
+
+
+def test_from_against_a_wall_no_tick_gets_nearer_within_the_floor() -> None:
+    """A robot the guard held at a wall starts nearer than keep: the manoeuvre may not take it nearer than it
+    is, and no tick may end within the floor (its radius) while getting nearer, which the guard would stop."""
+    world, floor, keep = pocket(4.0), 0.5, 0.65
+    start = [10.0, 11.49, 0.3, 0.3]       # 0.51 m from the wall at y = 12, heading towards it
+    found = plan_manoeuvre(MODEL, world, start, [2.0, 10.0], keep, DT, floor=floor)
+    assert found is not None
+    rooms = room(world, found.states[:, :2])
+    assert rooms[0] == pytest.approx(0.51)
+    assert not np.any((rooms[1:] < floor) & (rooms[1:] < rooms[:-1]))
+    assert rooms.min() >= 0.51 - 1e-3 - 0.02

@@ -104,3 +104,56 @@ def test_walled_in_robot_reports_no_valid_path_on_the_first_tick():
         assert np.all(nav.update(0.0, np.array([10.0, 10.0])) == 0.0)
         assert nav.mode is Mode.FAILED and nav.reason.startswith('no valid path'), algorithm
         assert nav.activations == 0 or algorithm == 'optimal'
+
+
+def test_guard_predicts_a_tractor_trailers_tick_as_the_plant_integrates_it():
+    """On a tight turn the RK4 step ends off the straight Euler guess; an obstacle the true step would enter
+    (and the guess would miss) stops the robot."""
+    from fastep_core.kinematics import TractorTrailer
+
+    model, dt, radius = TractorTrailer(), 0.05, 0.5
+    state, command = np.array([10.0, 10.0, 0.0, 0.0]), np.array([1.0, 1.0])
+    true_next = model.integrate(state, command, dt)[:2]
+    euler_next = state[:2] + model.velocity(state, command) * dt
+    away = (true_next - euler_next) / np.hypot(*(true_next - euler_next))
+    assert np.hypot(*(true_next - euler_next)) > 1e-3
+    # A circle whose surface the true step ends 0.5 mm inside the radius of; the Euler guess stays outside.
+    centre = true_next + away * (1.0 + radius - 5e-4)
+    world = World.from_obstacles([0, 0, 50, 50], [Circle((float(centre[0]), float(centre[1])), 1.0)])
+    nav = make_navigator('fastep', RobotSpec('r1', 'tractor_trailer', tuple(state), (45.0, 45.0), radius),
+                         radius, world, PlannerParams(dt=dt), 0)
+    assert float(world.obstacles.clearance(euler_next[None])[0]) > radius
+    guarded = nav.guard(state, command, dt, [])
+    assert np.all(guarded == 0.0) and 'obstacle is within the robot radius' in nav.reason
+    # Steering the other way turns it clear of the circle: the guard lets that through.
+    assert np.any(nav.guard(state, np.array([1.0, -1.0]), dt, []) != 0.0)
+
+
+def test_a_manoeuvre_that_did_not_help_is_followed_by_one_all_the_way_to_the_goal(monkeypatch):
+    """A manoeuvre ends where the goal is in clear sight; stuck again without coming progress_distance nearer,
+    the next one may not stop at "in sight" (clear_within inf) and goes on until the goal is within reach."""
+    from fastep_core.kinematics import TractorTrailer
+    from fastep_core.planning import navigator as navigator_module
+    from fastep_core.planning.manoeuvre import Manoeuvre
+
+    asked = []
+
+    def fake_plan(model, world, state, goal, keep, dt, **kwargs):
+        asked.append(kwargs['clear_within'])
+        s = np.asarray(state, dtype=float)
+        return Manoeuvre(np.zeros((1, 2)), np.array([s, s]), 1, 0, 1)
+
+    monkeypatch.setattr(navigator_module, 'plan_manoeuvre', fake_plan)
+    spec = RobotSpec('r1', 'tractor_trailer', (5.0, 5.0, 0.0, 0.0), (45.0, 5.0), 0.5)
+    nav = make_navigator('fastep', spec, 0.5, World.from_obstacles([0, 0, 50, 50], []), PlannerParams(), 0)
+    assert isinstance(nav.model, TractorTrailer)
+    nav.set_goal((45.0, 5.0))
+    state = np.array([5.0, 5.0, 0.0, 0.0])
+    assert nav.start_manoeuvre(state, 0.0, [])
+    assert nav.drive_manoeuvre(state, 0.0, 0.05, 40.0, []) is not None
+    assert nav.drive_manoeuvre(state, 0.05, 0.05, 40.0, []) is None        # over: it ended 40 m from the goal
+    assert nav.start_manoeuvre(state + [0.1, 0.0, 0.0, 0.0], 1.0, [])     # stuck again, 0.1 m nearer
+    nav._manoeuvre = None
+    progress = nav.params.progress_distance
+    assert nav.start_manoeuvre(state + [progress + 0.1, 0.0, 0.0, 0.0], 2.0, [])   # came nearer meanwhile
+    assert np.isfinite(asked[0]) and asked[1] == np.inf and np.isfinite(asked[2])
