@@ -1,6 +1,6 @@
 """Trap escape before/after: arrival rate on U-shaped traps without it (trap_timeout 0) and with it.
 
-    python -m benchmarks.trap_escape --scenarios 100 --workers 2
+    python -m benchmarks.trap_escape --scenarios 100 --workers 2 [--models tractor_trailer]
 
 The same scenarios (fastep_core.random_scenarios.u_trap_scenario_data, seeds 0..N-1; point masses and
 tractor-trailers) and the same run seeds for both settings; every run is one robot facing a U open towards
@@ -36,16 +36,18 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument('--scenarios', type=int, default=100)
     p.add_argument('--algorithms', nargs='+', default=['fastep', 'aco'])
+    p.add_argument('--models', nargs='+', default=['point_mass', 'tractor_trailer'],
+                   choices=['point_mass', 'tractor_trailer'])
     p.add_argument('--workers', type=int, default=2)
     p.add_argument('--out', type=Path, default=Path('out/trap_escape.json'))
     args = p.parse_args()
-    jobs = [(seed, model, algorithm, timeout) for model in ('point_mass', 'tractor_trailer')
+    jobs = [(seed, model, algorithm, timeout) for model in args.models
             for algorithm in args.algorithms for timeout in (0.0, None) for seed in range(args.scenarios)]
     start = time.perf_counter()
     with ProcessPoolExecutor(args.workers) as pool:
         rows = list(pool.map(run_one, jobs, chunksize=4))
     table = []
-    for model in ('point_mass', 'tractor_trailer'):
+    for model in args.models:
         for algorithm in args.algorithms:
             for escape in (False, True):
                 sel = [r for r in rows if r['model'] == model and r['algorithm'] == algorithm and r['escape'] == escape]
