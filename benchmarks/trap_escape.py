@@ -29,7 +29,8 @@ def run_one(job: tuple[int, str, str, float | None]) -> dict[str, Any]:
     robot = simulate(parse_scenario(data), algorithm, seed).robots[0]
     return {'seed': seed, 'model': model, 'algorithm': algorithm, 'escape': trap_timeout is None,
             'reached': robot.reached, 'collided': robot.collided, 'escapes': robot.escapes,
-            'sim_time': robot.sim_time, 'path_length': robot.path_length, 'status': robot.status}
+            'sim_time': robot.sim_time, 'path_length': robot.path_length, 'min_clearance': robot.min_clearance,
+            'status': robot.status}
 
 
 def main() -> int:
