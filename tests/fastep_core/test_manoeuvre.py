@@ -25,16 +25,12 @@ def pocket(width: float) -> World:
                                           Segment((12.0, hi), (4.0, hi))))
 
 
-def room(world: World, points: np.ndarray) -> np.ndarray:
-    return np.minimum(world.wall_distance(points), world.obstacles.clearance(points))
-
-
 @pytest.mark.parametrize('width', [4.0, 1.6])
 def test_a_manoeuvre_out_of_a_dead_end_keeps_its_clearance_and_the_trailer_straight(width: float) -> None:
     world, goal, keep = pocket(width), np.array([2.0, 10.0]), 0.65
     found = plan_manoeuvre(MODEL, world, [10.5, 10.0, 0.0, 0.0], goal, keep, DT)
     assert found is not None and found.ticks == len(found.commands) == len(found.states) - 1
-    assert room(world, found.states[:, :2]).min() >= keep - 0.02
+    assert world.room(found.states[:, :2]).min() >= keep - 0.02
     assert max(abs(hitch_angle(s)) for s in found.states) <= 1.0 + 1e-6
     # The states are the plant's: replaying the commands with the model's integrator gives them back.
     state = found.states[0]
@@ -74,7 +70,7 @@ def test_from_against_a_wall_no_tick_gets_nearer_within_the_floor() -> None:
     start = [10.0, 11.49, 0.3, 0.3]       # 0.51 m from the wall at y = 12, heading towards it
     found = plan_manoeuvre(MODEL, world, start, [2.0, 10.0], keep, DT, floor=floor)
     assert found is not None
-    rooms = room(world, found.states[:, :2])
+    rooms = world.room(found.states[:, :2])
     assert rooms[0] == pytest.approx(0.51)
     assert not np.any((rooms[1:] < floor) & (rooms[1:] < rooms[:-1]))
     assert rooms.min() >= 0.51 - 1e-3 - 0.02

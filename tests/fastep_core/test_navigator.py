@@ -5,8 +5,10 @@ import pytest
 
 from fastep_core.errors import GoalError
 from fastep_core.geometry import Circle
-from fastep_core.kinematics import PointMass
+from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator
+from fastep_core.planning import navigator as navigator_module
+from fastep_core.planning.manoeuvre import Manoeuvre
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World
 
@@ -109,8 +111,6 @@ def test_walled_in_robot_reports_no_valid_path_on_the_first_tick():
 def test_guard_predicts_a_tractor_trailers_tick_as_the_plant_integrates_it():
     """On a tight turn the RK4 step ends off the straight Euler guess; an obstacle the true step would enter
     (and the guess would miss) stops the robot."""
-    from fastep_core.kinematics import TractorTrailer
-
     model, dt, radius = TractorTrailer(), 0.05, 0.5
     state, command = np.array([10.0, 10.0, 0.0, 0.0]), np.array([1.0, 1.0])
     true_next = model.integrate(state, command, dt)[:2]
@@ -132,9 +132,6 @@ def test_guard_predicts_a_tractor_trailers_tick_as_the_plant_integrates_it():
 def test_a_manoeuvre_that_did_not_help_is_followed_by_one_all_the_way_to_the_goal(monkeypatch):
     """A manoeuvre ends where the goal is in clear sight; stuck again without coming progress_distance nearer,
     the next one may not stop at "in sight" (clear_within inf) and goes on until the goal is within reach."""
-    from fastep_core.kinematics import TractorTrailer
-    from fastep_core.planning import navigator as navigator_module
-    from fastep_core.planning.manoeuvre import Manoeuvre
 
     asked = []
 
