@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: demo test venv bench clean
+.PHONY: demo test fuzz venv bench clean
 
 venv: $(STAMP)
 
@@ -26,6 +26,12 @@ demo: $(STAMP)
 
 test: $(STAMP)
 	$(BIN)/python -m pytest -q tests
+
+# The property tests with fresh random examples, ROUNDS times (make test always tries the same ones).
+ROUNDS ?= 20
+fuzz: $(STAMP)
+	for i in $$(seq $(ROUNDS)); do HYPOTHESIS_PROFILE=explore $(BIN)/python -m pytest -q -x \
+		tests/fastep_core/test_properties.py tests/fastep_core/test_optimal.py || exit 1; done
 
 # Measurements run by hand (minutes, not seconds); results and commands are in docs/benchmarks.md.
 bench: $(STAMP)

@@ -10,7 +10,8 @@ motions instead:
   at half or full steering lock either way, for `arc_ticks` control ticks, integrating eq. 13 the way the
   plant does (RK4, four sub-steps per arc in the search; the found arcs are replayed tick by tick).
 - An arc is kept if the reference point stays `keep` from every obstacle and from the border and the trailer
-  does not fold past `max_hitch` (past 90 degrees the steering law's anti-jack-knife term folds it further).
+  does not fold past `max_hitch` (past 90 degrees the steering law's anti-jack-knife term folds it further);
+  the replay, integrated every tick, may part from the search's sub-steps by 2 cm and 0.02 rad, no more.
   A robot already nearer than `keep` (held at a wall) may not come more than a millimetre nearer on an arc,
   and with a `floor` (the robot's radius) no tick of the replay may end below it while getting nearer: that
   is the navigator's guard, which would stop the manoeuvre there.
@@ -55,6 +56,8 @@ AHEAD = math.radians(30.0)  # the goal counts as straight ahead within this head
 STRAIGHT_HITCH = 0.35       # ... with the trailer folded less than this (rad)
 SUBSTEPS = 4              # RK4 sub-steps per arc in the search (the replay integrates every tick)
 REPLAY_SLACK = 0.02       # m: the replay may come this much closer than `keep` between the search's sub-steps
+HITCH_SLACK = 0.02        # rad: ... and fold the trailer this much further than `max_hitch` (it integrates every
+                          # tick, the search 4 sub-steps per arc, and the two part by a few mrad over a manoeuvre)
 
 
 @dataclass(frozen=True)
@@ -157,7 +160,8 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
     getting nearer (the robot's radius: what the guard enforces; default none); clear_within: how far the
     straight run to the goal must stay from every obstacle for the goal to count as in sight (default keep;
     inf: only the goal within reach ends a manoeuvre); speed: m/s of every arc; arc_ticks: control ticks of dt
-    per arc; max_hitch: the trailer may not fold further than this (rad), or than it already is.
+    per arc; max_hitch: the trailer may not fold further than this (rad), or than it already is, at the
+    search's sub-steps; the replayed ticks may fold HITCH_SLACK more.
     """
     start = np.asarray(state, dtype=float)
     goal = np.asarray(goal, dtype=float)
@@ -245,10 +249,12 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
         replay.append(model.integrate(replay[-1], command, dt))
     replayed = np.array(replay)
     # The search checked each arc at a few sub-steps; the replay is what the robot drives, so it must keep
-    # the clearance too (a corner passed between two sub-steps), and never get nearer below the floor.
+    # the clearance too (a corner passed between two sub-steps), never get nearer below the floor, and not
+    # fold the trailer further than the search allowed.
     room = world.room(replayed[:, :2])
     if float(room.min()) < min(keep, start_room - 1e-3) - REPLAY_SLACK or \
-            bool(np.any((room[1:] < lowest) & (room[1:] < room[:-1]))):
+            bool(np.any((room[1:] < lowest) & (room[1:] < room[:-1]))) or \
+            float(np.abs(_hitch(replayed)).max()) > hitch_limit + HITCH_SLACK:
         return None
     reversals = sum(1 for a, b in zip(chain, chain[1:]) if np.sign(v[a]) != np.sign(v[b]))
     return Manoeuvre(commands, replayed, len(chain), reversals, expansions)

@@ -11,6 +11,7 @@ import pytest
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import TractorTrailer
 from fastep_core.kinematics.tractor_trailer import hitch_angle
+from fastep_core.planning import manoeuvre
 from fastep_core.planning.manoeuvre import DistanceField, plan_manoeuvre
 from fastep_core.world import World
 
@@ -74,3 +75,15 @@ def test_from_against_a_wall_no_tick_gets_nearer_within_the_floor() -> None:
     assert rooms[0] == pytest.approx(0.51)
     assert not np.any((rooms[1:] < floor) & (rooms[1:] < rooms[:-1]))
     assert rooms.min() >= 0.51 - 1e-3 - 0.02
+
+
+def test_the_replay_may_fold_the_trailer_only_hitch_slack_past_the_limit(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Facing a wall 2 m away with the trailer folded, the way round holds 1 rad at the search's sub-steps
+    and folds 1.3 mrad more when replayed tick by tick; without the slack that replay is refused."""
+    world = World.from_obstacles([0.0, 0.0, 50.0, 50.0], [Circle((5.0, 5.0), 1.0)])
+    start, goal = [2.0, 9.0, 3.0, 3.25], [45.0, 45.0]
+    found = plan_manoeuvre(MODEL, world, start, goal, 0.65, DT, max_expansions=1500)
+    assert found is not None
+    assert 1.0 < max(abs(hitch_angle(s)) for s in found.states) <= 1.0 + manoeuvre.HITCH_SLACK
+    monkeypatch.setattr(manoeuvre, 'HITCH_SLACK', 0.0)
+    assert plan_manoeuvre(MODEL, world, start, goal, 0.65, DT, max_expansions=1500) is None
