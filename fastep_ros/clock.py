@@ -19,10 +19,12 @@ misses the beginning of the run because DDS discovery took a while.
 
 Lock step (sync_topics: fastep-launch lists every plant's odom and every planner's cmd_vel, with step = the
 planners' control period, so each of them publishes once per tick): each tick waits, up to sync_timeout wall
-seconds, until every listed topic has delivered a message since the previous tick, i.e. every plant has
-integrated and every planner has acted on the last tick. Simulated time then never runs ahead of a busy node,
-so the live loop behaves like the in-process simulator whatever the machine's load, and rtf is an upper bound.
-A topic that timed out (its node died) is not waited for again until it publishes again.
+seconds (default 5), until every listed topic has delivered a message since the previous tick, i.e. every
+plant has integrated and every planner has acted on the last tick. Simulated time then never runs ahead of a
+busy node, so the live loop behaves like the in-process simulator whatever the machine's load, and rtf is an
+upper bound. A topic that timed out (its node died) is not waited for again until it publishes again. The
+timeout is long because a loaded machine starves a node for a second or two at times (a 1 s timeout once let
+a test's run take 29 s of simulated time instead of 17); a dead node costs those 5 s once.
 """
 
 from __future__ import annotations
@@ -90,7 +92,7 @@ class ClockNode(Node):
         topics = declare(self, 'sync_topics', [''], 'lock step: before each tick, wait until every one of these '
                          'topics (e.g. the planners\' cmd_vel, published once per control period) has delivered a '
                          'message since the previous tick; empty: free-running')
-        self.sync_timeout = declare(self, 'sync_timeout', 1.0, 'lock step: tick anyway after waiting this many '
+        self.sync_timeout = declare(self, 'sync_timeout', 5.0, 'lock step: tick anyway after waiting this many '
                                     'wall seconds, and stop waiting for a topic that did not answer until it '
                                     'publishes again (a node that stopped does not freeze time)')
         for name in ('rtf', 'step', 'max_rate_hz'):

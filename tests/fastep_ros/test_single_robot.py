@@ -115,6 +115,32 @@ def test_bad_goal_is_refused_and_the_robot_does_not_move(one: Graph, goal: tuple
     assert all(m.linear.x == 0.0 and m.linear.y == 0.0 and m.angular.z == 0.0 for m in cmds[first_cmd:])
 
 
+def clock_seconds(h: Helper) -> float:
+    clock = h.records['/clock'][-1].clock
+    return clock.sec + clock.nanosec * 1e-9
+
+
+def test_a_planner_stalled_for_two_wall_seconds_holds_simulated_time(one: Graph) -> None:
+    """A loaded machine can starve a node for a second or two: in lock step the clock waits for it rather than
+    letting the robot drive on an old command (or stand still) while simulated time runs on."""
+    h = one.helper
+    assert h is not None
+    start = position(h)
+    goal = (18.0, 17.0) if start[0] < 10.0 else (2.0, 17.0)
+    h.send_goal(NS, goal)
+    h.spin_until(lambda: distance(position(h), start) > 1.0, 60.0, 'the robot to be on its way')
+    planner = one.procs['planner']
+    planner.send_signal(signal.SIGSTOP)
+    try:
+        h.spin_for(0.2)
+        held = clock_seconds(h)
+        h.spin_for(2.5)
+        assert clock_seconds(h) - held <= 0.1, 'simulated time ran on while the planner was stopped'
+    finally:
+        planner.send_signal(signal.SIGCONT)
+    h.wait_status(NS, lambda s: s['message'] == 'arrived' and goal_is(goal)(s), ARRIVE, 'arrival after the stall')
+
+
 def test_stale_odometry_stops_the_robot(one: Graph) -> None:
     h = one.helper
     assert h is not None
