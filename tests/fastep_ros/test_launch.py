@@ -147,4 +147,5 @@ def test_a_trapped_tractor_trailer_manoeuvres_out_on_the_live_graph(tmp_path: Pa
                   '--json', str(out)], env, timeout=240)
     assert result.returncode == 0, result.stdout + result.stderr
     live = json.loads(out.read_text())['runs'][0]['robots'][0]
-    assert live['reached'] and not live['collided'] and live['escapes'] == 1 and live['manoeuvres'] >= 1
+    assert live['reached'] and not live['collided'] and live['escapes'] == 1 and live['manoeuvres'] >= 1, \
+        (live, result.stdout)

@@ -224,6 +224,26 @@ def test_launch_passes_the_scenario_to_the_nodes() -> None:
     assert launch._ros_value(1e-5) == '1e-05' and launch._ros_value([5, 25]) == '[5.0, 25.0]'
 
 
+def test_launch_monitor_keeps_time_from_odometry_when_clock_messages_are_lost(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    # /clock is best effort: on a loaded machine the monitor once got none for 30 s while the robot drove on,
+    # and gave the run up as stalled. Odometry stamps (reliable) carry simulated time too.
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain()))
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monitor = launch.Monitor(load_scenario('table2_s1'))
+    try:
+        monitor.follow_clock()
+        monitor.sim_now = 0.0
+        robot = next(iter(monitor.robots.values()))
+        monitor.on_odom(robot, convert.state_to_odometry([3.0, 4.0], convert.seconds_to_stamp(12.5)))
+        assert monitor.now() == pytest.approx(12.5)
+        monitor.on_odom(robot, convert.state_to_odometry([3.0, 4.0], convert.seconds_to_stamp(12.0)))
+        assert monitor.now() == pytest.approx(12.5), 'an older stamp must not take time back'
+        assert robot.rows == [[pytest.approx(12.5), 3.0, 4.0]]
+    finally:
+        monitor.close()
+
+
 def test_stamped_cmd_vel_between_planner_and_plant(context: Any) -> None:
     from geometry_msgs.msg import TwistStamped
     planner = make(PlannerNode, context, use_stamped_cmd_vel=True, model='tractor_trailer', robot_radius=0.6)
