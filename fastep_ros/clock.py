@@ -23,8 +23,9 @@ seconds (default 5), until every listed topic has delivered a message since the 
 plant has integrated and every planner has acted on the last tick. Simulated time then never runs ahead of a
 busy node, so the live loop behaves like the in-process simulator whatever the machine's load, and rtf is an
 upper bound. A topic that timed out (its node died) is not waited for again until it publishes again. The
-timeout is long because a loaded machine starves a node for a second or two at times (a 1 s timeout once let
-a test's run take 29 s of simulated time instead of 17); a dead node costs those 5 s once.
+timeout is long because a loaded machine starves a node for a second or two at times, and with 1 s the clock
+then ran on without it (a planner stopped for 2.5 s let 6 s of simulated time pass); a dead node costs those
+5 s once.
 """
 
 from __future__ import annotations
