@@ -167,8 +167,9 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
     goal = np.asarray(goal, dtype=float)
     clear_within = keep if clear_within is None else clear_within
     start_room = float(world.room(start[None, :2])[0])
+    kept = min(keep, start_room - 1e-3)   # what the whole manoeuvre keeps: keep, or a millimetre less than now
     lowest = -math.inf if floor is None else floor
-    field = DistanceField(world, goal, min(keep, start_room - 1e-3))
+    field = DistanceField(world, goal, kept)
     if not math.isfinite(float(field(start[None, :2])[0])):
         return None
     lock = np.array([-MAX_STEER, -0.5 * MAX_STEER, 0.0, 0.5 * MAX_STEER, MAX_STEER])
@@ -252,7 +253,7 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], 
     # the clearance too (a corner passed between two sub-steps), never get nearer below the floor, and not
     # fold the trailer further than the search allowed.
     room = world.room(replayed[:, :2])
-    if float(room.min()) < min(keep, start_room - 1e-3) - REPLAY_SLACK or \
+    if float(room.min()) < kept - REPLAY_SLACK or \
             bool(np.any((room[1:] < lowest) & (room[1:] < room[:-1]))) or \
             float(np.abs(_hitch(replayed)).max()) > hitch_limit + HITCH_SLACK:
         return None

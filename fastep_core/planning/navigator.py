@@ -312,7 +312,8 @@ class Navigator:
         the recovery without folding the trailer (hitch angle over MAX_RECOVERY_HITCH) and whose first step
         the guard allows: a wall alongside pins straight moves too, and reversing a trailer far folds it.
         When every move would fold it, straight back (the first option) all the same: cutting moves short
-        instead kept trailers straighter but landed fewer robots (docs/robustness.md, "Tractor-trailers before manoeuvres")."""
+        instead kept trailers straighter but landed fewer robots (docs/robustness.md, "Tractor-trailers before
+        manoeuvres")."""
         lock = BACKUP_SPEED * math.tan(7.0 / 18.0 * math.pi) / max(getattr(self.model, 'length', 1.0), 1e-6)
         options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
         scores = []

@@ -15,6 +15,7 @@ from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 
 from graph_helpers import FAST, ONE_CIRCLE, Graph, Helper, distance, odom_xy, stamp, write
+from msg_tools import convert
 
 NS = '/r1'
 CIRCLE, CIRCLE_R, RADIUS = (10.0, 10.0), 1.5, 0.5
@@ -116,8 +117,7 @@ def test_bad_goal_is_refused_and_the_robot_does_not_move(one: Graph, goal: tuple
 
 
 def clock_seconds(h: Helper) -> float:
-    clock = h.records['/clock'][-1].clock
-    return clock.sec + clock.nanosec * 1e-9
+    return convert.stamp_to_seconds(h.records['/clock'][-1].clock)
 
 
 def test_a_planner_stalled_for_two_wall_seconds_holds_simulated_time(one: Graph) -> None:
