@@ -2,11 +2,12 @@
 
     python -m benchmarks.trajectory_checksums [--seeds 3] [--algorithms fastep aco] [--out FILE.json]
 
-For every built-in scenario, algorithm and seed it runs `fastep_core.simulator.simulate` (what `fastep-sim
---json` prints) and hashes, per run, everything but wall time: each robot's trajectory rows and waypoints (first hash) and
-what is reported of it (reached, collided, path length, simulated time, clearance, activations, escapes,
-manoeuvres, status; second hash). Run it before and after a change and compare
-the JSON files (`diff`): equal hashes mean equal trajectories, bit for bit.
+For every built-in scenario (and with --u-traps / --random, generated ones that exercise trap escapes and
+tractor-trailer manoeuvres), algorithm and seed it runs `fastep_core.simulator.simulate` (what `fastep-sim
+--json` prints) and hashes, per run, everything but wall time: each robot's trajectory rows and waypoints
+(first hash) and what is reported of it (reached, collided, path length, simulated time, clearance,
+activations, escapes, manoeuvres, status; second hash). Run it before and after a change and compare the
+JSON files (`diff`): equal hashes mean equal trajectories, bit for bit.
 """
 
 from __future__ import annotations
@@ -19,13 +20,25 @@ from pathlib import Path
 
 import numpy as np
 
-from fastep_core.scenario import builtin_names, load_scenario
+from fastep_core.random_scenarios import random_scenario_data, u_trap_scenario_data
+from fastep_core.scenario import Scenario, builtin_names, load_scenario, parse_scenario
 from fastep_core.simulator import simulate
+
+
+def scenario_named(key: str) -> Scenario:
+    """A built-in scenario by name, or 'u_trap:<model>:<seed>' / 'random:<seed>' from random_scenarios."""
+    kind, _, rest = key.partition(':')
+    if kind == 'u_trap':
+        model, _, seed = rest.partition(':')
+        return parse_scenario(u_trap_scenario_data(int(seed), model))
+    if kind == 'random':
+        return parse_scenario(random_scenario_data(int(rest)))
+    return load_scenario(key)
 
 
 def run_digest(scenario: str, algorithm: str, seed: int) -> tuple[str, str]:
     """(trajectory hash, outcome hash) of one run: the rows and waypoints; the reported numbers and status."""
-    run = simulate(load_scenario(scenario), algorithm=algorithm, seed=seed)
+    run = simulate(scenario_named(scenario), algorithm=algorithm, seed=seed)
     paths, outcome = hashlib.sha256(), hashlib.sha256()
     for r in run.robots:
         paths.update(r.name.encode())
@@ -41,15 +54,21 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument('--seeds', type=int, default=3, help='seeds 0..N-1 (default 3)')
     p.add_argument('--algorithms', nargs='+', default=['fastep', 'aco'])
     p.add_argument('--scenarios', nargs='+', default=None, help='default: every built-in scenario')
+    p.add_argument('--u-traps', type=int, default=0, metavar='N',
+                   help='also U-trap scenarios 0..N-1 of random_scenarios, point mass and tractor-trailer')
+    p.add_argument('--random', type=int, default=0, metavar='N', help='also random scenarios 0..N-1')
     p.add_argument('--out', type=Path, help='write the table as JSON')
     args = p.parse_args(argv)
     table: dict[str, list[str]] = {}
-    for scenario in args.scenarios or builtin_names():
+    scenarios = list(args.scenarios or builtin_names())
+    scenarios += [f'u_trap:{model}:{i}' for i in range(args.u_traps) for model in ('point_mass', 'tractor_trailer')]
+    scenarios += [f'random:{i}' for i in range(args.random)]
+    for scenario in scenarios:
         for algorithm in args.algorithms:
             for seed in range(args.seeds):
                 key = f'{scenario} {algorithm} {seed}'
                 table[key] = list(run_digest(scenario, algorithm, seed))
-                print(f'{key:32s} {table[key][0]} {table[key][1]}', flush=True)
+                print(f'{key:40s} {table[key][0]} {table[key][1]}', flush=True)
     if args.out:
         args.out.write_text(json.dumps(table, indent=1) + '\n')
     return 0

@@ -15,13 +15,14 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.planning.navigator import Mode, Navigator, OtherRobot, make_navigator
+from fastep_core.planning.algorithms import ALGORITHMS, make_navigator
+from fastep_core.planning.navigator import Mode, Navigator
+from fastep_core.planning.others import OtherRobot
 from fastep_core.scenario import Scenario
 
 __all__ = ['RobotRun', 'Run', 'Tick', 'simulate', 'ALGORITHMS']
 
 FloatArray = NDArray[np.float64]
-ALGORITHMS = ('fastep', 'aco', 'optimal')  # optimal: exact shortest path (planning/optimal_kinematic.py)
 SAMPLE_SPACING = 0.1  # metres of travel between trajectory samples (DESIGN: at least every 0.1 m)
 
 

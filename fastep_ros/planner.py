@@ -41,10 +41,11 @@ from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import GoalError, ParameterError
-from fastep_core.planning.navigator import Mode, Navigator, OtherRobot, make_navigator
+from fastep_core.planning.algorithms import ALGORITHMS, make_navigator
+from fastep_core.planning.navigator import Mode, Navigator
+from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
-from fastep_core.simulator import ALGORITHMS
 from fastep_core.world import World
 from fastep_ros.common import LATCHED, LATEST, RELIABLE, StartupError, declare, node_main
 from msg_tools import convert

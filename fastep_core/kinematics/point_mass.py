@@ -9,6 +9,7 @@ dV/dt stays negative.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,6 +24,10 @@ class PointMass:
     """A holonomic point: state (x, y), input (vx, vy) in the map frame."""
 
     state_size: int = 2
+    holonomic: ClassVar[bool] = True        # what it can do (kinematics/model.py)
+    turns_in_place: ClassVar[bool] = True   # it has no heading to turn
+    reverses: ClassVar[bool] = True
+    trailer: ClassVar[bool] = False
 
     def integrate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
         """Exact zero-order-hold step: the velocity is constant over dt."""

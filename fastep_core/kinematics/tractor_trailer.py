@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import ClassVar
 
 import numpy as np
 from numpy.typing import NDArray
@@ -59,6 +60,11 @@ class TractorTrailer:
     trailer_length: float = 1.0
     hitch_offset: float = 0.0
     state_size: int = 4
+    holonomic: ClassVar[bool] = False        # what it can do (kinematics/model.py)
+    turns_in_place: ClassVar[bool] = False   # forward-steered: it turns only while it moves
+    reverses: ClassVar[bool] = True
+    trailer: ClassVar[bool] = True
+    max_steer: ClassVar[float] = MAX_STEER   # steering lock |phi| (rad)
 
     def derivative(self, state: FloatArray, command: FloatArray) -> FloatArray:
         _, _, th0, th1 = state

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
@@ -23,9 +24,20 @@ from numpy.typing import NDArray
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.world import World
 
-__all__ = ['EscapePath', 'densify']
+__all__ = ['ESCAPING', 'REPLAN_AFTER', 'EscapePath', 'TrapEscape', 'densify']
 
 FloatArray = NDArray[np.float64]
+ESCAPING = 'escaping a trap along the exact shortest path'   # the status reason while escaping
+REPLAN_AFTER = 0.5   # seconds: a path with no vertex in sight is planned again at most this often
+
+
+class EscapeParams(Protocol):
+    """The planner parameters an escape reads (PlannerParams has them)."""
+
+    clearance_margin: float
+    step_radius: float
+    waypoint_tolerance: float
+    progress_distance: float
 
 
 def densify(points: FloatArray, spacing: float = 0.5) -> list[FloatArray]:
@@ -102,3 +114,70 @@ class EscapePath:
                 (len(obstacles) and float(obstacles.fan_clearance(position, carrot[None])[0]) < within):
             return aim
         return carrot   # a new array each tick: the controller is reset, as pure pursuit needs
+
+
+class TrapEscape:
+    """A trap escape in progress: the path followed, when it was planned, and when the robot is out.
+
+    The robot hands back to its algorithm once it is `progress_distance` closer to the goal than it ever was
+    in the trap (the leave rule of the Bug algorithms), so each escape ends strictly closer to the goal and
+    escapes cannot cycle. The path is planned again when no vertex ahead is in sight, at most every
+    REPLAN_AFTER seconds. Progress along an escape is a shorter way left to go (path length), not a smaller
+    distance to the goal.
+    """
+
+    def __init__(self) -> None:
+        self.path: EscapePath | None = None   # the way out, while escaping
+        self.planned_at = -math.inf           # when it was last planned
+        self.exit = 0.0                       # hand back to the algorithm once this close to the goal
+        self.best = math.inf                  # the shortest way left so far
+
+    @property
+    def active(self) -> bool:
+        return self.path is not None
+
+    def start(self, path: OptimalPath, world: World, t: float, exit_distance: float) -> None:
+        self.replan(path, world, t)
+        self.exit, self.best = exit_distance, math.inf
+
+    def replan(self, path: OptimalPath, world: World, t: float) -> None:
+        """Follow a new path (planned in `world`, parked robots included) from now on."""
+        self.path, self.planned_at = EscapePath.from_path(path, world), t
+
+    def stop(self) -> None:
+        self.path = None
+
+    def left(self, distance: float) -> bool:
+        """Is the robot out of the trap (and the escape over) at `distance` from the goal?"""
+        if distance <= self.exit:
+            self.path = None
+            return True
+        return False
+
+    def next_target(self, position: FloatArray, t: float, plan: Callable[[], tuple[OptimalPath, World] | None],
+                    radius: float, params: EscapeParams, replan: bool = False) -> tuple[FloatArray | None, bool]:
+        """The pursuit target and whether the way left got `progress_distance` shorter; (None, False) when the
+        path had to be planned again (`replan` asks for that) and `plan()` found none."""
+        if not replan:
+            target, progressed = self._pursue(position, radius, params, fresh=t - self.planned_at < REPLAN_AFTER)
+            if target is not None:
+                return target, progressed
+        found = plan()
+        if found is None:
+            return None, False
+        self.replan(*found, t)
+        return self._pursue(position, radius, params, fresh=True)
+
+    def _pursue(self, position: FloatArray, radius: float, params: EscapeParams,
+                fresh: bool) -> tuple[FloatArray | None, bool]:
+        assert self.path is not None
+        p = params
+        target = self.path.target(position, radius, p.clearance_margin, p.step_radius, p.waypoint_tolerance,
+                                  radius + p.clearance_margin, fresh)
+        if target is None:
+            return None, False
+        rest = self.path.remaining(position)
+        if rest < self.best - p.progress_distance:
+            self.best = rest
+            return target, True
+        return target, False

@@ -26,13 +26,17 @@ from typing import Sequence
 
 import numpy as np
 
-from fastep_core.planning.navigator import PATH_SPACING, Mode, Navigator, OtherRobot
+from fastep_core.planning.exact_path import PATH_SPACING, no_path_reason
+from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.optimal import OptimalPath
+from fastep_core.planning.others import OtherRobot
 
 __all__ = ['OptimalKinematic', 'ARC_SPACING']
 
 ARC_SPACING = PATH_SPACING
 """Largest distance (m) between consecutive polyline vertices along an arc (the navigator's exact_path)."""
+
+
 class OptimalKinematic(Navigator):
     """Follow the exact shortest clearance-keeping path, vertex by vertex, with the kinematic controller."""
 
@@ -53,7 +57,7 @@ class OptimalKinematic(Navigator):
         path = self.reference if self.reference is not None and np.array_equal(self.reference.points[0], position) \
             else self.exact_path(position)
         if path is None:
-            self.fail(self.no_path_reason(position))
+            self.fail(no_path_reason(self.radius, position, self.goal))
             return False
         self.path = path
         self._route = path.points[1:] if len(path.points) > 1 else path.points

@@ -27,7 +27,7 @@ from fastep_core.optimize import OptimizeResult, aco_r, fastep
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step']
+__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step', 'plan_step_passing_right']
 
 FloatArray = NDArray[np.float64]
 INFEASIBLE = 1e6
@@ -127,3 +127,16 @@ def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Genera
     if not result.fun < INFEASIBLE:
         return None
     return StepPlan(np.asarray(result.x, dtype=float), float(result.fun), result)
+
+
+def plan_step_passing_right(problem: StepProblem, params: PlannerParams, rng: np.random.Generator, method: str,
+                            ahead: FloatArray) -> StepPlan | None:
+    """plan_step keeping right of the robots met `ahead` (offsets from the robot) when that is possible at all;
+    two robots meeting head-on otherwise keep making mirror-image side steps into each other's way."""
+    if len(ahead):
+        problem.pass_on_right = ahead
+        step = plan_step(problem, params, rng, method)
+        problem.pass_on_right = np.zeros((0, 2))
+        if step is not None:
+            return step
+    return plan_step(problem, params, rng, method)

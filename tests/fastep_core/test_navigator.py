@@ -7,7 +7,7 @@ from fastep_core.errors import GoalError
 from fastep_core.geometry import Circle
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator
-from fastep_core.planning import navigator as navigator_module
+from fastep_core.planning import manoeuvring
 from fastep_core.planning.manoeuvre import Manoeuvre
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World
@@ -140,7 +140,7 @@ def test_a_manoeuvre_that_did_not_help_is_followed_by_one_all_the_way_to_the_goa
         s = np.asarray(state, dtype=float)
         return Manoeuvre(np.zeros((1, 2)), np.array([s, s]), 1, 0, 1)
 
-    monkeypatch.setattr(navigator_module, 'plan_manoeuvre', fake_plan)
+    monkeypatch.setattr(manoeuvring, 'plan_manoeuvre', fake_plan)
     spec = RobotSpec('r1', 'tractor_trailer', (5.0, 5.0, 0.0, 0.0), (45.0, 5.0), 0.5)
     nav = make_navigator('fastep', spec, 0.5, World.from_obstacles([0, 0, 50, 50], []), PlannerParams(), 0)
     assert isinstance(nav.model, TractorTrailer)
@@ -150,7 +150,8 @@ def test_a_manoeuvre_that_did_not_help_is_followed_by_one_all_the_way_to_the_goa
     assert nav.drive_manoeuvre(state, 0.0, 0.05, 40.0, []) is not None
     assert nav.drive_manoeuvre(state, 0.05, 0.05, 40.0, []) is None        # over: it ended 40 m from the goal
     assert nav.start_manoeuvre(state + [0.1, 0.0, 0.0, 0.0], 1.0, [])     # stuck again, 0.1 m nearer
-    nav._manoeuvre = None
+    assert nav.manoeuvring is not None
+    nav.manoeuvring.current = None
     progress = nav.params.progress_distance
     assert nav.start_manoeuvre(state + [progress + 0.1, 0.0, 0.0, 0.0], 2.0, [])   # came nearer meanwhile
     assert np.isfinite(asked[0]) and asked[1] == np.inf and np.isfinite(asked[2])

@@ -1,0 +1,94 @@
+"""The exact shortest path a robot can take to its goal, as the navigator asks for it.
+
+planning/optimal.py computes the shortest path that keeps a given clearance. A navigator needs a little more
+around it: which clearance to keep (the planner's radius + margin where there is room, less down to the
+radius through a narrow gap, more where a robot that cannot turn in place needs room to turn), and which
+other robots to plan round (those standing still). Used to refuse a goal with no path on the first tick, by
+trap escapes (planning/escape.py) and by Optimal-Kinematic (planning/optimal_kinematic.py).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.geometry import Circle
+from fastep_core.planning.optimal import OptimalPath, shortest_path
+from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.params import PlannerParams
+from fastep_core.world import World
+
+__all__ = ['PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'exact_path', 'no_path_reason', 'parked_world', 'robot_path']
+
+FloatArray = NDArray[np.float64]
+PATH_SPACING = 0.25   # metres between exact-path vertices along arcs (escape paths, the optimal reference)
+TURN_ROOM = 1.0       # extra clearance (m) for a robot that cannot turn in place, where there is room for it
+PARKED_SPEED = 0.05   # m/s: another robot slower than this is planned around like an obstacle
+
+
+def exact_path(world: World, position: FloatArray, goal: FloatArray, radius: float, params: PlannerParams, *,
+               turn_room: bool = False, floor: float | None = None) -> OptimalPath | None:
+    """The shortest path from position to goal keeping the most clearance it can, or None when there is none.
+
+    It keeps the planner's clearance (radius + margin) where it can, and less (down to `floor`, by default the
+    radius) when the one way through is narrower: a robot that fits through a gap has a path, even if its
+    steps never go there. A start or goal already nearer an obstacle than the clearance lowers it to that
+    distance. With `turn_room` the path first tries TURN_ROOM more.
+    """
+    clearance = radius + params.clearance_margin
+    if len(world.obstacles):
+        ends = np.array([position, goal])
+        clearance = min(clearance, float(world.obstacles.clearance(ends).min()) - 1e-9)
+    path = None
+    # Through a narrow gap the path keeps a quarter margin when it can (the guard stops at the radius
+    # itself, so a path at exactly the radius would leave no slack for the controller).
+    narrow = (min(clearance, radius + 0.25 * params.clearance_margin), min(clearance, radius))
+    # A robot that cannot turn in place cannot wrap tightly round a wall's end (it circles there).
+    wide = (clearance + TURN_ROOM,) if turn_room else ()
+    floor = radius - 1e-9 if floor is None else floor
+    for keep in dict.fromkeys((*wide, clearance, *narrow)):
+        if keep >= floor and keep > 0.0:
+            path = shortest_path(world, position, goal, keep, spacing=PATH_SPACING)
+            if path is not None:
+                break
+    return path
+
+
+def parked_world(world: World, others: Sequence[OtherRobot], goal: FloatArray, radius: float,
+                 params: PlannerParams) -> World | None:
+    """The world with the robots standing still (not at this robot's goal) as circles; None if none is.
+
+    They are inflated by what the guard adds for another robot (a tick's travel and a quarter margin), so a
+    way round a parked robot is not one the guard stops on.
+    """
+    parked = [o for o in others if math.hypot(*o.velocity) < PARKED_SPEED
+              and math.hypot(o.position[0] - goal[0], o.position[1] - goal[1]) > o.radius + radius]
+    if not parked:
+        return None
+    reach = params.max_speed * params.dt + 0.25 * params.clearance_margin + 0.01
+    return World(world.workspace, world.obstacle_list + tuple(
+        Circle((float(o.position[0]), float(o.position[1])), o.radius + reach) for o in parked))
+
+
+def robot_path(world: World, others: Sequence[OtherRobot], position: FloatArray, goal: FloatArray, radius: float,
+               params: PlannerParams, turn_room: bool = False) -> tuple[OptimalPath | None, World]:
+    """A robot's exact path round the obstacles and the robots parked (see parked_world), and the world it was
+    planned in; round the obstacles alone when no way round the parked robots exists, (None, world) if none.
+
+    The robot may already stand within a parked robot's inflation (it was held there): the path round them
+    then starts with what it has, down to almost nothing, and moves away. Moving robots are left to the guard.
+    """
+    parked = parked_world(world, others, goal, radius, params)
+    if parked is not None:
+        path = exact_path(parked, position, goal, radius, params, turn_room=turn_room, floor=0.01)
+        if path is not None:
+            return path, parked
+    return exact_path(world, position, goal, radius, params, turn_room=turn_room), world
+
+
+def no_path_reason(radius: float, position: FloatArray, goal: FloatArray) -> str:
+    return (f'no valid path: nothing keeps the robot radius {radius:g} m from the obstacles and the '
+            f'border between ({position[0]:.3g}, {position[1]:.3g}) and the goal ({goal[0]:.3g}, {goal[1]:.3g})')
