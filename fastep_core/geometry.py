@@ -135,7 +135,8 @@ class Obstacles:
         d = self.distances(points)
         if d.shape[-1] == 0:
             return np.full(d.shape[:-1], np.inf)
-        return d.min(axis=-1)
+        nearest: FloatArray = d.min(axis=-1)
+        return nearest
 
     def path_distances(self, a: ArrayLike, b: ArrayLike) -> FloatArray:
         """Minimum distance from straight runs a-b to each obstacle surface: shape (..., n_obstacles)."""
@@ -152,7 +153,8 @@ class Obstacles:
         d = self.path_distances(a, b)
         if d.shape[-1] == 0:
             return np.full(d.shape[:-1], np.inf)
-        return d.min(axis=-1)
+        nearest: FloatArray = d.min(axis=-1)
+        return nearest
 
     def fan_clearance(self, origin: ArrayLike, ends: ArrayLike) -> FloatArray:
         """path_clearance(origin, ends) for one origin and many ends (m, 2): the swarm's hot path.

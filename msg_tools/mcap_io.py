@@ -280,13 +280,13 @@ class McapWriter:
             raise RecordingError(f'compression must be one of {", ".join(COMPRESSIONS)}, got {compression!r}')
         self._own_stream = not hasattr(output, 'write')
         if self._own_stream:
-            path = Path(output)  # type: ignore[arg-type]
+            path = Path(output)  # type: ignore[arg-type]  # no write(): a path, which mypy cannot narrow by hasattr
             try:
                 self._stream: IO[bytes] = open(path, 'wb')
             except OSError as exc:
                 raise RecordingError(f'cannot write {path}: {exc.strerror or exc}') from None
         else:
-            self._stream = output  # type: ignore[assignment]
+            self._stream = output  # type: ignore[assignment]  # has write(): a binary stream
         self._writer = Writer(self._stream, chunk_size=int(chunk_size), compression=COMPRESSIONS[compression])
         self._writer.start(profile=PROFILE, library=library)
         self._schemas: dict[tuple[str, str], int] = {}
