@@ -9,7 +9,7 @@ r at that point touches the obstacle".
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Union
+from typing import Iterable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,7 +38,7 @@ class Segment:
     end: tuple[float, float]
 
 
-Obstacle = Union[Circle, Segment]
+Obstacle = Circle | Segment
 
 
 def norm(dx: FloatArray, dy: FloatArray) -> FloatArray:
@@ -95,7 +95,7 @@ class Obstacles:
     def __len__(self) -> int:
         return len(self.items)
 
-    def subset(self, keep: NDArray[np.bool_]) -> 'Obstacles':
+    def subset(self, keep: NDArray[np.bool_]) -> Obstacles:
         """The obstacles where `keep` (one bool per obstacle, circles first) is true."""
         return Obstacles(item for item, k in zip(self.items, keep) if k)
 

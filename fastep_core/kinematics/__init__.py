@@ -1,8 +1,7 @@
 """Robot models (what a plant integrates) and their kinematic controllers (what a planner commands)."""
 
 from fastep_core.kinematics.point_mass import PointMass, PointMassController, lyapunov
-from fastep_core.kinematics.tractor_trailer import (TractorTrailer, TractorTrailerController, hitch_angle,
-                                                    wrap_angle)
+from fastep_core.kinematics.tractor_trailer import TractorTrailer, TractorTrailerController, hitch_angle, wrap_angle
 
 __all__ = ['PointMass', 'PointMassController', 'TractorTrailer', 'TractorTrailerController', 'hitch_angle',
            'lyapunov', 'wrap_angle']
