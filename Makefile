@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: demo test fuzz venv bench clean
+.PHONY: demo test lint lint-counts fuzz venv bench clean
 
 venv: $(STAMP)
 
@@ -24,8 +24,26 @@ demo: $(STAMP)
 		--record $(OUT)/demo.mcap --json $(OUT)/demo.json --plot $(OUT)/demo.png
 	$(BIN)/fastep-report $(OUT)/demo.mcap --out $(OUT)/demo_report
 
-test: $(STAMP)
+# Linter and type checker first (ruff.toml; [mypy] in setup.cfg), so a lint or type error fails make test.
+test: $(STAMP) lint
 	$(BIN)/python -m pytest -q tests
+
+# A `# type: ignore` names its error code and says why after it: `# type: ignore[code]  # why`.
+lint: $(STAMP)
+	$(BIN)/ruff check .
+	$(BIN)/python -m mypy
+	@! grep -rnE --include='*.py' '# type: ignore(\[[^]]*\])? *$$' fastep_core msg_tools fastep_ros tests benchmarks \
+		|| { echo 'each type: ignore above needs a reason: # type: ignore[code]  # why'; false; }
+
+# Lint and type errors per file (mypy on tests and benchmarks too, which make lint does not type-check yet).
+lint-counts: $(STAMP)
+	@echo '== ruff check'; $(BIN)/ruff check --output-format concise --quiet . | cut -d: -f1 | sort | uniq -c | sort -rn
+	@echo '== mypy'; $(BIN)/python -m mypy | grep ': error:' | cut -d: -f1 | sort | uniq -c | sort -rn
+	@echo '== mypy tests benchmarks (bodies checked, annotations not required)'; \
+		$(BIN)/python -m mypy --allow-untyped-defs --allow-incomplete-defs tests benchmarks \
+		| grep -E '^(tests|benchmarks)/.*: error:' | cut -d: -f1 | sort | uniq -c | sort -rn
+	@echo '== type: ignore without a reason'; grep -rnE --include='*.py' '# type: ignore(\[[^]]*\])? *$$' \
+		fastep_core msg_tools fastep_ros tests benchmarks | cut -d: -f1 | sort | uniq -c | sort -rn
 
 # The property tests with fresh random examples, ROUNDS times (make test always tries the same ones).
 ROUNDS ?= 20
@@ -45,4 +63,4 @@ bench: $(STAMP)
 	$(BIN)/python -m benchmarks.trap_escape --scenarios 60
 
 clean:
-	rm -rf $(VENV) $(OUT) build *.egg-info
+	rm -rf $(VENV) $(OUT) build *.egg-info .mypy_cache .ruff_cache

@@ -9,7 +9,7 @@ r at that point touches the obstacle".
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Iterable, Union
+from typing import Iterable
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -38,7 +38,7 @@ class Segment:
     end: tuple[float, float]
 
 
-Obstacle = Union[Circle, Segment]
+Obstacle = Circle | Segment
 
 
 def norm(dx: FloatArray, dy: FloatArray) -> FloatArray:
@@ -95,7 +95,7 @@ class Obstacles:
     def __len__(self) -> int:
         return len(self.items)
 
-    def subset(self, keep: NDArray[np.bool_]) -> 'Obstacles':
+    def subset(self, keep: NDArray[np.bool_]) -> Obstacles:
         """The obstacles where `keep` (one bool per obstacle, circles first) is true."""
         return Obstacles(item for item, k in zip(self.items, keep) if k)
 
@@ -135,7 +135,8 @@ class Obstacles:
         d = self.distances(points)
         if d.shape[-1] == 0:
             return np.full(d.shape[:-1], np.inf)
-        return d.min(axis=-1)
+        nearest: FloatArray = d.min(axis=-1)
+        return nearest
 
     def path_distances(self, a: ArrayLike, b: ArrayLike) -> FloatArray:
         """Minimum distance from straight runs a-b to each obstacle surface: shape (..., n_obstacles)."""
@@ -152,7 +153,8 @@ class Obstacles:
         d = self.path_distances(a, b)
         if d.shape[-1] == 0:
             return np.full(d.shape[:-1], np.inf)
-        return d.min(axis=-1)
+        nearest: FloatArray = d.min(axis=-1)
+        return nearest
 
     def fan_clearance(self, origin: ArrayLike, ends: ArrayLike) -> FloatArray:
         """path_clearance(origin, ends) for one origin and many ends (m, 2): the swarm's hot path.

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 from importlib import resources
 from importlib.resources.abc import Traversable
 from pathlib import Path
-from typing import Any, Mapping, Sequence
+from typing import Any, Callable, Mapping, Sequence
 
 import yaml
 
@@ -213,7 +213,7 @@ def _segment(value: Any, path: str) -> Segment:
     return Segment(start, end)
 
 
-_OBSTACLE_PARSERS = {'circle': _circle, 'segment': _segment}
+_OBSTACLE_PARSERS: dict[str, Callable[[Any, str], Obstacle]] = {'circle': _circle, 'segment': _segment}
 
 
 def _obstacle(value: Any, path: str) -> Obstacle:

@@ -27,7 +27,7 @@ class World:
         object.__setattr__(self, 'obstacles', Obstacles(self.obstacle_list))
 
     @classmethod
-    def from_obstacles(cls, workspace: Sequence[float], obstacles: Sequence[Obstacle]) -> 'World':
+    def from_obstacles(cls, workspace: Sequence[float], obstacles: Sequence[Obstacle]) -> World:
         xmin, ymin, xmax, ymax = (float(v) for v in workspace)
         return cls((xmin, ymin, xmax, ymax), tuple(obstacles))
 

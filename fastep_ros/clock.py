@@ -74,8 +74,8 @@ def tick_plan(rtf: float, step: float, max_rate_hz: float) -> tuple[float, float
 class ClockNode(Node):
     """Publishes simulated time on /clock, rtf times faster than wall time."""
 
-    def __init__(self, node_name: str = 'clock', **kwargs: object) -> None:
-        super().__init__(node_name, **kwargs)  # type: ignore[arg-type]
+    def __init__(self, node_name: str = 'clock', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
         if self.get_parameter('use_sim_time').value:
             raise StartupError('the clock cannot itself run on simulated time (use_sim_time must be false)')
         self.rtf = declare(self, 'rtf', 1.0, 'real-time factor: simulated seconds per wall second',
@@ -139,8 +139,9 @@ class ClockNode(Node):
                 for type_name in types.get(topic, []):
                     msg_type = _message_type(type_name)
                     if msg_type is not None:
-                        self.sync[topic].sub = self.create_subscription(
-                            msg_type, topic, lambda _msg, t=topic: self.on_sync(t), 10)
+                        def on_message(_msg: object, t: str = topic) -> None:   # a def: mypy cannot type a lambda
+                            self.on_sync(t)
+                        self.sync[topic].sub = self.create_subscription(msg_type, topic, on_message, 10)
                         break
         return all(s.sub is not None and self.count_publishers(t) > 0 for t, s in self.sync.items())
 

@@ -11,7 +11,7 @@ A bad scenario logs one line and exits with code 2.
 
 from __future__ import annotations
 
-from typing import Sequence
+from typing import Any, Sequence
 
 from nav_msgs.msg import OccupancyGrid
 from rclpy.node import Node
@@ -28,8 +28,8 @@ __all__ = ['MapNode', 'main']
 class MapNode(Node):
     """Latched /obstacles and /map of one scenario."""
 
-    def __init__(self, node_name: str = 'map', **kwargs: object) -> None:
-        super().__init__(node_name, **kwargs)  # type: ignore[arg-type]
+    def __init__(self, node_name: str = 'map', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
         source = declare(self, 'scenario', '', 'scenario YAML file or built-in name whose world is published')
         resolution = declare(self, 'resolution', 0.1, 'occupancy grid cell size (m)', constraints='> 0')
         thickness = declare(self, 'segment_thickness', 0.0, 'width a wall (segment) is rasterised with in the '

@@ -17,7 +17,7 @@ A command older than cmd_timeout, or one that is not finite, counts as zero.
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
@@ -37,8 +37,8 @@ MAX_CATCH_UP = 100_000  # integration steps done in one go at most (a clock jump
 class PlantNode(Node):
     """Integrates one robot's model from the commands on cmd_vel; publishes odom (and trailer_pose)."""
 
-    def __init__(self, node_name: str = 'plant', **kwargs: object) -> None:
-        super().__init__(node_name, **kwargs)  # type: ignore[arg-type]
+    def __init__(self, node_name: str = 'plant', **kwargs: Any) -> None:
+        super().__init__(node_name, **kwargs)
         self.model_name = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
                                   constraints='point_mass | tractor_trailer')
         start = declare(self, 'start', None, 'start state: [x, y] (point_mass) or [x, y, theta0, theta1] '

@@ -42,6 +42,7 @@ CIRCLES_NS = 'circles'
 SEGMENTS_NS = 'segments'
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR,
           'stale': DiagnosticStatus.STALE}
+Vector = Sequence[float] | np.ndarray   # a state or command: a list, tuple or numpy array of numbers
 
 
 def _finite(values: Iterable[float], what: str) -> None:
@@ -122,7 +123,7 @@ def path_to_waypoints(msg: Path) -> list[tuple[float, float]]:
 
 # ------------------------------------------------------------------------------------------------- odometry
 
-def state_to_odometry(state: Sequence[float], stamp: Time | None = None, *, child_frame_id: str = 'base_link',
+def state_to_odometry(state: Vector, stamp: Time | None = None, *, child_frame_id: str = 'base_link',
                       frame_id: str = 'map', linear: Sequence[float] = (0.0, 0.0),
                       angular: float = 0.0) -> Odometry:
     """Odometry of a model state: (x, y) (point mass, yaw 0) or (x, y, theta0, theta1) (yaw theta0).
@@ -179,7 +180,7 @@ def odometry_velocity(msg: Odometry) -> tuple[float, float]:
     return c * vx - s * vy, s * vx + c * vy
 
 
-def trailer_pose(state: Sequence[float], trailer_length: float, hitch_offset: float = 0.0,
+def trailer_pose(state: Vector, trailer_length: float, hitch_offset: float = 0.0,
                  stamp: Time | None = None, frame_id: str = 'map') -> PoseStamped:
     """Pose of the trailer axle point of a tractor-trailer state (x, y, theta0, theta1), yaw theta1.
 
@@ -199,7 +200,7 @@ def trailer_yaw(msg: PoseStamped) -> float:
 
 # ------------------------------------------------------------------------------------------------- commands
 
-def command_to_twist(command: Sequence[float], model: str = 'point_mass') -> Twist:
+def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
     """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer (v, omega) -> linear.x,
     angular.z."""
     a, b = float(command[0]), float(command[1])

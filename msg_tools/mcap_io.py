@@ -82,7 +82,7 @@ def type_name_of(message: Any) -> str:
     return f'{parts[0]}/msg/{cls.__name__}'
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def message_class(type_name: str) -> type:
     """The rclpy message class of `pkg/msg/Type` (imported from `pkg.msg`)."""
     full = normalize_type(type_name)
@@ -109,7 +109,7 @@ def _share_roots(pkg: str) -> list[Path]:
     return roots
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _msg_text(pkg: str, name: str) -> str:
     roots = _share_roots(pkg)
     for root in roots:
@@ -143,7 +143,7 @@ def _dependencies(pkg: str, text: str) -> list[str]:
     return out
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def message_definition(type_name: str) -> str:
     """The `ros2msg` schema text of a type, as rosbag2 writes it (see the module docstring)."""
     pkg, _, name = normalize_type(type_name).split('/')
@@ -280,13 +280,13 @@ class McapWriter:
             raise RecordingError(f'compression must be one of {", ".join(COMPRESSIONS)}, got {compression!r}')
         self._own_stream = not hasattr(output, 'write')
         if self._own_stream:
-            path = Path(output)  # type: ignore[arg-type]
+            path = Path(output)  # type: ignore[arg-type]  # no write(): a path, which mypy cannot narrow by hasattr
             try:
                 self._stream: IO[bytes] = open(path, 'wb')
             except OSError as exc:
                 raise RecordingError(f'cannot write {path}: {exc.strerror or exc}') from None
         else:
-            self._stream = output  # type: ignore[assignment]
+            self._stream = output  # type: ignore[assignment]  # has write(): a binary stream
         self._writer = Writer(self._stream, chunk_size=int(chunk_size), compression=COMPRESSIONS[compression])
         self._writer.start(profile=PROFILE, library=library)
         self._schemas: dict[tuple[str, str], int] = {}
@@ -368,7 +368,7 @@ class McapWriter:
         else:
             self._stream.flush()
 
-    def __enter__(self) -> 'McapWriter':
+    def __enter__(self) -> McapWriter:
         return self
 
     def __exit__(self, *exc: object) -> None:

@@ -2,8 +2,7 @@
 
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.kinematics.point_mass import PointMass, PointMassController, lyapunov
-from fastep_core.kinematics.tractor_trailer import (TractorTrailer, TractorTrailerController, hitch_angle,
-                                                    wrap_angle)
+from fastep_core.kinematics.tractor_trailer import TractorTrailer, TractorTrailerController, hitch_angle, wrap_angle
 
 __all__ = ['Controller', 'PointMass', 'PointMassController', 'RobotModel', 'TractorTrailer',
            'TractorTrailerController', 'hitch_angle', 'lyapunov', 'wrap_angle']

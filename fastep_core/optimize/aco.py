@@ -29,8 +29,16 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike
 
-from fastep_core.optimize.result import (Objective, OptimizeResult, RngLike, VectorisedFunction, check_count,
-                                         check_number, check_problem, initial_population)
+from fastep_core.optimize.result import (
+    Objective,
+    OptimizeResult,
+    RngLike,
+    VectorisedFunction,
+    check_count,
+    check_number,
+    check_problem,
+    initial_population,
+)
 
 __all__ = ['aco_r']
 

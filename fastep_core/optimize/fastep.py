@@ -55,9 +55,15 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from fastep_core.optimize.firefly import Elite, Swarm, _check_swarm_parameters
-from fastep_core.optimize.result import (FloatArray, Objective, OptimizeResult, RngLike, VectorisedFunction,
-                                         check_number,
-                                         check_problem, initial_population)
+from fastep_core.optimize.result import (
+    Objective,
+    OptimizeResult,
+    RngLike,
+    VectorisedFunction,
+    check_number,
+    check_problem,
+    initial_population,
+)
 
 __all__ = ['fastep', 'PREFERENCE_TOLERANCE']
 
@@ -67,7 +73,8 @@ PREFERENCE_TOLERANCE = 0.01
 
 def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50, max_iter: int = 30,
            patience: int = 5, gamma: float = 1.0, beta0: float = 2.0, alpha: float = 0.2,
-           alpha_damping: float = 0.8, tol: float = 0.0, rng: RngLike = None, x0: ArrayLike | None = None) -> OptimizeResult:
+           alpha_damping: float = 0.8, tol: float = 0.0, rng: RngLike = None,
+           x0: ArrayLike | None = None) -> OptimizeResult:
     """Minimise a vectorised function over a box with the Stepping Ahead Firefly algorithm.
 
     Parameters

@@ -40,16 +40,26 @@ import functools
 import numpy as np
 from numpy.typing import ArrayLike
 
-from fastep_core.optimize.result import (FloatArray, IntArray, Objective, OptimizeResult, RngLike,
-                                         VectorisedFunction, check_count, check_number, check_problem,
-                                         initial_population)
+from fastep_core.optimize.result import (
+    FloatArray,
+    IntArray,
+    Objective,
+    OptimizeResult,
+    RngLike,
+    VectorisedFunction,
+    check_count,
+    check_number,
+    check_problem,
+    initial_population,
+)
 
 __all__ = ['firefly']
 
 
 def firefly(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50, max_iter: int = 30,
             patience: int = 5, gamma: float = 1.0, beta0: float = 2.0, alpha: float = 0.2,
-            alpha_damping: float = 0.8, tol: float = 0.0, rng: RngLike = None, x0: ArrayLike | None = None) -> OptimizeResult:
+            alpha_damping: float = 0.8, tol: float = 0.0, rng: RngLike = None,
+            x0: ArrayLike | None = None) -> OptimizeResult:
     """Minimise a vectorised function over a box with the standard firefly algorithm.
 
     Parameters are those of `fastep` (Table 1 of the paper as defaults): `fun` maps an (m, d) array of

@@ -63,7 +63,7 @@ class EscapePath:
     index: int = 0               # the vertex aimed at
 
     @classmethod
-    def from_path(cls, path: OptimalPath, world: World) -> 'EscapePath':
+    def from_path(cls, path: OptimalPath, world: World) -> EscapePath:
         points = densify(path.points)
         legs = np.hypot(*np.diff(np.array(points), axis=0).T)
         rest = np.concatenate([np.cumsum(legs[::-1])[::-1][1:], [0.0]])

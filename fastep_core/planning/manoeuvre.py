@@ -82,7 +82,7 @@ class DistanceField:
     search's own test, so every state the search can reach lies in a free cell (within 0.71 cell of its centre).
     """
 
-    def __init__(self, world: World, goal: Sequence[float], keep: float, cell: float = 0.25) -> None:
+    def __init__(self, world: World, goal: Sequence[float] | FloatArray, keep: float, cell: float = 0.25) -> None:
         xmin, ymin, xmax, ymax = world.workspace
         self.origin = np.array([xmin, ymin])
         self.cell = cell
@@ -111,7 +111,8 @@ class DistanceField:
     def index(self, points: FloatArray) -> NDArray[np.intp]:
         ny, nx = self.shape
         ij = np.floor((points - self.origin) / self.cell).astype(np.intp)
-        return np.clip(ij[:, 1], 0, ny - 1) * nx + np.clip(ij[:, 0], 0, nx - 1)
+        flat: NDArray[np.intp] = np.clip(ij[:, 1], 0, ny - 1) * nx + np.clip(ij[:, 0], 0, nx - 1)
+        return flat
 
     def __call__(self, points: FloatArray) -> FloatArray:
         """Distance to the goal from each point (n, 2); inf where the goal cannot be reached."""
@@ -149,7 +150,8 @@ def _hitch(states: FloatArray) -> FloatArray:
     return np.arctan2(np.sin(states[..., 3] - states[..., 2]), np.cos(states[..., 3] - states[..., 2]))
 
 
-def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float], goal: Sequence[float],
+def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float] | FloatArray,
+                   goal: Sequence[float] | FloatArray,
                    keep: float, dt: float, *, floor: float | None = None, clear_within: float | None = None,
                    speed: float = 0.5, arc_ticks: int = 30, reach: float = 1.0, max_hitch: float = 1.0,
                    max_expansions: int = 6000) -> Manoeuvre | None:

@@ -83,7 +83,7 @@ class PlannerParams:
     def descriptions(cls) -> dict[str, str]:
         return {f.name: f.metadata['description'] for f in fields(cls)}
 
-    def with_overrides(self, overrides: Mapping[str, Any]) -> 'PlannerParams':
+    def with_overrides(self, overrides: Mapping[str, Any]) -> PlannerParams:
         """A copy with some fields replaced; unknown names raise ParameterError."""
         unknown = sorted(set(overrides) - set(self.names()))
         if unknown:
