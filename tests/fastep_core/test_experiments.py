@@ -1,4 +1,4 @@
-"""Batch experiments, their statistics, the fastep-bench and fastep-tune command lines (small and fast)."""
+"""Batch experiments, their statistics, tuning and the fastep-tune command line (small and fast)."""
 
 import math
 import subprocess
@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 
 from fastep_core import experiments, tuning
-from fastep_core.bench_cli import main as bench_main
 from fastep_core.experiments import Record
 
 
@@ -68,19 +67,7 @@ def test_run_batch_is_reproducible_and_independent_of_workers():
     assert all(r.ok for r in serial)
 
 
-def test_fastep_bench_writes_the_table_and_figures(tmp_path, capsys):
-    assert bench_main(['--runs', '2', '--scenarios', 'table2_s3', '--workers', '1', '--out', str(tmp_path)]) == 0
-    text = (tmp_path / 'table2.md').read_text()
-    assert 'FAStep-Kinematic against ACO-Kinematic' in text and 'Optimal-Kinematic' in text
-    for metric in ('path_length', 'compute_time'):
-        assert (tmp_path / 'figures' / f'table2_{metric}.png').stat().st_size > 1000
-
-
 @pytest.mark.parametrize('module, args', [
-    ('fastep_core.bench_cli', ['--runs', '0']),
-    ('fastep_core.bench_cli', ['--algorithms', 'nope']),
-    ('fastep_core.bench_cli', ['--scenarios', 'no_such_scenario']),
-    ('fastep_core.bench_cli', ['--bogus']),
     ('fastep_core.tuning', ['--popsize', '0']),
     ('fastep_core.tuning', ['--train', 'table2_s1', '--test', 'table2_s1']),
     ('fastep_core.tuning', ['--test', 'no_such_scenario']),

@@ -280,6 +280,6 @@ def test_optimal_navigator_fails_cleanly_without_a_path():
 
 
 def test_fastep_sim_accepts_the_optimal_algorithm(capsys):
-    from fastep_core.cli import main
+    from msg_tools.sim_cli import main
     assert main(['table2_s3', '--algorithm', 'optimal']) == 0
     assert 'arrived' in capsys.readouterr().out

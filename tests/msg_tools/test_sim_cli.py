@@ -6,12 +6,12 @@ import sys
 
 import pytest
 
-from fastep_core.cli import main
+from msg_tools.sim_cli import main
 from fastep_core.scenario import builtin_names
 
 
 def run_cli(*args):
-    return subprocess.run([sys.executable, '-m', 'fastep_core.cli', *args], capture_output=True, text=True,
+    return subprocess.run([sys.executable, '-m', 'msg_tools.sim_cli', *args], capture_output=True, text=True,
                           timeout=120)
 
 
