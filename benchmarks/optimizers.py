@@ -31,15 +31,15 @@ Run: `python -m benchmarks.optimizers [--budget 20000] [--seeds 30] [--dims 2 10
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
 from pathlib import Path
-from typing import Callable, NoReturn, Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
+from fastep_core.cli import Parser
 from fastep_core.experiments import pool_context
 from fastep_core.optimize import fastep, firefly
 
@@ -205,13 +205,8 @@ def markdown(rows: Sequence[tuple[str, int, str, int, float, float, int]], dims:
     return '\n'.join(lines) + '\n'
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
-
-
 def main(argv: Sequence[str] | None = None) -> int:
-    p = _Parser(prog='python -m benchmarks.optimizers', description=__doc__.splitlines()[0])
+    p = Parser(prog='python -m benchmarks.optimizers', description=__doc__.splitlines()[0])
     p.add_argument('--budget', type=int, default=20_000, help='objective evaluations per run (default 20000)')
     p.add_argument('--seeds', type=int, default=30, help='seeds per function and optimizer (default 30)')
     p.add_argument('--dims', type=int, nargs='+', default=[2, 10], help='dimensions (default 2 10)')

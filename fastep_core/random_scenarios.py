@@ -22,6 +22,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from fastep_core import cli
 from fastep_core.geometry import Circle
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.params import PlannerParams
@@ -202,13 +203,17 @@ def random_scenario(seed: int, *, n_robots: int | None = None, tractor_share: fl
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Print random scenario SEED (default 0) as YAML, ready for `fastep-sim FILE`."""
-    import sys
-
     import yaml
-    args = list(sys.argv[1:] if argv is None else argv)
-    seed = int(args[0]) if args else 0
-    print(yaml.safe_dump(random_scenario_data(seed), sort_keys=False), end='')
-    return 0
+
+    prog = 'python -m fastep_core.random_scenarios'
+    parser = cli.Parser(prog=prog, description='Print a random solvable scenario as YAML.')
+    parser.add_argument('seed', nargs='?', type=cli.seed, default=0, help='scenario seed (default 0)')
+
+    def run() -> int:
+        args = parser.parse_args(argv)
+        print(yaml.safe_dump(random_scenario_data(args.seed), sort_keys=False), end='')
+        return 0
+    return cli.guard(prog, run)
 
 
 if __name__ == '__main__':

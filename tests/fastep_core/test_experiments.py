@@ -67,14 +67,12 @@ def test_run_batch_is_reproducible_and_independent_of_workers():
     assert all(r.ok for r in serial)
 
 
-@pytest.mark.parametrize('module, args', [
-    ('fastep_core.tuning', ['--popsize', '0']),
-    ('fastep_core.tuning', ['--train', 'table2_s1', '--test', 'table2_s1']),
-    ('fastep_core.tuning', ['--test', 'no_such_scenario']),
-    ('fastep_core.tuning', ['--bogus']),
-])
-def test_command_lines_exit_2_with_one_line(module, args):
-    done = subprocess.run([sys.executable, '-m', module, *args], capture_output=True, text=True, timeout=120)
+@pytest.mark.parametrize('args', [['--popsize', '0'], ['--maxiter', '-1'],
+                                  ['--train', 'table2_s1', '--test', 'table2_s1'],
+                                  ['--test', 'no_such_scenario'], ['--bogus']])
+def test_fastep_tune_bad_input_exits_2_with_one_line(args):
+    done = subprocess.run([sys.executable, '-m', 'fastep_core.tuning', *args], capture_output=True, text=True,
+                          timeout=120)
     assert done.returncode == 2
     assert len(done.stderr.strip().splitlines()) == 1 and 'Traceback' not in done.stderr
     assert done.stdout == ''

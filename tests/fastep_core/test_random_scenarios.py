@@ -62,6 +62,15 @@ def test_main_prints_the_scenario_as_yaml(capsys):
     assert yaml.safe_load(capsys.readouterr().out) == random_scenario_data(5)
 
 
+@pytest.mark.parametrize('argv', [['-1'], ['five'], ['1', '2']])
+def test_main_refuses_a_bad_seed_with_one_line(capsys, argv):
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    captured = capsys.readouterr()
+    assert captured.out == '' and len(captured.err.splitlines()) == 1
+
+
 @pytest.mark.parametrize('seed', [0, 4, 10])
 def test_a_small_soak_every_robot_arrives_and_none_collides(seed):
     run = simulate(random_scenario(seed), 'fastep', seed)

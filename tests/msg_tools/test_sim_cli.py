@@ -6,8 +6,8 @@ import sys
 
 import pytest
 
-from msg_tools.sim_cli import main
 from fastep_core.scenario import builtin_names
+from msg_tools.sim_cli import main
 
 
 def run_cli(*args):
