@@ -38,6 +38,8 @@ from typing import TYPE_CHECKING, Callable, Iterable, Sequence
 
 import numpy as np
 
+from fastep_core.errors import ParameterError
+
 if TYPE_CHECKING:
     from fastep_core.scenario import Scenario
 
@@ -158,7 +160,7 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     workers <= 1 runs in this process. `progress` (True or a label) prints a counter on stderr.
     """
     if runs < 1:
-        raise ValueError(f'runs must be >= 1, got {runs}')
+        raise ParameterError(f'runs must be >= 1, got {runs}')
     todo = tasks(scenarios, algorithms, runs, seed0)
     # A shuffled order spreads whatever else loads the machine evenly over planners and scenarios (in
     # scenario-major order one planner's runs would share one stretch of background load).

@@ -23,6 +23,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core import cli
+from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.params import PlannerParams
@@ -148,7 +149,7 @@ def random_scenario_data(seed: int, *, n_robots: int | None = None,
     n_robots: 1-4, drawn when None. Raises RuntimeError if no solvable layout turns up (has not happened).
     """
     if n_robots is not None and not 1 <= n_robots <= 4:
-        raise ValueError(f'n_robots must be 1-4, got {n_robots}')
+        raise ParameterError(f'n_robots must be 1-4, got {n_robots}')
     rng = np.random.default_rng(seed)
     margin = PlannerParams().clearance_margin
     for _ in range(_ATTEMPTS):
@@ -169,7 +170,7 @@ def u_trap_scenario_data(seed: int, model: str = 'point_mass') -> dict[str, Any]
     """One robot and one U-shaped trap across its straight line, open towards it (and a few circles away
     from that line): the trap-escape benchmark's scenarios. Same seed, same scenario."""
     if model not in ('point_mass', 'tractor_trailer'):
-        raise ValueError(f'model must be point_mass or tractor_trailer, got {model!r}')
+        raise ParameterError(f'model must be point_mass or tractor_trailer, got {model!r}')
     rng = np.random.default_rng(seed)
     margin = PlannerParams().clearance_margin
     for _ in range(_ATTEMPTS):

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from fastep_core import experiments, tuning
+from fastep_core.errors import ParameterError
 from fastep_core.experiments import Record
 
 
@@ -57,6 +58,11 @@ def test_markdown_report_has_the_papers_numbers_and_ours():
     assert '45.73' in text and '48.54' in text and '5.79 %' in text       # the paper's row for scenario 3
     assert '| table2_s3 | r1 | FAStep-Kinematic | 5/5 |' in text
     assert f'{50.0 / 45.51:.3f}'[:4] in text                              # the optimality ratio
+
+
+def test_run_batch_refuses_zero_runs():
+    with pytest.raises(ParameterError, match='runs must be >= 1'):
+        experiments.run_batch(['table2_s3'], ['fastep'], 0)
 
 
 def test_run_batch_is_reproducible_and_independent_of_workers():
