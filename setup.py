@@ -28,6 +28,7 @@ setup(
         'matplotlib>=3.8',
         'mcap>=1.3',
         'rosbags>=0.10',
+        'tqdm==4.70.1',
     ],
     extras_require={'test': ['pytest>=8', 'hypothesis>=6.100']},
     zip_safe=True,

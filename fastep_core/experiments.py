@@ -31,13 +31,13 @@ from __future__ import annotations
 import functools
 import math
 import multiprocessing
-import sys
 import time
 from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING, Callable, Iterable, Sequence
+from typing import TYPE_CHECKING, Iterable, Sequence
 
 import numpy as np
 
+from fastep_core.cli import progress_bar
 from fastep_core.errors import ParameterError
 
 if TYPE_CHECKING:
@@ -137,27 +137,13 @@ def pool_context() -> multiprocessing.context.BaseContext:
     return multiprocessing.get_context('fork' if 'fork' in multiprocessing.get_all_start_methods() else None)
 
 
-def _progress_printer(total: int, label: str) -> Callable[[int], None]:
-    tty = sys.stderr.isatty()
-    every = max(1, total // 20)
-
-    def show(done: int) -> None:
-        if tty:
-            sys.stderr.write(f'\r{label}: {done}/{total} runs')
-            if done == total:
-                sys.stderr.write('\n')
-        elif done % every == 0 or done == total:
-            sys.stderr.write(f'{label}: {done}/{total} runs\n')
-        sys.stderr.flush()
-    return show
-
-
 def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, workers: int = 2, *,
-              seed0: int = 0, progress: bool | str = False,
+              seed0: int = 0, progress: bool | None = False, label: str = 'runs',
               overrides: dict[str, float] | None = None) -> list[Record]:
     """Simulate every scenario with every algorithm for seeds seed0..seed0+runs-1; records sorted.
 
-    workers <= 1 runs in this process. `progress` (True or a label) prints a counter on stderr.
+    workers <= 1 runs in this process. `progress`: a progress bar titled `label` on stderr, None when stderr
+    is a terminal, True always, False never (fastep_core.cli.progress_bar).
     """
     if runs < 1:
         raise ParameterError(f'runs must be >= 1, got {runs}')
@@ -167,19 +153,17 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     todo = [todo[k] for k in np.random.default_rng(seed0).permutation(len(todo))]
     frozen = tuple(sorted((overrides or {}).items()))
     job = functools.partial(run_task, overrides=frozen)
-    show = _progress_printer(len(todo), progress if isinstance(progress, str) else 'runs') if progress else None
     out: list[Record] = []
-    if workers <= 1 or len(todo) == 1:
-        for k, task in enumerate(todo, 1):
-            out.extend(job(task))
-            if show:
-                show(k)
-    else:
-        with pool_context().Pool(min(workers, len(todo))) as pool:
-            for k, records in enumerate(pool.imap_unordered(job, todo), 1):
-                out.extend(records)
-                if show:
-                    show(k)
+    with progress_bar(len(todo), label, progress) as bar:
+        if workers <= 1 or len(todo) == 1:
+            for task in todo:
+                out.extend(job(task))
+                bar.update()
+        else:
+            with pool_context().Pool(min(workers, len(todo))) as pool:
+                for records in pool.imap_unordered(job, todo):
+                    out.extend(records)
+                    bar.update()
     order = {(s, a): i for i, (s, a) in enumerate((s, a) for s in scenarios for a in algorithms)}
     out.sort(key=lambda r: (order[(r.scenario, r.algorithm)], r.seed, r.robot))
     return out

@@ -2,12 +2,13 @@
 
     fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal]
                  [--workers 2] [--seed 0] [--out docs/] [--report table2] [--json FILE] [--no-figures]
+                 [--progress]
 
 Writes OUT/REPORT.md (the Markdown tables) and OUT/figures/REPORT_{path_length,compute_time,paths}.png,
-prints the Markdown on stdout and a progress counter on stderr. The engine is `fastep_core.experiments`, the
-figures `msg_tools.bench_figures` (why this command lives in msg_tools: fastep_core draws nothing);
-`python -m benchmarks.table2` is the same command. Exit 0 when the runs were made, 2 with one line on
-stderr for bad input.
+prints the Markdown on stdout and a progress bar on stderr (when stderr is a terminal, or with --progress).
+The engine is `fastep_core.experiments`, the figures `msg_tools.bench_figures` (why this command lives in
+msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is the same command. Exit 0 when the
+runs were made, 2 with one line on stderr for bad input.
 """
 
 from __future__ import annotations
@@ -40,6 +41,8 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument('--report', default='table2', help='report name: OUT/REPORT.md, figures/REPORT_*.png')
     p.add_argument('--json', type=Path, metavar='FILE', help='also write every run record as JSON')
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
+    p.add_argument('--progress', action='store_true',
+                   help='show the progress bar on stderr even when it is not a terminal (e.g. a log file)')
     return p
 
 
@@ -56,7 +59,7 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
     for name in scenarios:  # a bad one is a FastepError: one line before any run starts
         load_scenario(name)
     records = experiments.run_batch(scenarios, args.algorithms, args.runs, args.workers, seed0=args.seed,
-                                    progress=prog)
+                                    progress=True if args.progress else None, label=prog)
     optimal = {s: experiments.optimal_lengths(s) for s in scenarios}
     command = ' '.join([prog, *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
     title = 'Table 2 regenerated' if scenarios == list(experiments.TABLE2) else \

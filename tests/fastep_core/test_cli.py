@@ -8,7 +8,7 @@ import sys
 
 import pytest
 
-from fastep_core.cli import INTERRUPTED, Parser, guard, positive_int, seed
+from fastep_core.cli import INTERRUPTED, Parser, guard, positive_int, progress_bar, seed
 from fastep_core.errors import FastepError, ScenarioError
 
 
@@ -92,3 +92,14 @@ def test_argparse_types_refuse_what_they_should() -> None:
         seed('-3')
     with pytest.raises(argparse.ArgumentTypeError):
         positive_int('0')
+
+
+def test_progress_bar_is_off_when_stderr_is_not_a_terminal_unless_asked(capsys: pytest.CaptureFixture[str]) -> None:
+    for show in (None, False):   # pytest's captured stderr is not a terminal
+        with progress_bar(3, 'batch', show) as bar:
+            bar.update(3)
+        assert capsys.readouterr() == ('', '')
+    with progress_bar(3, 'batch', True) as bar:
+        bar.update(3)
+    captured = capsys.readouterr()
+    assert captured.out == '' and 'batch' in captured.err and '3/3' in captured.err

@@ -60,6 +60,13 @@ def test_markdown_report_has_the_papers_numbers_and_ours():
     assert f'{50.0 / 45.51:.3f}'[:4] in text                              # the optimality ratio
 
 
+def test_run_batch_shows_its_progress_on_stderr_when_asked(capsys):
+    records = experiments.run_batch(['table2_s3'], ['optimal'], 1, workers=1, progress=True, label='bench')
+    captured = capsys.readouterr()
+    assert len(records) == 1 and captured.out == ''
+    assert 'bench' in captured.err and '1/1' in captured.err
+
+
 def test_run_batch_refuses_zero_runs():
     with pytest.raises(ParameterError, match='runs must be >= 1'):
         experiments.run_batch(['table2_s3'], ['fastep'], 0)
