@@ -28,6 +28,7 @@ setup(
         'matplotlib>=3.8',
         'mcap>=1.3',
         'rosbags>=0.10',
+        'tqdm==4.70.1',
     ],
     extras_require={'test': ['pytest>=8', 'hypothesis>=6.100']},
     zip_safe=True,
@@ -36,13 +37,13 @@ setup(
     license='Apache-2.0',
     entry_points={
         'console_scripts': [
-            'fastep-sim = fastep_core.cli:main',
+            'fastep-sim = msg_tools.sim_cli:main',
             'fastep-plant = fastep_ros.plant:main',
             'fastep-map = fastep_ros.map_server:main',
             'fastep-planner = fastep_ros.planner:main',
             'fastep-clock = fastep_ros.clock:main',
             'fastep-launch = fastep_ros.launch:main',
-            'fastep-bench = fastep_core.bench_cli:main',
+            'fastep-bench = msg_tools.bench_cli:main',
             'fastep-tune = fastep_core.tuning:main',
             'fastep-record = fastep_ros.recorder:main',
             'fastep-replay = fastep_ros.replay:main',

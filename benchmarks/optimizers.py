@@ -31,15 +31,15 @@ Run: `python -m benchmarks.optimizers [--budget 20000] [--seeds 30] [--dims 2 10
 
 from __future__ import annotations
 
-import argparse
 import math
 import sys
 import time
 from pathlib import Path
-from typing import Callable, NoReturn, Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
+from fastep_core.cli import Parser, progress_bar
 from fastep_core.experiments import pool_context
 from fastep_core.optimize import fastep, firefly
 
@@ -168,17 +168,17 @@ def run_one(job: tuple[str, int, str, int, int]) -> tuple[str, int, str, int, fl
 
 
 def run_all(dims: Sequence[int], seeds: int, max_evals: int, workers: int,
-            optimizers: Sequence[str] = tuple(OPTIMIZERS)) -> list[tuple[str, int, str, int, float, float, int]]:
+            optimizers: Sequence[str] = tuple(OPTIMIZERS),
+            progress: bool | None = None) -> list[tuple[str, int, str, int, float, float, int]]:
+    """Every (function, d, optimizer, seed) run; `progress` as fastep_core.cli.progress_bar's `show`."""
     jobs = [(f, d, o, s, max_evals) for f in FUNCTIONS for d in dims for o in optimizers for s in range(seeds)]
     order = np.random.default_rng(0).permutation(len(jobs))     # spread background load over optimizers
     jobs = [jobs[k] for k in order]
     out = []
-    every = max(1, len(jobs) // 20)
-    with pool_context().Pool(workers) as pool:
-        for k, row in enumerate(pool.imap_unordered(run_one, jobs, chunksize=4), 1):
+    with pool_context().Pool(workers) as pool, progress_bar(len(jobs), 'optimizers', progress) as bar:
+        for row in pool.imap_unordered(run_one, jobs, chunksize=4):
             out.append(row)
-            if k % every == 0 or k == len(jobs):
-                print(f'optimizers: {k}/{len(jobs)} runs', file=sys.stderr, flush=True)
+            bar.update()
     return out
 
 
@@ -205,13 +205,8 @@ def markdown(rows: Sequence[tuple[str, int, str, int, float, float, int]], dims:
     return '\n'.join(lines) + '\n'
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
-
-
 def main(argv: Sequence[str] | None = None) -> int:
-    p = _Parser(prog='python -m benchmarks.optimizers', description=__doc__.splitlines()[0])
+    p = Parser(prog='python -m benchmarks.optimizers', description=__doc__.splitlines()[0])
     p.add_argument('--budget', type=int, default=20_000, help='objective evaluations per run (default 20000)')
     p.add_argument('--seeds', type=int, default=30, help='seeds per function and optimizer (default 30)')
     p.add_argument('--dims', type=int, nargs='+', default=[2, 10], help='dimensions (default 2 10)')
@@ -219,10 +214,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument('--optimizers', nargs='+', default=list(OPTIMIZERS), choices=list(OPTIMIZERS),
                    metavar='NAME', help=f'subset of: {", ".join(OPTIMIZERS)}')
     p.add_argument('--out', type=Path, help='also write the Markdown table to this file')
+    p.add_argument('--progress', action='store_true',
+                   help='show the progress bar on stderr even when it is not a terminal (e.g. a log file)')
     args = p.parse_args(argv)
     if args.budget < 100 or args.seeds < 1 or args.workers < 1 or min(args.dims) < 1:
         p.error('--budget must be >= 100, --seeds, --workers and --dims >= 1')
-    rows = run_all(args.dims, args.seeds, args.budget, args.workers, args.optimizers)
+    rows = run_all(args.dims, args.seeds, args.budget, args.workers, args.optimizers,
+                   progress=True if args.progress else None)
     command = 'python -m benchmarks.optimizers ' + ' '.join(sys.argv[1:] if argv is None else argv)
     text = markdown(rows, args.dims, args.seeds, args.budget, args.optimizers, command.strip())
     print(text)

@@ -20,6 +20,7 @@ from typing import Any
 
 import yaml
 
+from fastep_core.cli import progress_bar
 from fastep_core.random_scenarios import random_scenario_data
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
@@ -71,17 +72,21 @@ def main() -> int:
                    help='override planner trap_timeout (0 disables trap escape)')
     p.add_argument('--workers', type=int, default=2)
     p.add_argument('--out', type=Path, default=Path('out/soak'))
+    p.add_argument('--progress', action='store_true',
+                   help='show the progress bar on stderr even when it is not a terminal (e.g. a log file)')
     args = p.parse_args()
     jobs = [(seed, args.algorithm, args.trap_timeout) for seed in range(args.first, args.first + args.scenarios)]
     start = time.perf_counter()
     results = []
-    with ProcessPoolExecutor(args.workers) as pool:
+    failed_so_far = 0
+    # A soak takes most of an hour on two cores: show it is moving, and whether anything failed yet.
+    with ProcessPoolExecutor(args.workers) as pool, \
+            progress_bar(len(jobs), 'soak', True if args.progress else None, unit='scenario') as bar:
         for result in pool.map(run_one, jobs, chunksize=4):
             results.append(result)
-            if len(results) % 50 == 0:   # a soak takes most of an hour on two cores: show it is moving
-                failed = sum(any(not r['reached'] or r['collided'] for r in res['robots']) for res in results)
-                print(f'{len(results)}/{len(jobs)} scenarios, {failed} with a failure, '
-                      f'{time.perf_counter() - start:.0f} s', flush=True)
+            failed_so_far += any(not r['reached'] or r['collided'] for r in result['robots'])
+            bar.set_postfix(failed=failed_so_far, refresh=False)
+            bar.update()
     summary = summarise(results)
     summary.update(algorithm=args.algorithm, first_seed=args.first, trap_timeout=args.trap_timeout,
                    wall_seconds=round(time.perf_counter() - start, 1))

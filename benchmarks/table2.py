@@ -1,7 +1,7 @@
 """Benchmark: the paper's Table 2 regenerated, with Mann-Whitney tests, optimality ratios and box plots.
 
 Run: `python -m benchmarks.table2 [--runs N] [--scenarios ...] [--workers 2] [--out docs/]` (the same flags
-as the `fastep-bench` console script; the engine is `fastep_core.experiments`, the CLI `fastep_core.bench_cli`).
+as the `fastep-bench` console script; the engine is `fastep_core.experiments`, the CLI `msg_tools.bench_cli`).
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from __future__ import annotations
 import sys
 from typing import Sequence
 
-from fastep_core.bench_cli import main as _main
+from msg_tools.bench_cli import main as _main
 
 
 def main(argv: Sequence[str] | None = None) -> int:

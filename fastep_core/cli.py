@@ -1,33 +1,60 @@
-"""fastep-sim: run a scenario in-process (no ROS) and report what every robot did.
+"""What every fastep command line shares: one-line errors with exit code 2, the main() guard, argparse types.
 
-    fastep-sim SCENARIO [--algorithm fastep|aco] [--seed N] [--runs K] [--json OUT] [--plot OUT.png]
-               [--mcap OUT.mcap]
-    fastep-sim --list
-
-Exit 0 when the runs were simulated (arrived or not), 2 with one line on stderr for bad input.
+The contract of every console script (fastep-sim, fastep-bench, fastep-tune, fastep-report, fastep-recover,
+fastep-replay, fastep-launch) and of the ROS nodes: bad input gives ONE line `PROG: error: ...` on stderr and
+exit code 2, never a traceback or a usage block; Ctrl-C gives one line and 130; a reader that goes away
+(`| head`) ends the command quietly. `Parser` does it for the flags, `guard` for everything after them.
+Long batches show a `progress_bar` (tqdm) on stderr, so stdout stays the result.
 """
 
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import sys
-from pathlib import Path
-from typing import NoReturn, Sequence
+from typing import TYPE_CHECKING, Callable, NoReturn
 
 from fastep_core.errors import FastepError
-from fastep_core.scenario import builtin_names, load_scenario
-from fastep_core.simulator import ALGORITHMS, Run, simulate
 
-__all__ = ['main']
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
+__all__ = ['Parser', 'guard', 'fail', 'seed', 'positive_int', 'progress_bar']
+
+INTERRUPTED = 130
+"""Exit code after Ctrl-C: 128 + SIGINT, as a shell reports it."""
 
 
-class _Parser(argparse.ArgumentParser):
+class Parser(argparse.ArgumentParser):
     """argparse, but bad flags give one line on stderr (and exit 2) instead of usage + error."""
 
     def error(self, message: str) -> NoReturn:
         self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+
+
+def fail(prog: str, message: object) -> int:
+    """Print `PROG: error: MESSAGE` on stderr; return 2, the exit code of bad input."""
+    print(f'{prog}: error: {message}', file=sys.stderr)
+    return 2
+
+
+def guard(prog: str, body: Callable[[], int]) -> int:
+    """Run a command's body and return its exit code, turning what a user can cause into one line.
+
+    FastepError: its message, exit 2. Ctrl-C: `PROG: interrupted`, exit 130. BrokenPipeError (the reader of
+    stdout went away): exit 1 without a word, and without Python's second complaint when it flushes stdout
+    at exit.
+    """
+    try:
+        return body()
+    except FastepError as exc:
+        return fail(prog, exc)
+    except KeyboardInterrupt:
+        print(f'{prog}: interrupted', file=sys.stderr)
+        return INTERRUPTED
+    except BrokenPipeError:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 1
 
 
 def seed(text: str) -> int:
@@ -38,95 +65,20 @@ def seed(text: str) -> int:
     return value
 
 
-def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog='fastep-sim', description='Simulate a scenario with FAStep-Kinematic or ACO-Kinematic.')
-    p.add_argument('scenario', nargs='?', help='scenario YAML file or built-in name (see --list)')
-    p.add_argument('--algorithm', choices=ALGORITHMS, default='fastep', help='planner (default: fastep)')
-    p.add_argument('--seed', type=seed, default=0, help='seed of the first run (default: 0)')
-    p.add_argument('--runs', type=int, default=1, help='number of runs, seeds seed..seed+runs-1 (default: 1)')
-    p.add_argument('--json', type=Path, metavar='OUT', help='write all runs as JSON')
-    p.add_argument('--plot', type=Path, metavar='OUT.png', help='draw the first run like the paper\'s Fig. 2')
-    p.add_argument('--mcap', type=Path, metavar='OUT.mcap',
-                   help='record the first run as MCAP with the topics of a live run (msg_tools.sim_mcap)')
-    p.add_argument('--list', action='store_true', help='list built-in scenarios and exit')
-    return p
+def positive_int(text: str) -> int:
+    """argparse type of a count (runs, workers, seeds, population): a whole number >= 1."""
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError(f'must be at least 1, got {value}')
+    return value
 
 
-def _summary(run: Run) -> str:
-    lines = []
-    for r in run.robots:
-        state = 'arrived' if r.reached else 'NOT arrived'
-        when = f'{r.sim_time:.1f} s' if r.sim_time is not None else '-'
-        lines.append(f'seed {run.seed} {r.name}: {state}{" COLLIDED" if r.collided else ""}, '
-                     f'path {r.path_length:.2f} m, time {when}, compute {r.compute_time * 1e3:.0f} ms, '
-                     f'min clearance {r.min_clearance:.2f} m, activations {r.activations} ({r.status})')
-    return '\n'.join(lines)
+def progress_bar(total: int, label: str, show: bool | None = None, unit: str = 'run') -> tqdm:
+    """A tqdm progress bar on stderr; update(n) it as work ends, close() it (or use it as a context manager).
 
-
-def main(argv: Sequence[str] | None = None) -> int:
-    try:
-        return _run(argv)
-    except KeyboardInterrupt:
-        print('fastep-sim: interrupted', file=sys.stderr)
-        return 130
-    except BrokenPipeError:
-        # The reader went away (e.g. `| head`): stop quietly, without a second error at interpreter exit.
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 1
-
-
-def _run(argv: Sequence[str] | None) -> int:
-    parser = _parser()
-    args = parser.parse_args(argv)
-    if args.list:
-        print('\n'.join(builtin_names()))
-        return 0
-    if args.scenario is None:
-        parser.error('a SCENARIO is required (a YAML file or one of: ' + ', '.join(builtin_names()) + ')')
-    if args.runs < 1:
-        parser.error(f'--runs must be at least 1, got {args.runs}')
-    try:
-        scenario = load_scenario(args.scenario)
-    except FastepError as exc:
-        print(f'fastep-sim: error: {exc}', file=sys.stderr)
-        return 2
-    recorder = None
-    if args.mcap is not None:
-        try:  # the ROS message packages only when a recording is asked for
-            from msg_tools.sim_mcap import SimRecorder
-        except ImportError as exc:
-            print(f'fastep-sim: error: --mcap needs the ROS 2 message packages: {exc}', file=sys.stderr)
-            return 2
-        recorder = SimRecorder(scenario, args.algorithm, args.seed)
-    runs = [simulate(scenario, args.algorithm, seed,
-                     observer=recorder.observe if recorder is not None and seed == args.seed else None)
-            for seed in range(args.seed, args.seed + args.runs)]
-    for run in runs:
-        print(_summary(run))
-    try:
-        if args.json is not None:
-            doc = {'scenario': scenario.name, 'algorithm': args.algorithm, 'runs': [r.to_json() for r in runs]}
-            args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(json.dumps(doc) + '\n')
-            print(f'wrote {args.json}')
-        if args.plot is not None:
-            from msg_tools.plots import plot_paths  # matplotlib only when a figure is asked for
-            args.plot.parent.mkdir(parents=True, exist_ok=True)
-            plot_paths(scenario, runs[0], args.plot)
-            print(f'wrote {args.plot}')
-        if recorder is not None:
-            recorder.finish(runs[0])
-            args.mcap.parent.mkdir(parents=True, exist_ok=True)
-            count = recorder.write(args.mcap)
-            print(f'wrote {args.mcap} ({count} messages of the run with seed {args.seed})')
-    except OSError as exc:
-        print(f'fastep-sim: error: cannot write output: {exc}', file=sys.stderr)
-        return 2
-    except FastepError as exc:  # msg_tools.errors.RecordingError: e.g. the MCAP file cannot be created
-        print(f'fastep-sim: error: {exc}', file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == '__main__':
-    sys.exit(main())
+    show: None draws it only when stderr is a terminal (a log file gets no carriage-return clutter), True
+    always (asked for, e.g. to follow a long batch in a log), False never.
+    """
+    from tqdm import tqdm  # here, not at the top: 0.1 s of import that no node and no short command needs
+    return tqdm(total=total, desc=label, unit=unit, file=sys.stderr, disable=None if show is None else not show,
+                dynamic_ncols=True)

@@ -13,8 +13,12 @@ class ScenarioError(FastepError):
     """A scenario file or mapping is malformed or describes an impossible setup."""
 
 
-class ParameterError(FastepError):
-    """A planner or model parameter is unknown or out of range."""
+class ParameterError(FastepError, ValueError):
+    """A planner, model or function parameter is unknown or out of range.
+
+    Also a ValueError, what Python code raises for a bad argument value, so a caller written against that
+    convention still catches it.
+    """
 
 
 class GoalError(FastepError):

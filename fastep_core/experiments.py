@@ -15,7 +15,8 @@ percentages) is the project's main claim, so regenerating it must be one reprodu
   no distribution: compute times are skewed and path lengths bounded below by the optimum;
 - `optimal_lengths` gives the exact shortest path (planning.optimal) per robot, the yardstick for the
   optimality ratio path length / optimal length;
-- `markdown_report` and `figures` write what docs/table2.md shows.
+- `markdown_report` writes what docs/table2.md shows; its figures are drawn one layer up, by the
+  fastep-bench command (this package imports no plotting library).
 
 'optimal' (the exact path driven by the kinematic controller) draws no random numbers, so a batch runs it
 once, with the first seed, whatever `runs` says.
@@ -30,18 +31,22 @@ from __future__ import annotations
 import functools
 import math
 import multiprocessing
-import sys
 import time
 from dataclasses import asdict, dataclass
-from pathlib import Path
-from typing import Callable, Iterable, Sequence
+from typing import TYPE_CHECKING, Iterable, Sequence
 
 import numpy as np
+
+from fastep_core.cli import progress_bar
+from fastep_core.errors import ParameterError
+
+if TYPE_CHECKING:
+    from fastep_core.scenario import Scenario
 
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
     'tasks', 'run_task', 'run_batch', 'pool_context', 'summarise', 'compare', 'enhancement',
-    'optimal_lengths', 'straight_lengths', 'markdown_report', 'figures',
+    'optimal_lengths', 'straight_lengths', 'markdown_report', 'metric_values', 'cached_scenario', 'NAMES',
 ]
 
 TABLE2: tuple[str, ...] = ('table2_s1', 'table2_s2', 'table2_s3')
@@ -104,7 +109,8 @@ def tasks(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0:
 
 
 @functools.lru_cache(maxsize=64)
-def _scenario(source: str):  # type: ignore[no-untyped-def]
+def cached_scenario(source: str) -> Scenario:
+    """The scenario of a built-in name or YAML path, loaded once per process (a worker runs many seeds)."""
     from fastep_core.scenario import load_scenario
     return load_scenario(source)
 
@@ -115,7 +121,7 @@ def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = ()) -> list[
 
     from fastep_core.simulator import simulate
     source, algorithm, seed = task
-    scenario = _scenario(source)
+    scenario = cached_scenario(source)
     if overrides:
         scenario = replace(scenario, planner=scenario.planner.with_overrides(dict(overrides)))
     cpu = time.process_time()
@@ -131,49 +137,33 @@ def pool_context() -> multiprocessing.context.BaseContext:
     return multiprocessing.get_context('fork' if 'fork' in multiprocessing.get_all_start_methods() else None)
 
 
-def _progress_printer(total: int, label: str) -> Callable[[int], None]:
-    tty = sys.stderr.isatty()
-    every = max(1, total // 20)
-
-    def show(done: int) -> None:
-        if tty:
-            sys.stderr.write(f'\r{label}: {done}/{total} runs')
-            if done == total:
-                sys.stderr.write('\n')
-        elif done % every == 0 or done == total:
-            sys.stderr.write(f'{label}: {done}/{total} runs\n')
-        sys.stderr.flush()
-    return show
-
-
 def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, workers: int = 2, *,
-              seed0: int = 0, progress: bool | str = False,
+              seed0: int = 0, progress: bool | None = False, label: str = 'runs',
               overrides: dict[str, float] | None = None) -> list[Record]:
     """Simulate every scenario with every algorithm for seeds seed0..seed0+runs-1; records sorted.
 
-    workers <= 1 runs in this process. `progress` (True or a label) prints a counter on stderr.
+    workers <= 1 runs in this process. `progress`: a progress bar titled `label` on stderr, None when stderr
+    is a terminal, True always, False never (fastep_core.cli.progress_bar).
     """
     if runs < 1:
-        raise ValueError(f'runs must be >= 1, got {runs}')
+        raise ParameterError(f'runs must be >= 1, got {runs}')
     todo = tasks(scenarios, algorithms, runs, seed0)
     # A shuffled order spreads whatever else loads the machine evenly over planners and scenarios (in
     # scenario-major order one planner's runs would share one stretch of background load).
     todo = [todo[k] for k in np.random.default_rng(seed0).permutation(len(todo))]
     frozen = tuple(sorted((overrides or {}).items()))
     job = functools.partial(run_task, overrides=frozen)
-    show = _progress_printer(len(todo), progress if isinstance(progress, str) else 'runs') if progress else None
     out: list[Record] = []
-    if workers <= 1 or len(todo) == 1:
-        for k, task in enumerate(todo, 1):
-            out.extend(job(task))
-            if show:
-                show(k)
-    else:
-        with pool_context().Pool(min(workers, len(todo))) as pool:
-            for k, records in enumerate(pool.imap_unordered(job, todo), 1):
-                out.extend(records)
-                if show:
-                    show(k)
+    with progress_bar(len(todo), label, progress) as bar:
+        if workers <= 1 or len(todo) == 1:
+            for task in todo:
+                out.extend(job(task))
+                bar.update()
+        else:
+            with pool_context().Pool(min(workers, len(todo))) as pool:
+                for records in pool.imap_unordered(job, todo):
+                    out.extend(records)
+                    bar.update()
     order = {(s, a): i for i, (s, a) in enumerate((s, a) for s in scenarios for a in algorithms)}
     out.sort(key=lambda r: (order[(r.scenario, r.algorithm)], r.seed, r.robot))
     return out
@@ -195,7 +185,7 @@ class Summary:
     std: dict[str, float]
 
 
-def _values(records: Iterable[Record], metric: str) -> np.ndarray:
+def metric_values(records: Iterable[Record], metric: str) -> np.ndarray:
     """The metric over the records it is defined for: compute time always, the rest for arrived runs."""
     if metric in ('compute_time', 'cpu_time'):
         return np.array([getattr(r, metric) for r in records], dtype=float)
@@ -217,7 +207,7 @@ def summarise(records: Sequence[Record]) -> list[Summary]:
     for (scenario, algorithm, robot), group in groups.items():
         mean, std = {}, {}
         for metric in METRICS:
-            mean[metric], std[metric] = _mean_std(_values(group, metric))
+            mean[metric], std[metric] = _mean_std(metric_values(group, metric))
         out.append(Summary(scenario, algorithm, robot, len(group), sum(r.ok for r in group),
                            sum(r.collided for r in group), mean, std))
     return out
@@ -251,8 +241,8 @@ def compare(records: Sequence[Record], scenario: str, metric: str, a: str = 'fas
             b: str = 'aco') -> Comparison:
     """Means, enhancement % and the two-sided Mann-Whitney U test of `metric` for planners a and b."""
     from scipy.stats import mannwhitneyu
-    xa = _values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
-    xb = _values([r for r in records if r.scenario == scenario and r.algorithm == b], metric)
+    xa = metric_values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
+    xb = metric_values([r for r in records if r.scenario == scenario and r.algorithm == b], metric)
     if xa.size == 0 or xb.size == 0:
         return Comparison(metric, _mean_std(xa)[0], _mean_std(xb)[0], math.nan, math.nan, math.nan,
                           int(xa.size), int(xb.size))
@@ -268,7 +258,7 @@ def compare(records: Sequence[Record], scenario: str, metric: str, a: str = 'fas
 def optimal_lengths(source: str) -> dict[str, float | None]:
     """Exact shortest path length per robot (clearance radius + clearance_margin); None when there is none."""
     from fastep_core.planning.optimal import shortest_path
-    scenario = _scenario(source)
+    scenario = cached_scenario(source)
     out: dict[str, float | None] = {}
     for spec in scenario.robots:
         path = shortest_path(scenario.world, spec.start[:2], spec.goal,
@@ -278,7 +268,7 @@ def optimal_lengths(source: str) -> dict[str, float | None]:
 
 
 def straight_lengths(source: str) -> dict[str, float]:
-    scenario = _scenario(source)
+    scenario = cached_scenario(source)
     return {spec.name: math.dist(spec.start[:2], spec.goal) for spec in scenario.robots}
 
 
@@ -362,99 +352,3 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
             lines.append(f'| {scenario} | {robot} | {lines_for[robot]:.2f} | {_num(opt)} | ' +
                          ' | '.join(cells) + ' |')
     return '\n'.join(lines) + '\n'
-
-
-def _grid(n: int, max_cols: int = 4) -> tuple[int, int]:
-    """Rows and columns for n panels, at most max_cols wide."""
-    cols = min(n, max_cols)
-    return -(-n // cols), cols
-
-
-def figures(records: Sequence[Record], optimal: dict[str, dict[str, float | None]], out_dir: Path,
-            prefix: str = 'table2') -> list[Path]:
-    """Box plots of path length and compute time per scenario and planner, and the paths (PNG, Agg)."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-
-    out_dir.mkdir(parents=True, exist_ok=True)
-    scenarios = list(dict.fromkeys(r.scenario for r in records))
-    algorithms = list(dict.fromkeys(r.algorithm for r in records))
-    written = []
-    for metric in ('path_length', 'compute_time'):
-        rows, cols = _grid(len(scenarios))
-        fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
-        for ax in axes.flat[len(scenarios):]:
-            ax.set_visible(False)
-        for ax, scenario in zip(axes.flat, scenarios):
-            data = [_values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
-                    for a in algorithms]
-            ax.boxplot(data, tick_labels=[NAMES.get(a, a).replace('-Kinematic', '') for a in algorithms])
-            paper = PAPER.get(scenario, {})
-            if metric == 'path_length':
-                for k, a in enumerate(algorithms, 1):
-                    if a in paper:
-                        ax.plot(k, paper[a]['path'], 'rx', ms=9, label='paper mean' if k == 1 else None)
-                for opt in {v for v in optimal.get(scenario, {}).values() if v}:
-                    ax.axhline(opt, color='green', ls='--', lw=1, label='optimal')
-                if ax.get_legend_handles_labels()[0]:
-                    ax.legend(fontsize=8)
-            ax.set_title(scenario)
-            ax.set_ylabel(METRICS[metric])
-            ax.grid(axis='y', alpha=0.3)
-        fig.tight_layout()
-        path = out_dir / f'{prefix}_{metric}.png'
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
-        written.append(path)
-    written.append(paths_figure(scenarios, algorithms, out_dir / f'{prefix}_paths.png',
-                                seed=min(r.seed for r in records)))
-    return written
-
-
-def paths_figure(scenarios: Sequence[str], algorithms: Sequence[str], out: Path, seed: int = 0) -> Path:
-    """Each scenario's obstacles, one run of every planner (the given seed) and the exact optimal path."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-
-    from fastep_core.geometry import Circle
-    from fastep_core.planning.optimal import shortest_path
-    from fastep_core.simulator import simulate
-
-    colours = {'fastep': 'tab:red', 'aco': 'tab:blue', 'optimal': 'tab:olive'}
-    rows, cols = _grid(len(scenarios))
-    fig, axes = plt.subplots(rows, cols, figsize=(5.0 * cols, 5.2 * rows), squeeze=False)
-    for ax in axes.flat[len(scenarios):]:
-        ax.set_visible(False)
-    for ax, source in zip(axes.flat, scenarios):
-        scenario = _scenario(source)
-        for o in scenario.world.obstacle_list:
-            if isinstance(o, Circle):
-                ax.add_patch(plt.Circle(o.center, o.radius, color='0.6'))
-            else:
-                ax.plot([o.start[0], o.end[0]], [o.start[1], o.end[1]], color='0.3', lw=2.5)
-        for k, spec in enumerate(scenario.robots):
-            exact = shortest_path(scenario.world, spec.start[:2], spec.goal,
-                                  spec.radius + scenario.planner.clearance_margin)
-            if exact is not None:
-                ax.plot(*exact.points.T, color='tab:green', lw=3, alpha=0.5,
-                        label=f'optimal {exact.length:.2f} m' if k == 0 else None)
-        for algorithm in algorithms:
-            if algorithm == 'optimal':
-                continue
-            run = simulate(scenario, algorithm, seed)
-            for k, robot in enumerate(run.robots):
-                xy = np.array(robot.trajectory)[:, 1:3]
-                ax.plot(*xy.T, color=colours.get(algorithm), lw=1.2,
-                        label=f'{NAMES.get(algorithm, algorithm)} {robot.path_length:.2f} m' if k == 0 else None)
-        xmin, ymin, xmax, ymax = scenario.world.workspace
-        ax.set_xlim(xmin, xmax)
-        ax.set_ylim(ymin, ymax)
-        ax.set_aspect('equal')
-        ax.set_title(f'{source} (seed {seed})')
-        ax.legend(fontsize=7, loc='best')
-    fig.tight_layout()
-    fig.savefig(out, dpi=90)
-    plt.close(fig)
-    return out

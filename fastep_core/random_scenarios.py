@@ -22,6 +22,8 @@ from typing import Any, Sequence
 
 import numpy as np
 
+from fastep_core import cli
+from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.params import PlannerParams
@@ -147,7 +149,7 @@ def random_scenario_data(seed: int, *, n_robots: int | None = None,
     n_robots: 1-4, drawn when None. Raises RuntimeError if no solvable layout turns up (has not happened).
     """
     if n_robots is not None and not 1 <= n_robots <= 4:
-        raise ValueError(f'n_robots must be 1-4, got {n_robots}')
+        raise ParameterError(f'n_robots must be 1-4, got {n_robots}')
     rng = np.random.default_rng(seed)
     margin = PlannerParams().clearance_margin
     for _ in range(_ATTEMPTS):
@@ -168,7 +170,7 @@ def u_trap_scenario_data(seed: int, model: str = 'point_mass') -> dict[str, Any]
     """One robot and one U-shaped trap across its straight line, open towards it (and a few circles away
     from that line): the trap-escape benchmark's scenarios. Same seed, same scenario."""
     if model not in ('point_mass', 'tractor_trailer'):
-        raise ValueError(f'model must be point_mass or tractor_trailer, got {model!r}')
+        raise ParameterError(f'model must be point_mass or tractor_trailer, got {model!r}')
     rng = np.random.default_rng(seed)
     margin = PlannerParams().clearance_margin
     for _ in range(_ATTEMPTS):
@@ -202,13 +204,17 @@ def random_scenario(seed: int, *, n_robots: int | None = None, tractor_share: fl
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Print random scenario SEED (default 0) as YAML, ready for `fastep-sim FILE`."""
-    import sys
-
     import yaml
-    args = list(sys.argv[1:] if argv is None else argv)
-    seed = int(args[0]) if args else 0
-    print(yaml.safe_dump(random_scenario_data(seed), sort_keys=False), end='')
-    return 0
+
+    prog = 'python -m fastep_core.random_scenarios'
+    parser = cli.Parser(prog=prog, description='Print a random solvable scenario as YAML.')
+    parser.add_argument('seed', nargs='?', type=cli.seed, default=0, help='scenario seed (default 0)')
+
+    def run() -> int:
+        args = parser.parse_args(argv)
+        print(yaml.safe_dump(random_scenario_data(args.seed), sort_keys=False), end='')
+        return 0
+    return cli.guard(prog, run)
 
 
 if __name__ == '__main__':

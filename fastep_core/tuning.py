@@ -38,17 +38,18 @@ import sys
 import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
-from typing import Any, Callable, NoReturn, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from fastep_core import experiments
-from fastep_core.cli import seed
-from fastep_core.errors import FastepError
+from fastep_core.cli import Parser, fail, guard, positive_int, seed
 from fastep_core.planning.params import PlannerParams
 
 __all__ = ['PARAMETERS', 'PENALTY', 'TRAIN', 'TEST', 'TuningResult', 'cost', 'decode', 'tune', 'evaluate',
            'main']
+
+PROG = 'fastep-tune'
 
 PENALTY = 1000.0
 """Added to a run's path length (m) when the robot collided or did not arrive."""
@@ -170,22 +171,15 @@ def report(result: TuningResult, test: Sequence[str], baseline: Sequence[experim
     return '\n'.join(lines) + '\n'
 
 
-class _Parser(argparse.ArgumentParser):
-    """argparse, but bad flags give one line on stderr (and exit 2) instead of usage + error."""
-
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
-
-
 def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog='fastep-tune', description='Tune a, b, c and step_radius by differential evolution.')
+    p = Parser(prog=PROG, description='Tune a, b, c and step_radius by differential evolution.')
     p.add_argument('--train', nargs='+', default=list(TRAIN), metavar='SCENARIO', help='training scenarios')
     p.add_argument('--test', nargs='+', default=list(TEST), metavar='SCENARIO', help='held-out scenarios')
-    p.add_argument('--seeds', type=int, default=2, help='training seeds 0..N-1 per scenario (default 2)')
-    p.add_argument('--test-seeds', type=int, default=10, help='held-out seeds 100..100+N-1 (default 10)')
-    p.add_argument('--popsize', type=int, default=5, help='DE population = popsize x 4 (default 5)')
+    p.add_argument('--seeds', type=positive_int, default=2, help='training seeds 0..N-1 per scenario (default 2)')
+    p.add_argument('--test-seeds', type=positive_int, default=10, help='held-out seeds 100..100+N-1 (default 10)')
+    p.add_argument('--popsize', type=positive_int, default=5, help='DE population = popsize x 4 (default 5)')
     p.add_argument('--maxiter', type=int, default=3, help='DE generations (default 3)')
-    p.add_argument('--workers', type=int, default=2, help='worker processes (default 2)')
+    p.add_argument('--workers', type=positive_int, default=2, help='worker processes (default 2)')
     p.add_argument('--seed', type=seed, default=0, help='seed of the search (default 0)')
     p.add_argument('--out', type=Path, metavar='FILE.md', help='also write the Markdown report here')
     p.add_argument('--json', type=Path, metavar='FILE', help='write the tuned parameters as JSON')
@@ -193,23 +187,20 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    return guard(PROG, lambda: _run(argv))
+
+
+def _run(argv: Sequence[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
-    for flag in ('seeds', 'test_seeds', 'popsize', 'workers'):
-        if getattr(args, flag) < 1:
-            parser.error(f'--{flag.replace("_", "-")} must be at least 1, got {getattr(args, flag)}')
     if args.maxiter < 0:
         parser.error(f'--maxiter must be >= 0, got {args.maxiter}')
     overlap = sorted(set(args.train) & set(args.test))
     if overlap:
         parser.error(f'held-out scenarios must not be training scenarios: {", ".join(overlap)}')
-    try:
-        from fastep_core.scenario import load_scenario
-        for name in [*args.train, *args.test]:
-            load_scenario(name)
-    except FastepError as exc:
-        print(f'fastep-tune: error: {exc}', file=sys.stderr)
-        return 2
+    from fastep_core.scenario import load_scenario
+    for name in [*args.train, *args.test]:  # a bad one is a FastepError: one line before the search starts
+        load_scenario(name)
 
     def log(text: str) -> None:
         print(text, file=sys.stderr, flush=True)
@@ -219,7 +210,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     log(f'fastep-tune: checking on held-out scenarios {", ".join(args.test)}')
     baseline = evaluate(args.test, None, args.test_seeds, 100, args.workers)
     tuned = evaluate(args.test, result.params, args.test_seeds, 100, args.workers)
-    command = ' '.join(['fastep-tune', *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
+    command = ' '.join([PROG, *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
     text = report(result, args.test, baseline, tuned, command)
     print(text)
     try:
@@ -232,8 +223,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             args.json.write_text(json.dumps(asdict(result), indent=1) + '\n')
             print(f'wrote {args.json}')
     except OSError as exc:
-        print(f'fastep-tune: error: cannot write output: {exc}', file=sys.stderr)
-        return 2
+        return fail(PROG, f'cannot write output: {exc}')
     return 0
 
 

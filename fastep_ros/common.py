@@ -16,6 +16,10 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from fastep_core.cli import guard
+from fastep_core.errors import FastepError
+from fastep_ros.errors import StartupError  # re-exported: every node raises it next to declare()
+
 __all__ = ['LATCHED', 'LATEST', 'RELIABLE', 'StartupError', 'declare', 'node_main']
 
 # The shared map and obstacles: reliable + transient-local, so late joiners get them (Nav2's map QoS).
@@ -27,10 +31,6 @@ RELIABLE = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=Rel
 # deeper queue would make a busy node act on old messages, i.e. add delay to the control loop.
 LATEST = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
                     durability=DurabilityPolicy.VOLATILE)
-
-
-class StartupError(Exception):
-    """A node cannot start with the parameters it was given: one line, exit code 2, no traceback."""
 
 
 _TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER, float: Parameter.Type.DOUBLE,
@@ -126,27 +126,30 @@ def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None
     """rclpy.init, build the node, spin until Ctrl-C / shutdown.
 
     Returns the exit code: 0 after a normal stop, 2 (with one line on stderr, no traceback) when the node
-    cannot start with its parameters.
+    cannot start with its parameters (a FastepError, e.g. StartupError: fastep_core.cli.guard prints it).
     """
     _die_with_parent()
     # rclpy's own SIGINT handler shuts the context down (spin then ends); Python's default one would also raise
     # KeyboardInterrupt at a random point, e.g. inside a destructor, printing a traceback.
     signal.signal(signal.SIGINT, lambda signum, frame: None)
+    return guard(prog, lambda: _run_node(factory, args))
+
+
+def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
+    """node_main's body: 0 after a stop (Ctrl-C is a normal stop for a node); a FastepError propagates,
+    after the node is destroyed and ROS shut down."""
     try:
         rclpy.init(args=args)
     except Exception as exc:   # e.g. UnknownROSArgsError for a mistyped --ros-args
-        print(f'{prog}: error: cannot start ROS: {type(exc).__name__}: {exc}'.splitlines()[0], file=sys.stderr)
-        return 2
+        raise StartupError(f'cannot start ROS: {type(exc).__name__}: {exc}'.splitlines()[0]) from None
     node = None
-    code = 0
     try:
         node = factory()
         _spin(node)
-    except StartupError as exc:
-        print(f'{prog}: error: {exc}', file=sys.stderr)
-        code = 2
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
+    except FastepError:
+        raise
     except Exception:
         if rclpy.ok():
             raise
@@ -155,4 +158,4 @@ def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
-    return code
+    return 0

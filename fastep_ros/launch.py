@@ -27,31 +27,27 @@ import sys
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NoReturn, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
-from fastep_core.cli import seed
-from fastep_core.errors import FastepError
+from fastep_core.cli import Parser, fail, guard, seed
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_core.simulator import ALGORITHMS
+from fastep_ros.errors import LaunchError
 
 __all__ = ['main']
 
+PROG = 'fastep-launch'
 GRACE = 5.0             # wall seconds a process gets to stop after SIGINT
 STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the world and the other robots
 SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
 STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
-
-
 def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog='fastep-launch', description='Run a scenario through the live ROS 2 graph.')
+    p = Parser(prog=PROG, description='Run a scenario through the live ROS 2 graph.')
     p.add_argument('scenario', help='scenario YAML file or built-in name (' + ', '.join(builtin_names()) + ')')
     p.add_argument('--rtf', type=float, default=1.0, help='real-time factor of the simulated clock, at most '
                    '(default 1): each tick waits for every plant and planner, so a busy machine runs slower')
@@ -309,10 +305,6 @@ class Monitor:
 
 # ----------------------------------------------------------------------------------------------- the run
 
-class LaunchError(Exception):
-    """Something went wrong while bringing the graph up (not the robots' fault)."""
-
-
 def _wait(monitor: Monitor, procs: Processes, deadline: float, ready: Any, what: str) -> None:
     while not ready():
         dead = procs.dead()
@@ -434,10 +426,10 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         if not written:
             code = 2
     except LaunchError as exc:
-        print(f'fastep-launch: error: {exc}', file=sys.stderr)
+        fail(PROG, exc)
         code = 1
     except KeyboardInterrupt:
-        print('fastep-launch: interrupted; stopping every node', file=sys.stderr)
+        print(f'{PROG}: interrupted; stopping every node', file=sys.stderr)
         code = 1
     finally:
         if monitor is not None:
@@ -447,7 +439,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         if args.record.is_file():
             print(f'wrote {args.record}')
         else:
-            print(f'fastep-launch: error: the recorder wrote no {args.record}', file=sys.stderr)
+            fail(PROG, f'the recorder wrote no {args.record}')
             code = code or 1
     return code
 
@@ -530,7 +522,7 @@ def report(args: argparse.Namespace, scenario: Scenario, monitor: Monitor, t0: f
             plot_paths(scenario, run, args.plot)
             print(f'wrote {args.plot}')
     except OSError as exc:
-        print(f'fastep-launch: error: cannot write output: {exc}', file=sys.stderr)
+        fail(PROG, f'cannot write output: {exc}')
         return any(r.collided for r in runs), False
     return any(r.collided for r in runs), True
 
@@ -540,6 +532,10 @@ def _on_sigterm(signum: int, frame: Any) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    return guard(PROG, lambda: _main(argv))
+
+
+def _main(argv: Sequence[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     if not (math.isfinite(args.rtf) and args.rtf > 0.0):
@@ -548,11 +544,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f'--timeout must be > 0, got {args.timeout:g}')
     if args.no_clock and args.rtf != 1.0:
         parser.error('--no-clock runs on wall time: --rtf cannot be used with it')
-    try:
-        scenario = load_scenario(args.scenario)
-    except FastepError as exc:
-        print(f'fastep-launch: error: {exc}', file=sys.stderr)
-        return 2
+    scenario = load_scenario(args.scenario)  # a FastepError: guard's one line, exit 2
     previous = signal.signal(signal.SIGTERM, _on_sigterm)
     try:
         return run(args, scenario)

@@ -27,7 +27,7 @@ import argparse
 import math
 import sys
 import time
-from typing import Any, NoReturn, Sequence
+from typing import Any, Sequence
 
 import rclpy
 from rclpy.executors import ExternalShutdownException
@@ -35,6 +35,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
+from fastep_core.cli import Parser, guard
 from fastep_core.errors import FastepError
 from msg_tools.mcap_io import Recording, message_class, open_recording, qos_from_dicts
 
@@ -122,13 +123,11 @@ class ReplayNode(Node):
         return sent
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+PROG = 'fastep-replay'
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog='fastep-replay', description='Publish an MCAP recording with its original timing.')
+    p = Parser(prog=PROG, description='Publish an MCAP recording with its original timing.')
     p.add_argument('file', help='MCAP recording')
     p.add_argument('--rate', type=float, default=1.0, help='playback speed factor (default 1; 2 = twice as fast)')
     p.add_argument('--loop', action='store_true', help='start again at the end, until stopped')
@@ -143,7 +142,10 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
+    return guard(PROG, lambda: _run(list(sys.argv[1:] if argv is None else argv)))
+
+
+def _run(argv: list[str]) -> int:
     ros_args: list[str] = []
     if '--ros-args' in argv:
         cut = argv.index('--ros-args')
@@ -156,20 +158,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(f'--clock rate must be > 0, got {args.clock}')
     if not (math.isfinite(args.delay) and args.delay >= 0.0):
         parser.error(f'--delay must be >= 0, got {args.delay}')
-    try:
-        recording = open_recording(args.file)
-        for topic in args.topics or []:
-            if topic not in recording.topics:
-                raise FastepError(f'topic {topic} is not in {args.file} (it has {", ".join(sorted(recording.topics))})')
-        for topic in args.topics or recording.topics:
-            message_class(recording.topics[topic].type)
-    except FastepError as exc:
-        print(f'fastep-replay: error: {exc}', file=sys.stderr)
-        return 2
+    # A FastepError before ROS starts (unreadable file, unknown topic or message type) is guard's one line.
+    recording = open_recording(args.file)
+    for topic in args.topics or []:
+        if topic not in recording.topics:
+            raise FastepError(f'topic {topic} is not in {args.file} (it has {", ".join(sorted(recording.topics))})')
+    for topic in args.topics or recording.topics:
+        message_class(recording.topics[topic].type)
     if recording.truncated:
-        print(f'fastep-replay: warning: {recording.warning()}', file=sys.stderr)
+        print(f'{PROG}: warning: {recording.warning()}', file=sys.stderr)
 
-    rclpy.init(args=['fastep-replay', *ros_args])
+    rclpy.init(args=[PROG, *ros_args])
     node = None
     try:
         node = ReplayNode(recording, args.topics, args.rate, args.clock)
@@ -181,7 +180,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             if node.play_once() == 0 or not args.loop:
                 break
         time.sleep(LINGER)
-        print(f'fastep-replay: played {node.played} messages on {len(node.topics)} topics', file=sys.stderr)
+        print(f'{PROG}: played {node.played} messages on {len(node.topics)} topics', file=sys.stderr)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     finally:

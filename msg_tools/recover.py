@@ -12,11 +12,11 @@ stderr when IN is not MCAP or holds no complete message, or OUT cannot be writte
 
 from __future__ import annotations
 
-import argparse
 import sys
 from pathlib import Path
-from typing import NoReturn, Sequence
+from typing import Sequence
 
+from fastep_core.cli import Parser, fail, guard
 from fastep_core.errors import FastepError
 from msg_tools.mcap_io import copy_recording, open_recording
 
@@ -39,24 +39,22 @@ def recover(source: str | Path, target: str | Path) -> tuple[int, str]:
     return count, recording.warning()
 
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+PROG = 'fastep-recover'
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    p = _Parser(prog='fastep-recover', description='Rewrite the readable part of an MCAP file as a valid file.')
+    return guard(PROG, lambda: _run(argv))
+
+
+def _run(argv: Sequence[str] | None) -> int:
+    p = Parser(prog=PROG, description='Rewrite the readable part of an MCAP file as a valid file.')
     p.add_argument('input', type=Path, metavar='IN.mcap')
     p.add_argument('output', type=Path, metavar='OUT.mcap')
     args = p.parse_args(argv)
-    try:
+    try:  # a FastepError (not MCAP, nothing complete in it, OUT is IN) is guard's one line
         count, warning = recover(args.input, args.output)
-    except FastepError as exc:
-        print(f'fastep-recover: error: {exc}', file=sys.stderr)
-        return 2
     except OSError as exc:
-        print(f'fastep-recover: error: cannot write {args.output}: {exc.strerror or exc}', file=sys.stderr)
-        return 2
+        return fail(PROG, f'cannot write {args.output}: {exc.strerror or exc}')
     state = 'recovered' if warning else 'copied (the input was complete)'
     print(f'{state} {count} messages from {args.input} into {args.output}')
     return 0

@@ -30,16 +30,16 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import re
 import struct
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, NoReturn, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
+from fastep_core.cli import Parser, fail, guard
 from fastep_core.errors import FastepError
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
 from msg_tools.mcap_io import Recording, open_recording
@@ -471,13 +471,11 @@ def write_report(path: str | Path, out: str | Path | None = None, radius: float 
 
 # ----------------------------------------------------------------------------------------------- CLI
 
-class _Parser(argparse.ArgumentParser):
-    def error(self, message: str) -> NoReturn:
-        self.exit(2, f'{self.prog}: error: {message} (see --help)\n')
+PROG = 'fastep-report'
 
 
 def _parser() -> argparse.ArgumentParser:
-    p = _Parser(prog='fastep-report', description='Metrics and figures of a recorded run (MCAP).')
+    p = Parser(prog=PROG, description='Metrics and figures of a recorded run (MCAP).')
     p.add_argument('file', type=Path, help='MCAP recording (fastep-record or fastep-sim --mcap)')
     p.add_argument('--out', type=Path, metavar='DIR', help='output folder (default: <file>_report next to it)')
     p.add_argument('--radius', type=float, default=DEFAULT_RADIUS,
@@ -495,30 +493,20 @@ def _line(row: dict[str, Any]) -> str:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    try:
-        return _run(argv)
-    except KeyboardInterrupt:
-        print('fastep-report: interrupted', file=sys.stderr)
-        return 130
-    except BrokenPipeError:  # e.g. `fastep-report x.mcap | head -1`: stop quietly
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 1
+    return guard(PROG, lambda: _run(argv))
 
 
 def _run(argv: Sequence[str] | None) -> int:
-    args = _parser().parse_args(argv)
+    parser = _parser()
+    args = parser.parse_args(argv)
     if not (math.isfinite(args.radius) and args.radius >= 0.0):
-        _parser().error(f'--radius must be a finite number >= 0, got {args.radius}')
-    try:
+        parser.error(f'--radius must be a finite number >= 0, got {args.radius}')
+    try:  # a FastepError (unreadable recording, no robot in it) is guard's one line
         report, files = write_report(args.file, args.out, args.radius, figures=not args.no_figures)
-    except FastepError as exc:
-        print(f'fastep-report: error: {exc}', file=sys.stderr)
-        return 2
     except OSError as exc:
-        print(f'fastep-report: error: cannot write the report: {exc}', file=sys.stderr)
-        return 2
+        return fail(PROG, f'cannot write the report: {exc}')
     if report['warning']:
-        print(f'fastep-report: warning: {report["warning"]}', file=sys.stderr)
+        print(f'{PROG}: warning: {report["warning"]}', file=sys.stderr)
     for row in report['robots']:
         print(_line(row))
     print('wrote ' + ', '.join(str(f) for f in files))

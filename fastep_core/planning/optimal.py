@@ -41,6 +41,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle, Segment
 from fastep_core.world import World
 
@@ -420,13 +421,13 @@ def shortest_path(world: World, start: Sequence[float], goal: Sequence[float], c
     arcs. Returns None when no path exists, or when start or goal is closer than `clearance` to an obstacle.
     """
     if not (math.isfinite(clearance) and clearance > 0.0):
-        raise ValueError(f'clearance must be a finite number > 0, got {clearance!r}')
+        raise ParameterError(f'clearance must be a finite number > 0, got {clearance!r}')
     if not (math.isfinite(spacing) and spacing > 0.0):
-        raise ValueError(f'spacing must be a finite number > 0, got {spacing!r}')
+        raise ParameterError(f'spacing must be a finite number > 0, got {spacing!r}')
     a = np.array([float(start[0]), float(start[1])])
     b = np.array([float(goal[0]), float(goal[1])])
     if not (np.all(np.isfinite(a)) and np.all(np.isfinite(b))):
-        raise ValueError('start and goal must be finite')
+        raise ParameterError('start and goal must be finite')
     walls = world.wall_distance(np.array([a, b]))
     if walls.min() < 0.0:
         return None

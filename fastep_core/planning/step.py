@@ -22,6 +22,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from fastep_core.errors import ParameterError
 from fastep_core.geometry import norm, point_segment_distance
 from fastep_core.optimize import OptimizeResult, aco_r, fastep
 from fastep_core.planning.params import PlannerParams
@@ -123,7 +124,7 @@ def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Genera
                        n_ants=params.aco_ants, q=params.aco_q, xi=params.aco_xi, max_iter=params.aco_iter,
                        patience=params.patience, tol=params.tol, rng=rng)
     else:
-        raise ValueError(f'unknown step optimizer {method!r}')
+        raise ParameterError(f'unknown step optimizer {method!r} (fastep or aco)')
     if not result.fun < INFEASIBLE:
         return None
     return StepPlan(np.asarray(result.x, dtype=float), float(result.fun), result)

@@ -1,86 +1,105 @@
-"""fastep-sim as users run it: exit codes, one-line errors, the JSON contract, the figure."""
+"""fastep_core.cli, what every command line shares: one-line errors with exit 2, the main() guard, types."""
 
-import json
+from __future__ import annotations
+
+import argparse
 import subprocess
 import sys
 
 import pytest
 
-from fastep_core.cli import main
-from fastep_core.scenario import builtin_names
+from fastep_core.cli import INTERRUPTED, Parser, guard, positive_int, progress_bar, seed
+from fastep_core.errors import FastepError, ScenarioError
 
 
-def run_cli(*args):
-    return subprocess.run([sys.executable, '-m', 'fastep_core.cli', *args], capture_output=True, text=True,
-                          timeout=120)
+def parser() -> Parser:
+    p = Parser(prog='tool')
+    p.add_argument('--seed', type=seed, default=0)
+    p.add_argument('--runs', type=positive_int, default=1)
+    return p
 
 
-def test_list_names_every_builtin(capsys):
-    assert main(['--list']) == 0
-    assert capsys.readouterr().out.split() == builtin_names()
+@pytest.mark.parametrize('argv, words', [
+    (['--bogus'], 'unrecognized arguments: --bogus'),
+    (['--seed', '-1'], 'a seed must be >= 0, got -1'),
+    (['--seed', 'x'], "invalid seed value: 'x'"),
+    (['--runs', '0'], 'must be at least 1, got 0'),
+    (['--runs', '2.5'], "invalid positive_int value: '2.5'"),
+])
+def test_bad_flags_are_one_line_and_exit_2(capsys: pytest.CaptureFixture[str], argv: list[str],
+                                           words: str) -> None:
+    with pytest.raises(SystemExit) as stop:
+        parser().parse_args(argv)
+    assert stop.value.code == 2
+    captured = capsys.readouterr()
+    assert captured.out == '' and captured.err.startswith('tool: error: ') and words in captured.err
+    assert len(captured.err.splitlines()) == 1
 
 
-def test_json_has_the_documented_keys(tmp_path):
-    out = tmp_path / 'r.json'
-    assert main(['table2_s3', '--seed', '3', '--runs', '2', '--json', str(out)]) == 0
-    doc = json.loads(out.read_text())
-    assert doc['scenario'] == 'table2_s3' and doc['algorithm'] == 'fastep'
-    assert [r['seed'] for r in doc['runs']] == [3, 4]
-    robot = doc['runs'][0]['robots'][0]
-    for key in ('name', 'reached', 'collided', 'path_length', 'sim_time', 'compute_time', 'min_clearance',
-                'activations', 'trajectory'):
-        assert key in robot
-    assert robot['reached'] is True and robot['sim_time'] > 0
-    assert all(len(row) == 3 for row in robot['trajectory'])
+def test_good_flags_parse() -> None:
+    assert vars(parser().parse_args(['--seed', '0', '--runs', '3'])) == {'seed': 0, 'runs': 3}
 
 
-def test_tractor_trailer_trajectory_rows_carry_both_headings(tmp_path):
-    out = tmp_path / 'a.json'
-    assert main(['application', '--json', str(out)]) == 0
-    rows = json.loads(out.read_text())['runs'][0]['robots'][0]['trajectory']
-    assert all(len(row) == 5 for row in rows)
+def test_guard_turns_a_fastep_error_into_one_line_and_2(capsys: pytest.CaptureFixture[str]) -> None:
+    def body() -> int:
+        raise ScenarioError("scenario 'x': robots[0].radius must be > 0, got -1")
+    assert guard('tool', body) == 2
+    assert capsys.readouterr().err == "tool: error: scenario 'x': robots[0].radius must be > 0, got -1\n"
 
 
-def test_plot_writes_a_png(tmp_path):
-    out = tmp_path / 'fig.png'
-    assert main(['table2_s2', '--algorithm', 'aco', '--plot', str(out)]) == 0
-    assert out.read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+def test_guard_turns_ctrl_c_into_one_line_and_130(capsys: pytest.CaptureFixture[str]) -> None:
+    def body() -> int:
+        raise KeyboardInterrupt
+    assert guard('tool', body) == INTERRUPTED == 130
+    assert capsys.readouterr().err == 'tool: interrupted\n'
 
 
-BAD_FILES = {
-    'unknown_key': 'workspace: [0, 0, 50, 50]\nrobots: []\ncolour: red\n',
-    'negative_radius': ('workspace: [0, 0, 50, 50]\nobstacles:\n  - circle: {center: [20, 20], radius: -1}\n'
-                        'robots:\n  - {name: r1, model: point_mass, start: [5, 5], goal: [45, 45], radius: 0.5}\n'),
-    'goal_in_obstacle': ('workspace: [0, 0, 50, 50]\nobstacles:\n  - circle: {center: [45, 45], radius: 2}\n'
-                         'robots:\n  - {name: r1, model: point_mass, start: [5, 5], goal: [45, 45], radius: 0.5}\n'),
-    'start_outside': ('workspace: [0, 0, 50, 50]\n'
-                      'robots:\n  - {name: r1, model: point_mass, start: [-5, 5], goal: [45, 45], radius: 0.5}\n'),
-    'nan': ('workspace: [0, 0, 50, 50]\n'
-            'robots:\n  - {name: r1, model: point_mass, start: [.nan, 5], goal: [45, 45], radius: 0.5}\n'),
-    'duplicate_names': ('workspace: [0, 0, 50, 50]\nrobots:\n'
-                        '  - {name: r1, model: point_mass, start: [5, 5], goal: [45, 45], radius: 0.5}\n'
-                        '  - {name: r1, model: point_mass, start: [5, 45], goal: [45, 5], radius: 0.5}\n'),
-    'unknown_model': ('workspace: [0, 0, 50, 50]\n'
-                      'robots:\n  - {name: r1, model: hovercraft, start: [5, 5], goal: [45, 45], radius: 0.5}\n'),
-    'syntax_error': 'workspace: [0, 0, 50, 50\nrobots: {\n',
-    'python_tag': 'workspace: !!python/object/apply:os.system ["echo hi"]\nrobots: []\n',
-}
+def test_guard_passes_the_exit_code_and_other_errors_through() -> None:
+    assert guard('tool', lambda: 7) == 7
+
+    def bug() -> int:
+        raise ZeroDivisionError('a bug is not a user error: its traceback must show')
+    with pytest.raises(ZeroDivisionError):
+        guard('tool', bug)
 
 
-@pytest.mark.parametrize('case', sorted(BAD_FILES))
-def test_bad_scenario_exits_2_with_one_line(tmp_path, case):
-    path = tmp_path / f'{case}.yaml'
-    path.write_text(BAD_FILES[case])
-    proc = run_cli(str(path))
-    assert proc.returncode == 2
-    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
-    assert 'Traceback' not in proc.stderr and proc.stderr.startswith('fastep-sim: error:')
+def test_guard_ends_quietly_when_the_reader_of_stdout_goes_away() -> None:
+    # A real closed pipe: the child prints until the write fails; no traceback, no "Exception ignored" at exit.
+    script = ('import sys\nfrom fastep_core.cli import guard\n'
+              'def body():\n    while True:\n        print("line " * 100)\n'
+              'sys.exit(guard("tool", body))\n')
+    child = subprocess.Popen([sys.executable, '-c', script], stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert child.stdout is not None and child.stderr is not None
+    child.stdout.read(10)
+    child.stdout.close()
+    err = child.stderr.read().decode()
+    assert child.wait(timeout=60) == 1
+    assert err == ''
 
 
-@pytest.mark.parametrize('args', [['no_such_scenario'], ['table2_s1', '--algorithm', 'pso'],
-                                  ['table2_s1', '--runs', '0'], ['table2_s1', '--seed', 'x'],
-                                  ['table2_s1', '--seed', '-1'], []])
-def test_bad_arguments_exit_2_with_one_line(args):
-    proc = run_cli(*args)
-    assert proc.returncode == 2
-    assert len(proc.stderr.strip().splitlines()) == 1, proc.stderr
+def test_every_error_the_packages_define_is_a_fastep_error() -> None:
+    from fastep_core import errors as core
+    from fastep_ros import errors as ros
+    from msg_tools import errors as tools
+    for module in (core, ros, tools):
+        for name in module.__all__:
+            assert issubclass(getattr(module, name), FastepError), f'{module.__name__}.{name}'
+
+
+def test_argparse_types_refuse_what_they_should() -> None:
+    assert seed('0') == 0 and positive_int('1') == 1
+    with pytest.raises(argparse.ArgumentTypeError):
+        seed('-3')
+    with pytest.raises(argparse.ArgumentTypeError):
+        positive_int('0')
+
+
+def test_progress_bar_is_off_when_stderr_is_not_a_terminal_unless_asked(capsys: pytest.CaptureFixture[str]) -> None:
+    for show in (None, False):   # pytest's captured stderr is not a terminal
+        with progress_bar(3, 'batch', show) as bar:
+            bar.update(3)
+        assert capsys.readouterr() == ('', '')
+    with progress_bar(3, 'batch', True) as bar:
+        bar.update(3)
+    captured = capsys.readouterr()
+    assert captured.out == '' and 'batch' in captured.err and '3/3' in captured.err

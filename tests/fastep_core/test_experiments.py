@@ -1,4 +1,4 @@
-"""Batch experiments, their statistics, the fastep-bench and fastep-tune command lines (small and fast)."""
+"""Batch experiments, their statistics, tuning and the fastep-tune command line (small and fast)."""
 
 import math
 import subprocess
@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from fastep_core import experiments, tuning
-from fastep_core.bench_cli import main as bench_main
+from fastep_core.errors import ParameterError
 from fastep_core.experiments import Record
 
 
@@ -60,6 +60,18 @@ def test_markdown_report_has_the_papers_numbers_and_ours():
     assert f'{50.0 / 45.51:.3f}'[:4] in text                              # the optimality ratio
 
 
+def test_run_batch_shows_its_progress_on_stderr_when_asked(capsys):
+    records = experiments.run_batch(['table2_s3'], ['optimal'], 1, workers=1, progress=True, label='bench')
+    captured = capsys.readouterr()
+    assert len(records) == 1 and captured.out == ''
+    assert 'bench' in captured.err and '1/1' in captured.err
+
+
+def test_run_batch_refuses_zero_runs():
+    with pytest.raises(ParameterError, match='runs must be >= 1'):
+        experiments.run_batch(['table2_s3'], ['fastep'], 0)
+
+
 def test_run_batch_is_reproducible_and_independent_of_workers():
     serial = experiments.run_batch(['table2_s3'], ['fastep', 'optimal'], 2, workers=1)
     pooled = experiments.run_batch(['table2_s3'], ['fastep', 'optimal'], 2, workers=2)
@@ -68,26 +80,12 @@ def test_run_batch_is_reproducible_and_independent_of_workers():
     assert all(r.ok for r in serial)
 
 
-def test_fastep_bench_writes_the_table_and_figures(tmp_path, capsys):
-    assert bench_main(['--runs', '2', '--scenarios', 'table2_s3', '--workers', '1', '--out', str(tmp_path)]) == 0
-    text = (tmp_path / 'table2.md').read_text()
-    assert 'FAStep-Kinematic against ACO-Kinematic' in text and 'Optimal-Kinematic' in text
-    for metric in ('path_length', 'compute_time'):
-        assert (tmp_path / 'figures' / f'table2_{metric}.png').stat().st_size > 1000
-
-
-@pytest.mark.parametrize('module, args', [
-    ('fastep_core.bench_cli', ['--runs', '0']),
-    ('fastep_core.bench_cli', ['--algorithms', 'nope']),
-    ('fastep_core.bench_cli', ['--scenarios', 'no_such_scenario']),
-    ('fastep_core.bench_cli', ['--bogus']),
-    ('fastep_core.tuning', ['--popsize', '0']),
-    ('fastep_core.tuning', ['--train', 'table2_s1', '--test', 'table2_s1']),
-    ('fastep_core.tuning', ['--test', 'no_such_scenario']),
-    ('fastep_core.tuning', ['--bogus']),
-])
-def test_command_lines_exit_2_with_one_line(module, args):
-    done = subprocess.run([sys.executable, '-m', module, *args], capture_output=True, text=True, timeout=120)
+@pytest.mark.parametrize('args', [['--popsize', '0'], ['--maxiter', '-1'],
+                                  ['--train', 'table2_s1', '--test', 'table2_s1'],
+                                  ['--test', 'no_such_scenario'], ['--bogus']])
+def test_fastep_tune_bad_input_exits_2_with_one_line(args):
+    done = subprocess.run([sys.executable, '-m', 'fastep_core.tuning', *args], capture_output=True, text=True,
+                          timeout=120)
     assert done.returncode == 2
     assert len(done.stderr.strip().splitlines()) == 1 and 'Traceback' not in done.stderr
     assert done.stdout == ''

@@ -6,11 +6,11 @@ import math
 import numpy as np
 import pytest
 
-from fastep_core.cli import main as sim_main
 from fastep_core.planning import Mode
 from fastep_core.random_scenarios import u_trap
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
+from msg_tools.sim_cli import main as sim_main
 
 
 def u_scenario(model='point_mass', trap_timeout=None, width=6.0, depth=4.0):

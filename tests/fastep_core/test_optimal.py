@@ -8,6 +8,7 @@ import pytest
 from hypothesis import HealthCheck, assume, given, settings
 from hypothesis import strategies as st
 
+from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle, Segment
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.scenario import builtin_names, load_scenario, parse_scenario
@@ -112,11 +113,13 @@ def test_start_closer_than_the_clearance_has_no_path():
     assert shortest_path(w, (12.5, 10.0), (30.0, 30.0), 0.4) is not None
 
 
-def test_bad_arguments_raise():
-    with pytest.raises(ValueError):
+def test_bad_arguments_raise_a_parameter_error_that_is_still_a_value_error():
+    with pytest.raises(ParameterError, match='clearance must be'):
         shortest_path(world(), (1.0, 1.0), (2.0, 2.0), 0.0)
-    with pytest.raises(ValueError):
+    with pytest.raises(ParameterError, match='spacing must be'):
         shortest_path(world(), (1.0, 1.0), (2.0, 2.0), 0.5, spacing=-1.0)
+    with pytest.raises(ValueError, match='start and goal must be finite'):
+        shortest_path(world(), (math.nan, 1.0), (2.0, 2.0), 0.5)
 
 
 @pytest.mark.parametrize('name', builtin_names())
@@ -280,6 +283,6 @@ def test_optimal_navigator_fails_cleanly_without_a_path():
 
 
 def test_fastep_sim_accepts_the_optimal_algorithm(capsys):
-    from fastep_core.cli import main
+    from msg_tools.sim_cli import main
     assert main(['table2_s3', '--algorithm', 'optimal']) == 0
     assert 'arrived' in capsys.readouterr().out

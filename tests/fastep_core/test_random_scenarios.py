@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 import yaml
 
+from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle
 from fastep_core.random_scenarios import (main, random_scenario, random_scenario_data, solvable,
                                           u_trap_scenario_data)
@@ -60,6 +61,22 @@ def test_u_trap_scenarios_put_the_trap_across_the_straight_line(model):
 def test_main_prints_the_scenario_as_yaml(capsys):
     assert main(['5']) == 0
     assert yaml.safe_load(capsys.readouterr().out) == random_scenario_data(5)
+
+
+def test_bad_generator_arguments_are_parameter_errors():
+    with pytest.raises(ParameterError, match='n_robots must be 1-4'):
+        random_scenario_data(0, n_robots=5)
+    with pytest.raises(ParameterError, match='model must be point_mass or tractor_trailer'):
+        u_trap_scenario_data(0, model='hovercraft')
+
+
+@pytest.mark.parametrize('argv', [['-1'], ['five'], ['1', '2']])
+def test_main_refuses_a_bad_seed_with_one_line(capsys, argv):
+    with pytest.raises(SystemExit) as stop:
+        main(argv)
+    assert stop.value.code == 2
+    captured = capsys.readouterr()
+    assert captured.out == '' and len(captured.err.splitlines()) == 1
 
 
 @pytest.mark.parametrize('seed', [0, 4, 10])

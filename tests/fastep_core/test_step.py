@@ -1,6 +1,7 @@
 import numpy as np
 import pytest
 
+from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle, Segment
 from fastep_core.planning import PlannerParams, StepProblem, plan_step
 from fastep_core.planning.step import INFEASIBLE
@@ -79,3 +80,8 @@ def test_pass_on_right_keeps_the_waypoint_right_of_the_oncoming_robot():
     for seed in range(5):
         step = plan_step(p, PlannerParams(), np.random.default_rng(seed))
         assert step is not None and step.waypoint[1] <= 5.0 + 1e-9   # heading +x, right is -y
+
+
+def test_an_unknown_step_optimizer_is_a_parameter_error():
+    with pytest.raises(ParameterError, match="unknown step optimizer 'pso'"):
+        plan_step(problem(), PlannerParams(), np.random.default_rng(0), method='pso')

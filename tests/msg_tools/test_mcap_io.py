@@ -20,8 +20,7 @@ from mcap.reader import SeekingReader
 from rosbags.highlevel import AnyReader
 from std_msgs.msg import Float64
 
-from fastep_core import cli
-from msg_tools import recover
+from msg_tools import recover, sim_cli
 from msg_tools.errors import NotMcapError, RecordingError, TruncatedRecordingError
 from msg_tools.mcap_io import (McapWriter, copy_recording, message_definition, open_recording, qos_dict,
                                qos_from_dicts)
@@ -65,7 +64,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     scenario = folder / 'mixed.yaml'
     scenario.write_text(MIXED)
     out = folder / 'mixed.mcap'
-    assert cli.main([str(scenario), '--mcap', str(out), '--json', str(folder / 'mixed.json')]) == 0
+    assert sim_cli.main([str(scenario), '--mcap', str(out), '--json', str(folder / 'mixed.json')]) == 0
     return {'path': out, 'folder': folder, 'json': folder / 'mixed.json'}
 
 
@@ -266,9 +265,9 @@ def test_writer_round_trip_and_qos(tmp_path: Path) -> None:
 def test_fastep_sim_mcap_records_the_first_run_and_reports_bad_paths(
         recorded: dict[str, Any], tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     out = tmp_path / 'deep' / 'two.mcap'
-    assert cli.main(['table2_s1', '--seed', '4', '--runs', '2', '--mcap', str(out)]) == 0
+    assert sim_cli.main(['table2_s1', '--seed', '4', '--runs', '2', '--mcap', str(out)]) == 0
     assert 'seed 4' in capsys.readouterr().out
     assert open_recording(out).metadata['fastep']['seed'] == '4'
-    assert cli.main(['table2_s1', '--mcap', str(tmp_path)]) == 2  # a folder
+    assert sim_cli.main(['table2_s1', '--mcap', str(tmp_path)]) == 2  # a folder
     err = capsys.readouterr().err
     assert err.startswith('fastep-sim: error:') and err.count('\n') == 1

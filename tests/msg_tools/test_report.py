@@ -8,8 +8,7 @@ from typing import Any
 
 import pytest
 
-from fastep_core import cli
-from msg_tools import report
+from msg_tools import report, sim_cli
 from msg_tools.mcap_io import copy_recording, open_recording
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -43,7 +42,7 @@ def run(tmp_path_factory: pytest.TempPathFactory) -> dict[str, Any]:
     folder = tmp_path_factory.mktemp('report')
     (folder / 'scenario.yaml').write_text(SCENARIO)
     mcap = folder / 'run.mcap'
-    assert cli.main([str(folder / 'scenario.yaml'), '--seed', '3', '--mcap', str(mcap),
+    assert sim_cli.main([str(folder / 'scenario.yaml'), '--seed', '3', '--mcap', str(mcap),
                      '--json', str(folder / 'run.json')]) == 0
     return {'folder': folder, 'mcap': mcap, 'sim': json.loads((folder / 'run.json').read_text())['runs'][0]}
 
