@@ -15,12 +15,12 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.planning.algorithms import ALGORITHMS, make_navigator
+from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.scenario import Scenario
 
-__all__ = ['RobotRun', 'Run', 'Tick', 'simulate', 'ALGORITHMS']
+__all__ = ['RobotRun', 'Run', 'Tick', 'simulate']
 
 FloatArray = NDArray[np.float64]
 SAMPLE_SPACING = 0.1  # metres of travel between trajectory samples (DESIGN: at least every 0.1 m)

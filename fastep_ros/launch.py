@@ -34,7 +34,7 @@ import numpy as np
 from fastep_core.cli import Parser, fail, guard, seed
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
-from fastep_core.simulator import ALGORITHMS
+from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_ros.errors import LaunchError
 
 __all__ = ['main']

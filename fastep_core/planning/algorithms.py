@@ -32,10 +32,19 @@ TITLES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 
 
 
 class RobotLike(Protocol):
-    model: str
-    length: float
-    trailer_length: float
-    hitch_offset: float
+    """What make_robot reads of a robot (a scenario's RobotSpec, the planner node's parameters)."""
+
+    @property
+    def model(self) -> str: ...
+
+    @property
+    def length(self) -> float: ...
+
+    @property
+    def trailer_length(self) -> float: ...
+
+    @property
+    def hitch_offset(self) -> float: ...
 
 
 def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Controller]:

@@ -34,10 +34,17 @@ REPLAN_AFTER = 0.5   # seconds: a path with no vertex in sight is planned again 
 class EscapeParams(Protocol):
     """The planner parameters an escape reads (PlannerParams has them)."""
 
-    clearance_margin: float
-    step_radius: float
-    waypoint_tolerance: float
-    progress_distance: float
+    @property
+    def clearance_margin(self) -> float: ...
+
+    @property
+    def step_radius(self) -> float: ...
+
+    @property
+    def waypoint_tolerance(self) -> float: ...
+
+    @property
+    def progress_distance(self) -> float: ...
 
 
 def densify(points: FloatArray, spacing: float = 0.5) -> list[FloatArray]:

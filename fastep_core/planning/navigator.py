@@ -110,6 +110,10 @@ class Navigator:
         return self._target
 
     @property
+    def failed(self) -> bool:
+        return self.mode is Mode.FAILED
+
+    @property
     def manoeuvres(self) -> int:
         """Tractor-trailer manoeuvres found (replans included)."""
         return self.manoeuvring.count if self.manoeuvring is not None else 0
@@ -176,7 +180,7 @@ class Navigator:
             self._committed = target is not None
         else:
             target = self.follow_escape(position, distance, t, others) if self.escape.active else None
-            if self.mode is Mode.FAILED:
+            if self.failed:   # no way out of the trap
                 return stop
             if not self.escape.active:
                 target = self.choose_target(position, others)
