@@ -39,7 +39,7 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from numpy.typing import ArrayLike, NDArray
+from numpy.typing import NDArray
 
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle, Segment
@@ -412,8 +412,8 @@ def _pieces(graph: _Graph, problem: _Problem, path: list[int]) -> list[PathPiece
 
 # ----------------------------------------------------------------------------------------- the API
 
-def shortest_path(world: World, start: ArrayLike, goal: ArrayLike, clearance: float, *,
-                  spacing: float = 0.25) -> OptimalPath | None:
+def shortest_path(world: World, start: Sequence[float] | FloatArray, goal: Sequence[float] | FloatArray,
+                  clearance: float, *, spacing: float = 0.25) -> OptimalPath | None:
     """The shortest path from start to goal keeping `clearance` from every obstacle surface; None if none.
 
     `clearance` is r = robot radius + clearance margin for a planner's reference path (use the radius alone
