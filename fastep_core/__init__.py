@@ -9,10 +9,17 @@ The pieces, one module each: `optimize` (Stepping Ahead Firefly, standard firefl
 from fastep_core.errors import FastepError, GoalError, ParameterError, ScenarioError
 from fastep_core.geometry import Circle, Obstacles, Segment
 from fastep_core.optimize import OptimizeResult, aco_r, fastep, firefly
-from fastep_core.planning import (ACOKinematic, FAStepKinematic, Mode, Navigator, OtherRobot, PlannerParams,
-                                  make_navigator)
+from fastep_core.planning import (
+                                  ACOKinematic,
+                                  FAStepKinematic,
+                                  Mode,
+                                  Navigator,
+                                  OtherRobot,
+                                  PlannerParams,
+                                  make_navigator,
+)
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario, parse_scenario
-from fastep_core.simulator import Run, RobotRun, simulate
+from fastep_core.simulator import RobotRun, Run, simulate
 from fastep_core.world import World
 
 __all__ = [

@@ -38,7 +38,7 @@ MODELS_MIX = 0.3
 _ATTEMPTS = 200  # random layouts tried per scenario before giving up (a few are usually enough)
 
 
-def u_trap(center: Sequence[float], width: float, depth: float, facing: float) -> list[dict[str, Any]]:
+def u_trap(center: Sequence[float] | np.ndarray, width: float, depth: float, facing: float) -> list[dict[str, Any]]:
     """Three wall segments forming a U: the opening looks towards `facing` (radians), `width` across.
 
     `center` is the middle of the pocket; the back wall lies depth/2 behind it, away from the opening.
@@ -75,7 +75,7 @@ def solvable(scenario: Scenario) -> bool:
     """Does every robot have an exact path keeping radius + margin, with the others parked at their goals?"""
     margin = scenario.planner.clearance_margin
     for i, spec in enumerate(scenario.robots):
-        parked = [Circle(tuple(other.goal), other.radius) for j, other in enumerate(scenario.robots) if j != i]
+        parked = [Circle((float(other.goal[0]), float(other.goal[1])), other.radius) for j, other in enumerate(scenario.robots) if j != i]
         world = World(scenario.world.workspace, scenario.world.obstacle_list + tuple(parked))
         if shortest_path(world, spec.start[:2], spec.goal, spec.radius + margin) is None:
             return False

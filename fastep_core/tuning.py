@@ -41,6 +41,7 @@ from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fastep_core import experiments
 from fastep_core.cli import Parser, fail, guard, positive_int, seed
@@ -66,7 +67,7 @@ TRAIN: tuple[str, ...] = ('table2_s2', 'table2_s3', 'case_study_1')
 TEST: tuple[str, ...] = ('table2_s1', 'case_study_2', 'application', 'open_field')
 
 
-def decode(x: Sequence[float]) -> dict[str, float]:
+def decode(x: Sequence[float] | NDArray[np.float64]) -> dict[str, float]:
     """A point of the search box as planner parameter overrides."""
     a, b, log10_c, step_radius = (float(v) for v in x)
     return {'a': a, 'b': b, 'c': 10.0 ** log10_c, 'step_radius': step_radius}
@@ -81,7 +82,7 @@ def run_cost(records: Sequence[experiments.Record]) -> float:
     return float(np.mean([r.path_length + (0.0 if r.ok else PENALTY) for r in records]))
 
 
-def cost(x: Sequence[float], train: Sequence[str], seeds: Sequence[int], algorithm: str = 'fastep') -> float:
+def cost(x: Sequence[float] | NDArray[np.float64], train: Sequence[str], seeds: Sequence[int], algorithm: str = 'fastep') -> float:
     """J(x): every training scenario, every seed, in this process."""
     overrides = tuple(sorted(decode(x).items()))
     records = [r for s in train for seed in seeds
@@ -105,9 +106,9 @@ def tune(train: Sequence[str] = TRAIN, seeds: Sequence[int] = (0, 1), *, popsize
          workers: int = 2, seed: int = 0, algorithm: str = 'fastep',
          log: Callable[[str], None] | None = None) -> TuningResult:
     """Differential evolution over PARAMETERS (Table 1 in the initial population); returns the best found."""
-    from scipy.optimize import differential_evolution
+    from scipy.optimize import Bounds, differential_evolution
     fun = functools.partial(cost, train=tuple(train), seeds=tuple(seeds), algorithm=algorithm)
-    bounds = list(PARAMETERS.values())
+    bounds = Bounds(*np.array(list(PARAMETERS.values()), dtype=float).T)
     x0 = encode(PlannerParams())
     started = time.perf_counter()
     generation = [0]

@@ -48,6 +48,7 @@ from fastep_core.world import World
 __all__ = ['OptimalPath', 'PathPiece', 'shortest_path', 'TOL', 'main']
 
 FloatArray = NDArray[np.float64]
+ArcShape = tuple[int, float, float]   # an arc edge: (circle index, angle at its start, signed sweep)
 TOL = 1e-9
 """Absolute slack (m) on every clearance test, so tangential contact counts as free."""
 TWO_PI = 2.0 * math.pi
@@ -73,7 +74,8 @@ class PathPiece:
         s = np.linspace(0.0, 1.0, k + 1)
         if self.kind == 'line':
             a, b = np.array(self.start), np.array(self.end)
-            return a + s[:, None] * (b - a)
+            line: FloatArray = a + s[:, None] * (b - a)
+            return line
         assert self.center is not None
         t = self.angle0 + s * self.sweep
         return np.column_stack([self.center[0] + self.radius * np.cos(t), self.center[1] + self.radius * np.sin(t)])
@@ -272,14 +274,14 @@ class _Graph:
     def __init__(self) -> None:
         self.points: list[np.ndarray] = []
         self.circle: list[int] = []
-        self.adj: dict[int, dict[int, tuple[float, object]]] = {}
+        self.adj: dict[int, dict[int, tuple[float, ArcShape | None]]] = {}
 
     def node(self, point: np.ndarray, circle: int) -> int:
         self.points.append(point)
         self.circle.append(circle)
         return len(self.points) - 1
 
-    def edge(self, u: int, v: int, length: float, shape: object) -> None:
+    def edge(self, u: int, v: int, length: float, shape: ArcShape | None) -> None:
         """shape: None for a line, (circle, angle at u, signed sweep u -> v) for an arc."""
         old = self.adj.setdefault(u, {}).get(v)
         if old is None or length < old[0]:
@@ -287,7 +289,7 @@ class _Graph:
             if shape is None:
                 back = None
             else:
-                k, a0, sweep = shape            # type: ignore[misc]
+                k, a0, sweep = shape
                 back = (k, a0 + sweep, -sweep)
             self.adj.setdefault(v, {})[u] = (length, back)
 
@@ -330,7 +332,7 @@ def _build(problem: _Problem, start: np.ndarray, goal: np.ndarray) -> _Graph:
     cand_v.append((goal, -1, g))
     for node, point in ((s, start), (g, goal)):
         for k, c in enumerate(circles):
-            for p_circle, p_point in _tangents(c.center, c.radius, (point[0], point[1]), 0.0, inner=False):
+            for p_circle, _ in _tangents(c.center, c.radius, (point[0], point[1]), 0.0, inner=False):
                 cand_u.append((point, -1, node))
                 cand_v.append((p_circle, k, -1))
     for i in range(len(circles)):
@@ -401,7 +403,7 @@ def _pieces(graph: _Graph, problem: _Problem, path: list[int]) -> list[PathPiece
         if shape is None:
             out.append(PathPiece('line', (float(p[0]), float(p[1])), (float(q[0]), float(q[1])), length))
         else:
-            k, a0, sweep = shape                    # type: ignore[misc]
+            k, a0, sweep = shape
             if sweep == 0.0:
                 continue
             c = problem.circles[k]
