@@ -201,9 +201,8 @@ class Monitor:
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rclpy.signals import SignalHandlerOptions
 
-        from fastep_ros.common import LATCHED, RELIABLE
-        from fastep_ros.planner import STATUS_QOS
-        from msg_tools import convert
+        from msg_tools import convert, interface
+        from msg_tools.interface import LATCHED, RELIABLE, offered_qos, robot_topic
 
         self.convert = convert
         self.rclpy = rclpy
@@ -219,14 +218,17 @@ class Monitor:
         self.odom_subs = {}
         depth = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # every odometry message
         for name, robot in self.robots.items():
-            self.goal_pubs[name] = self.node.create_publisher(PoseStamped, f'/{name}/goal_pose', LATCHED)
-            self.node.create_subscription(DiagnosticStatus, f'/{name}/status',
-                                          lambda m, r=robot: self.on_status(r, m), STATUS_QOS)
+            # Latched, so a planner restarted mid-run gets its goal again (it subscribes to latched goals too).
+            self.goal_pubs[name] = self.node.create_publisher(PoseStamped, robot_topic(name, interface.GOAL_POSE),
+                                                              LATCHED)
+            self.node.create_subscription(DiagnosticStatus, robot_topic(name, interface.STATUS),
+                                          lambda m, r=robot: self.on_status(r, m), offered_qos(interface.STATUS))
             self.odom_subs[name] = self.node.create_subscription(
-                Odometry, f'/{name}/odom', lambda m, r=robot: self.on_odom(r, m), depth)
-            self.node.create_subscription(PathMsg, f'/{name}/plan', lambda m, r=robot: self.on_plan(r, m), RELIABLE)
+                Odometry, robot_topic(name, interface.ODOM), lambda m, r=robot: self.on_odom(r, m), depth)
+            self.node.create_subscription(PathMsg, robot_topic(name, interface.PLAN),
+                                          lambda m, r=robot: self.on_plan(r, m), RELIABLE)
             if robot.spec.model == 'tractor_trailer':
-                self.node.create_subscription(PoseStamped, f'/{name}/trailer_pose',
+                self.node.create_subscription(PoseStamped, robot_topic(name, interface.TRAILER_POSE),
                                               lambda m, r=robot: self.on_trailer(r, m), depth)
 
     def follow_clock(self) -> None:
@@ -235,9 +237,11 @@ class Monitor:
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rosgraph_msgs.msg import Clock
 
+        from msg_tools.interface import CLOCK
+
         def on_clock(msg: Any) -> None:
             self.sim_now = max(self.sim_now or 0.0, self.convert.stamp_to_seconds(msg.clock))
-        self.node.create_subscription(Clock, '/clock', on_clock,
+        self.node.create_subscription(Clock, CLOCK, on_clock,
                                       QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
 
     def now(self) -> float:
@@ -325,6 +329,8 @@ def _wait(monitor: Monitor, procs: Processes, deadline: float, ready: Any, what:
 
 
 def run(args: argparse.Namespace, scenario: Scenario) -> int:
+    from msg_tools.interface import CMD_VEL, ODOM, robot_topic
+
     sim_time = not args.no_clock
     timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
     procs = Processes(args.verbose)
@@ -350,7 +356,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 'rtf': float(args.rtf), 'step': scenario.planner.dt,
                 # The recorder subscribes to /clock twice: for its own time, and to record it.
                 'wait_for_subscribers': 2 + 2 * len(scenario.robots) + 2 * (args.record is not None),
-                'sync_topics': [f'/{spec.name}/{topic}' for spec in scenario.robots for topic in ('cmd_vel', 'odom')]})
+                'sync_topics': [robot_topic(spec.name, topic)
+                                for spec in scenario.robots for topic in (CMD_VEL, ODOM)]})
         monitor = Monitor(scenario)
         robots = monitor.robots
         names = set(robots)

@@ -31,7 +31,6 @@ import argparse
 import json
 import math
 import os
-import re
 import struct
 import sys
 from dataclasses import dataclass, field
@@ -42,14 +41,13 @@ import numpy as np
 
 from fastep_core.errors import FastepError
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from msg_tools.interface import (CMD_VEL, COST, GOAL_POSE, MAP, METADATA_NAME, OBSTACLES, ODOM, PLAN, STATUS,
+                                 TRAILER_POSE, TYPES, WAYPOINT, metadata_key, split_robot_topic)
 from msg_tools.mcap_io import Recording, open_recording
-from msg_tools.sim_mcap import METADATA_NAME
 
 __all__ = ['RecordedRun', 'RobotRecord', 'float64_field', 'load_run', 'main', 'metrics', 'odometry_fields',
            'twist_fields', 'write_figures', 'write_report']
 
-ROBOT_TOPIC = re.compile(r'^/([A-Za-z_][A-Za-z0-9_]*)/(odom|cmd_vel|goal_pose|waypoint|plan|cost|status|'
-                         r'trailer_pose)$')
 DEFAULT_RADIUS = 0.5
 
 
@@ -145,17 +143,17 @@ def load_run(recording: Recording) -> RecordedRun:
     from msg_tools.mcap_io import message_class
 
     robots: dict[str, RobotRecord] = {}
-    wanted = ['/obstacles', '/map']
+    wanted = [OBSTACLES, MAP]
     kinds: dict[str, tuple[RobotRecord, str]] = {}
     for topic in recording.topics:
-        match = ROBOT_TOPIC.match(topic)
-        if match:
-            robot = _robot(robots, match.group(1))
-            if match.group(2) == 'trailer_pose':
+        parts = split_robot_topic(topic)
+        if parts is not None:
+            robot = _robot(robots, parts[0])
+            if parts[1] == TRAILER_POSE:
                 robot.model = 'tractor_trailer'
             else:
                 wanted.append(topic)
-                kinds[topic] = (robot, match.group(2))
+                kinds[topic] = (robot, parts[1])
     classes: dict[str, type] = {}
 
     def decode(type_name: str, data: bytes) -> Any:
@@ -175,14 +173,14 @@ def load_run(recording: Recording) -> RecordedRun:
     # File order (fast); every series is sorted by time below.
     for topic, type_name, log_time, _, data, _ in recording.raw_messages(wanted, log_time_order=False):
         t = log_time * 1e-9
-        if topic == '/obstacles':
+        if topic == OBSTACLES:
             if obstacles is None or t >= obstacles[0]:
                 try:
                     obstacles = (t, convert.marker_array_to_obstacles(decode(type_name, data)))
                 except ValueError:
                     pass
             continue
-        if topic == '/map':
+        if topic == MAP:
             if workspace is None or t >= workspace[0]:
                 try:
                     workspace = (t, convert.occupancy_grid_workspace(decode(type_name, data)))
@@ -190,33 +188,33 @@ def load_run(recording: Recording) -> RecordedRun:
                     pass
             continue
         robot, kind = kinds[topic]
-        if kind == 'odom':
-            v = odometry_fields(data) if type_name == 'nav_msgs/msg/Odometry' else None
+        if kind == ODOM:
+            v = odometry_fields(data) if type_name == TYPES[ODOM] else None
             if v is None:
                 m = decode(type_name, data)
                 p, q, tw = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist
                 v = (p.x, p.y, q.x, q.y, q.z, q.w, tw.linear.x, tw.linear.y, tw.angular.z)
             robot.odom.append((t, v[0], v[1]))
             robot.odom_twist.append((t, v[6], v[7], v[8]))
-        elif kind == 'cmd_vel':
-            c = twist_fields(data) if type_name == 'geometry_msgs/msg/Twist' else None
+        elif kind == CMD_VEL:
+            c = twist_fields(data) if type_name == TYPES[CMD_VEL] else None
             if c is None:
                 m = decode(type_name, data)
                 tw = m.twist if hasattr(m, 'twist') else m  # TwistStamped or Twist
                 c = (tw.linear.x, tw.linear.y, tw.angular.z)
             robot.cmd.append((t, *c))
-        elif kind == 'cost':
-            f = float64_field(data) if type_name == 'std_msgs/msg/Float64' else None
+        elif kind == COST:
+            f = float64_field(data) if type_name == TYPES[COST] else None
             robot.cost.append((t, float(decode(type_name, data).data) if f is None else f))
-        elif kind == 'waypoint':
+        elif kind == WAYPOINT:
             waypoints[robot.name].append((t, convert.pose_stamped_to_point(decode(type_name, data))))
-        elif kind == 'plan':
+        elif kind == PLAN:
             if robot.name not in plans or t >= plans[robot.name][0]:
                 plans[robot.name] = (t, convert.path_to_waypoints(decode(type_name, data)))
-        elif kind == 'status':
+        elif kind == STATUS:
             values = convert.diagnostic_to_dict(decode(type_name, data))
             robot.statuses.append((t, values))
-        elif kind == 'goal_pose':
+        elif kind == GOAL_POSE:
             goals[robot.name].append((t, convert.pose_stamped_to_point(decode(type_name, data))))
     for robot in robots.values():
         for series in (robot.odom, robot.odom_twist, robot.cmd, robot.cost, robot.statuses):
@@ -240,7 +238,7 @@ def load_run(recording: Recording) -> RecordedRun:
         except ValueError:
             space = None
     for robot in robots.values():
-        model = meta.get(f'model/{robot.name}')
+        model = meta.get(metadata_key('model', robot.name))
         if model:
             robot.model = model
     starts = [r.goal_time for r in robots.values() if r.goal_time is not None]
@@ -257,7 +255,7 @@ def load_run(recording: Recording) -> RecordedRun:
 # ----------------------------------------------------------------------------------------------- metrics
 
 def _radius(run: RecordedRun, robot: RobotRecord, default: float) -> tuple[float, str]:
-    text = run.metadata.get(f'radius/{robot.name}')
+    text = run.metadata.get(metadata_key('radius', robot.name))
     if text:
         try:
             return float(text), 'metadata'
