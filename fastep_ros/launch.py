@@ -33,6 +33,7 @@ import numpy as np
 
 from fastep_core.cli import seed
 from fastep_core.errors import FastepError
+from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_core.simulator import ALGORITHMS
@@ -465,30 +466,11 @@ def _scenario_arg(source: str) -> str:
 
 
 def _min_clearance(scenario: Scenario, robots: dict[str, RobotLive]) -> dict[str, float]:
-    """Smallest margin each robot kept (negative: collided), from its odometry: to the obstacles, and to the
-    other robots at the same times (their positions interpolated at this robot's stamps, which with simulated
-    time are the same stamps: plants integrate on the same grid)."""
-    out = {}
-    obstacles = scenario.world.obstacles
-    tracks = {name: np.array([r[:3] for r in robot.rows]).reshape(-1, 3) for name, robot in robots.items()}
-    for name, robot in robots.items():
-        mine = tracks[name]
-        margin = math.inf
-        if len(mine) and len(obstacles):
-            margin = float(obstacles.clearance(mine[:, 1:3]).min()) - robot.spec.radius
-        for other, orobot in robots.items():
-            theirs = tracks[other]
-            if other == name or len(mine) == 0 or len(theirs) == 0:
-                continue
-            inside = (mine[:, 0] >= theirs[0, 0]) & (mine[:, 0] <= theirs[-1, 0])
-            if not inside.any():
-                continue
-            t = mine[inside, 0]
-            x, y = np.interp(t, theirs[:, 0], theirs[:, 1]), np.interp(t, theirs[:, 0], theirs[:, 2])
-            gap = float(np.hypot(mine[inside, 1] - x, mine[inside, 2] - y).min())
-            margin = min(margin, gap - robot.spec.radius - orobot.spec.radius)
-        out[name] = margin
-    return out
+    """Smallest margin each robot kept (negative: collided), from its odometry, to the obstacles and the other
+    robots (fastep_core.metrics; with simulated time every plant stamps odometry on the same grid)."""
+    margins = trajectory_margins([[row[:3] for row in robot.rows] for robot in robots.values()],
+                                 [robot.spec.radius for robot in robots.values()], scenario.world.obstacles)
+    return {name: float(margin) for name, margin in zip(robots, margins.overall)}
 
 
 def _sampled(rows: list[list[float]]) -> list[list[float]]:

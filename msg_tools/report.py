@@ -11,7 +11,7 @@ both and the numbers can be checked against each other. Everything is measured f
   `goal_pose` log time (or, without a goal_pose, its first odom);
 - min_clearance: smallest distance from an odom position to the surface of an obstacle of the file's
   `/obstacles`, minus the robot radius (negative means it touched); min_robot_gap likewise against the other
-  robots (positions interpolated in time). The radius is, in this order: the `fastep` metadata record
+  robots, compared at each odom time of either (fastep_core.metrics.trajectory_margins). The radius is, in this order: the `fastep` metadata record
   (fastep-sim and fastep-record with a scenario write it), a `robot_radius` value in the robot's status, or
   --radius (default 0.5); `radius_source` says which;
 - activations: the `activations` value of the last status (how often the swarm planned a step), or else the
@@ -41,6 +41,7 @@ import numpy as np
 
 from fastep_core.errors import FastepError
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from fastep_core.metrics import trajectory_margins
 from msg_tools.interface import (CMD_VEL, COST, GOAL_POSE, MAP, METADATA_NAME, OBSTACLES, ODOM, PLAN, STATUS,
                                  TRAILER_POSE, TYPES, WAYPOINT, metadata_key, split_robot_topic)
 from msg_tools.mcap_io import Recording, open_recording
@@ -271,12 +272,6 @@ def _radius(run: RecordedRun, robot: RobotRecord, default: float) -> tuple[float
     return default, 'default'
 
 
-def _positions_at(odom: np.ndarray, times: np.ndarray) -> np.ndarray:
-    """Positions (n, 2) of an odom array (rows t, x, y) at the given times, linearly interpolated and held
-    before the first and after the last message."""
-    return np.stack([np.interp(times, odom[:, 0], odom[:, 1]), np.interp(times, odom[:, 0], odom[:, 2])], axis=-1)
-
-
 def _int(text: Any) -> int | None:
     try:
         return int(float(text))
@@ -286,12 +281,13 @@ def _int(text: Any) -> int | None:
 
 def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[str, Any]:
     """The report as a JSON-ready dict (see the module docstring)."""
-    world = Obstacles(run.obstacles) if run.obstacles else None
     for robot in run.robots.values():
         robot.radius, robot.radius_source = _radius(run, robot, default_radius)
     rows = []
     arrays = {name: np.array(r.odom, dtype=float).reshape(-1, 3) for name, r in run.robots.items()}
-    for name, robot in run.robots.items():
+    kept = trajectory_margins(list(arrays.values()), [float(r.radius or 0.0) for r in run.robots.values()],
+                            Obstacles(run.obstacles))
+    for k, (name, robot) in enumerate(run.robots.items()):
         odom = arrays[name]
         xy = odom[:, 1:3]
         length = float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum()) if len(xy) > 1 else 0.0
@@ -299,19 +295,9 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
         arrived = [t for t, s in robot.statuses if s.get('message') == 'arrived' and (start is None or t >= start)]
         reached = bool(arrived)
         time_to_goal = arrived[0] - start if reached and start is not None else None
-        clearance = None
-        if world is not None and len(xy):
-            clearance = float(world.clearance(xy).min()) - float(robot.radius)
-        gap = None
-        for other_name, other in run.robots.items():
-            theirs_odom = arrays[other_name]
-            if other_name == name or not len(theirs_odom) or not len(xy):
-                continue
-            times = np.union1d(odom[:, 0], theirs_odom[:, 0])
-            mine, theirs = _positions_at(odom, times), _positions_at(theirs_odom, times)
-            distance = float(np.sqrt(((mine - theirs) ** 2).sum(axis=1)).min())
-            value = distance - float(robot.radius) - float(other.radius or 0.0)
-            gap = value if gap is None else min(gap, value)
+        # inf: no obstacle in the file, no other robot with odometry, or no odometry of this robot
+        clearance = float(kept.obstacles[k]) if math.isfinite(kept.obstacles[k]) else None
+        gap = float(kept.robots[k]) if math.isfinite(kept.robots[k]) else None
         last = robot.statuses[-1][1] if robot.statuses else {}
         activations = None
         for _, values in reversed(robot.statuses):
