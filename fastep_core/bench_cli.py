@@ -3,10 +3,10 @@
     fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal]
                  [--workers 2] [--seed 0] [--out docs/] [--report table2] [--json FILE]
 
-Writes OUT/REPORT.md (the Markdown tables) and OUT/figures/REPORT_{path_length,compute_time}.png (box plots),
-prints the Markdown on stdout and a progress counter on stderr. The engine is `fastep_core.experiments`;
-`python -m benchmarks.table2` is the same command. Exit 0 when the runs were made, 2 with one line on
-stderr for bad input.
+Writes OUT/REPORT.md (the Markdown tables) and OUT/figures/REPORT_{path_length,compute_time,paths}.png (box
+plots and example paths, drawn by msg_tools.plots), prints the Markdown on stdout and a progress counter on
+stderr. The engine is `fastep_core.experiments`; `python -m benchmarks.table2` is the same command. Exit 0
+when the runs were made, 2 with one line on stderr for bad input.
 """
 
 from __future__ import annotations
@@ -79,7 +79,8 @@ def main(argv: Sequence[str] | None = None, prog: str = 'fastep-bench') -> int:
         report.write_text(text)
         written = [report]
         if not args.no_figures:
-            written += experiments.figures(records, optimal, args.out / 'figures', prefix=args.report)
+            from msg_tools.plots import bench_figures  # matplotlib only when figures are asked for
+            written += bench_figures(records, optimal, args.out / 'figures', prefix=args.report)
         if args.json is not None:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps({'records': [r.to_json() for r in records], 'optimal': optimal}) + '\n')

@@ -15,7 +15,8 @@ percentages) is the project's main claim, so regenerating it must be one reprodu
   no distribution: compute times are skewed and path lengths bounded below by the optimum;
 - `optimal_lengths` gives the exact shortest path (planning.optimal) per robot, the yardstick for the
   optimality ratio path length / optimal length;
-- `markdown_report` and `figures` write what docs/table2.md shows.
+- `markdown_report` writes what docs/table2.md shows; `example_paths` gives the runs and exact paths its paths
+  figure draws (the figures themselves are drawn by msg_tools.plots.bench_figures: no plotting here).
 
 'optimal' (the exact path driven by the kinematic controller) draws no random numbers, so a batch runs it
 once, with the first seed, whatever `runs` says.
@@ -33,15 +34,18 @@ import multiprocessing
 import sys
 import time
 from dataclasses import asdict, dataclass
-from pathlib import Path
 from typing import Callable, Iterable, Sequence
 
 import numpy as np
 
+from fastep_core.planning.optimal import OptimalPath, shortest_path
+from fastep_core.scenario import Scenario, load_scenario
+from fastep_core.simulator import Run, algorithm_name, simulate
+
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
     'tasks', 'run_task', 'run_batch', 'pool_context', 'summarise', 'compare', 'enhancement',
-    'optimal_lengths', 'straight_lengths', 'markdown_report', 'figures',
+    'optimal_lengths', 'straight_lengths', 'markdown_report', 'metric_values', 'ExamplePaths', 'example_paths',
 ]
 
 TABLE2: tuple[str, ...] = ('table2_s1', 'table2_s2', 'table2_s3')
@@ -63,8 +67,6 @@ METRICS: dict[str, str] = {
     'compute_time': 'compute time (s)',
     'cpu_time': 'CPU time per run (s)',
 }
-
-NAMES = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
 
 
 @dataclass(frozen=True)
@@ -104,8 +106,7 @@ def tasks(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0:
 
 
 @functools.lru_cache(maxsize=64)
-def _scenario(source: str):  # type: ignore[no-untyped-def]
-    from fastep_core.scenario import load_scenario
+def _scenario(source: str) -> Scenario:
     return load_scenario(source)
 
 
@@ -113,7 +114,6 @@ def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = ()) -> list[
     """One simulate call (in a worker process); `overrides` replace planner parameters (used by tuning)."""
     from dataclasses import replace
 
-    from fastep_core.simulator import simulate
     source, algorithm, seed = task
     scenario = _scenario(source)
     if overrides:
@@ -195,7 +195,7 @@ class Summary:
     std: dict[str, float]
 
 
-def _values(records: Iterable[Record], metric: str) -> np.ndarray:
+def metric_values(records: Iterable[Record], metric: str) -> np.ndarray:
     """The metric over the records it is defined for: compute time always, the rest for arrived runs."""
     if metric in ('compute_time', 'cpu_time'):
         return np.array([getattr(r, metric) for r in records], dtype=float)
@@ -217,7 +217,7 @@ def summarise(records: Sequence[Record]) -> list[Summary]:
     for (scenario, algorithm, robot), group in groups.items():
         mean, std = {}, {}
         for metric in METRICS:
-            mean[metric], std[metric] = _mean_std(_values(group, metric))
+            mean[metric], std[metric] = _mean_std(metric_values(group, metric))
         out.append(Summary(scenario, algorithm, robot, len(group), sum(r.ok for r in group),
                            sum(r.collided for r in group), mean, std))
     return out
@@ -251,8 +251,8 @@ def compare(records: Sequence[Record], scenario: str, metric: str, a: str = 'fas
             b: str = 'aco') -> Comparison:
     """Means, enhancement % and the two-sided Mann-Whitney U test of `metric` for planners a and b."""
     from scipy.stats import mannwhitneyu
-    xa = _values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
-    xb = _values([r for r in records if r.scenario == scenario and r.algorithm == b], metric)
+    xa = metric_values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
+    xb = metric_values([r for r in records if r.scenario == scenario and r.algorithm == b], metric)
     if xa.size == 0 or xb.size == 0:
         return Comparison(metric, _mean_std(xa)[0], _mean_std(xb)[0], math.nan, math.nan, math.nan,
                           int(xa.size), int(xb.size))
@@ -267,7 +267,6 @@ def compare(records: Sequence[Record], scenario: str, metric: str, a: str = 'fas
 
 def optimal_lengths(source: str) -> dict[str, float | None]:
     """Exact shortest path length per robot (clearance radius + clearance_margin); None when there is none."""
-    from fastep_core.planning.optimal import shortest_path
     scenario = _scenario(source)
     out: dict[str, float | None] = {}
     for spec in scenario.robots:
@@ -310,7 +309,7 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
     lines = [f'## {title}', '']
     if command:
         lines += ['```', command, '```', '']
-    lines += ['Runs per cell: ' + ', '.join(f'{NAMES.get(a, a)} {n}' for a, n in runs.items()) +
+    lines += ['Runs per cell: ' + ', '.join(f'{algorithm_name(a)} {n}' for a, n in runs.items()) +
               '. Means ± sample standard deviation; path length and simulated time over the runs that '
               'arrived without collision, compute time (wall seconds planning and simulating the robot, as '
               'fastep-sim reports it) and CPU time (process CPU seconds of the whole run, not inflated by other '
@@ -323,7 +322,7 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
         paper = PAPER.get(s.scenario, {}).get(s.algorithm, {})
         opt = optimal.get(s.scenario, {}).get(s.robot)
         ratio = s.mean['path_length'] / opt if opt else math.nan
-        lines.append(f'| {s.scenario} | {s.robot} | {NAMES.get(s.algorithm, s.algorithm)} | '
+        lines.append(f'| {s.scenario} | {s.robot} | {algorithm_name(s.algorithm)} | '
                      f'{s.arrived}/{s.runs}{f" ({s.collided} collided)" if s.collided else ""} | '
                      f'{_pm(s.mean["path_length"], s.std["path_length"])} | {_num(paper.get("path"))} | '
                      f'{_num(ratio, 3)} | {_pm(s.mean["sim_time"], s.std["sim_time"], 1)} | '
@@ -349,7 +348,7 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
                          f'{_num(c["sim_time"].enhancement, 2, " %")} | {_p(c["sim_time"].p_value)} |')
     lines += ['', '### Optimality', '',
               '| scenario | robot | straight line (m) | optimal (m) | ' +
-              ' | '.join(f'{NAMES.get(a, a)} path / opt.' for a in algorithms) + ' |',
+              ' | '.join(f'{algorithm_name(a)} path / opt.' for a in algorithms) + ' |',
               '|---|---|---|---|' + '---|' * len(algorithms)]
     by_key = {(s.scenario, s.algorithm, s.robot): s for s in summaries}
     for scenario in scenarios:
@@ -364,97 +363,27 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
     return '\n'.join(lines) + '\n'
 
 
-def _grid(n: int, max_cols: int = 4) -> tuple[int, int]:
-    """Rows and columns for n panels, at most max_cols wide."""
-    cols = min(n, max_cols)
-    return -(-n // cols), cols
+# ----------------------------------------------------------------------------------------- example paths
+
+@dataclass(frozen=True)
+class ExamplePaths:
+    """One scenario's exact shortest paths and one run of each planner, for the paths figure."""
+
+    source: str                              # the scenario as given (built-in name or YAML path)
+    scenario: Scenario
+    seed: int
+    optimal: dict[str, OptimalPath | None]   # per robot (None: no path keeps the clearance)
+    runs: dict[str, Run]                     # per algorithm but 'optimal', which is the exact path itself
 
 
-def figures(records: Sequence[Record], optimal: dict[str, dict[str, float | None]], out_dir: Path,
-            prefix: str = 'table2') -> list[Path]:
-    """Box plots of path length and compute time per scenario and planner, and the paths (PNG, Agg)."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-
-    out_dir.mkdir(parents=True, exist_ok=True)
-    scenarios = list(dict.fromkeys(r.scenario for r in records))
-    algorithms = list(dict.fromkeys(r.algorithm for r in records))
-    written = []
-    for metric in ('path_length', 'compute_time'):
-        rows, cols = _grid(len(scenarios))
-        fig, axes = plt.subplots(rows, cols, figsize=(4.2 * cols, 4.0 * rows), squeeze=False)
-        for ax in axes.flat[len(scenarios):]:
-            ax.set_visible(False)
-        for ax, scenario in zip(axes.flat, scenarios):
-            data = [_values([r for r in records if r.scenario == scenario and r.algorithm == a], metric)
-                    for a in algorithms]
-            ax.boxplot(data, tick_labels=[NAMES.get(a, a).replace('-Kinematic', '') for a in algorithms])
-            paper = PAPER.get(scenario, {})
-            if metric == 'path_length':
-                for k, a in enumerate(algorithms, 1):
-                    if a in paper:
-                        ax.plot(k, paper[a]['path'], 'rx', ms=9, label='paper mean' if k == 1 else None)
-                for opt in {v for v in optimal.get(scenario, {}).values() if v}:
-                    ax.axhline(opt, color='green', ls='--', lw=1, label='optimal')
-                if ax.get_legend_handles_labels()[0]:
-                    ax.legend(fontsize=8)
-            ax.set_title(scenario)
-            ax.set_ylabel(METRICS[metric])
-            ax.grid(axis='y', alpha=0.3)
-        fig.tight_layout()
-        path = out_dir / f'{prefix}_{metric}.png'
-        fig.savefig(path, dpi=100)
-        plt.close(fig)
-        written.append(path)
-    written.append(paths_figure(scenarios, algorithms, out_dir / f'{prefix}_paths.png',
-                                seed=min(r.seed for r in records)))
-    return written
-
-
-def paths_figure(scenarios: Sequence[str], algorithms: Sequence[str], out: Path, seed: int = 0) -> Path:
-    """Each scenario's obstacles, one run of every planner (the given seed) and the exact optimal path."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
-
-    from fastep_core.geometry import Circle
-    from fastep_core.planning.optimal import shortest_path
-    from fastep_core.simulator import simulate
-
-    colours = {'fastep': 'tab:red', 'aco': 'tab:blue', 'optimal': 'tab:olive'}
-    rows, cols = _grid(len(scenarios))
-    fig, axes = plt.subplots(rows, cols, figsize=(5.0 * cols, 5.2 * rows), squeeze=False)
-    for ax in axes.flat[len(scenarios):]:
-        ax.set_visible(False)
-    for ax, source in zip(axes.flat, scenarios):
+def example_paths(scenarios: Sequence[str], algorithms: Sequence[str], seed: int = 0) -> list[ExamplePaths]:
+    """Per scenario: the exact optimal path of every robot and one run of every planner with the given seed."""
+    out = []
+    for source in scenarios:
         scenario = _scenario(source)
-        for o in scenario.world.obstacle_list:
-            if isinstance(o, Circle):
-                ax.add_patch(plt.Circle(o.center, o.radius, color='0.6'))
-            else:
-                ax.plot([o.start[0], o.end[0]], [o.start[1], o.end[1]], color='0.3', lw=2.5)
-        for k, spec in enumerate(scenario.robots):
-            exact = shortest_path(scenario.world, spec.start[:2], spec.goal,
-                                  spec.radius + scenario.planner.clearance_margin)
-            if exact is not None:
-                ax.plot(*exact.points.T, color='tab:green', lw=3, alpha=0.5,
-                        label=f'optimal {exact.length:.2f} m' if k == 0 else None)
-        for algorithm in algorithms:
-            if algorithm == 'optimal':
-                continue
-            run = simulate(scenario, algorithm, seed)
-            for k, robot in enumerate(run.robots):
-                xy = np.array(robot.trajectory)[:, 1:3]
-                ax.plot(*xy.T, color=colours.get(algorithm), lw=1.2,
-                        label=f'{NAMES.get(algorithm, algorithm)} {robot.path_length:.2f} m' if k == 0 else None)
-        xmin, ymin, xmax, ymax = scenario.world.workspace
-        ax.set_xlim(xmin, xmax)
-        ax.set_ylim(ymin, ymax)
-        ax.set_aspect('equal')
-        ax.set_title(f'{source} (seed {seed})')
-        ax.legend(fontsize=7, loc='best')
-    fig.tight_layout()
-    fig.savefig(out, dpi=90)
-    plt.close(fig)
+        exact = {spec.name: shortest_path(scenario.world, spec.start[:2], spec.goal,
+                                          spec.radius + scenario.planner.clearance_margin)
+                 for spec in scenario.robots}
+        runs = {a: simulate(scenario, a, seed) for a in algorithms if a != 'optimal'}
+        out.append(ExamplePaths(source, scenario, seed, exact, runs))
     return out

@@ -19,11 +19,18 @@ from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.navigator import Mode, Navigator, OtherRobot, make_navigator
 from fastep_core.scenario import Scenario
 
-__all__ = ['RobotRun', 'Run', 'Tick', 'simulate', 'ALGORITHMS']
+__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'RobotRun', 'Run', 'Tick', 'algorithm_name', 'simulate']
 
 FloatArray = NDArray[np.float64]
 ALGORITHMS = ('fastep', 'aco', 'optimal')  # optimal: exact shortest path (planning/optimal_kinematic.py)
+# What tables and figure titles call them (the paper's names).
+ALGORITHM_NAMES = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
 SAMPLE_SPACING = 0.1  # metres of travel between trajectory samples (DESIGN: at least every 0.1 m)
+
+
+def algorithm_name(algorithm: str) -> str:
+    """The paper's name of an algorithm ('aco' -> 'ACO-Kinematic'); an unknown one keeps its own."""
+    return ALGORITHM_NAMES.get(algorithm, algorithm)
 
 
 @dataclass

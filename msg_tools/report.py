@@ -11,9 +11,9 @@ both and the numbers can be checked against each other. Everything is measured f
   `goal_pose` log time (or, without a goal_pose, its first odom);
 - min_clearance: smallest distance from an odom position to the surface of an obstacle of the file's
   `/obstacles`, minus the robot radius (negative means it touched); min_robot_gap likewise against the other
-  robots, compared at each odom time of either (fastep_core.metrics.trajectory_margins). The radius is, in this order: the `fastep` metadata record
-  (fastep-sim and fastep-record with a scenario write it), a `robot_radius` value in the robot's status, or
-  --radius (default 0.5); `radius_source` says which;
+  robots, compared at each odom time of either (fastep_core.metrics.trajectory_margins). The radius is, in
+  this order: the `fastep` metadata record (fastep-sim and fastep-record with a scenario write it), a
+  `robot_radius` value in the robot's status, or --radius (default 0.5); `radius_source` says which;
 - activations: the `activations` value of the last status (how often the swarm planned a step), or else the
   number of distinct waypoints.
 
@@ -40,14 +40,14 @@ from typing import Any, NoReturn, Sequence
 import numpy as np
 
 from fastep_core.errors import FastepError
-from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from fastep_core.geometry import Obstacle, Obstacles
 from fastep_core.metrics import trajectory_margins
 from msg_tools.interface import (CMD_VEL, COST, GOAL_POSE, MAP, METADATA_NAME, OBSTACLES, ODOM, PLAN, STATUS,
                                  TRAILER_POSE, TYPES, WAYPOINT, metadata_key, split_robot_topic)
 from msg_tools.mcap_io import Recording, open_recording
 
-__all__ = ['RecordedRun', 'RobotRecord', 'float64_field', 'load_run', 'main', 'metrics', 'odometry_fields',
-           'twist_fields', 'write_figures', 'write_report']
+__all__ = ['RecordedRun', 'RobotRecord', 'figures', 'float64_field', 'load_run', 'main', 'metrics',
+           'odometry_fields', 'twist_fields', 'write_figures', 'write_report']
 
 DEFAULT_RADIUS = 0.5
 
@@ -332,108 +332,37 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
 
 # ----------------------------------------------------------------------------------------------- figures
 
-PLOT_POINTS = 5000  # rows drawn per line at most: long recordings are thinned for drawing only
+def figures(run: RecordedRun) -> dict[str, Any]:
+    """The report's figures (matplotlib Figures, drawn by msg_tools.plots) by file name; times are seconds since
+    the first goal."""
+    from msg_tools import plots
 
-
-def _thin(rows: Sequence[Sequence[float]]) -> np.ndarray:
-    data = np.asarray(rows, dtype=float)
-    if len(data) <= PLOT_POINTS:
-        return data
-    step = int(math.ceil(len(data) / PLOT_POINTS))
-    return np.concatenate([data[::step], data[-1:]])
-
-
-def _title(run: RecordedRun) -> str:
-    algo = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic'}.get(run.algorithm, run.algorithm)
-    what = run.scenario or run.path.stem
-    return f'{what}: {algo}' if algo else what
+    text = plots.title(run.scenario or run.path.stem, run.algorithm)
+    paths = []
+    for robot in run.robots.values():
+        odom = np.array(robot.odom, dtype=float).reshape(-1, 3)
+        length = float(np.sqrt((np.diff(odom[:, 1:3], axis=0) ** 2).sum(axis=1)).sum())
+        start = (float(odom[0, 1]), float(odom[0, 2])) if len(odom) else None
+        waypoints = robot.plan[:-1] if robot.plan else robot.waypoints   # the plan's last pose is the goal
+        paths.append(plots.RobotPath(robot.name, odom[:, 1:3], length, np.array(waypoints, dtype=float).reshape(-1, 2),
+                                     start, robot.goal))
+    costs = {robot.name: np.array(robot.cost, dtype=float).reshape(-1, 2) - [run.t0, 0.0]
+             for robot in run.robots.values()}
+    velocities = []
+    for robot in run.robots.values():
+        source, series = ('cmd_vel', robot.cmd) if robot.cmd else ('odom', robot.odom_twist)
+        velocities.append(plots.Velocities(robot.name, source, robot.model,
+                                           np.array(series, dtype=float).reshape(-1, 4) - [run.t0, 0.0, 0.0, 0.0]))
+    return {'paths.png': plots.paths_figure(run.obstacles, run.workspace, paths, text),
+            'cost.png': plots.cost_figure(costs, text),
+            'velocity.png': plots.velocity_figure(velocities, text)}
 
 
 def write_figures(run: RecordedRun, out: Path) -> list[Path]:
     """paths.png, cost.png and velocity.png in out; returns their paths."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
+    from msg_tools.plots import save
 
-    colours = plt.rcParams['axes.prop_cycle'].by_key()['color']
-    written = []
-
-    fig, ax = plt.subplots(figsize=(6.4, 6.4), dpi=110)
-    for obstacle in run.obstacles:
-        if isinstance(obstacle, Circle):
-            ax.add_patch(plt.Circle(obstacle.center, obstacle.radius, color='0.55', alpha=0.8, lw=0))
-        elif isinstance(obstacle, Segment):
-            ax.plot(*zip(obstacle.start, obstacle.end), color='0.25', lw=2.5, solid_capstyle='round')
-    for k, robot in enumerate(run.robots.values()):
-        colour = colours[k % len(colours)]
-        if robot.odom:
-            odom = np.array(robot.odom)
-            length = float(np.sqrt((np.diff(odom[:, 1:3], axis=0) ** 2).sum(axis=1)).sum())
-            odom = _thin(odom)
-            ax.plot(odom[:, 1], odom[:, 2], color=colour, lw=1.6, label=f'{robot.name} ({length:.1f} m)')
-            ax.plot(odom[0, 1], odom[0, 2], 'o', color=colour, ms=7, mfc='white', mew=2)
-        points = robot.plan[:-1] if robot.plan else robot.waypoints
-        if points:
-            wp = np.array(points)
-            ax.plot(wp[:, 0], wp[:, 1], 'x', color=colour, ms=5, mew=1.2)
-        if robot.goal is not None:
-            ax.plot(*robot.goal, '*', color=colour, ms=13)
-    if run.workspace is not None:
-        xmin, ymin, xmax, ymax = run.workspace
-        ax.set_xlim(xmin, xmax)
-        ax.set_ylim(ymin, ymax)
-    ax.set_aspect('equal')
-    ax.set_xlabel('x (m)')
-    ax.set_ylabel('y (m)')
-    ax.set_title(_title(run))
-    if run.robots:
-        ax.legend(loc='upper right', fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    written.append(out / 'paths.png')
-    fig.savefig(written[-1])
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(7, 3.2), dpi=110)
-    for k, robot in enumerate(run.robots.values()):
-        if robot.cost:
-            series = _thin(robot.cost)
-            ax.plot(series[:, 0] - run.t0, series[:, 1], lw=1.2, color=colours[k % len(colours)], label=robot.name)
-    ax.set_xlabel('time since the goal (s)')
-    ax.set_ylabel('cost f (eq. 10)')
-    ax.set_title(_title(run))
-    if any(r.cost for r in run.robots.values()):
-        ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    written.append(out / 'cost.png')
-    fig.savefig(written[-1])
-    plt.close(fig)
-
-    n = max(1, len(run.robots))
-    fig, axes = plt.subplots(n, 1, figsize=(7, 2.4 * n), dpi=110, sharex=True, squeeze=False)
-    for ax, robot in zip(axes[:, 0], run.robots.values()):
-        source, series = ('cmd_vel', robot.cmd) if robot.cmd else ('odom', robot.odom_twist)
-        if series:
-            data = _thin(series)
-            t = data[:, 0] - run.t0
-            if robot.model == 'tractor_trailer':
-                ax.plot(t, data[:, 1], lw=1.1, label='v (m/s)')
-                ax.plot(t, data[:, 3], lw=1.1, label='omega (rad/s)')
-            else:
-                ax.plot(t, data[:, 1], lw=1.1, label='vx (m/s)')
-                ax.plot(t, data[:, 2], lw=1.1, label='vy (m/s)')
-                ax.plot(t, np.hypot(data[:, 1], data[:, 2]), lw=0.9, ls='--', color='0.4', label='speed (m/s)')
-            ax.legend(fontsize=7, loc='upper right')
-        ax.set_ylabel(f'{robot.name}: {source}')
-        ax.grid(alpha=0.3)
-    axes[-1, 0].set_xlabel('time since the goal (s)')
-    axes[0, 0].set_title(f'{_title(run)}: controller velocities')
-    fig.tight_layout()
-    written.append(out / 'velocity.png')
-    fig.savefig(written[-1])
-    plt.close(fig)
-    return written
+    return [save(fig, out / name) for name, fig in figures(run).items()]
 
 
 def write_report(path: str | Path, out: str | Path | None = None, radius: float = DEFAULT_RADIUS,

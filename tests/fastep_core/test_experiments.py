@@ -72,8 +72,8 @@ def test_fastep_bench_writes_the_table_and_figures(tmp_path, capsys):
     assert bench_main(['--runs', '2', '--scenarios', 'table2_s3', '--workers', '1', '--out', str(tmp_path)]) == 0
     text = (tmp_path / 'table2.md').read_text()
     assert 'FAStep-Kinematic against ACO-Kinematic' in text and 'Optimal-Kinematic' in text
-    for metric in ('path_length', 'compute_time'):
-        assert (tmp_path / 'figures' / f'table2_{metric}.png').stat().st_size > 1000
+    for figure in ('path_length', 'compute_time', 'paths'):
+        assert (tmp_path / 'figures' / f'table2_{figure}.png').stat().st_size > 1000
 
 
 @pytest.mark.parametrize('module, args', [
