@@ -102,7 +102,7 @@ class Driver:
         from nav_msgs.msg import Odometry
         from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-        from fastep_ros.common import RELIABLE
+        from msg_tools.interface import RELIABLE
         from msg_tools import convert
 
         self.convert = convert

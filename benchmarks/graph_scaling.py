@@ -303,7 +303,7 @@ def fan_in(args: argparse.Namespace) -> None:
 
     from fastep_core.scenario import load_scenario
     from fastep_ros import launch
-    from fastep_ros.common import RELIABLE
+    from msg_tools.interface import RELIABLE
     from msg_tools import convert
 
     gh = graph_helpers()

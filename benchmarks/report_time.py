@@ -27,8 +27,8 @@ from std_msgs.msg import Float64
 from fastep_core.geometry import Circle
 from fastep_core.world import World
 from msg_tools import convert
+from msg_tools.interface import offered_qos_profiles
 from msg_tools.mcap_io import McapWriter
-from msg_tools.sim_mcap import topic_qos
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -39,7 +39,7 @@ def synthesise(path: Path, minutes: float, robots: int) -> int:
     end = int(minutes * 60 * 1000)  # ms
     with McapWriter(path) as w:
         def put(topic: str, msg: object, ms: int) -> None:
-            w.write(topic, msg, ms * 1_000_000, qos=topic_qos(topic))
+            w.write(topic, msg, ms * 1_000_000, qos=offered_qos_profiles(topic))
         stamp0 = convert.seconds_to_stamp(0.0)
         put('/obstacles', convert.obstacles_to_marker_array(world.obstacle_list, stamp0), 0)
         put('/map', convert.world_to_occupancy_grid(world, 0.1, stamp0), 0)

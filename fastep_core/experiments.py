@@ -15,8 +15,9 @@ percentages) is the project's main claim, so regenerating it must be one reprodu
   no distribution: compute times are skewed and path lengths bounded below by the optimum;
 - `optimal_lengths` gives the exact shortest path (planning.optimal) per robot, the yardstick for the
   optimality ratio path length / optimal length;
-- `markdown_report` writes what docs/table2.md shows; its figures are drawn one layer up, by the
-  fastep-bench command (this package imports no plotting library).
+- `markdown_report` writes what docs/table2.md shows; `example_paths` gives the runs and exact paths its paths
+  figure draws (the figures themselves are drawn one layer up, by msg_tools.plots.bench_figures: this package
+  imports no plotting library).
 
 'optimal' (the exact path driven by the kinematic controller) draws no random numbers, so a batch runs it
 once, with the first seed, whatever `runs` says.
@@ -33,20 +34,22 @@ import math
 import multiprocessing
 import time
 from dataclasses import asdict, dataclass
-from typing import TYPE_CHECKING, Iterable, Sequence
+from typing import Iterable, Sequence
 
 import numpy as np
 
 from fastep_core.cli import progress_bar
 from fastep_core.errors import ParameterError
-
-if TYPE_CHECKING:
-    from fastep_core.scenario import Scenario
+from fastep_core.planning.algorithms import algorithm_name
+from fastep_core.planning.optimal import OptimalPath, shortest_path
+from fastep_core.scenario import Scenario, load_scenario
+from fastep_core.simulator import Run, simulate
 
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
     'tasks', 'run_task', 'run_batch', 'pool_context', 'summarise', 'compare', 'enhancement',
-    'optimal_lengths', 'straight_lengths', 'markdown_report', 'metric_values', 'cached_scenario', 'NAMES',
+    'optimal_lengths', 'straight_lengths', 'markdown_report', 'metric_values', 'cached_scenario', 'ExamplePaths',
+    'example_paths',
 ]
 
 TABLE2: tuple[str, ...] = ('table2_s1', 'table2_s2', 'table2_s3')
@@ -68,8 +71,6 @@ METRICS: dict[str, str] = {
     'compute_time': 'compute time (s)',
     'cpu_time': 'CPU time per run (s)',
 }
-
-NAMES = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
 
 
 @dataclass(frozen=True)
@@ -111,7 +112,6 @@ def tasks(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0:
 @functools.lru_cache(maxsize=64)
 def cached_scenario(source: str) -> Scenario:
     """The scenario of a built-in name or YAML path, loaded once per process (a worker runs many seeds)."""
-    from fastep_core.scenario import load_scenario
     return load_scenario(source)
 
 
@@ -119,7 +119,6 @@ def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = ()) -> list[
     """One simulate call (in a worker process); `overrides` replace planner parameters (used by tuning)."""
     from dataclasses import replace
 
-    from fastep_core.simulator import simulate
     source, algorithm, seed = task
     scenario = cached_scenario(source)
     if overrides:
@@ -257,7 +256,6 @@ def compare(records: Sequence[Record], scenario: str, metric: str, a: str = 'fas
 
 def optimal_lengths(source: str) -> dict[str, float | None]:
     """Exact shortest path length per robot (clearance radius + clearance_margin); None when there is none."""
-    from fastep_core.planning.optimal import shortest_path
     scenario = cached_scenario(source)
     out: dict[str, float | None] = {}
     for spec in scenario.robots:
@@ -300,7 +298,7 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
     lines = [f'## {title}', '']
     if command:
         lines += ['```', command, '```', '']
-    lines += ['Runs per cell: ' + ', '.join(f'{NAMES.get(a, a)} {n}' for a, n in runs.items()) +
+    lines += ['Runs per cell: ' + ', '.join(f'{algorithm_name(a)} {n}' for a, n in runs.items()) +
               '. Means ± sample standard deviation; path length and simulated time over the runs that '
               'arrived without collision, compute time (wall seconds planning and simulating the robot, as '
               'fastep-sim reports it) and CPU time (process CPU seconds of the whole run, not inflated by other '
@@ -313,7 +311,7 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
         paper = PAPER.get(s.scenario, {}).get(s.algorithm, {})
         opt = optimal.get(s.scenario, {}).get(s.robot)
         ratio = s.mean['path_length'] / opt if opt else math.nan
-        lines.append(f'| {s.scenario} | {s.robot} | {NAMES.get(s.algorithm, s.algorithm)} | '
+        lines.append(f'| {s.scenario} | {s.robot} | {algorithm_name(s.algorithm)} | '
                      f'{s.arrived}/{s.runs}{f" ({s.collided} collided)" if s.collided else ""} | '
                      f'{_pm(s.mean["path_length"], s.std["path_length"])} | {_num(paper.get("path"))} | '
                      f'{_num(ratio, 3)} | {_pm(s.mean["sim_time"], s.std["sim_time"], 1)} | '
@@ -339,7 +337,7 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
                          f'{_num(c["sim_time"].enhancement, 2, " %")} | {_p(c["sim_time"].p_value)} |')
     lines += ['', '### Optimality', '',
               '| scenario | robot | straight line (m) | optimal (m) | ' +
-              ' | '.join(f'{NAMES.get(a, a)} path / opt.' for a in algorithms) + ' |',
+              ' | '.join(f'{algorithm_name(a)} path / opt.' for a in algorithms) + ' |',
               '|---|---|---|---|' + '---|' * len(algorithms)]
     by_key = {(s.scenario, s.algorithm, s.robot): s for s in summaries}
     for scenario in scenarios:
@@ -352,3 +350,29 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
             lines.append(f'| {scenario} | {robot} | {lines_for[robot]:.2f} | {_num(opt)} | ' +
                          ' | '.join(cells) + ' |')
     return '\n'.join(lines) + '\n'
+
+
+# ----------------------------------------------------------------------------------------- example paths
+
+@dataclass(frozen=True)
+class ExamplePaths:
+    """One scenario's exact shortest paths and one run of each planner, for the paths figure."""
+
+    source: str                              # the scenario as given (built-in name or YAML path)
+    scenario: Scenario
+    seed: int
+    optimal: dict[str, OptimalPath | None]   # per robot (None: no path keeps the clearance)
+    runs: dict[str, Run]                     # per algorithm but 'optimal', which is the exact path itself
+
+
+def example_paths(scenarios: Sequence[str], algorithms: Sequence[str], seed: int = 0) -> list[ExamplePaths]:
+    """Per scenario: the exact optimal path of every robot and one run of every planner with the given seed."""
+    out = []
+    for source in scenarios:
+        scenario = cached_scenario(source)
+        exact = {spec.name: shortest_path(scenario.world, spec.start[:2], spec.goal,
+                                          spec.radius + scenario.planner.clearance_margin)
+                 for spec in scenario.robots}
+        runs = {a: simulate(scenario, a, seed) for a in algorithms if a != 'optimal'}
+        out.append(ExamplePaths(source, scenario, seed, exact, runs))
+    return out

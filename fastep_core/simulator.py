@@ -15,6 +15,7 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
@@ -88,9 +89,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
              observer: Callable[[Tick], None] | None = None) -> Run:
     """Run every robot of the scenario until each has arrived, failed, or max_sim_time has passed.
 
-    min_clearance is the smallest margin a robot kept: distance from its reference point to the nearest
-    obstacle surface minus its radius, or to another robot's centre minus both radii; negative means it
-    collided.
+    min_clearance is the smallest margin a robot kept (fastep_core.metrics.trajectory_margins): distance from
+    its reference point to the nearest obstacle surface minus its radius, or to another robot's centre minus
+    both radii, measured at every robot's position after each step; negative means it collided.
     """
     params = scenario.planner
     world = scenario.world
@@ -104,14 +105,12 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     for nav, spec, run, state in zip(navigators, specs, runs, states):
         nav.set_goal(spec.goal)
         run.trajectory.append([0.0, *state.tolist()])
-    radii = np.array([spec.radius for spec in specs])
     last_sample = [s[:2].copy() for s in states]
     pending: list[list[float] | None] = [None] * len(specs)
     dt = params.dt
     n_ticks = int(math.ceil(params.max_sim_time / dt))
-    obstacles = world.obstacles
-    known_at = np.array([s[:2] for s in states])
-    known_margin = (obstacles.clearance(known_at) if len(obstacles) else np.full(len(specs), np.inf)) - radii
+    step_times: list[float] = []               # every robot's position after each step, for the margins
+    step_positions: list[FloatArray] = []
 
     for k in range(n_ticks):
         t = k * dt
@@ -161,27 +160,17 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 pending[i] = row
             if observer is not None:
                 observer(Tick(t_next, specs[i].name, new_state, commands[i], velocities[i], nav))
-        positions = np.array([s[:2] for s in states])
-        # Obstacle margins are recomputed only when they could set a new minimum: a robot within
-        # distance e of the last exactly-measured point has a margin of at least that margin - e.
-        bound = known_margin - np.hypot(*(positions - known_at).T)
-        exact = bound < np.array([run.min_clearance for run in runs])
-        if exact.any() and len(obstacles):
-            known_at[exact] = positions[exact]
-            known_margin[exact] = obstacles.clearance(positions[exact]) - radii[exact]
-            bound[exact] = known_margin[exact]
-        margins = bound
-        if len(specs) > 1:
-            gaps = np.hypot(*np.moveaxis(positions[:, None, :] - positions[None, :, :], -1, 0))
-            gaps = gaps - radii[:, None] - radii[None, :]
-            np.fill_diagonal(gaps, np.inf)
-            margins = np.minimum(margins, gaps.min(axis=1))
-        for i, run in enumerate(runs):
-            run.min_clearance = min(run.min_clearance, float(margins[i]))
-            if margins[i] < 0.0:
-                run.collided = True
+        step_times.append(t_next)
+        step_positions.append(np.array([s[:2] for s in states]))
 
+    # Robots that have stopped (arrived, failed) keep their place among the others.
+    times = np.array(step_times)
+    positions = np.array(step_positions).reshape(len(times), len(specs), 2)
+    margins = trajectory_margins([np.column_stack([times, positions[:, i]]) for i in range(len(specs))],
+                                 [spec.radius for spec in specs], world.obstacles).overall
     for i, (nav, run) in enumerate(zip(navigators, runs)):
+        run.min_clearance = float(margins[i])
+        run.collided = bool(margins[i] < 0.0)
         if pending[i] is not None:
             run.trajectory.append(pending[i])
         if nav.mode not in (Mode.ARRIVED, Mode.FAILED):

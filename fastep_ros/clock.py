@@ -37,11 +37,10 @@ from typing import Any, Sequence
 
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock as ClockMsg
 
 from fastep_ros.common import StartupError, declare, node_main
-from msg_tools import convert
+from msg_tools import convert, interface
 
 __all__ = ['ClockNode', 'main', 'tick_plan']
 
@@ -115,8 +114,7 @@ class ClockNode(Node):
         self.sync: dict[str, _Sync] = {t: _Sync() for t in topics if t}
         self.last_tick = -math.inf      # steady seconds of the last advancing tick
         self.last_lookup = -math.inf    # steady seconds of the last graph look-up for sync topics
-        self.pub = self.create_publisher(ClockMsg, '/clock',
-                                         QoSProfile(depth=10, reliability=ReliabilityPolicy.RELIABLE))
+        self.pub = self.create_publisher(ClockMsg, interface.CLOCK, interface.offered_qos(interface.CLOCK))
         self.timer = self.create_timer(self.period, self.on_tick, clock=self.steady)
         self.get_logger().info(f'simulated time at rtf {self.rtf:g}: {self.increment:g} s every '
                                f'{self.period * 1e3:.3g} ms of wall time')

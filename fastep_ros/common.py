@@ -1,4 +1,7 @@
-"""Small helpers shared by the fastep_ros nodes: QoS profiles, parameter declaration, the main() wrapper."""
+"""Small helpers shared by the fastep_ros nodes: parameter declaration, the main() wrapper.
+
+Topic names and QoS profiles are in msg_tools.interface.
+"""
 
 from __future__ import annotations
 
@@ -14,23 +17,12 @@ from rclpy.exceptions import ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from fastep_core.cli import guard
 from fastep_core.errors import FastepError
 from fastep_ros.errors import StartupError  # re-exported: every node raises it next to declare()
 
-__all__ = ['LATCHED', 'LATEST', 'RELIABLE', 'StartupError', 'declare', 'node_main']
-
-# The shared map and obstacles: reliable + transient-local, so late joiners get them (Nav2's map QoS).
-LATCHED = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
-RELIABLE = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
-                      durability=DurabilityPolicy.VOLATILE)
-# Inputs where only the newest message matters (odometry into a controller, commands into a plant): a
-# deeper queue would make a busy node act on old messages, i.e. add delay to the control loop.
-LATEST = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
-                    durability=DurabilityPolicy.VOLATILE)
+__all__ = ['StartupError', 'declare', 'node_main']
 
 
 _TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER, float: Parameter.Type.DOUBLE,

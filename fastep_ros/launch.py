@@ -32,6 +32,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core.cli import Parser, fail, guard, seed
+from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_core.planning.algorithms import ALGORITHMS
@@ -197,9 +198,8 @@ class Monitor:
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rclpy.signals import SignalHandlerOptions
 
-        from fastep_ros.common import LATCHED, RELIABLE
-        from fastep_ros.planner import STATUS_QOS
-        from msg_tools import convert
+        from msg_tools import convert, interface
+        from msg_tools.interface import LATCHED, RELIABLE, offered_qos, robot_topic
 
         self.convert = convert
         self.rclpy = rclpy
@@ -215,14 +215,17 @@ class Monitor:
         self.odom_subs = {}
         depth = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # every odometry message
         for name, robot in self.robots.items():
-            self.goal_pubs[name] = self.node.create_publisher(PoseStamped, f'/{name}/goal_pose', LATCHED)
-            self.node.create_subscription(DiagnosticStatus, f'/{name}/status',
-                                          lambda m, r=robot: self.on_status(r, m), STATUS_QOS)
+            # Latched, so a planner restarted mid-run gets its goal again (it subscribes to latched goals too).
+            self.goal_pubs[name] = self.node.create_publisher(PoseStamped, robot_topic(name, interface.GOAL_POSE),
+                                                              LATCHED)
+            self.node.create_subscription(DiagnosticStatus, robot_topic(name, interface.STATUS),
+                                          lambda m, r=robot: self.on_status(r, m), offered_qos(interface.STATUS))
             self.odom_subs[name] = self.node.create_subscription(
-                Odometry, f'/{name}/odom', lambda m, r=robot: self.on_odom(r, m), depth)
-            self.node.create_subscription(PathMsg, f'/{name}/plan', lambda m, r=robot: self.on_plan(r, m), RELIABLE)
+                Odometry, robot_topic(name, interface.ODOM), lambda m, r=robot: self.on_odom(r, m), depth)
+            self.node.create_subscription(PathMsg, robot_topic(name, interface.PLAN),
+                                          lambda m, r=robot: self.on_plan(r, m), RELIABLE)
             if robot.spec.model == 'tractor_trailer':
-                self.node.create_subscription(PoseStamped, f'/{name}/trailer_pose',
+                self.node.create_subscription(PoseStamped, robot_topic(name, interface.TRAILER_POSE),
                                               lambda m, r=robot: self.on_trailer(r, m), depth)
 
     def follow_clock(self) -> None:
@@ -231,9 +234,11 @@ class Monitor:
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rosgraph_msgs.msg import Clock
 
+        from msg_tools.interface import CLOCK
+
         def on_clock(msg: Any) -> None:
             self.sim_now = max(self.sim_now or 0.0, self.convert.stamp_to_seconds(msg.clock))
-        self.node.create_subscription(Clock, '/clock', on_clock,
+        self.node.create_subscription(Clock, CLOCK, on_clock,
                                       QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
 
     def now(self) -> float:
@@ -317,6 +322,8 @@ def _wait(monitor: Monitor, procs: Processes, deadline: float, ready: Any, what:
 
 
 def run(args: argparse.Namespace, scenario: Scenario) -> int:
+    from msg_tools.interface import CMD_VEL, ODOM, robot_topic
+
     sim_time = not args.no_clock
     timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
     procs = Processes(args.verbose)
@@ -342,7 +349,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 'rtf': float(args.rtf), 'step': scenario.planner.dt,
                 # The recorder subscribes to /clock twice: for its own time, and to record it.
                 'wait_for_subscribers': 2 + 2 * len(scenario.robots) + 2 * (args.record is not None),
-                'sync_topics': [f'/{spec.name}/{topic}' for spec in scenario.robots for topic in ('cmd_vel', 'odom')]})
+                'sync_topics': [robot_topic(spec.name, topic)
+                                for spec in scenario.robots for topic in (CMD_VEL, ODOM)]})
         monitor = Monitor(scenario)
         robots = monitor.robots
         names = set(robots)
@@ -450,30 +458,11 @@ def _scenario_arg(source: str) -> str:
 
 
 def _min_clearance(scenario: Scenario, robots: dict[str, RobotLive]) -> dict[str, float]:
-    """Smallest margin each robot kept (negative: collided), from its odometry: to the obstacles, and to the
-    other robots at the same times (their positions interpolated at this robot's stamps, which with simulated
-    time are the same stamps: plants integrate on the same grid)."""
-    out = {}
-    obstacles = scenario.world.obstacles
-    tracks = {name: np.array([r[:3] for r in robot.rows]).reshape(-1, 3) for name, robot in robots.items()}
-    for name, robot in robots.items():
-        mine = tracks[name]
-        margin = math.inf
-        if len(mine) and len(obstacles):
-            margin = float(obstacles.clearance(mine[:, 1:3]).min()) - robot.spec.radius
-        for other, orobot in robots.items():
-            theirs = tracks[other]
-            if other == name or len(mine) == 0 or len(theirs) == 0:
-                continue
-            inside = (mine[:, 0] >= theirs[0, 0]) & (mine[:, 0] <= theirs[-1, 0])
-            if not inside.any():
-                continue
-            t = mine[inside, 0]
-            x, y = np.interp(t, theirs[:, 0], theirs[:, 1]), np.interp(t, theirs[:, 0], theirs[:, 2])
-            gap = float(np.hypot(mine[inside, 1] - x, mine[inside, 2] - y).min())
-            margin = min(margin, gap - robot.spec.radius - orobot.spec.radius)
-        out[name] = margin
-    return out
+    """Smallest margin each robot kept (negative: collided), from its odometry, to the obstacles and the other
+    robots (fastep_core.metrics; with simulated time every plant stamps odometry on the same grid)."""
+    margins = trajectory_margins([[row[:3] for row in robot.rows] for robot in robots.values()],
+                                 [robot.spec.radius for robot in robots.values()], scenario.world.obstacles)
+    return {name: float(margin) for name, margin in zip(robots, margins.overall)}
 
 
 def _sampled(rows: list[list[float]]) -> list[list[float]]:

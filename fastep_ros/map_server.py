@@ -19,8 +19,9 @@ from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import FastepError
 from fastep_core.scenario import load_scenario
-from fastep_ros.common import LATCHED, StartupError, declare, node_main
-from msg_tools import convert
+from fastep_ros.common import StartupError, declare, node_main
+from msg_tools import convert, interface
+from msg_tools.interface import offered_qos
 
 __all__ = ['MapNode', 'main']
 
@@ -34,7 +35,7 @@ class MapNode(Node):
         resolution = declare(self, 'resolution', 0.1, 'occupancy grid cell size (m)', constraints='> 0')
         thickness = declare(self, 'segment_thickness', 0.0, 'width a wall (segment) is rasterised with in the '
                             'occupancy grid (m); 0 means one cell')
-        self.frame_id = declare(self, 'frame_id', 'map', 'frame of /obstacles and /map')
+        self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of /obstacles and /map')
         if not source:
             raise StartupError('parameter scenario is required (a YAML file or a built-in name)')
         if resolution <= 0.0:
@@ -48,8 +49,11 @@ class MapNode(Node):
         self.obstacles_msg = convert.obstacles_to_marker_array(world.obstacle_list, stamp, self.frame_id)
         self.map_msg = convert.world_to_occupancy_grid(world, resolution, stamp, self.frame_id,
                                                        thickness if thickness > 0.0 else None)
-        self.obstacles_pub = self.create_publisher(MarkerArray, 'obstacles', LATCHED)
-        self.map_pub = self.create_publisher(OccupancyGrid, 'map', LATCHED)
+        # Relative names: a map node started in a namespace publishes there; in the root one they are the shared
+        # /obstacles and /map.
+        self.obstacles_pub = self.create_publisher(MarkerArray, interface.OBSTACLES.lstrip('/'),
+                                                   offered_qos(interface.OBSTACLES))
+        self.map_pub = self.create_publisher(OccupancyGrid, interface.MAP.lstrip('/'), offered_qos(interface.MAP))
         self.obstacles_pub.publish(self.obstacles_msg)
         self.map_pub.publish(self.map_msg)
         info = self.map_msg.info

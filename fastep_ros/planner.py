@@ -36,7 +36,6 @@ from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
 
@@ -47,17 +46,14 @@ from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
-from fastep_ros.common import LATCHED, LATEST, RELIABLE, StartupError, declare, node_main
-from msg_tools import convert
+from fastep_ros.common import StartupError, declare, node_main
+from msg_tools import convert, interface
+from msg_tools.interface import LATCHED, LATEST, RELIABLE, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
-ODOM_TYPE = 'nav_msgs/msg/Odometry'
-# Status is latched (transient-local) so a monitor that subscribes late sees the current state at once.
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots
 HEARTBEAT_TICKS = 4      # status, waypoint and plan are re-published every 4 * 0.25 s = 1 s of wall time
-STATUS_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=10, reliability=ReliabilityPolicy.RELIABLE,
-                        durability=DurabilityPolicy.TRANSIENT_LOCAL)
 
 
 @dataclass(frozen=True)
@@ -109,7 +105,7 @@ class PlannerNode(Node):
             'predicted forward from its stamp to the control time by at most this much (s); 0 disables',
             constraints='>= 0')
         workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
-        self.frame_id = declare(self, 'frame_id', 'map', 'frame of goals, waypoints and plans')
+        self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans')
         self._check(length, trailer_length, hitch_offset, other_radius, workspace)
         self.other_radius = other_radius if other_radius > 0.0 else self.radius
         self.body = _Body(self.model, length, trailer_length, hitch_offset)
@@ -144,21 +140,22 @@ class PlannerNode(Node):
         self._plan_key: tuple[Any, ...] | None = None
         self._target_key: tuple[float, ...] | None = None
 
-        self.cmd_pub = self.create_publisher(TwistStamped if stamped else Twist, 'cmd_vel', RELIABLE)
-        self.waypoint_pub = self.create_publisher(PoseStamped, 'waypoint', RELIABLE)
-        self.plan_pub = self.create_publisher(Path, 'plan', RELIABLE)
-        self.cost_pub = self.create_publisher(Float64, 'cost', RELIABLE)
-        self.status_pub = self.create_publisher(DiagnosticStatus, 'status', STATUS_QOS)
-        self.odom_sub = self.create_subscription(Odometry, 'odom', self.on_odom, LATEST)
+        self.cmd_pub = self.create_publisher(TwistStamped if stamped else Twist, interface.CMD_VEL,
+                                             offered_qos(interface.CMD_VEL))
+        self.waypoint_pub = self.create_publisher(PoseStamped, interface.WAYPOINT, offered_qos(interface.WAYPOINT))
+        self.plan_pub = self.create_publisher(Path, interface.PLAN, offered_qos(interface.PLAN))
+        self.cost_pub = self.create_publisher(Float64, interface.COST, offered_qos(interface.COST))
+        self.status_pub = self.create_publisher(DiagnosticStatus, interface.STATUS, offered_qos(interface.STATUS))
+        self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST)
         if self.model == 'tractor_trailer':
-            self.create_subscription(PoseStamped, 'trailer_pose', self.on_trailer, LATEST)
+            self.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
         # Goals from anyone (volatile, as `ros2 topic pub` sends them) and from latched publishers (fastep-launch):
         # a planner restarted mid-run gets the goal it was driving to again and resumes from the odometry.
-        self.create_subscription(PoseStamped, 'goal_pose', self.on_goal, RELIABLE)
-        self.create_subscription(PoseStamped, 'goal_pose', self.on_goal, LATCHED)
-        self.create_subscription(MarkerArray, '/obstacles', self.on_obstacles, LATCHED)
+        self.create_subscription(PoseStamped, interface.GOAL_POSE, self.on_goal, RELIABLE)
+        self.create_subscription(PoseStamped, interface.GOAL_POSE, self.on_goal, LATCHED)
+        self.create_subscription(MarkerArray, interface.OBSTACLES, self.on_obstacles, offered_qos(interface.OBSTACLES))
         if self.workspace_param is None:
-            self.create_subscription(OccupancyGrid, '/map', self.on_map, LATCHED)
+            self.create_subscription(OccupancyGrid, interface.MAP, self.on_map, offered_qos(interface.MAP))
         self.own_odom_topic = self.odom_sub.topic_name
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
@@ -292,11 +289,13 @@ class PlannerNode(Node):
         """Subscribe to the odometry of every other robot on the graph; True if one was new."""
         found = False
         for topic, types in self.get_topic_names_and_types():
-            if not topic.endswith('/odom') or ODOM_TYPE not in types or topic == self.own_odom_topic:
+            suffix = '/' + interface.ODOM
+            if not topic.endswith(suffix) or interface.TYPES[interface.ODOM] not in types or \
+                    topic == self.own_odom_topic:
                 continue
             if topic in self.other_subs:
                 continue
-            name = topic[1:-len('/odom')] or topic
+            name = topic[1:-len(suffix)] or topic
             self.others[topic] = _Other(name)
             self.other_subs[topic] = self.create_subscription(
                 Odometry, topic, lambda msg, key=topic: self.on_other_odom(key, msg), LATEST)
@@ -423,8 +422,8 @@ class PlannerNode(Node):
     def status(self) -> tuple[bytes, str, str]:
         nav = self.navigator
         if nav is None:
-            missing = [name for name, have in (('/obstacles', self.obstacles is not None),
-                                               ('/map', self.workspace_param or self.map_workspace))
+            missing = [name for name, have in ((interface.OBSTACLES, self.obstacles is not None),
+                                               (interface.MAP, self.workspace_param or self.map_workspace))
                        if not have]
             return DiagnosticStatus.WARN, 'waiting', f'waiting for the world ({" and ".join(missing)})'
         mode = nav.mode

@@ -26,8 +26,9 @@ from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.scenario import MODELS
-from fastep_ros.common import LATEST, RELIABLE, StartupError, declare, node_main
-from msg_tools import convert
+from fastep_ros.common import StartupError, declare, node_main
+from msg_tools import convert, interface
+from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlantNode', 'main']
 
@@ -51,8 +52,8 @@ class PlantNode(Node):
         self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'stop (zero velocity) when no cmd_vel arrived '
                                    'for this long (s, node clock)', constraints='> 0')
         stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist')
-        self.frame_id = declare(self, 'frame_id', 'map', 'frame of the odometry pose (the simulated pose is '
-                                'the map pose)')
+        self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of the odometry pose (the simulated '
+                                'pose is the map pose)')
 
         if self.model_name not in MODELS:
             raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model_name!r}')
@@ -83,10 +84,11 @@ class PlantNode(Node):
         self.command_time: float | None = None  # node-clock time the current command arrived
         self.applied = np.zeros(2)              # command used in the last step (for the odometry twist)
 
-        self.odom_pub = self.create_publisher(Odometry, 'odom', RELIABLE)
-        self.trailer_pub = (self.create_publisher(PoseStamped, 'trailer_pose', RELIABLE)
+        self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
+        self.trailer_pub = (self.create_publisher(PoseStamped, interface.TRAILER_POSE,
+                                                  offered_qos(interface.TRAILER_POSE))
                             if self.model_name == 'tractor_trailer' else None)
-        self.create_subscription(TwistStamped if stamped else Twist, 'cmd_vel', self.on_cmd_vel, LATEST)
+        self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, self.on_cmd_vel, LATEST)
         self.timer = self.create_timer(self.step, self.on_timer)
         self.get_logger().info(f'{self.model_name} at {np.round(self.state, 3).tolist()}, '
                                f'integrating at {self.rate_hz:g} Hz')

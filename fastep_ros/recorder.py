@@ -32,7 +32,6 @@ Parameters are read-only; a bad one (or an output that cannot be created) is one
 
 from __future__ import annotations
 
-import re
 import sys
 import time
 from pathlib import Path
@@ -48,25 +47,14 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from fastep_core.errors import FastepError
 from fastep_ros.common import StartupError, declare, node_main
+from msg_tools import interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, message_class, qos_profile_to_dict
 
-__all__ = ['RecorderNode', 'main', 'wanted_by_default']
+__all__ = ['RecorderNode', 'main']
 
-# The fastep interface (DESIGN.md): shared topics and per-robot topics in a namespace of one level.
-_SHARED = ('/obstacles', '/map', '/clock')
-_PER_ROBOT = re.compile(r'^/[A-Za-z_][A-Za-z0-9_]*/(odom|cmd_vel|goal_pose|waypoint|plan|cost|status|trailer_pose)$')
-METADATA_NAME = 'fastep'
-
-
-def wanted_by_default(topic: str) -> bool:
-    """Whether a topic belongs to the fastep interface (what the recorder takes when `topics` is empty)."""
-    return topic in _SHARED or _PER_ROBOT.match(topic) is not None
-
-
-def _offered_default(topic: str) -> list[dict[str, Any]]:
-    """What the fastep nodes offer on a topic (used before any publisher of it was seen)."""
-    from msg_tools.sim_mcap import topic_qos
-    return topic_qos(topic)
+# What an empty `topics` parameter records.
+_DEFAULT_TOPICS = (', '.join(interface.SHARED_TOPICS) + ' and /<robot>/{' + ', '.join(interface.ROBOT_TOPICS) +
+                   '}')
 
 
 class RecorderNode(Node):
@@ -109,7 +97,7 @@ class RecorderNode(Node):
             raise StartupError(f'cannot write {self.path}: {exc.strerror or exc}') from None
         except FastepError as exc:   # already names the file
             raise StartupError(str(exc)) from None
-        self.writer.add_metadata(METADATA_NAME, metadata)
+        self.writer.add_metadata(interface.METADATA_NAME, metadata)
         self.subscriptions_by_topic: dict[str, Any] = {}
         self.types: dict[str, str] = {}
         self.channels: dict[str, int] = {}
@@ -124,9 +112,7 @@ class RecorderNode(Node):
     # ------------------------------------------------------------------------------------------- setup
     def _declare_topics(self) -> set[str]:
         descriptor = ParameterDescriptor(name='topics', type=Parameter.Type.STRING_ARRAY.value, read_only=True,
-                                         description='topics to record; empty: /obstacles, /map, /clock and '
-                                         '/<robot>/{odom, cmd_vel, goal_pose, waypoint, plan, cost, status, '
-                                         'trailer_pose} as they appear')
+                                         description=f'topics to record; empty: {_DEFAULT_TOPICS} as they appear')
         try:
             value = self.declare_parameter('topics', Parameter.Type.STRING_ARRAY, descriptor).value
         except ParameterException as exc:
@@ -145,16 +131,15 @@ class RecorderNode(Node):
         if not source:
             return meta
         from fastep_core.scenario import load_scenario
-        from msg_tools.sim_mcap import robot_metadata
         try:
-            meta.update(robot_metadata(load_scenario(source)))
+            meta.update(interface.scenario_metadata(load_scenario(source)))
         except FastepError as exc:
             raise StartupError(f'parameter scenario: {exc}') from None
         return meta
 
     # ------------------------------------------------------------------------------------------- graph
     def wants(self, topic: str) -> bool:
-        return topic in self.wanted if self.wanted else wanted_by_default(topic)
+        return topic in self.wanted if self.wanted else interface.is_interface_topic(topic)
 
     def discover(self) -> None:
         """Subscribe to every wanted topic now on the graph that is not recorded yet."""
@@ -185,7 +170,13 @@ class RecorderNode(Node):
             infos = self.get_publishers_info_by_topic(topic)
         except Exception:  # the graph can change under us; fall back to the interface's defaults
             infos = []
-        return [qos_profile_to_dict(info.qos_profile) for info in infos] or _offered_default(topic)
+        if infos:
+            return [qos_profile_to_dict(info.qos_profile) for info in infos]
+        # Nobody publishes it yet (e.g. goal_pose, known from the planner's subscription): what the fastep nodes
+        # offer on it, or for a topic outside the interface ROS's usual offer (reliable, volatile, 10 deep).
+        if interface.is_interface_topic(topic):
+            return interface.offered_qos_profiles(topic)
+        return [qos_profile_to_dict(interface.RELIABLE)]
 
     def request_qos(self, topic: str) -> QoSProfile:
         """Like rosbag2: reliable / transient-local only if every offer is; deep keep-last queue."""

@@ -32,11 +32,12 @@ from typing import Any, Sequence
 import rclpy
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import DurabilityPolicy
 from rosgraph_msgs.msg import Clock
 
 from fastep_core.cli import Parser, guard
 from fastep_core.errors import FastepError
+from msg_tools import interface
 from msg_tools.mcap_io import Recording, message_class, open_recording, qos_from_dicts
 
 __all__ = ['ReplayNode', 'main']
@@ -61,15 +62,14 @@ class ReplayNode(Node):
         self.clock_hz = clock_hz
         chosen = set(topics) if topics else set(recording.topics)
         if clock_hz is not None:
-            chosen.discard('/clock')
+            chosen.discard(interface.CLOCK)
         self.topics = sorted(chosen)
         self.publishers_by_topic: dict[str, Any] = {}
         for topic in self.topics:
             info = recording.topics[topic]
             self.publishers_by_topic[topic] = self.create_publisher(message_class(info.type), topic,
                                                                     qos_from_dicts(info.qos))
-        self.clock_pub = (self.create_publisher(Clock, '/clock', QoSProfile(depth=10,
-                                                reliability=ReliabilityPolicy.RELIABLE))
+        self.clock_pub = (self.create_publisher(Clock, interface.CLOCK, interface.offered_qos(interface.CLOCK))
                           if clock_hz is not None else None)
         self.last_clock = -1
         self.played = 0

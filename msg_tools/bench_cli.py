@@ -4,11 +4,11 @@
                  [--workers 2] [--seed 0] [--out docs/] [--report table2] [--json FILE] [--no-figures]
                  [--progress]
 
-Writes OUT/REPORT.md (the Markdown tables) and OUT/figures/REPORT_{path_length,compute_time,paths}.png,
-prints the Markdown on stdout and a progress bar on stderr (when stderr is a terminal, or with --progress).
-The engine is `fastep_core.experiments`, the figures `msg_tools.bench_figures` (why this command lives in
-msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is the same command. Exit 0 when the
-runs were made, 2 with one line on stderr for bad input.
+Writes OUT/REPORT.md (the Markdown tables) and OUT/figures/REPORT_{path_length,compute_time,paths}.png (box
+plots and example paths, drawn by msg_tools.plots), prints the Markdown on stdout and a progress bar on stderr
+(when stderr is a terminal, or with --progress). The engine is `fastep_core.experiments` (why this command
+lives in msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is the same command. Exit 0 when
+the runs were made, 2 with one line on stderr for bad input.
 """
 
 from __future__ import annotations
@@ -71,8 +71,8 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
         report.write_text(text)
         written = [report]
         if not args.no_figures:
-            from msg_tools.bench_figures import figures  # matplotlib only when figures are drawn
-            written += figures(records, optimal, args.out / 'figures', prefix=args.report)
+            from msg_tools.plots import bench_figures  # matplotlib only when figures are drawn
+            written += bench_figures(records, optimal, args.out / 'figures', prefix=args.report)
         if args.json is not None:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps({'records': [r.to_json() for r in records], 'optimal': optimal}) + '\n')

@@ -11,9 +11,9 @@ both and the numbers can be checked against each other. Everything is measured f
   `goal_pose` log time (or, without a goal_pose, its first odom);
 - min_clearance: smallest distance from an odom position to the surface of an obstacle of the file's
   `/obstacles`, minus the robot radius (negative means it touched); min_robot_gap likewise against the other
-  robots (positions interpolated in time). The radius is, in this order: the `fastep` metadata record
-  (fastep-sim and fastep-record with a scenario write it), a `robot_radius` value in the robot's status, or
-  --radius (default 0.5); `radius_source` says which;
+  robots, compared at each odom time of either (fastep_core.metrics.trajectory_margins). The radius is, in
+  this order: the `fastep` metadata record (fastep-sim and fastep-record with a scenario write it), a
+  `robot_radius` value in the robot's status, or --radius (default 0.5); `radius_source` says which;
 - activations: the `activations` value of the last status (how often the swarm planned a step), or else the
   number of distinct waypoints.
 
@@ -30,7 +30,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import re
+import os
 import struct
 import sys
 from dataclasses import dataclass, field
@@ -41,15 +41,15 @@ import numpy as np
 
 from fastep_core.cli import Parser, fail, guard
 from fastep_core.errors import FastepError
-from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from fastep_core.geometry import Obstacle, Obstacles
+from fastep_core.metrics import trajectory_margins
+from msg_tools.interface import (CMD_VEL, COST, GOAL_POSE, MAP, METADATA_NAME, OBSTACLES, ODOM, PLAN, STATUS,
+                                 TRAILER_POSE, TYPES, WAYPOINT, metadata_key, split_robot_topic)
 from msg_tools.mcap_io import Recording, open_recording
-from msg_tools.sim_mcap import METADATA_NAME
 
-__all__ = ['RecordedRun', 'RobotRecord', 'float64_field', 'load_run', 'main', 'metrics', 'odometry_fields',
-           'twist_fields', 'write_figures', 'write_report']
+__all__ = ['RecordedRun', 'RobotRecord', 'figures', 'float64_field', 'load_run', 'main', 'metrics',
+           'odometry_fields', 'twist_fields', 'write_figures', 'write_report']
 
-ROBOT_TOPIC = re.compile(r'^/([A-Za-z_][A-Za-z0-9_]*)/(odom|cmd_vel|goal_pose|waypoint|plan|cost|status|'
-                         r'trailer_pose)$')
 DEFAULT_RADIUS = 0.5
 
 
@@ -145,17 +145,17 @@ def load_run(recording: Recording) -> RecordedRun:
     from msg_tools.mcap_io import message_class
 
     robots: dict[str, RobotRecord] = {}
-    wanted = ['/obstacles', '/map']
+    wanted = [OBSTACLES, MAP]
     kinds: dict[str, tuple[RobotRecord, str]] = {}
     for topic in recording.topics:
-        match = ROBOT_TOPIC.match(topic)
-        if match:
-            robot = _robot(robots, match.group(1))
-            if match.group(2) == 'trailer_pose':
+        parts = split_robot_topic(topic)
+        if parts is not None:
+            robot = _robot(robots, parts[0])
+            if parts[1] == TRAILER_POSE:
                 robot.model = 'tractor_trailer'
             else:
                 wanted.append(topic)
-                kinds[topic] = (robot, match.group(2))
+                kinds[topic] = (robot, parts[1])
     classes: dict[str, type] = {}
 
     def decode(type_name: str, data: bytes) -> Any:
@@ -175,14 +175,14 @@ def load_run(recording: Recording) -> RecordedRun:
     # File order (fast); every series is sorted by time below.
     for topic, type_name, log_time, _, data, _ in recording.raw_messages(wanted, log_time_order=False):
         t = log_time * 1e-9
-        if topic == '/obstacles':
+        if topic == OBSTACLES:
             if obstacles is None or t >= obstacles[0]:
                 try:
                     obstacles = (t, convert.marker_array_to_obstacles(decode(type_name, data)))
                 except ValueError:
                     pass
             continue
-        if topic == '/map':
+        if topic == MAP:
             if workspace is None or t >= workspace[0]:
                 try:
                     workspace = (t, convert.occupancy_grid_workspace(decode(type_name, data)))
@@ -190,33 +190,33 @@ def load_run(recording: Recording) -> RecordedRun:
                     pass
             continue
         robot, kind = kinds[topic]
-        if kind == 'odom':
-            v = odometry_fields(data) if type_name == 'nav_msgs/msg/Odometry' else None
+        if kind == ODOM:
+            v = odometry_fields(data) if type_name == TYPES[ODOM] else None
             if v is None:
                 m = decode(type_name, data)
                 p, q, tw = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist
                 v = (p.x, p.y, q.x, q.y, q.z, q.w, tw.linear.x, tw.linear.y, tw.angular.z)
             robot.odom.append((t, v[0], v[1]))
             robot.odom_twist.append((t, v[6], v[7], v[8]))
-        elif kind == 'cmd_vel':
-            c = twist_fields(data) if type_name == 'geometry_msgs/msg/Twist' else None
+        elif kind == CMD_VEL:
+            c = twist_fields(data) if type_name == TYPES[CMD_VEL] else None
             if c is None:
                 m = decode(type_name, data)
                 tw = m.twist if hasattr(m, 'twist') else m  # TwistStamped or Twist
                 c = (tw.linear.x, tw.linear.y, tw.angular.z)
             robot.cmd.append((t, *c))
-        elif kind == 'cost':
-            f = float64_field(data) if type_name == 'std_msgs/msg/Float64' else None
+        elif kind == COST:
+            f = float64_field(data) if type_name == TYPES[COST] else None
             robot.cost.append((t, float(decode(type_name, data).data) if f is None else f))
-        elif kind == 'waypoint':
+        elif kind == WAYPOINT:
             waypoints[robot.name].append((t, convert.pose_stamped_to_point(decode(type_name, data))))
-        elif kind == 'plan':
+        elif kind == PLAN:
             if robot.name not in plans or t >= plans[robot.name][0]:
                 plans[robot.name] = (t, convert.path_to_waypoints(decode(type_name, data)))
-        elif kind == 'status':
+        elif kind == STATUS:
             values = convert.diagnostic_to_dict(decode(type_name, data))
             robot.statuses.append((t, values))
-        elif kind == 'goal_pose':
+        elif kind == GOAL_POSE:
             goals[robot.name].append((t, convert.pose_stamped_to_point(decode(type_name, data))))
     for robot in robots.values():
         for series in (robot.odom, robot.odom_twist, robot.cmd, robot.cost, robot.statuses):
@@ -240,7 +240,7 @@ def load_run(recording: Recording) -> RecordedRun:
         except ValueError:
             space = None
     for robot in robots.values():
-        model = meta.get(f'model/{robot.name}')
+        model = meta.get(metadata_key('model', robot.name))
         if model:
             robot.model = model
     starts = [r.goal_time for r in robots.values() if r.goal_time is not None]
@@ -257,7 +257,7 @@ def load_run(recording: Recording) -> RecordedRun:
 # ----------------------------------------------------------------------------------------------- metrics
 
 def _radius(run: RecordedRun, robot: RobotRecord, default: float) -> tuple[float, str]:
-    text = run.metadata.get(f'radius/{robot.name}')
+    text = run.metadata.get(metadata_key('radius', robot.name))
     if text:
         try:
             return float(text), 'metadata'
@@ -273,12 +273,6 @@ def _radius(run: RecordedRun, robot: RobotRecord, default: float) -> tuple[float
     return default, 'default'
 
 
-def _positions_at(odom: np.ndarray, times: np.ndarray) -> np.ndarray:
-    """Positions (n, 2) of an odom array (rows t, x, y) at the given times, linearly interpolated and held
-    before the first and after the last message."""
-    return np.stack([np.interp(times, odom[:, 0], odom[:, 1]), np.interp(times, odom[:, 0], odom[:, 2])], axis=-1)
-
-
 def _int(text: Any) -> int | None:
     try:
         return int(float(text))
@@ -288,12 +282,13 @@ def _int(text: Any) -> int | None:
 
 def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[str, Any]:
     """The report as a JSON-ready dict (see the module docstring)."""
-    world = Obstacles(run.obstacles) if run.obstacles else None
     for robot in run.robots.values():
         robot.radius, robot.radius_source = _radius(run, robot, default_radius)
     rows = []
     arrays = {name: np.array(r.odom, dtype=float).reshape(-1, 3) for name, r in run.robots.items()}
-    for name, robot in run.robots.items():
+    kept = trajectory_margins(list(arrays.values()), [float(r.radius or 0.0) for r in run.robots.values()],
+                            Obstacles(run.obstacles))
+    for k, (name, robot) in enumerate(run.robots.items()):
         odom = arrays[name]
         xy = odom[:, 1:3]
         length = float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum()) if len(xy) > 1 else 0.0
@@ -301,19 +296,9 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
         arrived = [t for t, s in robot.statuses if s.get('message') == 'arrived' and (start is None or t >= start)]
         reached = bool(arrived)
         time_to_goal = arrived[0] - start if reached and start is not None else None
-        clearance = None
-        if world is not None and len(xy):
-            clearance = float(world.clearance(xy).min()) - float(robot.radius)
-        gap = None
-        for other_name, other in run.robots.items():
-            theirs_odom = arrays[other_name]
-            if other_name == name or not len(theirs_odom) or not len(xy):
-                continue
-            times = np.union1d(odom[:, 0], theirs_odom[:, 0])
-            mine, theirs = _positions_at(odom, times), _positions_at(theirs_odom, times)
-            distance = float(np.sqrt(((mine - theirs) ** 2).sum(axis=1)).min())
-            value = distance - float(robot.radius) - float(other.radius or 0.0)
-            gap = value if gap is None else min(gap, value)
+        # inf: no obstacle in the file, no other robot with odometry, or no odometry of this robot
+        clearance = float(kept.obstacles[k]) if math.isfinite(kept.obstacles[k]) else None
+        gap = float(kept.robots[k]) if math.isfinite(kept.robots[k]) else None
         last = robot.statuses[-1][1] if robot.statuses else {}
         activations = None
         for _, values in reversed(robot.statuses):
@@ -348,108 +333,37 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
 
 # ----------------------------------------------------------------------------------------------- figures
 
-PLOT_POINTS = 5000  # rows drawn per line at most: long recordings are thinned for drawing only
+def figures(run: RecordedRun) -> dict[str, Any]:
+    """The report's figures (matplotlib Figures, drawn by msg_tools.plots) by file name; times are seconds since
+    the first goal."""
+    from msg_tools import plots
 
-
-def _thin(rows: Sequence[Sequence[float]]) -> np.ndarray:
-    data = np.asarray(rows, dtype=float)
-    if len(data) <= PLOT_POINTS:
-        return data
-    step = int(math.ceil(len(data) / PLOT_POINTS))
-    return np.concatenate([data[::step], data[-1:]])
-
-
-def _title(run: RecordedRun) -> str:
-    algo = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic'}.get(run.algorithm, run.algorithm)
-    what = run.scenario or run.path.stem
-    return f'{what}: {algo}' if algo else what
+    text = plots.title(run.scenario or run.path.stem, run.algorithm)
+    paths = []
+    for robot in run.robots.values():
+        odom = np.array(robot.odom, dtype=float).reshape(-1, 3)
+        length = float(np.sqrt((np.diff(odom[:, 1:3], axis=0) ** 2).sum(axis=1)).sum())
+        start = (float(odom[0, 1]), float(odom[0, 2])) if len(odom) else None
+        waypoints = robot.plan[:-1] if robot.plan else robot.waypoints   # the plan's last pose is the goal
+        paths.append(plots.RobotPath(robot.name, odom[:, 1:3], length, np.array(waypoints, dtype=float).reshape(-1, 2),
+                                     start, robot.goal))
+    costs = {robot.name: np.array(robot.cost, dtype=float).reshape(-1, 2) - [run.t0, 0.0]
+             for robot in run.robots.values()}
+    velocities = []
+    for robot in run.robots.values():
+        source, series = ('cmd_vel', robot.cmd) if robot.cmd else ('odom', robot.odom_twist)
+        velocities.append(plots.Velocities(robot.name, source, robot.model,
+                                           np.array(series, dtype=float).reshape(-1, 4) - [run.t0, 0.0, 0.0, 0.0]))
+    return {'paths.png': plots.paths_figure(run.obstacles, run.workspace, paths, text),
+            'cost.png': plots.cost_figure(costs, text),
+            'velocity.png': plots.velocity_figure(velocities, text)}
 
 
 def write_figures(run: RecordedRun, out: Path) -> list[Path]:
     """paths.png, cost.png and velocity.png in out; returns their paths."""
-    import matplotlib
-    matplotlib.use('Agg')
-    import matplotlib.pyplot as plt
+    from msg_tools.plots import save
 
-    colours = plt.rcParams['axes.prop_cycle'].by_key()['color']
-    written = []
-
-    fig, ax = plt.subplots(figsize=(6.4, 6.4), dpi=110)
-    for obstacle in run.obstacles:
-        if isinstance(obstacle, Circle):
-            ax.add_patch(plt.Circle(obstacle.center, obstacle.radius, color='0.55', alpha=0.8, lw=0))
-        elif isinstance(obstacle, Segment):
-            ax.plot(*zip(obstacle.start, obstacle.end), color='0.25', lw=2.5, solid_capstyle='round')
-    for k, robot in enumerate(run.robots.values()):
-        colour = colours[k % len(colours)]
-        if robot.odom:
-            odom = np.array(robot.odom)
-            length = float(np.sqrt((np.diff(odom[:, 1:3], axis=0) ** 2).sum(axis=1)).sum())
-            odom = _thin(odom)
-            ax.plot(odom[:, 1], odom[:, 2], color=colour, lw=1.6, label=f'{robot.name} ({length:.1f} m)')
-            ax.plot(odom[0, 1], odom[0, 2], 'o', color=colour, ms=7, mfc='white', mew=2)
-        points = robot.plan[:-1] if robot.plan else robot.waypoints
-        if points:
-            wp = np.array(points)
-            ax.plot(wp[:, 0], wp[:, 1], 'x', color=colour, ms=5, mew=1.2)
-        if robot.goal is not None:
-            ax.plot(*robot.goal, '*', color=colour, ms=13)
-    if run.workspace is not None:
-        xmin, ymin, xmax, ymax = run.workspace
-        ax.set_xlim(xmin, xmax)
-        ax.set_ylim(ymin, ymax)
-    ax.set_aspect('equal')
-    ax.set_xlabel('x (m)')
-    ax.set_ylabel('y (m)')
-    ax.set_title(_title(run))
-    if run.robots:
-        ax.legend(loc='upper right', fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    written.append(out / 'paths.png')
-    fig.savefig(written[-1])
-    plt.close(fig)
-
-    fig, ax = plt.subplots(figsize=(7, 3.2), dpi=110)
-    for k, robot in enumerate(run.robots.values()):
-        if robot.cost:
-            series = _thin(robot.cost)
-            ax.plot(series[:, 0] - run.t0, series[:, 1], lw=1.2, color=colours[k % len(colours)], label=robot.name)
-    ax.set_xlabel('time since the goal (s)')
-    ax.set_ylabel('cost f (eq. 10)')
-    ax.set_title(_title(run))
-    if any(r.cost for r in run.robots.values()):
-        ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    written.append(out / 'cost.png')
-    fig.savefig(written[-1])
-    plt.close(fig)
-
-    n = max(1, len(run.robots))
-    fig, axes = plt.subplots(n, 1, figsize=(7, 2.4 * n), dpi=110, sharex=True, squeeze=False)
-    for ax, robot in zip(axes[:, 0], run.robots.values()):
-        source, series = ('cmd_vel', robot.cmd) if robot.cmd else ('odom', robot.odom_twist)
-        if series:
-            data = _thin(series)
-            t = data[:, 0] - run.t0
-            if robot.model == 'tractor_trailer':
-                ax.plot(t, data[:, 1], lw=1.1, label='v (m/s)')
-                ax.plot(t, data[:, 3], lw=1.1, label='omega (rad/s)')
-            else:
-                ax.plot(t, data[:, 1], lw=1.1, label='vx (m/s)')
-                ax.plot(t, data[:, 2], lw=1.1, label='vy (m/s)')
-                ax.plot(t, np.hypot(data[:, 1], data[:, 2]), lw=0.9, ls='--', color='0.4', label='speed (m/s)')
-            ax.legend(fontsize=7, loc='upper right')
-        ax.set_ylabel(f'{robot.name}: {source}')
-        ax.grid(alpha=0.3)
-    axes[-1, 0].set_xlabel('time since the goal (s)')
-    axes[0, 0].set_title(f'{_title(run)}: controller velocities')
-    fig.tight_layout()
-    written.append(out / 'velocity.png')
-    fig.savefig(written[-1])
-    plt.close(fig)
-    return written
+    return [save(fig, out / name) for name, fig in figures(run).items()]
 
 
 def write_report(path: str | Path, out: str | Path | None = None, radius: float = DEFAULT_RADIUS,

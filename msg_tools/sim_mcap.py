@@ -36,40 +36,13 @@ from fastep_core.planning.navigator import Mode
 from fastep_core.scenario import RobotSpec, Scenario
 from fastep_core.simulator import Run, Tick, simulate
 from msg_tools import convert
-from msg_tools.mcap_io import DEFAULT_CHUNK_SIZE, McapWriter, qos_dict
+from msg_tools.interface import (CLOCK, CMD_VEL, COST, GOAL_POSE, MAP, MAP_FRAME, METADATA_NAME, OBSTACLES, ODOM,
+                                 PLAN, STATUS, TRAILER_POSE, WAYPOINT, offered_qos_profiles, robot_topic,
+                                 scenario_metadata)
+from msg_tools.mcap_io import DEFAULT_CHUNK_SIZE, McapWriter
 
-__all__ = ['METADATA_NAME', 'SimRecorder', 'record_run', 'robot_metadata', 'topic_qos']
+__all__ = ['SimRecorder', 'record_run']
 
-METADATA_NAME = 'fastep'
-FRAME = 'map'
-
-# The QoS the live nodes offer (fastep_ros.common / fastep_ros.planner), so a replay recreates them.
-_LATCHED = [qos_dict(depth=1, transient_local=True)]        # /map, /obstacles (map node)
-_STATUS = [qos_dict(depth=10, transient_local=True)]        # status (planner STATUS_QOS)
-_RELIABLE = [qos_dict(depth=10)]                            # everything else
-
-
-def topic_qos(topic: str) -> list[dict[str, Any]]:
-    """The offered QoS profiles recorded for a topic of the fastep interface."""
-    if topic in ('/map', '/obstacles'):
-        return _LATCHED
-    if topic.endswith('/status'):
-        return _STATUS
-    return _RELIABLE
-
-
-def robot_metadata(scenario: Scenario) -> dict[str, str]:
-    """The `fastep` metadata entries describing a scenario's robots (also written by fastep-record)."""
-    out = {'scenario': scenario.name, 'robots': ','.join(r.name for r in scenario.robots),
-           'workspace': ','.join(f'{v:g}' for v in scenario.world.workspace)}
-    for r in scenario.robots:
-        out[f'model/{r.name}'] = r.model
-        out[f'radius/{r.name}'] = f'{r.radius:g}'
-        out[f'start/{r.name}'] = ','.join(f'{v:g}' for v in r.start)
-        out[f'goal/{r.name}'] = ','.join(f'{v:g}' for v in r.goal)
-        if r.model == 'tractor_trailer':
-            out[f'length/{r.name}'] = f'{r.length:g}'
-    return out
 
 
 def _ns(t: float) -> int:
@@ -101,17 +74,17 @@ class SimRecorder:
         stamp = convert.seconds_to_stamp(0.0)
         self.dt = self.scenario.planner.dt
         self._clock(0.0)
-        self._add(0.0, '/obstacles', convert.obstacles_to_marker_array(world.obstacle_list, stamp, FRAME))
-        self._add(0.0, '/map', convert.world_to_occupancy_grid(world, 0.1, stamp, FRAME))
+        self._add(0.0, OBSTACLES, convert.obstacles_to_marker_array(world.obstacle_list, stamp, MAP_FRAME))
+        self._add(0.0, MAP, convert.world_to_occupancy_grid(world, 0.1, stamp, MAP_FRAME))
         for spec in self.scenario.robots:
             state = _RobotState(spec)
             self.robots[spec.name] = state
-            ns = f'/{spec.name}'
-            self._add(0.0, f'{ns}/goal_pose', convert.point_to_pose_stamped(spec.goal, stamp, FRAME))
+            self._add(0.0, robot_topic(spec.name, GOAL_POSE),
+                      convert.point_to_pose_stamped(spec.goal, stamp, MAP_FRAME))
             self._odom(spec, 0.0, np.array(spec.start, dtype=float), np.zeros(2))
             goal = (float(spec.goal[0]), float(spec.goal[1]))
             state.plan = (goal,)
-            self._add(0.0, f'{ns}/plan', convert.waypoints_to_path([goal], stamp, FRAME))
+            self._add(0.0, robot_topic(spec.name, PLAN), convert.waypoints_to_path([goal], stamp, MAP_FRAME))
 
     # ------------------------------------------------------------------------------------------- helpers
     def _add(self, t: float, topic: str, message: Any) -> None:
@@ -121,7 +94,7 @@ class SimRecorder:
         ns = _ns(t)
         if ns > self.last_clock:
             self.last_clock = ns
-            self._add(t, '/clock', Clock(clock=convert.seconds_to_stamp(t)))
+            self._add(t, CLOCK, Clock(clock=convert.seconds_to_stamp(t)))
 
     def _odom(self, spec: RobotSpec, t: float, state: np.ndarray, command: np.ndarray) -> None:
         stamp = convert.seconds_to_stamp(t)
@@ -131,12 +104,12 @@ class SimRecorder:
             angular = omega
         else:
             linear, angular = (float(command[0]), float(command[1])), 0.0
-        self._add(t, f'/{spec.name}/odom', convert.state_to_odometry(
-            state, stamp, child_frame_id=f'{spec.name}/base_link', frame_id=FRAME, linear=linear,
+        self._add(t, robot_topic(spec.name, ODOM), convert.state_to_odometry(
+            state, stamp, child_frame_id=f'{spec.name}/base_link', frame_id=MAP_FRAME, linear=linear,
             angular=angular))
         if spec.model == 'tractor_trailer':
-            self._add(t, f'/{spec.name}/trailer_pose',
-                      convert.trailer_pose(state, spec.trailer_length, spec.hitch_offset, stamp, FRAME))
+            self._add(t, robot_topic(spec.name, TRAILER_POSE),
+                      convert.trailer_pose(state, spec.trailer_length, spec.hitch_offset, stamp, MAP_FRAME))
 
     def _status(self, robot: _RobotState, t: float, mode: str, reason: str, activations: int,
                 waypoint: Any, cost: float) -> None:
@@ -150,14 +123,14 @@ class SimRecorder:
         values = {'reason': reason, 'activations': activations, 'waypoint': waypoint, 'goal': spec.goal,
                   'cost': float(cost), 'others': others, 'algorithm': self.algorithm, 't': t,
                   'robot_radius': float(spec.radius)}
-        self._add(t, f'/{spec.name}/status', convert.make_status(f'/{spec.name}', mode, level, values))
+        self._add(t, robot_topic(spec.name, STATUS), convert.make_status(f'/{spec.name}', mode, level, values))
 
     def _plan(self, robot: _RobotState, t: float, points: list[tuple[float, float]]) -> None:
         key = tuple(points)
         if key != robot.plan:
             robot.plan = key
-            self._add(t, f'/{robot.spec.name}/plan',
-                      convert.waypoints_to_path(points, convert.seconds_to_stamp(t), FRAME))
+            self._add(t, robot_topic(robot.spec.name, PLAN),
+                      convert.waypoints_to_path(points, convert.seconds_to_stamp(t), MAP_FRAME))
 
     # ------------------------------------------------------------------------------------------- observer
     def observe(self, tick: Tick) -> None:
@@ -166,15 +139,15 @@ class SimRecorder:
         spec, nav = robot.spec, tick.navigator
         t = tick.t
         decided = max(0.0, round(t - self.dt, 9))
-        ns = f'/{spec.name}'
         stamp = convert.seconds_to_stamp(decided)
         # What the planner published at the decision time...
-        self._add(decided, f'{ns}/cmd_vel', convert.command_to_twist(tick.command, spec.model))
-        self._add(decided, f'{ns}/cost', Float64(data=float(nav.cost)))
+        self._add(decided, robot_topic(spec.name, CMD_VEL), convert.command_to_twist(tick.command, spec.model))
+        self._add(decided, robot_topic(spec.name, COST), Float64(data=float(nav.cost)))
         target = nav.target
         key = None if target is None else tuple(float(v) for v in target)
         if key is not None and key != robot.target:
-            self._add(decided, f'{ns}/waypoint', convert.point_to_pose_stamped(key, stamp, FRAME))
+            self._add(decided, robot_topic(spec.name, WAYPOINT),
+                      convert.point_to_pose_stamped(key, stamp, MAP_FRAME))
         robot.target = key
         goal = (float(spec.goal[0]), float(spec.goal[1]))
         self._plan(robot, decided, [(float(p[0]), float(p[1])) for p in nav.plan] + [goal])
@@ -193,18 +166,18 @@ class SimRecorder:
             goal = (float(robot.spec.goal[0]), float(robot.spec.goal[1]))
             self._plan(robot, t, [(float(w[0]), float(w[1])) for w in result.waypoints] + [goal])
             self._status(robot, t, mode, reason, result.activations, None, 0.0)
-            self._add(t, f'/{result.name}/cmd_vel', Twist())
-            self._add(t, f'/{result.name}/cost', Float64(data=0.0))
+            self._add(t, robot_topic(result.name, CMD_VEL), Twist())
+            self._add(t, robot_topic(result.name, COST), Float64(data=0.0))
 
     def write(self, output: str | os.PathLike[str] | IO[bytes], chunk_size: int = DEFAULT_CHUNK_SIZE) -> int:
         """Write the collected messages in log-time order; return how many."""
         with McapWriter(output, chunk_size=chunk_size) as writer:
-            meta = robot_metadata(self.scenario)
+            meta = scenario_metadata(self.scenario)
             meta.update(algorithm=self.algorithm, seed=str(self.seed), source='fastep-sim',
                         time_base='simulated seconds since the start of the run')
             writer.add_metadata(METADATA_NAME, meta)
             for log_time, _, topic, message in sorted(self.items, key=lambda item: item[:2]):
-                writer.write(topic, message, log_time, qos=topic_qos(topic))
+                writer.write(topic, message, log_time, qos=offered_qos_profiles(topic))
             return writer.message_count
 
 

@@ -19,7 +19,7 @@ from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['ALGORITHMS', 'NAVIGATORS', 'TITLES', 'make_navigator', 'make_robot']
+__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'NAVIGATORS', 'algorithm_name', 'make_navigator', 'make_robot']
 
 NAVIGATORS: dict[str, type[Navigator]] = {
     'fastep': FAStepKinematic,   # the paper's algorithm
@@ -27,8 +27,13 @@ NAVIGATORS: dict[str, type[Navigator]] = {
     'optimal': OptimalKinematic,  # the exact shortest path, driven by the same controller (a reference)
 }
 ALGORITHMS: tuple[str, ...] = tuple(NAVIGATORS)
-TITLES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
-"""What figures and reports call each algorithm."""
+ALGORITHM_NAMES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
+"""What tables, reports and figure titles call each algorithm (the paper's names)."""
+
+
+def algorithm_name(algorithm: str) -> str:
+    """The paper's name of an algorithm ('aco' -> 'ACO-Kinematic'); an unknown one keeps its own."""
+    return ALGORITHM_NAMES.get(algorithm, algorithm)
 
 
 class RobotLike(Protocol):

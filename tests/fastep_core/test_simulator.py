@@ -96,6 +96,27 @@ def test_crossing_robots_keep_their_separation_every_tick():
         assert len(gaps) > 100 and min(gaps) >= r1.radius + r2.radius
 
 
+def test_min_clearance_is_the_smallest_margin_after_any_step():
+    """Every robot's position after each step, against the obstacles and the others (a stopped robot stays)."""
+    scenario = load_scenario('case_study_2')   # two robots crossing among circles
+    after_step: dict[float, dict[str, np.ndarray]] = {}
+    run = simulate(scenario, 'fastep', 0,
+                   observer=lambda tick: after_step.setdefault(tick.t, {}).__setitem__(tick.name, tick.state[:2]))
+    where = {spec.name: np.array(spec.start[:2], dtype=float) for spec in scenario.robots}
+    radius = {spec.name: spec.radius for spec in scenario.robots}
+    smallest = dict.fromkeys(where, math.inf)
+    for t in sorted(after_step):
+        where.update(after_step[t])
+        for name, p in where.items():
+            margins = [float(scenario.world.obstacles.clearance(p[None])[0]) - radius[name]]
+            margins += [math.hypot(*(p - q)) - radius[name] - radius[other] for other, q in where.items()
+                        if other != name]
+            smallest[name] = min(smallest[name], *margins)
+    for robot in run.robots:
+        assert robot.min_clearance == pytest.approx(smallest[robot.name], abs=1e-12)
+        assert robot.collided == (smallest[robot.name] < 0.0)
+
+
 def test_head_on_robots_in_open_space_get_past_each_other():
     scenario = parse_scenario({
         'name': 'swap', 'workspace': [0, 0, 30, 10],

@@ -218,7 +218,7 @@ class Helper:
 
     def record_status(self, namespace: str) -> list[dict[str, Any]]:
         from diagnostic_msgs.msg import DiagnosticStatus
-        from fastep_ros.planner import STATUS_QOS
+        from msg_tools.interface import STATUS_QOS
         return self.record(f'{namespace}/status', DiagnosticStatus, STATUS_QOS)
 
     def wait_status(self, namespace: str, accept: Callable[[dict[str, Any]], bool], timeout: float,
@@ -235,7 +235,7 @@ class Helper:
 
     def send_goal(self, namespace: str, goal: tuple[float, float]) -> None:
         from geometry_msgs.msg import PoseStamped
-        from fastep_ros.common import RELIABLE
+        from msg_tools.interface import RELIABLE
         from msg_tools.convert import point_to_pose_stamped
         topic = f'{namespace}/goal_pose'
         if topic not in self.goal_pubs:

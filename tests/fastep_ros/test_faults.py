@@ -72,8 +72,8 @@ def send_latched_goal(h: Helper, goal: tuple[float, float]) -> None:
     """As fastep-launch does: a transient-local publisher, so a planner that starts later still gets it."""
     from geometry_msgs.msg import PoseStamped
 
-    from fastep_ros.common import LATCHED
     from msg_tools.convert import point_to_pose_stamped
+    from msg_tools.interface import LATCHED
     pub = h.node.create_publisher(PoseStamped, f'{NS}/goal_pose', LATCHED)
     h.spin_until(lambda: pub.get_subscription_count() > 0, 20.0, 'the planner to match the goal publisher')
     pub.publish(point_to_pose_stamped(goal))

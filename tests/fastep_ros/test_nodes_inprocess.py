@@ -5,6 +5,8 @@ from __future__ import annotations
 
 import math
 import os
+from dataclasses import replace
+from pathlib import Path
 from typing import Any, Iterator
 
 import numpy as np
@@ -259,3 +261,46 @@ def test_stamped_cmd_vel_between_planner_and_plant(context: Any) -> None:
     finally:
         planner.destroy_node()
         plant.destroy_node()
+
+
+def test_nodes_publish_the_interface_and_fastep_sim_records_their_qos(context: Any, tmp_path: Path) -> None:
+    """Every topic a node publishes has the interface's name, type and QoS, and a fastep-sim recording offers
+    exactly the nodes' profiles (so a replay of it looks like the live graph)."""
+    from rclpy.node import Node
+
+    from fastep_ros.clock import ClockNode
+    from fastep_ros.map_server import MapNode
+    from msg_tools import interface
+    from msg_tools.mcap_io import open_recording, qos_profile_to_dict, type_name_of
+    from msg_tools.sim_mcap import record_run
+
+    scenario = load_scenario('application')    # tractor-trailers: trailer_pose too
+    spec = scenario.robots[0]
+    nodes: list[Node] = []
+    try:
+        nodes.append(MapNode(context=context, parameter_overrides=[Parameter('scenario', value='application')]))
+        nodes.append(ClockNode(context=context))
+        trailer = [Parameter('model', value='tractor_trailer')]
+        nodes.append(PlantNode(context=context, namespace=f'/{spec.name}', parameter_overrides=[
+            *trailer, Parameter('start', value=[float(v) for v in spec.start])]))
+        nodes.append(PlannerNode(context=context, namespace=f'/{spec.name}', parameter_overrides=trailer))
+        published = {pub.topic_name: (type_name_of(pub.msg_type), qos_profile_to_dict(pub.qos_profile))
+                     for node in nodes for pub in node.publishers if interface.is_interface_topic(pub.topic_name)}
+    finally:
+        for node in nodes:
+            node.destroy_node()
+    goal = interface.robot_topic(spec.name, interface.GOAL_POSE)   # the nodes subscribe to it; a user publishes
+    expected = {interface.robot_topic(spec.name, t) for t in interface.ROBOT_TOPICS} - {goal}
+    assert set(published) == expected | set(interface.SHARED_TOPICS)
+    for topic, (type_name, qos) in published.items():
+        assert type_name == interface.message_type(topic), topic
+        assert [qos] == interface.offered_qos_profiles(topic), topic
+
+    out = tmp_path / 'run.mcap'
+    # Two simulated seconds publish on every topic.
+    record_run(replace(scenario, planner=scenario.planner.with_overrides({'max_sim_time': 2.0})), 'fastep', 0, out)
+    recording = open_recording(out)
+    for topic, (type_name, qos) in published.items():
+        assert recording.topics[topic].type == type_name, topic
+        assert recording.topics[topic].qos == [qos], topic
+    assert recording.topics[goal].qos == interface.offered_qos_profiles(goal)

@@ -105,7 +105,7 @@ def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
     live file as it reads a fastep-sim one (same topics), and replays are driven by the same QoS metadata."""
     from geometry_msgs.msg import PoseStamped
 
-    from fastep_ros.common import RELIABLE
+    from msg_tools.interface import RELIABLE
     from graph_helpers import FAST, ONE_CIRCLE, Helper, write
     from msg_tools import convert, report
 

@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from msg_tools import report, sim_cli
@@ -71,6 +72,22 @@ def test_report_matches_the_simulated_run(run: dict[str, Any], capsys: pytest.Ca
     assert {r['radius'] for r in doc['robots']} == {0.5, 0.4}
     for name in ('paths.png', 'cost.png', 'velocity.png'):
         assert (out / name).read_bytes()[:8] == b'\x89PNG\r\n\x1a\n'
+
+
+def test_report_figures_show_the_recorded_odometry_and_series(run: dict[str, Any]) -> None:
+    recorded = report.load_run(open_recording(run['mcap']))
+    figures = report.figures(recorded)
+    assert list(figures) == ['paths.png', 'cost.png', 'velocity.png']
+    paths = figures['paths.png'].axes[0]
+    assert paths.get_title() == 'crossing_wall: FAStep-Kinematic'
+    assert len(paths.patches) == 1                                   # the circle; the wall is a line
+    for name, robot in recorded.robots.items():
+        (line,) = [line for line in paths.get_lines() if line.get_label().startswith(f'{name} (')]
+        assert np.column_stack([line.get_xdata(), line.get_ydata()]).tolist() == [list(r[1:3]) for r in robot.odom]
+    costs = figures['cost.png'].axes[0].get_lines()
+    assert [line.get_label() for line in costs] == ['r1', 'r2']
+    assert costs[0].get_xdata()[0] == pytest.approx(recorded.robots['r1'].cost[0][0] - recorded.t0)
+    assert [ax.get_ylabel() for ax in figures['velocity.png'].axes] == ['r1: cmd_vel', 'r2: cmd_vel']
 
 
 def test_report_without_metadata_uses_status_radius(run: dict[str, Any], tmp_path: Path) -> None:

@@ -1,0 +1,95 @@
+"""How close robots came to the obstacles and to each other along their trajectories: the one margin function.
+
+fastep-sim (simulator.py), fastep-launch (from odometry) and fastep-report (from a recording) all measure
+with trajectory_margins, so their min_clearance numbers mean the same thing:
+
+- against the obstacles: the smallest distance from a robot's reference point (the state's x, y) at one of its
+  samples to the nearest obstacle surface, minus its radius;
+- against another robot: the smallest centre distance over time, minus both radii;
+- negative means the discs touched (a collision), inf that there was nothing to measure against.
+
+Time alignment (robot against robot): two robots are compared at every time at which either of them has a
+sample (the union of their sample times). Between its samples a robot's position is interpolated linearly;
+before its first sample it is held at its first position (it had not moved yet) and after its last at its last
+(it stopped there). When both tracks have the same sample times (the in-process simulator; plants integrating
+on one simulated clock) this compares exactly the sampled positions, with no interpolation.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from fastep_core.geometry import Obstacles
+
+__all__ = ['Margins', 'positions_at', 'trajectory_margins']
+
+FloatArray = NDArray[np.float64]
+CHUNK = 16_384   # points per obstacles.clearance call: bounds the (points x obstacles) distance matrix
+
+
+@dataclass(frozen=True)
+class Margins:
+    """Per robot (in the order of the tracks): the smallest margin kept to the obstacles and to the other robots."""
+
+    obstacles: FloatArray
+    robots: FloatArray
+
+    @property
+    def overall(self) -> FloatArray:
+        """The smaller of the two: what a run reports as min_clearance."""
+        return np.minimum(self.obstacles, self.robots)
+
+
+def _rows(track: ArrayLike) -> FloatArray:
+    rows = np.asarray(track, dtype=float)
+    return rows.reshape(len(rows), -1) if rows.size else np.zeros((0, 3))
+
+
+def positions_at(track: FloatArray, times: FloatArray) -> FloatArray:
+    """Positions (n, 2) of a track (rows t, x, y in time order) at the given times: linearly interpolated
+    between samples, held before the first and after the last."""
+    return np.stack([np.interp(times, track[:, 0], track[:, 1]), np.interp(times, track[:, 0], track[:, 2])],
+                    axis=-1)
+
+
+def _min_clearance(obstacles: Obstacles, points: FloatArray) -> float:
+    return float(min(obstacles.clearance(points[k:k + CHUNK]).min() for k in range(0, len(points), CHUNK)))
+
+
+def _closest_approach(a: FloatArray, b: FloatArray) -> float:
+    """Smallest centre distance of two non-empty tracks, aligned as the module docstring says."""
+    if len(a) == len(b) and np.array_equal(a[:, 0], b[:, 0]):
+        pa, pb = a[:, 1:3], b[:, 1:3]
+    else:
+        times = np.union1d(a[:, 0], b[:, 0])
+        pa, pb = positions_at(a, times), positions_at(b, times)
+    return float(np.hypot(pa[:, 0] - pb[:, 0], pa[:, 1] - pb[:, 1]).min())
+
+
+def trajectory_margins(tracks: Sequence[ArrayLike], radii: ArrayLike, obstacles: Obstacles) -> Margins:
+    """The margins of each robot along its track.
+
+    tracks[i]: robot i's samples as rows (t, x, y, ...) in time order (further columns, e.g. headings, are
+    ignored; a robot may have no samples); radii[i]: its radius.
+    """
+    rows = [_rows(track) for track in tracks]
+    radius = np.asarray(radii, dtype=float).reshape(-1)
+    if len(radius) != len(rows):
+        raise ValueError(f'{len(rows)} tracks but {len(radius)} radii')
+    to_obstacles = np.full(len(rows), np.inf)
+    to_robots = np.full(len(rows), np.inf)
+    for i, mine in enumerate(rows):
+        if len(mine) and len(obstacles):
+            to_obstacles[i] = _min_clearance(obstacles, mine[:, 1:3]) - radius[i]
+        for j in range(i + 1, len(rows)):
+            if not len(mine) or not len(rows[j]):
+                continue
+            gap = _closest_approach(mine, rows[j])
+            # Each robot's own radius first: the same rounding as margins computed one robot at a time.
+            to_robots[i] = min(to_robots[i], gap - radius[i] - radius[j])
+            to_robots[j] = min(to_robots[j], gap - radius[j] - radius[i])
+    return Margins(to_obstacles, to_robots)
