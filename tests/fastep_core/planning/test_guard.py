@@ -1,0 +1,73 @@
+"""The guard (planning/guard.py) and the navigator's detection, with the world changing under them."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from fastep_core.geometry import Circle
+from fastep_core.kinematics import PointMass
+from fastep_core.planning import OtherRobot, PlannerParams, make_navigator
+from fastep_core.planning.guard import Guard, Stop
+from fastep_core.scenario import RobotSpec
+from fastep_core.world import World
+
+EMPTY = World.from_obstacles([0, 0, 20, 20], [])
+AHEAD = World.from_obstacles([0, 0, 20, 20], [Circle((6.6, 5.0), 1.0)])   # surface 1.6 m ahead of (5, 5)
+SPEC = RobotSpec('r1', 'point_mass', (5.0, 5.0), (15.0, 5.0), 0.5)
+
+
+def test_the_guard_stops_a_tick_into_the_radius_and_lets_a_robot_inside_move_away():
+    guard, state = Guard(PointMass(), 0.5, PlannerParams()), np.array([5.0, 5.0])
+    fast = np.array([25.0, 0.0])   # 1.25 m in one 0.05 s tick: ends 0.35 m from the surface
+    assert np.all(guard.check(AHEAD, state, fast, 0.05, []) == 0.0) and guard.stop is Stop.OBSTACLE
+    slow = np.array([1.0, 0.0])
+    assert guard.check(AHEAD, state, slow, 0.05, []) is slow
+    inside = np.array([5.3, 5.0])   # 0.3 m from the surface, nearer than the radius
+    away = np.array([-1.0, 0.0])
+    assert guard.check(AHEAD, inside, away, 0.05, []) is away
+
+
+def test_a_free_disc_learnt_in_one_world_is_not_trusted_in_a_new_one():
+    """The planner node swaps the navigator's world when the map changes (a new obstacle): what the guard
+    learnt was free in the old world (here 11 m round the robot) must be checked again in the new one."""
+    nav = make_navigator('fastep', SPEC, 0.5, World.from_obstacles([0, 0, 20, 20], [Circle((15.0, 15.0), 1.0)]),
+                         PlannerParams(), 0)
+    state, fast = np.array([5.0, 5.0]), np.array([25.0, 0.0])   # 1.25 m in one tick
+    assert nav.guard(state, fast, 0.05, []) is fast
+    nav.world = AHEAD
+    assert np.all(nav.guard(state, fast, 0.05, []) == 0.0) and 'obstacle is within the robot radius' in nav.reason
+
+
+def test_the_guard_gives_way_to_another_robot_it_would_close_in_on():
+    guard, state = Guard(PointMass(), 0.5, PlannerParams()), np.array([5.0, 5.0])
+    other = OtherRobot('r2', (6.1, 5.0), radius=0.5)   # 1.1 m apart: radii 1 m + reach 0.1 m
+    assert np.all(guard.check(EMPTY, state, np.array([1.0, 0.0]), 0.05, [other]) == 0.0)
+    assert guard.stop is Stop.ROBOT and 'giving way to r2' in guard.reason
+    away = np.array([-1.0, 0.0])
+    assert guard.check(EMPTY, state, away, 0.05, [other]) is away
+
+
+def test_detection_is_asked_again_when_the_world_changes():
+    nav = make_navigator('fastep', SPEC, 0.5, EMPTY, PlannerParams(), 0)
+    nav.set_goal((15.0, 5.0))
+    position, goal = np.array([5.0, 5.0]), nav.goal
+    assert goal is not None and not nav.blocked(position, goal, [])
+    nav.world = AHEAD   # same position, same target: only the world is new
+    assert nav.blocked(position, goal, [])
+
+
+def test_a_navigator_steps_round_an_obstacle_that_appears_mid_run():
+    nav = make_navigator('fastep', SPEC, 0.5, EMPTY, PlannerParams(), 0)
+    nav.set_goal((15.0, 5.0))
+    state, model, t = np.array([3.0, 5.0]), PointMass(), 0.0
+    for _ in range(10):   # kinematic toward the goal in an empty world
+        state = model.integrate(state, nav.update(t, state), 0.05)
+        t += 0.05
+    nav.world = AHEAD
+    path = []
+    while nav.mode.value not in ('arrived', 'failed') and t < 300.0:
+        state = model.integrate(state, nav.update(t, state), 0.05)
+        path.append(state.copy())
+        t += 0.05
+    assert nav.mode.value == 'arrived' and nav.activations >= 1
+    assert float(AHEAD.obstacles.clearance(np.array(path)).min()) >= 0.5
