@@ -12,7 +12,7 @@ from __future__ import annotations
 import argparse
 import os
 import sys
-from typing import TYPE_CHECKING, Callable, NoReturn
+from typing import TYPE_CHECKING, Any, Callable, NoReturn
 
 from fastep_core.errors import FastepError
 
@@ -73,7 +73,7 @@ def positive_int(text: str) -> int:
     return value
 
 
-def progress_bar(total: int, label: str, show: bool | None = None, unit: str = 'run') -> tqdm:
+def progress_bar(total: int, label: str, show: bool | None = None, unit: str = 'run') -> tqdm[Any]:
     """A tqdm progress bar on stderr; update(n) it as work ends, close() it (or use it as a context manager).
 
     show: None draws it only when stderr is a terminal (a log file gets no carriage-return clutter), True

@@ -327,9 +327,9 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
                   '|---|---|---|---|---|---|---|---|---|---|---|']
         for scenario in scenarios:
             c = {m: compare(records, scenario, m) for m in METRICS}
-            paper = PAPER.get(scenario)
-            pe = enhancement(paper['aco']['path'], paper['fastep']['path']) if paper else None
-            te = enhancement(paper['aco']['time'], paper['fastep']['time']) if paper else None
+            table = PAPER.get(scenario)
+            pe = enhancement(table['aco']['path'], table['fastep']['path']) if table else None
+            te = enhancement(table['aco']['time'], table['fastep']['time']) if table else None
             lines.append(f'| {scenario} | {_num(c["path_length"].enhancement, 2, " %")} | {_num(pe, 2, " %")} | '
                          f'{_p(c["path_length"].p_value)} | {_num(c["compute_time"].enhancement, 2, " %")} | '
                          f'{_num(te, 2, " %")} | {_p(c["compute_time"].p_value)} | '
@@ -345,8 +345,8 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
         for robot, opt in optimal.get(scenario, {}).items():
             cells = []
             for a in algorithms:
-                s = by_key.get((scenario, a, robot))
-                cells.append(_num(s.mean['path_length'] / opt, 3) if s and opt else '-')
+                found = by_key.get((scenario, a, robot))
+                cells.append(_num(found.mean['path_length'] / opt, 3) if found and opt else '-')
             lines.append(f'| {scenario} | {robot} | {lines_for[robot]:.2f} | {_num(opt)} | ' +
                          ' | '.join(cells) + ' |')
     return '\n'.join(lines) + '\n'

@@ -148,9 +148,10 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             # Trajectory samples at most SAMPLE_SPACING apart: when the newest point is too far from the
             # last sample, the point before it is sampled first.
             row = [t_next, *new_state.tolist()]
-            if np.hypot(*(new_state[:2] - last_sample[i])) > SAMPLE_SPACING and pending[i] is not None:
-                run.trajectory.append(pending[i])
-                last_sample[i] = np.array(pending[i][1:3])
+            before = pending[i]
+            if np.hypot(*(new_state[:2] - last_sample[i])) > SAMPLE_SPACING and before is not None:
+                run.trajectory.append(before)
+                last_sample[i] = np.array(before[1:3])
                 pending[i] = None
             if np.hypot(*(new_state[:2] - last_sample[i])) >= SAMPLE_SPACING:
                 run.trajectory.append(row)
@@ -171,8 +172,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     for i, (nav, run) in enumerate(zip(navigators, runs)):
         run.min_clearance = float(margins[i])
         run.collided = bool(margins[i] < 0.0)
-        if pending[i] is not None:
-            run.trajectory.append(pending[i])
+        last = pending[i]
+        if last is not None:
+            run.trajectory.append(last)
         if nav.mode not in (Mode.ARRIVED, Mode.FAILED):
             nav.fail(f'not arrived within max_sim_time={params.max_sim_time:g} s')
         run.status = f'{nav.mode.value}: {nav.reason}'

@@ -131,7 +131,7 @@ def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
     """node_main's body: 0 after a stop (Ctrl-C is a normal stop for a node); a FastepError propagates,
     after the node is destroyed and ROS shut down."""
     try:
-        rclpy.init(args=args)
+        rclpy.init(args=None if args is None else list(args))
     except Exception as exc:   # e.g. UnknownROSArgsError for a mistyped --ros-args
         raise StartupError(f'cannot start ROS: {type(exc).__name__}: {exc}'.splitlines()[0]) from None
     node = None

@@ -18,6 +18,7 @@ line on stderr for bad input (or when --json / --plot cannot be written).
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import math
 import os
@@ -34,8 +35,8 @@ import numpy as np
 from fastep_core.cli import Parser, fail, guard, seed
 from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.params import PlannerParams
-from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_core.planning.algorithms import ALGORITHMS
+from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import LaunchError
 
 __all__ = ['main']
@@ -219,14 +220,14 @@ class Monitor:
             self.goal_pubs[name] = self.node.create_publisher(PoseStamped, robot_topic(name, interface.GOAL_POSE),
                                                               LATCHED)
             self.node.create_subscription(DiagnosticStatus, robot_topic(name, interface.STATUS),
-                                          lambda m, r=robot: self.on_status(r, m), offered_qos(interface.STATUS))
+                                          functools.partial(self.on_status, robot), offered_qos(interface.STATUS))
             self.odom_subs[name] = self.node.create_subscription(
-                Odometry, robot_topic(name, interface.ODOM), lambda m, r=robot: self.on_odom(r, m), depth)
+                Odometry, robot_topic(name, interface.ODOM), functools.partial(self.on_odom, robot), depth)
             self.node.create_subscription(PathMsg, robot_topic(name, interface.PLAN),
-                                          lambda m, r=robot: self.on_plan(r, m), RELIABLE)
+                                          functools.partial(self.on_plan, robot), RELIABLE)
             if robot.spec.model == 'tractor_trailer':
                 self.node.create_subscription(PoseStamped, robot_topic(name, interface.TRAILER_POSE),
-                                              lambda m, r=robot: self.on_trailer(r, m), depth)
+                                              functools.partial(self.on_trailer, robot), depth)
 
     def follow_clock(self) -> None:
         """Subscribe to /clock: the clock, holding the start time until all its subscribers are there,

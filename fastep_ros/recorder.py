@@ -32,6 +32,7 @@ Parameters are read-only; a bad one (or an output that cannot be created) is one
 
 from __future__ import annotations
 
+import functools
 import sys
 import time
 from pathlib import Path
@@ -160,7 +161,7 @@ class RecorderNode(Node):
             self.types[topic] = type_name
             self.counts[topic] = 0
             self.subscriptions_by_topic[topic] = self.create_subscription(
-                msg_type, topic, lambda data, name=topic: self.on_message(name, data), self.request_qos(topic),
+                msg_type, topic, functools.partial(self.on_message, topic), self.request_qos(topic),
                 raw=True)
             self.get_logger().info(f'recording {topic} ({type_name})')
 

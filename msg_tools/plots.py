@@ -56,7 +56,10 @@ def title(what: str, algorithm: str = '', seed: int | None = None) -> str:
 def save(fig: Figure, out: str | Path, dpi: float | None = None) -> Path:
     """Write the figure as PNG and close it."""
     path = Path(out)
-    fig.savefig(path, **({} if dpi is None else {'dpi': dpi}))
+    if dpi is None:
+        fig.savefig(path)
+    else:
+        fig.savefig(path, dpi=dpi)
     plt.close(fig)
     return path
 
