@@ -14,7 +14,7 @@ import pytest
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 
-from graph_helpers import FAST, ONE_CIRCLE, Graph, Helper, distance, odom_xy, stamp, write
+from fastep_testing.graph import FAST, ONE_CIRCLE, Graph, Helper, distance, odom_xy, stamp, write
 from msg_tools import convert
 
 NS = '/r1'

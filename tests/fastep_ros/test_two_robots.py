@@ -6,7 +6,7 @@ import math
 
 from nav_msgs.msg import Odometry
 
-from graph_helpers import CROSSING, FAST, Graph, Helper, distance, odom_xy, stamp, write
+from fastep_testing.graph import CROSSING, FAST, Graph, Helper, distance, odom_xy, stamp, write
 
 ROBOTS = {'r1': ((3.0, 3.0), (17.0, 17.0)), 'r2': ((17.0, 3.0), (3.0, 17.0))}
 RADIUS = 0.5
