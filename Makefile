@@ -24,8 +24,11 @@ demo: $(STAMP)
 		--record $(OUT)/demo.mcap --json $(OUT)/demo.json --plot $(OUT)/demo.png
 	$(BIN)/fastep-report $(OUT)/demo.mcap --out $(OUT)/demo_report
 
+# Two workers: the tests on a live ROS graph run one after another on one of them, the rest spread over both
+# (tests/conftest.py says why). TEST_WORKERS=0 runs everything in this process, in file order.
+TEST_WORKERS ?= 2
 test: $(STAMP)
-	$(BIN)/python -m pytest -q tests
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup tests
 
 # The property tests with fresh random examples, ROUNDS times (make test always tries the same ones).
 ROUNDS ?= 20

@@ -29,7 +29,7 @@ setup(
         'mcap>=1.3',
         'rosbags>=0.10',
     ],
-    extras_require={'test': ['pytest>=8', 'hypothesis>=6.100']},
+    extras_require={'test': ['pytest>=8', 'pytest-xdist>=3.8', 'hypothesis>=6.100']},
     zip_safe=True,
     maintainer='fastep developers',
     maintainer_email='dev@fastep.invalid',
