@@ -25,8 +25,11 @@ demo: $(STAMP)
 	$(BIN)/fastep-report $(OUT)/demo.mcap --out $(OUT)/demo_report
 
 # Linter and type checker first (ruff.toml; [mypy] in setup.cfg), so a lint or type error fails make test.
+# Then two workers: the tests on a live ROS graph run one after another on one of them, the rest spread over
+# both (tests/conftest.py says why). TEST_WORKERS=0 runs everything in this process, in file order.
+TEST_WORKERS ?= 2
 test: $(STAMP) lint
-	$(BIN)/python -m pytest -q tests
+	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup tests
 
 # A `# type: ignore` names its error code and says why after it: `# type: ignore[code]  # why`.
 lint: $(STAMP)
@@ -49,7 +52,7 @@ lint-counts: $(STAMP)
 ROUNDS ?= 20
 fuzz: $(STAMP)
 	for i in $$(seq $(ROUNDS)); do HYPOTHESIS_PROFILE=explore $(BIN)/python -m pytest -q -x \
-		tests/fastep_core/test_properties.py tests/fastep_core/test_optimal.py || exit 1; done
+		tests/fastep_core/test_properties.py tests/fastep_core/planning/test_optimal.py || exit 1; done
 
 # Measurements run by hand (minutes, not seconds); results and commands are in docs/benchmarks.md.
 bench: $(STAMP)

@@ -30,7 +30,7 @@ setup(
         'rosbags>=0.10',
         'tqdm==4.70.1',
     ],
-    extras_require={'test': ['pytest>=8', 'hypothesis>=6.100']},
+    extras_require={'test': ['pytest>=8', 'pytest-xdist>=3.8', 'hypothesis>=6.100']},
     zip_safe=True,
     maintainer='fastep developers',
     maintainer_email='dev@fastep.invalid',

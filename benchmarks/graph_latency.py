@@ -19,7 +19,7 @@ a control timer (control_rate_hz, 20 Hz). "Odom-to-cmd_vel latency" therefore ha
     measures that phase. The inprocess phase therefore also splits (b) into odometry transport, wait for the
     tick, processing and cmd_vel transport, and reports the sum without the wait (the planner's real latency).
 
-Graph: on an isolated DDS domain (tests/fastep_ros/graph_helpers.free_domain, ROS_AUTOMATIC_DISCOVERY_RANGE=
+Graph: on an isolated DDS domain (fastep_testing.graph.free_domain, ROS_AUTOMATIC_DISCOVERY_RANGE=
 LOCALHOST) a map node process (the scenario's world) and, in phase `process`, one unmodified planner process
 (`python -m fastep_ros.planner`, namespace /r1, parameters as fastep-launch gives them, wall time). A driver
 node in this process publishes nav_msgs/Odometry on /r1/odom at 20 Hz (--motion follow: a point mass that
@@ -52,17 +52,9 @@ from typing import Any
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parents[1]
+from fastep_testing.graph import Graph, Helper
+
 TARGET_P99_MS = 5.0
-
-
-def graph_helpers() -> Any:
-    """tests/fastep_ros/graph_helpers.py (isolated domains, process start/stop), imported by path."""
-    folder = str(ROOT / 'tests' / 'fastep_ros')
-    if folder not in sys.path:
-        sys.path.insert(0, folder)
-    import graph_helpers as gh
-    return gh
 
 
 def load() -> str:
@@ -239,17 +231,17 @@ def planner_params(scenario: Any, index: int, algorithm: str, seed: int, sim_tim
     return params
 
 
-def phase_process(gh: Any, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
+def phase_process(args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
     """The unmodified planner as its own process: (b) end-to-end age, cmd period, planner CPU."""
     from fastep_core.scenario import load_scenario
     
     scenario = load_scenario(args.scenario)
-    graph = gh.Graph(tmp)
+    graph = Graph(tmp)
     try:
         graph.start('map', 'map_server', '/', scenario=args.scenario)
         graph.start('planner', 'planner', '/r1',
                     **planner_params(scenario, 0, 'fastep', args.seed, False, args.stamped))
-        graph.helper = gh.Helper(graph.domain)
+        graph.helper = Helper(graph.domain)
         spec = scenario.robots[0]
         driver = Driver(graph.helper, spec.start, spec.goal, args.motion, args.speed, 20.0, args.stamped)
         pid = graph.procs['planner'].pid
@@ -333,7 +325,7 @@ def make_timed_planner(profile: cProfile.Profile | None) -> type:
     return TimedPlanner
 
 
-def phase_inprocess(gh: Any, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
+def phase_inprocess(args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
     """The instrumented planner in this process's executor: (a) processing time, and (b) split into parts."""
     import rclpy.logging
     from rclpy.logging import LoggingSeverity
@@ -342,12 +334,12 @@ def phase_inprocess(gh: Any, args: argparse.Namespace, tmp: Path) -> dict[str, A
     from fastep_core.scenario import load_scenario
     
     scenario = load_scenario(args.scenario)
-    graph = gh.Graph(tmp)
+    graph = Graph(tmp)
     profile = cProfile.Profile() if args.profile else None
     planner = None
     try:
         graph.start('map', 'map_server', '/', scenario=args.scenario)
-        graph.helper = helper = gh.Helper(graph.domain)
+        graph.helper = helper = Helper(graph.domain)
         params = planner_params(scenario, 0, 'fastep', args.seed, False, args.stamped)
         rclpy.logging.set_logger_level('r1.planner', LoggingSeverity.WARN)
         planner = make_timed_planner(profile)(
@@ -477,7 +469,6 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument('--profile-out', help='write the cProfile stats here (pstats format)')
     p.add_argument('--json', type=Path, help='write the results as JSON')
     args = p.parse_args(argv)
-    gh = graph_helpers()
     os.environ.setdefault('FASTEP_TEST_LOG_LEVEL', 'warn')
     print(f'graph_latency: scenario {args.scenario}, motion {args.motion}, {args.seconds:g} s per phase; {load()}',
           flush=True)
@@ -488,7 +479,7 @@ def main(argv: list[str] | None = None) -> None:
             folder = Path(tmp) / phase
             folder.mkdir()
             run = phase_process if phase == 'process' else phase_inprocess
-            result = run(gh, args, folder)
+            result = run(args, folder)
             report(result)
             results.append(result)
             sys.stdout.flush()

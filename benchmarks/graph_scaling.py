@@ -8,7 +8,7 @@ Scaling: for each N, a generated scenario (a temporary YAML, format of docs/scen
 of radius 0.5 m spread evenly on a circle of radius --radius (20 m) around (25, 25) in a 50 x 50 m workspace
 without obstacles, each with its goal diametrically opposite, so that they all meet in the middle and must
 avoid each other; planner overrides: max_speed --max-speed (2 m/s, so that the meeting falls inside the
-window). On an isolated DDS domain (tests/fastep_ros/graph_helpers.free_domain, ROS_AUTOMATIC_DISCOVERY_RANGE=
+window). On an isolated DDS domain (fastep_testing.graph.free_domain, ROS_AUTOMATIC_DISCOVERY_RANGE=
 LOCALHOST), the map, N plants and N planners are started as separate processes on wall time (no clock), with the
 parameters fastep-launch gives them (fastep_ros.launch.plant_params / planner_params); fastep-launch --no-clock
 itself is not used because it reports arrivals, not command rates or CPU, and adds its own odometry recorder.
@@ -53,20 +53,13 @@ from typing import Any
 
 import numpy as np
 
+from fastep_testing.graph import Graph, Helper, free_domain, isolated_env, stop_process
+
 ROOT = Path(__file__).resolve().parents[1]
 PERIOD = 0.05            # control period of the planners (s)
 LATE = 1.5 * PERIOD      # a period longer than this is late
 MIN_RATE = 19.0
 MAX_LATE_FRACTION = 0.05
-
-
-def graph_helpers() -> Any:
-    """tests/fastep_ros/graph_helpers.py (isolated domains, process start/stop), imported by path."""
-    folder = str(ROOT / 'tests' / 'fastep_ros')
-    if folder not in sys.path:
-        sys.path.insert(0, folder)
-    import graph_helpers as gh
-    return gh
 
 
 def loadavg() -> tuple[float, float, float]:
@@ -119,7 +112,7 @@ def period_stats(times: list[float], seconds: float) -> dict[str, float]:
             'p99_gap_ms': float(np.percentile(gaps, 99) * 1e3) if gaps.size else math.inf}
 
 
-def run_n(gh: Any, n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
+def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
     from geometry_msgs.msg import Twist, TwistStamped
     from rclpy.qos import QoSProfile, ReliabilityPolicy
 
@@ -130,7 +123,7 @@ def run_n(gh: Any, n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any
     path.write_text(scenario_yaml(n, args.radius, args.max_speed))
     scenario = load_scenario(str(path))
     stamped = not args.unstamped
-    graph = gh.Graph(tmp)
+    graph = Graph(tmp)
     t_start = time.monotonic()
     try:
         graph.start('map', 'map_server', '/', scenario=str(path))
@@ -141,7 +134,7 @@ def run_n(gh: Any, n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any
                 plant['use_stamped_cmd_vel'] = planner['use_stamped_cmd_vel'] = True
             graph.start(f'plant/{spec.name}', 'plant', f'/{spec.name}', **plant)
             graph.start(f'planner/{spec.name}', 'planner', f'/{spec.name}', **planner)
-        graph.helper = helper = gh.Helper(graph.domain)
+        graph.helper = helper = Helper(graph.domain)
         names = [spec.name for spec in scenario.robots]
         receipts: dict[str, list[float]] = {name: [] for name in names}
         stamps: dict[str, list[float]] = {name: [] for name in names}
@@ -257,7 +250,6 @@ def print_result(r: dict[str, Any]) -> None:
 
 
 def scaling(args: argparse.Namespace) -> None:
-    gh = graph_helpers()
     counts = [int(v) for v in args.counts.split(',')] if args.counts else \
         [n for n in (1, 2, 4, 6, 8, 10, 12, 14, 16) if n <= args.max_robots]
     print(f'graph_scaling: N in {counts}, {args.seconds:g} s each, circle radius {args.radius:g} m, max_speed '
@@ -269,7 +261,7 @@ def scaling(args: argparse.Namespace) -> None:
             folder = Path(tmp) / f'n{n}'
             folder.mkdir()
             try:
-                r = run_n(gh, n, args, folder)
+                r = run_n(n, args, folder)
             except (RuntimeError, AssertionError) as exc:
                 print(f'N={n}: could not run: {exc}', flush=True)
                 results.append({'n': n, 'error': str(exc), 'passed': False, 'load': os.getloadavg()})
@@ -306,7 +298,6 @@ def fan_in(args: argparse.Namespace) -> None:
     from msg_tools.interface import RELIABLE
     from msg_tools import convert
 
-    gh = graph_helpers()
     scenario = load_scenario('open_field')
     spec = scenario.robots[0]
     counts = [int(v) for v in args.fan_in.split(',')]
@@ -320,14 +311,14 @@ def fan_in(args: argparse.Namespace) -> None:
             for mode in ('staggered', 'burst') if k else ('staggered',):
                 folder = Path(tmp) / f'k{k}-{mode}'
                 folder.mkdir()
-                graph = gh.Graph(folder)
+                graph = Graph(folder)
                 stop = threading.Event()
                 thread = None
                 try:
                     graph.start('map', 'map_server', '/', scenario='open_field')
                     graph.start('planner', 'planner', '/r1',
                                 **launch.planner_params(scenario, 0, 'fastep', 0, False))
-                    graph.helper = helper = gh.Helper(graph.domain)
+                    graph.helper = helper = Helper(graph.domain)
                     node = helper.node
                     own = node.create_publisher(Odometry, '/r1/odom', RELIABLE)
                     pubs = [node.create_publisher(Odometry, f'/o{i}/odom', RELIABLE) for i in range(1, k + 1)]
@@ -391,11 +382,10 @@ RESULT = re.compile(r'^(\w+): (arrived|failed|timeout).*?time ([0-9.]+) s')
 
 
 def demo_rtf(args: argparse.Namespace) -> None:
-    gh = graph_helpers()
-    domain = gh.free_domain()
+    domain = free_domain()
     cmd = [sys.executable, '-m', 'fastep_ros.launch', args.demo, '--rtf', f'{args.rtf:g}', '--seed', str(args.seed)]
     with tempfile.TemporaryDirectory(prefix='fastep-demo-rtf-') as tmp:
-        env = gh.isolated_env(domain, Path(tmp) / 'roslog')
+        env = isolated_env(domain, Path(tmp) / 'roslog')
         print(f'$ python {" ".join(cmd[1:])}   (ROS_DOMAIN_ID={domain}; {load_text()})', flush=True)
         lines: list[tuple[float, str]] = []
         start = time.perf_counter()
@@ -407,7 +397,7 @@ def demo_rtf(args: argparse.Namespace) -> None:
                 print(f'  [{lines[-1][0]:6.2f} s] {lines[-1][1]}', flush=True)
             code = proc.wait()
         finally:
-            gh.stop_process(proc)
+            stop_process(proc)
         wall = time.perf_counter() - start
     sim = [float(m.group(3)) for _, text in lines if (m := RESULT.match(text))]
     underway = [t for t, text in lines if 'on their way' in text]

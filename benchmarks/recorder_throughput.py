@@ -3,7 +3,7 @@
     python -m benchmarks.recorder_throughput [--robots 8] [--rate 50] [--seconds 30]
 
 Starts, on an isolated DDS domain (215..232, outside the 1..100 the tests use; localhost only), fastep-record
-(`python -m fastep_ros.recorder`) and then benchmarks.fake_robots (odom + cost per robot, reliable, keep-last
+(`python -m fastep_ros.recorder`) and then fastep_testing.fake_robots (odom + cost per robot, reliable, keep-last
 10, what the plant and planner offer), which waits until the recorder is subscribed to all its topics and
 publishes for --seconds. The recorder is then stopped with SIGINT and its file read back. Prints published and
 recorded counts per topic kind, the total loss, the file size and the CPU time of both processes.
@@ -43,7 +43,7 @@ def main() -> None:
                                      f'output:={out}', '--log-level', 'warn'], env=env, cwd=ROOT)
         try:
             start = time.monotonic()
-            fake = subprocess.run([sys.executable, '-m', 'benchmarks.fake_robots', '--robots', str(args.robots),
+            fake = subprocess.run([sys.executable, '-m', 'fastep_testing.fake_robots', '--robots', str(args.robots),
                                    '--rate', str(args.rate), '--count', str(count), '--wait-subscribers', '1',
                                    '--wait-timeout', '120'], env=env, cwd=ROOT, capture_output=True, text=True,
                                   check=True)

@@ -11,9 +11,9 @@ import time
 import numpy as np
 
 from benchmarks.common import captured_step_problems, median_ms
-from benchmarks.fastep_loop import fastep_loop
 from fastep_core.optimize import fastep
 from fastep_core.planning import PlannerParams
+from fastep_testing.fastep_loop import fastep_loop
 
 
 def solve(optimizer, problem, params: PlannerParams, seed: int):

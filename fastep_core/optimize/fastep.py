@@ -41,7 +41,7 @@ the whole population). The defaults are the paper's Table 1 (alpha damping 0.8; 
 Random draws, in order, from the one Generator: the initial population (`rng.uniform(low, high, (n, d))`),
 then per iteration one `rng.random((d, m))` block for the m attraction pairs (column p: the p-th pair in
 row-major order of the ranked swarm) and one `rng.random((d, k))` block for the k stepping-ahead fireflies
-(ascending index). `benchmarks/fastep_loop.py` makes the same moves and draws with plain Python loops, and
+(ascending index). `fastep_testing/fastep_loop.py` makes the same moves and draws with plain Python loops, and
 returns the same result bit for bit.
 
 Objective values are only compared, never subtracted, so +inf and huge values (the planner scores an

@@ -21,7 +21,7 @@ from typing import Any, Iterator
 import pytest
 from nav_msgs.msg import Odometry
 
-from graph_helpers import Graph, Helper, distance, odom_xy, write
+from fastep_testing.graph import Graph, Helper, distance, odom_xy, write
 
 NS = '/r1'
 START, GOAL, RADIUS = (2.0, 10.0), (18.0, 10.5), 0.5

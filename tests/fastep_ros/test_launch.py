@@ -13,7 +13,7 @@ import pytest
 
 from fastep_core.scenario import load_scenario
 from fastep_core.simulator import simulate
-from graph_helpers import ONE_CIRCLE, free_domain, isolated_env, stop_process, write
+from fastep_testing.graph import ONE_CIRCLE, free_domain, isolated_env, stop_process, write
 
 
 def run(cmd: list[str], env: dict[str, str], timeout: float) -> subprocess.CompletedProcess[str]:

@@ -24,7 +24,7 @@ from fastep_ros import launch
 from fastep_ros.clock import tick_plan
 from fastep_ros.plant import PlantNode
 from fastep_ros.planner import PlannerNode
-from graph_helpers import free_domain
+from fastep_testing.graph import free_domain
 from msg_tools import convert
 
 

@@ -2,7 +2,7 @@
 recoverable one after SIGKILL.
 
 One isolated graph: the map node (latched /map and /obstacles, published before any recorder exists), three
-recorders, and benchmarks.fake_robots publishing odom and cost of two robots at 50 Hz once all recorders are
+recorders, and fastep_testing.fake_robots publishing odom and cost of two robots at 50 Hz once all recorders are
 subscribed. Then the recorders get SIGINT, SIGTERM and SIGKILL.
 """
 
@@ -21,7 +21,7 @@ import pytest
 from mcap.reader import SeekingReader
 from rosbags.highlevel import AnyReader
 
-from graph_helpers import ROOT, Graph
+from fastep_testing.graph import ROOT, Graph
 from msg_tools import recover
 from msg_tools.mcap_io import open_recording
 
@@ -41,7 +41,7 @@ def recorded(tmp_path_factory: pytest.TempPathFactory) -> Iterator[dict[str, Any
         g.start('rec_term', 'recorder', output=str(files['term']))
         g.start('rec_kill', 'recorder', output=str(files['kill']), chunk_size=4096, flush_period=0.2)
         fake = subprocess.run(
-            [sys.executable, '-m', 'benchmarks.fake_robots', '--robots', '2', '--rate', '50', '--count', str(COUNT),
+            [sys.executable, '-m', 'fastep_testing.fake_robots', '--robots', '2', '--rate', '50', '--count', str(COUNT),
              '--wait-subscribers', '3', '--wait-timeout', '90', '--prefix', PREFIX],
             env=g.env, cwd=ROOT, capture_output=True, text=True, timeout=180)
         assert fake.returncode == 0, fake.stderr
@@ -105,8 +105,8 @@ def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
     live file as it reads a fastep-sim one (same topics), and replays are driven by the same QoS metadata."""
     from geometry_msgs.msg import PoseStamped
 
+    from fastep_testing.graph import FAST, ONE_CIRCLE, Helper, write
     from msg_tools.interface import RELIABLE
-    from graph_helpers import FAST, ONE_CIRCLE, Helper, write
     from msg_tools import convert, report
 
     g = Graph(tmp_path)
@@ -148,7 +148,7 @@ def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
 
 
 def test_bad_parameters_are_one_line_and_exit_2(tmp_path: Path) -> None:
-    from graph_helpers import free_domain, isolated_env
+    from fastep_testing.graph import free_domain, isolated_env
     env = isolated_env(free_domain(), tmp_path / 'log')
     for params in (['-p', f'output:={tmp_path}'], ['-p', f'output:={tmp_path / "x.mcap"}', '-p', 'compression:=rar']):
         proc = subprocess.run([sys.executable, '-m', 'fastep_ros.recorder', '--ros-args', *params], env=env,

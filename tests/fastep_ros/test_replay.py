@@ -25,7 +25,7 @@ from std_msgs.msg import Float64
 
 from fastep_core.world import World
 from fastep_ros import replay
-from graph_helpers import ROOT, Helper, free_domain, isolated_env, stop_process
+from fastep_testing.graph import ROOT, Helper, free_domain, isolated_env, stop_process
 from msg_tools import convert
 from msg_tools.mcap_io import McapWriter, qos_dict
 

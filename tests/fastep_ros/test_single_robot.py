@@ -1,23 +1,25 @@
 """One robot in a live graph (clock, map, plant, planner as separate processes, simulated time at rtf 10).
 
-The tests share one graph and run in file order; each one reads the robot's position when it starts, and the
-stale-odometry test, which kills the plant, comes last.
+Every test starts a graph of its own (about 5 s on an idle machine), with the robot standing at START, so no
+test depends on where another left the robot or on which processes it stopped: they pass in any order and alone.
 """
 
 from __future__ import annotations
 
 import math
 import signal
+from pathlib import Path
 from typing import Any, Iterator
 
 import pytest
 from geometry_msgs.msg import Twist
 from nav_msgs.msg import Odometry
 
-from graph_helpers import FAST, ONE_CIRCLE, Graph, Helper, distance, odom_xy, stamp, write
+from fastep_testing.graph import FAST, ONE_CIRCLE, Graph, Helper, distance, odom_xy, stamp, write
 from msg_tools import convert
 
 NS = '/r1'
+START = (2.0, 10.0)
 CIRCLE, CIRCLE_R, RADIUS = (10.0, 10.0), 1.5, 0.5
 ARRIVE = 120.0  # wall seconds at most for an arrival (normally 2-3 s)
 
@@ -32,13 +34,14 @@ def goal_is(goal: tuple[float, float]) -> Any:
     return check
 
 
-@pytest.fixture(scope='module')
-def one(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Graph]:
-    g = Graph(tmp_path_factory.mktemp('single'))
+@pytest.fixture
+def one(tmp_path: Path) -> Iterator[Graph]:
+    """A fresh graph: the robot idle at START, the helper recording its status, odometry and commands."""
+    g = Graph(tmp_path)
     try:
         scenario = write(g.tmp / 'one.yaml', ONE_CIRCLE)
         g.start('map', 'map_server', scenario=str(scenario))
-        g.start('plant', 'plant', NS, model='point_mass', start=[2.0, 10.0], use_sim_time=True)
+        g.start('plant', 'plant', NS, model='point_mass', start=list(START), use_sim_time=True)
         g.start('planner', 'planner', NS, model='point_mass', robot_radius=RADIUS, use_sim_time=True, **FAST)
         # The clock holds time 0 until the plant, the planner and the helper (last) follow it, then runs in lock
         # step with them (as fastep-launch does).
@@ -52,6 +55,7 @@ def one(tmp_path_factory: pytest.TempPathFactory) -> Iterator[Graph]:
         assert h.status(NS)['level'] == 'ok'
         h.follow_clock()
         h.spin_until(lambda: len(h.records[f'{NS}/odom']) > 0, 30.0, 'odometry')
+        assert distance(position(h), START) < 1e-9
         yield g
     finally:
         g.close()
@@ -82,12 +86,11 @@ def test_reaches_goal_past_an_obstacle(one: Graph) -> None:
 def test_goal_changed_mid_run_is_followed(one: Graph) -> None:
     h = one.helper
     assert h is not None
-    start = position(h)
     first_goal, second_goal = (2.0, 3.0), (3.0, 17.0)
     odom = h.records[f'{NS}/odom']
     first = len(odom)
     h.send_goal(NS, first_goal)
-    h.spin_until(lambda: distance(position(h), start) > 1.5, 60.0, 'the robot to move toward the first goal')
+    h.spin_until(lambda: distance(position(h), START) > 1.5, 60.0, 'the robot to move toward the first goal')
     h.send_goal(NS, second_goal)
     h.wait_status(NS, lambda s: s['message'] == 'arrived' and goal_is(second_goal)(s), ARRIVE,
                   'arrival at the second goal')
@@ -103,7 +106,6 @@ def test_bad_goal_is_refused_and_the_robot_does_not_move(one: Graph, goal: tuple
     h = one.helper
     assert h is not None
     odom, cmds = h.records[f'{NS}/odom'], h.records[f'{NS}/cmd_vel']
-    h.spin_for(0.3)  # let any motion from the previous test settle into odometry
     h.send_goal(NS, goal)
     status = h.wait_status(NS, lambda s: s['level'] == 'error' and words in s['reason'], 30.0,
                            f'the goal to be refused ({words})')
@@ -125,10 +127,9 @@ def test_a_planner_stalled_for_two_wall_seconds_holds_simulated_time(one: Graph)
     letting the robot drive on an old command (or stand still) while simulated time runs on."""
     h = one.helper
     assert h is not None
-    start = position(h)
-    goal = (18.0, 17.0) if start[0] < 10.0 else (2.0, 17.0)
+    goal = (18.0, 17.0)
     h.send_goal(NS, goal)
-    h.spin_until(lambda: distance(position(h), start) > 1.0, 60.0, 'the robot to be on its way')
+    h.spin_until(lambda: distance(position(h), START) > 1.0, 60.0, 'the robot to be on its way')
     planner = one.procs['planner']
     planner.send_signal(signal.SIGSTOP)
     try:
@@ -145,8 +146,7 @@ def test_stale_odometry_stops_the_robot(one: Graph) -> None:
     h = one.helper
     assert h is not None
     cmds = h.records[f'{NS}/cmd_vel']
-    goal = (18.0, 3.0) if position(h)[0] < 10.0 else (2.0, 3.0)
-    h.send_goal(NS, goal)
+    h.send_goal(NS, (18.0, 3.0))
     h.spin_until(lambda: bool(cmds) and math.hypot(cmds[-1].linear.x, cmds[-1].linear.y) > 0.1, 30.0,
                  'the robot to be commanded to move')
     one.stop('plant', signal.SIGKILL)

@@ -2,11 +2,9 @@
 
 from __future__ import annotations
 
-import math
-
 from nav_msgs.msg import Odometry
 
-from graph_helpers import CROSSING, FAST, Graph, Helper, distance, odom_xy, stamp, write
+from fastep_testing.graph import CROSSING, FAST, Graph, Helper, distance, odom_xy, stamp, write
 
 ROBOTS = {'r1': ((3.0, 3.0), (17.0, 17.0)), 'r2': ((17.0, 3.0), (3.0, 17.0))}
 RADIUS = 0.5
@@ -38,10 +36,11 @@ def test_two_robots_cross_without_collision(tmp_path) -> None:  # type: ignore[n
         for name in ROBOTS:
             h.wait_status(f'/{name}', lambda s: s['message'] == 'kinematic', 20.0, f'{name} to take its goal')
         h.follow_clock()
+        final = {}
         for name in ROBOTS:
-            status = h.wait_status(f'/{name}', lambda s: s['message'] in ('arrived', 'failed'), 120.0,
-                                   f'{name} to finish')
-            assert status['message'] == 'arrived', status
+            final[name] = h.wait_status(f'/{name}', lambda s: s['message'] in ('arrived', 'failed'), 120.0,
+                                        f'{name} to finish')
+            assert final[name]['message'] == 'arrived', final[name]
         h.spin_for(0.2)
 
         tracks = {name: {round(stamp(m), 6): odom_xy(m) for m in h.records[f'/{name}/odom']} for name in ROBOTS}
@@ -55,6 +54,8 @@ def test_two_robots_cross_without_collision(tmp_path) -> None:  # type: ignore[n
         assert closest >= 2 * RADIUS, f'robots came {closest:.3f} m close (sum of radii {2 * RADIUS} m)'
         # they really did meet: the straight runs cross at (10, 10) at about the same time
         assert closest < 4.0
-        assert not math.isnan(closest)
+        # and it was planned: on their straight runs, at the same speed, they would reach (10, 10) together, so
+        # at least one planner must have planned a step around the other
+        assert max(int(final[name]['activations']) for name in ROBOTS) >= 1, final
     finally:
         g.close()

@@ -7,8 +7,7 @@ import pytest
 
 from fastep_core.errors import ParameterError
 from fastep_core.optimize import aco_r
-
-from optimize_objectives import BOX, RASTRIGIN_BOX, Recorder, rastrigin, shifted_sphere
+from fastep_testing.objectives import BOX, RASTRIGIN_BOX, Recorder, rastrigin, shifted_sphere
 
 CENTRE = np.array([1.25, 0.6])
 sphere = shifted_sphere(CENTRE)

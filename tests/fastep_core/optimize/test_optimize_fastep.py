@@ -5,11 +5,10 @@ import warnings
 import numpy as np
 import pytest
 
-from benchmarks.fastep_loop import fastep_loop
 from fastep_core.errors import ParameterError
 from fastep_core.optimize import OptimizeResult, fastep, firefly
-
-from optimize_objectives import BOX, RASTRIGIN_BOX, Recorder, rastrigin, shifted_sphere
+from fastep_testing.fastep_loop import fastep_loop
+from fastep_testing.objectives import BOX, RASTRIGIN_BOX, Recorder, rastrigin, shifted_sphere
 
 CENTRE = np.array([0.7, -1.3])
 sphere = shifted_sphere(CENTRE)

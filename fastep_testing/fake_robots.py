@@ -1,6 +1,6 @@
 """A test-style publisher: N fake robots publishing odom (nav_msgs/Odometry) and cost (std_msgs/Float64).
 
-    python -m benchmarks.fake_robots [--robots 8] [--rate 50] [--count 500] [--wait-subscribers 1] [--prefix r]
+    python -m fastep_testing.fake_robots [--robots 8] [--rate 50] [--count 500] [--wait-subscribers 1] [--prefix r]
 
 Why: to measure the recorder (benchmarks.recorder_throughput) and to test it (tests/fastep_ros/test_recorder.py)
 with a known number of messages. Robot k publishes /<prefix><k>/odom and /<prefix><k>/cost (prefix `r`:

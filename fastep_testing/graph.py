@@ -1,4 +1,4 @@
-"""Helpers for tests that run real fastep_ros node processes (imported by the test modules of this folder).
+"""Live ROS graphs for tests and benchmarks that run real fastep_ros node processes.
 
 Every graph lives on its own DDS domain (a free ROS_DOMAIN_ID in 1..100, see free_domain) with
 ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST, and every process a test starts is stopped (SIGINT, wait, SIGKILL)
@@ -22,7 +22,7 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]  # the repository root
 _domains = itertools.count()
 
 # Small, fast scenarios: gains 0.5 and 2 m/s, so a run takes ~15-20 simulated seconds.

@@ -1,9 +1,10 @@
-"""FAStep with plain Python loops: the reference the vectorised `fastep_core.optimize.fastep` is timed against.
+"""FAStep with plain Python loops: the reference `fastep_core.optimize.fastep` is checked and timed against.
 
 This is how the algorithm reads in the authors' MATLAB template, translated line by line: loops over fireflies
 and over pairs, one objective call per point (`fun` is still the vectorised objective, called on a (1, d)
-array). It exists only so that a benchmark can report the speed-up of the vectorised version; nothing else
-should call it.
+array). It exists so that a test can check that the vectorised version makes the same moves
+(tests/fastep_core/optimize/test_optimize_fastep.py) and a benchmark can report its speed-up
+(benchmarks/step_latency.py); the product never calls it.
 
 It makes exactly the same moves as `fastep` (ranking, eq. 3 attraction, eq. 4 stepping ahead, the preference
 rule, elitism, damping and stopping; see `fastep_core/optimize/fastep.py` for the why) and takes the same
