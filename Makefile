@@ -35,7 +35,7 @@ test: $(STAMP) lint
 lint: $(STAMP)
 	$(BIN)/ruff check .
 	$(BIN)/python -m mypy
-	@! grep -rnE --include='*.py' '# type: ignore(\[[^]]*\])? *$$' fastep_core msg_tools fastep_ros tests benchmarks \
+	@! grep -rnE --include='*.py' '# type: ignore(\[[^]]*\])? *$$' fastep_core msg_tools fastep_ros fastep_testing tests benchmarks \
 		|| { echo 'each type: ignore above needs a reason: # type: ignore[code]  # why'; false; }
 
 # Lint and type errors per file (mypy on tests and benchmarks too, which make lint does not type-check yet).
@@ -46,7 +46,7 @@ lint-counts: $(STAMP)
 		$(BIN)/python -m mypy --allow-untyped-defs --allow-incomplete-defs tests benchmarks \
 		| grep -E '^(tests|benchmarks)/.*: error:' | cut -d: -f1 | sort | uniq -c | sort -rn
 	@echo '== type: ignore without a reason'; grep -rnE --include='*.py' '# type: ignore(\[[^]]*\])? *$$' \
-		fastep_core msg_tools fastep_ros tests benchmarks | cut -d: -f1 | sort | uniq -c | sort -rn
+		fastep_core msg_tools fastep_ros fastep_testing tests benchmarks | cut -d: -f1 | sort | uniq -c | sort -rn
 
 # The property tests with fresh random examples, ROUNDS times (make test always tries the same ones).
 ROUNDS ?= 20

@@ -94,8 +94,8 @@ class Driver:
         from nav_msgs.msg import Odometry
         from rclpy.qos import QoSProfile, ReliabilityPolicy
 
-        from msg_tools.interface import RELIABLE
         from msg_tools import convert
+        from msg_tools.interface import RELIABLE
 
         self.convert = convert
         self.helper = helper
@@ -234,7 +234,7 @@ def planner_params(scenario: Any, index: int, algorithm: str, seed: int, sim_tim
 def phase_process(args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
     """The unmodified planner as its own process: (b) end-to-end age, cmd period, planner CPU."""
     from fastep_core.scenario import load_scenario
-    
+
     scenario = load_scenario(args.scenario)
     graph = Graph(tmp)
     try:
@@ -332,7 +332,7 @@ def phase_inprocess(args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
     from rclpy.parameter import Parameter
 
     from fastep_core.scenario import load_scenario
-    
+
     scenario = load_scenario(args.scenario)
     graph = Graph(tmp)
     profile = cProfile.Profile() if args.profile else None

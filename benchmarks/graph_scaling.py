@@ -90,8 +90,8 @@ def machine_cpu() -> tuple[float, float]:
 
 
 def scenario_yaml(n: int, radius: float, max_speed: float) -> str:
-    lines = ['name: circle_swap_%d' % n,
-             'description: %d point-mass robots on a circle of radius %g m swapping to the opposite side' % (n, radius),
+    lines = [f'name: circle_swap_{n}',
+             f'description: {n} point-mass robots on a circle of radius {radius:g} m swapping to the opposite side',
              'workspace: [0, 0, 50, 50]', 'robots:']
     for k in range(n):
         a = 2.0 * math.pi * k / n
@@ -295,8 +295,8 @@ def fan_in(args: argparse.Namespace) -> None:
 
     from fastep_core.scenario import load_scenario
     from fastep_ros import launch
-    from msg_tools.interface import RELIABLE
     from msg_tools import convert
+    from msg_tools.interface import RELIABLE
 
     scenario = load_scenario('open_field')
     spec = scenario.robots[0]
@@ -327,8 +327,11 @@ def fan_in(args: argparse.Namespace) -> None:
                             for i in range(k)]
                     own_msg = convert.state_to_odometry(spec.start, child_frame_id='r1/base_link')
 
-                    def publisher(mode: str = mode) -> None:
-                        streams = [(own, own_msg)] + list(zip(pubs, msgs))
+                    streams = [(own, own_msg)] + list(zip(pubs, msgs))
+
+                    # Defaults bind this iteration's objects (the thread is joined before the next one).
+                    def publisher(mode: str = mode, node: Any = node, stop: threading.Event = stop,
+                                  streams: list[Any] = streams) -> None:
                         slots = len(streams) if mode == 'staggered' else 1
                         step = 0.02 / slots
                         t = time.monotonic()
@@ -348,9 +351,11 @@ def fan_in(args: argparse.Namespace) -> None:
                     thread.start()
                     helper.record_status('/r1')
                     others = {f'o{i}' for i in range(1, k + 1)}
-                    helper.spin_until(lambda: helper.status('/r1').get('message') == 'idle' and others <= set(
-                        str(helper.status('/r1').get('others', '')).split()), 60.0,
-                        f'the planner to follow {k} robots')
+                    def following(helper: Helper = helper, others: set[str] = others) -> bool:
+                        status = helper.status('/r1')
+                        return status.get('message') == 'idle' and others <= set(str(status.get('others', '')).split())
+
+                    helper.spin_until(following, 60.0, f'the planner to follow {k} robots')
                     helper.send_goal('/r1', spec.goal)
                     helper.spin_for(1.0)
                     pid = graph.procs['planner'].pid

@@ -26,10 +26,10 @@ def main() -> None:
     params = PlannerParams()
     problems = captured_step_problems('table2_s2')
     fast, slow, same = [], [], 0
-    for k, problem in enumerate(problems):
+    for problem in problems:
         for seed in range(20):
             start = time.perf_counter()
-            result = solve(fastep, problem, params, seed)
+            solve(fastep, problem, params, seed)
             fast.append(time.perf_counter() - start)
         start = time.perf_counter()
         reference = solve(fastep_loop, problem, params, 0)

@@ -75,7 +75,8 @@ def solvable(scenario: Scenario) -> bool:
     """Does every robot have an exact path keeping radius + margin, with the others parked at their goals?"""
     margin = scenario.planner.clearance_margin
     for i, spec in enumerate(scenario.robots):
-        parked = [Circle((float(other.goal[0]), float(other.goal[1])), other.radius) for j, other in enumerate(scenario.robots) if j != i]
+        parked = [Circle((float(other.goal[0]), float(other.goal[1])), other.radius)
+                  for j, other in enumerate(scenario.robots) if j != i]
         world = World(scenario.world.workspace, scenario.world.obstacle_list + tuple(parked))
         if shortest_path(world, spec.start[:2], spec.goal, spec.radius + margin) is None:
             return False

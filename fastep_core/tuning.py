@@ -82,7 +82,8 @@ def run_cost(records: Sequence[experiments.Record]) -> float:
     return float(np.mean([r.path_length + (0.0 if r.ok else PENALTY) for r in records]))
 
 
-def cost(x: Sequence[float] | NDArray[np.float64], train: Sequence[str], seeds: Sequence[int], algorithm: str = 'fastep') -> float:
+def cost(x: Sequence[float] | NDArray[np.float64], train: Sequence[str], seeds: Sequence[int],
+         algorithm: str = 'fastep') -> float:
     """J(x): every training scenario, every seed, in this process."""
     overrides = tuple(sorted(decode(x).items()))
     records = [r for s in train for seed in seeds

@@ -34,8 +34,8 @@ import numpy as np
 
 from fastep_core.cli import Parser, fail, guard, seed
 from fastep_core.metrics import trajectory_margins
-from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.algorithms import ALGORITHMS
+from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import LaunchError
 
@@ -195,7 +195,8 @@ class Monitor:
         import rclpy.executors
         from diagnostic_msgs.msg import DiagnosticStatus
         from geometry_msgs.msg import PoseStamped
-        from nav_msgs.msg import Odometry, Path as PathMsg
+        from nav_msgs.msg import Odometry
+        from nav_msgs.msg import Path as PathMsg
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rclpy.signals import SignalHandlerOptions
 

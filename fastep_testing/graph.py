@@ -165,7 +165,7 @@ class Graph:
                 stop_process(proc)
 
 
-def stop_process(proc: subprocess.Popen[bytes], sig: int = signal.SIGINT, grace: float = 5.0) -> int:
+def stop_process(proc: subprocess.Popen[Any], sig: int = signal.SIGINT, grace: float = 5.0) -> int:
     if proc.poll() is None:
         proc.send_signal(sig)
         try:
@@ -218,6 +218,7 @@ class Helper:
 
     def record_status(self, namespace: str) -> list[dict[str, Any]]:
         from diagnostic_msgs.msg import DiagnosticStatus
+
         from msg_tools.interface import STATUS_QOS
         return self.record(f'{namespace}/status', DiagnosticStatus, STATUS_QOS)
 
@@ -235,8 +236,9 @@ class Helper:
 
     def send_goal(self, namespace: str, goal: tuple[float, float]) -> None:
         from geometry_msgs.msg import PoseStamped
-        from msg_tools.interface import RELIABLE
+
         from msg_tools.convert import point_to_pose_stamped
+        from msg_tools.interface import RELIABLE
         topic = f'{namespace}/goal_pose'
         if topic not in self.goal_pubs:
             self.goal_pubs[topic] = self.node.create_publisher(PoseStamped, topic, RELIABLE)

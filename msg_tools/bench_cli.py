@@ -22,8 +22,8 @@ from typing import Sequence
 
 from fastep_core import experiments
 from fastep_core.cli import Parser, fail, guard, positive_int, seed
-from fastep_core.scenario import builtin_names, load_scenario
 from fastep_core.planning.algorithms import ALGORITHMS
+from fastep_core.scenario import builtin_names, load_scenario
 
 __all__ = ['main']
 

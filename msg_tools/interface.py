@@ -169,7 +169,7 @@ def metadata_key(field: str, robot: str) -> str:
     return f'{field}/{robot}'
 
 
-def scenario_metadata(scenario: 'Scenario') -> dict[str, str]:
+def scenario_metadata(scenario: Scenario) -> dict[str, str]:
     """The METADATA_NAME entries describing a scenario and its robots (fastep-sim --mcap, fastep-record)."""
     out = {'scenario': scenario.name, 'robots': ','.join(r.name for r in scenario.robots),
            'workspace': ','.join(f'{v:g}' for v in scenario.world.workspace)}

@@ -8,7 +8,8 @@
 
 Plotting lives here, never in the algorithms (fastep_core imports no matplotlib). Each figure is built by a
 function that returns the matplotlib Figure (tests read its lines and patches); `save` writes it as PNG with
-the Agg backend (no display needed) and closes it. Titles name planners by fastep_core.planning.algorithms.algorithm_name.
+the Agg backend (no display needed) and closes it. Titles name planners by
+fastep_core.planning.algorithms.algorithm_name.
 """
 
 from __future__ import annotations
@@ -140,7 +141,7 @@ def paths_figure(obstacles: Sequence[Obstacle], workspace: Sequence[float] | Non
     return fig
 
 
-def run_paths_figure(scenario: 'Scenario', run: 'Run') -> Figure:
+def run_paths_figure(scenario: Scenario, run: Run) -> Figure:
     """The paths figure of a simulated (fastep-sim) or live (fastep-launch) run of a scenario."""
     specs = {spec.name: spec for spec in scenario.robots}
     robots = []
@@ -154,7 +155,7 @@ def run_paths_figure(scenario: 'Scenario', run: 'Run') -> Figure:
                         title(scenario.name, run.algorithm, run.seed))
 
 
-def plot_paths(scenario: 'Scenario', run: 'Run', out: str | Path) -> Path:
+def plot_paths(scenario: Scenario, run: Run, out: str | Path) -> Path:
     """Write run_paths_figure as PNG (fastep-sim --plot, fastep-launch --plot)."""
     return save(run_paths_figure(scenario, run), out)
 

@@ -30,7 +30,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
 import struct
 import sys
 from dataclasses import dataclass, field
@@ -43,8 +42,22 @@ from fastep_core.cli import Parser, fail, guard
 from fastep_core.errors import FastepError
 from fastep_core.geometry import Obstacle, Obstacles
 from fastep_core.metrics import trajectory_margins
-from msg_tools.interface import (CMD_VEL, COST, GOAL_POSE, MAP, METADATA_NAME, OBSTACLES, ODOM, PLAN, STATUS,
-                                 TRAILER_POSE, TYPES, WAYPOINT, metadata_key, split_robot_topic)
+from msg_tools.interface import (
+    CMD_VEL,
+    COST,
+    GOAL_POSE,
+    MAP,
+    METADATA_NAME,
+    OBSTACLES,
+    ODOM,
+    PLAN,
+    STATUS,
+    TRAILER_POSE,
+    TYPES,
+    WAYPOINT,
+    metadata_key,
+    split_robot_topic,
+)
 from msg_tools.mcap_io import Recording, open_recording
 
 __all__ = ['RecordedRun', 'RobotRecord', 'figures', 'float64_field', 'load_run', 'main', 'metrics',
@@ -236,7 +249,8 @@ def load_run(recording: Recording) -> RecordedRun:
     space = workspace[1] if workspace is not None else None
     if space is None and meta.get('workspace'):
         try:
-            space = tuple(float(v) for v in meta['workspace'].split(','))  # type: ignore[assignment]
+            corners = [float(v) for v in meta['workspace'].split(',')]
+            space = (corners[0], corners[1], corners[2], corners[3]) if len(corners) == 4 else None
         except ValueError:
             space = None
     for robot in robots.values():

@@ -19,8 +19,8 @@ from pathlib import Path
 from typing import Sequence
 
 from fastep_core.cli import Parser, fail, guard, positive_int, seed
-from fastep_core.scenario import builtin_names, load_scenario
 from fastep_core.planning.algorithms import ALGORITHMS
+from fastep_core.scenario import builtin_names, load_scenario
 from fastep_core.simulator import Run, simulate
 
 __all__ = ['main']

@@ -36,9 +36,24 @@ from fastep_core.planning.navigator import Mode
 from fastep_core.scenario import RobotSpec, Scenario
 from fastep_core.simulator import Run, Tick, simulate
 from msg_tools import convert
-from msg_tools.interface import (CLOCK, CMD_VEL, COST, GOAL_POSE, MAP, MAP_FRAME, METADATA_NAME, OBSTACLES, ODOM,
-                                 PLAN, STATUS, TRAILER_POSE, WAYPOINT, offered_qos_profiles, robot_topic,
-                                 scenario_metadata)
+from msg_tools.interface import (
+    CLOCK,
+    CMD_VEL,
+    COST,
+    GOAL_POSE,
+    MAP,
+    MAP_FRAME,
+    METADATA_NAME,
+    OBSTACLES,
+    ODOM,
+    PLAN,
+    STATUS,
+    TRAILER_POSE,
+    WAYPOINT,
+    offered_qos_profiles,
+    robot_topic,
+    scenario_metadata,
+)
 from msg_tools.mcap_io import DEFAULT_CHUNK_SIZE, McapWriter
 
 __all__ = ['SimRecorder', 'record_run']

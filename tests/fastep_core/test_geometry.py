@@ -50,7 +50,8 @@ def test_path_clearance_and_blocking():
 def test_vectorised_clearance_matches_pointwise():
     rng = np.random.default_rng(3)
     obs = Obstacles([Circle(tuple(c), r) for c, r in zip(rng.uniform(0, 50, (6, 2)), rng.uniform(1, 4, 6))]
-                    + [Segment(tuple(s), tuple(e)) for s, e in zip(rng.uniform(0, 50, (3, 2)), rng.uniform(0, 50, (3, 2)))])
+                    + [Segment(tuple(s), tuple(e))
+                       for s, e in zip(rng.uniform(0, 50, (3, 2)), rng.uniform(0, 50, (3, 2)))])
     pts = rng.uniform(0, 50, (40, 2))
     assert obs.clearance(pts) == pytest.approx([float(obs.clearance(p)) for p in pts])
     b = rng.uniform(0, 50, (40, 2))
@@ -60,7 +61,8 @@ def test_vectorised_clearance_matches_pointwise():
 def test_fan_clearance_equals_path_clearance():
     rng = np.random.default_rng(11)
     obs = Obstacles([Circle(tuple(c), r) for c, r in zip(rng.uniform(0, 20, (5, 2)), rng.uniform(0.5, 3, 5))]
-                    + [Segment(tuple(s), tuple(e)) for s, e in zip(rng.uniform(0, 20, (4, 2)), rng.uniform(0, 20, (4, 2)))])
+                    + [Segment(tuple(s), tuple(e))
+                       for s, e in zip(rng.uniform(0, 20, (4, 2)), rng.uniform(0, 20, (4, 2)))])
     origin = np.array([10.0, 10.0])
     ends = np.vstack([rng.uniform(0, 20, (500, 2)), origin[None, :]])
     assert obs.fan_clearance(origin, ends) == pytest.approx(obs.path_clearance(origin, ends), abs=1e-9)

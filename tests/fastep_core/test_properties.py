@@ -7,8 +7,7 @@ from hypothesis import HealthCheck, assume, example, given, settings
 from hypothesis import strategies as st
 
 from fastep_core.geometry import Circle, Obstacles, Segment, point_segment_distance, segment_segment_distance
-from fastep_core.planning import PlannerParams, StepProblem, plan_step
-from fastep_core.planning import OtherRobot, make_navigator
+from fastep_core.planning import OtherRobot, PlannerParams, StepProblem, make_navigator, plan_step
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World
 

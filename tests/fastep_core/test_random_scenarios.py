@@ -8,8 +8,7 @@ import yaml
 
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle
-from fastep_core.random_scenarios import (main, random_scenario, random_scenario_data, solvable,
-                                          u_trap_scenario_data)
+from fastep_core.random_scenarios import main, random_scenario, random_scenario_data, solvable, u_trap_scenario_data
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
 from fastep_core.world import World

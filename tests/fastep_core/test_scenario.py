@@ -15,7 +15,12 @@ from fastep_core.errors import ScenarioError
 from fastep_core.geometry import Circle, Obstacles, Segment
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import (
-    RobotSpec, Scenario, builtin_names, builtin_path, load_scenario, parse_scenario,
+    RobotSpec,
+    Scenario,
+    builtin_names,
+    builtin_path,
+    load_scenario,
+    parse_scenario,
 )
 
 BUILTINS = {  # name -> robot models, in order

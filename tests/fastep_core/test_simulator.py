@@ -47,7 +47,10 @@ def test_same_seed_same_run_and_other_seed_differs(algorithm):
     scenario = load_scenario('table2_s3')
     a, b = simulate(scenario, algorithm, 7), simulate(scenario, algorithm, 7)
     timing = {'compute_time', 'plan_time'}   # wall-clock measurements, not part of the run
-    strip = lambda run: [{k: v for k, v in r.to_json().items() if k not in timing} for r in run.robots]
+
+    def strip(run):
+        return [{k: v for k, v in r.to_json().items() if k not in timing} for r in run.robots]
+
     assert strip(a) == strip(b)
     assert strip(simulate(scenario, algorithm, 8)) != strip(a)
 
@@ -90,8 +93,11 @@ def test_crossing_robots_keep_their_separation_every_tick():
     r1, r2 = scenario.robots
     for seed in range(3):
         positions: dict[float, dict[str, np.ndarray]] = {}
-        simulate(scenario, 'fastep', seed,
-                 observer=lambda tick: positions.setdefault(round(tick.t, 6), {}).__setitem__(tick.name, tick.state[:2]))
+
+        def note(tick, positions=positions):
+            positions.setdefault(round(tick.t, 6), {})[tick.name] = tick.state[:2]
+
+        simulate(scenario, 'fastep', seed, observer=note)
         gaps = [np.hypot(*(p['r1'] - p['r2'])) for p in positions.values() if len(p) == 2]
         assert len(gaps) > 100 and min(gaps) >= r1.radius + r2.radius
 

@@ -22,7 +22,7 @@ def run(cmd: list[str], env: dict[str, str], timeout: float) -> subprocess.Compl
     try:
         out, err = proc.communicate(timeout=timeout)
     finally:
-        stop_process(proc)  # type: ignore[arg-type]
+        stop_process(proc)
     return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
 
 
@@ -84,7 +84,7 @@ def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path) -> None:
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=20)
     finally:
-        stop_process(proc)  # type: ignore[arg-type]
+        stop_process(proc)
     assert proc.returncode == 1
     assert 'interrupted' in err and 'Traceback' not in err
     assert not [pid for pid in kids if alive(pid)], 'a node outlived the launcher'
@@ -137,7 +137,8 @@ def test_a_trapped_tractor_trailer_manoeuvres_out_on_the_live_graph(tmp_path: Pa
     from fastep_core.random_scenarios import u_trap
     robot = {'name': 'r1', 'model': 'tractor_trailer', 'start': [5, 15, 0.0, 0.0], 'goal': [35, 15], 'radius': 0.6,
              'length': 1.0, 'trailer_length': 1.0, 'width': 0.5}
-    data = {'name': 'u_tractor', 'workspace': [0, 0, 40, 30], 'obstacles': u_trap((20, 15), 3.5, 3.0, 3.141592653589793),
+    data = {'name': 'u_tractor', 'workspace': [0, 0, 40, 30],
+            'obstacles': u_trap((20, 15), 3.5, 3.0, 3.141592653589793),
             'robots': [robot]}
     scenario = tmp_path / 'u.yaml'
     scenario.write_text(yaml.safe_dump(data))

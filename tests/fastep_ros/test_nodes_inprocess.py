@@ -22,8 +22,8 @@ from fastep_core.scenario import load_scenario
 from fastep_core.world import World
 from fastep_ros import launch
 from fastep_ros.clock import tick_plan
-from fastep_ros.plant import PlantNode
 from fastep_ros.planner import PlannerNode
+from fastep_ros.plant import PlantNode
 from fastep_testing.graph import free_domain
 from msg_tools import convert
 
@@ -186,7 +186,7 @@ def test_plant_integrates_fixed_steps_and_zeroes_bad_or_old_commands(context: An
 def test_plant_tractor_trailer_publishes_consistent_odometry(context: Any) -> None:
     node = make(PlantNode, context, model='tractor_trailer', start=[0.0, 0.0, 0.5, 0.5], length=1.2)
     seen: list[Odometry] = []
-    node.odom_pub.publish = seen.append  # type: ignore[method-assign]
+    node.odom_pub.publish = seen.append  # type: ignore[method-assign]  # keep what the node publishes
     try:
         node.advance(1.0)
         node.command, node.command_time = np.array([1.0, 0.2]), 1.0
@@ -251,7 +251,7 @@ def test_stamped_cmd_vel_between_planner_and_plant(context: Any) -> None:
     planner = make(PlannerNode, context, use_stamped_cmd_vel=True, model='tractor_trailer', robot_radius=0.6)
     plant = make(PlantNode, context, use_stamped_cmd_vel=True, model='tractor_trailer', start=[0, 0, 0, 0])
     sent: list[Any] = []
-    planner.cmd_pub.publish = sent.append  # type: ignore[method-assign]
+    planner.cmd_pub.publish = sent.append  # type: ignore[method-assign]  # keep what the node publishes
     try:
         planner.publish_command(np.array([0.5, -0.25]))
         assert isinstance(sent[0], TwistStamped)

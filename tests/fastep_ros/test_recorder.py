@@ -106,8 +106,8 @@ def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
     from geometry_msgs.msg import PoseStamped
 
     from fastep_testing.graph import FAST, ONE_CIRCLE, Helper, write
-    from msg_tools.interface import RELIABLE
     from msg_tools import convert, report
+    from msg_tools.interface import RELIABLE
 
     g = Graph(tmp_path)
     try:

@@ -86,7 +86,7 @@ def play(h: Helper, env: dict[str, str], path: Path, rate: float, clock: bool = 
         h.spin_for(0.3)  # the last /clock may come after the last cost message
         out, err = proc.communicate(timeout=30)
     finally:
-        stop_process(proc)  # type: ignore[arg-type]
+        stop_process(proc)
         for sub in subs:
             h.node.destroy_subscription(sub)
     assert proc.returncode == 0, err
@@ -140,7 +140,7 @@ def test_ctrl_c_ends_a_looping_replay(helper: tuple[Helper, dict[str, str]], rec
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=15)
     finally:
-        stop_process(proc)  # type: ignore[arg-type]
+        stop_process(proc)
         h.node.destroy_subscription(sub)
     assert proc.returncode == 0 and 'Traceback' not in err
 

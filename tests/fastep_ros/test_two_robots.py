@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from pathlib import Path
+
 from nav_msgs.msg import Odometry
 
 from fastep_testing.graph import CROSSING, FAST, Graph, Helper, distance, odom_xy, stamp, write
@@ -10,7 +12,7 @@ ROBOTS = {'r1': ((3.0, 3.0), (17.0, 17.0)), 'r2': ((17.0, 3.0), (3.0, 17.0))}
 RADIUS = 0.5
 
 
-def test_two_robots_cross_without_collision(tmp_path) -> None:  # type: ignore[no-untyped-def]
+def test_two_robots_cross_without_collision(tmp_path: Path) -> None:
     g = Graph(tmp_path)
     try:
         scenario = write(tmp_path / 'crossing.yaml', CROSSING)

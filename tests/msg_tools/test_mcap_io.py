@@ -22,8 +22,7 @@ from std_msgs.msg import Float64
 
 from msg_tools import recover, sim_cli
 from msg_tools.errors import NotMcapError, RecordingError, TruncatedRecordingError
-from msg_tools.mcap_io import (McapWriter, copy_recording, message_definition, open_recording, qos_dict,
-                               qos_from_dicts)
+from msg_tools.mcap_io import McapWriter, copy_recording, message_definition, open_recording, qos_dict, qos_from_dicts
 
 # One point mass and one tractor-trailer (so trailer_pose is there), a circle and a wall (both marker kinds).
 MIXED = """\

@@ -13,8 +13,8 @@ from matplotlib.patches import Circle as CirclePatch
 
 from fastep_core.experiments import PAPER, Record, example_paths
 from fastep_core.geometry import Circle, Segment
-from fastep_core.scenario import load_scenario, parse_scenario
 from fastep_core.planning.algorithms import ALGORITHMS
+from fastep_core.scenario import load_scenario, parse_scenario
 from fastep_core.simulator import RobotRun, Run, simulate
 from msg_tools import plots
 

@@ -60,9 +60,9 @@ def test_first_ants_follow_socha_and_dorigo():
     w = np.array([np.exp(-(rank - 1) ** 2 / (2 * q ** 2 * k ** 2)) for rank in range(1, k + 1)])
     u, z = gen.random(m), gen.standard_normal((m, 2))
     for ant in range(m):
-        l = min(int(np.searchsorted(np.cumsum(w / w.sum()), u[ant], side='right')), k - 1)
-        sigma = xi * np.abs(archive - archive[l]).sum(axis=0) / (k - 1)
-        expected = np.clip(archive[l] + sigma * z[ant], -2.0, 2.0)
+        pick = min(int(np.searchsorted(np.cumsum(w / w.sum()), u[ant], side='right')), k - 1)
+        sigma = xi * np.abs(archive - archive[pick]).sum(axis=0) / (k - 1)
+        expected = np.clip(archive[pick] + sigma * z[ant], -2.0, 2.0)
         assert np.allclose(rec.batches[1][ant], expected, rtol=0.0, atol=1e-12)
 
 

@@ -47,7 +47,8 @@ def test_a_manoeuvre_out_of_a_dead_end_keeps_its_clearance_and_the_trailer_strai
 
 
 def test_no_manoeuvre_to_a_walled_in_goal() -> None:
-    ring = tuple(Circle((10.0 + 3 * math.cos(a), 10.0 + 3 * math.sin(a)), 0.9) for a in np.linspace(0, 2 * np.pi, 13)[:-1])
+    ring = tuple(Circle((10.0 + 3 * math.cos(a), 10.0 + 3 * math.sin(a)), 0.9)
+                 for a in np.linspace(0, 2 * np.pi, 13)[:-1])
     world = World((0.0, 0.0, 20.0, 20.0), ring)
     assert plan_manoeuvre(MODEL, world, [2.0, 2.0, 0.0, 0.0], [10.0, 10.0], 0.6, DT) is None
 

@@ -24,7 +24,10 @@ def test_a_manoeuvre_is_replayed_tick_by_tick_and_ends_where_it_ends(monkeypatch
     monkeypatch.setattr(manoeuvring, 'plan_manoeuvre', two_ticks)
     m = ManoeuvreDriver(TractorTrailer(), 0.5, PlannerParams())
     assert m.plan(WORLD, START, GOAL, 0.0) and m.count == 1 and 'manoeuvring: 1 arcs' in m.status
-    allow = (lambda c: c)
+
+    def allow(command):
+        return command
+
     command, ended = m.drive(START, 0.0, 40.0, allow, lambda: False)
     assert command is not None and command[0] == 1.0 and not ended
     command, ended = m.drive(START + [0.05, 0, 0, 0], 0.05, 39.95, allow, lambda: False)
@@ -41,7 +44,10 @@ def test_a_robot_off_its_manoeuvre_or_held_three_seconds_searches_again(monkeypa
     off = START + [OFF_MANOEUVRE + 0.01, 0.0, 0.0, 0.0]
     assert m.drive(off, 0.0, 40.0, lambda c: c, lambda: asked.append('off') or False) == (None, False)
     m.plan(WORLD, START, GOAL, 1.0)
-    stop = (lambda c: np.zeros(2))
+
+    def stop(command):
+        return np.zeros(2)
+
     for t in (1.0, 2.0, 3.9):
         m.drive(START, t, 40.0, stop, lambda: asked.append('held') or True)
     assert m.tick == 0 and asked == ['off']

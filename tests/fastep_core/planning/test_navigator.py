@@ -5,9 +5,8 @@ import pytest
 
 from fastep_core.errors import GoalError
 from fastep_core.geometry import Circle
-from fastep_core.kinematics import PointMass, TractorTrailer
-from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator
-from fastep_core.planning import manoeuvring
+from fastep_core.kinematics import TractorTrailer
+from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator, manoeuvring
 from fastep_core.planning.manoeuvre import Manoeuvre
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World

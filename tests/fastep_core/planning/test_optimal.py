@@ -10,9 +10,9 @@ from hypothesis import strategies as st
 
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle, Segment
+from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.scenario import builtin_names, load_scenario, parse_scenario
-from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.simulator import simulate
 from fastep_core.world import World
 

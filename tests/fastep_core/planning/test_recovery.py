@@ -45,7 +45,10 @@ def test_a_tractor_trailer_facing_a_wall_backs_up_and_keeps_its_choice():
     state = np.array([5.0, 5.0, 0.0, 0.0])
     backup = BackUp(model)
     backup.start(0.0)
-    room = (lambda p: free_room(world, p, []))
+
+    def room(points):
+        return free_room(world, points, [])
+
     first = backup.choose(state, 0.05, room, lambda c: c[0] < 0)   # the guard allows reversing only
     assert first[0] < 0
     probe = state
