@@ -1,4 +1,5 @@
-"""The layers: fastep_core (numpy, scipy) < msg_tools (ROS messages, MCAP, figures) < fastep_ros (rclpy nodes).
+"""The layers: fastep_core (numpy, scipy) < msg_tools (ROS messages, MCAP, figures) < fastep_ros (rclpy nodes),
+and no import cycle anywhere (on 7380572 it finds navigator <-> optimal_kinematic).
 
 fastep_core must import nothing above it, not even inside a function: read every module's syntax tree and
 list each import (statements anywhere in the file, and importlib.import_module / __import__ of a constant).
@@ -51,3 +52,61 @@ def test_msg_tools_imports_no_node(path: Path) -> None:
     wrong = [f'{path.relative_to(ROOT)}:{line}: {name}' for line, name in imported_modules(path)
              if name.split('.')[0] == 'fastep_ros']
     assert not wrong, 'msg_tools imports fastep_ros:\n' + '\n'.join(wrong)
+
+
+def product_imports() -> dict[str, set[str]]:
+    """Module -> the product modules it imports (`from package import name` counts `package.name` when that is
+    a module of its own, else the package)."""
+    files = {'.'.join(p.relative_to(ROOT).with_suffix('').parts).removesuffix('.__init__'): p
+             for package in ('fastep_core', 'msg_tools', 'fastep_ros') for p in (ROOT / package).rglob('*.py')}
+    graph: dict[str, set[str]] = {}
+    for module, path in files.items():
+        targets = set()
+        for node in ast.walk(ast.parse(path.read_text(), filename=str(path))):
+            if isinstance(node, ast.Import):
+                targets |= {alias.name for alias in node.names}
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                targets |= {f'{node.module}.{alias.name}' if f'{node.module}.{alias.name}' in files else node.module
+                            for alias in node.names}
+        graph[module] = {t for t in targets if t in files and t != module}
+    return graph
+
+
+def test_no_two_modules_import_each_other() -> None:
+    """No import cycle among the product's modules, through any number of modules (a package's __init__
+    re-exporting its modules counts too): Tarjan's strongly connected components must all be single modules."""
+    graph = product_imports()
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    cycles: list[list[str]] = []
+
+    def visit(v: str) -> None:
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        for w in graph[v]:
+            if w not in index:
+                visit(w)
+                low[v] = min(low[v], low[w])
+            elif w in stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            component = []
+            while True:
+                w = stack.pop()
+                component.append(w)
+                if w == v:
+                    break
+            if len(component) > 1:
+                cycles.append(sorted(component))
+
+    for module in sorted(graph):
+        if module not in index:
+            visit(module)
+    assert cycles == []
+
+
+def test_the_cycle_finder_sees_the_navigator_split() -> None:
+    graph = product_imports()
+    assert 'fastep_core.planning.navigator' in graph['fastep_core.planning.optimal_kinematic']
+    assert 'fastep_core.planning.optimal_kinematic' not in graph['fastep_core.planning.navigator']
