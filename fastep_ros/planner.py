@@ -25,6 +25,7 @@ ERROR (failed, which includes a refused goal: reason is the goal check's message
 
 from __future__ import annotations
 
+import functools
 import math
 import traceback
 from dataclasses import dataclass, fields
@@ -111,7 +112,7 @@ class PlannerNode(Node):
         self.body = _Body(self.model, length, trailer_length, hitch_offset)
         self.stamped = stamped
         self.workspace_param: tuple[float, float, float, float] | None = (
-            tuple(workspace) if workspace else None)  # type: ignore[assignment]
+            tuple(workspace) if workspace else None)
         if self.seed_stream >= 0:
             seq = np.random.SeedSequence(self.seed).spawn(self.seed_stream + 1)[self.seed_stream]
             self.rng = np.random.default_rng(seq)
@@ -298,7 +299,7 @@ class PlannerNode(Node):
             name = topic[1:-len(suffix)] or topic
             self.others[topic] = _Other(name)
             self.other_subs[topic] = self.create_subscription(
-                Odometry, topic, lambda msg, key=topic: self.on_other_odom(key, msg), LATEST)
+                Odometry, topic, functools.partial(self.on_other_odom, topic), LATEST)
             self.get_logger().info(f'following robot {name} on {topic}')
             found = True
         return found
