@@ -288,7 +288,7 @@ def make_timed_planner(profile: cProfile.Profile | None) -> type:
                         return inner(*a, **k)
                     finally:
                         self._update_time += time.perf_counter() - t0
-                nav.update = timed_update  # type: ignore[method-assign]
+                nav.update = timed_update  # type: ignore[method-assign]  # time each call
 
         def on_odom(self, msg: Any) -> None:
             t = time.perf_counter()

@@ -396,9 +396,8 @@ class PlannerNode(Node):
 
     def publish_target(self, force: bool = False) -> None:
         nav = self.navigator
-        # Navigator.fail() keeps the last target: only a robot under way has one.
-        moving = nav is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING)
-        target = nav.target if moving else None  # type: ignore[union-attr]
+        # Only a robot under way has a target to show.
+        target = nav.target if nav is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING) else None
         key = None if target is None else tuple(float(v) for v in target)
         if key is None or (key == self._target_key and not force):
             self._target_key = key
