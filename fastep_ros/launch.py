@@ -25,6 +25,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -254,11 +255,13 @@ class Monitor:
         """Handle every callback that comes in for `seconds` (spin_once alone handles one, and falls behind)."""
         end = time.monotonic() + seconds
         self.executor.spin_once(timeout_sec=seconds)
-        while (left := end - time.monotonic()) > 0:
+        while (left := end - time.monotonic()) > 0 and not STOP.is_set():
             self.executor.spin_once(timeout_sec=left)
+        if STOP.is_set():
+            raise KeyboardInterrupt   # here, between spins: never from inside rclpy (see _request_stop)
 
     def close(self) -> None:
-        self.executor.shutdown()
+        self.executor.shutdown(timeout_sec=1.0)
         self.node.destroy_node()
         self.rclpy.try_shutdown(context=self.context)
 
@@ -518,8 +521,15 @@ def report(args: argparse.Namespace, scenario: Scenario, monitor: Monitor, t0: f
     return any(r.collided for r in runs), True
 
 
-def _on_sigterm(signum: int, frame: Any) -> None:
-    raise KeyboardInterrupt
+STOP = threading.Event()
+"""Set by Ctrl-C or SIGTERM: the run stops at the monitor's next spin and stops every node."""
+
+
+def _request_stop(signum: int, frame: Any) -> None:
+    """Ctrl-C / SIGTERM only set STOP. Python's own handler raised KeyboardInterrupt wherever the main thread
+    was, inside rclpy's executor too, which then waited forever on shutdown (a test saw the launcher hang after
+    Ctrl-C), and a second Ctrl-C during the shutdown of the nodes gave a traceback."""
+    STOP.set()
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -536,11 +546,13 @@ def _main(argv: Sequence[str] | None) -> int:
     if args.no_clock and args.rtf != 1.0:
         parser.error('--no-clock runs on wall time: --rtf cannot be used with it')
     scenario = load_scenario(args.scenario)  # a FastepError: guard's one line, exit 2
-    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    STOP.clear()
+    previous = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
         return run(args, scenario)
     finally:
-        signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            signal.signal(sig, handler)
 
 
 if __name__ == '__main__':

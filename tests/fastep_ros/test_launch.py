@@ -90,6 +90,27 @@ def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path) -> None:
     assert not [pid for pid in kids if alive(pid)], 'a node outlived the launcher'
 
 
+def test_launch_survives_a_second_ctrl_c_and_a_sigterm_while_it_stops_the_nodes(tmp_path: Path) -> None:
+    """Signals only ask the launcher to stop: a second one while it stops the nodes is no traceback."""
+    scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '0.5'], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    try:
+        assert proc.stdout is not None
+        assert 'on their way' in proc.stdout.readline()
+        kids = children(proc.pid)
+        for sig in (signal.SIGINT, signal.SIGINT, signal.SIGTERM):
+            proc.send_signal(sig)
+            time.sleep(0.1)
+        _, err = proc.communicate(timeout=20)
+    finally:
+        stop_process(proc)
+    assert proc.returncode == 1
+    assert 'interrupted' in err and 'Traceback' not in err, err
+    assert not [pid for pid in kids if alive(pid)], 'a node outlived the launcher'
+
+
 @pytest.mark.parametrize('argv,words', [
     (['no_such_scenario_here'], 'no built-in scenario'),
     (['missing/file.yaml'], 'file not found'),
