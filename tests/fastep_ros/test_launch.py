@@ -69,16 +69,23 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
         assert max(((b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2) ** 0.5 for a, b in zip(rows, rows[1:])) <= 0.15
 
 
-def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path) -> None:
+def launch_under_way(tmp_path: Path) -> tuple[subprocess.Popen[str], list[int]]:
+    """fastep-launch of one robot, once the goals are in and the clock runs, and its node processes."""
     scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
     env = isolated_env(free_domain(), tmp_path / 'roslog')
     proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '0.5'], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    assert proc.stdout is not None
+    line = proc.stdout.readline()  # printed once the goals are in and the clock runs
+    if 'on their way' not in line:
+        stop_process(proc)
+        pytest.fail(f'fastep-launch did not start: {line!r}')
+    return proc, children(proc.pid)
+
+
+def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path) -> None:
+    proc, kids = launch_under_way(tmp_path)
     try:
-        assert proc.stdout is not None
-        line = proc.stdout.readline()  # printed once the goals are in and the clock runs
-        assert 'on their way' in line, line
-        kids = children(proc.pid)
         assert len(kids) == 4, f'expected 4 node processes (map, plant, planner, clock), found {kids}'
         time.sleep(0.5)
         proc.send_signal(signal.SIGINT)
@@ -92,14 +99,8 @@ def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path) -> None:
 
 def test_launch_survives_a_second_ctrl_c_and_a_sigterm_while_it_stops_the_nodes(tmp_path: Path) -> None:
     """Signals only ask the launcher to stop: a second one while it stops the nodes is no traceback."""
-    scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
-    env = isolated_env(free_domain(), tmp_path / 'roslog')
-    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '0.5'], env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    proc, kids = launch_under_way(tmp_path)
     try:
-        assert proc.stdout is not None
-        assert 'on their way' in proc.stdout.readline()
-        kids = children(proc.pid)
         for sig in (signal.SIGINT, signal.SIGINT, signal.SIGTERM):
             proc.send_signal(sig)
             time.sleep(0.1)
