@@ -212,6 +212,70 @@ def test_a_command_taken_late_acts_no_longer_than_cmd_timeout_after_it_was_sent(
     assert min(bench.margins()) >= 0.0, f'margins {bench.margins()}: a command acted after its time'
 
 
+# The plant is descheduled for 0.6 s while the planner runs on: the odometry it has gets older every tick.
+ODOMETRY_STOPS = (Stall('plant', 6.0, 6.6),)
+
+
+def test_the_planner_holds_the_robot_while_its_odometry_is_older_than_it_predicts(context: Any) -> None:
+    bench = drive(context, ODOMETRY_STOPS)
+    horizon = bench.planner.max_extrapolation
+    late = [tick for tick in bench.ticks if tick.odom_age > horizon]
+    assert len(late) >= 6, 'the premise: ticks with odometry older than the prediction horizon'
+    moving = [tick for tick in late if tick.command != (0.0, 0.0)]
+    # Before: 3 m/s to the goal, "way is clear", decided where the robot would be 0.25 s after the odometry's
+    # stamp, while by then it would be 0.6 s on, where the second circle is within sensing range.
+    assert not moving, f'commands from odometry it cannot predict: {moving[:3]}'
+    assert all(tick.mode == 'stale' for tick in late)
+    assert bench.planner.navigator is not None and bench.planner.navigator.mode.value == 'arrived'
+    assert min(bench.margins()) >= 0.0
+
+
+# A schedule found by descheduling both nodes at random (heavily) and minimised: it hits the first circle before
+# (0.008 m inside the radius) and, with only the plant's fix, 0.13 m inside. The decisive moment with the
+# plant's fix alone: at 7.95 s the planner, its odometry 0.53 s old, sees "way is clear" from where it
+# predicts the robot to be and sends 3 m/s to the goal; the plant takes it at 8.13 s, is descheduled from 8.41
+# s and drives it until 8.45 s, from beside the first circle into it. With the planner's fix it sends zero.
+STALE_DECISION = (
+    Stall('planner', 0.477, 0.939), Stall('planner', 1.094, 1.924), Stall('planner', 2.654, 3.511),
+    Stall('planner', 4.548, 5.09), Stall('planner', 6.055, 7.029), Stall('planner', 7.092, 7.891),
+    Stall('planner', 7.965, 8.556), Stall('plant', 0.772, 1.448), Stall('plant', 1.86, 2.537),
+    Stall('plant', 3.672, 4.629), Stall('plant', 5.16, 6.044), Stall('plant', 6.72, 7.083),
+    Stall('plant', 7.421, 8.132), Stall('plant', 8.406, 9.073))
+
+
+def test_no_command_decided_on_stale_odometry_drives_the_robot_into_an_obstacle(context: Any) -> None:
+    bench = drive(context, STALE_DECISION)
+    assert bench.planner.navigator is not None and bench.planner.navigator.mode.value == 'arrived'
+    assert min(bench.margins()) >= 0.0, f'margins {bench.margins()}'
+
+
+def test_planner_acts_on_odometry_stamped_within_max_extrapolation_only(context: Any) -> None:
+    planner = PlannerNode(context=context,
+                          parameter_overrides=[Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0])])
+    now = [50.0]
+    planner.now = lambda: now[0]   # type: ignore[method-assign]
+    try:
+        planner.on_obstacles(convert.obstacles_to_marker_array([]))
+        planner.on_goal(convert.point_to_pose_stamped(GOAL))
+        planner.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.8)))
+        planner.on_control()
+        assert planner.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
+        planner.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.7)))
+        planner.on_control()
+        _, message, reason = planner.status()
+        assert message == 'stale' and reason.startswith('odometry stale: stamped 0.30 s ago'), reason
+        assert np.all(planner.last_command == 0.0)
+        planner.on_odom(convert.state_to_odometry(START))   # unset stamp: as old as since it arrived
+        now[0] = 50.2
+        planner.on_control()
+        assert planner.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
+        now[0] = 50.3
+        planner.on_control()
+        assert planner.status()[1] == 'stale'
+    finally:
+        planner.destroy_node()
+
+
 def test_plant_counts_a_commands_age_from_when_it_was_sent(context: Any) -> None:
     plant = PlantNode(context=context, parameter_overrides=[Parameter('start', value=[0.0, 0.0])])
     try:
