@@ -10,7 +10,10 @@ Inputs: `odom` (and `trailer_pose` for tractor-trailers) of its own robot; `goal
 unless the `workspace` parameter gives it), both transient-local; and the `odom` of every other robot,
 discovered from the graph every 0.25 s of wall time (topics `/<name>/odom` of type nav_msgs/msg/Odometry).
 Odometry is predicted forward from its stamp to the control time (at most max_extrapolation seconds) to make
-up for the transport delay.
+up for the transport delay. Own odometry stamped longer ago than that (an unset stamp counts as its arrival)
+is not acted on: the robot is held still (zero cmd_vel, `stale`) until fresher odometry comes, because a
+command decided and guarded at a position the robot has left can drive it into an obstacle (docs/robustness.md,
+"A loaded machine").
 
 Outputs, on a control timer of the node clock (simulated time with use_sim_time): `cmd_vel`, `cost`; and when
 they change (and once a wall second): `waypoint` (the point driven to now), `plan` (the waypoints planned so
@@ -18,9 +21,10 @@ far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the nam
 reason / activations / escapes / manoeuvres / waypoint / goal / cost / others / t / obstacles).
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
-run it, `waiting` (world or odometry not received yet) or `stale` (odometry older than odom_timeout or not
-finite; zero cmd_vel is sent). Levels: OK (idle, kinematic, avoiding, arrived), WARN (waiting, stale),
-ERROR (failed, which includes a refused goal: reason is the goal check's message, e.g. "... is occupied ...").
+run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry
+stamped more than max_extrapolation before the control time, or not finite; zero cmd_vel is sent). Levels: OK
+(idle, kinematic, avoiding, arrived), WARN (waiting, stale), ERROR (failed, which includes a refused goal:
+reason is the goal check's message, e.g. "... is occupied ...").
 """
 
 from __future__ import annotations
@@ -103,8 +107,8 @@ class PlannerNode(Node):
                                '0 means robot_radius', constraints='>= 0')
         self.max_extrapolation = declare(
             self, 'max_extrapolation', 0.25, 'latency compensation: odometry (own and other robots\') is '
-            'predicted forward from its stamp to the control time by at most this much (s); 0 disables',
-            constraints='>= 0')
+            'predicted forward from its stamp to the control time by at most this much (s); own odometry stamped '
+            'longer ago is stale: the robot is held still; 0 disables both', constraints='>= 0')
         workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans')
         self._check(length, trailer_length, hitch_offset, other_radius, workspace)
@@ -128,6 +132,7 @@ class PlannerNode(Node):
         self.goal: tuple[float, float] | None = None
         self.odom: Odometry | None = None
         self.odom_received = -math.inf
+        self.odom_stamp = -math.inf   # its header stamp; when it arrived if that is unset (zero)
         self.odom_problem = ''
         self.trailer: float | None = None
         self.others: dict[str, _Other] = {}
@@ -252,6 +257,8 @@ class PlannerNode(Node):
             self.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
             return
         self.odom, self.odom_received, self.odom_problem = msg, self.now(), ''
+        stamp = convert.stamp_to_seconds(msg.header.stamp)
+        self.odom_stamp = stamp if stamp > 0.0 else self.odom_received
 
     def on_trailer(self, msg: PoseStamped) -> None:
         try:
@@ -343,8 +350,13 @@ class PlannerNode(Node):
             state = convert.odometry_to_state(self.odom, self.model, self.trailer)
         except ValueError as exc:
             return None, f'odometry rejected: {exc}'
-        self.odom_lag = t - convert.stamp_to_seconds(self.odom.header.stamp)
-        lag = self.lag(t, convert.stamp_to_seconds(self.odom.header.stamp))
+        self.odom_lag = t - self.odom_stamp
+        if self.max_extrapolation > 0.0 and self.odom_lag > self.max_extrapolation:
+            # Where the robot is now cannot be predicted that far: a command from this state would be checked (by
+            # the guard) at a position the robot has left.
+            return None, (f'odometry stale: stamped {self.odom_lag:.2f} s ago, beyond what it is predicted over '
+                          f'(max_extrapolation {self.max_extrapolation:g} s)')
+        lag = self.lag(t, self.odom_stamp)
         if lag > 0.0 and self.navigator is not None:
             # Latency compensation: the plant has applied the last command since the odometry was stamped.
             state = self.navigator.model.integrate(state, self.last_command, lag)

@@ -11,7 +11,11 @@ Time: the model is integrated in fixed steps of 1 / rate_hz seconds of the node'
 use_sim_time, wall time otherwise) up to "now", on a timer and before each new command takes effect (a
 zero-order hold: a command acts from the step after it arrived). Odometry is stamped with the integrated
 time, which is always a whole number of steps, so the odometry of several plants lines up.
-A command older than cmd_timeout, or one that is not finite, counts as zero.
+A command older than cmd_timeout, or one that is not finite, counts as zero. Its age counts from when it was
+sent, not from when this node took it, so a command that waited while the plant was descheduled does not act
+for a fresh cmd_timeout after it (docs/robustness.md, "A loaded machine"): sent is the header stamp of a
+TwistStamped, and for a Twist the DDS source timestamp (the sender's system clock, hence on wall time only; on
+simulated time lock step holds the clock while a node is late, and a Twist's age counts from when it is taken).
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ from typing import Any, Sequence
 import numpy as np
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
+from rclpy.clock import ROSClock
 from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
@@ -49,8 +54,9 @@ class PlantNode(Node):
         hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
         self.rate_hz = declare(self, 'rate_hz', 50.0, 'integration rate: fixed steps of 1/rate_hz s of the '
                                'node clock (simulated time with use_sim_time)', constraints='> 0')
-        self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'stop (zero velocity) when no cmd_vel arrived '
-                                   'for this long (s, node clock)', constraints='> 0')
+        self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'a cmd_vel acts for at most this long after it '
+                                   'was sent (its stamp; for a Twist on wall time its DDS source time): stop '
+                                   '(zero velocity) when no newer one came (s, node clock)', constraints='> 0')
         stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of the odometry pose (the simulated '
                                 'pose is the map pose)')
@@ -81,14 +87,16 @@ class PlantNode(Node):
         self.tick: int | None = None           # integrated time = tick * step
         self.published_tick: int | None = None  # tick of the last odometry published
         self.command = np.zeros(2)
-        self.command_time: float | None = None  # node-clock time the current command arrived
+        self.command_time: float | None = None  # node-clock time the current command was sent
         self.applied = np.zeros(2)              # command used in the last step (for the odometry twist)
 
         self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
         self.trailer_pub = (self.create_publisher(PoseStamped, interface.TRAILER_POSE,
                                                   offered_qos(interface.TRAILER_POSE))
                             if self.model_name == 'tractor_trailer' else None)
-        self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, self.on_cmd_vel, LATEST)
+        # rclpy passes (message, MessageInfo) to a callback of two parameters; its type hints know only one.
+        take_cmd_vel: Any = self._take_cmd_vel
+        self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, take_cmd_vel, LATEST)
         self.timer = self.create_timer(self.step, self.on_timer)
         self.get_logger().info(f'{self.model_name} at {np.round(self.state, 3).tolist()}, '
                                f'integrating at {self.rate_hz:g} Hz')
@@ -122,8 +130,28 @@ class PlantNode(Node):
             self.applied = command
         return True
 
+    def sent_time(self, msg: Twist | TwistStamped, source_timestamp_ns: int) -> float | None:
+        """When a command was sent, on this node's clock; None when that is not known (then: when it is taken).
+
+        A TwistStamped carries it (a zero stamp means unset). For a Twist, DDS's source timestamp is the sender's
+        system clock, which is this node's clock only when it does not run on simulated time.
+        """
+        if isinstance(msg, TwistStamped):
+            stamp = convert.stamp_to_seconds(msg.header.stamp)
+            return stamp if stamp > 0.0 else None
+        clock = self.get_clock()
+        on_simulated_time = isinstance(clock, ROSClock) and clock.ros_time_is_active
+        if source_timestamp_ns > 0 and not on_simulated_time:
+            return source_timestamp_ns * 1e-9
+        return None
+
     # ------------------------------------------------------------------------------------------- callbacks
-    def on_cmd_vel(self, msg: Twist | TwistStamped) -> None:
+    def _take_cmd_vel(self, msg: Twist | TwistStamped, info: dict[str, Any]) -> None:
+        """The subscription's callback: rclpy passes the message info (with its DDS source timestamp) too."""
+        self.on_cmd_vel(msg, self.sent_time(msg, int(info.get('source_timestamp', 0))))
+
+    def on_cmd_vel(self, msg: Twist | TwistStamped, sent: float | None = None) -> None:
+        """Take a command sent at `sent` (node clock; None: now). It acts until cmd_timeout after it was sent."""
         now = self.now()
         self.advance(now)  # the old command holds until now
         try:
@@ -131,7 +159,11 @@ class PlantNode(Node):
         except ValueError as exc:
             self.get_logger().warning(f'ignoring cmd_vel: {exc}; treating it as zero', once=True)
             command = np.zeros(2)
-        self.command, self.command_time = command, now
+        if sent is not None and now - sent > self.cmd_timeout:
+            self.get_logger().warning(f'cmd_vel sent {now - sent:.2f} s ago, more than cmd_timeout '
+                                      f'{self.cmd_timeout:g} s: treated as zero (a late node, or clocks apart)',
+                                      throttle_duration_sec=5.0)
+        self.command, self.command_time = command, now if sent is None else min(sent, now)
 
     def on_timer(self) -> None:
         self.advance(self.now())
