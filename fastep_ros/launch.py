@@ -372,6 +372,9 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 # drive a run it never sees (on a loaded machine, discovery can take longer than a short run).
                 if monitor.odom_subs[name].get_publisher_count() < 1:
                     return False
+                # Nor may a planner's commands go unheard: its plant (and the clock's lock step) must have matched.
+                if int(robot.status.get('cmd_vel_readers', 0)) < 1 + sim_time:
+                    return False
                 if not names - {name} <= set(robot.status.get('others', '').split()):
                     return False
             return True

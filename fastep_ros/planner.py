@@ -470,6 +470,9 @@ class PlannerNode(Node):
             't': self.now(),
             'odom_lag': self.odom_lag,
             'obstacles': -1 if self.obstacles is None else len(self.obstacles),
+            # Who hears cmd_vel (the plant; the clock's lock step): a run started before the plant has matched
+            # this publisher leaves the robot standing while time runs.
+            'cmd_vel_readers': self.cmd_pub.get_subscription_count(),
         }
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 
