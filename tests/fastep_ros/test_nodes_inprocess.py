@@ -4,10 +4,9 @@ its callbacks are called directly."""
 from __future__ import annotations
 
 import math
-import os
 from dataclasses import replace
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import numpy as np
 import pytest
@@ -26,26 +25,6 @@ from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
 from fastep_testing.graph import free_domain
 from msg_tools import convert
-
-
-@pytest.fixture
-def context() -> Iterator[Any]:
-    import rclpy
-    from rclpy.signals import SignalHandlerOptions
-    saved = os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE')
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    ctx = rclpy.Context()
-    try:
-        rclpy.init(args=[], context=ctx, domain_id=free_domain(), signal_handler_options=SignalHandlerOptions.NO)
-    finally:
-        if saved is None:
-            os.environ.pop('ROS_AUTOMATIC_DISCOVERY_RANGE', None)
-        else:
-            os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = saved
-    try:
-        yield ctx
-    finally:
-        rclpy.try_shutdown(context=ctx)
 
 
 def make(cls: type, context: Any, **params: Any) -> Any:

@@ -13,10 +13,9 @@ known exactly, also inside the catch-up after a stall (the plant publishes only 
 
 from __future__ import annotations
 
-import os
 import time
 from dataclasses import dataclass
-from typing import Any, Iterator, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pytest
@@ -28,7 +27,6 @@ from fastep_core.geometry import Circle
 from fastep_core.world import World
 from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
-from fastep_testing.graph import free_domain
 from msg_tools import convert
 from msg_tools.interface import RELIABLE
 
@@ -154,26 +152,6 @@ class Bench:
     def close(self) -> None:
         self.planner.destroy_node()
         self.plant.destroy_node()
-
-
-@pytest.fixture
-def context() -> Iterator[Any]:
-    import rclpy
-    from rclpy.signals import SignalHandlerOptions
-    saved = os.environ.get('ROS_AUTOMATIC_DISCOVERY_RANGE')
-    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
-    ctx = rclpy.Context()
-    try:
-        rclpy.init(args=[], context=ctx, domain_id=free_domain(), signal_handler_options=SignalHandlerOptions.NO)
-    finally:
-        if saved is None:
-            os.environ.pop('ROS_AUTOMATIC_DISCOVERY_RANGE', None)
-        else:
-            os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = saved
-    try:
-        yield ctx
-    finally:
-        rclpy.try_shutdown(context=ctx)
 
 
 def drive(context: Any, stalls: Sequence[Stall] = (), until: float = 60.0) -> Bench:
