@@ -10,6 +10,7 @@ from nav_msgs.msg import Odometry
 from fastep_core.geometry import Obstacles
 from fastep_core.metrics import trajectory_margins
 from fastep_testing.graph import CROSSING, FAST, Graph, Helper, distance, odom_xy, stamp, write
+from msg_tools.convert import diagnostic_to_dict
 
 ROBOTS = {'r1': ((3.0, 3.0), (17.0, 17.0)), 'r2': ((17.0, 3.0), (3.0, 17.0))}
 RADIUS = 0.5
@@ -65,7 +66,10 @@ def test_two_robots_cross_without_collision(tmp_path: Path) -> None:
         off = {name: next((t for t in sorted(tracks[name]) if distance(tracks[name][t], ROBOTS[name][0]) > 0.05), None)
                for name in ROBOTS}
         stale = {name: sum(m.message == 'stale' for m in h.records[f'/{name}/status']) for name in ROBOTS}
-        assert closest < 4.0, f'the robots never met: closest {closest:.2f} m; set off at {off}; stale {stale}'
+        said = {name: list(dict.fromkeys(f"{d['message']}: {d.get('reason', '')}" for d in map(
+            diagnostic_to_dict, h.records[f'/{name}/status'])))[:8] for name in ROBOTS}   # first distinct statuses
+        assert closest < 4.0, (f'the robots never met: closest {closest:.2f} m; set off at {off}; stale {stale}; '
+                               f'statuses {said}')
         # and it was planned: on their straight runs, at the same speed, they would reach (10, 10) together, so
         # at least one planner must have planned a step around the other
         assert max(int(final[name]['activations']) for name in ROBOTS) >= 1, final
