@@ -373,7 +373,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 if monitor.odom_subs[name].get_publisher_count() < 1:
                     return False
                 # Nor may a planner's commands go unheard: its plant (and the clock's lock step) must have matched.
-                if int(robot.status.get('cmd_vel_readers', 0)) < 1 + sim_time:
+                if int(robot.status.get('cmd_vel_readers', 0)) < 1 + sim_time or \
+                        int(robot.status.get('odom_writers', 0)) < 1:
                     return False
                 if not names - {name} <= set(robot.status.get('others', '').split()):
                     return False

@@ -473,6 +473,8 @@ class PlannerNode(Node):
             # Who hears cmd_vel (the plant; the clock's lock step): a run started before the plant has matched
             # this publisher leaves the robot standing while time runs.
             'cmd_vel_readers': self.cmd_pub.get_subscription_count(),
+            # ... and whether its own odometry can reach it (volatile: a plant not yet matched is not heard).
+            'odom_writers': self.odom_sub.get_publisher_count(),
         }
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 

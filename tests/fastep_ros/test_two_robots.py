@@ -36,7 +36,7 @@ def test_two_robots_cross_without_collision(tmp_path: Path) -> None:
         for name in ROBOTS:
             other = 'r2' if name == 'r1' else 'r1'
             h.wait_status(f'/{name}', lambda s, o=other: s['message'] == 'idle' and o in s['others'].split()
-                          and int(s.get('cmd_vel_readers', 0)) >= 2, 60.0,
+                          and int(s.get('cmd_vel_readers', 0)) >= 2 and int(s.get('odom_writers', 0)) >= 1, 60.0,
                           f'{name} to know the world and {other}, and its plant and the clock to hear its commands')
         for name, (_, goal) in ROBOTS.items():
             h.send_goal(f'/{name}', goal)
