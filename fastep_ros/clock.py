@@ -13,9 +13,11 @@ whatever the tick size, and planners act once per control period. If the machine
 late and simulated time simply runs slower: it never jumps.
 
 Plants and planners started with use_sim_time:=true integrate and decide on this time; started without it
-they run on wall time with the same code. With wait_for_subscribers N the clock holds the start time until N
-/clock subscriptions are matched (fastep-launch passes the number of nodes it started), so that no node
-misses the beginning of the run because DDS discovery took a while.
+they run on wall time with the same code. With wait_for_subscribers N the clock holds the start time until
+its publisher has matched N /clock subscriptions (fastep-launch passes the number of nodes it started), so that
+no node misses the beginning of the run because DDS discovery took a while. DDS matches the two ends of a
+connection each on its own (under load, seconds apart), so a subscriber may still miss the first ticks: see
+lock step.
 
 Lock step (sync_topics: fastep-launch lists every plant's odom and every planner's cmd_vel, with step = the
 planners' control period, so each of them publishes once per tick): each tick waits, up to sync_timeout wall
@@ -25,7 +27,9 @@ busy node, so the live loop behaves like the in-process simulator whatever the m
 upper bound. A topic that timed out (its node died) is not waited for again until it publishes again. The
 timeout is long because a loaded machine starves a node for a second or two at times, and with 1 s the clock
 then ran on without it (a planner stopped for 2.5 s let 6 s of simulated time pass); a dead node costs those
-5 s once.
+5 s once. A topic that has not answered once since the run started is waited for up to wait_timeout: a node
+still being matched is late, not dead. /clock is best effort, so while the clock waits it says the current time
+again every HOLD_PERIOD: a node that lost a tick's message, or was matched after it, still gets it.
 """
 
 from __future__ import annotations
@@ -45,7 +49,7 @@ from msg_tools import convert, interface
 __all__ = ['ClockNode', 'main', 'tick_plan']
 
 SETTLE = 0.3        # wall seconds the start time is held after the expected subscribers matched
-HOLD_PERIOD = 0.1   # wall seconds between /clock messages while the start time is held
+HOLD_PERIOD = 0.1   # wall seconds between repeated /clock messages while the time is held
 
 
 @dataclass
@@ -53,6 +57,7 @@ class _Sync:
     sub: Any = None
     fresh: bool = False
     absent: bool = False   # timed out once: not waited for until it publishes again
+    answered: bool = False  # has published since the clock started
 
 
 def _message_type(type_name: str) -> Any:
@@ -146,6 +151,7 @@ class ClockNode(Node):
     def on_sync(self, topic: str) -> None:
         self.sync[topic].fresh = True
         self.sync[topic].absent = False
+        self.sync[topic].answered = self.ticks > 0
         # The last answer came after the tick period: tick now rather than at the next timer event.
         if self.matched_at is not None and self.seconds() - self.last_tick >= self.period \
                 and all(s.fresh for s in self.sync.values()) and not self.waiting():
@@ -158,14 +164,16 @@ class ClockNode(Node):
         late = [t for t, s in self.sync.items() if not (s.fresh or s.absent) and self.count_publishers(t) > 0]
         if not late:
             return True
-        if self.seconds() - self.last_tick > self.sync_timeout:
-            # A node that died (SIGKILL) stays on the graph until its DDS lease ends: stop waiting for it.
-            for topic in late:
-                self.sync[topic].absent = True
-            self.get_logger().warning(f'no answer on {", ".join(late)} for {self.sync_timeout:g} s of wall time; '
-                                      f'not waiting for it until it publishes again')
-            return True
-        return False
+        waited = self.seconds() - self.last_tick
+        # A node that died (SIGKILL) stays on the graph until its DDS lease ends: stop waiting for it. One that
+        # has not answered yet is more likely still being matched.
+        overdue = [t for t in late if waited > (self.sync_timeout if self.sync[t].answered else self.wait_timeout)]
+        for topic in overdue:
+            self.sync[topic].absent = True
+        if overdue:
+            self.get_logger().warning(f'no answer on {", ".join(overdue)} for {waited:.3g} s of wall time; not '
+                                      f'waiting for it until it publishes again')
+        return len(overdue) == len(late)
 
     def waiting(self) -> bool:
         """Hold the start time until the expected subscribers are matched, plus a short settling time."""
@@ -180,23 +188,28 @@ class ClockNode(Node):
             return self.wait_for > 0
         if elapsed > self.wait_timeout:
             self.get_logger().warning(f'only {self.pub.get_subscription_count()} of {self.wait_for} /clock '
-                                      f'subscribers after {self.wait_timeout:g} s; starting anyway')
+                                      f'subscribers matched after {self.wait_timeout:g} s; starting anyway')
             self.matched_at = elapsed - SETTLE
             return False
         return True
 
     def on_tick(self) -> None:
         if self.waiting():
-            # Holding: tell the nodes the start time now and then, without keeping them busy.
-            now = self.steady.now().nanoseconds * 1e-9
-            if now - self.held_at < HOLD_PERIOD:
-                return
-            self.held_at = now
-            self.pub.publish(convert.seconds_to_clock(self.time))
+            self.repeat()   # holding the start time
         elif not self.sync or self.ticks == 0:  # nothing answers the hold
             self.advance()
         elif self.seconds() - self.last_tick >= 0.5 * self.period and self.synced():
             self.advance()
+        else:
+            self.repeat()   # lock step, waiting for a node that may have lost this tick's (best-effort) message
+
+    def repeat(self) -> None:
+        """Say the current time again, once per HOLD_PERIOD of waiting, without keeping the nodes busy."""
+        now = self.seconds()
+        if now - max(self.held_at, self.last_tick) < HOLD_PERIOD:
+            return
+        self.held_at = now
+        self.pub.publish(convert.seconds_to_clock(self.time))
 
     def advance(self) -> None:
         for sync in self.sync.values():

@@ -215,7 +215,10 @@ class Monitor:
         self.executor.add_node(self.node)
         self.robots = {spec.name: RobotLive(spec) for spec in scenario.robots}
         self.goal_pubs = {}
-        self.odom_subs = {}
+        # What fastep-record (started as /recorder) has received: topic -> message count.
+        self.recorded: dict[str, str] = {}
+        self.node.create_subscription(DiagnosticStatus, '/recorder/' + interface.RECORDING.removeprefix('~/'),
+                                      self.on_recording, interface.STATUS_QOS)
         depth = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # every odometry message
         for name, robot in self.robots.items():
             # Latched, so a planner restarted mid-run gets its goal again (it subscribes to latched goals too).
@@ -223,7 +226,7 @@ class Monitor:
                                                               LATCHED)
             self.node.create_subscription(DiagnosticStatus, robot_topic(name, interface.STATUS),
                                           functools.partial(self.on_status, robot), offered_qos(interface.STATUS))
-            self.odom_subs[name] = self.node.create_subscription(
+            self.node.create_subscription(
                 Odometry, robot_topic(name, interface.ODOM), functools.partial(self.on_odom, robot), depth)
             self.node.create_subscription(PathMsg, robot_topic(name, interface.PLAN),
                                           functools.partial(self.on_plan, robot), RELIABLE)
@@ -277,6 +280,9 @@ class Monitor:
                 setattr(robot, key, int(robot.status.get(key, 0)))
             except ValueError:
                 pass
+
+    def on_recording(self, msg: Any) -> None:
+        self.recorded = self.convert.diagnostic_to_dict(msg)
 
     def on_odom(self, robot: RobotLive, msg: Any) -> None:
         try:
@@ -369,14 +375,18 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                         monitor.goal_pubs[name].get_subscription_count() < goal_readers:
                     return False
                 # Odometry is volatile: a plant this monitor has not matched yet when the clock starts would
-                # drive a run it never sees (on a loaded machine, discovery can take longer than a short run).
-                if monitor.odom_subs[name].get_publisher_count() < 1:
+                # drive a run it never sees (on a loaded machine, DDS matches endpoints seconds after the graph
+                # lists them). Plants publish their start state until time starts: wait until it is heard here
+                # and by the planner.
+                if not robot.rows or int(robot.status.get('odom_heard', 0)) < 1:
                     return False
                 # Nor may a planner's commands go unheard: its plant (and the clock's lock step) must have matched.
-                if int(robot.status.get('cmd_vel_readers', 0)) < 1 + sim_time or \
-                        int(robot.status.get('odom_writers', 0)) < 1:
+                if int(robot.status.get('cmd_vel_readers', 0)) < 1 + sim_time:
                     return False
                 if not names - {name} <= set(robot.status.get('others', '').split()):
+                    return False
+                # And the recording holds the run from its start.
+                if args.record is not None and robot_topic(name, ODOM) not in monitor.recorded:
                     return False
             return True
 

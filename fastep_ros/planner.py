@@ -18,7 +18,9 @@ command decided and guarded at a position the robot has left can drive it into a
 Outputs, on a control timer of the node clock (simulated time with use_sim_time): `cmd_vel`, `cost`; and when
 they change (and once a wall second): `waypoint` (the point driven to now), `plan` (the waypoints planned so
 far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the namespace, message = mode, values
-reason / activations / escapes / manoeuvres / waypoint / goal / cost / others / t / obstacles).
+reason / activations / escapes / manoeuvres / waypoint / goal / cost / algorithm / t / odom_lag / obstacles,
+and for a launcher: others (the robots whose odometry it has heard), cmd_vel_readers (subscriptions matched to
+cmd_vel) and odom_heard (own odometry messages taken)).
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
 run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry
@@ -134,6 +136,7 @@ class PlannerNode(Node):
         self.odom_received = -math.inf
         self.odom_stamp = -math.inf   # its header stamp; when it arrived if that is unset (zero)
         self.odom_problem = ''
+        self.odom_heard = 0            # own odometry messages taken
         self.trailer: float | None = None
         self.others: dict[str, _Other] = {}
         self.other_subs: dict[str, Any] = {}
@@ -259,6 +262,9 @@ class PlannerNode(Node):
         self.odom, self.odom_received, self.odom_problem = msg, self.now(), ''
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         self.odom_stamp = stamp if stamp > 0.0 else self.odom_received
+        self.odom_heard += 1
+        if self.odom_heard == 1:
+            self.publish_status(force=True)   # a launcher waits for the odometry path to be up
 
     def on_trailer(self, msg: PoseStamped) -> None:
         try:
@@ -319,8 +325,11 @@ class PlannerNode(Node):
         except ValueError as exc:
             self.get_logger().warning(f'ignoring odometry of {other.name}: {exc}', throttle_duration_sec=5.0)
             return
+        first = other.received == -math.inf
         other.received = self.now()
         other.stamp = convert.stamp_to_seconds(msg.header.stamp)
+        if first:
+            self.publish_status(force=True)   # `others` lists the robots heard
 
     def other_robots(self, t: float) -> list[OtherRobot]:
         out = []
@@ -465,16 +474,17 @@ class PlannerNode(Node):
             'waypoint': waypoint,
             'goal': self.goal,
             'cost': 0.0 if nav is None else float(nav.cost),
-            'others': ' '.join(sorted(o.name for o in self.others.values())),
+            'others': ' '.join(sorted(o.name for o in self.others.values() if o.position is not None)),
             'algorithm': self.algorithm,
             't': self.now(),
             'odom_lag': self.odom_lag,
             'obstacles': -1 if self.obstacles is None else len(self.obstacles),
-            # Who hears cmd_vel (the plant; the clock's lock step): a run started before the plant has matched
-            # this publisher leaves the robot standing while time runs.
+            # Who hears cmd_vel (the plant; the clock's lock step): the readers this writer has matched. DDS
+            # matches each end on its own, so that the plant's end is matched too is told by ...
             'cmd_vel_readers': self.cmd_pub.get_subscription_count(),
-            # ... and whether its own odometry can reach it (volatile: a plant not yet matched is not heard).
-            'odom_writers': self.odom_sub.get_publisher_count(),
+            # ... its odometry having reached this planner: while simulated time holds at 0 a plant publishes
+            # its start state once its cmd_vel reader is matched (odometry is volatile: a match is not a delivery).
+            'odom_heard': self.odom_heard,
         }
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 

@@ -10,7 +10,12 @@ and, for tractor-trailers, `trailer_pose` (geometry_msgs/PoseStamped, the traile
 Time: the model is integrated in fixed steps of 1 / rate_hz seconds of the node's clock (simulated time with
 use_sim_time, wall time otherwise) up to "now", on a timer and before each new command takes effect (a
 zero-order hold: a command acts from the step after it arrived). Odometry is stamped with the integrated
-time, which is always a whole number of steps, so the odometry of several plants lines up.
+time, which is always a whole number of steps, so the odometry of several plants lines up. Until simulated time
+has started (the clock holds time 0, or has not been heard), the plant publishes its start state stamped 0 once
+every AT_REST_PERIOD wall seconds, from when its cmd_vel subscription has matched a publisher: odometry and
+commands are volatile, and DDS matches the two ends of a connection each on its own (under load, seconds apart),
+so this is how its planner and a launcher learn, before the run begins, that both ends of both paths are up
+(docs/robustness.md, "A loaded machine").
 A command older than cmd_timeout, or one that is not finite, counts as zero. Its age counts from when it was
 sent, not from when this node took it, so a command that waited while the plant was descheduled does not act
 for a fresh cmd_timeout after it (docs/robustness.md, "A loaded machine"): sent is the header stamp of a
@@ -26,7 +31,7 @@ from typing import Any, Sequence
 import numpy as np
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
-from rclpy.clock import ROSClock
+from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
@@ -38,6 +43,7 @@ from msg_tools.interface import LATEST, offered_qos
 __all__ = ['PlantNode', 'main']
 
 MAX_CATCH_UP = 100_000  # integration steps done in one go at most (a clock jump beyond that is skipped)
+AT_REST_PERIOD = 0.25   # wall seconds between start-state odometry messages before simulated time starts
 
 
 class PlantNode(Node):
@@ -96,8 +102,11 @@ class PlantNode(Node):
                             if self.model_name == 'tractor_trailer' else None)
         # rclpy passes (message, MessageInfo) to a callback of two parameters; its type hints know only one.
         take_cmd_vel: Any = self._take_cmd_vel
-        self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, take_cmd_vel, LATEST)
+        self.cmd_sub = self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, take_cmd_vel,
+                                                LATEST)
         self.timer = self.create_timer(self.step, self.on_timer)
+        self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick,
+                                               clock=Clock(clock_type=ClockType.STEADY_TIME))
         self.get_logger().info(f'{self.model_name} at {np.round(self.state, 3).tolist()}, '
                                f'integrating at {self.rate_hz:g} Hz')
 
@@ -172,9 +181,17 @@ class PlantNode(Node):
             self.published_tick = self.tick
             self.publish()
 
+    def on_at_rest_tick(self) -> None:
+        """Before the first integration step (simulated time at 0), once this plant can hear commands: publish
+        the start state, stamped 0."""
+        if self.tick is not None:
+            self.at_rest_timer.cancel()   # integrating: on_timer publishes from now on
+        elif self.now() <= 0.0 and self.cmd_sub.get_publisher_count() > 0:
+            self.publish()
+
     def publish(self) -> None:
-        assert self.tick is not None
-        stamp = convert.seconds_to_stamp(max(0.0, self.tick * self.step))
+        """Odometry (and trailer pose) of the state at the integrated time (0 before the first step)."""
+        stamp = convert.seconds_to_stamp(0.0 if self.tick is None else max(0.0, self.tick * self.step))
         if self.model_name == 'tractor_trailer':
             assert isinstance(self.model, TractorTrailer)
             v, omega = (float(c) for c in self.applied)

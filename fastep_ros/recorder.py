@@ -19,6 +19,10 @@ the planner's subscription) is subscribed with the QoS the fastep nodes offer on
 after the recorder and send at once (goal_pose) are only recorded if their publisher matched the recorder's
 subscription first: wait until the publisher's subscription count includes the recorder.
 
+Status: `~/recording` (diagnostic_msgs/DiagnosticStatus, latched): values = the file and, per topic received,
+its message count; sent when a topic first delivers and once per flush. fastep-launch waits, before it starts
+the clock, until it counts every robot's odometry (plants publish their start state while time holds at 0).
+
 Time: log_time = publish_time = the receive time on the node's clock, i.e. simulated time with
 use_sim_time:=true (what fastep-launch uses; 0 until the first /clock arrives), wall time otherwise.
 
@@ -38,6 +42,7 @@ import time
 from pathlib import Path
 from typing import Any, Sequence
 
+from diagnostic_msgs.msg import DiagnosticStatus
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
 from rclpy.exceptions import ParameterException
@@ -48,7 +53,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from fastep_core.errors import FastepError
 from fastep_ros.common import StartupError, declare, node_main
-from msg_tools import interface
+from msg_tools import convert, interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, message_class, qos_profile_to_dict
 
 __all__ = ['RecorderNode', 'main']
@@ -103,6 +108,7 @@ class RecorderNode(Node):
         self.types: dict[str, str] = {}
         self.channels: dict[str, int] = {}
         self.counts: dict[str, int] = {}
+        self.status_pub = self.create_publisher(DiagnosticStatus, interface.RECORDING, interface.STATUS_QOS)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.discovery_timer = self.create_timer(discovery_period, self.discover, clock=steady)
         self.flush_timer = self.create_timer(flush_period, self.flush, clock=steady)
@@ -199,10 +205,19 @@ class RecorderNode(Node):
             channel = self.channels[topic] = writer.add_channel(topic, self.types[topic], self.offered(topic))
         writer.write_raw(channel, data, now, now)
         self.counts[topic] += 1
+        if self.counts[topic] == 1:
+            self.publish_status()
 
     def flush(self) -> None:
         if self.writer is not None:
             self.writer.flush()
+            self.publish_status()
+
+    def publish_status(self) -> None:
+        """What was received so far: the file, and the message count of every topic that delivered."""
+        values: dict[str, Any] = {'file': str(self.path)}
+        values.update((topic, count) for topic, count in sorted(self.counts.items()) if count)
+        self.status_pub.publish(convert.make_status(self.get_fully_qualified_name(), 'recording', 'ok', values))
 
     def close(self) -> None:
         """Finish the file (summary, footer). Safe to call twice."""

@@ -210,6 +210,12 @@ class Helper:
                                           qos or QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
         return self.records[topic]
 
+    def wait_heard(self, topic: str, timeout: float = 60.0) -> None:
+        """Spin until a recorded topic has delivered a message. DDS matches the two ends of a connection each on
+        its own (under load, seconds apart), so a subscription on the graph may still miss what is sent: a test
+        that judges a run from recorded odometry first waits to hear it (plants at rest publish their start)."""
+        self.spin_until(lambda: bool(self.records[topic]), timeout, f'a message on {topic}')
+
     def follow_clock(self) -> list[Any]:
         """Subscribe to /clock (a clock started with wait_for_subscribers counting this helper then runs)."""
         from rclpy.qos import QoSProfile, ReliabilityPolicy

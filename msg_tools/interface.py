@@ -31,7 +31,7 @@ if TYPE_CHECKING:
 
 __all__ = [
     'CLOCK', 'CMD_VEL', 'COST', 'GOAL_POSE', 'LATCHED', 'LATEST', 'MAP', 'MAP_FRAME', 'METADATA_NAME', 'OBSTACLES',
-    'ODOM', 'OFFERED_QOS', 'PLAN', 'RELIABLE', 'ROBOT_TOPICS', 'ROBOT_TOPIC_PATTERN', 'SHARED_TOPICS',
+    'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS', 'ROBOT_TOPIC_PATTERN', 'SHARED_TOPICS',
     'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS', 'TRAILER_POSE', 'TYPES', 'WAYPOINT', 'is_interface_topic',
     'message_type',
     'metadata_key', 'offered_qos', 'offered_qos_profiles', 'robot_topic', 'scenario_metadata', 'split_robot_topic',
@@ -55,6 +55,11 @@ OBSTACLES = '/obstacles'   # map node: circles and walls
 MAP = '/map'               # map node: occupancy grid of the workspace
 CLOCK = '/clock'           # fastep-clock (or a replay): simulated time
 SHARED_TOPICS = (OBSTACLES, MAP, CLOCK)
+
+# fastep-record's own status, in its node's namespace (`/recorder/recording`; not recorded by default): a
+# DiagnosticStatus (STATUS_QOS) whose values count the messages received per topic, so a launcher can tell the
+# recorder hears a robot before the run starts.
+RECORDING = '~/recording'
 
 MAP_FRAME = 'map'          # frame of every pose; a robot's own frame is `<name>/base_link`
 

@@ -59,6 +59,7 @@ def start_robot(g: Graph, world: str = WORLD.format(extra=''), goal: bool = True
     h.record_status(NS)
     h.record(f'{NS}/odom', Odometry)
     h.wait_status(NS, lambda s: s['message'] == 'idle', 60.0, 'the planner to know the world')
+    h.wait_heard(f'{NS}/odom')   # the run is judged from this odometry: all of it
     if goal:
         send_latched_goal(h, GOAL)
     return h

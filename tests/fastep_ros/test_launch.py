@@ -10,6 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
+from rosbags.highlevel import AnyReader
 
 from fastep_core.scenario import load_scenario
 from fastep_core.simulator import simulate
@@ -41,10 +42,10 @@ def alive(pid: int) -> bool:
 
 def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
     scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
-    out, plot = tmp_path / 'live.json', tmp_path / 'live.png'
+    out, plot, recorded = tmp_path / 'live.json', tmp_path / 'live.png', tmp_path / 'live.mcap'
     env = isolated_env(free_domain(), tmp_path / 'roslog')
     result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '10', '--seed', '0',
-                  '--json', str(out), '--plot', str(plot)], env, timeout=120)
+                  '--json', str(out), '--plot', str(plot), '--record', str(recorded)], env, timeout=120)
     assert result.returncode == 0, result.stdout + result.stderr
     assert 'Traceback' not in result.stderr
     assert 'one_circle: 1 robot(s) on their way' in result.stdout
@@ -67,6 +68,13 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
         assert rows[0][1:3] == pytest.approx([2.0, 10.0], abs=1e-6)
         # one odometry message per control tick (lock step): at 2 m/s rows are at most ~0.12 m apart
         assert max(((b[1] - a[1]) ** 2 + (b[2] - a[2]) ** 2) ** 0.5 for a, b in zip(rows, rows[1:])) <= 0.15
+    # The recording holds the whole run, from the start state (stamped 0, before the clock started) on.
+    with AnyReader([recorded]) as reader:   # rosbags: a reader independent of ours
+        connections = [c for c in reader.connections if c.topic == '/r1/odom']
+        odometry = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=connections)]
+    stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in odometry]
+    assert stamps[0] == 0.0 and (odometry[0].pose.pose.position.x, odometry[0].pose.pose.position.y) == (2.0, 10.0)
+    assert stamps[-1] >= rows[-1][0] - 1e-9
 
 
 def launch_under_way(tmp_path: Path) -> tuple[subprocess.Popen[str], list[int]]:

@@ -162,6 +162,51 @@ def test_plant_integrates_fixed_steps_and_zeroes_bad_or_old_commands(context: An
         node.destroy_node()
 
 
+def test_before_time_starts_the_plant_publishes_its_start_once_it_hears_commands(context: Any) -> None:
+    """A launcher starts the clock only once every path of the loop is up. DDS matches the two ends of a
+    connection each on its own, under load seconds apart: a robot whose planner had matched its plant's odometry
+    but was not sent it stood still for 16 s of a two-robot run. So while simulated time holds at 0 the plant
+    publishes its start state (stamped 0), once its cmd_vel reader is matched: a planner that hears it knows both
+    ends of both paths are up."""
+    import time
+
+    from rclpy.executors import SingleThreadedExecutor
+    from rclpy.time import Time
+
+    plant = make(PlantNode, context, start=[2.0, 3.0], use_sim_time=True)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(plant)
+    heard: list[Odometry] = []
+    listener = plant.create_subscription(Odometry, 'odom', heard.append, 10)
+    planner = None
+    try:
+        end = time.monotonic() + 1.0
+        while time.monotonic() < end:
+            executor.spin_once(timeout_sec=0.05)
+        assert heard == [], 'no commander yet: the plant does not say it is ready'
+        plant.destroy_subscription(listener)
+        planner = make(PlannerNode, context, use_sim_time=True, workspace=[0.0, 0.0, 10.0, 10.0])
+        assert planner.odom_heard == 0
+        executor.add_node(planner)
+        deadline = time.monotonic() + 20.0
+        while planner.odom_heard < 2 and time.monotonic() < deadline:
+            executor.spin_once(timeout_sec=0.1)
+        assert planner.odom_heard >= 2 and planner.cmd_pub.get_subscription_count() == 1
+        assert planner.odom is not None and plant.tick is None   # simulated time has not started
+        assert convert.odometry_position(planner.odom) == (2.0, 3.0)
+        assert convert.stamp_to_seconds(planner.odom.header.stamp) == 0.0
+        # Once time runs, the plant publishes integrated steps only.
+        plant.get_clock().set_ros_time_override(Time(nanoseconds=50_000_000, clock_type=plant.get_clock().clock_type))
+        plant.on_timer()
+        plant.on_at_rest_tick()
+        assert plant.tick == 2 and plant.at_rest_timer.is_canceled()
+    finally:
+        executor.shutdown(timeout_sec=1.0)
+        if planner is not None:
+            planner.destroy_node()
+        plant.destroy_node()
+
+
 def test_plant_tractor_trailer_publishes_consistent_odometry(context: Any) -> None:
     node = make(PlantNode, context, model='tractor_trailer', start=[0.0, 0.0, 0.5, 0.5], length=1.2)
     seen: list[Odometry] = []
@@ -186,6 +231,40 @@ def test_clock_tick_plan() -> None:
     assert tick_plan(20.0, 0.05, 400.0) == pytest.approx((0.0025, 0.05))
     period, increment = tick_plan(100.0, 0.05, 400.0)
     assert period == pytest.approx(0.0025) and increment == pytest.approx(0.25)
+
+
+def test_clock_lock_step_waits_longer_for_a_first_answer_and_says_the_time_again_while_it_waits(
+        context: Any) -> None:
+    """/clock is best effort and a node may be matched after the run started: a node silent since the start is
+    late, not dead (waited for up to wait_timeout, not sync_timeout), and the time is said again while waiting."""
+    from fastep_ros.clock import ClockNode
+
+    clock = make(ClockNode, context, rtf=1.0, step=0.05, sync_topics=['/r1/cmd_vel'], sync_timeout=0.2,
+                 wait_timeout=30.0)
+    sent: list[float] = []
+    clock.pub.publish = lambda msg: sent.append(convert.stamp_to_seconds(msg.clock))  # type: ignore[method-assign]  # keep what it says
+    wall = [0.0]
+    clock.seconds = lambda: wall[0]  # type: ignore[method-assign]  # the test's wall clock
+    commands = clock.create_publisher(Twist, '/r1/cmd_vel', 10)   # a planner on the graph
+    try:
+        assert clock.count_publishers('/r1/cmd_vel') == 1
+        clock.matched_at = -1.0   # its subscribers are there: no more holding
+        clock.sync['/r1/cmd_vel'].sub = commands   # subscribed (only its presence counts here)
+        clock.on_tick()
+        assert sent == [pytest.approx(0.05)]   # the first tick waits for nobody
+        wall[0] = 1.0   # beyond sync_timeout, but the planner has never answered: still waited for
+        clock.on_tick()
+        wall[0] = 1.05
+        clock.on_tick()
+        assert sent == [pytest.approx(0.05)] * 2 and clock.ticks == 1, 'said again, once per HOLD_PERIOD'
+        wall[0] = 1.2
+        clock.on_sync('/r1/cmd_vel')   # it answers: the next tick at once
+        assert clock.ticks == 2 and sent[-1] == pytest.approx(0.1)
+        wall[0] = 1.5   # now silent beyond sync_timeout after having answered: taken for dead, time goes on
+        clock.on_tick()
+        assert clock.ticks == 3 and clock.sync['/r1/cmd_vel'].absent
+    finally:
+        clock.destroy_node()
 
 
 def test_launch_passes_the_scenario_to_the_nodes() -> None:

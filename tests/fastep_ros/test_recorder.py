@@ -103,11 +103,12 @@ def test_sigkill_leaves_a_recoverable_file(recorded: dict[str, Any], tmp_path: P
 def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
     """map, plant, planner and clock on simulated time, recorded with use_sim_time: fastep-report reads the
     live file as it reads a fastep-sim one (same topics), and replays are driven by the same QoS metadata."""
+    from diagnostic_msgs.msg import DiagnosticStatus
     from geometry_msgs.msg import PoseStamped
 
     from fastep_testing.graph import FAST, ONE_CIRCLE, Helper, write
     from msg_tools import convert, report
-    from msg_tools.interface import RELIABLE
+    from msg_tools.interface import RELIABLE, STATUS_QOS
 
     g = Graph(tmp_path)
     try:
@@ -122,6 +123,10 @@ def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
         h = g.helper = Helper(g.domain)
         h.record_status('/r1')
         h.wait_status('/r1', lambda s: s['message'] == 'idle', 90.0, 'the planner to know the world')
+        # The recorder says what it has received: its status counts the plant's start state before time runs.
+        said = h.record('/recorder/recording', DiagnosticStatus, STATUS_QOS)
+        h.spin_until(lambda: any(v.key == '/r1/odom' for m in said for v in m.values), 60.0,
+                     'the recorder to hear /r1/odom')
         goal = h.node.create_publisher(PoseStamped, '/r1/goal_pose', RELIABLE)
         # The planner and the recorder must both have matched the goal publisher before it sends.
         h.spin_until(lambda: goal.get_subscription_count() >= 2, 60.0, 'the planner and the recorder on goal_pose')
@@ -145,6 +150,9 @@ def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
     assert 0.0 < row['time_to_goal'] < 60.0 and row['min_clearance'] > 0.0 and row['activations'] >= 1
     # Log times are simulated time (the goal was sent at about 0 s of it).
     assert recording.end_time * 1e-9 < 100.0
+    # The run is there from its start: the start state, stamped 0, before the first step.
+    first = next(recording.messages(['/r1/odom'])).message
+    assert convert.stamp_to_seconds(first.header.stamp) == 0.0 and convert.odometry_position(first) == (2.0, 10.0)
 
 
 def test_bad_parameters_are_one_line_and_exit_2(tmp_path: Path) -> None:
