@@ -118,8 +118,9 @@ def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
         g.start('rec', 'recorder', output=str(out), scenario=str(scenario), use_sim_time=True)
         g.start('plant', 'plant', '/r1', model='point_mass', start=[2.0, 10.0], use_sim_time=True)
         g.start('planner', 'planner', '/r1', model='point_mass', robot_radius=0.5, use_sim_time=True, **FAST)
-        # Time holds at 0 until the plant, the planner and the recorder (its time source) follow /clock.
-        g.start('clock', 'clock', rtf=10.0, step=0.05, wait_for_subscribers=3)
+        # Time holds at 0 until the plant, the planner, the recorder (twice: its time source, and to record it)
+        # and, last, the helper follow /clock.
+        g.start('clock', 'clock', rtf=10.0, step=0.05, wait_for_subscribers=5)
         h = g.helper = Helper(g.domain)
         h.record_status('/r1')
         h.wait_status('/r1', lambda s: s['message'] == 'idle', 90.0, 'the planner to know the world')
@@ -127,6 +128,7 @@ def test_live_run_recording_reports_like_an_offline_one(tmp_path: Path) -> None:
         said = h.record('/recorder/recording', DiagnosticStatus, STATUS_QOS)
         h.spin_until(lambda: any(v.key == '/r1/odom' for m in said for v in m.values), 60.0,
                      'the recorder to hear /r1/odom')
+        h.follow_clock()
         goal = h.node.create_publisher(PoseStamped, '/r1/goal_pose', RELIABLE)
         # The planner and the recorder must both have matched the goal publisher before it sends.
         h.spin_until(lambda: goal.get_subscription_count() >= 2, 60.0, 'the planner and the recorder on goal_pose')
