@@ -29,7 +29,8 @@ __all__ = ['MAX_ALIASES', 'MAX_BYTES', 'MAX_DEPTH', 'MAX_INTEGER_DIGITS', 'MAX_N
            'MisreadNumber', 'load']
 
 MAX_BYTES = 4 * 1024 * 1024
-"""Largest document (bytes): ~80,000 obstacles; PyYAML reads ~0.1-0.2 MB/s here, so 4 MiB takes 20-40 s."""
+"""Largest document (bytes): ~50,000 obstacles. Pure-Python PyYAML reads 0.07-0.13 MB/s on a loaded 2-core
+machine, so this is up to about a minute in which a node cannot be stopped (rclpy holds SIGINT)."""
 MAX_DEPTH = 64
 """Deepest nesting of collections, counted through aliases (a scenario needs 7: obstacles[i].motion.waypoints[j])."""
 MAX_ALIASES = 10_000
