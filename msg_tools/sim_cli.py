@@ -7,9 +7,9 @@
 Exit 0 when the runs were simulated (arrived or not), 2 with one line on stderr for bad input.
 
 Runs are reported as they finish: each run's summary is printed and its JSON appended to --json as soon as it
-ends, and only the first run is kept (for --plot and --mcap), so memory does not grow with --runs. Ctrl-C (or
-SIGTERM) stops the batch: the JSON file is closed as a valid document holding every finished run, the figure
-and the recording of the first run are written if it finished, and the command exits 130 (143 on SIGTERM).
+ends, the figure (--plot) and recording (--mcap) of the first run are written as soon as it ends, and no run
+is kept after that, so memory does not grow with --runs. Ctrl-C (or SIGTERM) stops the batch: the JSON file is
+closed as a valid document holding every finished run, and the command exits 130 (143 on SIGTERM).
 
 Why here and not in fastep_core: the simulation is fastep_core's, but --plot draws with msg_tools.plots and
 --mcap records ROS messages with msg_tools.sim_mcap, and fastep_core imports nothing above itself.
@@ -153,7 +153,6 @@ def _run(argv: Sequence[str] | None) -> int:
         json_runs = _JsonRuns(args.json, scenario.name, args.algorithm) if args.json is not None else None
     except OSError as exc:
         return fail(PROG, f'cannot write output: {exc}')
-    first: Run | None = None   # the only run kept (for --plot and --mcap): memory does not grow with --runs
     done, stop = 0, None
     try:
         try:
@@ -166,14 +165,17 @@ def _run(argv: Sequence[str] | None) -> int:
                         json_runs.add(run)   # before the summary: a run printed is a run in the file
                     print(_summary(run), flush=True)
                     done += 1
-                    if run_seed == args.seed and (args.plot is not None or recorder is not None):
-                        first = run
+                    if run_seed == args.seed:
+                        _write_first_run(args, scenario, run, recorder)
+                        recorder = None   # its messages too
+                    del run   # no run is kept: memory does not grow with --runs
         except KeyboardInterrupt as exc:   # Ctrl-C, or SIGTERM (_Terminated): keep what finished
             stop = exc
         finally:
             if json_runs is not None:
                 json_runs.close()
-        _write_outputs(args, scenario, json_runs, first, recorder)
+        if json_runs is not None:
+            print(f'wrote {json_runs.path}')
     except OSError as exc:
         return fail(PROG, f'cannot write output: {exc}')
     if stop is None:
@@ -183,13 +185,9 @@ def _run(argv: Sequence[str] | None) -> int:
     return 128 + signal.SIGTERM if isinstance(stop, _Terminated) else INTERRUPTED
 
 
-def _write_outputs(args: argparse.Namespace, scenario: Scenario, json_runs: _JsonRuns | None, first: Run | None,
-                   recorder: SimRecorder | None) -> None:
-    """Say where the JSON went; draw and record the first run if it finished."""
-    if json_runs is not None:
-        print(f'wrote {json_runs.path}')
-    if first is None:
-        return
+def _write_first_run(args: argparse.Namespace, scenario: Scenario, first: Run, recorder: SimRecorder | None) -> None:
+    """The figure and the recording of the first run, as soon as it has finished (a bad path fails here, not
+    after the whole batch; a batch stopped later keeps them)."""
     if args.plot is not None:
         from msg_tools.plots import plot_paths  # matplotlib only when a figure is asked for
         args.plot.parent.mkdir(parents=True, exist_ok=True)
