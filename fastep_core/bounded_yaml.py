@@ -28,9 +28,11 @@ from yaml.nodes import MappingNode, Node, ScalarNode, SequenceNode
 __all__ = ['MAX_ALIASES', 'MAX_BYTES', 'MAX_DEPTH', 'MAX_INTEGER_DIGITS', 'MAX_NODES', 'LimitError',
            'MisreadNumber', 'load']
 
-MAX_BYTES = 4 * 1024 * 1024
-"""Largest document (bytes): ~50,000 obstacles. Pure-Python PyYAML reads 0.07-0.13 MB/s on a loaded 2-core
-machine, so this is up to about a minute in which a node cannot be stopped (rclpy holds SIGINT)."""
+MAX_BYTES = 1024 * 1024
+"""Largest document (bytes): 12,000-20,000 obstacles, ten times what the planners are measured with. Pure-Python
+PyYAML reads 0.07-0.13 MB/s on a loaded 2-core machine (1 MB: 8-15 s), time in which a node cannot be stopped
+(rclpy holds SIGINT), so the bound is also on that. The densest such file has ~500,000 nodes: within MAX_NODES,
+which therefore only aliases can reach."""
 MAX_DEPTH = 64
 """Deepest nesting of collections, counted through aliases (a scenario needs 7: obstacles[i].motion.waypoints[j])."""
 MAX_ALIASES = 10_000
