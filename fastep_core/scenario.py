@@ -487,7 +487,10 @@ def _parse(data: Any, default_name: str, label: str) -> Scenario:
 
 
 def parse_scenario(data: object, *, default_name: str = 'scenario') -> Scenario:
-    """Validate an already-loaded mapping (e.g. from ``yaml.safe_load``) and build a Scenario.
+    """Validate an already-loaded mapping and build a Scenario.
+
+    Load untrusted text with ``bounded_yaml.load`` (what ``load_scenario`` does), not ``yaml.safe_load``: the
+    validation walks the lists it is given, and an alias bomb's are 10^9 items long.
 
     ``default_name`` is the scenario's name when the mapping has no ``name:`` key; error messages name the
     scenario by its ``name:`` if that is a usable string, else by ``default_name``.
