@@ -1,10 +1,13 @@
 """Scenario files (format v1, YAML): a workspace, its obstacles, the robots and optional planner overrides.
 
 A scenario is loaded from a path or from a built-in name (the ``fastep_core/scenarios/*.yaml`` files that ship
-with the package), parsed with ``yaml.safe_load`` only, and validated strictly: unknown keys are an error at
-every level, every coordinate must be a real finite number, and starts and goals must be free. Every problem
-raises :class:`~fastep_core.errors.ScenarioError` with a one-line message that names the file (or scenario)
-and the offending key path, e.g. ``scenario 'x.yaml': robots[1].radius must be > 0, got -1``.
+with the package), parsed with PyYAML's safe loader within bounds (:mod:`fastep_core.bounded_yaml`: size,
+nesting, aliases; YAML 1.1 numbers that do not mean what their digits say are refused), and validated
+strictly: unknown keys are an error at every level, every coordinate must be a real finite number, and starts
+and goals must be free. Every problem raises :class:`~fastep_core.errors.ScenarioError` with a one-line
+message that names the file (or scenario) and the offending key path, e.g.
+``scenario 'x.yaml': robots[1].radius must be > 0, got -1``. Messages show at most a few dozen characters of
+an offending value, however large it is.
 
 The format is documented in ``docs/scenarios.md``.
 """
@@ -22,8 +25,10 @@ from typing import Any, Callable, Mapping, Sequence
 
 import yaml
 
+from fastep_core import bounded_yaml
 from fastep_core.errors import GoalError, ParameterError, ScenarioError
 from fastep_core.geometry import Circle, Obstacle, Segment
+from fastep_core.kinematics.tractor_trailer import wrap_angle
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
@@ -46,6 +51,10 @@ _SUFFIX = '.yaml'
 _TEXT_EXPONENT = re.compile(r'([-+]?)([0-9]+\.?[0-9]*|\.[0-9]+)[eE]([-+]?)([0-9]+)')
 # Relative slack when comparing a tractor-trailer's radius with its clearance sqrt(L^2 + b^2) / 2.
 _CLEARANCE_RTOL = 1e-9
+# Start headings beyond one turn either way are normalised into (-pi, pi]; within it they are kept as written.
+_HEADING_TURN = math.tau
+# _show renders a value at most this deep (and cuts it at its length limit), whatever its size.
+_SHOW_DEPTH = 8
 
 
 @dataclass(frozen=True)
@@ -85,10 +94,70 @@ def _one_line(text: str) -> str:
 
 
 def _show(value: Any, limit: int = 60) -> str:
-    """A short, single-line rendering of an offending value."""
-    text = 'null' if value is None else repr(value)
-    text = _one_line(text)
+    """A short, single-line rendering of an offending value: its repr, cut at ``limit`` characters.
+
+    Never the repr of the whole value: a "billion laughs" list (10^9 items sharing a few lists) has a repr
+    that takes hours and more memory than the machine has; this walks only as far as the limit.
+    """
+    text = 'null' if value is None else _one_line(_bounded_repr(value, limit + 1))
     return text if len(text) <= limit else text[:limit - 3] + '...'
+
+
+def _bounded_repr(value: Any, budget: int) -> str:
+    """repr(value) up to about ``budget`` characters (as repr writes it, for the values YAML gives)."""
+    parts: list[str] = []
+    used = 0
+
+    def emit(text: str) -> None:
+        nonlocal used
+        parts.append(text)
+        used += len(text)
+
+    def items(opening: str, entries: Any, closing: str, depth: int, pairs: bool = False) -> None:
+        emit(opening)
+        for i, entry in enumerate(entries):
+            if used > budget:
+                return
+            if i:
+                emit(', ')
+            if pairs:
+                walk(entry[0], depth + 1)
+                emit(': ')
+                walk(entry[1], depth + 1)
+            else:
+                walk(entry, depth + 1)
+        emit(closing)
+
+    def walk(item: Any, depth: int) -> None:
+        if used > budget:
+            return
+        if depth > _SHOW_DEPTH:
+            emit('...')
+        elif isinstance(item, dict):
+            items('{', item.items(), '}', depth, pairs=True)
+        elif isinstance(item, list):
+            items('[', item, ']', depth)
+        elif isinstance(item, tuple):
+            items('(', item, ',)' if len(item) == 1 else ')', depth)
+        elif isinstance(item, (set, frozenset)) and item:
+            items('{', item, '}', depth)
+        elif isinstance(item, (str, bytes)):
+            emit(repr(item[:budget]))
+        elif isinstance(item, int) and not isinstance(item, bool) and item.bit_length() > 4 * budget:
+            emit(f'an integer of {_digit_count(item)} digits')
+        else:
+            emit(repr(item))
+
+    walk(value, 0)
+    return ''.join(parts)
+
+
+def _digit_count(value: int) -> str:
+    """'400', or 'about 5000' beyond the digits Python converts (repr raises ValueError there)."""
+    try:
+        return str(len(str(abs(value))))
+    except ValueError:
+        return f'about {int(value.bit_length() * math.log10(2)) + 1}'
 
 
 def _fail(label: str, message: str) -> ScenarioError:
@@ -113,7 +182,7 @@ def _mapping(value: Any, path: str) -> Mapping[str, Any]:
 def _check_keys(data: Mapping[str, Any], path: str, allowed: Sequence[str], required: Sequence[str]) -> None:
     for key in data:
         if key not in allowed:
-            raise _Invalid(f'{path}: unknown key {key!r} (allowed: {", ".join(allowed)})')
+            raise _Invalid(f'{path}: unknown key {_show(key)} (allowed: {", ".join(allowed)})')
     for key in required:
         if key not in data:
             raise _Invalid(f'{path}: missing required key {key!r}')
@@ -125,21 +194,35 @@ def _list(value: Any, path: str) -> list[Any]:
     return value
 
 
-def _number(value: Any, path: str) -> float:
-    """A real, finite number (bool, strings, null, .nan and .inf are rejected)."""
+def _finite(value: Any) -> float | None:
+    """value as a float if it is a real, finite number (not a bool, a string, null, .nan or .inf), else None."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
         try:
             number = float(value)
-        except OverflowError:
-            number = math.inf
+        except OverflowError:   # an integer beyond 1.8e308
+            return None
         if math.isfinite(number):
             return number
-    raise _Invalid(f'{path} must be a finite number, got {_show(value)}{_text_number_hint(value)}')
+    return None
+
+
+def _number(value: Any, path: str) -> float:
+    """A real, finite number (bool, strings, null, .nan and .inf are rejected)."""
+    number = _finite(value)
+    if isinstance(value, bounded_yaml.MisreadNumber):
+        raise _Invalid(f'{path} is {_show(str(value)).strip(chr(39))}, which YAML 1.1 reads as {value.reading}: '
+                       f'{value.fix}')
+    if number is None:
+        raise _Invalid(f'{path} must be a finite number, got {_show(value)}{_text_number_hint(value)}')
+    return number
 
 
 def _text_number_hint(value: Any) -> str:
-    """Why a number-looking string is text: YAML 1.1 wants 1.0e-3 (a dot and a signed exponent), or quotes."""
-    if not isinstance(value, str):
+    """Why a number-looking string is text: YAML 1.1 wants 1.0e-3 (a dot and a signed exponent), or quotes;
+    045 and 50:00 mean 37 and 3000 in YAML 1.1, and 08 is text (bounded_yaml.MisreadNumber)."""
+    if isinstance(value, bounded_yaml.MisreadNumber):
+        return f' ({value.advice})'   # _number has its own message for these; other callers use the hint
+    if not isinstance(value, str) or len(value) > 100:
         return ''
     match = _TEXT_EXPONENT.fullmatch(value.strip())
     if match:
@@ -184,7 +267,7 @@ def _text(value: Any, path: str) -> str:
         raise _Invalid(f'{path} must be a non-empty string, got {_show(value)}')
     if '\n' in value or '\r' in value:
         raise _Invalid(f'{path} must be a single line, got {_show(value)}')
-    return value
+    return str(value)   # a plain str, also for a MisreadNumber (name: 045 is the text '045')
 
 
 # ----------------------------------------------------------------------------------------------- sections
@@ -223,7 +306,7 @@ def _obstacle(value: Any, path: str) -> Obstacle:
         raise _Invalid(f'{path} must have exactly one key ({kinds}), got {_show(sorted(entry))}')
     (kind, body), = entry.items()
     if kind not in _OBSTACLE_PARSERS:
-        raise _Invalid(f'{path}: unknown key {kind!r} (allowed: {kinds})')
+        raise _Invalid(f'{path}: unknown key {_show(kind)} (allowed: {kinds})')
     return _OBSTACLE_PARSERS[kind](body, f'{path}.{kind}')
 
 
@@ -267,12 +350,24 @@ def _robot(value: Any, path: str) -> RobotSpec:
                 raise _Invalid(f'{path}.{key} is only valid for model tractor_trailer, not {model}')
     n = _START_LENGTH[model]
     start = _numbers(data['start'], f'{path}.start', n, '[x, y]' if n == 2 else '[x, y, theta0, theta1]')
+    start = start[:2] + tuple(_heading(theta) for theta in start[2:])
     robot = RobotSpec(name=name, model=model, start=start, goal=_point(data['goal'], f'{path}.goal'),
                       radius=_positive(data['radius'], f'{path}.radius'),
                       **_tractor_dimensions(data, path))
     if model == 'tractor_trailer':
         _check_tractor_radius(robot, path)
     return robot
+
+
+def _heading(theta: float) -> float:
+    """A start heading as given, or normalised into (-pi, pi] when it is more than a turn either way.
+
+    A heading of 1e15 rad is a direction like any other, but as a float it has 0.125 rad steps: the model's
+    heading changes of a few mrad per step were lost in it, the robot could not turn and drove off the map.
+    Normalising keeps the direction (atan2 of sin and cos: libm reduces exactly, unlike a remainder by the
+    float 2 pi); headings within a turn stay bit for bit what the file says.
+    """
+    return theta if abs(theta) <= _HEADING_TURN else wrap_angle(theta)
 
 
 def _check_tractor_radius(robot: RobotSpec, path: str) -> None:
@@ -291,22 +386,29 @@ def _robots(value: Any) -> tuple[RobotSpec, ...]:
     seen: dict[str, int] = {}
     for i, robot in enumerate(robots):
         if robot.name in seen:
-            raise _Invalid(f'robots[{i}].name {robot.name!r} is already used by robots[{seen[robot.name]}]')
+            raise _Invalid(f'robots[{i}].name {_show(robot.name)} is already used by robots[{seen[robot.name]}]')
         seen[robot.name] = i
     return robots
 
 
 def _planner(value: Any) -> PlannerParams:
+    """The overrides, each checked to be a finite number here first: PlannerParams' messages show the whole
+    value (and math.isfinite raises OverflowError on a 400-digit integer)."""
     defaults = PlannerParams()
     if value is None:
         return defaults
     overrides = _mapping(value, 'planner')
-    unknown = {k: v for k, v in overrides.items() if k not in PlannerParams.names()}
+    names = PlannerParams.names()
+    unknown = sorted(key for key in overrides if key not in names)
     if unknown:
-        _apply(defaults, unknown, 'planner')   # raises, naming every unknown parameter
+        listed = ', '.join(_show(key, 40).strip("'") for key in unknown[:10])
+        more = f', ... ({len(unknown)} in all)' if len(unknown) > 10 else ''
+        raise _Invalid(f'planner: unknown planner parameter(s): {listed}{more}')
     for key, item in overrides.items():
         if _text_number_hint(item):
             _number(item, f'planner.{key}')   # raises, with the hint
+        if _finite(item) is None:
+            raise _Invalid(f'planner.{key}: planner parameter {key} must be a finite number, got {_show(item)}')
         _apply(defaults, {key: item}, f'planner.{key}')
     return _apply(defaults, overrides, 'planner')
 
@@ -321,7 +423,7 @@ def _apply(params: PlannerParams, overrides: Mapping[str, Any], path: str) -> Pl
 def _description(value: Any) -> str:
     if not isinstance(value, str):
         raise _Invalid(f'description must be a string, got {_show(value)}')
-    return value
+    return str(value)
 
 
 # ----------------------------------------------------------------------------------------------- placement
@@ -362,7 +464,7 @@ def _build(data: Any, default_name: str) -> Scenario:
     top = _mapping(data, 'top level')
     for key in top:
         if key not in _TOP_KEYS and not key.startswith(_IGNORED_PREFIX):
-            raise _Invalid(f'unknown top-level key {key!r} (allowed: {", ".join(_TOP_KEYS)}, '
+            raise _Invalid(f'unknown top-level key {_show(key)} (allowed: {", ".join(_TOP_KEYS)}, '
                            f'and keys starting with {_IGNORED_PREFIX!r}, which are ignored)')
     for key in ('workspace', 'robots'):
         if key not in top:
@@ -385,7 +487,10 @@ def _parse(data: Any, default_name: str, label: str) -> Scenario:
 
 
 def parse_scenario(data: object, *, default_name: str = 'scenario') -> Scenario:
-    """Validate an already-loaded mapping (e.g. from ``yaml.safe_load``) and build a Scenario.
+    """Validate an already-loaded mapping and build a Scenario.
+
+    Load untrusted text with ``bounded_yaml.load`` (what ``load_scenario`` does), not ``yaml.safe_load``: the
+    validation walks the lists it is given, and an alias bomb's are 10^9 items long.
 
     ``default_name`` is the scenario's name when the mapping has no ``name:`` key; error messages name the
     scenario by its ``name:`` if that is a usable string, else by ``default_name``.
@@ -400,17 +505,26 @@ def parse_scenario(data: object, *, default_name: str = 'scenario') -> Scenario:
 
 def _yaml_error(exc: yaml.YAMLError) -> str:
     """One line for a YAML error, with the (1-based) line and column where PyYAML knows them."""
+    what = 'YAML beyond the limits of scenario files' if isinstance(exc, bounded_yaml.LimitError) else \
+        'invalid YAML'
     if isinstance(exc, yaml.MarkedYAMLError):
         mark = exc.problem_mark or exc.context_mark
         parts = [p for p in (exc.context, exc.problem) if p]
         where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark is not None else ''
-        return f'invalid YAML{where}: {"; ".join(parts) or type(exc).__name__}'
-    return f'invalid YAML: {_one_line(str(exc))}'
+        return f'{what}{where}: {"; ".join(parts) or type(exc).__name__}'
+    return f'{what}: {_one_line(str(exc))[:200]}'
+
+
+def _too_big(size: int) -> str:
+    return f'the file has {size} bytes, more than scenario files may have ({bounded_yaml.MAX_BYTES}, ' \
+           f'{bounded_yaml.MAX_BYTES // 2 ** 20} MiB)'
 
 
 def _load_bytes(raw: bytes, default_name: str, label: str) -> Scenario:
+    if len(raw) > bounded_yaml.MAX_BYTES:
+        raise _fail(label, _too_big(len(raw)))
     try:
-        data = yaml.safe_load(raw)
+        data = bounded_yaml.load(raw)
     except yaml.YAMLError as exc:
         raise _fail(label, _yaml_error(exc)) from None
     return _parse(data, default_name, label)
@@ -459,6 +573,9 @@ def load_scenario(source: str | os.PathLike[str]) -> Scenario:
     path = Path(label)
     if path.is_file():
         try:
+            size = path.stat().st_size
+            if size > bounded_yaml.MAX_BYTES:   # before reading it: a scenario path may name any file
+                raise _fail(label, _too_big(size))
             raw = path.read_bytes()
         except OSError as exc:
             raise _fail(label, f'cannot read the file: {exc.strerror or exc}') from None

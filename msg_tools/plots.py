@@ -55,13 +55,20 @@ def title(what: str, algorithm: str = '', seed: int | None = None) -> str:
 
 
 def save(fig: Figure, out: str | Path, dpi: float | None = None) -> Path:
-    """Write the figure as PNG and close it."""
+    """Write the figure to exactly ``out`` (the format from its suffix, PNG without one) and close it.
+
+    The format is passed explicitly: given no suffix, matplotlib would write ``out.png`` instead of ``out``,
+    and the caller would report a file that does not exist.
+    """
     path = Path(out)
-    if dpi is None:
-        fig.savefig(path)
-    else:
-        fig.savefig(path, dpi=dpi)
-    plt.close(fig)
+    form = path.suffix[1:].lower() or 'png'
+    try:
+        if dpi is None:
+            fig.savefig(path, format=form)
+        else:
+            fig.savefig(path, format=form, dpi=dpi)
+    finally:
+        plt.close(fig)
     return path
 
 

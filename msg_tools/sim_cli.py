@@ -6,6 +6,11 @@
 
 Exit 0 when the runs were simulated (arrived or not), 2 with one line on stderr for bad input.
 
+Runs are reported as they finish: each run's summary is printed and its JSON appended to --json as soon as it
+ends, the figure (--plot) and recording (--mcap) of the first run are written as soon as it ends, and no run
+is kept after that, so memory does not grow with --runs. Ctrl-C (or SIGTERM) stops the batch: the JSON file is
+closed as a valid document holding every finished run, and the command exits 130 (143 on SIGTERM).
+
 Why here and not in fastep_core: the simulation is fastep_core's, but --plot draws with msg_tools.plots and
 --mcap records ROS messages with msg_tools.sim_mcap, and fastep_core imports nothing above itself.
 """
@@ -14,18 +19,36 @@ from __future__ import annotations
 
 import argparse
 import json
+import signal
 import sys
+import threading
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Sequence
+from types import FrameType
+from typing import IO, TYPE_CHECKING, Iterator, Sequence
 
-from fastep_core.cli import Parser, fail, guard, positive_int, seed
+from fastep_core.cli import INTERRUPTED, Parser, fail, guard, positive_int, seed
 from fastep_core.planning.algorithms import ALGORITHMS
-from fastep_core.scenario import builtin_names, load_scenario
+from fastep_core.scenario import Scenario, builtin_names, load_scenario
 from fastep_core.simulator import Run, simulate
+
+if TYPE_CHECKING:
+    from msg_tools.sim_mcap import SimRecorder
 
 __all__ = ['main']
 
 PROG = 'fastep-sim'
+FIGURE_SUFFIXES = ('.png', '.pdf', '.svg')
+"""What --plot writes, chosen by the file's suffix (matplotlib draws each; others are refused up front)."""
+
+
+def _figure_path(text: str) -> Path:
+    """argparse type of --plot: a file whose suffix names a format, so the file written is the one named."""
+    path = Path(text)
+    if path.suffix.lower() not in FIGURE_SUFFIXES:
+        raise argparse.ArgumentTypeError(f'the figure file must end in {", ".join(FIGURE_SUFFIXES)} (its format), '
+                                         f'got {text!r}')
+    return path
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -36,7 +59,8 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--runs', type=positive_int, default=1,
                    help='number of runs, seeds seed..seed+runs-1 (default: 1)')
     p.add_argument('--json', type=Path, metavar='OUT', help='write all runs as JSON')
-    p.add_argument('--plot', type=Path, metavar='OUT.png', help='draw the first run like the paper\'s Fig. 2')
+    p.add_argument('--plot', type=_figure_path, metavar='OUT.png',
+                   help='draw the first run like the paper\'s Fig. 2 (.png, .pdf or .svg)')
     p.add_argument('--mcap', type=Path, metavar='OUT.mcap',
                    help='record the first run as MCAP with the topics of a live run (msg_tools.sim_mcap)')
     p.add_argument('--list', action='store_true', help='list built-in scenarios and exit')
@@ -52,6 +76,55 @@ def _summary(run: Run) -> str:
                      f'path {r.path_length:.2f} m, time {when}, compute {r.compute_time * 1e3:.0f} ms, '
                      f'min clearance {r.min_clearance:.2f} m, activations {r.activations} ({r.status})')
     return '\n'.join(lines)
+
+
+class _JsonRuns:
+    """--json written as runs finish: the document's head at once, each run as it ends, the tail when the batch
+    stops. The bytes are those of json.dumps of the whole document, and a stopped batch leaves a valid one."""
+
+    def __init__(self, path: Path, scenario: str, algorithm: str) -> None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        self.path = path
+        self.file: IO[str] = path.open('w')
+        head = json.dumps({'scenario': scenario, 'algorithm': algorithm, 'runs': []})
+        self.file.write(head[:-len('[]}')] + '[')
+        self.count = 0
+
+    def add(self, run: Run) -> None:
+        self.file.write((', ' if self.count else '') + json.dumps(run.to_json()))   # one write: whole or nothing
+        self.file.flush()
+        self.count += 1
+
+    def close(self) -> None:
+        """End the document (once); a write error is the caller's, the file is closed either way."""
+        if self.file.closed:
+            return
+        try:
+            self.file.write(']}\n')
+        finally:
+            self.file.close()
+
+
+class _Terminated(KeyboardInterrupt):
+    """SIGTERM during the batch: stop as Ctrl-C does (a KeyboardInterrupt, so no `except Exception` in the
+    simulation takes it for a fault)."""
+
+
+def _on_sigterm(signum: int, frame: FrameType | None) -> None:
+    raise _Terminated
+
+
+@contextmanager
+def _sigterm_stops() -> Iterator[None]:
+    """While the batch runs, SIGTERM stops it as Ctrl-C does (signal handlers: main thread only)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGTERM, _on_sigterm)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGTERM, previous)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -76,30 +149,54 @@ def _run(argv: Sequence[str] | None) -> int:
         except ImportError as exc:
             return fail(PROG, f'--mcap needs the ROS 2 message packages: {exc}')
         recorder = SimRecorder(scenario, args.algorithm, args.seed)
-    runs = [simulate(scenario, args.algorithm, seed,
-                     observer=recorder.observe if recorder is not None and seed == args.seed else None)
-            for seed in range(args.seed, args.seed + args.runs)]
-    for run in runs:
-        print(_summary(run))
     try:
-        if args.json is not None:
-            doc = {'scenario': scenario.name, 'algorithm': args.algorithm, 'runs': [r.to_json() for r in runs]}
-            args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(json.dumps(doc) + '\n')
-            print(f'wrote {args.json}')
-        if args.plot is not None:
-            from msg_tools.plots import plot_paths  # matplotlib only when a figure is asked for
-            args.plot.parent.mkdir(parents=True, exist_ok=True)
-            plot_paths(scenario, runs[0], args.plot)
-            print(f'wrote {args.plot}')
-        if recorder is not None:
-            recorder.finish(runs[0])
-            args.mcap.parent.mkdir(parents=True, exist_ok=True)
-            count = recorder.write(args.mcap)
-            print(f'wrote {args.mcap} ({count} messages of the run with seed {args.seed})')
+        json_runs = _JsonRuns(args.json, scenario.name, args.algorithm) if args.json is not None else None
     except OSError as exc:
         return fail(PROG, f'cannot write output: {exc}')
-    return 0
+    done, stop = 0, None
+    try:
+        try:
+            with _sigterm_stops():
+                for run_seed in range(args.seed, args.seed + args.runs):
+                    run = simulate(scenario, args.algorithm, run_seed,
+                                   observer=recorder.observe if recorder is not None and run_seed == args.seed
+                                   else None)
+                    if json_runs is not None:
+                        json_runs.add(run)   # before the summary: a run printed is a run in the file
+                    print(_summary(run), flush=True)
+                    done += 1
+                    if run_seed == args.seed:
+                        _write_first_run(args, scenario, run, recorder)
+                        recorder = None   # its messages too
+                    del run   # no run is kept: memory does not grow with --runs
+        except KeyboardInterrupt as exc:   # Ctrl-C, or SIGTERM (_Terminated): keep what finished
+            stop = exc
+        finally:
+            if json_runs is not None:
+                json_runs.close()
+        if json_runs is not None:
+            print(f'wrote {json_runs.path}')
+    except OSError as exc:
+        return fail(PROG, f'cannot write output: {exc}')
+    if stop is None:
+        return 0
+    what = 'stopped by SIGTERM' if isinstance(stop, _Terminated) else 'interrupted'
+    print(f'{PROG}: {what} after {done} of {args.runs} runs; what finished is written', file=sys.stderr)
+    return 128 + signal.SIGTERM if isinstance(stop, _Terminated) else INTERRUPTED
+
+
+def _write_first_run(args: argparse.Namespace, scenario: Scenario, first: Run, recorder: SimRecorder | None) -> None:
+    """The figure and the recording of the first run, as soon as it has finished (a bad path fails here, not
+    after the whole batch; a batch stopped later keeps them)."""
+    if args.plot is not None:
+        from msg_tools.plots import plot_paths  # matplotlib only when a figure is asked for
+        args.plot.parent.mkdir(parents=True, exist_ok=True)
+        print(f'wrote {plot_paths(scenario, first, args.plot)}')
+    if recorder is not None:
+        recorder.finish(first)
+        args.mcap.parent.mkdir(parents=True, exist_ok=True)
+        count = recorder.write(args.mcap)
+        print(f'wrote {args.mcap} ({count} messages of the run with seed {args.seed})')
 
 
 if __name__ == '__main__':

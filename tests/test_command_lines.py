@@ -43,3 +43,37 @@ def test_unknown_flag_is_one_line_and_exit_2(name: str) -> None:
     assert done.stdout == ''
     assert done.stderr.startswith(f'{name}: error: ') and 'Traceback' not in done.stderr
     assert len(done.stderr.splitlines()) == 1, done.stderr
+
+
+# Every tool that loads a scenario, with how it is given one (issue "Hardening", item 3: a 500-byte alias bomb
+# hung them all, or ended in MemoryError).
+SCENARIO_TOOLS = {
+    'fastep-sim': ['{}'],
+    'fastep-bench': ['--scenarios', '{}', '--runs', '1', '--out', '{dir}'],
+    'fastep-launch': ['{}'],
+    'fastep-map': ['--ros-args', '-p', 'scenario:={}'],
+    'fastep-record': ['--ros-args', '-p', 'scenario:={}', '-p', 'output:={dir}/r.mcap'],
+}
+LAUGHS = 'x_a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n' + ''.join(
+    f"x_{b}: &{b} [{', '.join([f'*{a}'] * 9)}]\n" for a, b in zip('abcdefgh', 'bcdefghi'))
+HOSTILE = {
+    'alias_bomb': ('workspace: *i\n', 'more than 1000000 nodes once its aliases are expanded'),
+    'deep': ('x_deep: ' + '[' * 1000 + ']' * 1000 + '\nworkspace: [0, 0, 9, 9]\n', 'nested deeper than 64'),
+}
+
+
+@pytest.mark.parametrize('case', sorted(HOSTILE))
+@pytest.mark.parametrize('name', sorted(SCENARIO_TOOLS))
+def test_a_hostile_scenario_is_one_line_and_exit_2(tmp_path: Path, name: str, case: str) -> None:
+    from fastep_testing.graph import free_domain, isolated_env
+    text, words = HOSTILE[case]
+    path = tmp_path / f'{case}.yaml'
+    path.write_text(LAUGHS + text + 'robots:\n  - {name: r1, model: point_mass, start: [1, 1], goal: [5, 5], '
+                    'radius: 0.5}\n')
+    args = [arg.format(str(path), dir=tmp_path) for arg in SCENARIO_TOOLS[name]]
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    done = subprocess.run([sys.executable, '-m', console_scripts()[name], *args], capture_output=True, text=True,
+                          timeout=120, cwd=ROOT, env=env)
+    assert done.returncode == 2, done.stderr
+    assert words in done.stderr and 'Traceback' not in done.stderr, done.stderr
+    assert len(done.stderr.strip().splitlines()) == 1, done.stderr

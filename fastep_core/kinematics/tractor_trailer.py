@@ -40,6 +40,13 @@ __all__ = ['TractorTrailer', 'TractorTrailerController', 'hitch_angle', 'wrap_an
 
 FloatArray = NDArray[np.float64]
 MAX_STEER = 7.0 / 9.0 * math.pi / 2.0  # |phi| < (7/9)(pi/2) = 70 degrees
+HEADING_LIMIT = 2.0 ** 16
+"""|heading| (rad) beyond which integrate() first normalises theta0 and theta1 into (-pi, pi].
+
+A float heading of 1e15 rad has 0.125 rad steps: the few mrad a step turns were rounded away, the tractor
+could not turn and drove off the map. Up to 2^16 rad a float still resolves 1.5e-11 rad, and a run winds up a
+few thousand rad at most (2.75 rad/s at full lock for max_sim_time 1500 s), so runs within it are unchanged.
+"""
 
 
 def wrap_angle(a: float) -> float:
@@ -82,6 +89,8 @@ class TractorTrailer:
     def integrate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
         """One classical Runge-Kutta step with the command held over dt."""
         s = np.asarray(state, dtype=float)
+        if abs(s[2]) > HEADING_LIMIT or abs(s[3]) > HEADING_LIMIT:
+            s = np.array([s[0], s[1], wrap_angle(float(s[2])), wrap_angle(float(s[3]))])
         k1 = self.derivative(s, command)
         k2 = self.derivative(s + 0.5 * dt * k1, command)
         k3 = self.derivative(s + 0.5 * dt * k2, command)

@@ -655,3 +655,175 @@ def test_table2_s2_has_walls_on_the_way() -> None:
     assert len(obstacles) > obstacles.n_circles   # line obstacles present
     d = obstacles.path_distances(np.array(robot.start[:2]), np.array(robot.goal))
     assert (d[obstacles.n_circles:] < robot.radius).sum() >= 1
+
+
+# ----------------------------------------------------------------------------------------------- hostile files
+# Issue "Hardening", items 3, 17, 18, 24: what a hostile or careless scenario file did to every tool loading it.
+
+GOOD_ROBOT = "robots:\n  - {name: r1, model: point_mass, start: [5, 5], goal: [45, 45], radius: 0.5}\n"
+LAUGHS = ''.join(f"x_{b}: &{b} [{', '.join([f'*{a}'] * 9)}]\n" for a, b in zip('abcdefgh', 'bcdefghi'))
+BOMB = 'x_a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n' + LAUGHS   # 9^9 = 387 million items
+
+
+def good_file(tmp_path: Path, extra: str) -> Path:
+    return write(tmp_path, 'workspace: [0, 0, 50, 50]\n' + GOOD_ROBOT + extra)
+
+
+def test_alias_bomb_is_refused_before_it_is_expanded(tmp_path: Path) -> None:
+    assert len(BOMB) < 600
+    expect_error(good_file(tmp_path, BOMB), 'beyond the limits', 'more than 1000000 nodes once its aliases are '
+                 'expanded', 'line 10,')   # x_g (after 3 lines): 9^7 = 4.8 million items, the first over
+    expect_error(write(tmp_path, BOMB + 'workspace: *i\n' + GOOD_ROBOT), 'more than 1000000 nodes')
+
+
+def test_aliases_within_the_limits_load_and_mean_the_same(tmp_path: Path) -> None:
+    text = ('x_defaults: &robot {model: point_mass, radius: 0.5}\nworkspace: &ws [0, 0, 50, 50]\n'
+            'x_copy: *ws\nrobots:\n  - {<<: *robot, name: r1, start: [5, 45], goal: [45, 5]}\n'
+            '  - {<<: *robot, name: r2, start: [5, 5], goal: [45, 45]}\n'
+            'obstacles:\n  - circle: {center: [25, 25], radius: 4}\n  - segment: {start: [10, 30], end: [20, 30]}\n'
+            'name: base\n')
+    assert load_scenario(write(tmp_path, text)) == load_scenario(write(tmp_path, base(), 'plain.yaml'))
+
+
+def test_too_many_aliases(tmp_path: Path) -> None:
+    expect_error(good_file(tmp_path, 'x_r: &r 1\nx_list: [' + ', '.join(['*r'] * 10_001) + ']\n'),
+                 'more than 10000 aliases')
+    assert load_scenario(good_file(tmp_path, 'x_r: &r 1\nx_list: [' + ', '.join(['*r'] * 10_000) + ']\n'))
+
+
+def test_an_alias_inside_itself_is_refused(tmp_path: Path) -> None:
+    expect_error(good_file(tmp_path, 'x_loop: &a [1, *a]\n'), 'an alias refers to a collection that contains it')
+
+
+class CountedRepr:
+    """A value whose repr counts its calls: an error message must not render a huge value whole."""
+
+    calls = 0
+
+    def __repr__(self) -> str:
+        CountedRepr.calls += 1
+        return 'item'
+
+
+@pytest.mark.parametrize('where', ['workspace', 'robots.0.radius', 'planner.a', 'obstacles.0.circle',
+                                   'description'])
+def test_error_messages_never_render_a_huge_value(where: str) -> None:
+    huge = [CountedRepr()] * 1_000_000   # what an alias bomb builds: one object, shared
+    data = base()
+    *parents, last = where.split('.')
+    node: Any = data
+    for step in parents:
+        node = node[int(step)] if step.isdigit() else node.setdefault(step, {})
+    node[int(last) if last.isdigit() else last] = huge
+    CountedRepr.calls = 0
+    with pytest.raises(ScenarioError) as info:
+        parse_scenario(data)
+    assert CountedRepr.calls < 100 and len(str(info.value)) < 300, (CountedRepr.calls, str(info.value)[:300])
+
+
+def test_error_messages_never_show_a_huge_key_or_name(tmp_path: Path) -> None:
+    long = 'k' * 400_000   # within the 1 MiB file limit, also twice
+    assert len(bad(tmp_path, lambda d: d.update({long: 1}), 'unknown top-level key')) < 400
+    assert len(bad(tmp_path, lambda d: d.update(planner={long: 1}), 'unknown planner parameter')) < 400
+    assert len(bad(tmp_path, lambda d: d['obstacles'][0]['circle'].update({long: 1}), 'unknown key')) < 400
+    name = 'r' * 400_000
+    assert len(bad(tmp_path, lambda d: [r.update(name=name) for r in d['robots']], 'is already used')) < 400
+
+
+def test_a_huge_integer_planner_parameter_is_one_line(tmp_path: Path) -> None:
+    expect_error(good_file(tmp_path, 'planner: {n_fireflies: ' + '9' * 400 + '}\n'),
+                 'planner.n_fireflies: planner parameter n_fireflies must be a finite number, got an integer of 400 '
+                 'digits')
+
+
+def test_deep_nesting_is_refused_even_where_it_is_ignored(tmp_path: Path) -> None:
+    expect_error(good_file(tmp_path, 'x_deep: ' + '[' * 1000 + ']' * 1000 + '\n'),
+                 'collections nested deeper than 64 levels', 'line 4,')
+    expect_error(good_file(tmp_path, 'x_deep:\n' + ''.join('  ' * i + '- \n' for i in range(100))), 'deeper than 64')
+    assert load_scenario(good_file(tmp_path, 'x_deep: ' + '[' * 63 + ']' * 63 + '\n'))   # with the top level: 64
+    nested = 'x_a: &a ' + '[' * 40 + ']' * 40 + '\nx_b: ' + '[' * 30 + '*a' + ']' * 30 + '\n'
+    expect_error(good_file(tmp_path, nested), 'nested deeper than 64 levels once its aliases are expanded')
+
+
+def test_an_integer_longer_than_python_reads_is_refused(tmp_path: Path) -> None:
+    expect_error(good_file(tmp_path, 'x_big: ' + '7' * 5000 + '\n'), 'an integer of 5000 digits (at most 4300)')
+    expect_error(good_file(tmp_path, 'x_big: 0x' + 'f' * 5000 + '\n'), 'an integer of 5000 digits')
+    assert load_scenario(good_file(tmp_path, 'x_big: ' + '7' * 4300 + '\n'))   # ignored, as before
+
+
+def test_a_file_over_the_size_limit_is_not_read(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = good_file(tmp_path, 'x_pad: "' + 'x' * (1024 * 1024) + '"\n')
+
+    def refuse(self: Path) -> bytes:
+        raise AssertionError('read a file over the limit')
+
+    monkeypatch.setattr(Path, 'read_bytes', refuse)
+    expect_error(path, 'bytes, more than scenario files may have (1048576, 1 MiB)')
+
+
+@pytest.mark.parametrize('text', ['!!int abc', '!!float abc', '2001-02-30', '!!timestamp abc', '!!bool maybe',
+                                  '!!int ""', '!!int 0x'])
+def test_bad_tagged_scalars_are_invalid_yaml(tmp_path: Path, text: str) -> None:
+    expect_error(good_file(tmp_path, f'x_value: {text}\n'), 'invalid YAML at line 4, column 10: cannot read')
+
+
+# YAML 1.1 numbers (item 17): refused where their reading differs from their digits, naming the key.
+
+@pytest.mark.parametrize('text, reading, fix', [
+    ('[045, 25]', 'is 045, which YAML 1.1 reads as the octal number 37', 'write 45 without the leading zero'),
+    ('[-0_45, 25]', 'is -0_45, which YAML 1.1 reads as the octal number -37', 'write -45'),
+    ('[08, 25]', 'is 08, which YAML 1.1 reads as text', 'write 8 without the leading zero'),
+    ('[50:00, 25]', 'is 50:00, which YAML 1.1 reads as 3000 (base 60', 'write the number itself'),
+    ('[1:30.5, 25]', 'is 1:30.5, which YAML 1.1 reads as 90.5 (base 60', 'write the number itself'),
+])
+def test_yaml_1_1_numbers_that_change_are_refused(tmp_path: Path, text: str, reading: str, fix: str) -> None:
+    path = write(tmp_path, f'workspace: [0, 0, 50, 50]\nrobots:\n  - {{name: r1, model: point_mass, start: {text}, '
+                           'goal: [45, 45], radius: 0.5}\n')
+    expect_error(path, f'robots[0].start[0] {reading}', fix)
+
+
+def test_yaml_1_1_numbers_in_planner_and_workspace(tmp_path: Path) -> None:
+    expect_error(good_file(tmp_path, 'planner: {max_sim_time: 50:00}\n'), 'planner.max_sim_time is 50:00',
+                 '3000')
+    expect_error(write(tmp_path, 'workspace: [0, 0, 050, 50]\n' + GOOD_ROBOT), 'workspace[2] is 050',
+                 'octal number 40')
+
+
+def test_leading_zeros_that_change_nothing_load_as_their_digits_say(tmp_path: Path) -> None:
+    text = ('workspace: [00, 0, 50, 50]\nrobots:\n  - {name: r1, model: point_mass, start: [05, 007], '
+            'goal: [45, 45], radius: 0.5}\nplanner: {n_fireflies: 0x20, max_iter: 1_0}\nname: 045\n'
+            'x_note: 09:30\n')
+    scenario = load_scenario(write(tmp_path, text))
+    assert scenario.world.workspace == (0.0, 0.0, 50.0, 50.0) and scenario.robots[0].start == (5.0, 7.0)
+    assert (scenario.planner.n_fireflies, scenario.planner.max_iter) == (32, 10)
+    assert scenario.name == '045' and type(scenario.name) is str    # text, as a reader reads it
+
+
+# Headings (item 24): normalised beyond one turn, kept as written within it.
+
+@pytest.mark.parametrize('heading, expected', [
+    (1e15, math.atan2(math.sin(1e15), math.cos(1e15))), (-7.0, -7.0 + 2 * math.pi), (3.5, 3.5), (-6.0, -6.0),
+    (math.tau, math.tau)])
+def test_start_headings_beyond_a_turn_are_normalised(tmp_path: Path, heading: float, expected: float) -> None:
+    data = base()
+    data['robots'] = [dict(TRACTOR, start=[5, 5, heading, heading])]
+    start = load_scenario(write(tmp_path, data)).robots[0].start
+    assert start[2] == pytest.approx(expected, abs=1e-12) and start[3] == start[2]
+    assert abs(start[2]) <= math.tau
+
+
+def test_an_integer_too_long_for_repr_is_shown_by_its_size() -> None:
+    data = base()
+    data['robots'][0]['radius'] = 10 ** 5000   # parse_scenario takes Python values: repr() of it raises
+    with pytest.raises(ScenarioError, match=r'robots\[0\].radius must be a finite number, got an integer of about '
+                                            r'5001 digits'):
+        parse_scenario(data)
+
+
+def test_a_robot_started_at_a_huge_heading_stays_on_the_map(tmp_path: Path) -> None:
+    from fastep_core.simulator import simulate
+    data = base()
+    data.update(obstacles=[], robots=[dict(TRACTOR, start=[5, 5, 1e15, 1e15])])   # before: drove off to x = 90
+    run = simulate(load_scenario(write(tmp_path, data)), 'fastep', 0).robots[0]
+    rows = np.asarray(run.trajectory)
+    assert run.reached and rows[:, 1:3].min() >= 0.0 and rows[:, 1:3].max() <= 50.0

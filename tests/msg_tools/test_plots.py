@@ -160,3 +160,11 @@ def test_bench_example_paths_draw_the_optimum_and_one_run_per_planner(tmp_path: 
     written = plots.bench_figures([record('fastep', 0, 57.0, 0.1)], {}, tmp_path, prefix='t')
     assert [p.name for p in written] == ['t_path_length.png', 't_compute_time.png', 't_paths.png']
     assert all(p.read_bytes().startswith(PNG) for p in written)
+
+
+@pytest.mark.parametrize('name, magic', [('fig', PNG), ('fig.PNG', PNG), ('fig.svg', b'<?xml'), ('fig.pdf', b'%PDF')])
+def test_save_writes_exactly_the_file_it_is_given(tmp_path: Path, name: str, magic: bytes) -> None:
+    """Without a suffix matplotlib wrote fig.png and the commands said 'wrote fig' (issue "Hardening", 19)."""
+    path = plots.save(Figure(), tmp_path / name)
+    assert path == tmp_path / name and path.read_bytes().startswith(magic)
+    assert [p.name for p in tmp_path.iterdir()] == [name]

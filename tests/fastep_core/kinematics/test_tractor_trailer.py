@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from fastep_core.kinematics import TractorTrailer, TractorTrailerController, hitch_angle
+from fastep_core.kinematics import TractorTrailer, TractorTrailerController, hitch_angle, wrap_angle
 from fastep_testing.closed_loop import drive
 
 
@@ -41,3 +41,21 @@ def test_steering_is_bounded_by_70_degrees():
         for rel in np.linspace(-3.0, 3.0, 13):
             ctrl.xi = xi
             assert abs(ctrl.steering(np.array([0.0, 0.0, 0.0, rel]))) < math.radians(70.0) + 1e-12
+
+
+def test_a_huge_heading_still_turns():
+    """At 1e15 rad a float has 0.125 rad steps: each step's turn was rounded away (issue "Hardening", 24)."""
+    model, command = TractorTrailer(), np.array([1.0, 1.0])
+    huge = np.array([5.0, 5.0, 1e15, 1e15])
+    same = np.array([5.0, 5.0, wrap_angle(1e15), wrap_angle(1e15)])
+    for _ in range(20):
+        huge, same = model.integrate(huge, command, 0.05), model.integrate(same, command, 0.05)
+    assert np.array_equal(huge, same)
+    assert wrap_angle(float(huge[2]) - wrap_angle(1e15)) == pytest.approx(1.0)   # 20 steps of 0.05 rad
+
+
+def test_headings_within_the_limit_are_integrated_as_they_are():
+    model = TractorTrailer()
+    s = np.array([0.0, 0.0, 1000.0, 1000.5])
+    after = model.integrate(s, np.array([1.0, 0.5]), 0.05)
+    assert after[2] == pytest.approx(1000.025) and after[3] > 1000.0
