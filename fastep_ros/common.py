@@ -22,7 +22,7 @@ from fastep_core.cli import guard
 from fastep_core.errors import FastepError
 from fastep_ros.errors import StartupError  # re-exported: every node raises it next to declare()
 
-__all__ = ['StartupError', 'declare', 'node_main']
+__all__ = ['CLOCK_JUMP_LIMIT', 'StartupError', 'declare', 'guard_clock', 'node_main']
 
 
 _TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER, float: Parameter.Type.DOUBLE,
@@ -69,6 +69,63 @@ def declare(node: Node, name: str, default: Any, description: str, *, read_only:
     if isinstance(value, list) and not all(math.isfinite(v) for v in value if isinstance(v, float)):
         raise StartupError(f'parameter {name} must be finite, got {value}')
     return value
+
+
+CLOCK_JUMP_LIMIT = 3600.0  # simulated seconds a /clock message may run ahead of the last one unconfirmed
+
+
+class _ClockGuard:
+    """The /clock handler of a node on simulated time: rclpy's TimeSource.clock_callback behind two checks.
+
+    A message rclpy cannot turn into a time (sec < 0: "Seconds value must not be negative", raised inside the
+    executor, ended the node; nanosec >= 1e9) is ignored. A time that goes back, or runs more than
+    CLOCK_JUMP_LIMIT ahead of the last one, is taken only once the next message confirms it (comes at or after
+    it, within the limit): a lone message far off (sec = 2^31 - 1) is ignored, while a clock that really
+    restarts or jumps (a replay started from another time) costs one message. Each is a throttled warning.
+    """
+
+    def __init__(self, node: Node, deliver: Callable[[Any], None]) -> None:
+        self.node = node
+        self.deliver = deliver
+        self.last: float | None = None      # seconds of the last time taken
+        self.pending: float | None = None   # a jump waiting for its confirmation
+
+    def __call__(self, msg: Any) -> None:
+        sec, nanosec = int(msg.clock.sec), int(msg.clock.nanosec)
+        if sec < 0 or not 0 <= nanosec < 1_000_000_000:
+            self.warn(f'ignoring /clock message sec={sec} nanosec={nanosec}: not a valid time')
+            return
+        t = sec + nanosec * 1e-9
+        last, pending = self.last, self.pending
+        self.pending = None
+        if last is not None and not last <= t <= last + CLOCK_JUMP_LIMIT and \
+                not (pending is not None and pending <= t <= pending + CLOCK_JUMP_LIMIT):
+            self.pending = t
+            self.warn(f'ignoring /clock at {t:.9g} s after {last:.9g} s: a jump back or of more than '
+                      f'{CLOCK_JUMP_LIMIT:g} s ahead is taken only when the next message confirms it')
+            return
+        self.last = t
+        self.deliver(msg)
+
+    def warn(self, text: str) -> None:
+        self.node.get_logger().warning(text, throttle_duration_sec=5.0)
+
+
+def guard_clock(node: Node) -> None:
+    """Put _ClockGuard in front of the node's /clock handling (now, and if use_sim_time is switched on later).
+
+    rclpy builds the TimeSource and its /clock subscription inside Node.__init__; this reaches into both (private
+    attributes). Should they change, the node starts anyway, unguarded (the test of the guard fails then).
+    """
+    source = getattr(node, '_time_source', None)
+    deliver = getattr(source, 'clock_callback', None)
+    if source is None or deliver is None or isinstance(deliver, _ClockGuard):
+        return
+    guarded = _ClockGuard(node, deliver)
+    source.clock_callback = guarded
+    subscription = getattr(source, '_clock_sub', None)
+    if subscription is not None:
+        subscription.callback = guarded
 
 
 PARENT_ENV = 'FASTEP_PARENT_PID'

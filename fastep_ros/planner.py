@@ -24,7 +24,8 @@ cmd_vel) and odom_heard (own odometry messages taken)).
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
 run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry
-stamped more than max_extrapolation before the control time, or not finite; zero cmd_vel is sent). Levels: OK
+stamped more than max_extrapolation before the control time or more than odom_timeout after it, received
+before the clock went back, or not finite; zero cmd_vel is sent). Levels: OK
 (idle, kinematic, avoiding, arrived), WARN (waiting, stale), ERROR (failed, which includes a refused goal:
 reason is the goal check's message, e.g. "... is occupied ...").
 """
@@ -53,7 +54,7 @@ from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
-from fastep_ros.common import StartupError, declare, node_main
+from fastep_ros.common import StartupError, declare, guard_clock, node_main
 from msg_tools import convert, interface
 from msg_tools.interface import LATCHED, LATEST, RELIABLE, offered_qos
 
@@ -87,6 +88,7 @@ class PlannerNode(Node):
 
     def __init__(self, node_name: str = 'planner', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.params = self._declare_planner_params()
         self.algorithm = declare(self, 'algorithm', 'fastep', 'fastep (FAStep-Kinematic) or aco (ACO-Kinematic)',
                                  constraints='fastep | aco')
@@ -353,6 +355,10 @@ class PlannerNode(Node):
         if t - self.odom_received > self.odom_timeout:
             return None, f'odometry stale: none for {t - self.odom_received:.2f} s (odom_timeout ' \
                          f'{self.odom_timeout:g} s)'
+        if t < self.odom_received:
+            # The clock went back since it came (a restarted clock): how old it is is not known.
+            return None, f'odometry stale: received at {self.odom_received:.2f} s, after this node\'s clock ' \
+                         f'({t:.2f} s): the clock went back'
         if self.model == 'tractor_trailer' and self.trailer is None:
             return None, 'waiting for trailer_pose'
         try:
@@ -360,6 +366,11 @@ class PlannerNode(Node):
         except ValueError as exc:
             return None, f'odometry rejected: {exc}'
         self.odom_lag = t - self.odom_stamp
+        if self.odom_lag < -self.odom_timeout:
+            # From a clock that ran ahead of this node's (a restarted plant, a clock jump): acting on it would
+            # take a position the robot has left for its present one.
+            return None, (f'odometry stale: stamped {-self.odom_lag:.2f} s ahead of this node\'s clock '
+                          f'(odom_timeout {self.odom_timeout:g} s)')
         if self.max_extrapolation > 0.0 and self.odom_lag > self.max_extrapolation:
             # Where the robot is now cannot be predicted that far: a command from this state would be checked (by
             # the guard) at a position the robot has left.

@@ -36,7 +36,7 @@ from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.scenario import MODELS
-from fastep_ros.common import StartupError, declare, node_main
+from fastep_ros.common import StartupError, declare, guard_clock, node_main
 from msg_tools import convert, interface
 from msg_tools.interface import LATEST, offered_qos
 
@@ -51,6 +51,7 @@ class PlantNode(Node):
 
     def __init__(self, node_name: str = 'plant', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.model_name = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
                                   constraints='point_mass | tractor_trailer')
         start = declare(self, 'start', None, 'start state: [x, y] (point_mass) or [x, y, theta0, theta1] '
@@ -123,7 +124,13 @@ class PlantNode(Node):
             self.tick = target
             return True
         steps = target - self.tick
-        if steps <= 0:
+        if steps < 0:
+            # The clock went back (restarted; fastep_ros.common's guard lets through only a confirmed one): go on
+            # from the new time, or no odometry would come until the clock is back where it was.
+            self.get_logger().warning(f'clock went back {-steps * self.step:g} s; integrating from the new time')
+            self.tick = target
+            return True
+        if steps == 0:
             return False
         if steps > MAX_CATCH_UP:
             self.get_logger().warning(f'clock jumped {steps * self.step:g} s ahead; not integrating the gap')

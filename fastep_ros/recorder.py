@@ -52,7 +52,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from fastep_core.errors import FastepError
-from fastep_ros.common import StartupError, declare, node_main
+from fastep_ros.common import StartupError, declare, guard_clock, node_main
 from msg_tools import convert, interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, message_class, qos_profile_to_dict
 
@@ -68,6 +68,7 @@ class RecorderNode(Node):
 
     def __init__(self, node_name: str = 'recorder', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         output = declare(self, 'output', '', 'MCAP file to write (replaced if it exists; folders are created); '
                          'empty: fastep_<date>_<time>.mcap in the current folder')
         self.wanted = self._declare_topics()
