@@ -21,8 +21,10 @@ from rclpy.parameter import Parameter
 from fastep_core.cli import guard
 from fastep_core.errors import FastepError
 from fastep_ros.errors import StartupError  # re-exported: every node raises it next to declare()
+from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-exported for the nodes
 
-__all__ = ['CLOCK_JUMP_LIMIT', 'StartupError', 'declare', 'guard_clock', 'node_main']
+__all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'StartupError', 'check_range', 'declare', 'guard_clock',
+           'node_main']
 
 
 _TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER, float: Parameter.Type.DOUBLE,
@@ -71,7 +73,10 @@ def declare(node: Node, name: str, default: Any, description: str, *, read_only:
     return value
 
 
-CLOCK_JUMP_LIMIT = 3600.0  # simulated seconds a /clock message may run ahead of the last one unconfirmed
+def check_range(name: str, value: float, low: float, high: float, unit: str = '') -> None:
+    """A StartupError (one line, exit 2) unless low <= value <= high."""
+    if not low <= value <= high:
+        raise StartupError(f'parameter {name} must be in [{low:g}, {high:g}]{unit}, got {value:g}')
 
 
 class _ClockGuard:

@@ -12,7 +12,9 @@ length measured from its odometry, the time taken. Every process it started is s
 then SIGKILL after a grace period), also on Ctrl-C.
 
 Exit 0 if every robot arrived (without colliding, as measured from the odometry), 1 otherwise, 2 with one
-line on stderr for bad input (or when --json / --plot cannot be written).
+line on stderr for bad input, checked before anything starts: --rtf outside [0.001, 10000], a robot name ROS
+cannot take (with '__', or longer than 200 characters), a --json / --plot / --record file that cannot be
+written (or --json / --plot failing after the run).
 """
 
 from __future__ import annotations
@@ -34,11 +36,13 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core.cli import Parser, fail, guard, seed
+from fastep_core.errors import ScenarioError
 from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import LaunchError
+from fastep_ros.limits import RTF_RANGE, robot_name_problem
 
 __all__ = ['main']
 
@@ -471,6 +475,30 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     return code
 
 
+def _output_problem(path: Path, plot: bool = False) -> str:
+    """Why `path` cannot be written as an output file ('' if it can). Tried, not guessed from permissions (root
+    passes every check of those): missing folders are created, as the run would, and the file is opened for
+    appending (an existing one is left as it is, a new one removed again)."""
+    if plot and path.suffix:
+        from matplotlib.backend_bases import FigureCanvasBase
+        formats = FigureCanvasBase.get_supported_filetypes()
+        if path.suffix[1:].lower() not in formats:
+            return f'cannot draw a {path.suffix} file (formats: {", ".join(sorted(formats))})'
+    if path.is_dir():
+        return 'is a directory'
+    existed = path.exists()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, 'ab'):
+            pass
+        if not existed:
+            path.unlink()
+    except OSError as exc:
+        where = f' ({exc.filename})' if exc.filename and str(exc.filename) != str(path) else ''
+        return f'cannot be written: {exc.strerror or exc}{where}'
+    return ''
+
+
 def _scenario_arg(source: str) -> str:
     path = Path(source)
     return str(path.resolve()) if path.is_file() else source
@@ -553,13 +581,25 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _main(argv: Sequence[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
-    if not (math.isfinite(args.rtf) and args.rtf > 0.0):
-        parser.error(f'--rtf must be > 0, got {args.rtf:g}')
+    if not RTF_RANGE[0] <= args.rtf <= RTF_RANGE[1]:
+        parser.error(f'--rtf must be in [{RTF_RANGE[0]:g}, {RTF_RANGE[1]:g}], got {args.rtf:g}')
     if args.timeout is not None and not (math.isfinite(args.timeout) and args.timeout > 0.0):
         parser.error(f'--timeout must be > 0, got {args.timeout:g}')
     if args.no_clock and args.rtf != 1.0:
         parser.error('--no-clock runs on wall time: --rtf cannot be used with it')
     scenario = load_scenario(args.scenario)  # a FastepError: guard's one line, exit 2
+    for i, spec in enumerate(scenario.robots):
+        problem = robot_name_problem(spec.name)
+        if problem:
+            raise ScenarioError(f'scenario {args.scenario!r}: robots[{i}].name {spec.name[:40]!r}'
+                                f'{"..." if len(spec.name) > 40 else ""} cannot name a robot on the ROS graph: '
+                                f'{problem}')
+    # Outputs are checked before anything starts: a run is not wasted on a file that cannot be written.
+    for flag, path in (('--json', args.json), ('--plot', args.plot), ('--record', args.record)):
+        if path is not None:
+            problem = _output_problem(path, plot=flag == '--plot')
+            if problem:
+                parser.error(f'{flag} {path}: {problem}')
     STOP.clear()
     previous = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:

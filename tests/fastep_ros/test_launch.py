@@ -123,11 +123,25 @@ def test_launch_survives_a_second_ctrl_c_and_a_sigterm_while_it_stops_the_nodes(
 @pytest.mark.parametrize('argv,words', [
     (['no_such_scenario_here'], 'no built-in scenario'),
     (['missing/file.yaml'], 'file not found'),
-    (['open_field', '--rtf', '-1'], '--rtf must be > 0'),
+    (['open_field', '--rtf', '-1'], '--rtf must be in [0.001, 10000], got -1'),
+    (['open_field', '--rtf', '1e-300'], '--rtf must be in [0.001, 10000], got 1e-300'),   # create_timer traceback
     (['open_field', '--seed', '-1'], 'a seed must be >= 0'),
+    # Checked before the run (they were after it: --record DIR aborted with exit 1 once the nodes were up).
+    (['open_field', '--record', '{tmp}'], '--record {tmp}: is a directory'),
+    (['open_field', '--json', '{tmp}'], '--json {tmp}: is a directory'),
+    (['open_field', '--plot', '{tmp}/p.xyz'], 'cannot draw a .xyz file'),
+    (['open_field', '--json', '/dev/null/out.json'], 'cannot be written: File exists (/dev/null)'),
+    # Names the scenario format allows but ROS does not: an rcl lexer error, an InvalidTopicNameException traceback.
+    (['{tmp}/r__1.yaml'], "robots[0].name 'r__1' cannot name a robot on the ROS graph: ROS does not allow '__'"),
+    (['{tmp}/long.yaml'], 'cannot name a robot on the ROS graph: 250 characters, more than the 200'),
 ])
 def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str], words: str) -> None:
     env = isolated_env(free_domain(), tmp_path / 'roslog')
+    for name in ('r__1', 'a' * 250):
+        robot = f'{{name: {name}, model: point_mass, start: [2, 2], goal: [18, 18], radius: 0.5}}'
+        write(tmp_path / ('long.yaml' if len(name) > 4 else f'{name}.yaml'),
+              f'workspace: [0, 0, 20, 20]\nrobots:\n  - {robot}\n')
+    argv, words = [a.format(tmp=tmp_path) for a in argv], words.format(tmp=tmp_path)
     result = run([sys.executable, '-m', 'fastep_ros.launch', *argv], env, timeout=60)
     assert result.returncode == 2
     assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr
@@ -146,6 +160,17 @@ def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str]
     ('planner', ['n_fireflies:=many'], 'n_fireflies'),
     ('planner', ['workspace:=[0.0, 1.0]'], 'workspace must be'),
     ('planner', ['--garbage'], 'cannot start ROS'),
+    # Rates and periods rclpy's create_timer overflowed on (a traceback), or that flooded the log.
+    ('planner', ['control_rate_hz:=1e-12'], 'control_rate_hz must be in [0.1, 10000] Hz, got 1e-12'),
+    ('plant', ['rate_hz:=1e-12'], 'rate_hz must be in [0.1, 10000] Hz'),
+    ('plant', ['rate_hz:=1e12'], 'rate_hz must be in [0.1, 10000] Hz, got 1e+12'),
+    ('recorder', ['flush_period:=1e300'], 'flush_period must be in [0.01, 3600] s'),
+    ('recorder', ['discovery_period:=1e-12'], 'discovery_period must be in [0.01, 3600] s'),
+    ('clock', ['rtf:=1e-300'], 'rtf must be in [0.001, 10000]'),
+    ('clock', ['max_rate_hz:=1e-300'], 'max_rate_hz must be in [0.1, 10000] Hz'),
+    ('clock', ['step:=1e300'], 'step must be in [0.0001, 10] s'),
+    ('clock', ['start:=1e300'], 'start must be in [0, 1e+09] s'),
+    ('clock', ['rtf:=1000.0', 'max_rate_hz:=0.1'], 'a tick of 10000 s'),
 ])
 def test_nodes_refuse_bad_parameters_with_one_line(tmp_path: Path, module: str, params: list[str],
                                                    words: str) -> None:
@@ -180,3 +205,35 @@ def test_a_trapped_tractor_trailer_manoeuvres_out_on_the_live_graph(tmp_path: Pa
     live = json.loads(out.read_text())['runs'][0]['robots'][0]
     assert live['reached'] and not live['collided'] and live['escapes'] == 1 and live['manoeuvres'] >= 1, \
         (live, result.stdout)
+
+
+def test_a_planner_on_a_far_seed_stream_starts_at_once_with_fastep_sims_stream(tmp_path: Path) -> None:
+    """-p seed_stream:=2000000000 made the planner spawn two billion SeedSequences (~85 MB/s). Run under a 3 GB
+    address-space limit, so the old code ends in MemoryError instead of taking the machine's memory."""
+    import resource
+
+    import numpy as np
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+    code = ('from rclpy.parameter import Parameter\n'
+            'import rclpy\n'
+            'rclpy.init()\n'
+            'from fastep_ros.planner import PlannerNode\n'
+            'node = PlannerNode(parameter_overrides=[Parameter("seed", value=7), '
+            'Parameter("seed_stream", value=2_000_000_000)])\n'
+            'print(node.rng.random())\n'
+            'node.destroy_node()\n'
+            'rclpy.shutdown()\n')
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    proc = subprocess.Popen([sys.executable, '-c', code], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, stdin=subprocess.DEVNULL, preexec_fn=limit)
+    try:
+        out, err = proc.communicate(timeout=120)
+    finally:
+        stop_process(proc)
+    assert proc.returncode == 0, err[-2000:]
+    expected = np.random.default_rng(np.random.SeedSequence(7).spawn(3)[2]).random()
+    from fastep_ros.planner import stream_rng
+    assert stream_rng(7, 2).random() == expected, 'the k-th stream is the one fastep-sim gives its k-th robot'
+    assert float(out) == np.random.default_rng(np.random.SeedSequence(7, spawn_key=(2_000_000_000,))).random()
