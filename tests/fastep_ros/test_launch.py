@@ -8,6 +8,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 from rosbags.highlevel import AnyReader
@@ -77,10 +78,10 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
     assert stamps[-1] >= rows[-1][0] - 1e-9
 
 
-def launch_under_way(tmp_path: Path) -> tuple[subprocess.Popen[str], list[int]]:
+def launch_under_way(tmp_path: Path, domain: int | None = None) -> tuple[subprocess.Popen[str], list[int]]:
     """fastep-launch of one robot, once the goals are in and the clock runs, and its node processes."""
     scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
-    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    env = isolated_env(free_domain() if domain is None else domain, tmp_path / 'roslog')
     proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '0.5'], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     assert proc.stdout is not None
@@ -237,3 +238,46 @@ def test_a_planner_on_a_far_seed_stream_starts_at_once_with_fastep_sims_stream(t
     from fastep_ros.planner import stream_rng
     assert stream_rng(7, 2).random() == expected, 'the k-th stream is the one fastep-sim gives its k-th robot'
     assert float(out) == np.random.default_rng(np.random.SeedSequence(7, spawn_key=(2_000_000_000,))).random()
+
+
+def _foreign_publisher(context: Any, topic: str, msg_type: Any) -> Any:
+    """A node of 'another graph' in this process, publishing on `topic` (discovery needs no spinning)."""
+    import rclpy
+    node = rclpy.create_node('someone_else', context=context)
+    node.create_publisher(msg_type, topic, 10)
+    return node
+
+
+def test_launch_refuses_to_start_beside_another_graph(context: Any, tmp_path: Path) -> None:
+    """Two launches on one domain drove each other's robots (one reported a 498 m path in a 50 m map): a launch
+    that sees another graph's /clock (or its robots' topics) starts nothing and says so."""
+    from rosgraph_msgs.msg import Clock
+    other = _foreign_publisher(context, '/clock', Clock)
+    try:
+        scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+        env = isolated_env(context.get_domain_id(), tmp_path / 'roslog')
+        result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario)], env, timeout=60)
+    finally:
+        other.destroy_node()
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and 'Traceback' not in result.stderr, result.stderr
+    # Seen before the nodes start ('/clock (1 publishers)'), or, when DDS is slow to show it, while they come up.
+    assert f'another ROS graph shares ROS_DOMAIN_ID {context.get_domain_id()}: /clock (' in result.stderr
+    assert 'on their way' not in result.stdout, 'the run started beside the other graph'
+
+
+def test_launch_stops_when_another_graph_joins_its_robots_mid_run(context: Any, tmp_path: Path) -> None:
+    from nav_msgs.msg import Odometry
+    proc, kids = launch_under_way(tmp_path, context.get_domain_id())
+    other = None
+    try:
+        other = _foreign_publisher(context, '/r1/odom', Odometry)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)
+        if other is not None:
+            other.destroy_node()
+    assert proc.returncode == 2, err
+    assert 'another ROS graph shares' in err and '/r1/odom (2 publishers, 1 of them this launch)' in err, err
+    assert 'Traceback' not in err, err
+    assert not [pid for pid in kids if alive(pid)], 'a node outlived the launcher'
