@@ -151,11 +151,18 @@ def _die_with_parent() -> None:
         raise SystemExit(1)
 
 
+class _Executor(SingleThreadedExecutor):
+    """rclpy's, with a class default for the attribute its __del__ reads: a stop (the context shut down by a
+    signal) while its __init__ runs left the object without it, and Python printed an AttributeError from __del__."""
+
+    _sigint_gc = None  # type: ignore[assignment]  # only read when __init__ did not set it
+
+
 def _spin(node: Node) -> None:
     """rclpy.spin, but quiet about the races of a stop: an error raised because the context was shut down
     (Ctrl-C / SIGINT) while spinning ends the loop, and a message rclpy cannot convert (seen with Fast DDS
     while a peer process stops) is dropped with one warning instead of ending the node."""
-    executor = SingleThreadedExecutor()
+    executor = _Executor()
     executor.add_node(node)
     warned = False
     try:
@@ -176,6 +183,11 @@ def _spin(node: Node) -> None:
         executor.shutdown()
 
 
+def _ignore_stop_signals() -> None:
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda signum, frame: None)
+
+
 def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None = None) -> int:
     """rclpy.init, build the node, spin until Ctrl-C / shutdown.
 
@@ -183,9 +195,11 @@ def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None
     cannot start with its parameters (a FastepError, e.g. StartupError: fastep_core.cli.guard prints it).
     """
     _die_with_parent()
-    # rclpy's own SIGINT handler shuts the context down (spin then ends); Python's default one would also raise
-    # KeyboardInterrupt at a random point, e.g. inside a destructor, printing a traceback.
-    signal.signal(signal.SIGINT, lambda signum, frame: None)
+    # rclpy's own SIGINT / SIGTERM handler shuts the context down (spin then ends) and then calls the handler it
+    # found: Python's default SIGINT one raised KeyboardInterrupt at a random point, e.g. inside a destructor
+    # (a traceback), and the default SIGTERM action ended the node there (a recorder with its file unfinished, when
+    # a second SIGTERM came during the clean-up).
+    _ignore_stop_signals()
     return guard(prog, lambda: _run_node(factory, args))
 
 
@@ -212,4 +226,9 @@ def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
+        # Stopped and cleaned up: a second Ctrl-C / SIGTERM has nothing left to stop. Ignored at the OS level (a
+        # Python handler is reset to the default action while the interpreter exits: a signal then ended the
+        # process with -2 / -15 after a clean stop).
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
     return 0

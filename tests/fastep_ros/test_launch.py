@@ -281,3 +281,42 @@ def test_launch_stops_when_another_graph_joins_its_robots_mid_run(context: Any, 
     assert 'another ROS graph shares' in err and '/r1/odom (2 publishers, 1 of them this launch)' in err, err
     assert 'Traceback' not in err, err
     assert not [pid for pid in kids if alive(pid)], 'a node outlived the launcher'
+
+
+@pytest.mark.parametrize('module', ['planner', 'recorder'])
+def test_a_node_stops_cleanly_on_sigterm_and_a_second_signal(tmp_path: Path, module: str) -> None:
+    """SIGTERM ended a node by its default action (rclpy's handler passes it on: exit -15, the recorder's file
+    unfinished), and a second signal while the node stopped did the same."""
+    from msg_tools.mcap_io import open_recording
+    out = tmp_path / 'r.mcap'
+    params = {'planner': ['workspace:=[0.0, 0.0, 10.0, 10.0]'], 'recorder': [f'output:={out}']}[module]
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    cmd = [sys.executable, '-m', f'fastep_ros.{module}', '--ros-args', *sum((['-p', p] for p in params), [])]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            stdin=subprocess.DEVNULL)
+    try:
+        assert proc.stderr is not None
+        first = proc.stderr.readline()   # its INFO line: the node is built and spins
+        assert '[INFO]' in first, first
+        for sig in (signal.SIGTERM, signal.SIGTERM, signal.SIGINT):
+            proc.send_signal(sig)
+            time.sleep(0.01)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)
+    assert proc.returncode == 0 and 'Traceback' not in err, (proc.returncode, err)
+    if module == 'recorder':
+        open_recording(out)   # finished: summary and footer written
+
+
+def test_a_node_interrupted_while_it_imports_ends_without_a_traceback(tmp_path: Path) -> None:
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.planner'], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+    try:
+        time.sleep(0.3)   # importing rclpy, numpy, scipy
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)
+    assert proc.returncode in (0, 130) and 'Traceback' not in err, (proc.returncode, err)
