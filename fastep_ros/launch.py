@@ -536,7 +536,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         if monitor is not None:
             monitor.close()
         procs.stop()
-    if args.record is not None:
+    if any(label == 'fastep-record' for label, _ in procs.items):   # not when another graph stopped it first
+        assert args.record is not None
         if args.record.is_file():
             print(f'wrote {args.record}')
         else:

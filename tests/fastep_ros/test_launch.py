@@ -256,7 +256,8 @@ def test_launch_refuses_to_start_beside_another_graph(context: Any, tmp_path: Pa
     try:
         scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
         env = isolated_env(context.get_domain_id(), tmp_path / 'roslog')
-        result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario)], env, timeout=60)
+        result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--record', str(tmp_path / 'r.mcap')],
+                     env, timeout=60)
     finally:
         other.destroy_node()
     assert result.returncode == 2, result.stdout + result.stderr
