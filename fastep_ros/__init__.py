@@ -3,13 +3,33 @@
 import os as _os
 import signal as _signal
 import sys as _sys
+from types import FrameType as _FrameType
+
+_LAUNCHED = bool(_os.environ.get('FASTEP_PARENT_PID')) and \
+    str(_os.getppid()) == _os.environ.get('FASTEP_PARENT_PID')
 
 
-def _quiet_exit(signum: int, frame: object) -> None:
-    _sys.exit(0)
+def _importing(frame: '_FrameType | None') -> bool:
+    while frame is not None:
+        if frame.f_code.co_filename.startswith('<frozen importlib'):
+            return True
+        frame = frame.f_back
+    return False
 
 
-# A node started by fastep-launch that is stopped while it is still importing (Ctrl-C right after the start)
-# ends quietly instead of printing a KeyboardInterrupt traceback; its main() then installs rclpy's handling.
-if _os.environ.get('FASTEP_PARENT_PID') and _os.getppid() == int(_os.environ['FASTEP_PARENT_PID']):
+def _quiet_exit(signum: int, frame: '_FrameType | None') -> None:
+    """Ctrl-C while the program is still importing (rclpy, numpy, scipy take seconds on a loaded machine) ends it
+    without a KeyboardInterrupt traceback: exit 0 for a node fastep-launch started (it is being stopped), 130
+    otherwise. Once imported, a program's main() installs its own handling (node_main, fastep-launch); until then,
+    or in a program that does not, Ctrl-C is the KeyboardInterrupt of Python's default handler."""
+    if _LAUNCHED:
+        _sys.exit(0)
+    if _importing(frame):
+        _sys.exit(130)
+    raise KeyboardInterrupt
+
+
+# Only in a program (a fastep-* command, python -m fastep_ros.<module>): a test or a user's code importing fastep_ros
+# keeps its own handling.
+if _LAUNCHED or _sys.argv[:1] == ['-m'] or _os.path.basename(_sys.argv[0] if _sys.argv else '').startswith('fastep-'):
     _signal.signal(_signal.SIGINT, _quiet_exit)

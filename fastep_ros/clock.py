@@ -43,13 +43,15 @@ from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
 from rosgraph_msgs.msg import Clock as ClockMsg
 
-from fastep_ros.common import StartupError, declare, node_main
+from fastep_ros.common import CLOCK_JUMP_LIMIT, RATE_RANGE, StartupError, check_range, declare, node_main
+from fastep_ros.limits import RTF_RANGE, STEP_RANGE
 from msg_tools import convert, interface
 
 __all__ = ['ClockNode', 'main', 'tick_plan']
 
 SETTLE = 0.3        # wall seconds the start time is held after the expected subscribers matched
 HOLD_PERIOD = 0.1   # wall seconds between repeated /clock messages while the time is held
+START_MAX = 1e9     # simulated seconds: far from the int32 seconds of a /clock message (2^31 - 1)
 
 
 @dataclass
@@ -83,13 +85,14 @@ class ClockNode(Node):
         if self.get_parameter('use_sim_time').value:
             raise StartupError('the clock cannot itself run on simulated time (use_sim_time must be false)')
         self.rtf = declare(self, 'rtf', 1.0, 'real-time factor: simulated seconds per wall second',
-                           constraints='> 0')
+                           constraints=f'range [{RTF_RANGE[0]:g}, {RTF_RANGE[1]:g}]')
         self.step = declare(self, 'step', 0.05, 'simulated seconds per tick, at most (it grows when the tick '
                             'rate would exceed max_rate_hz); the default is the planners\' control period',
-                            constraints='> 0')
-        self.max_rate_hz = declare(self, 'max_rate_hz', 400.0, 'most ticks per wall second', constraints='> 0')
+                            constraints=f'range [{STEP_RANGE[0]:g}, {STEP_RANGE[1]:g}]')
+        self.max_rate_hz = declare(self, 'max_rate_hz', 400.0, 'most ticks per wall second',
+                                   constraints=f'range [{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}]')
         self.start = declare(self, 'start', 0.0, 'simulated time of the first tick minus one increment (s)',
-                             constraints='>= 0')
+                             constraints=f'range [0, {START_MAX:g}]')
         self.wait_for = declare(self, 'wait_for_subscribers', 0, 'hold the time at start until this many '
                                 '/clock subscriptions are matched (so no node misses the beginning)')
         self.wait_timeout = declare(self, 'wait_timeout', 30.0, 'start anyway after this many wall seconds of '
@@ -100,12 +103,15 @@ class ClockNode(Node):
         self.sync_timeout = declare(self, 'sync_timeout', 5.0, 'lock step: tick anyway after waiting this many '
                                     'wall seconds, and stop waiting for a topic that did not answer until it '
                                     'publishes again (a node that stopped does not freeze time)')
-        for name in ('rtf', 'step', 'max_rate_hz'):
-            if getattr(self, name) <= 0.0:
-                raise StartupError(f'parameter {name} must be > 0, got {getattr(self, name):g}')
-        if self.start < 0.0:
-            raise StartupError(f'parameter start must be >= 0, got {self.start:g}')
+        check_range('rtf', self.rtf, *RTF_RANGE)
+        check_range('step', self.step, *STEP_RANGE, ' s')
+        check_range('max_rate_hz', self.max_rate_hz, *RATE_RANGE, ' Hz')
+        check_range('start', self.start, 0.0, START_MAX, ' s')
         self.period, self.increment = tick_plan(self.rtf, self.step, self.max_rate_hz)
+        if self.increment > CLOCK_JUMP_LIMIT:
+            raise StartupError(f'a tick of {self.increment:g} s (rtf {self.rtf:g} at max_rate_hz '
+                               f'{self.max_rate_hz:g}) is more than the nodes take from one /clock message '
+                               f'({CLOCK_JUMP_LIMIT:g} s): lower rtf or raise max_rate_hz')
         if topics and any(topics):
             # Lock step: every tick is one control period, as in the in-process simulator. A bigger increment
             # would make rcl timers skip periods (planners at 8 Hz instead of 20 Hz of simulated time), so

@@ -21,8 +21,10 @@ from rclpy.parameter import Parameter
 from fastep_core.cli import guard
 from fastep_core.errors import FastepError
 from fastep_ros.errors import StartupError  # re-exported: every node raises it next to declare()
+from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-exported for the nodes
 
-__all__ = ['StartupError', 'declare', 'node_main']
+__all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'StartupError', 'check_range', 'declare', 'guard_clock',
+           'node_main']
 
 
 _TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER, float: Parameter.Type.DOUBLE,
@@ -71,6 +73,66 @@ def declare(node: Node, name: str, default: Any, description: str, *, read_only:
     return value
 
 
+def check_range(name: str, value: float, low: float, high: float, unit: str = '') -> None:
+    """A StartupError (one line, exit 2) unless low <= value <= high."""
+    if not low <= value <= high:
+        raise StartupError(f'parameter {name} must be in [{low:g}, {high:g}]{unit}, got {value:g}')
+
+
+class _ClockGuard:
+    """The /clock handler of a node on simulated time: rclpy's TimeSource.clock_callback behind two checks.
+
+    A message rclpy cannot turn into a time (sec < 0: "Seconds value must not be negative", raised inside the
+    executor, ended the node; nanosec >= 1e9) is ignored. A time that goes back, or runs more than
+    CLOCK_JUMP_LIMIT ahead of the last one, is taken only once the next message confirms it (comes at or after
+    it, within the limit): a lone message far off (sec = 2^31 - 1) is ignored, while a clock that really
+    restarts or jumps (a replay started from another time) costs one message. Each is a throttled warning.
+    """
+
+    def __init__(self, node: Node, deliver: Callable[[Any], None]) -> None:
+        self.node = node
+        self.deliver = deliver
+        self.last: float | None = None      # seconds of the last time taken
+        self.pending: float | None = None   # a jump waiting for its confirmation
+
+    def __call__(self, msg: Any) -> None:
+        sec, nanosec = int(msg.clock.sec), int(msg.clock.nanosec)
+        if sec < 0 or not 0 <= nanosec < 1_000_000_000:
+            self.warn(f'ignoring /clock message sec={sec} nanosec={nanosec}: not a valid time')
+            return
+        t = sec + nanosec * 1e-9
+        last, pending = self.last, self.pending
+        self.pending = None
+        if last is not None and not last <= t <= last + CLOCK_JUMP_LIMIT and \
+                not (pending is not None and pending <= t <= pending + CLOCK_JUMP_LIMIT):
+            self.pending = t
+            self.warn(f'ignoring /clock at {t:.9g} s after {last:.9g} s: a jump back or of more than '
+                      f'{CLOCK_JUMP_LIMIT:g} s ahead is taken only when the next message confirms it')
+            return
+        self.last = t
+        self.deliver(msg)
+
+    def warn(self, text: str) -> None:
+        self.node.get_logger().warning(text, throttle_duration_sec=5.0)
+
+
+def guard_clock(node: Node) -> None:
+    """Put _ClockGuard in front of the node's /clock handling (now, and if use_sim_time is switched on later).
+
+    rclpy builds the TimeSource and its /clock subscription inside Node.__init__; this reaches into both (private
+    attributes). Should they change, the node starts anyway, unguarded (the test of the guard fails then).
+    """
+    source = getattr(node, '_time_source', None)
+    deliver = getattr(source, 'clock_callback', None)
+    if source is None or deliver is None or isinstance(deliver, _ClockGuard):
+        return
+    guarded = _ClockGuard(node, deliver)
+    source.clock_callback = guarded
+    subscription = getattr(source, '_clock_sub', None)
+    if subscription is not None:
+        subscription.callback = guarded
+
+
 PARENT_ENV = 'FASTEP_PARENT_PID'
 
 
@@ -89,11 +151,18 @@ def _die_with_parent() -> None:
         raise SystemExit(1)
 
 
+class _Executor(SingleThreadedExecutor):
+    """rclpy's, with a class default for the attribute its __del__ reads: a stop (the context shut down by a
+    signal) while its __init__ runs left the object without it, and Python printed an AttributeError from __del__."""
+
+    _sigint_gc = None  # type: ignore[assignment]  # only read when __init__ did not set it
+
+
 def _spin(node: Node) -> None:
     """rclpy.spin, but quiet about the races of a stop: an error raised because the context was shut down
     (Ctrl-C / SIGINT) while spinning ends the loop, and a message rclpy cannot convert (seen with Fast DDS
     while a peer process stops) is dropped with one warning instead of ending the node."""
-    executor = SingleThreadedExecutor()
+    executor = _Executor()
     executor.add_node(node)
     warned = False
     try:
@@ -114,6 +183,11 @@ def _spin(node: Node) -> None:
         executor.shutdown()
 
 
+def _ignore_stop_signals() -> None:
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda signum, frame: None)
+
+
 def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None = None) -> int:
     """rclpy.init, build the node, spin until Ctrl-C / shutdown.
 
@@ -121,9 +195,11 @@ def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None
     cannot start with its parameters (a FastepError, e.g. StartupError: fastep_core.cli.guard prints it).
     """
     _die_with_parent()
-    # rclpy's own SIGINT handler shuts the context down (spin then ends); Python's default one would also raise
-    # KeyboardInterrupt at a random point, e.g. inside a destructor, printing a traceback.
-    signal.signal(signal.SIGINT, lambda signum, frame: None)
+    # rclpy's own SIGINT / SIGTERM handler shuts the context down (spin then ends) and then calls the handler it
+    # found: Python's default SIGINT one raised KeyboardInterrupt at a random point, e.g. inside a destructor
+    # (a traceback), and the default SIGTERM action ended the node there (a recorder with its file unfinished, when
+    # a second SIGTERM came during the clean-up).
+    _ignore_stop_signals()
     return guard(prog, lambda: _run_node(factory, args))
 
 
@@ -150,4 +226,9 @@ def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
+        # Stopped and cleaned up: a second Ctrl-C / SIGTERM has nothing left to stop. Ignored at the OS level (a
+        # Python handler is reset to the default action while the interpreter exits: a signal then ended the
+        # process with -2 / -15 after a clean stop).
+        for sig in (signal.SIGINT, signal.SIGTERM):
+            signal.signal(sig, signal.SIG_IGN)
     return 0

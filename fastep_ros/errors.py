@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from fastep_core.errors import FastepError
 
-__all__ = ['LaunchError', 'StartupError']
+__all__ = ['GraphConflict', 'LaunchError', 'StartupError']
 
 
 class StartupError(FastepError):
@@ -13,3 +13,8 @@ class StartupError(FastepError):
 
 class LaunchError(FastepError):
     """Something went wrong while bringing the graph up (not the robots' fault): one line, exit code 1."""
+
+
+class GraphConflict(FastepError):
+    """fastep-launch found another graph on its ROS domain (another launch, a replay, nodes of its robots' names):
+    one line, exit code 2. Two launches on one domain corrupted each other's runs silently."""

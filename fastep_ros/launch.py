@@ -12,7 +12,9 @@ length measured from its odometry, the time taken. Every process it started is s
 then SIGKILL after a grace period), also on Ctrl-C.
 
 Exit 0 if every robot arrived (without colliding, as measured from the odometry), 1 otherwise, 2 with one
-line on stderr for bad input (or when --json / --plot cannot be written).
+line on stderr for bad input, checked before anything starts: --rtf outside [0.001, 10000], a robot name ROS
+cannot take (with '__', or longer than 200 characters), a --json / --plot / --record file that cannot be
+written (or --json / --plot failing after the run).
 """
 
 from __future__ import annotations
@@ -34,11 +36,13 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core.cli import Parser, fail, guard, seed
+from fastep_core.errors import ScenarioError
 from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
-from fastep_ros.errors import LaunchError
+from fastep_ros.errors import GraphConflict, LaunchError
+from fastep_ros.limits import RTF_RANGE, robot_name_problem
 
 __all__ = ['main']
 
@@ -47,6 +51,10 @@ GRACE = 5.0             # wall seconds a process gets to stop after SIGINT
 STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the world and the other robots
 SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
 STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
+DISCOVERY_WAIT = 1.0    # wall seconds the launcher looks for another graph on its domain before it starts any node
+# (DDS took 0 to 3.2 s to show an existing publisher to a new process here: one seen later stops the launch, by the
+# checks every CONFLICT_CHECK while the nodes come up and the run goes on, and one just before the goals go out)
+CONFLICT_CHECK = 1.0    # wall seconds between looks for a graph that joined later
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -194,15 +202,9 @@ class Monitor:
     def __init__(self, scenario: Scenario) -> None:
         import rclpy
         import rclpy.executors
-        from diagnostic_msgs.msg import DiagnosticStatus
-        from geometry_msgs.msg import PoseStamped
-        from nav_msgs.msg import Odometry
-        from nav_msgs.msg import Path as PathMsg
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rclpy.signals import SignalHandlerOptions
 
-        from msg_tools import convert, interface
-        from msg_tools.interface import LATCHED, RELIABLE, offered_qos, robot_topic
+        from msg_tools import convert
 
         self.convert = convert
         self.rclpy = rclpy
@@ -214,9 +216,24 @@ class Monitor:
         self.executor = rclpy.executors.SingleThreadedExecutor(context=self.context)
         self.executor.add_node(self.node)
         self.robots = {spec.name: RobotLive(spec) for spec in scenario.robots}
-        self.goal_pubs = {}
-        # What fastep-record (started as /recorder) has received: topic -> message count.
+        self.goal_pubs: dict[str, Any] = {}
         self.recorded: dict[str, str] = {}
+        # topic -> publishers this launch puts on it: more are another graph's.
+        self.expected: dict[str, int] = {topic: 0 for topic in watched_topics(scenario)}
+        self.checked = -math.inf   # monotonic time of the last look for another graph
+
+    def connect(self) -> None:
+        """The monitor's own endpoints: goal publishers, status / odometry / plan subscriptions."""
+        from diagnostic_msgs.msg import DiagnosticStatus
+        from geometry_msgs.msg import PoseStamped
+        from nav_msgs.msg import Odometry
+        from nav_msgs.msg import Path as PathMsg
+        from rclpy.qos import QoSProfile, ReliabilityPolicy
+
+        from msg_tools import interface
+        from msg_tools.interface import LATCHED, RELIABLE, offered_qos, robot_topic
+
+        # What fastep-record (started as /recorder) has received: topic -> message count.
         self.node.create_subscription(DiagnosticStatus, '/recorder/' + interface.RECORDING.removeprefix('~/'),
                                       self.on_recording, interface.STATUS_QOS)
         depth = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # every odometry message
@@ -233,6 +250,32 @@ class Monitor:
             if robot.spec.model == 'tractor_trailer':
                 self.node.create_subscription(PoseStamped, robot_topic(name, interface.TRAILER_POSE),
                                               functools.partial(self.on_trailer, robot), depth)
+
+    def other_graph(self, launchers: bool = False) -> str:
+        """What shows another graph on this domain ('' if nothing): more publishers on /clock, /obstacles, /map or
+        a robot's topics than this launch puts there (self.expected), and with `launchers` another fastep-launch.
+        (Only before this launch starts its nodes: a second launch that looks and refuses must not stop a first
+        one that runs.)"""
+        found = []
+        if launchers and [n for n, ns in self.node.get_node_names_and_namespaces()
+                          if n == self.node.get_name() and ns == '/'][1:]:
+            found.append('another fastep-launch')
+        for topic, count in self.expected.items():
+            have = self.node.count_publishers(topic)
+            if have > count:
+                found.append(f'{topic} ({have} publishers{f", {count} of them this launch" if count else ""})')
+        return ', '.join(found)
+
+    def check_alone(self, launchers: bool = False, now: bool = False) -> None:
+        """Once every CONFLICT_CHECK wall seconds (or `now`): a GraphConflict if another graph shares the domain."""
+        if time.monotonic() - self.checked < CONFLICT_CHECK and not (launchers or now):
+            return
+        self.checked = time.monotonic()
+        found = self.other_graph(launchers)
+        if found:
+            domain = os.environ.get('ROS_DOMAIN_ID', '0')
+            raise GraphConflict(f'another ROS graph shares ROS_DOMAIN_ID {domain}: {found}; the runs would mix '
+                                f'their robots and clocks (stop it, or give each launch its own ROS_DOMAIN_ID)')
 
     def follow_clock(self) -> None:
         """Subscribe to /clock: the clock, holding the start time until all its subscribers are there,
@@ -321,8 +364,30 @@ class Monitor:
 
 # ----------------------------------------------------------------------------------------------- the run
 
+def watched_topics(scenario: Scenario, sim_time: bool = True) -> dict[str, int]:
+    """The topics another graph on the domain would be seen on, and how many publishers this launch puts there."""
+    from msg_tools.interface import CLOCK, CMD_VEL, GOAL_POSE, MAP, OBSTACLES, ODOM, STATUS, TRAILER_POSE, robot_topic
+
+    out = {CLOCK: int(sim_time), OBSTACLES: 1, MAP: 1}
+    for spec in scenario.robots:
+        topics = (ODOM, CMD_VEL, GOAL_POSE, STATUS) + ((TRAILER_POSE,) if spec.model == 'tractor_trailer' else ())
+        out.update((robot_topic(spec.name, topic), 1) for topic in topics)
+    return out
+
+
+def _alone(monitor: Monitor) -> None:
+    """Refuse to start beside another graph: look for one for DISCOVERY_WAIT (DDS takes a moment to see it)."""
+    end = time.monotonic() + DISCOVERY_WAIT
+    while True:
+        monitor.check_alone(launchers=True)
+        if time.monotonic() >= end:
+            return
+        monitor.spin(0.1)
+
+
 def _wait(monitor: Monitor, procs: Processes, deadline: float, ready: Any, what: str) -> None:
     while not ready():
+        monitor.check_alone()
         dead = procs.dead()
         if dead:
             label, code = dead[0]
@@ -341,6 +406,12 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     monitor: Monitor | None = None
     code = 1
     try:
+        # Two launches on one domain drove each other's robots and clocks (one reported a 498 m path in a 50 m
+        # map): look for another graph before starting anything, and keep looking (run's loop, _wait).
+        monitor = Monitor(scenario)
+        _alone(monitor)
+        monitor.connect()
+        monitor.expected = watched_topics(scenario, sim_time)
         procs.start('fastep-map', 'map_server', '/', {'scenario': _scenario_arg(args.scenario),
                                                        'use_sim_time': sim_time})
         for i, spec in enumerate(scenario.robots):
@@ -362,7 +433,6 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 'wait_for_subscribers': 2 + 2 * len(scenario.robots) + 2 * (args.record is not None),
                 'sync_topics': [robot_topic(spec.name, topic)
                                 for spec in scenario.robots for topic in (CMD_VEL, ODOM)]})
-        monitor = Monitor(scenario)
         robots = monitor.robots
         names = set(robots)
         deadline = time.monotonic() + args.startup_timeout
@@ -392,6 +462,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
 
         _wait(monitor, procs, deadline, planners_ready,
               'waiting for the planners to see the world and each other, and for every odometry topic')
+        monitor.check_alone(now=True)
         monitor.send_goals()
         sent = time.monotonic()
 
@@ -413,6 +484,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         last_now, last_change = monitor.now(), time.monotonic()
         while any(not r.outcome for r in robots.values()):
             monitor.spin(0.05)
+            monitor.check_alone()
             now = monitor.now() - t0
             if now != last_now:
                 last_now, last_change = now, time.monotonic()
@@ -452,6 +524,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         code = 0 if all(r.outcome == 'arrived' for r in robots.values()) and not collided else 1
         if not written:
             code = 2
+    except GraphConflict as exc:
+        code = fail(PROG, exc)
     except LaunchError as exc:
         fail(PROG, exc)
         code = 1
@@ -462,13 +536,38 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         if monitor is not None:
             monitor.close()
         procs.stop()
-    if args.record is not None:
+    if any(label == 'fastep-record' for label, _ in procs.items):   # not when another graph stopped it first
+        assert args.record is not None
         if args.record.is_file():
             print(f'wrote {args.record}')
         else:
             fail(PROG, f'the recorder wrote no {args.record}')
             code = code or 1
     return code
+
+
+def _output_problem(path: Path, plot: bool = False) -> str:
+    """Why `path` cannot be written as an output file ('' if it can). Tried, not guessed from permissions (root
+    passes every check of those): missing folders are created, as the run would, and the file is opened for
+    appending (an existing one is left as it is, a new one removed again)."""
+    if plot and path.suffix:
+        from matplotlib.backend_bases import FigureCanvasBase
+        formats = FigureCanvasBase.get_supported_filetypes()
+        if path.suffix[1:].lower() not in formats:
+            return f'cannot draw a {path.suffix} file (formats: {", ".join(sorted(formats))})'
+    if path.is_dir():
+        return 'is a directory'
+    existed = path.exists()
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, 'ab'):
+            pass
+        if not existed:
+            path.unlink()
+    except OSError as exc:
+        where = f' ({exc.filename})' if exc.filename and str(exc.filename) != str(path) else ''
+        return f'cannot be written: {exc.strerror or exc}{where}'
+    return ''
 
 
 def _scenario_arg(source: str) -> str:
@@ -553,13 +652,25 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _main(argv: Sequence[str] | None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
-    if not (math.isfinite(args.rtf) and args.rtf > 0.0):
-        parser.error(f'--rtf must be > 0, got {args.rtf:g}')
+    if not RTF_RANGE[0] <= args.rtf <= RTF_RANGE[1]:
+        parser.error(f'--rtf must be in [{RTF_RANGE[0]:g}, {RTF_RANGE[1]:g}], got {args.rtf:g}')
     if args.timeout is not None and not (math.isfinite(args.timeout) and args.timeout > 0.0):
         parser.error(f'--timeout must be > 0, got {args.timeout:g}')
     if args.no_clock and args.rtf != 1.0:
         parser.error('--no-clock runs on wall time: --rtf cannot be used with it')
     scenario = load_scenario(args.scenario)  # a FastepError: guard's one line, exit 2
+    for i, spec in enumerate(scenario.robots):
+        problem = robot_name_problem(spec.name)
+        if problem:
+            raise ScenarioError(f'scenario {args.scenario!r}: robots[{i}].name {spec.name[:40]!r}'
+                                f'{"..." if len(spec.name) > 40 else ""} cannot name a robot on the ROS graph: '
+                                f'{problem}')
+    # Outputs are checked before anything starts: a run is not wasted on a file that cannot be written.
+    for flag, path in (('--json', args.json), ('--plot', args.plot), ('--record', args.record)):
+        if path is not None:
+            problem = _output_problem(path, plot=flag == '--plot')
+            if problem:
+                parser.error(f'{flag} {path}: {problem}')
     STOP.clear()
     previous = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:

@@ -19,7 +19,7 @@ from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import FastepError
 from fastep_core.scenario import load_scenario
-from fastep_ros.common import StartupError, declare, node_main
+from fastep_ros.common import StartupError, declare, guard_clock, node_main
 from msg_tools import convert, interface
 from msg_tools.interface import offered_qos
 
@@ -31,6 +31,7 @@ class MapNode(Node):
 
     def __init__(self, node_name: str = 'map', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         source = declare(self, 'scenario', '', 'scenario YAML file or built-in name whose world is published')
         resolution = declare(self, 'resolution', 0.1, 'occupancy grid cell size (m)', constraints='> 0')
         thickness = declare(self, 'segment_thickness', 0.0, 'width a wall (segment) is rasterised with in the '

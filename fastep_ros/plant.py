@@ -36,7 +36,7 @@ from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.scenario import MODELS
-from fastep_ros.common import StartupError, declare, node_main
+from fastep_ros.common import RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from msg_tools import convert, interface
 from msg_tools.interface import LATEST, offered_qos
 
@@ -51,6 +51,7 @@ class PlantNode(Node):
 
     def __init__(self, node_name: str = 'plant', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.model_name = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
                                   constraints='point_mass | tractor_trailer')
         start = declare(self, 'start', None, 'start state: [x, y] (point_mass) or [x, y, theta0, theta1] '
@@ -59,7 +60,8 @@ class PlantNode(Node):
         trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)')
         hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
         self.rate_hz = declare(self, 'rate_hz', 50.0, 'integration rate: fixed steps of 1/rate_hz s of the '
-                               'node clock (simulated time with use_sim_time)', constraints='> 0')
+                               'node clock (simulated time with use_sim_time)',
+                               constraints=f'range [{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}]')
         self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'a cmd_vel acts for at most this long after it '
                                    'was sent (its stamp; for a Twist on wall time its DDS source time): stop '
                                    '(zero velocity) when no newer one came (s, node clock)', constraints='> 0')
@@ -69,9 +71,9 @@ class PlantNode(Node):
 
         if self.model_name not in MODELS:
             raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model_name!r}')
-        for name, value in (('rate_hz', self.rate_hz), ('cmd_timeout', self.cmd_timeout)):
-            if value <= 0.0:
-                raise StartupError(f'parameter {name} must be > 0, got {value:g}')
+        check_range('rate_hz', self.rate_hz, *RATE_RANGE, ' Hz')
+        if self.cmd_timeout <= 0.0:
+            raise StartupError(f'parameter cmd_timeout must be > 0, got {self.cmd_timeout:g}')
         self.model: PointMass | TractorTrailer
         if self.model_name == 'point_mass':
             self.model = PointMass()
@@ -123,10 +125,18 @@ class PlantNode(Node):
             self.tick = target
             return True
         steps = target - self.tick
-        if steps <= 0:
+        if steps < 0:
+            # The clock went back (restarted; fastep_ros.common's guard lets through only a confirmed one): go on
+            # from the new time, or no odometry would come until the clock is back where it was.
+            self.get_logger().warning(f'clock went back {-steps * self.step:g} s; integrating from the new time',
+                                      throttle_duration_sec=5.0)
+            self.tick = target
+            return True
+        if steps == 0:
             return False
         if steps > MAX_CATCH_UP:
-            self.get_logger().warning(f'clock jumped {steps * self.step:g} s ahead; not integrating the gap')
+            self.get_logger().warning(f'clock jumped {steps * self.step:g} s ahead; not integrating the gap',
+                                      throttle_duration_sec=5.0)
             self.tick = target - 1
             steps = 1
         for _ in range(steps):

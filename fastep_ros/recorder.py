@@ -52,7 +52,7 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from fastep_core.errors import FastepError
-from fastep_ros.common import StartupError, declare, node_main
+from fastep_ros.common import PERIOD_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from msg_tools import convert, interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, message_class, qos_profile_to_dict
 
@@ -68,6 +68,7 @@ class RecorderNode(Node):
 
     def __init__(self, node_name: str = 'recorder', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         output = declare(self, 'output', '', 'MCAP file to write (replaced if it exists; folders are created); '
                          'empty: fastep_<date>_<time>.mcap in the current folder')
         self.wanted = self._declare_topics()
@@ -76,18 +77,18 @@ class RecorderNode(Node):
         chunk_size = declare(self, 'chunk_size', 256 * 1024, 'bytes of messages per chunk (a chunk is the unit a '
                              'crash loses at most)', constraints='>= 1024')
         flush_period = declare(self, 'flush_period', 1.0, 'wall seconds between flushes of the chunk in progress '
-                               'to the file (bounds what a SIGKILL loses)', constraints='> 0')
+                               'to the file (bounds what a SIGKILL loses)',
+                               constraints=f'range [{PERIOD_RANGE[0]:g}, {PERIOD_RANGE[1]:g}]')
         compression = declare(self, 'compression', 'zstd', 'chunk compression: zstd | lz4 | none',
                               constraints='zstd | lz4 | none')
         discovery_period = declare(self, 'discovery_period', 0.5, 'wall seconds between looks at the graph for '
-                                   'new topics', constraints='> 0')
+                                   'new topics', constraints=f'range [{PERIOD_RANGE[0]:g}, {PERIOD_RANGE[1]:g}]')
         self.depth = declare(self, 'queue_depth', 1000, 'subscription queue depth (messages kept while the '
                              'recorder is busy)', constraints='>= 1')
         if chunk_size < 1024:
             raise StartupError(f'parameter chunk_size must be >= 1024, got {chunk_size}')
         for name, value in (('flush_period', flush_period), ('discovery_period', discovery_period)):
-            if value <= 0.0:
-                raise StartupError(f'parameter {name} must be > 0, got {value:g}')
+            check_range(name, value, *PERIOD_RANGE, ' s')
         if compression not in COMPRESSIONS:
             raise StartupError(f'parameter compression must be one of {", ".join(COMPRESSIONS)}, got {compression!r}')
         if self.depth < 1:

@@ -8,6 +8,7 @@ import subprocess
 import sys
 import time
 from pathlib import Path
+from typing import Any
 
 import pytest
 from rosbags.highlevel import AnyReader
@@ -77,10 +78,10 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
     assert stamps[-1] >= rows[-1][0] - 1e-9
 
 
-def launch_under_way(tmp_path: Path) -> tuple[subprocess.Popen[str], list[int]]:
+def launch_under_way(tmp_path: Path, domain: int | None = None) -> tuple[subprocess.Popen[str], list[int]]:
     """fastep-launch of one robot, once the goals are in and the clock runs, and its node processes."""
     scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
-    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    env = isolated_env(free_domain() if domain is None else domain, tmp_path / 'roslog')
     proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '0.5'], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     assert proc.stdout is not None
@@ -123,11 +124,25 @@ def test_launch_survives_a_second_ctrl_c_and_a_sigterm_while_it_stops_the_nodes(
 @pytest.mark.parametrize('argv,words', [
     (['no_such_scenario_here'], 'no built-in scenario'),
     (['missing/file.yaml'], 'file not found'),
-    (['open_field', '--rtf', '-1'], '--rtf must be > 0'),
+    (['open_field', '--rtf', '-1'], '--rtf must be in [0.001, 10000], got -1'),
+    (['open_field', '--rtf', '1e-300'], '--rtf must be in [0.001, 10000], got 1e-300'),   # create_timer traceback
     (['open_field', '--seed', '-1'], 'a seed must be >= 0'),
+    # Checked before the run (they were after it: --record DIR aborted with exit 1 once the nodes were up).
+    (['open_field', '--record', '{tmp}'], '--record {tmp}: is a directory'),
+    (['open_field', '--json', '{tmp}'], '--json {tmp}: is a directory'),
+    (['open_field', '--plot', '{tmp}/p.xyz'], 'cannot draw a .xyz file'),
+    (['open_field', '--json', '/dev/null/out.json'], 'cannot be written: File exists (/dev/null)'),
+    # Names the scenario format allows but ROS does not: an rcl lexer error, an InvalidTopicNameException traceback.
+    (['{tmp}/r__1.yaml'], "robots[0].name 'r__1' cannot name a robot on the ROS graph: ROS does not allow '__'"),
+    (['{tmp}/long.yaml'], 'cannot name a robot on the ROS graph: 250 characters, more than the 200'),
 ])
 def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str], words: str) -> None:
     env = isolated_env(free_domain(), tmp_path / 'roslog')
+    for name in ('r__1', 'a' * 250):
+        robot = f'{{name: {name}, model: point_mass, start: [2, 2], goal: [18, 18], radius: 0.5}}'
+        write(tmp_path / ('long.yaml' if len(name) > 4 else f'{name}.yaml'),
+              f'workspace: [0, 0, 20, 20]\nrobots:\n  - {robot}\n')
+    argv, words = [a.format(tmp=tmp_path) for a in argv], words.format(tmp=tmp_path)
     result = run([sys.executable, '-m', 'fastep_ros.launch', *argv], env, timeout=60)
     assert result.returncode == 2
     assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr
@@ -146,6 +161,17 @@ def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str]
     ('planner', ['n_fireflies:=many'], 'n_fireflies'),
     ('planner', ['workspace:=[0.0, 1.0]'], 'workspace must be'),
     ('planner', ['--garbage'], 'cannot start ROS'),
+    # Rates and periods rclpy's create_timer overflowed on (a traceback), or that flooded the log.
+    ('planner', ['control_rate_hz:=1e-12'], 'control_rate_hz must be in [0.1, 10000] Hz, got 1e-12'),
+    ('plant', ['rate_hz:=1e-12'], 'rate_hz must be in [0.1, 10000] Hz'),
+    ('plant', ['rate_hz:=1e12'], 'rate_hz must be in [0.1, 10000] Hz, got 1e+12'),
+    ('recorder', ['flush_period:=1e300'], 'flush_period must be in [0.01, 3600] s'),
+    ('recorder', ['discovery_period:=1e-12'], 'discovery_period must be in [0.01, 3600] s'),
+    ('clock', ['rtf:=1e-300'], 'rtf must be in [0.001, 10000]'),
+    ('clock', ['max_rate_hz:=1e-300'], 'max_rate_hz must be in [0.1, 10000] Hz'),
+    ('clock', ['step:=1e300'], 'step must be in [0.0001, 10] s'),
+    ('clock', ['start:=1e300'], 'start must be in [0, 1e+09] s'),
+    ('clock', ['rtf:=1000.0', 'max_rate_hz:=0.1'], 'a tick of 10000 s'),
 ])
 def test_nodes_refuse_bad_parameters_with_one_line(tmp_path: Path, module: str, params: list[str],
                                                    words: str) -> None:
@@ -180,3 +206,118 @@ def test_a_trapped_tractor_trailer_manoeuvres_out_on_the_live_graph(tmp_path: Pa
     live = json.loads(out.read_text())['runs'][0]['robots'][0]
     assert live['reached'] and not live['collided'] and live['escapes'] == 1 and live['manoeuvres'] >= 1, \
         (live, result.stdout)
+
+
+def test_a_planner_on_a_far_seed_stream_starts_at_once_with_fastep_sims_stream(tmp_path: Path) -> None:
+    """-p seed_stream:=2000000000 made the planner spawn two billion SeedSequences (~85 MB/s). Run under a 3 GB
+    address-space limit, so the old code ends in MemoryError instead of taking the machine's memory."""
+    import resource
+
+    import numpy as np
+
+    def limit() -> None:
+        resource.setrlimit(resource.RLIMIT_AS, (3 << 30, 3 << 30))
+    code = ('from rclpy.parameter import Parameter\n'
+            'import rclpy\n'
+            'rclpy.init()\n'
+            'from fastep_ros.planner import PlannerNode\n'
+            'node = PlannerNode(parameter_overrides=[Parameter("seed", value=7), '
+            'Parameter("seed_stream", value=2_000_000_000)])\n'
+            'print(node.rng.random())\n'
+            'node.destroy_node()\n'
+            'rclpy.shutdown()\n')
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    proc = subprocess.Popen([sys.executable, '-c', code], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, stdin=subprocess.DEVNULL, preexec_fn=limit)
+    try:
+        out, err = proc.communicate(timeout=120)
+    finally:
+        stop_process(proc)
+    assert proc.returncode == 0, err[-2000:]
+    expected = np.random.default_rng(np.random.SeedSequence(7).spawn(3)[2]).random()
+    from fastep_ros.planner import stream_rng
+    assert stream_rng(7, 2).random() == expected, 'the k-th stream is the one fastep-sim gives its k-th robot'
+    assert float(out) == np.random.default_rng(np.random.SeedSequence(7, spawn_key=(2_000_000_000,))).random()
+
+
+def _foreign_publisher(context: Any, topic: str, msg_type: Any) -> Any:
+    """A node of 'another graph' in this process, publishing on `topic` (discovery needs no spinning)."""
+    import rclpy
+    node = rclpy.create_node('someone_else', context=context)
+    node.create_publisher(msg_type, topic, 10)
+    return node
+
+
+def test_launch_refuses_to_start_beside_another_graph(context: Any, tmp_path: Path) -> None:
+    """Two launches on one domain drove each other's robots (one reported a 498 m path in a 50 m map): a launch
+    that sees another graph's /clock (or its robots' topics) starts nothing and says so."""
+    from rosgraph_msgs.msg import Clock
+    other = _foreign_publisher(context, '/clock', Clock)
+    try:
+        scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+        env = isolated_env(context.get_domain_id(), tmp_path / 'roslog')
+        result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--record', str(tmp_path / 'r.mcap')],
+                     env, timeout=60)
+    finally:
+        other.destroy_node()
+    assert result.returncode == 2, result.stdout + result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and 'Traceback' not in result.stderr, result.stderr
+    # Seen before the nodes start ('/clock (1 publishers)'), or, when DDS is slow to show it, while they come up.
+    assert f'another ROS graph shares ROS_DOMAIN_ID {context.get_domain_id()}: /clock (' in result.stderr
+    assert 'on their way' not in result.stdout, 'the run started beside the other graph'
+
+
+def test_launch_stops_when_another_graph_joins_its_robots_mid_run(context: Any, tmp_path: Path) -> None:
+    from nav_msgs.msg import Odometry
+    proc, kids = launch_under_way(tmp_path, context.get_domain_id())
+    other = None
+    try:
+        other = _foreign_publisher(context, '/r1/odom', Odometry)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)
+        if other is not None:
+            other.destroy_node()
+    assert proc.returncode == 2, err
+    assert 'another ROS graph shares' in err and '/r1/odom (2 publishers, 1 of them this launch)' in err, err
+    assert 'Traceback' not in err, err
+    assert not [pid for pid in kids if alive(pid)], 'a node outlived the launcher'
+
+
+@pytest.mark.parametrize('module', ['planner', 'recorder'])
+def test_a_node_stops_cleanly_on_sigterm_and_a_second_signal(tmp_path: Path, module: str) -> None:
+    """SIGTERM ended a node by its default action (rclpy's handler passes it on: exit -15, the recorder's file
+    unfinished), and a second signal while the node stopped did the same."""
+    from msg_tools.mcap_io import open_recording
+    out = tmp_path / 'r.mcap'
+    params = {'planner': ['workspace:=[0.0, 0.0, 10.0, 10.0]'], 'recorder': [f'output:={out}']}[module]
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    cmd = [sys.executable, '-m', f'fastep_ros.{module}', '--ros-args', *sum((['-p', p] for p in params), [])]
+    proc = subprocess.Popen(cmd, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            stdin=subprocess.DEVNULL)
+    try:
+        assert proc.stderr is not None
+        first = proc.stderr.readline()   # its INFO line: the node is built and spins
+        assert '[INFO]' in first, first
+        for sig in (signal.SIGTERM, signal.SIGTERM, signal.SIGINT):
+            proc.send_signal(sig)
+            time.sleep(0.01)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)
+    assert proc.returncode == 0 and 'Traceback' not in err, (proc.returncode, err)
+    if module == 'recorder':
+        open_recording(out)   # finished: summary and footer written
+
+
+def test_a_node_interrupted_while_it_imports_ends_without_a_traceback(tmp_path: Path) -> None:
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.planner'], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+    try:
+        time.sleep(0.3)   # importing rclpy, numpy, scipy
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)
+    assert proc.returncode in (0, 130) and 'Traceback' not in err, (proc.returncode, err)

@@ -1,0 +1,43 @@
+"""Ranges the nodes and fastep-launch accept for rates, periods and the real-time factor (no ROS import here: the
+launcher checks its command line with them before it starts anything). docs/robustness.md lists them."""
+
+from __future__ import annotations
+
+__all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ROBOT_NAME_MAX', 'RTF_RANGE', 'STEP_RANGE',
+           'robot_name_problem']
+
+RATE_RANGE = (0.1, 10_000.0)
+"""Timer rates a node accepts (Hz): the planners' 1 / dt range (PlannerParams.dt is [1e-4, 10] s). Beyond it rclpy's
+create_timer overflowed (1e-12 Hz: a traceback) or a node spent itself on its timer (1e12 Hz)."""
+
+PERIOD_RANGE = (0.01, 3600.0)
+"""Wall periods (s) of housekeeping timers (the recorder's flush and discovery)."""
+
+STEP_RANGE = (1e-4, 10.0)
+"""Simulated seconds per tick of fastep-clock: PlannerParams.dt's range (the launcher passes dt)."""
+
+RTF_RANGE = (1e-3, 1e4)
+"""Real-time factors of fastep-clock and fastep-launch --rtf. 1e-300 overflowed rclpy's create_timer (the tick
+period is step / rtf): at 1e-3 a tick of the largest step takes 10^4 wall seconds. fastep-clock also refuses a
+tick of more than CLOCK_JUMP_LIMIT simulated seconds (what a node takes from one /clock message unconfirmed)."""
+
+CLOCK_JUMP_LIMIT = 3600.0
+"""Simulated seconds a /clock message may run ahead of the last one and be taken at once (fastep_ros.common)."""
+
+ROBOT_NAME_MAX = 200
+"""Characters of a robot name on the live graph. The name is a ROS namespace, and the longest name in it, the
+planner's `/<name>/planner/set_parameters_atomically` service, may have 247 characters: 212 for the name at most
+(a 250-character name was an InvalidTopicNameException traceback in fastep-launch)."""
+
+
+def robot_name_problem(name: str) -> str:
+    """Why a robot name the scenario format allows ([A-Za-z_][A-Za-z0-9_]*) cannot be a ROS namespace; '' if it can.
+
+    ROS also refuses '__' anywhere in a name: rcl's argument lexer reads it as the start of a token (`__ns`,
+    `__node`), so `-r __ns:=/r__1` fails to parse.
+    """
+    if '__' in name:
+        return "ROS does not allow '__' in a name"
+    if len(name) > ROBOT_NAME_MAX:
+        return f'{len(name)} characters, more than the {ROBOT_NAME_MAX} a ROS namespace of fastep can have'
+    return ''
