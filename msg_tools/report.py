@@ -186,7 +186,7 @@ def load_run(recording: Recording) -> RecordedRun:
     goals: dict[str, list[tuple[float, tuple[float, float]]]] = {name: [] for name in robots}
     algorithm = ''
     # File order (fast); every series is sorted by time below.
-    for topic, type_name, log_time, _, data, _ in recording.raw_messages(wanted, log_time_order=False):
+    for topic, type_name, log_time, _, data, *_ in recording.raw_messages(wanted, log_time_order=False):
         t = log_time * 1e-9
         if topic == OBSTACLES:
             if obstacles is None or t >= obstacles[0]:
