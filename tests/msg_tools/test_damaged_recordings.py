@@ -236,3 +236,26 @@ def test_a_channel_whose_schema_was_lost_is_left_out_with_a_warning(tmp_path: Pa
     kept = contents(fixed)
     assert {c[0] for c in kept['channels']} == {'/plain'}
     assert kept['messages'] and all(m[0] == '/plain' for m in kept['messages'])
+
+
+# ----------------------------------------------------------------------------------------------- a full disk
+
+def test_a_full_disk_is_one_write_error_and_the_writer_stays_closed(tmp_path: Path,
+                                                                    capsys: pytest.CaptureFixture[str]) -> None:
+    """/dev/full refuses every write with ENOSPC, as a full disk does (item 15: the writer's part)."""
+    from msg_tools import sim_cli
+    from msg_tools.mcap_io import WriteFailedError
+
+    writer = McapWriter('/dev/full', chunk_size=1024)
+    with pytest.raises(WriteFailedError, match='cannot write /dev/full: No space left on device'):
+        for i in range(100):
+            writer.write('/x', Float64(data=float(i)), i)
+            writer.flush()
+    with pytest.raises(WriteFailedError):   # broken for good: no half-written record after the failure
+        writer.write('/x', Float64(data=0.0), 200)
+    with pytest.raises(WriteFailedError):   # finish() closes the file and says it once more
+        writer.finish()
+    writer.finish()                         # then nothing
+    assert sim_cli.main(['table2_s1', '--mcap', '/dev/full']) == 2
+    err = capsys.readouterr().err
+    assert err == 'fastep-sim: error: cannot write /dev/full: No space left on device\n'
