@@ -259,3 +259,23 @@ def test_a_full_disk_is_one_write_error_and_the_writer_stays_closed(tmp_path: Pa
     assert sim_cli.main(['table2_s1', '--mcap', '/dev/full']) == 2
     err = capsys.readouterr().err
     assert err == 'fastep-sim: error: cannot write /dev/full: No space left on device\n'
+
+
+def test_chunks_that_overlap_in_time_are_merged_and_a_corrupt_one_skipped(tmp_path: Path) -> None:
+    """Two topics written one after the other with interleaved times: every chunk of the second overlaps the
+    first's. The messages come in log-time order (as mcap's own reader merges them), less a corrupt chunk."""
+    path = tmp_path / 'overlap.mcap'
+    with McapWriter(path, chunk_size=1024) as writer:
+        for topic, parity in (('/even', 0), ('/odd', 1)):
+            for i in range(150):
+                writer.write(topic, Float64(data=float(i)), 2 * i + parity)
+    with open(path, 'rb') as f:
+        expected = [(ch.topic, m.log_time) for _, ch, m in SeekingReader(f).iter_messages(log_time_order=True)]
+    assert [(m.topic, m.log_time) for m in open_recording(path).raw_messages()] == expected
+    bad = tmp_path / 'bad.mcap'
+    lost = corrupt_chunk(path, bad, 3)
+    recording = open_recording(bad)
+    got = [(m.channel_id, m.sequence, m.log_time) for m in recording.raw_messages()]
+    assert [k[:2] for k in got] == [k[:2] for k in got if k[:2] not in lost] and len(got) == 300 - len(lost)
+    assert [k[2] for k in got] == sorted(k[2] for k in got)
+    assert f'{len(lost)} messages lost' in recording.warning()
