@@ -3,7 +3,7 @@
 It was always rasterised at 0.1 m: a 1 km workspace took 4 GB in `fastep-sim --mcap`, a 5 km workspace or
 `-p resolution:=1e-4` ended fastep-map in MemoryError. Now the cell size is chosen so that the grid has at most
 convert.MAX_GRID_CELLS cells, the same by fastep-map (its default) and fastep-sim --mcap, and a resolution
-whose grid would be larger is refused with one line. The runs here are limited to 1.5 GB of address space.
+whose grid would be larger is refused with one line. The runs here are limited to 2 GB of address space.
 """
 
 from __future__ import annotations
@@ -38,7 +38,7 @@ robots:
     goal: [12, 10]
     radius: 0.5
 """
-MEMORY_LIMIT = 1536 * 1024 * 1024   # bytes of address space for the child processes below
+MEMORY_LIMIT = 2048 * 1024 * 1024   # bytes of address space for the child processes below (they peak at 0.9 GB)
 
 
 def scenario_file(folder: Path, side: int) -> Path:
