@@ -481,6 +481,7 @@ class SkippedChunk:
     start_time: int | None
     end_time: int | None
     reason: str
+    record: str = 'chunk'   # or the kind of another record whose content was corrupt (its framing intact)
 
     @property
     def messages(self) -> int | None:
@@ -490,7 +491,7 @@ class SkippedChunk:
         lost = 'an unknown number of messages' if self.messages is None else f'{self.messages} messages'
         when = ('' if self.start_time is None or self.end_time is None else
                 f', log time {self.start_time * 1e-9:.3f}-{self.end_time * 1e-9:.3f} s')
-        return f'skipped a corrupt chunk at byte {self.offset} ({lost} lost{when}): {self.reason}'
+        return f'skipped a corrupt {self.record} at byte {self.offset} ({lost} lost{when}): {self.reason}'
 
 
 _RECORD = struct.Struct('<BQ')       # opcode, length
@@ -637,8 +638,8 @@ def _scan(path: Path, size: int) -> _Scan:
                         pending = {'offset': pos, 'lost': {}, 'start_time': None, 'end_time': None,
                                    'reason': _one_line(exc)}
                     else:
-                        out.skipped.append(SkippedChunk(pos, {}, None, None, f'a corrupt record (opcode {opcode:#x}) '
-                                                        f'skipped: {_one_line(exc)}'))
+                        out.skipped.append(SkippedChunk(pos, {}, None, None, _one_line(exc),
+                                                        record=f'record (opcode {opcode:#x})'))
                     pos += 9 + length
                     continue
                 if isinstance(exc, EndOfFile) and rest <= 0:
