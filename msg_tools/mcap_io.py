@@ -15,8 +15,11 @@ and the `rosbags` library open them without extra files:
 
 Reading deserialises with rclpy (the message classes are imported by name). A file that was cut off (a killed
 recorder leaves no summary and no footer) is read linearly up to the last complete chunk: everything before
-it is recovered and the Recording says how much. Problems raise msg_tools.errors.RecordingError subclasses
-with a one-line message.
+it is recovered and the Recording says how much. A corrupt chunk (bad compression or CRC: a bad sector, a
+bad copy) is skipped, with one line saying how many messages it held; the chunks before and after it are
+read. Files of other tools (JSON, ros1, protobuf channels, channels without schema) are read and copied as
+they are. Problems raise msg_tools.errors.RecordingError subclasses with a one-line message; a write that
+fails (a full disk) raises WriteFailedError.
 """
 
 from __future__ import annotations
