@@ -538,8 +538,15 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         procs.stop()
     if any(label == 'fastep-record' for label, _ in procs.items):   # not when another graph stopped it first
         assert args.record is not None
-        if args.record.is_file():
+        # "wrote" only when the recorder finished the file itself (exit 0); a recorder that failed (a full disk:
+        # exit 1) or was killed left at most its complete chunks.
+        recorder_code = next((proc.returncode for label, proc in procs.items if label == 'fastep-record'), None)
+        if recorder_code == 0 and args.record.is_file():
             print(f'wrote {args.record}')
+        elif args.record.is_file():
+            fail(PROG, f'the recorder failed (exit code {recorder_code}): {args.record} is incomplete '
+                       f'(fastep-recover rewrites what it holds)')
+            code = code or 1
         else:
             fail(PROG, f'the recorder wrote no {args.record}')
             code = code or 1

@@ -6,7 +6,9 @@ Publishes `obstacles` and `map` (relative names: `/obstacles` and `/map` in the 
 visualization_msgs/MarkerArray with a CYLINDER per circle and one LINE_LIST for all segments, and a
 nav_msgs/OccupancyGrid covering the workspace (100 in obstacles, 0 free). Both are reliable +
 transient-local in the `map` frame, so nodes that start later still receive them.
-A bad scenario logs one line and exits with code 2.
+The grid has at most msg_tools.convert.MAX_GRID_CELLS cells (4 million): `resolution` 0 (the default) is 0.1 m,
+or coarser for a workspace larger than 200 m x 200 m (what `fastep-sim --mcap` writes too); a resolution whose
+grid would be larger is refused. A bad scenario or resolution logs one line and exits with code 2.
 """
 
 from __future__ import annotations
@@ -33,19 +35,25 @@ class MapNode(Node):
         super().__init__(node_name, **kwargs)
         guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         source = declare(self, 'scenario', '', 'scenario YAML file or built-in name whose world is published')
-        resolution = declare(self, 'resolution', 0.1, 'occupancy grid cell size (m)', constraints='> 0')
+        resolution = declare(self, 'resolution', 0.0, 'occupancy grid cell size (m); 0: 0.1 m, coarser for a '
+                             f'workspace that would need more than {convert.MAX_GRID_CELLS:,} cells',
+                             constraints=f'>= 0, at most {convert.MAX_GRID_CELLS:,} cells')
         thickness = declare(self, 'segment_thickness', 0.0, 'width a wall (segment) is rasterised with in the '
                             'occupancy grid (m); 0 means one cell')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of /obstacles and /map')
         if not source:
             raise StartupError('parameter scenario is required (a YAML file or a built-in name)')
-        if resolution <= 0.0:
-            raise StartupError(f'parameter resolution must be > 0, got {resolution:g}')
+        if resolution < 0.0:
+            raise StartupError(f'parameter resolution must be >= 0 (0: automatic), got {resolution:g}')
         try:
             self.scenario = load_scenario(source)
         except FastepError as exc:
             raise StartupError(str(exc)) from None
         world = self.scenario.world
+        try:
+            resolution = convert.grid_resolution(world.workspace, resolution or None)
+        except ValueError as exc:
+            raise StartupError(f'parameter {exc}') from None
         stamp = self.get_clock().now().to_msg()
         self.obstacles_msg = convert.obstacles_to_marker_array(world.obstacle_list, stamp, self.frame_id)
         self.map_msg = convert.world_to_occupancy_grid(world, resolution, stamp, self.frame_id,

@@ -31,6 +31,10 @@ file every `flush_period` wall seconds. SIGINT or SIGTERM finish the file (summa
 everything up to the last flushed chunk is recovered by msg_tools.mcap_io.open_recording (the reader) and
 rewritten as a complete file by `fastep-recover IN.mcap OUT.mcap`.
 
+A full disk (or a file size limit, an I/O error) while writing stops the recording: one line on stderr
+(`fastep-record: error: cannot write run.mcap: No space left on device; ...`), exit 1. The file keeps every
+chunk written before; `fastep-recover` rewrites it as a complete file.
+
 Parameters are read-only; a bad one (or an output that cannot be created) is one line on stderr, exit 2.
 """
 
@@ -54,9 +58,16 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from fastep_core.errors import FastepError
 from fastep_ros.common import PERIOD_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from msg_tools import convert, interface
-from msg_tools.mcap_io import COMPRESSIONS, McapWriter, message_class, qos_profile_to_dict
+from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError, message_class, qos_profile_to_dict
 
-__all__ = ['RecorderNode', 'main']
+__all__ = ['RecorderNode', 'RecordingStopped', 'main']
+
+
+class RecordingStopped(FastepError):
+    """The output could not be written (disk full, ...): the node stops, main() exits with code 1."""
+
+
+_write_failures: list[str] = []   # what stopped a recorder of this process: main() exits 1 instead of 0 or 2
 
 # What an empty `topics` parameter records.
 _DEFAULT_TOPICS = (', '.join(interface.SHARED_TOPICS) + ' and /<robot>/{' + ', '.join(interface.ROBOT_TOPICS) +
@@ -201,18 +212,38 @@ class RecorderNode(Node):
         if writer is None:
             return
         now = self.get_clock().now().nanoseconds
-        channel = self.channels.get(topic)
-        if channel is None:  # registered at the first message, when the publishers' QoS is known
-            channel = self.channels[topic] = writer.add_channel(topic, self.types[topic], self.offered(topic))
-        writer.write_raw(channel, data, now, now)
+        try:
+            channel = self.channels.get(topic)
+            if channel is None:  # registered at the first message, when the publishers' QoS is known
+                channel = self.channels[topic] = writer.add_channel(topic, self.types[topic], self.offered(topic))
+            writer.write_raw(channel, data, now, now)
+        except WriteFailedError as exc:
+            self.stop_writing(exc)
         self.counts[topic] += 1
         if self.counts[topic] == 1:
             self.publish_status()
 
     def flush(self) -> None:
         if self.writer is not None:
-            self.writer.flush()
+            try:
+                self.writer.flush()
+            except WriteFailedError as exc:
+                self.stop_writing(exc)
             self.publish_status()
+
+    def stop_writing(self, exc: WriteFailedError) -> None:
+        """The file cannot be written (disk full, ...): close it as it is and end the node with one line."""
+        writer, self.writer = self.writer, None
+        if writer is not None:
+            try:
+                writer.finish()   # only closes the file: the writer is broken
+            except WriteFailedError:
+                pass
+        kept = sum(self.counts.values())
+        message = (f'{exc}; recording stopped after {kept} messages: {self.path} keeps the chunks written before '
+                   f'(fastep-recover rewrites them as a complete file)')
+        _write_failures.append(message)
+        raise RecordingStopped(message)
 
     def publish_status(self) -> None:
         """What was received so far: the file, and the message count of every topic that delivered."""
@@ -225,7 +256,14 @@ class RecorderNode(Node):
         writer, self.writer = self.writer, None
         if writer is None:
             return
-        writer.finish()
+        try:
+            writer.finish()
+        except WriteFailedError as exc:   # the summary did not fit on the disk: one line, exit 1
+            message = (f'{exc}; {self.path} has no summary: the chunks written before are readable (fastep-recover '
+                       f'rewrites them as a complete file)')
+            _write_failures.append(message)
+            print(f'fastep-record: error: {message}', file=sys.stderr)
+            return
         text = f'wrote {sum(self.counts.values())} messages on {len(self.channels)} topics to {self.path}'
         logger = self.get_logger()
         if self.context.ok():
@@ -239,7 +277,9 @@ class RecorderNode(Node):
 
 
 def main(args: Sequence[str] | None = None) -> int:
-    return node_main('fastep-record', RecorderNode, args)
+    code = node_main('fastep-record', RecorderNode, args)
+    # A write failure (printed by node_main's guard or by close()) is not bad input: exit 1, not 2 (or 0).
+    return 1 if _write_failures else code
 
 
 if __name__ == '__main__':

@@ -17,15 +17,21 @@ second in between (default 100), so nodes with use_sim_time follow the replay (-
 --wait-subscribers N waits (at most 30 s) until every replayed volatile topic has N matched subscriptions
 (transient-local ones reach late subscribers anyway).
 
-Exit 0 at the end of the recording (or on Ctrl-C / SIGTERM); 2 with one line on stderr for a file that cannot
-be read or bad options. A truncated file is replayed up to its last complete chunk, with a warning line.
+Exit 0 at the end of the recording (or on Ctrl-C / SIGTERM, also during a long gap between two messages: the
+waits are cut in slices of 0.1 s); 2 with one line on stderr for a file that cannot be read or bad options
+(--delay over an hour, --clock over 10 kHz, --clock with log times past 2^31 s, unknown --ros-args or a bad
+remap). A truncated file is replayed up to its last complete chunk, and a corrupt chunk is skipped, each with
+a warning line. Topics that cannot be published are not replayed, with a warning line (an error if named in
+--topics): a name ROS refuses, messages not CDR-encoded (e.g. JSON), a type that is not installed.
 """
 
 from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
+import tempfile
 import time
 from typing import Any, Sequence
 
@@ -38,12 +44,70 @@ from rosgraph_msgs.msg import Clock
 from fastep_core.cli import Parser, guard
 from fastep_core.errors import FastepError
 from msg_tools import interface
-from msg_tools.mcap_io import Recording, message_class, open_recording, qos_from_dicts
+from msg_tools.mcap_io import MESSAGE_ENCODING, ChannelInfo, Recording, message_class, open_recording, qos_from_dicts
 
 __all__ = ['ReplayNode', 'main']
 
 LINGER = 0.5          # wall seconds the publishers stay after the last message (reliable delivery)
 WAIT_TIMEOUT = 30.0   # wall seconds --wait-subscribers waits at most
+SLICE = 0.1           # wall seconds slept at most at once: a stop (Ctrl-C, SIGTERM) is noticed within it
+MAX_DELAY = 3600.0    # s, --delay
+MAX_CLOCK_HZ = 10_000.0
+MAX_CLOCK_NS = (2**31 - 1) * 1_000_000_000   # builtin_interfaces/Time.sec is an int32
+
+
+def pause(seconds: float) -> None:
+    """Sleep `seconds` of wall time, or less if ROS shuts down meanwhile (rclpy's SIGINT/SIGTERM handler
+    does not interrupt a sleep)."""
+    deadline = time.monotonic() + seconds
+    while rclpy.ok():
+        left = deadline - time.monotonic()
+        if left <= 0.0:
+            return
+        time.sleep(min(left, SLICE))
+
+
+def init_ros(ros_args: Sequence[str]) -> None:
+    """rclpy.init with the --ros-args; FastepError (one line) if ROS refuses them. rcl also logs its own
+    complaint on stderr ("Failed to parse global arguments"): what it writes there during init is held back
+    and shown only if init succeeds, so that a refusal stays one line."""
+    sys.stderr.flush()
+    saved = os.dup(2)
+    error: Exception | None = None
+    with tempfile.TemporaryFile() as held:
+        os.dup2(held.fileno(), 2)
+        try:
+            rclpy.init(args=[PROG, *ros_args])
+        except Exception as exc:   # UnknownROSArgsError, RCLError for a remap rule it cannot parse, ...
+            error = exc
+        finally:
+            os.dup2(saved, 2)
+            os.close(saved)
+        if error is None:
+            held.seek(0)
+            text = held.read()
+            if text:
+                os.write(2, text)
+            return
+    raise FastepError(f'cannot start ROS: {type(error).__name__}: {" ".join(str(error).split())}')
+
+
+def unplayable(info: ChannelInfo) -> str:
+    """Why a recorded topic cannot be published on ROS 2 ('' if it can)."""
+    from rclpy.exceptions import NameValidationException
+    from rclpy.validate_full_topic_name import validate_full_topic_name
+
+    try:
+        validate_full_topic_name(info.topic)
+    except NameValidationException:
+        return 'its name is not a valid ROS topic name'
+    if info.message_encoding != MESSAGE_ENCODING:
+        return f'its messages are {info.message_encoding or "not"}-encoded, not cdr'
+    try:
+        message_class(info.type)
+    except FastepError as exc:
+        return str(exc)
+    return ''
 
 
 def _stamp(ns: int) -> Any:
@@ -88,8 +152,8 @@ class ReplayNode(Node):
             if now >= target:
                 return
             if self.clock_pub is not None:
-                self.publish_clock(origin_ns + int((now - origin_wall) * self.rate * 1e9))
-            time.sleep(min(target - now, period))
+                self.publish_clock(min(origin_ns + int((now - origin_wall) * self.rate * 1e9), MAX_CLOCK_NS))
+            time.sleep(min(target - now, period, SLICE))
 
     # ------------------------------------------------------------------------------------------- playing
     def wait_for_subscribers(self, count: int) -> bool:
@@ -154,32 +218,53 @@ def _run(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     if not (math.isfinite(args.rate) and args.rate > 0.0):
         parser.error(f'--rate must be > 0, got {args.rate}')
-    if args.clock is not None and not (math.isfinite(args.clock) and args.clock > 0.0):
-        parser.error(f'--clock rate must be > 0, got {args.clock}')
-    if not (math.isfinite(args.delay) and args.delay >= 0.0):
-        parser.error(f'--delay must be >= 0, got {args.delay}')
-    # A FastepError before ROS starts (unreadable file, unknown topic or message type) is guard's one line.
+    if args.clock is not None and not (math.isfinite(args.clock) and 0.0 < args.clock <= MAX_CLOCK_HZ):
+        parser.error(f'--clock rate must be > 0 and <= {MAX_CLOCK_HZ:g} Hz, got {args.clock}')
+    if not (math.isfinite(args.delay) and 0.0 <= args.delay <= MAX_DELAY):
+        parser.error(f'--delay must be >= 0 and <= {MAX_DELAY:g} s, got {args.delay}')
+    # A FastepError before ROS starts (unreadable file, unknown or unplayable topic) is guard's one line.
     recording = open_recording(args.file)
     for topic in args.topics or []:
         if topic not in recording.topics:
             raise FastepError(f'topic {topic} is not in {args.file} (it has {", ".join(sorted(recording.topics))})')
-    for topic in args.topics or recording.topics:
-        message_class(recording.topics[topic].type)
-    if recording.truncated:
+        why = unplayable(recording.topics[topic])
+        if why:
+            raise FastepError(f'topic {topic} cannot be replayed: {why}')
+    topics = list(args.topics or [])
+    if not topics:
+        for topic, info in sorted(recording.topics.items()):
+            why = unplayable(info)
+            if why:
+                print(f'{PROG}: warning: not replaying {topic}: {why}', file=sys.stderr)
+            else:
+                topics.append(topic)
+        if not topics:
+            raise FastepError(f'{args.file} holds no topic that can be replayed')
+    if args.clock is not None and recording.end_time > MAX_CLOCK_NS:
+        raise FastepError(f'--clock: {args.file} has log times past 2^31 s ({recording.end_time * 1e-9:.6g} s), '
+                          f'which /clock cannot carry (builtin_interfaces/Time.sec is an int32)')
+    if recording.warning():
         print(f'{PROG}: warning: {recording.warning()}', file=sys.stderr)
+    recording.on_skip = lambda line: print(f'{PROG}: warning: {line}', file=sys.stderr)
 
-    rclpy.init(args=[PROG, *ros_args])
+    init_ros(ros_args)
     node = None
     try:
-        node = ReplayNode(recording, args.topics, args.rate, args.clock)
+        try:
+            node = ReplayNode(recording, topics, args.rate, args.clock)
+        except (KeyboardInterrupt, ExternalShutdownException):
+            raise
+        except Exception as exc:   # e.g. a remap (-r) to a name ROS refuses, found when a publisher is made
+            raise FastepError(f'cannot create the publishers: {type(exc).__name__}: '
+                              f'{" ".join(str(exc).split())}') from None
         if args.wait_subscribers > 0 and not node.wait_for_subscribers(args.wait_subscribers):
             node.get_logger().warning(f'not every topic has {args.wait_subscribers} subscribers after '
                                       f'{WAIT_TIMEOUT:g} s; playing anyway')
-        time.sleep(args.delay)
+        pause(args.delay)
         while rclpy.ok():
             if node.play_once() == 0 or not args.loop:
                 break
-        time.sleep(LINGER)
+        pause(LINGER)
         print(f'{PROG}: played {node.played} messages on {len(node.topics)} topics', file=sys.stderr)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

@@ -30,7 +30,8 @@ from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
 from fastep_core.world import World
 
 __all__ = [
-    'LEVELS', 'command_to_twist', 'diagnostic_to_dict', 'make_status', 'marker_array_to_obstacles',
+    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'command_to_twist', 'grid_resolution', 'grid_shape',
+    'diagnostic_to_dict', 'make_status', 'marker_array_to_obstacles',
     'obstacles_to_marker_array', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
     'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point',
     'quaternion_to_yaw', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds', 'state_to_odometry',
@@ -309,28 +310,92 @@ def marker_array_to_obstacles(msg: MarkerArray) -> list[Obstacle]:
 
 # ------------------------------------------------------------------------------------------------- the map
 
-def world_to_occupancy_grid(world: World, resolution: float = 0.1, stamp: Time | None = None,
+DEFAULT_RESOLUTION = 0.1
+"""m: the /map cell size of a workspace small enough (200 m x 200 m) for it; larger ones get coarser cells."""
+MAX_GRID_CELLS = 4_000_000
+"""The most cells a /map grid may have (2000 x 2000; 4 MB on the wire, ~0.3 GB while it is rasterised): a 1 km
+workspace at 0.1 m took 4 GB in `fastep-sim --mcap`, a 5 km one (or 1e-4 m cells) ended in MemoryError."""
+_NICE_STEPS = ('1', '2', '2.5', '5')   # automatic cell sizes: 0.1, 0.2, 0.25, 0.5, 1, 2, 2.5, 5, 10, ... m
+
+
+def grid_shape(workspace: Sequence[float], resolution: float) -> tuple[int, int]:
+    """(width, height) in cells of a grid covering the workspace (cells rounded up at the far edges)."""
+    xmin, ymin, xmax, ymax = workspace
+    width = max(1, int(math.ceil((xmax - xmin) / resolution - 1e-9)))
+    height = max(1, int(math.ceil((ymax - ymin) / resolution - 1e-9)))
+    return width, height
+
+
+def grid_resolution(workspace: Sequence[float], resolution: float | None = None) -> float:
+    """The /map cell size (m) of a workspace, so that the grid has at most MAX_GRID_CELLS cells.
+
+    None (automatic; what fastep-sim --mcap and fastep-map use by default): DEFAULT_RESOLUTION, or for a
+    larger workspace the smallest of 0.2, 0.25, 0.5, 1, 2, 2.5, 5, 10, ... m that fits (exact in decimal, so
+    it survives the float32 of MapMetaData.resolution). A given resolution: ValueError (one line, naming the
+    smallest that fits) if it is not > 0 or its grid would have more cells."""
+    if resolution is not None:
+        if not (math.isfinite(resolution) and resolution > 0.0):
+            raise ValueError(f'resolution must be > 0, got {resolution!r}')
+        width, height = grid_shape(workspace, resolution)
+        if width * height > MAX_GRID_CELLS:
+            raise ValueError(f'resolution {resolution:g} m would make a {width} x {height} grid, more than '
+                             f'{MAX_GRID_CELLS:,} cells; this workspace needs at least '
+                             f'{grid_resolution(workspace):g} m (0 chooses it)')
+        return float(resolution)
+    xmin, ymin, xmax, ymax = workspace
+    # Start one decade below what the area alone needs (a thin workspace needs less), then go up.
+    needed = math.sqrt(max(xmax - xmin, 1e-300) * max(ymax - ymin, 1e-300) / MAX_GRID_CELLS)
+    exponent = max(0, math.floor(math.log10(max(needed / DEFAULT_RESOLUTION, 1.0))) - 1)
+    for k in range(exponent, exponent + 400):
+        for step in _NICE_STEPS:
+            candidate = float(f'{step}e{k - 1}')
+            width, height = grid_shape(workspace, candidate)
+            if width * height <= MAX_GRID_CELLS:
+                if candidate > 3.0e38:   # MapMetaData.resolution is a float32
+                    raise ValueError(f'workspace {tuple(workspace)} is too large for an occupancy grid')
+                return candidate
+    raise ValueError(f'workspace {tuple(workspace)} is too large for an occupancy grid')
+
+
+def world_to_occupancy_grid(world: World, resolution: float | None = None, stamp: Time | None = None,
                             frame_id: str = 'map', thickness: float | None = None) -> OccupancyGrid:
     """Rasterise the world: 100 where a cell centre is inside a circle or within thickness / 2 of a segment
     (default thickness: one cell, so a wall has no gaps), 0 elsewhere. The grid covers the workspace
-    (origin at xmin, ymin; cells rounded up at the far edges)."""
-    if not (math.isfinite(resolution) and resolution > 0.0):
-        raise ValueError(f'resolution must be > 0, got {resolution!r}')
+    (origin at xmin, ymin; cells rounded up at the far edges). resolution: see grid_resolution (None:
+    automatic; ValueError if the grid would exceed MAX_GRID_CELLS). Each obstacle is rasterised over the cells
+    of its bounding box only."""
+    resolution = grid_resolution(world.workspace, resolution)
     xmin, ymin, xmax, ymax = world.workspace
-    width = max(1, int(math.ceil((xmax - xmin) / resolution - 1e-9)))
-    height = max(1, int(math.ceil((ymax - ymin) / resolution - 1e-9)))
+    width, height = grid_shape(world.workspace, resolution)
     half = 0.5 * (resolution if thickness is None else thickness)
     xs = xmin + (np.arange(width) + 0.5) * resolution
     ys = ymin + (np.arange(height) + 0.5) * resolution
     grid = np.zeros((height, width), dtype=bool)
-    centres = np.stack(np.meshgrid(xs, ys), axis=-1)  # (height, width, 2), row = y
+
+    def cells(low: float, high: float, origin: float, count: int) -> slice:
+        """The cells whose centres may lie in [low, high] (one cell of margin against rounding)."""
+        first = math.floor((low - origin) / resolution - 0.5) - 1
+        last = math.ceil((high - origin) / resolution - 0.5) + 2
+        return slice(min(max(first, 0), count), min(max(last, 0), count))
+
     for obstacle in world.obstacle_list:
         if isinstance(obstacle, Circle):
             cx, cy = obstacle.center
-            grid |= np.hypot(centres[..., 0] - cx, centres[..., 1] - cy) <= obstacle.radius
+            reach = obstacle.radius
+            bx, by = (cx - reach, cx + reach), (cy - reach, cy + reach)
         else:
-            d = Obstacles([obstacle]).distances(centres)[..., 0]
-            grid |= d <= half
+            reach = half
+            bx = (min(obstacle.start[0], obstacle.end[0]) - reach, max(obstacle.start[0], obstacle.end[0]) + reach)
+            by = (min(obstacle.start[1], obstacle.end[1]) - reach, max(obstacle.start[1], obstacle.end[1]) + reach)
+        cols, rows = cells(*bx, xmin, width), cells(*by, ymin, height)
+        if cols.start >= cols.stop or rows.start >= rows.stop:
+            continue
+        gx, gy = np.meshgrid(xs[cols], ys[rows])
+        if isinstance(obstacle, Circle):
+            grid[rows, cols] |= np.hypot(gx - cx, gy - cy) <= obstacle.radius
+        else:
+            d = Obstacles([obstacle]).distances(np.stack([gx, gy], axis=-1))[..., 0]
+            grid[rows, cols] |= d <= half
     msg = OccupancyGrid()
     msg.header.frame_id = frame_id
     if stamp is not None:

@@ -4,10 +4,18 @@
 
 Why: a recorder that was killed (SIGKILL, power loss, a crashed launcher) leaves a file without summary and
 footer. Our reader recovers it on the fly, but other tools (`ros2 bag info`, Foxglove, indexed readers)
-want a complete file. Every message up to the last complete chunk is copied with its schema, channel metadata
-(QoS) and the metadata records, in log-time order, and a summary with statistics is written. A complete input
-is simply copied (re-chunked). Exit 0 with one line saying how many messages were kept; 2 with one line on
-stderr when IN is not MCAP or holds no complete message, or OUT cannot be written. OUT must differ from IN.
+want a complete file. Every message up to the last complete chunk is copied, in log-time order, and a summary
+with statistics is written. A chunk that is corrupt (bad compression or CRC) is skipped and the chunks after it
+are read. A complete input is simply copied (re-chunked).
+
+The copy is faithful to files of any tool: the header's profile, every schema and channel as they were
+(message encodings such as json or ros1, schema encodings, binary schemas, channels without a schema), channel
+metadata (QoS), sequence numbers, metadata records and attachments. A channel whose schema record was lost
+(it was in a corrupt or missing part) cannot be: it is left out, with a warning line.
+
+Exit 0 with one line on stdout saying how many messages were kept, and one warning line on stderr for each
+loss (truncation, corrupt chunks, a channel left out); 2 with one line on stderr when IN is not MCAP or holds
+no complete message, or OUT cannot be written. OUT must differ from IN.
 """
 
 from __future__ import annotations
@@ -23,20 +31,21 @@ from msg_tools.mcap_io import copy_recording, open_recording
 __all__ = ['main', 'recover']
 
 
-def recover(source: str | Path, target: str | Path) -> tuple[int, str]:
-    """Copy what is readable from source into a complete file target; (messages written, warning or '')."""
+def recover(source: str | Path, target: str | Path) -> tuple[int, list[str]]:
+    """Copy what is readable from source into a complete file target; (messages written, warning lines)."""
     source, target = Path(source), Path(target)
     if target.exists() and source.exists() and target.resolve() == source.resolve():
         raise FastepError(f'OUT must not be the input file {source}')
     recording = open_recording(source)
     target.parent.mkdir(parents=True, exist_ok=True)
     temp = target.with_name(target.name + '.part')
+    left_out: list[str] = []
     try:
-        count = copy_recording(recording, temp)
+        count = copy_recording(recording, temp, warn=left_out.append)
         temp.replace(target)
     finally:
         temp.unlink(missing_ok=True)
-    return count, recording.warning()
+    return count, [line for line in (recording.warning(), *left_out) if line]
 
 
 PROG = 'fastep-recover'
@@ -52,11 +61,13 @@ def _run(argv: Sequence[str] | None) -> int:
     p.add_argument('output', type=Path, metavar='OUT.mcap')
     args = p.parse_args(argv)
     try:  # a FastepError (not MCAP, nothing complete in it, OUT is IN) is guard's one line
-        count, warning = recover(args.input, args.output)
+        count, warnings = recover(args.input, args.output)
     except OSError as exc:
         return fail(PROG, f'cannot write {args.output}: {exc.strerror or exc}')
-    state = 'recovered' if warning else 'copied (the input was complete)'
-    print(f'{state} {count} messages from {args.input} into {args.output}')
+    for line in warnings:
+        print(f'{PROG}: warning: {line}', file=sys.stderr)
+    state = 'recovered' if warnings else 'copied'
+    print(f'{state} {count} messages from {args.input} into {args.output}{"" if warnings else " (it was complete)"}')
     return 0
 
 

@@ -40,7 +40,7 @@ import numpy as np
 
 from fastep_core.cli import Parser, fail, guard
 from fastep_core.errors import FastepError
-from fastep_core.geometry import Obstacle, Obstacles
+from fastep_core.geometry import Circle, Obstacle, Obstacles
 from fastep_core.metrics import trajectory_margins
 from msg_tools.interface import (
     CMD_VEL,
@@ -51,6 +51,7 @@ from msg_tools.interface import (
     OBSTACLES,
     ODOM,
     PLAN,
+    STAMPED_CMD_VEL_TYPE,
     STATUS,
     TRAILER_POSE,
     TYPES,
@@ -64,6 +65,9 @@ __all__ = ['RecordedRun', 'RobotRecord', 'figures', 'float64_field', 'load_run',
            'odometry_fields', 'twist_fields', 'write_figures', 'write_report']
 
 DEFAULT_RADIUS = 0.5
+MAX_COORDINATE = 1e9
+"""m: positions, lengths and speeds beyond it (or not finite) are left out of a report (with a warning): a
+robot 10^6 km away is a broken message, and sums of squares of such values overflow."""
 
 
 @dataclass
@@ -112,72 +116,157 @@ def _robot(robots: dict[str, RobotRecord], name: str) -> RobotRecord:
 # Odometry is ~15 objects and two numpy covariance arrays), which made reading a 10-minute recording take half
 # a minute; these read only the needed float64 fields of little-endian CDR (encapsulation 00 01) with struct.
 # Alignment is relative to the payload after the 4-byte encapsulation header. Tests compare them with rclpy.
+# A message shorter than the whole type (cut off) raises CdrError, as rclpy's decoder refuses it.
 _CDR_LE = b'\x00\x01'
 _U32 = struct.Struct('<I')
 _ODOM = struct.Struct('<3d4d288x3d3d')  # position, orientation, (pose covariance), twist linear, angular
+_ODOM_TAIL = 85 * 8                     # pose (7), its covariance (36), twist (6), its covariance (36)
 _TWIST = struct.Struct('<3d3d')
 _F64 = struct.Struct('<d')
 
 
+class CdrError(ValueError):
+    """CDR bytes that do not hold a whole message of the type (cut off, or a string running past the end)."""
+
+
 def _string_end(data: bytes, offset: int) -> int:
-    """Offset after a CDR string starting at `offset` (payload offsets; data includes the 4-byte header)."""
+    """Offset after a CDR string starting at `offset` (payload offsets; data includes the 4-byte header);
+    struct.error if its length field lies past the end (a string running past the end is caught by the
+    caller's length check)."""
     offset = (offset + 3) & ~3
     return offset + 4 + _U32.unpack_from(data, 4 + offset)[0]
 
 
 def odometry_fields(data: bytes) -> tuple[float, ...] | None:
-    """(x, y, qx, qy, qz, qw, linear.x, linear.y, angular.z) of a CDR Odometry, None if not little-endian CDR."""
+    """(x, y, qx, qy, qz, qw, linear.x, linear.y, angular.z) of a CDR Odometry, None if not little-endian CDR;
+    CdrError if the bytes are not a whole Odometry."""
     if data[:2] != _CDR_LE:
         return None
-    offset = _string_end(data, 8)           # header.stamp (8 bytes), header.frame_id
-    offset = _string_end(data, offset)      # child_frame_id
+    try:
+        offset = _string_end(data, 8)           # header.stamp (8 bytes), header.frame_id
+        offset = _string_end(data, offset)      # child_frame_id
+    except struct.error:
+        raise CdrError(f'cut off: {len(data)} bytes end inside a frame name') from None
     offset = (offset + 7) & ~7
+    if 4 + offset + _ODOM_TAIL > len(data):
+        raise CdrError(f'cut off: {len(data)} bytes, an Odometry with these frame names needs '
+                       f'{4 + offset + _ODOM_TAIL}')
     v = _ODOM.unpack_from(data, 4 + offset)
     return v[0], v[1], v[3], v[4], v[5], v[6], v[7], v[8], v[12]
 
 
 def twist_fields(data: bytes) -> tuple[float, float, float] | None:
-    """(linear.x, linear.y, angular.z) of a CDR Twist."""
+    """(linear.x, linear.y, angular.z) of a CDR Twist (CdrError if cut off)."""
     if data[:2] != _CDR_LE:
         return None
-    v = _TWIST.unpack_from(data, 4)
+    try:
+        v = _TWIST.unpack_from(data, 4)
+    except struct.error:
+        raise CdrError(f'cut off: {len(data)} bytes, a Twist needs {4 + _TWIST.size}') from None
     return v[0], v[1], v[5]
 
 
 def float64_field(data: bytes) -> float | None:
+    """The value of a CDR Float64 (CdrError if cut off)."""
     if data[:2] != _CDR_LE:
         return None
-    return _F64.unpack_from(data, 4)[0]
+    try:
+        return _F64.unpack_from(data, 4)[0]
+    except struct.error:
+        raise CdrError(f'cut off: {len(data)} bytes, a Float64 needs {4 + _F64.size}') from None
+
+
+# What each topic may carry; anything else (another type, another encoding) is left out with a warning.
+_ACCEPTED = {kind: {name} for kind, name in TYPES.items()}
+_ACCEPTED[CMD_VEL] = {TYPES[CMD_VEL], STAMPED_CMD_VEL_TYPE}
+
+
+def _plausible(values: Sequence[float]) -> bool:
+    """Finite and within MAX_COORDINATE: a position, length or speed a report can compute and draw with."""
+    return all(math.isfinite(v) and abs(v) <= MAX_COORDINATE for v in values)
+
+
+def _numbers(obstacle: Obstacle) -> tuple[float, ...]:
+    if isinstance(obstacle, Circle):
+        return (*obstacle.center, obstacle.radius)
+    return (*obstacle.start, *obstacle.end)
+
+
+def _workspace(values: Sequence[float] | None) -> tuple[float, float, float, float] | None:
+    """(xmin, ymin, xmax, ymax) if it is a plausible workspace (4 values, min < max), else None."""
+    if values is None or len(values) != 4 or not _plausible(values):
+        return None
+    xmin, ymin, xmax, ymax = (float(v) for v in values)
+    return (xmin, ymin, xmax, ymax) if xmin < xmax and ymin < ymax else None
+
+
+class _Problems:
+    """Messages left out while loading, counted per topic and reason, said in one line at the end."""
+
+    def __init__(self) -> None:
+        self.counts: dict[tuple[str, str], int] = {}
+        self.lines: list[str] = []
+
+    def count(self, topic: str, what: str) -> None:
+        self.counts[(topic, what)] = self.counts.get((topic, what), 0) + 1
+
+    def line(self, text: str) -> None:
+        self.lines.append(text)
+
+    def summary(self) -> list[str]:
+        counted = [f'{n} message(s) on {topic} left out ({what})' for (topic, what), n in self.counts.items()]
+        return self.lines + counted
 
 
 def load_run(recording: Recording) -> RecordedRun:
-    """Collect every robot's series, the obstacles and the workspace from a recording."""
+    """Collect every robot's series, the obstacles and the workspace from a recording.
+
+    What the report cannot use is left out and said in `warning` (one line): topics of another type or
+    encoding than the interface's, messages that do not decode, odometry, points and obstacles that are not
+    finite or lie beyond MAX_COORDINATE, a workspace that is not one."""
     from rclpy.serialization import deserialize_message
 
     from msg_tools import convert
-    from msg_tools.mcap_io import message_class
+    from msg_tools.mcap_io import message_class, normalize_type
 
+    problems = _Problems()
+    LIMIT = MAX_COORDINATE  # noqa: N806  (a local name: read once per message in the loop below)
     robots: dict[str, RobotRecord] = {}
-    wanted = [OBSTACLES, MAP]
-    kinds: dict[str, tuple[RobotRecord, str]] = {}
-    for topic in recording.topics:
+    kinds: dict[str, tuple[RobotRecord | None, str, str]] = {}   # topic -> robot, kind, pkg/msg/Type
+    for topic, info in recording.topics.items():
         parts = split_robot_topic(topic)
         if parts is not None:
-            robot = _robot(robots, parts[0])
-            if parts[1] == TRAILER_POSE:
-                robot.model = 'tractor_trailer'
-            else:
-                wanted.append(topic)
-                kinds[topic] = (robot, parts[1])
+            robot: RobotRecord | None = _robot(robots, parts[0])
+            kind = parts[1]
+        elif topic in (OBSTACLES, MAP):
+            robot, kind = None, topic
+        else:
+            continue
+        try:
+            type_name = normalize_type(info.type)
+        except FastepError:
+            type_name = info.type
+        if info.message_encoding != 'cdr' or type_name not in _ACCEPTED[kind]:
+            problems.line(f'{topic} left out: it holds {info.type or "schemaless"} ({info.message_encoding}), '
+                          f'not {" or ".join(sorted(_ACCEPTED[kind]))} (cdr)')
+            continue
+        if kind == TRAILER_POSE:
+            assert robot is not None
+            robot.model = 'tractor_trailer'
+        else:
+            kinds[topic] = (robot, kind, type_name)
     classes: dict[str, type] = {}
 
     def decode(type_name: str, data: bytes) -> Any:
         if type_name not in classes:
             classes[type_name] = message_class(type_name)
-        try:
-            return deserialize_message(data, classes[type_name])
-        except Exception as exc:
-            raise FastepError(f'{recording.path}: cannot decode a {type_name} message: {exc}') from None
+        return deserialize_message(data, classes[type_name])
+
+    def point(pose: Any) -> tuple[float, float]:
+        p = convert.pose_stamped_to_point(pose)
+        if not _plausible(p):
+            raise ValueError(f'a point that is not finite or beyond {MAX_COORDINATE:g} m')
+        return p
 
     obstacles: tuple[float, list[Obstacle]] | None = None
     workspace: tuple[float, tuple[float, float, float, float]] | None = None
@@ -186,57 +275,72 @@ def load_run(recording: Recording) -> RecordedRun:
     goals: dict[str, list[tuple[float, tuple[float, float]]]] = {name: [] for name in robots}
     algorithm = ''
     # File order (fast); every series is sorted by time below.
-    for topic, type_name, log_time, _, data, _ in recording.raw_messages(wanted, log_time_order=False):
+    cmd_vel_type = TYPES[CMD_VEL]
+    for topic, _, log_time, _, data, _, _ in recording.raw_messages(list(kinds), log_time_order=False):
         t = log_time * 1e-9
-        if topic == OBSTACLES:
-            if obstacles is None or t >= obstacles[0]:
-                try:
-                    obstacles = (t, convert.marker_array_to_obstacles(decode(type_name, data)))
-                except ValueError:
-                    pass
-            continue
-        if topic == MAP:
-            if workspace is None or t >= workspace[0]:
-                try:
-                    workspace = (t, convert.occupancy_grid_workspace(decode(type_name, data)))
-                except ValueError:
-                    pass
-            continue
-        robot, kind = kinds[topic]
-        if kind == ODOM:
-            v = odometry_fields(data) if type_name == TYPES[ODOM] else None
-            if v is None:
-                m = decode(type_name, data)
-                p, q, tw = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist
-                v = (p.x, p.y, q.x, q.y, q.z, q.w, tw.linear.x, tw.linear.y, tw.angular.z)
-            robot.odom.append((t, v[0], v[1]))
-            robot.odom_twist.append((t, v[6], v[7], v[8]))
-        elif kind == CMD_VEL:
-            c = twist_fields(data) if type_name == TYPES[CMD_VEL] else None
-            if c is None:
-                m = decode(type_name, data)
-                tw = m.twist if hasattr(m, 'twist') else m  # TwistStamped or Twist
-                c = (tw.linear.x, tw.linear.y, tw.angular.z)
-            robot.cmd.append((t, *c))
-        elif kind == COST:
-            f = float64_field(data) if type_name == TYPES[COST] else None
-            robot.cost.append((t, float(decode(type_name, data).data) if f is None else f))
-        elif kind == WAYPOINT:
-            waypoints[robot.name].append((t, convert.pose_stamped_to_point(decode(type_name, data))))
-        elif kind == PLAN:
-            if robot.name not in plans or t >= plans[robot.name][0]:
-                plans[robot.name] = (t, convert.path_to_waypoints(decode(type_name, data)))
-        elif kind == STATUS:
-            values = convert.diagnostic_to_dict(decode(type_name, data))
-            robot.statuses.append((t, values))
-        elif kind == GOAL_POSE:
-            goals[robot.name].append((t, convert.pose_stamped_to_point(decode(type_name, data))))
+        robot, kind, type_name = kinds[topic]
+        try:
+            if kind == ODOM:   # the most frequent first
+                assert robot is not None
+                v = odometry_fields(data)
+                if v is None:
+                    m = decode(type_name, data)
+                    p, q, tw = m.pose.pose.position, m.pose.pose.orientation, m.twist.twist
+                    v = (p.x, p.y, q.x, q.y, q.z, q.w, tw.linear.x, tw.linear.y, tw.angular.z)
+                # Chained comparisons: False for NaN and inf too, and 30 times faster than math.isfinite + abs.
+                if not (-LIMIT <= v[0] <= LIMIT and -LIMIT <= v[1] <= LIMIT and -LIMIT <= v[6] <= LIMIT
+                        and -LIMIT <= v[7] <= LIMIT and -LIMIT <= v[8] <= LIMIT):
+                    problems.count(topic, f'not finite or beyond {LIMIT:g}')
+                    continue
+                robot.odom.append((t, v[0], v[1]))
+                robot.odom_twist.append((t, v[6], v[7], v[8]))
+                continue
+            if kind == OBSTACLES:
+                found = convert.marker_array_to_obstacles(decode(type_name, data))
+                if not all(_plausible(_numbers(o)) for o in found):
+                    raise ValueError(f'an obstacle beyond {MAX_COORDINATE:g} m')
+                if obstacles is None or t >= obstacles[0]:
+                    obstacles = (t, found)
+                continue
+            if kind == MAP:
+                space = _workspace(convert.occupancy_grid_workspace(decode(type_name, data)))
+                if space is None:
+                    raise ValueError('its extent is not a plausible workspace')
+                if workspace is None or t >= workspace[0]:
+                    workspace = (t, space)
+                continue
+            assert robot is not None
+            if kind == CMD_VEL:
+                c = twist_fields(data) if type_name == cmd_vel_type else None
+                if c is None:
+                    m = decode(type_name, data)
+                    tw = m.twist if hasattr(m, 'twist') else m  # TwistStamped or Twist
+                    c = (tw.linear.x, tw.linear.y, tw.angular.z)
+                if not (-LIMIT <= c[0] <= LIMIT and -LIMIT <= c[1] <= LIMIT and -LIMIT <= c[2] <= LIMIT):
+                    problems.count(topic, f'not finite or beyond {LIMIT:g}')
+                    continue
+                robot.cmd.append((t, *c))
+            elif kind == COST:
+                f = float64_field(data)
+                robot.cost.append((t, float(decode(type_name, data).data) if f is None else f))
+            elif kind == WAYPOINT:
+                waypoints[robot.name].append((t, point(decode(type_name, data))))
+            elif kind == PLAN:
+                path = [point(pose) for pose in decode(type_name, data).poses]
+                if robot.name not in plans or t >= plans[robot.name][0]:
+                    plans[robot.name] = (t, path)
+            elif kind == STATUS:
+                robot.statuses.append((t, convert.diagnostic_to_dict(decode(type_name, data))))
+            elif kind == GOAL_POSE:
+                goals[robot.name].append((t, point(decode(type_name, data))))
+        except Exception as exc:  # rclpy's decoder raises several kinds; every one means the same here
+            problems.count(topic, ' '.join(f'{type(exc).__name__}: {exc}'.split())[:200])
     for robot in robots.values():
         for series in (robot.odom, robot.odom_twist, robot.cmd, robot.cost, robot.statuses):
             series.sort(key=lambda row: row[0])  # stable: equal times keep file order
-        for _, point in sorted(waypoints[robot.name], key=lambda row: row[0]):
-            if point not in robot.waypoints:
-                robot.waypoints.append(point)
+        for _, point_ in sorted(waypoints[robot.name], key=lambda row: row[0]):
+            if point_ not in robot.waypoints:
+                robot.waypoints.append(point_)
         if robot.name in plans:
             robot.plan = plans[robot.name][1]
         if goals[robot.name]:
@@ -249,10 +353,12 @@ def load_run(recording: Recording) -> RecordedRun:
     space = workspace[1] if workspace is not None else None
     if space is None and meta.get('workspace'):
         try:
-            corners = [float(v) for v in meta['workspace'].split(',')]
-            space = (corners[0], corners[1], corners[2], corners[3]) if len(corners) == 4 else None
+            space = _workspace([float(v) for v in meta['workspace'].split(',')])
         except ValueError:
             space = None
+        if space is None:
+            problems.line(f'the metadata\'s workspace {meta["workspace"][:80]!r} is not xmin,ymin,xmax,ymax with '
+                          f'min < max, finite, within {MAX_COORDINATE:g}: left out')
     for robot in robots.values():
         model = meta.get(metadata_key('model', robot.name))
         if model:
@@ -263,41 +369,65 @@ def load_run(recording: Recording) -> RecordedRun:
     t0 = min(starts) if starts else recording.start_time * 1e-9
     order = [n for n in meta.get('robots', '').split(',') if n in robots]
     ordered = {n: robots[n] for n in order + sorted(n for n in robots if n not in order)}
+    warning = '; '.join(line for line in (recording.warning(), *problems.summary()) if line)
     return RecordedRun(recording.path, ordered, [] if obstacles is None else obstacles[1], space, meta,
                        meta.get('algorithm', algorithm), meta.get('scenario', ''), t0, recording.truncated,
-                       recording.warning(), recording.message_count)
+                       warning, recording.message_count)
 
 
 # ----------------------------------------------------------------------------------------------- metrics
 
-def _radius(run: RecordedRun, robot: RobotRecord, default: float) -> tuple[float, str]:
+def _radius_value(text: Any) -> float | None:
+    try:
+        value = float(text)
+    except (TypeError, ValueError):
+        return None
+    return value if math.isfinite(value) and 0.0 <= value <= MAX_COORDINATE else None
+
+
+def _radius(run: RecordedRun, robot: RobotRecord, default: float) -> tuple[float, str, str]:
+    """(radius, where it came from, a problem with a source passed over or '')."""
+    problem = ''
     text = run.metadata.get(metadata_key('radius', robot.name))
     if text:
-        try:
-            return float(text), 'metadata'
-        except ValueError:
-            pass
+        value = _radius_value(text)
+        if value is not None:
+            return value, 'metadata', ''
+        problem = f'{metadata_key("radius", robot.name)} = {text[:40]!r} in the metadata is not a radius: left out'
     for _, values in reversed(robot.statuses):
         for key in ('robot_radius', 'radius'):
             if values.get(key):
-                try:
-                    return float(values[key]), 'status'
-                except ValueError:
-                    pass
-    return default, 'default'
+                value = _radius_value(values[key])
+                if value is not None:
+                    return value, 'status', problem
+    return default, 'default', problem
 
 
 def _int(text: Any) -> int | None:
     try:
         return int(float(text))
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):
         return None
+
+
+def _json_ready(value: Any) -> Any:
+    """value with every float that is not finite as None (null): JSON has no NaN or Infinity."""
+    if isinstance(value, float):
+        return value if math.isfinite(value) else None
+    if isinstance(value, dict):
+        return {k: _json_ready(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_json_ready(v) for v in value]
+    return value
 
 
 def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[str, Any]:
     """The report as a JSON-ready dict (see the module docstring)."""
+    notes = []
     for robot in run.robots.values():
-        robot.radius, robot.radius_source = _radius(run, robot, default_radius)
+        robot.radius, robot.radius_source, problem = _radius(run, robot, default_radius)
+        if problem:
+            notes.append(problem)
     rows = []
     arrays = {name: np.array(r.odom, dtype=float).reshape(-1, 3) for name, r in run.robots.items()}
     kept = trajectory_margins(list(arrays.values()), [float(r.radius or 0.0) for r in run.robots.values()],
@@ -339,7 +469,8 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
         })
     return {
         'file': str(run.path), 'scenario': run.scenario, 'algorithm': run.algorithm,
-        'truncated': run.truncated, 'warning': run.warning, 'messages': run.message_count,
+        'truncated': run.truncated, 'warning': '; '.join(line for line in (run.warning, *notes) if line),
+        'messages': run.message_count,
         'obstacles': len(run.obstacles), 'workspace': None if run.workspace is None else list(run.workspace),
         'robots': rows,
     }
@@ -391,7 +522,7 @@ def write_report(path: str | Path, out: str | Path | None = None, radius: float 
     folder = Path(out) if out is not None else recording.path.with_name(recording.path.stem + '_report')
     folder.mkdir(parents=True, exist_ok=True)
     files = [folder / 'report.json']
-    files[0].write_text(json.dumps(report, indent=1) + '\n')
+    files[0].write_text(json.dumps(_json_ready(report), indent=1, allow_nan=False) + '\n')
     if figures:
         files += write_figures(run, folder)
     return report, files

@@ -90,7 +90,8 @@ class SimRecorder:
         self.dt = self.scenario.planner.dt
         self._clock(0.0)
         self._add(0.0, OBSTACLES, convert.obstacles_to_marker_array(world.obstacle_list, stamp, MAP_FRAME))
-        self._add(0.0, MAP, convert.world_to_occupancy_grid(world, 0.1, stamp, MAP_FRAME))
+        # The automatic cell size, as fastep-map's default: 0.1 m, coarser beyond 4 million cells.
+        self._add(0.0, MAP, convert.world_to_occupancy_grid(world, None, stamp, MAP_FRAME))
         for spec in self.scenario.robots:
             state = _RobotState(spec)
             self.robots[spec.name] = state

@@ -321,3 +321,27 @@ def test_a_node_interrupted_while_it_imports_ends_without_a_traceback(tmp_path: 
     finally:
         stop_process(proc)
     assert proc.returncode in (0, 130) and 'Traceback' not in err, (proc.returncode, err)
+
+
+def test_a_full_disk_under_fastep_launch_is_not_reported_as_written(tmp_path: Path) -> None:
+    """Issue "Hardening", item 15: the recorder's file hits a file size limit (RLIMIT_FSIZE of the launcher,
+    inherited by every node; a full disk without filling one): the launcher must not print "wrote ..."."""
+    import resource
+
+    def limit_file_size() -> None:
+        resource.setrlimit(resource.RLIMIT_FSIZE, (16 * 1024, 16 * 1024))
+
+    scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+    recorded = tmp_path / 'live.mcap'
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '10', '--seed', '0',
+                             '--record', str(recorded)], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, stdin=subprocess.DEVNULL, preexec_fn=limit_file_size)
+    try:
+        out, err = proc.communicate(timeout=120)
+    finally:
+        stop_process(proc)
+    assert proc.returncode == 1 and 'Traceback' not in err, out + err
+    assert f'wrote {recorded}' not in out, out
+    assert 'fastep-record: error: cannot write' in err and 'File too large' in err, err
+    assert f'fastep-launch: error: the recorder failed (exit code 1): {recorded} is incomplete' in err, err

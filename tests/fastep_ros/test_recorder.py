@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import json
 import os
+import resource
 import signal
 import subprocess
 import sys
@@ -165,3 +166,50 @@ def test_bad_parameters_are_one_line_and_exit_2(tmp_path: Path) -> None:
                               cwd=ROOT, capture_output=True, text=True, timeout=60)
         assert proc.returncode == 2
         assert proc.stderr.startswith('fastep-record: error:') and proc.stderr.count('\n') == 1, proc.stderr
+
+
+# Issue "Hardening", item 15: a full disk. Simulated without filling the real one: a file size limit
+# (RLIMIT_FSIZE, set in the recorder's process only: writes past it fail with EFBIG) or /dev/full (ENOSPC).
+FULL_LIMIT = 64 * 1024
+
+
+def _limit_file_size() -> None:
+    resource.setrlimit(resource.RLIMIT_FSIZE, (FULL_LIMIT, FULL_LIMIT))
+
+
+@pytest.mark.parametrize('how', ['file_size_limit', 'dev_full'])
+def test_a_full_disk_stops_the_recorder_with_one_line_and_keeps_what_was_written(tmp_path: Path, how: str) -> None:
+    from fastep_testing.graph import free_domain, isolated_env
+    env = isolated_env(free_domain(), tmp_path / 'log')
+    prefix = f'full{os.getpid()}_'
+    out = tmp_path / 'full.mcap' if how == 'file_size_limit' else Path('/dev/full')
+    recorder = subprocess.Popen(
+        [sys.executable, '-m', 'fastep_ros.recorder', '--ros-args', '--log-level', 'warn', '-p', f'output:={out}',
+         '-p', 'chunk_size:=1024', '-p', 'flush_period:=0.1', '-p', 'compression:=none'],
+        env=env, cwd=ROOT, stdin=subprocess.DEVNULL, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        preexec_fn=_limit_file_size if how == 'file_size_limit' else None)
+    try:
+        if how == 'file_size_limit':   # /dev/full refuses the first flush (the header), before any message
+            fake = subprocess.run(
+                [sys.executable, '-m', 'fastep_testing.fake_robots', '--robots', '2', '--rate', '200', '--count',
+                 '300', '--wait-subscribers', '1', '--wait-timeout', '90', '--prefix', prefix],
+                env=env, cwd=ROOT, capture_output=True, text=True, timeout=180)
+            assert fake.returncode == 0, fake.stderr
+        _, err = recorder.communicate(timeout=60)   # it stops by itself
+    finally:
+        if recorder.poll() is None:
+            recorder.kill()
+            recorder.wait()
+    errors = [line for line in err.splitlines() if 'error' in line.lower() or 'Traceback' in line]
+    assert recorder.returncode == 1 and len(errors) == 1, err
+    reason = 'File too large' if how == 'file_size_limit' else 'No space left on device'
+    assert errors[0].startswith(f'fastep-record: error: cannot write {out}: {reason}; recording stopped after')
+    if how == 'dev_full':
+        return
+    recording = open_recording(out)   # everything up to the last chunk that fitted
+    assert recording.truncated and 0 < recording.message_count
+    assert len(list(recording.messages())) == recording.message_count
+    fixed = tmp_path / 'fixed.mcap'
+    assert recover.main([str(out), str(fixed)]) == 0
+    with AnyReader([fixed]) as reader:
+        assert reader.message_count == recording.message_count

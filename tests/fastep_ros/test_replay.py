@@ -18,6 +18,7 @@ from typing import Any, Iterator
 
 import numpy as np
 import pytest
+from mcap.reader import SeekingReader
 from nav_msgs.msg import OccupancyGrid
 from rclpy.qos import DurabilityPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
@@ -27,7 +28,7 @@ from fastep_core.world import World
 from fastep_ros import replay
 from fastep_testing.graph import ROOT, Helper, free_domain, isolated_env, stop_process
 from msg_tools import convert
-from msg_tools.mcap_io import McapWriter, qos_dict
+from msg_tools.mcap_io import McapWriter, open_recording, qos_dict
 
 # Irregular gaps (s) between the cost messages; the recording starts at 5 s of log time.
 TIMES = 5.0 + np.array([0.0, 0.1, 0.15, 0.35, 0.4, 0.6, 0.9, 0.95, 1.2, 1.25, 1.45, 1.5])
@@ -159,3 +160,99 @@ def test_bad_input_is_one_line_and_exit_2(tmp_path: Path, recording: Path,
         assert code == 2
         err = capsys.readouterr().err
         assert err.startswith('fastep-replay: error:') and err.count('\n') == 1, err
+
+
+# ----------------------------------------------------------------------------------------------- hostile input
+# Issue "Hardening", item 10 (and item 6 for replay): a stop during a long gap, options and files that used to
+# give a traceback.
+
+def test_sigterm_ends_a_replay_waiting_out_a_gap_of_centuries(helper: tuple[Helper, dict[str, str]],
+                                                              tmp_path: Path) -> None:
+    """Two messages 2^64 ns apart (585 years): the replay waits out the gap, and SIGTERM must end it."""
+    h, env = helper
+    path = tmp_path / 'gap.mcap'
+    with McapWriter(path) as writer:
+        writer.write(COST, Float64(data=1.0), 1)
+        writer.write(COST, Float64(data=2.0), 2**64 - 1000)
+    got: list[float] = []
+    sub = h.node.create_subscription(Float64, COST, lambda m: got.append(m.data), RELIABLE)
+    proc = start(env, str(path), '--wait-subscribers', '1', '--delay', '0')
+    try:
+        h.spin_until(lambda: bool(got), 60.0, 'the first message')
+        h.spin_for(0.5)
+        assert proc.poll() is None
+        proc.send_signal(signal.SIGTERM)
+        _, err = proc.communicate(timeout=10)   # before: it slept on and never exited
+    finally:
+        stop_process(proc, signal.SIGKILL)
+        h.node.destroy_subscription(sub)
+    assert proc.returncode == 0 and 'Traceback' not in err and got == [1.0]
+
+
+def test_unplayable_topics_and_a_corrupt_chunk_are_skipped_with_warnings(
+        helper: tuple[Helper, dict[str, str]], tmp_path: Path) -> None:
+    """A file with a JSON-encoded channel, a topic name ROS refuses and a corrupt chunk among 300 cost
+    messages: the rest is played, each problem is one warning line."""
+    h, env = helper
+    path = tmp_path / 'hostile.mcap'
+    with McapWriter(path, chunk_size=2048) as writer:
+        schema = writer.add_schema('Reading', 'jsonschema', b'{}')
+        json_channel = writer.add_raw_channel('/json_topic', 'json', schema)
+        writer.write_raw(json_channel, b'{"v": 1}', 1_000_000)
+        writer.write('/bad name', Float64(data=0.0), 1_000_000)
+        for i in range(300):
+            writer.write(COST, Float64(data=float(i)), 2_000_000 + i * 1_000_000)
+    with open(path, 'rb') as f:
+        summary = SeekingReader(f).get_summary()
+        assert summary is not None
+    chunk = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)[2]
+    lost = sum(1 for m in open_recording(path).raw_messages([COST])
+               if chunk.message_start_time <= m.log_time <= chunk.message_end_time)
+    data = bytearray(path.read_bytes())
+    data[chunk.chunk_start_offset + chunk.chunk_length - 30] ^= 0xFF
+    path.write_bytes(bytes(data))
+    assert 0 < lost < 300
+    got: list[float] = []
+    sub = h.node.create_subscription(Float64, COST, lambda m: got.append(m.data), RELIABLE)
+    proc = start(env, str(path), '--rate', '10', '--wait-subscribers', '1', '--delay', '0')
+    try:
+        h.spin_until(lambda: proc.poll() is not None, 60.0, 'the end of the replay')   # receiving meanwhile
+        h.spin_for(0.3)
+        _, err = proc.communicate(timeout=10)
+    finally:
+        stop_process(proc)
+        h.node.destroy_subscription(sub)
+    assert proc.returncode == 0 and 'Traceback' not in err, err
+    warnings = [line for line in err.splitlines() if line.startswith('fastep-replay: warning:')]
+    assert any('not replaying /json_topic: its messages are json-encoded' in w for w in warnings), err
+    assert any("not replaying /bad name: its name is not a valid ROS topic name" in w for w in warnings), err
+    assert any('corrupt chunk' in w and f'{lost} messages lost' in w for w in warnings), err
+    assert f'played {300 - lost} messages on 1 topics' in err
+    assert len(got) == 300 - lost and got == sorted(got)
+
+
+def test_hostile_options_are_one_line_and_exit_2(tmp_path: Path, recording: Path,
+                                                 capsys: pytest.CaptureFixture[str]) -> None:
+    far = tmp_path / 'far.mcap'
+    with McapWriter(far) as writer:
+        writer.write(COST, Float64(data=1.0), 2**63)
+    json_file = tmp_path / 'json.mcap'
+    with McapWriter(json_file) as writer:
+        writer.write_raw(writer.add_raw_channel('/json_topic', 'json', 0), b'{}', 1)
+    cases = {
+        'unknown ros arg': [str(recording), '--ros-args', '--bogus'],
+        'bad remap': [str(recording), '--ros-args', '-r', 'a:=b c'],
+        'delay 1e308': [str(recording), '--delay', '1e308'],
+        'clock 1e308': [str(recording), '--clock', '1e308'],
+        'clock past 2038': [str(far), '--clock'],
+        'json topic asked for': [str(json_file), '--topics', '/json_topic'],
+        'nothing playable': [str(json_file)],
+    }
+    for what, args in cases.items():
+        try:
+            code = replay.main(args)
+        except SystemExit as exc:  # argparse errors
+            code = exc.code
+        err = capsys.readouterr().err
+        lines = [line for line in err.splitlines() if not line.startswith('fastep-replay: warning:')]
+        assert code == 2 and len(lines) == 1 and lines[0].startswith('fastep-replay: error:'), (what, err)

@@ -94,7 +94,7 @@ def test_report_without_metadata_uses_status_radius(run: dict[str, Any], tmp_pat
     """A live recording has no `fastep` metadata unless fastep-record knew the scenario."""
     stripped = tmp_path / 'live_like.mcap'
     recording = open_recording(run['mcap'])
-    recording.metadata.clear()
+    recording.metadata_records.clear()   # copy_recording copies every metadata record
     copy_recording(recording, stripped)
     doc, files = report.write_report(stripped, tmp_path / 'out', radius=0.3, figures=False)
     assert [f.name for f in files] == ['report.json']
