@@ -227,6 +227,7 @@ def test_a_planner_on_a_far_seed_stream_starts_at_once_with_fastep_sims_stream(t
             'node.destroy_node()\n'
             'rclpy.shutdown()\n')
     env = isolated_env(free_domain(), tmp_path / 'roslog')
+    env['MALLOC_ARENA_MAX'] = '2'   # address space reserved by glibc's per-thread arenas: not the thread count's
     proc = subprocess.Popen([sys.executable, '-c', code], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                             text=True, stdin=subprocess.DEVNULL, preexec_fn=limit)
     try:

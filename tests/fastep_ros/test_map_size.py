@@ -113,6 +113,9 @@ def test_fastep_map_of_a_5_km_workspace_is_one_line_or_a_bounded_grid(tmp_path: 
     gives a 2000 x 2000 grid within the memory limit (stopped after it published, by a timeout)."""
     scenario = scenario_file(tmp_path, 5000)
     env = isolated_env(free_domain(), tmp_path / 'roslog')
+    # Address space, not memory, is limited: glibc reserves up to 64 MB of it per malloc arena, one per thread up
+    # to 8 per core, and DDS starts threads; two arenas make the reservation independent of the thread count.
+    env['MALLOC_ARENA_MAX'] = '2'
     code = (f'import resource, sys; resource.setrlimit(resource.RLIMIT_AS, ({MEMORY_LIMIT}, {MEMORY_LIMIT})); '
             'from fastep_ros.map_server import main; sys.exit(main(sys.argv[1:]))')
     args = [sys.executable, '-c', code, '--ros-args', '-p', f'scenario:={scenario}']
