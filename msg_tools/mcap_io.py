@@ -44,6 +44,7 @@ from mcap.records import Attachment, Channel, Chunk, Footer, Header, Message, Me
 from mcap.stream_reader import StreamReader, breakup_chunk
 from mcap.writer import CompressionType, Writer
 
+from fastep_core import bounded_yaml
 from msg_tools.errors import NotMcapError, RecordingError, TruncatedRecordingError
 
 __all__ = [
@@ -218,9 +219,10 @@ def qos_yaml(profiles: Sequence[Mapping[str, Any]]) -> str:
 
 
 def parse_qos_yaml(text: str) -> list[dict[str, Any]]:
-    """The profiles of an `offered_qos_profiles` value; [] when empty or not a list of mappings."""
+    """The profiles of an `offered_qos_profiles` value; [] when empty or not a list of mappings. The text comes
+    from a file anyone may have written: it is loaded within the scenario loader's bounds (no alias bomb)."""
     try:
-        value = yaml.safe_load(text) if text else None
+        value = bounded_yaml.load(text) if text else None
     except yaml.YAMLError:
         return []
     if not isinstance(value, list):

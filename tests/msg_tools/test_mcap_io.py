@@ -270,3 +270,15 @@ def test_fastep_sim_mcap_records_the_first_run_and_reports_bad_paths(
     assert sim_cli.main(['table2_s1', '--mcap', str(tmp_path)]) == 2  # a folder
     err = capsys.readouterr().err
     assert err.startswith('fastep-sim: error:') and err.count('\n') == 1
+
+
+def test_a_channels_qos_text_is_read_within_bounds() -> None:
+    """offered_qos_profiles is YAML from whoever wrote the file: an alias bomb in it is no profile, not a hang."""
+    from msg_tools.mcap_io import parse_qos_yaml, qos_yaml
+    profile = qos_dict()
+    assert parse_qos_yaml(qos_yaml([profile])) == [profile]
+    levels = 'abcdefghij'
+    bomb = '- &a [x, x, x, x, x, x, x, x, x, x]\n' + ''.join(
+        f'- &{name} [{", ".join([f"*{below}"] * 10)}]\n' for below, name in zip(levels, levels[1:]))
+    bomb += '- {history: keep_last, depth: *j}\n'   # before: a "profile" of 10^10 items, hung whoever printed it
+    assert parse_qos_yaml(bomb) == []
