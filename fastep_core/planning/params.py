@@ -7,12 +7,34 @@ parameters, and a scenario's top-level `planner:` mapping overrides them by name
 from __future__ import annotations
 
 import math
+import reprlib
 from dataclasses import dataclass, field, fields, replace
 from typing import Any, Mapping
 
 from fastep_core.errors import ParameterError
 
 __all__ = ['PlannerParams']
+
+
+# A bad value is shown within bounds: the repr of a hostile one (a YAML alias bomb's 10^9 shared items) never ends.
+_shown = reprlib.Repr()
+_shown.maxlevel, _shown.maxlist, _shown.maxdict = 1, 3, 3
+_shown.maxstring = _shown.maxother = _shown.maxlong = 40
+
+
+def _show(value: Any) -> str:
+    if isinstance(value, int) and value.bit_length() > 128:   # repr() refuses ints of over 4300 digits
+        return f'an integer of {value.bit_length()} bits'
+    return _shown.repr(value)
+
+
+def _is_finite_number(value: Any) -> bool:
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return math.isfinite(value)
+    except OverflowError:   # an int too large for a float
+        return False
 
 
 def _p(default: float | int, description: str, low: float, high: float = math.inf) -> Any:
@@ -68,12 +90,12 @@ class PlannerParams:
         for f in fields(self):
             value = getattr(self, f.name)
             low, high = f.metadata['range']
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-                raise ParameterError(f'planner parameter {f.name} must be a finite number, got {value!r}')
+            if not _is_finite_number(value):
+                raise ParameterError(f'planner parameter {f.name} must be a finite number, got {_show(value)}')
             if f.type in ('int', int) and value != int(value):
-                raise ParameterError(f'planner parameter {f.name} must be an integer, got {value!r}')
+                raise ParameterError(f'planner parameter {f.name} must be an integer, got {_show(value)}')
             if not low <= value <= high:
-                raise ParameterError(f'planner parameter {f.name}={value!r} is outside [{low}, {high}]')
+                raise ParameterError(f'planner parameter {f.name}={_show(value)} is outside [{low}, {high}]')
 
     @classmethod
     def names(cls) -> tuple[str, ...]:
@@ -92,6 +114,6 @@ class PlannerParams:
         for f in fields(self):
             if f.name in overrides:
                 value = overrides[f.name]
-                cast[f.name] = int(value) if f.type in ('int', int) and isinstance(value, (int, float)) \
-                    and not isinstance(value, bool) and float(value).is_integer() else value
+                cast[f.name] = int(value) if f.type in ('int', int) and _is_finite_number(value) \
+                    and float(value).is_integer() else value
         return replace(self, **cast)
