@@ -56,6 +56,8 @@ TOL = 1e-9
 """Absolute slack (m) on every clearance test, so tangential contact counts as free."""
 TWO_PI = 2.0 * math.pi
 _MAX_REFINE = 12          # a chord is split at most 2^12 times when a neighbour is tighter than the bulge
+MAX_ARC_VERTICES = 4096   # an arc's polygon starts with at most this many vertices (a vast circle: coarser)
+MAX_SAMPLES = 1_000_000   # OptimalPath.sample gives at most about this many points per piece
 
 
 @dataclass(frozen=True)
@@ -72,8 +74,9 @@ class PathPiece:
     sweep: float = 0.0                           # arcs only: signed angle swept (rad, + = counter-clockwise)
 
     def sample(self, step: float) -> FloatArray:
-        """Points on the exact piece, at most `step` apart, both ends included: (k, 2)."""
-        k = max(1, int(math.ceil(self.length / step)))
+        """Points on the exact piece, at most `step` apart (at most MAX_SAMPLES + 1), both ends included: (k, 2)."""
+        wanted = self.length / step
+        k = max(1, min(MAX_SAMPLES, int(math.ceil(wanted)))) if math.isfinite(wanted) else MAX_SAMPLES
         s = np.linspace(0.0, 1.0, k + 1)
         if self.kind == 'line':
             a, b = np.array(self.start), np.array(self.end)
@@ -601,9 +604,12 @@ def _arc_polygon(problem: _Problem, piece: PathPiece, spacing: float) -> list[np
     assert piece.center is not None
     cx, cy = piece.center
     R = piece.radius
-    k = max(1, int(math.ceil(abs(piece.sweep) * R / spacing)))
+    wanted = abs(piece.sweep) * R / spacing
+    k = max(1, min(MAX_ARC_VERTICES, int(math.ceil(wanted)))) if math.isfinite(wanted) else MAX_ARC_VERTICES
     end = np.array(piece.end)
     for _ in range(_MAX_REFINE + 1):
+        if k > 16 * MAX_ARC_VERTICES:            # a vast arc: coarser than `spacing`, but bounded
+            break
         delta = piece.sweep / k
         if abs(delta) >= math.pi / 2:            # keep the bulge bounded
             k *= 2
