@@ -18,7 +18,7 @@ from numpy.typing import NDArray
 from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
-from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.others import OtherRobot, OtherRobots
 from fastep_core.scenario import Scenario
 
 __all__ = ['RobotRun', 'Run', 'Tick', 'simulate']
@@ -118,15 +118,16 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
         if not any(active):
             break
         commands = []
+        # Every robot sees the others as they are at the start of the tick: made once, viewed by each robot.
+        robots = [OtherRobot(spec.name, (state[0], state[1]), (velocity[0], velocity[1]), spec.radius)
+                  for spec, state, velocity in zip(specs, states, velocities)]
+        views = OtherRobots.views(robots)
         for i, nav in enumerate(navigators):
             if not active[i]:
                 commands.append(np.zeros(2))
                 continue
-            others = [OtherRobot(specs[j].name, (states[j][0], states[j][1]),
-                                 (velocities[j][0], velocities[j][1]), specs[j].radius)
-                      for j in range(len(specs)) if j != i]
             start = time.perf_counter()
-            commands.append(nav.update(t, states[i], others))
+            commands.append(nav.update(t, states[i], views[i]))
             runs[i].compute_time += time.perf_counter() - start
             if nav.mode is Mode.ARRIVED:
                 runs[i].reached, runs[i].sim_time = True, t

@@ -15,7 +15,7 @@ the robot is.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable, Protocol
 
 import numpy as np
@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.world import World
 
-__all__ = ['ESCAPING', 'REPLAN_AFTER', 'EscapePath', 'TrapEscape', 'densify']
+__all__ = ['ESCAPING', 'MAX_VERTICES', 'REPLAN_AFTER', 'EscapePath', 'TrapEscape', 'densify']
 
 FloatArray = NDArray[np.float64]
 ESCAPING = 'escaping a trap along the exact shortest path'   # the status reason while escaping
@@ -47,14 +47,24 @@ class EscapeParams(Protocol):
     def progress_distance(self) -> float: ...
 
 
+MAX_VERTICES = 20_000
+"""Most vertices a densified path gets: spacing 0.5 m up to 10 km of path, coarser beyond (it was unbounded:
+a far goal, or coordinates near 1e299, ended in MemoryError)."""
+
+
 def densify(points: FloatArray, spacing: float = 0.5) -> list[FloatArray]:
     """The polyline with extra vertices on long edges, so a pursuit carrot never lags far behind the lookahead.
 
-    One array per vertex: the navigator tells a new target by its identity.
+    One array per vertex: the navigator tells a new target by its identity. At most MAX_VERTICES extra
+    vertices: on a path longer than MAX_VERTICES * spacing they are spread evenly over its length instead.
     """
+    legs = [math.hypot(*(b - a)) for a, b in zip(points[:-1], points[1:])]
+    total = math.fsum(legs)
+    if total > MAX_VERTICES * spacing:
+        spacing = total / MAX_VERTICES          # inf for an overflowing length: no extra vertex at all
     out = [points[0]]
-    for a, b in zip(points[:-1], points[1:]):
-        n = max(1, int(math.ceil(math.hypot(*(b - a)) / spacing)))
+    for a, b, leg in zip(points[:-1], points[1:], legs):
+        n = max(1, int(math.ceil(leg / spacing))) if math.isfinite(leg / spacing) else 1
         out.extend(a + (b - a) * (k / n) for k in range(1, n + 1))
     return out
 
@@ -68,6 +78,10 @@ class EscapePath:
     keep: float                  # the clearance the path keeps ...
     world: World                 # ... from the obstacles of this world (parked robots included)
     index: int = 0               # the vertex aimed at
+    stacked: FloatArray = field(init=False, repr=False)   # the vertices as one (n, 2) array, made once
+
+    def __post_init__(self) -> None:
+        self.stacked = np.array(self.vertices, dtype=float).reshape(-1, 2)
 
     @classmethod
     def from_path(cls, path: OptimalPath, world: World) -> EscapePath:
@@ -88,10 +102,10 @@ class EscapePath:
         radius, margin: the robot's; clearance: radius + margin, kept from the border by a pushed-out carrot.
         """
         route = self.vertices
-        gaps = np.hypot(*(np.array(route[self.index:]) - position).T)
+        gaps = np.hypot(*(self.stacked[self.index:] - position).T)
         beyond = gaps > step_radius
         reach = max(1, int(np.argmax(beyond)) if beyond.any() else len(gaps))
-        candidates = np.array(route[self.index:self.index + reach])
+        candidates = self.stacked[self.index:self.index + reach]
         obstacles = self.world.obstacles
         # A path vertex sits exactly at the path's clearance, so "visible" allows a little less: half the margin,
         # what the path keeps (in a narrow gap), or what the robot has now, whichever is smallest (the guard

@@ -20,7 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.kinematics.model import RobotModel
-from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.others import OtherRobot, other_arrays
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
@@ -61,13 +61,16 @@ class Guard:
             if then < self.radius and then < float(obstacles.clearance(position)):
                 return self._refuse(command, Stop.OBSTACLE, 'stopped: an obstacle is within the robot radius ahead')
             self._free = (world, after, then - self.radius)
-        for other in others:
-            centre = np.asarray(other.position, dtype=float)
-            reach = (self.params.max_speed if self.params.max_speed > 0
-                     else float(np.hypot(*other.velocity))) * dt + 0.25 * self.params.clearance_margin
-            gap_now = float(np.hypot(*(position - centre)))
-            gap_then = float(np.hypot(*(after - centre)))
-            if gap_then < self.radius + other.radius + reach and gap_then < gap_now:
+        if len(others):
+            # All the others at once (one by one, this loop was a tenth of a 40-robot run); the same numbers.
+            centres, velocities, radii = other_arrays(others)
+            speed = self.params.max_speed if self.params.max_speed > 0 else np.hypot(*velocities.T)
+            reach = speed * dt + 0.25 * self.params.clearance_margin
+            gap_now = np.hypot(*(position - centres).T)
+            gap_then = np.hypot(*(after - centres).T)
+            giving_way = (gap_then < self.radius + radii + reach) & (gap_then < gap_now)
+            if giving_way.any():
+                other = others[int(np.argmax(giving_way))]
                 return self._refuse(command, Stop.ROBOT, f'stopped: giving way to {other.name}')
         return command
 

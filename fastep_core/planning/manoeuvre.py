@@ -191,10 +191,13 @@ def plan_manoeuvre(model: TractorTrailer, world: World, state: Sequence[float] |
     def arrives(s: FloatArray) -> bool:
         to_goal = goal - s[:2]
         distance = math.hypot(*to_goal)
-        if distance <= reach:
+        ahead = abs(hitch_angle(s)) <= STRAIGHT_HITCH and \
+            abs(wrap_angle(math.atan2(to_goal[1], to_goal[0]) - float(s[2]))) <= AHEAD
+        if distance <= reach and ahead:
+            # Near, but ahead too: a goal near the tractor's side or behind it lies inside its turning circle,
+            # which the steering law orbits for ever (a goal 1 m behind was "reached" by an empty manoeuvre).
             return True
-        if clear_within == math.inf or abs(hitch_angle(s)) > STRAIGHT_HITCH or \
-                abs(wrap_angle(math.atan2(to_goal[1], to_goal[0]) - float(s[2]))) > AHEAD:
+        if clear_within == math.inf or not ahead:
             return False
         return not len(obstacles) or float(obstacles.path_clearance(s[:2], goal)) >= clear_within
 

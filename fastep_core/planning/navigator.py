@@ -35,7 +35,7 @@ from fastep_core.planning.exact_path import no_path_reason, parked_world, robot_
 from fastep_core.planning.guard import Guard
 from fastep_core.planning.manoeuvring import ManoeuvreDriver
 from fastep_core.planning.optimal import OptimalPath
-from fastep_core.planning.others import OtherRobot, robot_arrays, robots_on_run
+from fastep_core.planning.others import OtherRobot, OtherRobots, robot_arrays, robots_on_run
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
 from fastep_core.planning.recovery import BackUp, StopTimer, free_room
@@ -149,7 +149,8 @@ class Navigator:
             self.reason = 'robot state is not finite; holding still'
             return stop
         position = state[:2]
-        others = [o for o in others if math.isfinite(o.position[0]) and math.isfinite(o.position[1])]
+        if not (isinstance(others, OtherRobots) and others.finite):
+            others = [o for o in others if math.isfinite(o.position[0]) and math.isfinite(o.position[1])]
         distance = math.hypot(self.goal[0] - position[0], self.goal[1] - position[1])
         if distance <= self.params.goal_tolerance:
             self.mode, self.reason = Mode.ARRIVED, 'goal reached'

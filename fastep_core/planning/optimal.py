@@ -14,7 +14,9 @@ The method (a tangent visibility graph, exact for discs; Chen & Wang's "shortest
 - Nodes are start, goal and the tangent points of every common tangent between two circles (four per pair:
   two outer, two inner when they are apart) and between start or goal and a circle (two each). A tangent
   edge is kept when the core's own `Obstacles.path_clearance` of it is at least r (minus TOL) and both of its
-  ends lie in the workspace shrunk by the border margin (convex, so the whole edge then does).
+  ends lie in the workspace shrunk by the border margin (convex, so the whole edge then does). The test
+  measures each edge only against the obstacles near it (_ObstacleGrid) and in blocks, so memory stays
+  bounded (the full edge-by-obstacle matrix grew as N^3: 500 circles 9.4 GB); the decisions are the same.
 - Arc edges join consecutive nodes along each circle (either way round, as long as the arc is free). The
   free part of a circle is computed in closed form: the angles where it enters another inflated disc, the
   strip of a capsule, or leaves the shrunk workspace are intervals of the form {A cos t + B sin t < h}.
@@ -36,23 +38,26 @@ from __future__ import annotations
 import heapq
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Iterator, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.errors import ParameterError
-from fastep_core.geometry import Circle, Segment
+from fastep_core.geometry import Circle, Obstacles, Segment, point_segment_distance, segment_segment_distance
 from fastep_core.world import World
 
 __all__ = ['OptimalPath', 'PathPiece', 'shortest_path', 'TOL', 'main']
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 ArcShape = tuple[int, float, float]   # an arc edge: (circle index, angle at its start, signed sweep)
 TOL = 1e-9
 """Absolute slack (m) on every clearance test, so tangential contact counts as free."""
 TWO_PI = 2.0 * math.pi
 _MAX_REFINE = 12          # a chord is split at most 2^12 times when a neighbour is tighter than the bulge
+MAX_ARC_VERTICES = 4096   # an arc's polygon starts with at most this many vertices (a vast circle: coarser)
+MAX_SAMPLES = 1_000_000   # OptimalPath.sample gives at most about this many points per piece
 
 
 @dataclass(frozen=True)
@@ -69,8 +74,9 @@ class PathPiece:
     sweep: float = 0.0                           # arcs only: signed angle swept (rad, + = counter-clockwise)
 
     def sample(self, step: float) -> FloatArray:
-        """Points on the exact piece, at most `step` apart, both ends included: (k, 2)."""
-        k = max(1, int(math.ceil(self.length / step)))
+        """Points on the exact piece, at most `step` apart (at most MAX_SAMPLES + 1), both ends included: (k, 2)."""
+        wanted = self.length / step
+        k = max(1, min(MAX_SAMPLES, int(math.ceil(wanted)))) if math.isfinite(wanted) else MAX_SAMPLES
         s = np.linspace(0.0, 1.0, k + 1)
         if self.kind == 'line':
             a, b = np.array(self.start), np.array(self.end)
@@ -184,7 +190,16 @@ class _Problem:
         for s in segments:
             self.circles.append(_Circle(s.start, clearance))
             self.circles.append(_Circle(s.end, clearance))
+        coordinates = [abs(v) for v in world.workspace]
+        coordinates += [abs(v) for c in self.circles for v in (*c.center, c.radius)]
+        self.scale = max(coordinates)
+        """The largest coordinate (m): rounding slack grows with it."""
+        self.disc_centers = np.array([d.center for d in self.disc_obstacles], dtype=float).reshape(-1, 2)
+        self.disc_radii = np.array([d.radius for d in self.disc_obstacles], dtype=float)
+        self.seg_starts = np.array([s.start for s in segments], dtype=float).reshape(-1, 2)
+        self.seg_ends = np.array([s.end for s in segments], dtype=float).reshape(-1, 2)
         self.blocked = [self._blocked(k) for k in range(len(self.circles))]
+        self.grid = _ObstacleGrid(world.obstacles, self.box, clearance - TOL, self.scale)
 
     # ------------------------------------------------------------------ free arcs of one circle
     def _blocked(self, k: int) -> Pieces:
@@ -193,14 +208,26 @@ class _Problem:
         cx, cy = c.center
         R = c.radius
         out: Pieces = []
-        for j, d in enumerate(self.disc_obstacles):
+        # Only a disc or wall that comes within R of the circle's centre (and a millimetre more) blocks any
+        # of it; the others would add empty intervals (the test of each, one by one, made this O(N^2)).
+        slack = 1e-3 + 1e-9 * self.scale
+        near = np.hypot(cx - self.disc_centers[:, 0], cy - self.disc_centers[:, 1]) <= \
+            R + self.disc_radii + slack
+        for j in np.flatnonzero(near).tolist():
+            d = self.disc_obstacles[j]
             if j == k:
                 continue
             wx, wy = cx - d.center[0], cy - d.center[1]
             q = d.radius - TOL
             out += _below(wx, wy, (q * q - R * R - wx * wx - wy * wy) / (2.0 * R))
         r = self.clearance - TOL
-        for s in self.segments:
+        if self.segments:
+            centre = np.array([cx, cy])
+            reach = point_segment_distance(centre, self.seg_starts, self.seg_ends)
+            near_segments = np.flatnonzero(reach <= R + r + slack).tolist()
+        else:
+            near_segments = []
+        for s in (self.segments[i] for i in near_segments):
             for end in (s.start, s.end):      # the end-cap discs
                 wx, wy = cx - end[0], cy - end[1]
                 out += _below(wx, wy, (r * r - R * R - wx * wx - wy * wy) / (2.0 * R))
@@ -234,13 +261,157 @@ class _Problem:
         return (P[:, 0] >= bx0) & (P[:, 0] <= bx1) & (P[:, 1] >= by0) & (P[:, 1] <= by1)
 
     def edges_free(self, P: FloatArray, Q: FloatArray) -> NDArray[np.bool_]:
-        """Which straight edges P[i]-Q[i] keep the clearance and stay in the shrunk workspace."""
+        """Which straight edges P[i]-Q[i] keep the clearance and stay in the shrunk workspace.
+
+        Exactly `Obstacles.path_clearance(P, Q) >= clearance - TOL` where inside, computed only for the
+        obstacles near each edge (_ObstacleGrid), in blocks of bounded size.
+        """
         ok = self.inside(P) & self.inside(Q)
-        obstacles = self.world.obstacles
-        if len(obstacles) and ok.any():
+        if len(self.world.obstacles) and ok.any():
             idx = np.flatnonzero(ok)
-            ok[idx] = obstacles.path_clearance(P[idx], Q[idx]) >= self.clearance - TOL
+            ok[idx] = self.grid.free(P[idx], Q[idx])
         return ok
+
+
+PAIRS_PER_BLOCK = 1 << 19
+"""Edge-obstacle pairs measured at once: the blocks' arrays stay within some tens of MB, whatever the world."""
+
+
+class _ObstacleGrid:
+    """The obstacles binned in square cells, so that an edge is measured against the obstacles near it only.
+
+    Why: measuring every candidate edge (about 2 N^2 of them) against every obstacle at once took O(N^3)
+    memory (500 circles: 9.4 GB). Here an obstacle is listed in every cell its reach square overlaps: its
+    bounding box grown by the threshold, half the sample spacing and a rounding slack. An edge is sampled at
+    most one cell size apart, ends included; an obstacle closer to the edge than the threshold is then
+    closer than that (in every coordinate) to one of the samples, so it is listed in that sample's cell. The
+    pairs found are measured with the same formulas as `Obstacles.path_distances` (so the decision is the
+    same, bit for bit); an edge is free when none of them is below the threshold. The midpoints go first:
+    in a cluttered world most candidate edges are blocked there, and never sampled in full.
+    """
+
+    def __init__(self, obstacles: Obstacles, box: tuple[float, float, float, float], threshold: float,
+                 scale: float) -> None:
+        self.obstacles = obstacles
+        self.threshold = threshold
+        self.n_circles = obstacles.n_circles
+        self.usable = False
+        x0, y0, x1, y1 = box
+        n = len(obstacles)
+        if n == 0:
+            return
+        width, height = x1 - x0, y1 - y0
+        slack = 1e-6 + 1e-9 * scale
+        # Low and high corners of each obstacle's bounding box: circles, then segments.
+        o = obstacles
+        lo = np.concatenate([o.centers - o.radii[:, None], np.minimum(o.starts, o.ends)])
+        hi = np.concatenate([o.centers + o.radii[:, None], np.maximum(o.starts, o.ends)])
+        # About one cell per obstacle; coarser while the listings would exceed 16 per obstacle (big obstacles).
+        cell = math.sqrt(max(width, 0.0)) * math.sqrt(max(height, 0.0)) / math.sqrt(n)
+        cell = max(cell, (width + height) / 4096.0, 1e-9 * (1.0 + scale), threshold)
+        for _ in range(64):
+            if not (math.isfinite(cell) and cell > 0.0):
+                return
+            grow = threshold + 0.5 * cell + slack
+            nx = max(1, min(4096, int(math.ceil(width / cell))))
+            ny = max(1, min(4096, int(math.ceil(height / cell))))
+            with np.errstate(invalid='ignore', over='ignore'):
+                ix0 = np.floor((lo[:, 0] - grow - x0) / cell)
+                ix1 = np.floor((hi[:, 0] + grow - x0) / cell)
+                iy0 = np.floor((lo[:, 1] - grow - y0) / cell)
+                iy1 = np.floor((hi[:, 1] + grow - y0) / cell)
+            spans = np.stack([ix0, ix1, iy0, iy1])
+            if not np.all(np.isfinite(spans)):
+                return
+            ix0, ix1 = np.clip(ix0, 0, nx - 1), np.clip(ix1, -1, nx - 1)
+            iy0, iy1 = np.clip(iy0, 0, ny - 1), np.clip(iy1, -1, ny - 1)
+            cols = np.maximum(ix1 - ix0 + 1, 0).astype(np.int64)
+            rows = np.maximum(iy1 - iy0 + 1, 0).astype(np.int64)
+            counts = cols * rows
+            if int(counts.sum()) <= 16 * n + 4096 or (nx == 1 and ny == 1):
+                break
+            cell *= 2.0
+        else:
+            return
+        # (cell, obstacle) listings, sorted by cell: cell c lists members[first[c]:first[c + 1]].
+        owner = np.repeat(np.arange(n), counts)
+        k = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
+        ix = ix0.astype(np.int64)[owner] + k % np.maximum(cols, 1)[owner]
+        iy = iy0.astype(np.int64)[owner] + k // np.maximum(cols, 1)[owner]
+        cells = iy * nx + ix
+        order = np.argsort(cells, kind='stable')
+        self.members = owner[order]
+        self.first = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=nx * ny))])
+        self.origin, self.cell, self.nx, self.ny = (x0, y0), cell, nx, ny
+        self.usable = True
+
+    def free(self, P: FloatArray, Q: FloatArray) -> NDArray[np.bool_]:
+        """Which edges P[i]-Q[i] keep at least the threshold from every obstacle."""
+        blocked = np.zeros(len(P), dtype=bool)
+        if not self.usable:
+            # Rounding or overflow makes the grid useless (absurd coordinates): every pair, in blocks.
+            n = len(self.obstacles)
+            step = max(1, PAIRS_PER_BLOCK // max(n, 1))
+            for a in range(0, len(P), step):
+                e = np.repeat(np.arange(a, min(a + step, len(P))), n)
+                self._measure(P, Q, e, np.tile(np.arange(n), len(e) // n), blocked)
+            return ~blocked
+        mid = 0.5 * (P + Q)
+        self._sampled(P, Q, np.arange(len(P)), mid, blocked)
+        alive = np.flatnonzero(~blocked)
+        if len(alive):
+            lengths = np.hypot(*(Q[alive] - P[alive]).T)
+            with np.errstate(invalid='ignore', over='ignore'):
+                n_samples = np.ceil(lengths / self.cell)
+            n_samples = np.where(np.isfinite(n_samples), n_samples, 0.0)
+            n_samples = (np.minimum(n_samples, 2.0 * (self.nx + self.ny)) + 1).astype(np.int64)
+            # Blocks of edges whose samples (about 8 listed obstacles each) stay within a block of pairs.
+            ends = np.cumsum(n_samples)
+            block = max(1, PAIRS_PER_BLOCK // 8)
+            a = 0
+            while a < len(alive):
+                b = max(a + 1, int(np.searchsorted(ends, ends[a] - n_samples[a] + block, side='right')))
+                edges, counts = alive[a:b], n_samples[a:b]
+                e = np.repeat(edges, counts)
+                k = np.arange(len(e)) - np.repeat(np.cumsum(counts) - counts, counts)
+                t = (k / np.maximum(np.repeat(counts, counts) - 1, 1))[:, None]
+                points = P[e] + t * (Q[e] - P[e])
+                self._sampled(P, Q, e, points, blocked)
+                a = b
+        return ~blocked
+
+    def _sampled(self, P: FloatArray, Q: FloatArray, edge: IntArray, points: FloatArray,
+                 blocked: NDArray[np.bool_]) -> None:
+        """Measure edge[i] against the obstacles listed in the cell of points[i], in blocks of pairs."""
+        x0, y0 = self.origin
+        ix = np.clip(np.floor((points[:, 0] - x0) / self.cell), 0, self.nx - 1).astype(np.int64)
+        iy = np.clip(np.floor((points[:, 1] - y0) / self.cell), 0, self.ny - 1).astype(np.int64)
+        cells = iy * self.nx + ix
+        start = self.first[cells]
+        counts = self.first[cells + 1] - start
+        ends = np.cumsum(counts)
+        a = 0
+        while a < len(edge):
+            b = max(a + 1, int(np.searchsorted(ends, ends[a] - counts[a] + PAIRS_PER_BLOCK, side='right')))
+            c = counts[a:b]
+            e = np.repeat(edge[a:b], c)
+            k = np.arange(len(e)) - np.repeat(np.cumsum(c) - c, c)
+            self._measure(P, Q, e, self.members[np.repeat(start[a:b], c) + k], blocked)
+            a = b
+
+    def _measure(self, P: FloatArray, Q: FloatArray, e: IntArray, o: IntArray,
+                 blocked: NDArray[np.bool_]) -> None:
+        """Mark edge e[i] blocked when obstacle o[i] is nearer than the threshold (or the distance is NaN)."""
+        obstacles = self.obstacles
+        circle = o < self.n_circles
+        ec, oc = e[circle], o[circle]
+        if len(ec):
+            d = point_segment_distance(obstacles.centers[oc], P[ec], Q[ec]) - obstacles.radii[oc]
+            blocked[ec[~(d >= self.threshold)]] = True
+        es, os_ = e[~circle], o[~circle] - self.n_circles
+        if len(es):
+            d = segment_segment_distance(P[es], Q[es], obstacles.starts[os_], obstacles.ends[os_])
+            blocked[es[~(d >= self.threshold)]] = True
 
 
 def _tangents(c1: tuple[float, float], r1: float, c2: tuple[float, float], r2: float,
@@ -322,39 +493,94 @@ class _Graph:
         return path[::-1]
 
 
+def _pair_tangents(c1: FloatArray, r1: FloatArray, c2: FloatArray, r2: FloatArray,
+                   inner: bool) -> tuple[FloatArray, FloatArray, NDArray[np.bool_], NDArray[np.bool_]]:
+    """_tangents for many pairs at once, the same numbers bit for bit (math.hypot, then the same operations).
+
+    Returns the points on circle 1 and on circle 2 of the first and second tangent, shape (m, 2, 2) each
+    (index 1: first, second), and which of the two exist.
+    """
+    dx, dy = c2[:, 0] - c1[:, 0], c2[:, 1] - c1[:, 1]
+    D = np.array([math.hypot(x, y) for x, y in zip(dx.tolist(), dy.tolist())], dtype=float)
+    apart = D > 1e-12
+    D = np.where(apart, D, 1.0)
+    s2 = -r2 if inner else r2
+    ratio = (r1 - s2) / D
+    first = apart & ~(np.abs(ratio) > 1.0)
+    vx, vy = dx / D, dy / D
+    with np.errstate(invalid='ignore'):
+        h = np.sqrt(np.maximum(0.0, 1.0 - ratio * ratio))
+    second = first & (h > 0.0)
+    on1 = np.empty((len(D), 2, 2))
+    on2 = np.empty((len(D), 2, 2))
+    for slot, k in enumerate((1.0, -1.0)):
+        kh = k * h
+        nx, ny = vx * ratio - kh * vy, vy * ratio + kh * vx
+        on1[:, slot, 0], on1[:, slot, 1] = c1[:, 0] + r1 * nx, c1[:, 1] + r1 * ny
+        on2[:, slot, 0], on2[:, slot, 1] = c2[:, 0] + s2 * nx, c2[:, 1] + s2 * ny
+    return on1, on2, first, second
+
+
+PAIRS_PER_TANGENT_BLOCK = 1 << 16
+"""Circle pairs whose common tangents are made and tested at once (4 candidate edges each)."""
+
+
+Candidates = tuple[FloatArray, FloatArray, IntArray, IntArray, IntArray, IntArray]
+
+
+def _candidate_blocks(centers: FloatArray, radii: FloatArray, start: FloatArray,
+                      goal: FloatArray) -> Iterator[Candidates]:
+    """The candidate tangent edges in the order the graph numbers its nodes, in blocks of bounded size.
+
+    Each block: P, Q (m, 2), the circle of each end (-1: start or goal) and the existing node of each end
+    (-1: a new tangent point). First start's and goal's tangents to every circle, then every pair i < j:
+    the outer tangents, then the inner ones.
+    """
+    n = len(radii)
+    none = np.full(1, -1)
+    yield start[None], goal[None], none, none, np.zeros(1, dtype=int), np.ones(1, dtype=int)   # the straight run
+    for node, point in ((0, start), (1, goal)):
+        if n == 0:
+            break
+        on1, _, first, second = _pair_tangents(centers, radii, np.tile(point, (n, 1)), np.zeros(n), False)
+        keep = np.stack([first, second], axis=1).ravel()
+        k = np.repeat(np.arange(n), 2)[keep]
+        Q = on1.reshape(-1, 2)[keep]
+        yield np.tile(point, (len(Q), 1)), Q, np.full(len(Q), -1), k, np.full(len(Q), node), np.full(len(Q), -1)
+    rows = max(1, PAIRS_PER_TANGENT_BLOCK // max(n, 1))
+    for i0 in range(0, n - 1, rows):
+        first_rows = np.arange(i0, min(i0 + rows, n - 1))
+        counts = n - 1 - first_rows
+        i = np.repeat(first_rows, counts)                    # i < j, row by row: the order of nested loops
+        j = np.arange(len(i)) - np.repeat(np.cumsum(counts) - counts, counts) + i + 1
+        parts = [_pair_tangents(centers[i], radii[i], centers[j], radii[j], inner) for inner in (False, True)]
+        # Per pair: outer first, outer second, inner first, inner second.
+        keep = np.stack([parts[0][2], parts[0][3], parts[1][2], parts[1][3]], axis=1).ravel()
+        P = np.stack([parts[0][0][:, 0], parts[0][0][:, 1], parts[1][0][:, 0], parts[1][0][:, 1]], axis=1)
+        Q = np.stack([parts[0][1][:, 0], parts[0][1][:, 1], parts[1][1][:, 0], parts[1][1][:, 1]], axis=1)
+        m = int(keep.sum())
+        yield (P.reshape(-1, 2)[keep], Q.reshape(-1, 2)[keep], np.repeat(i, 4)[keep], np.repeat(j, 4)[keep],
+               np.full(m, -1), np.full(m, -1))
+
+
 def _build(problem: _Problem, start: np.ndarray, goal: np.ndarray) -> _Graph:
     graph = _Graph()
     s, g = graph.node(start, -1), graph.node(goal, -1)
     circles = problem.circles
-    cand_u: list[tuple[np.ndarray, int, int]] = []      # (point, circle, existing node or -1)
-    cand_v: list[tuple[np.ndarray, int, int]] = []
-    cand_u.append((start, -1, s))
-    cand_v.append((goal, -1, g))
-    for node, point in ((s, start), (g, goal)):
-        for k, c in enumerate(circles):
-            for p_circle, _ in _tangents(c.center, c.radius, (point[0], point[1]), 0.0, inner=False):
-                cand_u.append((point, -1, node))
-                cand_v.append((p_circle, k, -1))
-    for i in range(len(circles)):
-        for j in range(i + 1, len(circles)):
-            a, b = circles[i], circles[j]
-            for inner in (False, True):
-                for p1, p2 in _tangents(a.center, a.radius, b.center, b.radius, inner):
-                    cand_u.append((p1, i, -1))
-                    cand_v.append((p2, j, -1))
-    P = np.array([c[0] for c in cand_u], dtype=float).reshape(-1, 2)
-    Q = np.array([c[0] for c in cand_v], dtype=float).reshape(-1, 2)
-    free = problem.edges_free(P, Q)
+    centers = np.array([c.center for c in circles], dtype=float).reshape(-1, 2)
+    radii = np.array([c.radius for c in circles], dtype=float)
     on_circle: dict[int, list[int]] = {}
-    for (p, ki, ni), (q, kj, nj), ok in zip(cand_u, cand_v, free):
-        if not ok:
-            continue
-        u = ni if ni >= 0 else graph.node(p, ki)
-        v = nj if nj >= 0 else graph.node(q, kj)
-        for node, k in ((u, ki), (v, kj)):
-            if k >= 0:                          # a new tangent point (start and goal lie on no circle)
-                on_circle.setdefault(k, []).append(node)
-        graph.edge(u, v, float(np.hypot(*(q - p))), None)
+    for P, Q, K1, K2, N1, N2 in _candidate_blocks(centers, radii, start, goal):
+        free = np.flatnonzero(problem.edges_free(P, Q))
+        for p, q, ki, kj, ni, nj in zip(P[free], Q[free], K1[free].tolist(), K2[free].tolist(),
+                                        N1[free].tolist(), N2[free].tolist()):
+            u = ni if ni >= 0 else graph.node(p, ki)
+            v = nj if nj >= 0 else graph.node(q, kj)
+            for node, k in ((u, ki), (v, kj)):
+                if k >= 0:                          # a new tangent point (start and goal lie on no circle)
+                    on_circle.setdefault(k, []).append(node)
+            graph.edge(u, v, float(np.hypot(*(q - p))), None)
+    assert (s, g) == (0, 1)
     for k, nodes in on_circle.items():
         c = circles[k]
         angles = [(_wrap(math.atan2(graph.points[n][1] - c.center[1], graph.points[n][0] - c.center[0])), n)
@@ -378,9 +604,12 @@ def _arc_polygon(problem: _Problem, piece: PathPiece, spacing: float) -> list[np
     assert piece.center is not None
     cx, cy = piece.center
     R = piece.radius
-    k = max(1, int(math.ceil(abs(piece.sweep) * R / spacing)))
+    wanted = abs(piece.sweep) * R / spacing
+    k = max(1, min(MAX_ARC_VERTICES, int(math.ceil(wanted)))) if math.isfinite(wanted) else MAX_ARC_VERTICES
     end = np.array(piece.end)
     for _ in range(_MAX_REFINE + 1):
+        if k > 16 * MAX_ARC_VERTICES:            # a vast arc: coarser than `spacing`, but bounded
+            break
         delta = piece.sweep / k
         if abs(delta) >= math.pi / 2:            # keep the bulge bounded
             k *= 2

@@ -3,14 +3,14 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Iterator, Sequence, overload
 
 import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import point_segment_distance
 
-__all__ = ['OtherRobot', 'robot_arrays', 'robots_on_run']
+__all__ = ['OtherRobot', 'OtherRobots', 'other_arrays', 'robot_arrays', 'robots_on_run']
 
 FloatArray = NDArray[np.float64]
 
@@ -25,13 +25,75 @@ class OtherRobot:
     radius: float = 0.5
 
 
+class OtherRobots(Sequence[OtherRobot]):
+    """Every robot of one tick but one, as a sequence of OtherRobot, sharing the tick's arrays.
+
+    Why: the simulator gives each of N robots the N - 1 others every tick. Built robot by robot, as lists of
+    OtherRobot and then as arrays again by each consumer, that was O(N^2) Python work per tick (100 robots:
+    most of a run's time). Here the N OtherRobot objects and their arrays are made once per tick; each robot's
+    view leaves its own row out.
+    """
+
+    def __init__(self, robots: Sequence[OtherRobot], skip: int, arrays: tuple[FloatArray, FloatArray, FloatArray]):
+        self._robots, self._skip, self._all = robots, skip, arrays
+        self._arrays: tuple[FloatArray, FloatArray, FloatArray] | None = None
+
+    @classmethod
+    def views(cls, robots: Sequence[OtherRobot]) -> list[OtherRobots]:
+        """For each robot, the others: views of one shared list and one set of arrays."""
+        arrays = (np.array([o.position for o in robots], dtype=float).reshape(-1, 2),
+                  np.array([o.velocity for o in robots], dtype=float).reshape(-1, 2),
+                  np.array([o.radius for o in robots], dtype=float))
+        return [cls(robots, i, arrays) for i in range(len(robots))]
+
+    def __len__(self) -> int:
+        return len(self._robots) - 1
+
+    @overload
+    def __getitem__(self, index: int) -> OtherRobot: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[OtherRobot]: ...
+
+    def __getitem__(self, index: int | slice) -> OtherRobot | list[OtherRobot]:
+        rest = list(self._robots[:self._skip]) + list(self._robots[self._skip + 1:])
+        return rest[index]
+
+    def __iter__(self) -> Iterator[OtherRobot]:
+        for j, robot in enumerate(self._robots):
+            if j != self._skip:
+                yield robot
+
+    @property
+    def arrays(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        """Positions (n, 2), velocities (n, 2) and radii (n,) of the others, made once."""
+        if self._arrays is None:
+            i = self._skip
+            positions, velocities, radii = (np.concatenate([a[:i], a[i + 1:]]) for a in self._all)
+            self._arrays = positions, velocities, radii
+        return self._arrays
+
+    @property
+    def finite(self) -> bool:
+        """Are all the positions finite (the navigator drops the others)?"""
+        return bool(np.isfinite(self.arrays[0]).all())
+
+
+def other_arrays(others: Sequence[OtherRobot]) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Positions (n, 2), velocities (n, 2) and radii (n,) of the other robots."""
+    if isinstance(others, OtherRobots):
+        return others.arrays
+    return (np.array([o.position for o in others], dtype=float).reshape(-1, 2),
+            np.array([o.velocity for o in others], dtype=float).reshape(-1, 2),
+            np.array([o.radius for o in others], dtype=float))
+
+
 def robot_arrays(others: Sequence[OtherRobot], radius: float) -> tuple[FloatArray, FloatArray]:
     """The other robots' centres (n, 2) and the sums of their radii and `radius` (n,)."""
     if not others:
         return np.zeros((0, 2)), np.zeros(0)
-    centres = np.array([o.position for o in others], dtype=float)
-    sums = np.array([o.radius for o in others], dtype=float) + radius
-    return centres, sums
+    centres, _, radii = other_arrays(others)
+    return centres, radii + radius
 
 
 def robots_on_run(others: Sequence[OtherRobot], radius: float, start: FloatArray, end: FloatArray,

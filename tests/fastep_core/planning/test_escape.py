@@ -40,3 +40,31 @@ def test_no_target_when_nothing_ahead_is_in_sight_unless_the_path_is_fresh():
     escape.index = 1
     assert escape.target(behind_the_wall, 0.5, 0.2, 2.0, 0.3, 0.7) is None
     assert escape.target(behind_the_wall, 0.5, 0.2, 2.0, 0.3, 0.7, fresh=True) is not None
+
+
+def test_densify_is_bounded_on_a_vast_path():
+    """Every 0.5 m of path was a vertex: a far goal, or coordinates near 1e299, ended in MemoryError."""
+    from fastep_core.planning.escape import MAX_VERTICES
+    for far in (1e6, 1e299):
+        points = np.array([[0.0, 0.0], [3.0, 4.0], [far, far]])
+        out = densify(points)
+        assert len(out) <= MAX_VERTICES + len(points)
+        assert np.array_equal(out[0], points[0]) and np.array_equal(out[-1], points[-1])
+        assert any(np.array_equal(p, points[1]) for p in out)      # the path's own vertices stay
+
+
+def test_a_far_goal_at_a_crawl_ends_with_a_status():
+    """A trap escape (no progress at 0.01 m/s) towards a goal 1e299 m away: bounded, a plain failure."""
+    import warnings
+
+    from fastep_core.scenario import parse_scenario
+    from fastep_core.simulator import simulate
+    data = {'name': 'far', 'workspace': [0, 0, 1e299, 1e299],
+            'obstacles': [{'circle': {'center': [20, 20], 'radius': 2}}],
+            'planner': {'max_speed': 0.01, 'max_sim_time': 12, 'trap_timeout': 5},
+            'robots': [{'name': 'r1', 'model': 'point_mass', 'start': [5, 5], 'goal': [9e298, 9e298], 'radius': 0.5}]}
+    with warnings.catch_warnings():
+        warnings.simplefilter('ignore', RuntimeWarning)       # squared distances overflow at this scale
+        robot = simulate(parse_scenario(data)).robots[0]
+    assert robot.escapes >= 1 and not robot.reached
+    assert robot.status.startswith('failed')

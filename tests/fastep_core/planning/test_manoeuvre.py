@@ -10,7 +10,7 @@ import pytest
 
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import TractorTrailer
-from fastep_core.kinematics.tractor_trailer import hitch_angle
+from fastep_core.kinematics.tractor_trailer import hitch_angle, wrap_angle
 from fastep_core.planning import manoeuvre
 from fastep_core.planning.manoeuvre import DistanceField, plan_manoeuvre
 from fastep_core.world import World
@@ -88,3 +88,27 @@ def test_the_replay_may_fold_the_trailer_only_hitch_slack_past_the_limit(monkeyp
     assert 1.0 < max(abs(hitch_angle(s)) for s in found.states) <= 1.0 + manoeuvre.HITCH_SLACK
     monkeypatch.setattr(manoeuvre, 'HITCH_SLACK', 0.0)
     assert plan_manoeuvre(MODEL, world, start, goal, 0.65, DT, max_expansions=1500) is None
+
+
+def test_a_goal_near_but_behind_is_not_reached_by_an_empty_manoeuvre():
+    """'Within reach' counted even behind the tractor, inside its turning circle: the search returned no
+    manoeuvre at all, and a goal 1 m behind was orbited until the run failed (issue 15, item 23)."""
+    world = World((0.0, 0.0, 50.0, 50.0), ())
+    found = plan_manoeuvre(TractorTrailer(), world, [25.0, 25.0, 0.0, 0.0], [24.0, 25.0], keep=0.65, dt=0.05)
+    assert found is not None and found.ticks > 0
+    end = found.states[-1]
+    bearing = math.atan2(25.0 - end[1], 24.0 - end[0])
+    assert abs(wrap_angle(bearing - end[2])) <= math.radians(30.0) + 1e-9
+
+
+@pytest.mark.parametrize('bearing', [180.0, 90.0])
+def test_a_tractor_trailer_reaches_a_goal_one_metre_behind_or_beside_it(bearing):
+    from fastep_core.scenario import parse_scenario
+    from fastep_core.simulator import simulate
+    b = math.radians(bearing)
+    data = {'name': 'behind', 'workspace': [0, 0, 50, 50], 'obstacles': [],
+            'robots': [{'name': 'r1', 'model': 'tractor_trailer', 'start': [25, 25, 0, 0],
+                        'goal': [25 + math.cos(b), 25 + math.sin(b)], 'radius': 0.6, 'length': 1.0,
+                        'trailer_length': 1.0, 'width': 0.5}]}
+    robot = simulate(parse_scenario(data), 'fastep', 0).robots[0]
+    assert robot.reached and not robot.collided, robot.status

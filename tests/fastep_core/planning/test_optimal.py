@@ -287,3 +287,47 @@ def test_fastep_sim_accepts_the_optimal_algorithm(capsys):
     from msg_tools.sim_cli import main
     assert main(['table2_s3', '--algorithm', 'optimal']) == 0
     assert 'arrived' in capsys.readouterr().out
+
+
+# ------------------------------------------------------------------ many obstacles (issue 15, item 4)
+
+def _cluttered(n: int, side: float, seed: int, segments: int = 0) -> World:
+    rng = np.random.default_rng(seed)
+    obstacles: list[Circle | Segment] = []
+    while len(obstacles) < n:
+        c, r = rng.uniform(0.0, side, 2), float(rng.uniform(0.2, 0.8))
+        if min(math.dist(c, (2.0, 2.0)), math.dist(c, (side - 2.0, side - 2.0))) > r + 1.5:
+            obstacles.append(Circle((float(c[0]), float(c[1])), r))
+    obstacles += [Segment(tuple(rng.uniform(0.0, side, 2)), tuple(rng.uniform(0.0, side, 2)))
+                  for _ in range(segments)]
+    return World((0.0, 0.0, side, side), tuple(obstacles))
+
+
+def test_hundreds_of_circles_stay_within_bounded_memory():
+    """Every candidate edge against every obstacle at once took O(N^3) memory: 250 circles about 1.3 GB."""
+    import tracemalloc
+    world = _cluttered(250, 50.0, seed=0)
+    tracemalloc.start()
+    try:
+        path = shortest_path(world, (2.0, 2.0), (48.0, 48.0), 0.6)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert path is not None
+    assert peak < 300e6
+
+
+@pytest.mark.parametrize('seed', range(4))
+def test_the_grid_decides_every_edge_as_the_full_distance_matrix_does(seed):
+    """The near-obstacle test (_ObstacleGrid) must take the same decision, bit for bit, as path_clearance."""
+    from fastep_core.planning.optimal import TOL, _Problem
+    world = _cluttered(60, 30.0, seed, segments=6)
+    rng = np.random.default_rng(seed)
+    clearance = float(rng.uniform(0.1, 1.0))
+    problem = _Problem(world, clearance, clearance)
+    P, Q = rng.uniform(-1.0, 31.0, (4000, 2)), rng.uniform(-1.0, 31.0, (4000, 2))
+    Q[:1000] = P[:1000] + rng.normal(0.0, 1.0, (1000, 2))            # short edges as well as long ones
+    inside = problem.inside(P) & problem.inside(Q)
+    expected = inside & (world.obstacles.path_clearance(P, Q) >= clearance - TOL)
+    assert 0 < expected.sum() < inside.sum()
+    assert np.array_equal(problem.edges_free(P, Q), expected)

@@ -85,3 +85,20 @@ def test_pass_on_right_keeps_the_waypoint_right_of_the_oncoming_robot():
 def test_an_unknown_step_optimizer_is_a_parameter_error():
     with pytest.raises(ParameterError, match="unknown step optimizer 'pso'"):
         plan_step(problem(), PlannerParams(), np.random.default_rng(0), method='pso')
+
+
+def test_robots_out_of_reach_are_skipped_without_changing_a_bit():
+    """In a crowd, the runs' clearance from the other robots is measured only for the robots a run can reach
+    (issue 15, many robots); every violation must stay the same, bit for bit, as measuring them all."""
+    from fastep_core.geometry import point_segment_distance
+    rng = np.random.default_rng(5)
+    world = World.from_obstacles([0, 0, 60, 60], [])
+    for _ in range(50):
+        origin = rng.uniform(5.0, 55.0, 2)
+        others = np.vstack([origin + rng.normal(0.0, 2.0, (5, 2)), rng.uniform(0.0, 60.0, (60, 2))])
+        problem = StepProblem(world, origin, np.array([59.0, 59.0]), 0.7, 2.0, others=others,
+                              robot_clearance=rng.uniform(0.8, 1.5, len(others)))
+        X = origin + rng.uniform(-2.0, 2.0, (500, 2))
+        run = point_segment_distance(problem.others, problem.origin, X[:, None, :])
+        expected = np.maximum(problem._path_robot_clearance - run, 0.0).sum(axis=1)
+        assert np.array_equal(problem._robot_run_violation(X), expected)

@@ -1,0 +1,131 @@
+"""Benchmark: how run time and memory grow with the number of robots and of obstacles.
+
+    python -m benchmarks.scale robots [--counts 10 20 40 100] [--seed 0] [--max-sim-time 300]
+    python -m benchmarks.scale obstacles [--counts 200 500 1000] [--side 50] [--seed 0]
+
+robots: one in-process `simulate` (what `fastep-sim` runs) of N point-mass robots (radius 0.5 m) in a square
+world of side max(50, 10 sqrt(N)) m with N / 2 random circles (radius 0.5-2 m), starts and goals drawn at least
+3 m from each other and half the side apart, obstacles kept clear of them (as fastep_core.random_scenarios
+does); fixed seeds. Prints wall and CPU time (this process; less sensitive to the machine's load),
+simulated time, arrivals and collisions per N.
+
+obstacles: the exact shortest path (fastep_core.planning.optimal.shortest_path, what the trap escape, the
+"no valid path" check and Optimal-Kinematic run) from (2, 2) to the far corner through N random circles (radius
+0.2-0.8 m) in a square of side --side, clearance 0.6 m. Prints wall time and the peak of traced memory
+(tracemalloc, which numpy reports to), the graph's size and the path length.
+
+Wall times depend on the machine's load: say it (the script prints the load average) with the numbers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+import tracemalloc
+from typing import Any
+
+import numpy as np
+
+from fastep_core.geometry import Circle
+from fastep_core.planning.optimal import shortest_path
+from fastep_core.scenario import parse_scenario
+from fastep_core.simulator import simulate
+from fastep_core.world import World
+
+
+def load_text() -> str:
+    one, five, fifteen = os.getloadavg()
+    return f'load average {one:.2f}, {five:.2f}, {fifteen:.2f}'
+
+
+def crowd_scenario_data(n_robots: int, seed: int, max_sim_time: float) -> dict[str, Any]:
+    """N point-mass robots and N / 2 circles in a square world (the scenario mapping of docs/scenarios.md)."""
+    rng = np.random.default_rng(seed)
+    side = round(max(50.0, 10.0 * math.sqrt(n_robots)), 3)
+    border = 3.0
+    ends: list[np.ndarray] = []
+    robots = []
+    while len(robots) < n_robots:
+        start, goal = rng.uniform(border, side - border, 2), rng.uniform(border, side - border, 2)
+        if np.hypot(*(goal - start)) < 0.5 * side:
+            continue
+        if any(np.hypot(*(p - q)) < 3.0 for p in (start, goal) for q in ends):
+            continue
+        ends += [start, goal]
+        robots.append({'name': f'r{len(robots) + 1}', 'model': 'point_mass', 'radius': 0.5,
+                       'start': [round(float(v), 3) for v in start], 'goal': [round(float(v), 3) for v in goal]})
+    points = np.array(ends)
+    obstacles = []
+    while len(obstacles) < n_robots // 2:
+        centre, radius = rng.uniform(0.0, side, 2), float(rng.uniform(0.5, 2.0))
+        if np.min(np.hypot(*(points - centre).T)) - radius < 0.5 + 0.2 + 0.5:   # radius + margin + 0.5 m
+            continue
+        obstacles.append({'circle': {'center': [round(float(v), 3) for v in centre], 'radius': round(radius, 3)}})
+    return {'name': f'crowd_{n_robots}_{seed}', 'workspace': [0.0, 0.0, side, side], 'obstacles': obstacles,
+            'robots': robots, 'planner': {'max_sim_time': max_sim_time}}
+
+
+def cluttered_world(n: int, side: float, seed: int) -> World:
+    rng = np.random.default_rng(seed)
+    circles: list[Circle] = []
+    while len(circles) < n:
+        c, r = rng.uniform(0.0, side, 2), float(rng.uniform(0.2, 0.8))
+        if min(math.dist(c, (2.0, 2.0)), math.dist(c, (side - 2.0, side - 2.0))) > r + 1.5:
+            circles.append(Circle((float(c[0]), float(c[1])), r))
+    return World((0.0, 0.0, side, side), tuple(circles))
+
+
+def bench_robots(counts: list[int], seed: int, max_sim_time: float) -> None:
+    print(load_text())
+    print(f'{"robots":>6} {"wall s":>8} {"CPU s":>8} {"sim s":>8} {"arrived":>8} {"collided":>8}')
+    for n in counts:
+        scenario = parse_scenario(crowd_scenario_data(n, seed, max_sim_time))
+        start, cpu = time.perf_counter(), time.process_time()
+        run = simulate(scenario, 'fastep', seed)
+        wall, cpu = time.perf_counter() - start, time.process_time() - cpu
+        sim = max((r.sim_time or max_sim_time) for r in run.robots)
+        print(f'{n:>6} {wall:>8.1f} {cpu:>8.1f} {sim:>8.1f} {sum(r.reached for r in run.robots):>8} '
+              f'{sum(r.collided for r in run.robots):>8}', flush=True)
+    print(load_text())
+
+
+def bench_obstacles(counts: list[int], side: float, seed: int) -> None:
+    print(load_text())
+    print(f'{"circles":>7} {"wall s":>8} {"peak MB":>8} {"nodes":>7} {"edges":>8} {"length m":>9}')
+    for n in counts:
+        world = cluttered_world(n, side, seed)
+        tracemalloc.start()
+        start = time.perf_counter()
+        path = shortest_path(world, (2.0, 2.0), (side - 2.0, side - 2.0), 0.6)
+        wall = time.perf_counter() - start
+        peak = tracemalloc.get_traced_memory()[1]
+        tracemalloc.stop()
+        nodes, edges, length = ('-', '-', 'no path') if path is None else \
+            (path.nodes, path.edges, f'{path.length:.3f}')
+        print(f'{n:>7} {wall:>8.2f} {peak / 1e6:>8.0f} {nodes:>7} {edges:>8} {length:>9}', flush=True)
+    print(load_text())
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog='python -m benchmarks.scale', description=__doc__.splitlines()[0])
+    sub = p.add_subparsers(dest='what', required=True)
+    robots = sub.add_parser('robots', help='one fastep-sim run of N robots')
+    robots.add_argument('--counts', type=int, nargs='+', default=[10, 20, 40, 100])
+    robots.add_argument('--seed', type=int, default=0)
+    robots.add_argument('--max-sim-time', type=float, default=300.0)
+    obstacles = sub.add_parser('obstacles', help='the exact shortest path among N circles')
+    obstacles.add_argument('--counts', type=int, nargs='+', default=[200, 500, 1000])
+    obstacles.add_argument('--side', type=float, default=50.0)
+    obstacles.add_argument('--seed', type=int, default=0)
+    args = p.parse_args(argv)
+    if args.what == 'robots':
+        bench_robots(args.counts, args.seed, args.max_sim_time)
+    else:
+        bench_obstacles(args.counts, args.side, args.seed)
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
