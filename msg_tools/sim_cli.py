@@ -25,12 +25,12 @@ import threading
 from contextlib import contextmanager
 from pathlib import Path
 from types import FrameType
-from typing import IO, TYPE_CHECKING, Iterator, Sequence
+from typing import IO, TYPE_CHECKING, Callable, Iterator, Sequence
 
 from fastep_core.cli import INTERRUPTED, Parser, fail, guard, positive_int, seed
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.scenario import Scenario, builtin_names, load_scenario
-from fastep_core.simulator import Run, simulate
+from fastep_core.simulator import Run, Tick, simulate
 
 if TYPE_CHECKING:
     from msg_tools.sim_mcap import SimRecorder
@@ -105,26 +105,46 @@ class _JsonRuns:
             self.file.close()
 
 
-class _Terminated(KeyboardInterrupt):
-    """SIGTERM during the batch: stop as Ctrl-C does (a KeyboardInterrupt, so no `except Exception` in the
-    simulation takes it for a fault)."""
+class _Stop(KeyboardInterrupt):
+    """A stop asked for by a signal, raised at a safe point of the batch (a KeyboardInterrupt, so no
+    `except Exception` in the simulation takes it for a fault)."""
+
+    def __init__(self, signum: int) -> None:
+        super().__init__(signum)
+        self.signum = signum
 
 
-def _on_sigterm(signum: int, frame: FrameType | None) -> None:
-    raise _Terminated
+class _StopSignals:
+    """While the batch runs, Ctrl-C and SIGTERM only note the signal; the batch stops at its next simulated step
+    or between runs. Python's own Ctrl-C raised KeyboardInterrupt wherever the main thread was, also inside a
+    destructor or a generator's clean-up, where Python prints "Exception ignored" and runs on: a batch of a
+    million runs then never stopped."""
 
+    def __init__(self) -> None:
+        self.signum: int | None = None
 
-@contextmanager
-def _sigterm_stops() -> Iterator[None]:
-    """While the batch runs, SIGTERM stops it as Ctrl-C does (signal handlers: main thread only)."""
-    if threading.current_thread() is not threading.main_thread():
-        yield
-        return
-    previous = signal.signal(signal.SIGTERM, _on_sigterm)
-    try:
-        yield
-    finally:
-        signal.signal(signal.SIGTERM, previous)
+    def check(self, *_: object) -> None:
+        """Raise the stop if one was asked for (also usable as a simulation observer)."""
+        if self.signum is not None:
+            raise _Stop(self.signum)
+
+    def _note(self, signum: int, frame: FrameType | None) -> None:
+        if self.signum is not None:   # asked twice (one step can take long, e.g. an exact path): stop now
+            raise _Stop(signum)
+        self.signum = signum
+
+    @contextmanager
+    def installed(self) -> Iterator[_StopSignals]:
+        """Signal handlers exist in the main thread only; elsewhere (a caller's thread) Ctrl-C acts as usual."""
+        if threading.current_thread() is not threading.main_thread():
+            yield self
+            return
+        previous = {sig: signal.signal(sig, self._note) for sig in (signal.SIGINT, signal.SIGTERM)}
+        try:
+            yield self
+        finally:
+            for sig, handler in previous.items():
+                signal.signal(sig, handler)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -156,11 +176,11 @@ def _run(argv: Sequence[str] | None) -> int:
     done, stop = 0, None
     try:
         try:
-            with _sigterm_stops():
+            with _StopSignals().installed() as stops:
                 for run_seed in range(args.seed, args.seed + args.runs):
+                    stops.check()
                     run = simulate(scenario, args.algorithm, run_seed,
-                                   observer=recorder.observe if recorder is not None and run_seed == args.seed
-                                   else None)
+                                   observer=_observing(recorder if run_seed == args.seed else None, stops))
                     if json_runs is not None:
                         json_runs.add(run)   # before the summary: a run printed is a run in the file
                     print(_summary(run), flush=True)
@@ -169,7 +189,7 @@ def _run(argv: Sequence[str] | None) -> int:
                         _write_first_run(args, scenario, run, recorder)
                         recorder = None   # its messages too
                     del run   # no run is kept: memory does not grow with --runs
-        except KeyboardInterrupt as exc:   # Ctrl-C, or SIGTERM (_Terminated): keep what finished
+        except KeyboardInterrupt as exc:   # Ctrl-C or SIGTERM (_Stop), or Ctrl-C outside the main thread
             stop = exc
         finally:
             if json_runs is not None:
@@ -180,9 +200,21 @@ def _run(argv: Sequence[str] | None) -> int:
         return fail(PROG, f'cannot write output: {exc}')
     if stop is None:
         return 0
-    what = 'stopped by SIGTERM' if isinstance(stop, _Terminated) else 'interrupted'
+    terminated = isinstance(stop, _Stop) and stop.signum == signal.SIGTERM
+    what = 'stopped by SIGTERM' if terminated else 'interrupted'
     print(f'{PROG}: {what} after {done} of {args.runs} runs; what finished is written', file=sys.stderr)
-    return 128 + signal.SIGTERM if isinstance(stop, _Terminated) else INTERRUPTED
+    return 128 + signal.SIGTERM if terminated else INTERRUPTED
+
+
+def _observing(recorder: SimRecorder | None, stops: _StopSignals) -> Callable[[Tick], None]:
+    """The simulation's observer: the stop check at every step, and the recorder for the run it records."""
+    if recorder is None:
+        return stops.check
+
+    def observe(tick: Tick) -> None:
+        stops.check()
+        recorder.observe(tick)
+    return observe
 
 
 def _write_first_run(args: argparse.Namespace, scenario: Scenario, first: Run, recorder: SimRecorder | None) -> None:

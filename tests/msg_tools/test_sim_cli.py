@@ -177,3 +177,28 @@ def test_ctrl_c_keeps_every_finished_run(tmp_path, signum, code, said):
     assert len(runs) >= len(summaries) >= 3 and [r['seed'] for r in runs] == list(range(len(runs)))
     assert printed[1] == f'wrote {figure}\n' and figure.read_bytes()[:4] == b'\x89PNG'   # once the first run ended
     assert rest.splitlines()[-1] == f'wrote {out}'
+
+
+def test_ctrl_c_that_lands_in_a_destructor_still_stops_the_batch(tmp_path, monkeypatch, capsys):
+    """Python's Ctrl-C raised KeyboardInterrupt wherever the main thread was; inside a destructor Python prints
+    "Exception ignored" and runs on, so a batch of a million runs once ignored Ctrl-C (a make test under load)."""
+    from msg_tools import sim_cli
+
+    class SignalsWhenCollected:
+        def __del__(self) -> None:
+            signal.raise_signal(signal.SIGINT)   # its handler runs here, inside the destructor
+
+    real = sim_cli.simulate
+
+    def simulate_then_ctrl_c(*args, **kwargs):
+        run = real(*args, **kwargs)
+        if args[2] == 2:   # the third run
+            SignalsWhenCollected()   # collected at once
+        return run
+
+    monkeypatch.setattr(sim_cli, 'simulate', simulate_then_ctrl_c)
+    scenario, out = tmp_path / 'quick.yaml', tmp_path / 'r.json'
+    scenario.write_text(QUICK)
+    assert main([str(scenario), '--runs', '200', '--json', str(out)]) == 130
+    assert [r['seed'] for r in json.loads(out.read_text())['runs']] == [0, 1, 2]
+    assert capsys.readouterr().err == 'fastep-sim: interrupted after 3 of 200 runs; what finished is written\n'
