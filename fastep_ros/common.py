@@ -193,6 +193,8 @@ def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None
 
     Returns the exit code: 0 after a normal stop, 2 (with one line on stderr, no traceback) when the node
     cannot start with its parameters (a FastepError, e.g. StartupError: fastep_core.cli.guard prints it).
+    It is a process's main: once the node has stopped, the process ignores SIGINT and SIGTERM while it exits
+    (and processes it starts after that would inherit the ignoring).
     """
     _die_with_parent()
     # rclpy's own SIGINT / SIGTERM handler shuts the context down (spin then ends) and then calls the handler it

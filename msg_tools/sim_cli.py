@@ -139,7 +139,9 @@ class _StopSignals:
         if threading.current_thread() is not threading.main_thread():
             yield self
             return
-        previous = {sig: signal.signal(sig, self._note) for sig in (signal.SIGINT, signal.SIGTERM)}
+        # A signal ignored from the start stays ignored (`fastep-sim ... &` in a script: Ctrl-C is not for it).
+        previous = {sig: signal.signal(sig, self._note) for sig in (signal.SIGINT, signal.SIGTERM)
+                    if signal.getsignal(sig) is not signal.SIG_IGN}
         try:
             yield self
         finally:

@@ -11,13 +11,19 @@ on a 2-core machine two graphs at once plus CPU-bound tests starve the nodes and
 lock-step clock holds) turn flaky. xdist hands out the largest unit first, so the graph tests start at once and
 the rest fills the other core. The unit is chosen here by folder, not with `xdist_group` marks: on pytest 9.2
 xdist 3.8 silently ignores those marks (it renames node ids, which pytest 9.2 no longer lets it do).
+
+Signals: a node's main() (fastep_ros.common.node_main) ignores SIGINT and SIGTERM once it has stopped, as the
+process it is meant to be the main of should while it exits. Called in a test, that would stay in the worker
+and pass on to every process it starts later (an ignored signal is inherited), which then ignore Ctrl-C: every
+test gets the worker's handlers back.
 """
 
 from __future__ import annotations
 
 import os
+import signal
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import pytest
 from hypothesis import settings
@@ -25,6 +31,17 @@ from hypothesis import settings
 settings.register_profile('ci', derandomize=True)
 settings.register_profile('explore', derandomize=False)
 settings.load_profile(os.environ.get('HYPOTHESIS_PROFILE', 'ci'))
+
+
+
+@pytest.fixture(autouse=True)
+def _signal_handlers_restored() -> Iterator[None]:
+    saved = {sig: signal.getsignal(sig) for sig in (signal.SIGINT, signal.SIGTERM)}
+    yield
+    for sig, handler in saved.items():
+        if signal.getsignal(sig) is not handler and handler is not None:
+            signal.signal(sig, handler)
+
 
 GRAPH_TESTS = Path(__file__).resolve().parent / 'fastep_ros'
 GRAPH_GROUP = 'ros_graph'
