@@ -43,6 +43,14 @@ def _signal_handlers_restored() -> Iterator[None]:
             signal.signal(sig, handler)
 
 
+# A suite started in the background of a non-interactive shell (`make test &`, a CI script's job) inherits
+# SIGINT ignored, and so would every process the tests start: those that check what Ctrl-C does would wait for
+# nothing. The tests are not for the shell's Ctrl-C: take the default back (the process's own stays usable).
+for _signum, _default in ((signal.SIGINT, signal.default_int_handler), (signal.SIGTERM, signal.SIG_DFL)):
+    if signal.getsignal(_signum) is signal.SIG_IGN:
+        signal.signal(_signum, _default)
+
+
 GRAPH_TESTS = Path(__file__).resolve().parent / 'fastep_ros'
 GRAPH_GROUP = 'ros_graph'
 

@@ -206,8 +206,10 @@ def test_unplayable_topics_and_a_corrupt_chunk_are_skipped_with_warnings(
         summary = SeekingReader(f).get_summary()
         assert summary is not None
     chunk = sorted(summary.chunk_indexes, key=lambda c: c.chunk_start_offset)[2]
-    lost = sum(1 for m in open_recording(path).raw_messages([COST])
-               if chunk.message_start_time <= m.log_time <= chunk.message_end_time)
+    in_chunk = [m.log_time for m in open_recording(path).raw_messages([COST])
+                if chunk.message_start_time <= m.log_time <= chunk.message_end_time]
+    lost = len(in_chunk)
+    lost_values = {float((t - 2_000_000) // 1_000_000) for t in in_chunk}
     data = bytearray(path.read_bytes())
     data[chunk.chunk_start_offset + chunk.chunk_length - 30] ^= 0xFF
     path.write_bytes(bytes(data))
@@ -228,7 +230,10 @@ def test_unplayable_topics_and_a_corrupt_chunk_are_skipped_with_warnings(
     assert any("not replaying /bad name: its name is not a valid ROS topic name" in w for w in warnings), err
     assert any('corrupt chunk' in w and f'{lost} messages lost' in w for w in warnings), err
     assert f'played {300 - lost} messages on 1 topics' in err
-    assert len(got) == 300 - lost and got == sorted(got)
+    # What reached the subscriber: in order, and nothing of the corrupt chunk. Not necessarily all of it: cost is
+    # reliable but keeps the last 10, and at 10x the recorded rate (10 kHz) a subscriber starved on a loaded
+    # machine may miss some (the replay's own count above is exact).
+    assert got and got == sorted(got) and not set(got) & lost_values
 
 
 def test_hostile_options_are_one_line_and_exit_2(tmp_path: Path, recording: Path,
