@@ -90,6 +90,8 @@ class Navigator:
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
         self._retry_at = -math.inf                # no step planning before this time (after a failed attempt)
         self._detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # last `blocked` answer
+        self._near_detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # ... within plan_horizon
+        self._stuck = 0                           # planned steps in a row that ended within waypoint_tolerance
         self.guard_check = Guard(model, self.radius, p)
         self.progress = ProgressChecker(p.progress_distance, p.progress_timeout)
         self.trap = TrapDetector(p.progress_distance, p.trap_timeout)
@@ -126,6 +128,7 @@ class Navigator:
         self.mode, self.reason = Mode.KINEMATIC, 'goal accepted'
         self.waypoint, self.plan, self.cost, self._target = None, [], 0.0, None
         self.reference, self._path_checked, self._committed = None, False, False
+        self._stuck = 0
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -213,18 +216,20 @@ class Navigator:
 
     # --------------------------------------------------- detection and steps
     def blocked(self, position: FloatArray, target: FloatArray, others: Sequence[OtherRobot],
-                sensing_range: float | None = None) -> bool:
+                sensing_range: float | None = None, horizon: float | None = None) -> bool:
         """Does something within sensing range lie on the straight run to target? (eq. 11 + 'on the way')
 
         A run counts as clear if it keeps half the clearance margin beyond the radius: waypoints are placed
         a full margin away, so a robot that just reached one does not see the obstacle it skirts as blocking.
+        With a horizon, only the first `horizon` metres of the run count for obstacles (other robots move:
+        they count on the whole run).
         """
         rng = self.params.sensing_range if sensing_range is None else sensing_range
         if robots_on_run(others, self.radius, position, target, rng, 0.5 * self.params.clearance_margin):
             return True
         # Static obstacles do not move: the answer is reused until the robot has travelled
         # detection_interval, the target changed or the world did (a detector running at a fixed travel rate).
-        cached = self._detection
+        cached = self._detection if horizon is None else self._near_detection
         if cached is not None and sensing_range is None and cached[0] is self.world and cached[2] is target and \
                 math.hypot(position[0] - cached[1][0], position[1] - cached[1][1]) < self.params.detection_interval:
             return cached[3]
@@ -233,9 +238,18 @@ class Navigator:
         blocked = False
         if len(obstacles):
             near = obstacles.distances(position) < rng
-            blocked = bool(near.any() and (obstacles.path_distances(position, target)[near] < within).any())
+            end = target
+            if horizon is not None:
+                length = math.hypot(target[0] - position[0], target[1] - position[1])
+                if length > horizon:
+                    end = position + (target - position) * (horizon / length)
+            blocked = bool(near.any() and (obstacles.path_distances(position, end)[near] < within).any())
         if sensing_range is None:
-            self._detection = (self.world, position.copy(), target, blocked)
+            entry = (self.world, position.copy(), target, blocked)
+            if horizon is None:
+                self._detection = entry
+            else:
+                self._near_detection = entry
         return blocked
 
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
@@ -395,5 +409,48 @@ class FAStepKinematic(Navigator):
             self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'way is clear'
             return self.goal                                 # eq. 12 / 13 straight to the goal
         if following:
-            return self.waypoint
-        return self.plan_next_step(position, others)         # eq. 3-10: the swarm plans the next step
+            return self.aim(position, self.waypoint)
+        horizon = self.params.plan_horizon
+        if horizon > 0.0 and not self.blocked(position, self.goal, others, horizon=horizon):
+            # Blocked farther than the swarm can step: its step would be the straight one (c*d dominates
+            # eq. 10), so drive on by the kinematics and plan once the blocker is within the horizon.
+            self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'way is clear for now'
+            return self.goal
+        waypoint = self.plan_next_step(position, others)     # eq. 3-10: the swarm plans the next step
+        if waypoint is not None and self.params.stuck_steps > 0:
+            self.note_stuck(position, waypoint, others)
+        return None if waypoint is None else self.aim(position, waypoint)
+
+    def aim(self, position: FloatArray, waypoint: FloatArray | None) -> FloatArray | None:
+        """The point the controller drives to for a waypoint: waypoint_lead beyond it on the ray from the robot.
+
+        The robot still heads straight at the waypoint and counts it as reached within waypoint_tolerance, before
+        any of the lead is driven; only eq. 12's slow-down near the target is avoided. Holonomic robots only
+        (they follow that ray exactly).
+        """
+        lead = self.params.waypoint_lead
+        if waypoint is None or lead <= 0.0 or not self.model.holonomic:
+            return waypoint
+        run = waypoint - position
+        length = math.hypot(run[0], run[1])
+        return waypoint if length <= 0.0 else waypoint + run * (lead / length)
+
+    def note_stuck(self, position: FloatArray, waypoint: FloatArray, others: Sequence[OtherRobot]) -> None:
+        """Count steps that end within waypoint_tolerance: the swarm's best point is where the robot already is.
+
+        Such a step counts as reached on the next tick and is planned again, every tick, while the trap
+        detector waits trap_timeout seconds for the robot to creep 0.5 m closer. With no other robot in
+        sensing range nothing will move away: after stuck_steps of them the robot is called trapped at once.
+        With robots near, the next plan waits RETRY_AFTER instead (they may make way).
+        """
+        if math.hypot(waypoint[0] - position[0], waypoint[1] - position[1]) > self.params.waypoint_tolerance:
+            self._stuck = 0
+            return
+        if any(math.hypot(o.position[0] - position[0], o.position[1] - position[1]) - o.radius - self.radius
+               < self.params.sensing_range for o in others):
+            self._retry_at = (self._last_t or 0.0) + RETRY_AFTER
+            return
+        self._stuck += 1
+        if self._stuck >= self.params.stuck_steps:
+            self._stuck = 0
+            self.trap.trip()

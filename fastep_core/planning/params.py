@@ -78,6 +78,19 @@ class PlannerParams:
     trap_timeout: float = _p(20.0, 'trap escape: no progress_distance (near the goal: half the distance) closer '
                                    'to the goal in this many seconds starts an escape along the exact shortest '
                                    'path (s); 0 disables', 0.0)
+    # FAStep-Kinematic's activation policy (issue 12 "Clutter"; docs/clutter_research.md). Both 0: as the paper.
+    plan_horizon: float = _p(0.0, 'FAStep-Kinematic plans a step only when the straight run to the goal is blocked '
+                                  'within this many metres (the step it could take); farther blockers are driven '
+                                  'toward in a straight line, as the swarm would step anyway (m); 0: anywhere on '
+                                  'the run', 0.0)
+    stuck_steps: int = _p(0, 'FAStep-Kinematic starts the trap escape after this many planned steps in a row that '
+                             'end within waypoint_tolerance of the robot (a greedy local minimum: each counts as '
+                             'reached at once and is planned again every tick); 0: only the trap detector',
+                          0, 1000)
+    waypoint_lead: float = _p(0.0, 'FAStep-Kinematic aims a holonomic robot this far beyond a swarm waypoint, on the '
+                                    'run to it, so eq. 12 does not slow it down to a crawl as it nears the waypoint '
+                                    '(the path is the same straight run; it is reached within waypoint_tolerance as '
+                                    'before) (m); 0: aims at the waypoint', 0.0)
     max_sim_time: float = _p(1500.0, 'fastep-sim stops a run after this much simulated time (s)', 1.0)
     # ACO_R for the ACO-Kinematic baseline (Socha & Dorigo 2008).
     aco_archive: int = _p(10, 'ACO_R solution archive size k', 2, 10_000)

@@ -49,13 +49,22 @@ class TrapDetector:
         self.distance, self.timeout = distance, timeout
         self.best = math.inf   # the best distance to the goal since the last reset ...
         self.since = 0.0       # ... and when it was reached
+        self.tripped = False   # trapped at the next check, whatever the clock says (trip)
 
     def reset(self, t: float, distance: float = math.inf) -> None:
         self.best, self.since = distance, t
+        self.tripped = False
+
+    def trip(self) -> None:
+        """Call the robot trapped at the next check (the planner knows it is stuck without waiting)."""
+        self.tripped = True
 
     def trapped(self, t: float, distance: float) -> bool:
         if self.timeout <= 0:
             return False
+        if self.tripped:
+            self.tripped = False
+            return True
         needed = min(self.distance, 0.5 * self.best)
         if distance < self.best - needed or self.best == math.inf:
             self.best, self.since = distance, t

@@ -40,3 +40,19 @@ def test_a_reset_trap_detector_starts_from_the_given_distance():
     trap.reset(100.0, 10.0)
     assert not trap.trapped(110.0, 9.8) and trap.trapped(120.5, 9.8)
     assert not TrapDetector(0.5, 0.0).trapped(1e6, 10.0)
+
+
+def test_a_tripped_trap_detector_calls_the_robot_trapped_once_unless_escapes_are_off():
+    trap = TrapDetector(distance=0.5, timeout=20.0)
+    trap.reset(0.0)
+    assert not trap.trapped(0.0, 10.0)
+    trap.trip()   # the planner knows the robot is stuck: no waiting for the clock
+    assert trap.trapped(1.0, 10.0)
+    assert not trap.trapped(2.0, 10.0)
+    trap.trip()
+    trap.reset(3.0, 10.0)   # a new goal or a left trap forgets it
+    assert not trap.trapped(4.0, 10.0)
+    off = TrapDetector(distance=0.5, timeout=0.0)
+    off.reset(0.0)
+    off.trip()
+    assert not off.trapped(1.0, 10.0)
