@@ -158,29 +158,25 @@ class _Executor(SingleThreadedExecutor):
     _sigint_gc = None  # type: ignore[assignment]  # only read when __init__ did not set it
 
 
-def _spin(node: Node) -> None:
+def _spin(node: Node, executor: rclpy.executors.Executor) -> None:
     """rclpy.spin, but quiet about the races of a stop: an error raised because the context was shut down
     (Ctrl-C / SIGINT) while spinning ends the loop, and a message rclpy cannot convert (seen with Fast DDS
     while a peer process stops) is dropped with one warning instead of ending the node."""
-    executor = _Executor()
     executor.add_node(node)
     warned = False
-    try:
-        while rclpy.ok():
-            try:
-                executor.spin_once()
-            except (KeyboardInterrupt, ExternalShutdownException):
+    while rclpy.ok():
+        try:
+            executor.spin_once()
+        except (KeyboardInterrupt, ExternalShutdownException):
+            raise
+        except Exception as exc:
+            if not rclpy.ok():
+                break
+            if not (isinstance(exc, RuntimeError) and 'Unable to convert call argument' in str(exc)):
                 raise
-            except Exception as exc:
-                if not rclpy.ok():
-                    break
-                if not (isinstance(exc, RuntimeError) and 'Unable to convert call argument' in str(exc)):
-                    raise
-                if not warned:
-                    node.get_logger().warning(f'dropped a message rclpy could not convert: {exc}')
-                    warned = True
-    finally:
-        executor.shutdown()
+            if not warned:
+                node.get_logger().warning(f'dropped a message rclpy could not convert: {exc}')
+                warned = True
 
 
 def _ignore_stop_signals() -> None:
@@ -212,10 +208,14 @@ def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
         rclpy.init(args=None if args is None else list(args))
     except Exception as exc:   # e.g. UnknownROSArgsError for a mistyped --ros-args
         raise StartupError(f'cannot start ROS: {type(exc).__name__}: {exc}'.splitlines()[0]) from None
-    node = None
+    node, executor = None, None
     try:
+        # The executor before the node: built on a context a signal has already shut down, it fails half-way
+        # and rclpy's destructor prints an AttributeError; a node that has logged that it is up is what a user
+        # (or a test) stops, so by then the executor must exist.
+        executor = _Executor()
         node = factory()
-        _spin(node)
+        _spin(node, executor)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except FastepError:
@@ -225,6 +225,8 @@ def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
             raise
         # stopped (SIGINT) while the node was being built: rclpy calls fail on the shut-down context
     finally:
+        if executor is not None:
+            executor.shutdown()
         if node is not None:
             node.destroy_node()
         rclpy.try_shutdown()
