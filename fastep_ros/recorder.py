@@ -58,7 +58,8 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 from fastep_core.errors import FastepError
 from fastep_ros.common import PERIOD_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from msg_tools import convert, interface
-from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError, message_class, qos_profile_to_dict
+from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError
+from msg_tools.ros2_profile import message_class, qos_profile_to_dict
 
 __all__ = ['RecorderNode', 'RecordingStopped', 'main']
 

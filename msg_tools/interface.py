@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING, Any
 
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, LivelinessPolicy, QoSProfile, ReliabilityPolicy
 
-from msg_tools.mcap_io import qos_profile_to_dict
+from msg_tools.ros2_profile import qos_profile_to_dict
 
 if TYPE_CHECKING:
     from fastep_core.scenario import Scenario

@@ -227,7 +227,7 @@ def load_run(recording: Recording) -> RecordedRun:
     from rclpy.serialization import deserialize_message
 
     from msg_tools import convert
-    from msg_tools.mcap_io import message_class, normalize_type
+    from msg_tools.ros2_profile import message_class, normalize_type
 
     problems = _Problems()
     LIMIT = MAX_COORDINATE  # noqa: N806  (a local name: read once per message in the loop below)

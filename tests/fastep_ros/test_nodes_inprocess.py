@@ -329,7 +329,8 @@ def test_nodes_publish_the_interface_and_fastep_sim_records_their_qos(context: A
     from fastep_ros.clock import ClockNode
     from fastep_ros.map_server import MapNode
     from msg_tools import interface
-    from msg_tools.mcap_io import open_recording, qos_profile_to_dict, type_name_of
+    from msg_tools.mcap_io import open_recording
+    from msg_tools.ros2_profile import qos_profile_to_dict, type_name_of
     from msg_tools.sim_mcap import record_run
 
     scenario = load_scenario('application')    # tractor-trailers: trailer_pose too

@@ -28,7 +28,8 @@ from fastep_core.world import World
 from fastep_ros import replay
 from fastep_testing.graph import ROOT, Helper, free_domain, isolated_env, stop_process
 from msg_tools import convert
-from msg_tools.mcap_io import McapWriter, open_recording, qos_dict
+from msg_tools.mcap_io import McapWriter, open_recording
+from msg_tools.ros2_profile import qos_dict
 
 # Irregular gaps (s) between the cost messages; the recording starts at 5 s of log time.
 TIMES = 5.0 + np.array([0.0, 0.1, 0.15, 0.35, 0.4, 0.6, 0.9, 0.95, 1.2, 1.25, 1.45, 1.5])

@@ -11,7 +11,7 @@ from rclpy.qos import DurabilityPolicy, LivelinessPolicy, ReliabilityPolicy
 
 from fastep_core.scenario import load_scenario
 from msg_tools import interface
-from msg_tools.mcap_io import message_class, qos_dict
+from msg_tools.ros2_profile import message_class, qos_dict
 
 # DESIGN.md "ROS 2 interface": the contract, written out again on purpose so a change to the module shows here.
 DESIGN = {

@@ -22,7 +22,8 @@ from std_msgs.msg import Float64
 
 from msg_tools import recover, sim_cli
 from msg_tools.errors import NotMcapError, RecordingError, TruncatedRecordingError
-from msg_tools.mcap_io import McapWriter, copy_recording, message_definition, open_recording, qos_dict, qos_from_dicts
+from msg_tools.mcap_io import McapWriter, copy_recording, open_recording
+from msg_tools.ros2_profile import message_definition, qos_dict, qos_from_dicts
 
 # One point mass and one tractor-trailer (so trailer_pose is there), a circle and a wall (both marker kinds).
 MIXED = """\
@@ -274,7 +275,7 @@ def test_fastep_sim_mcap_records_the_first_run_and_reports_bad_paths(
 
 def test_a_channels_qos_text_is_read_within_bounds() -> None:
     """offered_qos_profiles is YAML from whoever wrote the file: an alias bomb in it is no profile, not a hang."""
-    from msg_tools.mcap_io import parse_qos_yaml, qos_yaml
+    from msg_tools.ros2_profile import parse_qos_yaml, qos_yaml
     profile = qos_dict()
     assert parse_qos_yaml(qos_yaml([profile])) == [profile]
     levels = 'abcdefghij'
