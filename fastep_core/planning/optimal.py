@@ -15,7 +15,7 @@ The method (a tangent visibility graph, exact for discs; Chen & Wang's "shortest
   two outer, two inner when they are apart) and between start or goal and a circle (two each). A tangent
   edge is kept when the core's own `Obstacles.path_clearance` of it is at least r (minus TOL) and both of its
   ends lie in the workspace shrunk by the border margin (convex, so the whole edge then does). The test
-  measures each edge only against the obstacles near it (_ObstacleGrid) and in blocks, so memory stays
+  measures each edge only against the obstacles near it (ObstacleGrid, obstacle_grid.py) and in blocks, so memory stays
   bounded (the full edge-by-obstacle matrix grew as N^3: 500 circles 9.4 GB); the decisions are the same.
 - Arc edges join consecutive nodes along each circle (either way round, as long as the arc is free). The
   free part of a circle is computed in closed form: the angles where it enters another inflated disc, the
@@ -44,7 +44,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.errors import ParameterError
-from fastep_core.geometry import Circle, Obstacles, Segment, point_segment_distance, segment_segment_distance
+from fastep_core.geometry import Circle, Segment, point_segment_distance
+from fastep_core.planning.obstacle_grid import ObstacleGrid
 from fastep_core.world import World
 
 __all__ = ['OptimalPath', 'PathPiece', 'shortest_path', 'TOL', 'main']
@@ -199,7 +200,7 @@ class _Problem:
         self.seg_starts = np.array([s.start for s in segments], dtype=float).reshape(-1, 2)
         self.seg_ends = np.array([s.end for s in segments], dtype=float).reshape(-1, 2)
         self.blocked = [self._blocked(k) for k in range(len(self.circles))]
-        self.grid = _ObstacleGrid(world.obstacles, self.box, clearance - TOL, self.scale)
+        self.grid = ObstacleGrid(world.obstacles, self.box, clearance - TOL, self.scale)
 
     # ------------------------------------------------------------------ free arcs of one circle
     def _blocked(self, k: int) -> Pieces:
@@ -264,7 +265,7 @@ class _Problem:
         """Which straight edges P[i]-Q[i] keep the clearance and stay in the shrunk workspace.
 
         Exactly `Obstacles.path_clearance(P, Q) >= clearance - TOL` where inside, computed only for the
-        obstacles near each edge (_ObstacleGrid), in blocks of bounded size.
+        obstacles near each edge (ObstacleGrid), in blocks of bounded size.
         """
         ok = self.inside(P) & self.inside(Q)
         if len(self.world.obstacles) and ok.any():
@@ -273,170 +274,6 @@ class _Problem:
         return ok
 
 
-PAIRS_PER_BLOCK = 1 << 19
-"""Edge-obstacle pairs measured at once: the blocks' arrays stay within some tens of MB, whatever the world."""
-
-
-class _ObstacleGrid:
-    """The obstacles binned in square cells, so that an edge is measured against the obstacles near it only.
-
-    Why: measuring every candidate edge (about 2 N^2 of them) against every obstacle at once took O(N^3)
-    memory (500 circles: 9.4 GB). Here an obstacle is listed in every cell its reach square overlaps: its
-    bounding box grown by the threshold, half the sample spacing and a rounding slack. An edge is sampled at
-    most one cell size apart, ends included; an obstacle closer to the edge than the threshold is then
-    closer than that (in every coordinate) to one of the samples, so it is listed in that sample's cell. The
-    pairs found are measured with the same formulas as `Obstacles.path_distances` (so the decision is the
-    same, bit for bit); an edge is free when none of them is below the threshold. The midpoints go first:
-    in a cluttered world most candidate edges are blocked there, and never sampled in full.
-    """
-
-    def __init__(self, obstacles: Obstacles, box: tuple[float, float, float, float], threshold: float,
-                 scale: float) -> None:
-        self.obstacles = obstacles
-        self.threshold = threshold
-        self.n_circles = obstacles.n_circles
-        self.usable = False
-        x0, y0, x1, y1 = box
-        n = len(obstacles)
-        if n == 0:
-            return
-        width, height = x1 - x0, y1 - y0
-        slack = 1e-6 + 1e-9 * scale
-        # Low and high corners of each obstacle's bounding box: circles, then segments.
-        o = obstacles
-        lo = np.concatenate([o.centers - o.radii[:, None], np.minimum(o.starts, o.ends)])
-        hi = np.concatenate([o.centers + o.radii[:, None], np.maximum(o.starts, o.ends)])
-        # About one cell per obstacle; coarser while the listings would exceed 16 per obstacle (big obstacles).
-        cell = math.sqrt(max(width, 0.0)) * math.sqrt(max(height, 0.0)) / math.sqrt(n)
-        cell = max(cell, (width + height) / 4096.0, 1e-9 * (1.0 + scale), threshold)
-        for _ in range(64):
-            if not (math.isfinite(cell) and cell > 0.0):
-                return
-            grow = threshold + 0.5 * cell + slack
-            nx = max(1, min(4096, int(math.ceil(width / cell))))
-            ny = max(1, min(4096, int(math.ceil(height / cell))))
-            with np.errstate(invalid='ignore', over='ignore'):
-                ix0 = np.floor((lo[:, 0] - grow - x0) / cell)
-                ix1 = np.floor((hi[:, 0] + grow - x0) / cell)
-                iy0 = np.floor((lo[:, 1] - grow - y0) / cell)
-                iy1 = np.floor((hi[:, 1] + grow - y0) / cell)
-            spans = np.stack([ix0, ix1, iy0, iy1])
-            if not np.all(np.isfinite(spans)):
-                return
-            ix0, ix1 = np.clip(ix0, 0, nx - 1), np.clip(ix1, -1, nx - 1)
-            iy0, iy1 = np.clip(iy0, 0, ny - 1), np.clip(iy1, -1, ny - 1)
-            cols = np.maximum(ix1 - ix0 + 1, 0).astype(np.int64)
-            rows = np.maximum(iy1 - iy0 + 1, 0).astype(np.int64)
-            counts = cols * rows
-            if int(counts.sum()) <= 16 * n + 4096 or (nx == 1 and ny == 1):
-                break
-            cell *= 2.0
-        else:
-            return
-        # (cell, obstacle) listings, sorted by cell: cell c lists members[first[c]:first[c + 1]].
-        owner = np.repeat(np.arange(n), counts)
-        k = np.arange(len(owner)) - np.repeat(np.cumsum(counts) - counts, counts)
-        ix = ix0.astype(np.int64)[owner] + k % np.maximum(cols, 1)[owner]
-        iy = iy0.astype(np.int64)[owner] + k // np.maximum(cols, 1)[owner]
-        cells = iy * nx + ix
-        order = np.argsort(cells, kind='stable')
-        self.members = owner[order]
-        self.first = np.concatenate([[0], np.cumsum(np.bincount(cells, minlength=nx * ny))])
-        self.origin, self.cell, self.nx, self.ny = (x0, y0), cell, nx, ny
-        self.usable = True
-
-    def free(self, P: FloatArray, Q: FloatArray) -> NDArray[np.bool_]:
-        """Which edges P[i]-Q[i] keep at least the threshold from every obstacle."""
-        blocked = np.zeros(len(P), dtype=bool)
-        if not self.usable:
-            # Rounding or overflow makes the grid useless (absurd coordinates): every pair, in blocks.
-            n = len(self.obstacles)
-            step = max(1, PAIRS_PER_BLOCK // max(n, 1))
-            for a in range(0, len(P), step):
-                e = np.repeat(np.arange(a, min(a + step, len(P))), n)
-                self._measure(P, Q, e, np.tile(np.arange(n), len(e) // n), blocked)
-            return ~blocked
-        mid = 0.5 * (P + Q)
-        self._sampled(P, Q, np.arange(len(P)), mid, blocked)
-        alive = np.flatnonzero(~blocked)
-        if len(alive):
-            lengths = np.hypot(*(Q[alive] - P[alive]).T)
-            with np.errstate(invalid='ignore', over='ignore'):
-                n_samples = np.ceil(lengths / self.cell)
-            n_samples = np.where(np.isfinite(n_samples), n_samples, 0.0)
-            n_samples = (np.minimum(n_samples, 2.0 * (self.nx + self.ny)) + 1).astype(np.int64)
-            # Blocks of edges whose samples (about 8 listed obstacles each) stay within a block of pairs.
-            ends = np.cumsum(n_samples)
-            block = max(1, PAIRS_PER_BLOCK // 8)
-            a = 0
-            while a < len(alive):
-                b = max(a + 1, int(np.searchsorted(ends, ends[a] - n_samples[a] + block, side='right')))
-                edges, counts = alive[a:b], n_samples[a:b]
-                e = np.repeat(edges, counts)
-                k = np.arange(len(e)) - np.repeat(np.cumsum(counts) - counts, counts)
-                t = (k / np.maximum(np.repeat(counts, counts) - 1, 1))[:, None]
-                points = P[e] + t * (Q[e] - P[e])
-                self._sampled(P, Q, e, points, blocked)
-                a = b
-        return ~blocked
-
-    def _sampled(self, P: FloatArray, Q: FloatArray, edge: IntArray, points: FloatArray,
-                 blocked: NDArray[np.bool_]) -> None:
-        """Measure edge[i] against the obstacles listed in the cell of points[i], in blocks of pairs."""
-        x0, y0 = self.origin
-        ix = np.clip(np.floor((points[:, 0] - x0) / self.cell), 0, self.nx - 1).astype(np.int64)
-        iy = np.clip(np.floor((points[:, 1] - y0) / self.cell), 0, self.ny - 1).astype(np.int64)
-        cells = iy * self.nx + ix
-        start = self.first[cells]
-        counts = self.first[cells + 1] - start
-        ends = np.cumsum(counts)
-        a = 0
-        while a < len(edge):
-            b = max(a + 1, int(np.searchsorted(ends, ends[a] - counts[a] + PAIRS_PER_BLOCK, side='right')))
-            c = counts[a:b]
-            e = np.repeat(edge[a:b], c)
-            k = np.arange(len(e)) - np.repeat(np.cumsum(c) - c, c)
-            self._measure(P, Q, e, self.members[np.repeat(start[a:b], c) + k], blocked)
-            a = b
-
-    def _measure(self, P: FloatArray, Q: FloatArray, e: IntArray, o: IntArray,
-                 blocked: NDArray[np.bool_]) -> None:
-        """Mark edge e[i] blocked when obstacle o[i] is nearer than the threshold (or the distance is NaN)."""
-        obstacles = self.obstacles
-        circle = o < self.n_circles
-        ec, oc = e[circle], o[circle]
-        if len(ec):
-            d = point_segment_distance(obstacles.centers[oc], P[ec], Q[ec]) - obstacles.radii[oc]
-            blocked[ec[~(d >= self.threshold)]] = True
-        es, os_ = e[~circle], o[~circle] - self.n_circles
-        if len(es):
-            d = segment_segment_distance(P[es], Q[es], obstacles.starts[os_], obstacles.ends[os_])
-            blocked[es[~(d >= self.threshold)]] = True
-
-
-def _tangents(c1: tuple[float, float], r1: float, c2: tuple[float, float], r2: float,
-              inner: bool) -> list[tuple[np.ndarray, np.ndarray]]:
-    """Common tangents of two circles (r2 = 0: tangents from a point), as (point on 1, point on 2) pairs.
-
-    Outer tangents (inner=False) touch both circles on the same side, inner ones cross between them.
-    """
-    dx, dy = c2[0] - c1[0], c2[1] - c1[1]
-    D = math.hypot(dx, dy)
-    if D <= 1e-12:
-        return []
-    s2 = -r2 if inner else r2
-    ratio = (r1 - s2) / D
-    if abs(ratio) > 1.0:
-        return []
-    vx, vy = dx / D, dy / D
-    h = math.sqrt(max(0.0, 1.0 - ratio * ratio))
-    out = []
-    for k in ((1.0, -1.0) if h > 0.0 else (1.0,)):
-        nx, ny = vx * ratio - k * h * vy, vy * ratio + k * h * vx
-        p1 = np.array([c1[0] + r1 * nx, c1[1] + r1 * ny])
-        p2 = np.array([c2[0] + s2 * nx, c2[1] + s2 * ny])
-        out.append((p1, p2))
-    return out
 
 
 class _Graph:

@@ -319,7 +319,7 @@ def test_hundreds_of_circles_stay_within_bounded_memory():
 
 @pytest.mark.parametrize('seed', range(4))
 def test_the_grid_decides_every_edge_as_the_full_distance_matrix_does(seed):
-    """The near-obstacle test (_ObstacleGrid) must take the same decision, bit for bit, as path_clearance."""
+    """The near-obstacle test (ObstacleGrid) must take the same decision, bit for bit, as path_clearance."""
     from fastep_core.planning.optimal import TOL, _Problem
     world = _cluttered(60, 30.0, seed, segments=6)
     rng = np.random.default_rng(seed)
