@@ -3,11 +3,11 @@ the safety nets around them. `algorithms` is the registry by name; `navigator` t
 
 from fastep_core.planning.aco_kinematic import ACOKinematic
 from fastep_core.planning.algorithms import ALGORITHMS, make_navigator, make_robot
-from fastep_core.planning.navigator import FAStepKinematic, Mode, Navigator
+from fastep_core.planning.navigator import FAStepKinematic, FAStepPaper, Mode, Navigator
 from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.step import StepPlan, StepProblem, plan_step
 
-__all__ = ['ALGORITHMS', 'ACOKinematic', 'FAStepKinematic', 'Mode', 'Navigator', 'OptimalKinematic', 'OtherRobot',
-           'PlannerParams', 'StepPlan', 'StepProblem', 'make_navigator', 'make_robot', 'plan_step']
+__all__ = ['ALGORITHMS', 'ACOKinematic', 'FAStepKinematic', 'FAStepPaper', 'Mode', 'Navigator', 'OptimalKinematic',
+           'OtherRobot', 'PlannerParams', 'StepPlan', 'StepProblem', 'make_navigator', 'make_robot', 'plan_step']

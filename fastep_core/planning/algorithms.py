@@ -14,7 +14,7 @@ from fastep_core.errors import ParameterError
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.aco_kinematic import ACOKinematic
-from fastep_core.planning.navigator import FAStepKinematic, Navigator
+from fastep_core.planning.navigator import FAStepKinematic, FAStepPaper, Navigator
 from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
@@ -22,12 +22,14 @@ from fastep_core.world import World
 __all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'NAVIGATORS', 'algorithm_name', 'make_navigator', 'make_robot']
 
 NAVIGATORS: dict[str, type[Navigator]] = {
-    'fastep': FAStepKinematic,   # the paper's algorithm
+    'fastep': FAStepKinematic,   # the paper's algorithm, with the activation policy of docs/clutter_research.md
+    'fastep_paper': FAStepPaper,  # the paper's algorithm with its literal activation policy
     'aco': ACOKinematic,         # the paper's baseline
     'optimal': OptimalKinematic,  # the exact shortest path, driven by the same controller (a reference)
 }
 ALGORITHMS: tuple[str, ...] = tuple(NAVIGATORS)
-ALGORITHM_NAMES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
+ALGORITHM_NAMES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'fastep_paper': 'FAStep-Kinematic (paper policy)',
+                                   'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
 """What tables, reports and figure titles call each algorithm (the paper's names)."""
 
 

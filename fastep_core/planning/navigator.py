@@ -42,7 +42,7 @@ from fastep_core.planning.recovery import BackUp, StopTimer, free_room
 from fastep_core.planning.step import StepProblem, plan_step_passing_right
 from fastep_core.world import World
 
-__all__ = ['FAStepKinematic', 'Mode', 'Navigator', 'OtherRobot']
+__all__ = ['FAStepKinematic', 'FAStepPaper', 'Mode', 'Navigator', 'OtherRobot']
 
 FloatArray = NDArray[np.float64]
 RETRY_AFTER = 0.5   # seconds between step-planning attempts while no feasible step exists
@@ -395,9 +395,24 @@ class Navigator:
         return guarded
 
 class FAStepKinematic(Navigator):
-    """Algorithm 1: kinematics to the goal; the Stepping Ahead Firefly swarm only when something blocks the way."""
+    """Algorithm 1: kinematics to the goal; the Stepping Ahead Firefly swarm only when something blocks the way.
+
+    When the swarm runs is decided by the activation policy of docs/clutter_research.md, on by default:
+    `plan_horizon` (plan only once the blocker is within the step the swarm could take) and `stuck_steps` (a
+    step that ends where the robot already is starts the trap escape instead of being planned again every tick).
+    Neither changes a step (eq. 3-10) or the controller (eq. 12-13); `FAStepPaper` is the paper's literal policy.
+    """
 
     method = 'fastep'
+    paper_policy = False   # True: plan on every detection, ignore plan_horizon, stuck_steps and waypoint_lead
+
+    @property
+    def plan_horizon(self) -> float:
+        return 0.0 if self.paper_policy else self.params.plan_horizon
+
+    @property
+    def stuck_steps(self) -> int:
+        return 0 if self.paper_policy else self.params.stuck_steps
 
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         assert self.goal is not None
@@ -410,14 +425,14 @@ class FAStepKinematic(Navigator):
             return self.goal                                 # eq. 12 / 13 straight to the goal
         if following:
             return self.aim(position, self.waypoint)
-        horizon = self.params.plan_horizon
+        horizon = self.plan_horizon
         if horizon > 0.0 and not self.blocked(position, self.goal, others, horizon=horizon):
             # Blocked farther than the swarm can step: its step would be the straight one (c*d dominates
             # eq. 10), so drive on by the kinematics and plan once the blocker is within the horizon.
             self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'way is clear for now'
             return self.goal
         waypoint = self.plan_next_step(position, others)     # eq. 3-10: the swarm plans the next step
-        if waypoint is not None and self.params.stuck_steps > 0:
+        if waypoint is not None and self.stuck_steps > 0:
             self.note_stuck(position, waypoint, others)
         return None if waypoint is None else self.aim(position, waypoint)
 
@@ -428,7 +443,7 @@ class FAStepKinematic(Navigator):
         any of the lead is driven; only eq. 12's slow-down near the target is avoided. Holonomic robots only
         (they follow that ray exactly).
         """
-        lead = self.params.waypoint_lead
+        lead = 0.0 if self.paper_policy else self.params.waypoint_lead
         if waypoint is None or lead <= 0.0 or not self.model.holonomic:
             return waypoint
         run = waypoint - position
@@ -451,6 +466,15 @@ class FAStepKinematic(Navigator):
             self._retry_at = (self._last_t or 0.0) + RETRY_AFTER
             return
         self._stuck += 1
-        if self._stuck >= self.params.stuck_steps:
+        if self._stuck >= self.stuck_steps:
             self._stuck = 0
             self.trap.trip()
+
+
+class FAStepPaper(FAStepKinematic):
+    """FAStep-Kinematic with the paper's literal activation policy: the swarm plans a step on every detection
+    (eq. 11, anywhere on the run within sensing range) and every tick a step ends where the robot already is;
+    only the trap detector's timeout starts an escape. The reference `fastep` is measured against."""
+
+    method = 'fastep_paper'
+    paper_policy = True

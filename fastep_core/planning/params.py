@@ -78,12 +78,13 @@ class PlannerParams:
     trap_timeout: float = _p(20.0, 'trap escape: no progress_distance (near the goal: half the distance) closer '
                                    'to the goal in this many seconds starts an escape along the exact shortest '
                                    'path (s); 0 disables', 0.0)
-    # FAStep-Kinematic's activation policy (issue 12 "Clutter"; docs/clutter_research.md). Both 0: as the paper.
-    plan_horizon: float = _p(0.0, 'FAStep-Kinematic plans a step only when the straight run to the goal is blocked '
+    # FAStep-Kinematic's activation policy (issue 12 "Clutter"; docs/clutter_research.md): when the swarm runs.
+    # Both 0 is the paper's literal policy (the 'fastep_paper' algorithm ignores them).
+    plan_horizon: float = _p(2.0, 'FAStep-Kinematic plans a step only when the straight run to the goal is blocked '
                                   'within this many metres (the step it could take); farther blockers are driven '
                                   'toward in a straight line, as the swarm would step anyway (m); 0: anywhere on '
-                                  'the run', 0.0)
-    stuck_steps: int = _p(0, 'FAStep-Kinematic starts the trap escape after this many planned steps in a row that '
+                                  'the run (the default is step_radius\'s default: set them together)', 0.0)
+    stuck_steps: int = _p(1, 'FAStep-Kinematic starts the trap escape after this many planned steps in a row that '
                              'end within waypoint_tolerance of the robot (a greedy local minimum: each counts as '
                              'reached at once and is planned again every tick); 0: only the trap detector',
                           0, 1000)

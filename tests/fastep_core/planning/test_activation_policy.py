@@ -1,6 +1,7 @@
-"""FAStep-Kinematic's activation policy switches (plan_horizon, stuck_steps, waypoint_lead; docs/clutter_research.md).
+"""FAStep-Kinematic's activation policy (plan_horizon, stuck_steps, waypoint_lead; docs/clutter_research.md).
 
-Each is off by default (the paper's policy, runs unchanged bit for bit); these tests show what each one changes.
+`fastep` runs plan_horizon = 2 m and stuck_steps = 1 by default; `fastep_paper` is the paper's literal policy
+(it ignores all three). These tests show what each switch changes against the paper's policy.
 """
 
 from __future__ import annotations
@@ -27,9 +28,27 @@ def _scenario(planner: dict[str, Any], obstacles: list[tuple[list[float], float]
         'planner': planner})
 
 
+OFF = {'plan_horizon': 0.0, 'stuck_steps': 0, 'waypoint_lead': 0.0}
+
+
+def test_fastep_runs_the_policy_by_default_and_fastep_paper_ignores_it():
+    wedge = _scenario({}, WEDGE, [45.2, 36.595], [36.0, 22.0])
+    default = simulate(wedge, 'fastep', 6).robots[0]
+    switched = simulate(_scenario({'plan_horizon': 2.0, 'stuck_steps': 1}, WEDGE, [45.2, 36.595], [36.0, 22.0]),
+                        'fastep', 6).robots[0]
+    paper = simulate(wedge, 'fastep_paper', 6).robots[0]
+    paper_all_on = simulate(_scenario({'plan_horizon': 2.0, 'stuck_steps': 1, 'waypoint_lead': 2.0}, WEDGE,
+                                      [45.2, 36.595], [36.0, 22.0]), 'fastep_paper', 6).robots[0]
+    off = simulate(_scenario(OFF, WEDGE, [45.2, 36.595], [36.0, 22.0]), 'fastep', 6).robots[0]
+    assert default.trajectory == switched.trajectory
+    assert paper.trajectory == paper_all_on.trajectory == off.trajectory   # the switches at 0 are the paper
+    assert default.activations < paper.activations
+
+
 def test_stuck_steps_start_the_escape_at_once_instead_of_a_swarm_run_every_tick():
-    paper = simulate(_scenario({}, WEDGE, [45.2, 36.595], [36.0, 22.0]), 'fastep', 6).robots[0]
-    stuck = simulate(_scenario({'stuck_steps': 1}, WEDGE, [45.2, 36.595], [36.0, 22.0]), 'fastep', 6).robots[0]
+    paper = simulate(_scenario(OFF, WEDGE, [45.2, 36.595], [36.0, 22.0]), 'fastep', 6).robots[0]
+    stuck = simulate(_scenario({**OFF, 'stuck_steps': 1}, WEDGE, [45.2, 36.595], [36.0, 22.0]), 'fastep',
+                     6).robots[0]
     assert paper.reached and paper.escapes == 1 and paper.activations > 100   # one swarm run per tick for ~20 s
     assert stuck.reached and not stuck.collided and stuck.escapes == 1
     assert stuck.activations <= 10
@@ -50,8 +69,8 @@ def _first_activation(planner: dict[str, Any]) -> tuple[float, int, Any]:
 
 
 def test_plan_horizon_plans_only_once_the_blocker_is_within_the_step_the_swarm_could_take():
-    paper_at, paper_count, paper = _first_activation({})
-    near_at, near_count, near = _first_activation({'plan_horizon': 2.0})
+    paper_at, paper_count, paper = _first_activation(OFF)
+    near_at, near_count, near = _first_activation({**OFF, 'plan_horizon': 2.0})
     assert paper_at > 2.8                      # detected at sensing_range (eq. 11, epsilon = 3 m)
     assert near_at < 2.0 + 0.5 + 0.1 + 0.1     # horizon + radius + half the margin (+ detection_interval)
     assert near_count <= paper_count
@@ -61,8 +80,8 @@ def test_plan_horizon_plans_only_once_the_blocker_is_within_the_step_the_swarm_c
 
 
 def test_waypoint_lead_keeps_the_path_and_arrives_sooner():
-    _, _, paper = _first_activation({})
-    _, _, lead = _first_activation({'waypoint_lead': 2.0})
+    _, _, paper = _first_activation(OFF)
+    _, _, lead = _first_activation({**OFF, 'waypoint_lead': 2.0})
     assert lead.reached and not lead.collided and paper.sim_time is not None and lead.sim_time is not None
     assert abs(lead.path_length - paper.path_length) < 0.05 * paper.path_length
     assert lead.sim_time < 0.95 * paper.sim_time   # eq. 12 no longer slows it to a crawl at each waypoint

@@ -15,8 +15,8 @@ WORLD = World.from_obstacles([0, 0, 50, 50], [Circle((25.0, 25.0), 3.0)])
 SPEC = RobotSpec('r1', 'point_mass', (5.0, 5.0), (45.0, 45.0), 0.5)
 
 
-def navigator(world=WORLD, seed=0):
-    return make_navigator('fastep', SPEC, 0.5, world, PlannerParams(), seed)
+def navigator(world=WORLD, seed=0, algorithm='fastep'):
+    return make_navigator(algorithm, SPEC, 0.5, world, PlannerParams(), seed)
 
 
 @pytest.mark.parametrize('goal, words', [((25.0, 25.0), 'inside an obstacle'), ((60.0, 5.0), 'outside the map'),
@@ -29,11 +29,21 @@ def test_bad_goals_are_refused_with_a_reason(goal, words):
 
 
 def test_far_obstacle_on_the_line_is_not_detected_until_near():
-    nav = navigator()
+    nav = navigator(algorithm='fastep_paper')
     nav.set_goal((45.0, 45.0))
     nav.update(0.0, np.array([5.0, 5.0]))
     assert nav.mode is Mode.KINEMATIC and nav.activations == 0
     nav.update(0.05, np.array([21.0, 21.0]))   # 2.66 m from the circle's surface, on the line
+    assert nav.mode is Mode.AVOIDING and nav.activations == 1 and nav.cost > 0.0
+
+
+def test_by_default_the_swarm_waits_until_the_obstacle_is_within_the_plan_horizon():
+    nav = navigator()
+    nav.set_goal((45.0, 45.0))
+    nav.update(0.0, np.array([5.0, 5.0]))
+    nav.update(0.05, np.array([21.0, 21.0]))   # detected (2.66 m, eq. 11) but beyond the 2 m plan horizon
+    assert nav.mode is Mode.KINEMATIC and nav.activations == 0 and nav.reason == 'way is clear for now'
+    nav.update(0.1, np.array([21.8, 21.8]))    # 1.53 m from the surface: within a step
     assert nav.mode is Mode.AVOIDING and nav.activations == 1 and nav.cost > 0.0
 
 
