@@ -104,5 +104,7 @@ def robots_on_run(others: Sequence[OtherRobot], radius: float, start: FloatArray
         return False
     centres, sums = robot_arrays(others, radius)
     near = np.hypot(*(centres - start).T) - sums < sensing_range
-    run = point_segment_distance(centres, start, end)
-    return bool(np.any(near & (run < sums + margin)))
+    if not near.any():   # in a crowd most robots are out of range: measure runs only against those in it
+        return False
+    run = point_segment_distance(centres[near], start, end)
+    return bool(np.any(run < sums[near] + margin))
