@@ -175,10 +175,12 @@ def summarise(rows: Sequence[Row]) -> list[Summary]:
 
 def worst_runs(rows: Sequence[Row], algorithm: str | None = None) -> dict[str, Row]:
     """Per family the robot run with the largest path / optimum (of `algorithm`, or of any planner but the
-    optimal one); a family without such a run is left out."""
+    optimal one when there are others); a family without such a run is left out."""
+    others = any(row.algorithm != 'optimal' for row in rows)
     out: dict[str, Row] = {}
     for row in rows:
-        if row.path_opt is None or (row.algorithm != algorithm if algorithm else row.algorithm == 'optimal'):
+        if row.path_opt is None or (row.algorithm != algorithm if algorithm else
+                                    others and row.algorithm == 'optimal'):
             continue
         best = out.get(row.family)
         if best is None or row.path_opt > (best.path_opt or 0.0):
