@@ -61,7 +61,8 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument('--out', type=Path, default=Path('docs'), help='output folder (default docs/)')
     p.add_argument('--report', help='report name: OUT/REPORT.md, figures/REPORT_*.png (default table2, or '
                                     'families with --families)')
-    p.add_argument('--json', type=Path, metavar='FILE', help='also write every run record as JSON')
+    p.add_argument('--json', type=Path, metavar='FILE',
+                   help='also write every run record as JSON (--families: instead of OUT/REPORT.json)')
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
     p.add_argument('--progress', action='store_true',
                    help='show the progress bar on stderr even when it is not a terminal (e.g. a log file)')
