@@ -200,8 +200,10 @@ def _num(x: float, digits: int = 2) -> str:
     return '-' if x is None or not math.isfinite(x) else f'{x:.{digits}f}'
 
 
-def markdown_report(rows: Sequence[Row], *, command: str = '', notes: Sequence[str] = ()) -> str:
-    """Markdown: the family table (one line per family and planner) and each family's worst run."""
+def markdown_report(rows: Sequence[Row], *, command: str = '', notes: Sequence[str] = (),
+                    worst_of: str | None = None) -> str:
+    """Markdown: the family table (one line per family and planner) and each family's worst run (of planner
+    `worst_of`, or of any planner but the optimal one; see worst_runs)."""
     summaries = summarise(rows)
     lines = ['## Planners on random world families', '']
     if command:
@@ -226,9 +228,10 @@ def markdown_report(rows: Sequence[Row], *, command: str = '', notes: Sequence[s
             f'{_num(s.cpu_per_run, 3)} / {_num(s.cpu_per_run_mean, 3)} | {_num(s.compute_per_run, 3)} | '
             f'{_num(s.cpu_vs_aco)} | {_num(s.cpu_ms_per_m, 1)} | {_num(s.compute_ms_per_m, 1)} | '
             f'{_num(s.activations_per_m, 3)} | {s.activations} | {_num(s.sim_time, 1)} |')
-    worst = worst_runs(rows)
+    worst = worst_runs(rows, worst_of)
     if worst:
-        lines += ['', '### Worst path / optimum per family', '',
+        whose = f' ({algorithm_name(worst_of)})' if worst_of else ''
+        lines += ['', f'### Worst path / optimum per family{whose}', '',
                   '| family | world | planner | seed | robot | path (m) | optimum (m) | path / opt. |',
                   '|---|---|---|---|---|---|---|---|']
         for family, row in worst.items():

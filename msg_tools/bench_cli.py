@@ -15,9 +15,9 @@ lives in msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is
 --families (all of them when none is named) runs the families benchmark instead (fastep_core.families,
 docs/clutter.md): WORLDS unseen worlds per family, RUNS seeded runs per world and planner; it writes
 OUT/REPORT.md (the family table), OUT/REPORT.json (or --json: per-run rows and the per family and planner
-summary) and OUT/figures/REPORT_{path_opt,cpu,worst}.png. --planner-set overrides planner parameters
-(PlannerParams) for every planner in either mode. Exit 0 when the runs were made, 2 with one line on stderr for
-bad input.
+summary) and OUT/figures/REPORT_{path_opt,cpu,worst}.png (--worst-of ALG: that planner's worst worlds).
+--planner-set overrides planner parameters (PlannerParams) for every planner in either mode. Exit 0 when the
+runs were made, 2 with one line on stderr for bad input.
 """
 
 from __future__ import annotations
@@ -52,6 +52,9 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     what.add_argument('--families', nargs='*', choices=FAMILIES, metavar='FAMILY',
                       help=f'random world families among {", ".join(FAMILIES)} (none named: all)')
     p.add_argument('--worlds', type=positive_int, help='worlds per family with --families (default 30)')
+    p.add_argument('--worst-of', choices=ALGORITHMS, metavar='ALG',
+                   help='with --families: the worst-world table and figure show where this planner\'s path / '
+                        'optimum was worst (default: any planner but optimal)')
     p.add_argument('--algorithms', nargs='+', default=list(ALGORITHMS), choices=ALGORITHMS, metavar='ALG',
                    help=f'planners among {", ".join(ALGORITHMS)} (default: all; optimal runs once)')
     p.add_argument('--planner-set', nargs='+', default=[], type=_override, metavar='NAME=VALUE',
@@ -93,8 +96,11 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
     report_name = args.report if args.report is not None else 'table2' if args.families is None else 'families'
     if not report_name or '/' in report_name:
         parser.error(f'--report must be a plain file name, got {report_name!r}')
-    if args.worlds is not None and args.families is None:
-        parser.error('--worlds needs --families')
+    for flag in ('worlds', 'worst_of'):
+        if getattr(args, flag) is not None and args.families is None:
+            parser.error(f'--{flag.replace("_", "-")} needs --families')
+    if args.worst_of is not None and args.worst_of not in args.algorithms:
+        parser.error(f'--worst-of {args.worst_of} is not among --algorithms')
     overrides = dict(args.planner_set)
     PlannerParams().with_overrides(overrides)   # an unknown name or a bad value: one line before any run starts
     command = ' '.join([prog, *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
@@ -147,7 +153,7 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
              f'Wall time {wall:.0f} s with {args.workers} worker(s), CPU in the runs {run_cpu:.0f} s; load average '
              f'(1 min) {load_before:.2f} at the start, {load_after:.2f} at the end.' +
              (f' Planner overrides: {", ".join(f"{k}={v:g}" for k, v in overrides.items())}.' if overrides else '')]
-    text = families.markdown_report(rows, command=command, notes=notes)
+    text = families.markdown_report(rows, command=command, notes=notes, worst_of=args.worst_of)
     summary = families.summarise(rows)
     try:
         args.out.mkdir(parents=True, exist_ok=True)
@@ -163,7 +169,8 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
         written = [report, out_json]
         if not args.no_figures:
             from msg_tools.plots import family_figures  # matplotlib only when figures are drawn
-            written += family_figures(rows, args.out / 'figures', prefix=report_name, overrides=overrides)
+            written += family_figures(rows, args.out / 'figures', prefix=report_name, overrides=overrides,
+                                      worst_of=args.worst_of)
     except OSError as exc:
         return fail(prog, f'cannot write output: {exc}')
     print(text)

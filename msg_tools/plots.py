@@ -328,16 +328,17 @@ def family_box_figure(rows: Sequence[FamilyRow], metric: str, label: str, log: b
 
 
 def family_figures(rows: Sequence[FamilyRow], out_dir: Path, prefix: str = 'families',
-                   overrides: Mapping[str, float] | None = None) -> list[Path]:
+                   overrides: Mapping[str, float] | None = None, worst_of: str | None = None) -> list[Path]:
     """fastep-bench --families' figures: out_dir/PREFIX_path_opt.png (path / optimum per family and planner),
     PREFIX_cpu.png (CPU seconds per run, log scale) and PREFIX_worst.png (each family's world where a planner's
-    path / optimum was worst, every planner's run on it with that seed, and the exact optimum)."""
+    path / optimum was worst - planner `worst_of`'s, or any but the optimal one's - every planner's run on it with
+    that seed, and the exact optimum)."""
     out_dir.mkdir(parents=True, exist_ok=True)
     written = [save(family_box_figure(rows, 'path_opt', 'path / exact optimum'), out_dir / f'{prefix}_path_opt.png',
                     dpi=100),
                save(family_box_figure(rows, 'cpu_time', 'CPU seconds per run', log=True),
                     out_dir / f'{prefix}_cpu.png', dpi=100)]
-    worst = worst_runs(rows)
+    worst = worst_runs(rows, worst_of)
     if worst:
         algorithms = list(dict.fromkeys(r.algorithm for r in rows))
         examples = [example_paths([family_source(row.family, row.world)], algorithms, row.seed,

@@ -23,7 +23,8 @@ def test_fastep_bench_writes_the_table_and_figures(tmp_path, capsys):
                                   ['--report', 'a/b'], ['--bogus'], ['--families', 'nope'], ['--worlds', '3'],
                                   ['--families', '--worlds', '0'], ['--families', 'u_trap', '--scenarios', 'table2_s1'],
                                   ['--planner-set', 'no_such_parameter=1'], ['--planner-set', 'stuck_steps'],
-                                  ['--planner-set', 'max_speed=-1'], ['--families', '--planner-set', 'stuck_steps=x']])
+                                  ['--planner-set', 'max_speed=-1'], ['--families', '--planner-set', 'stuck_steps=x'],
+                                  ['--worst-of', 'aco'], ['--families', '--algorithms', 'fastep', '--worst-of', 'aco']])
 def test_bad_input_exits_2_with_one_line(args):
     done = subprocess.run([sys.executable, '-m', 'msg_tools.bench_cli', *args], capture_output=True, text=True,
                           timeout=120)
@@ -35,7 +36,7 @@ def test_bad_input_exits_2_with_one_line(args):
 def test_families_on_one_world_each_write_a_table_json_and_figures_that_agree(tmp_path, capsys):
     # The exact-path planner only: it draws no random numbers and is the cheapest to run.
     assert bench_main(['--families', '--worlds', '1', '--algorithms', 'optimal', '--workers', '1',
-                       '--out', str(tmp_path)]) == 0
+                       '--worst-of', 'optimal', '--out', str(tmp_path)]) == 0
     text = (tmp_path / 'families.md').read_text()
     assert text in capsys.readouterr().out
     result = json.loads((tmp_path / 'families.json').read_text())
@@ -53,6 +54,7 @@ def test_families_on_one_world_each_write_a_table_json_and_figures_that_agree(tm
             assert r['path_opt'] is None or r['path_opt'] == pytest.approx(r['path_length'] / r['optimum'])
         assert f"| {s['arrived']}/{s['robot_runs']} | {s['collided']} | {s['path_opt_mean']:.3f} |" in text
     assert len([r for r in rows if r['family'] == 'multi_robot']) >= 2
+    assert '### Worst path / optimum per family (Optimal-Kinematic)' in text
     for figure in ('path_opt', 'cpu', 'worst'):
         assert (tmp_path / 'figures' / f'families_{figure}.png').stat().st_size > 1000
 
