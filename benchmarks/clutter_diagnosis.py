@@ -2,9 +2,9 @@
 
     python -m benchmarks.clutter_diagnosis --worlds 8 --workers 2 [--algorithms fastep aco] [--out out/clutter.json]
 
-Worlds: `circle_field_data(seed)`, seeds 0..N-1: a 50 x 50 m workspace, 20-35 circles of radius 0.5-2.5 m
-placed uniformly, one point-mass robot (radius 0.5) whose start and goal are uniform in [3, 47]^2 and at least
-35 m apart; circles within radius + clearance_margin + 0.5 m of the start or goal are dropped
+Worlds: `random_scenarios.circle_field_data(seed)`, seeds 0..N-1: a 50 x 50 m workspace, 20-35 circles of
+radius 0.5-2.5 m placed uniformly, one point-mass robot (radius 0.5) whose start and goal are uniform in
+[3, 47]^2 and at least 35 m apart; circles within radius + clearance_margin + 0.5 m of the start or goal are dropped
 (random_scenarios._clear_of_robots) and the layout is kept only if the exact planner finds a path keeping
 radius + clearance_margin (random_scenarios.solvable). The world's generator is seeded 10_000 + seed; the run
 seed is the world seed.
@@ -37,36 +37,9 @@ from fastep_core.planning.aco_kinematic import ACOKinematic
 from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode, Navigator
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.others import OtherRobot
-from fastep_core.planning.params import PlannerParams
-from fastep_core.random_scenarios import _clear_of_robots, _robot, solvable
+from fastep_core.random_scenarios import CIRCLES, circle_field_data
 from fastep_core.scenario import builtin_path, parse_scenario
 from fastep_core.simulator import simulate
-
-SIZE = 50.0
-
-
-CIRCLES = (20, 35)
-
-
-def circle_field_data(seed: int, circles: tuple[int, int] = CIRCLES) -> dict[str, Any]:
-    """A solvable 50 x 50 m circle field with one point mass (see the module docstring); same seed, same world."""
-    rng = np.random.default_rng(10_000 + seed)
-    margin = PlannerParams().clearance_margin
-    for _ in range(200):
-        while True:
-            start, goal = rng.uniform(3.0, SIZE - 3.0, 2), rng.uniform(3.0, SIZE - 3.0, 2)
-            if np.hypot(*(goal - start)) >= 35.0:
-                break
-        obstacles = [{'circle': {'center': [round(float(v), 3) for v in rng.uniform(0.0, SIZE, 2)],
-                                 'radius': round(float(rng.uniform(0.5, 2.5)), 3)}}
-                     for _ in range(int(rng.integers(circles[0], circles[1] + 1)))]
-        data: dict[str, Any] = {'name': f'circle_field_{seed}', 'workspace': [0.0, 0.0, SIZE, SIZE],
-                                'obstacles': obstacles, 'robots': [_robot(rng, 'r1', start, goal, False)]}
-        data['obstacles'] = _clear_of_robots(data, margin)
-        data['description'] = f'circle field {seed}: {len(data["obstacles"])} circles'
-        if solvable(parse_scenario(data)):
-            return data
-    raise RuntimeError(f'no solvable circle field for seed {seed}')
 
 
 class Tracing:

@@ -32,6 +32,7 @@ from __future__ import annotations
 import functools
 import math
 import multiprocessing
+import os
 import time
 from dataclasses import asdict, dataclass
 from typing import Iterable, Sequence
@@ -42,7 +43,8 @@ from fastep_core.cli import progress_bar
 from fastep_core.errors import ParameterError
 from fastep_core.planning.algorithms import algorithm_name
 from fastep_core.planning.optimal import OptimalPath, shortest_path
-from fastep_core.scenario import Scenario, load_scenario
+from fastep_core.random_scenarios import parse_family_source, random_family_data
+from fastep_core.scenario import Scenario, load_scenario, parse_scenario
 from fastep_core.simulator import Run, simulate
 
 __all__ = [
@@ -109,9 +111,13 @@ def tasks(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0:
             for seed in range(seed0, seed0 + (1 if a in DETERMINISTIC else runs))]
 
 
-@functools.lru_cache(maxsize=64)
+@functools.lru_cache(maxsize=1024)
 def cached_scenario(source: str) -> Scenario:
-    """The scenario of a built-in name or YAML path, loaded once per process (a worker runs many seeds)."""
+    """The scenario of a built-in name, a YAML path or a random family world ('u_trap:1000004',
+    random_scenarios.family_source), built once per process (a worker runs many seeds)."""
+    family = parse_family_source(source)
+    if family is not None and not os.path.exists(source):
+        return parse_scenario(random_family_data(*family))
     return load_scenario(source)
 
 
@@ -365,11 +371,17 @@ class ExamplePaths:
     runs: dict[str, Run]                     # per algorithm but 'optimal', which is the exact path itself
 
 
-def example_paths(scenarios: Sequence[str], algorithms: Sequence[str], seed: int = 0) -> list[ExamplePaths]:
-    """Per scenario: the exact optimal path of every robot and one run of every planner with the given seed."""
+def example_paths(scenarios: Sequence[str], algorithms: Sequence[str], seed: int = 0,
+                  overrides: dict[str, float] | None = None) -> list[ExamplePaths]:
+    """Per scenario: the exact optimal path of every robot and one run of every planner with the given seed
+    (and the planner overrides of the batch, if any)."""
+    from dataclasses import replace
+
     out = []
     for source in scenarios:
         scenario = cached_scenario(source)
+        if overrides:
+            scenario = replace(scenario, planner=scenario.planner.with_overrides(overrides))
         exact = {spec.name: shortest_path(scenario.world, spec.start[:2], spec.goal,
                                           spec.radius + scenario.planner.clearance_margin)
                  for spec in scenario.robots}

@@ -13,6 +13,18 @@ corridor would make that robot's task impossible).
 
 U-shaped traps are what greedy steps fall into: three walls around a pocket whose open side faces a robot's
 start, placed across the straight line to its goal, so the goal lies behind the pocket's back wall.
+
+World families (`FAMILIES`, `random_family_data(family, seed)`), what the families benchmark
+(`fastep-bench --families`, docs/clutter.md) runs every planner on:
+
+- circle_field: one point mass across a 50 x 50 m field of 20-35 circles (`circle_field_data`);
+- circles_walls: one point mass, 10-20 circles and 4-10 straight walls in a 50 x 50 m workspace, no traps;
+- u_trap: one point mass and a U-shaped trap across its straight line (`u_trap_scenario_data`);
+- multi_robot: 2-4 robots, point masses and tractor-trailers, circles, walls and traps (`random_scenario_data`);
+- tractor_trailer: one tractor-trailer among circles, walls and perhaps a trap (`random_scenario_data`).
+
+Benchmarks draw their worlds from seeds FAMILY_SEED0 + k, far above every seed the tests use (0-500), so the
+benchmark's worlds are ones no test, and no tuning, has seen.
 """
 
 from __future__ import annotations
@@ -30,12 +42,19 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.world import World
 
-__all__ = ['MODELS_MIX', 'u_trap', 'u_trap_scenario_data', 'random_scenario', 'random_scenario_data', 'solvable',
-           'main']
+__all__ = ['MODELS_MIX', 'FAMILIES', 'FAMILY_SEED0', 'u_trap', 'u_trap_scenario_data', 'circle_field_data',
+           'circles_walls_data', 'random_family_data', 'family_source', 'parse_family_source', 'random_scenario',
+           'random_scenario_data', 'solvable', 'main']
 
 MODELS_MIX = 0.3
 """Share of tractor-trailers among random robots (the rest are point masses)."""
 _ATTEMPTS = 200  # random layouts tried per scenario before giving up (a few are usually enough)
+FAMILIES: tuple[str, ...] = ('circle_field', 'circles_walls', 'u_trap', 'multi_robot', 'tractor_trailer')
+"""The world families of random_family_data, in the order tables list them."""
+FAMILY_SEED0 = 1_000_000
+"""First world seed of the families benchmark: disjoint from the seeds the tests use."""
+FIELD_SIZE = 50.0   # metres: the square workspace of circle fields and circles + walls
+CIRCLES = (20, 35)  # circles per circle field, drawn uniformly from this range
 
 
 def u_trap(center: Sequence[float] | np.ndarray, width: float, depth: float, facing: float) -> list[dict[str, Any]]:
@@ -198,22 +217,114 @@ def u_trap_scenario_data(seed: int, model: str = 'point_mass') -> dict[str, Any]
     raise RuntimeError(f'no solvable U-trap layout for seed {seed}')
 
 
+def circle_field_data(seed: int, circles: tuple[int, int] = CIRCLES) -> dict[str, Any]:
+    """A solvable 50 x 50 m field of `circles` (low, high) circles of radius 0.5-2.5 m placed uniformly, one
+    point mass whose start and goal are uniform in [3, 47]^2 and at least 35 m apart; circles too close to the
+    start or goal dropped. Its generator is seeded 10_000 + seed (the clutter research's worlds, 0-15, stay
+    what docs/clutter_research.md measured); same seed, same world."""
+    rng = np.random.default_rng(10_000 + seed)
+    margin = PlannerParams().clearance_margin
+    for _ in range(_ATTEMPTS):
+        start, goal = _far_apart(rng)
+        obstacles = [_circle(rng.uniform(0.0, FIELD_SIZE, 2), float(rng.uniform(0.5, 2.5)))
+                     for _ in range(int(rng.integers(circles[0], circles[1] + 1)))]
+        data: dict[str, Any] = {'name': f'circle_field_{seed}', 'workspace': [0.0, 0.0, FIELD_SIZE, FIELD_SIZE],
+                                'obstacles': obstacles, 'robots': [_robot(rng, 'r1', start, goal, False)]}
+        data['obstacles'] = _clear_of_robots(data, margin)
+        data['description'] = f'circle field {seed}: {len(data["obstacles"])} circles'
+        if solvable(parse_scenario(data)):
+            return data
+    raise RuntimeError(f'no solvable circle field for seed {seed}')
+
+
+def circles_walls_data(seed: int) -> dict[str, Any]:
+    """A solvable 50 x 50 m world of 10-20 circles (radius 0.5-2.5 m) and 4-10 straight walls (2-10 m long,
+    any direction) placed uniformly, one point mass as in circle_field_data; same seed, same world."""
+    rng = np.random.default_rng(20_000 + seed)
+    margin = PlannerParams().clearance_margin
+    for _ in range(_ATTEMPTS):
+        start, goal = _far_apart(rng)
+        obstacles = [_circle(rng.uniform(0.0, FIELD_SIZE, 2), float(rng.uniform(0.5, 2.5)))
+                     for _ in range(int(rng.integers(10, 21)))]
+        for _ in range(int(rng.integers(4, 11))):
+            a = rng.uniform(0.0, FIELD_SIZE, 2)
+            angle, length = float(rng.uniform(0.0, math.pi)), float(rng.uniform(2.0, 10.0))
+            b = a + length * np.array([math.cos(angle), math.sin(angle)])
+            obstacles.append({'segment': {'start': [round(float(v), 3) for v in a],
+                                          'end': [round(float(v), 3) for v in b]}})
+        data: dict[str, Any] = {'name': f'circles_walls_{seed}', 'workspace': [0.0, 0.0, FIELD_SIZE, FIELD_SIZE],
+                                'obstacles': obstacles, 'robots': [_robot(rng, 'r1', start, goal, False)]}
+        data['obstacles'] = _clear_of_robots(data, margin)
+        data['description'] = f'circles and walls {seed}: {len(data["obstacles"])} obstacles'
+        if solvable(parse_scenario(data)):
+            return data
+    raise RuntimeError(f'no solvable circles-and-walls world for seed {seed}')
+
+
+def _far_apart(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """A start and a goal uniform in the field less a 3 m border, at least 35 m apart."""
+    while True:
+        start, goal = rng.uniform(3.0, FIELD_SIZE - 3.0, 2), rng.uniform(3.0, FIELD_SIZE - 3.0, 2)
+        if np.hypot(*(goal - start)) >= 35.0:
+            return start, goal
+
+
+def _circle(centre: np.ndarray, radius: float) -> dict[str, Any]:
+    return {'circle': {'center': [round(float(v), 3) for v in centre], 'radius': round(radius, 3)}}
+
+
+def random_family_data(family: str, seed: int) -> dict[str, Any]:
+    """The scenario mapping of world `seed` of a family (one of FAMILIES; see the module docstring), named
+    FAMILY_SEED, solvable; same family and seed, same world."""
+    if family == 'circle_field':
+        data = circle_field_data(seed)
+    elif family == 'circles_walls':
+        data = circles_walls_data(seed)
+    elif family == 'u_trap':
+        data = u_trap_scenario_data(seed)
+    elif family == 'multi_robot':
+        count = int(np.random.default_rng(seed).integers(2, 5))
+        data = random_scenario_data(seed, n_robots=count)
+    elif family == 'tractor_trailer':
+        data = random_scenario_data(seed, n_robots=1, tractor_share=1.0)
+    else:
+        raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(FAMILIES)}')
+    return {**data, 'name': f'{family}_{seed}'}
+
+
+def family_source(family: str, seed: int) -> str:
+    """The source name of a family world, 'FAMILY:SEED' (e.g. 'u_trap:1000004'): what
+    fastep_core.experiments.cached_scenario loads, and what tables and records call it."""
+    return f'{family}:{seed}'
+
+
+def parse_family_source(source: str) -> tuple[str, int] | None:
+    """(family, seed) of a family_source name; None for anything else (a built-in name or a file path)."""
+    family, colon, seed = source.partition(':')
+    if not colon or family not in FAMILIES or not seed.isdigit():
+        return None
+    return family, int(seed)
+
+
 def random_scenario(seed: int, *, n_robots: int | None = None, tractor_share: float = MODELS_MIX) -> Scenario:
     """Random scenario `seed`, validated (see random_scenario_data)."""
     return parse_scenario(random_scenario_data(seed, n_robots=n_robots, tractor_share=tractor_share))
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Print random scenario SEED (default 0) as YAML, ready for `fastep-sim FILE`."""
+    """Print random scenario SEED (default 0), or world SEED of a family, as YAML, ready for `fastep-sim FILE`."""
     import yaml
 
     prog = 'python -m fastep_core.random_scenarios'
     parser = cli.Parser(prog=prog, description='Print a random solvable scenario as YAML.')
     parser.add_argument('seed', nargs='?', type=cli.seed, default=0, help='scenario seed (default 0)')
+    parser.add_argument('--family', choices=FAMILIES,
+                        help='a world of this family (the families benchmark\'s worlds are seeds 1000000 on)')
 
     def run() -> int:
         args = parser.parse_args(argv)
-        print(yaml.safe_dump(random_scenario_data(args.seed), sort_keys=False), end='')
+        data = random_scenario_data(args.seed) if args.family is None else random_family_data(args.family, args.seed)
+        print(yaml.safe_dump(data, sort_keys=False), end='')
         return 0
     return cli.guard(prog, run)
 

@@ -1,49 +1,89 @@
-"""fastep-bench: regenerate the paper's Table 2 (and optimality ratios) from many seeded in-process runs.
+"""fastep-bench: regenerate the paper's Table 2 (and optimality ratios) from many seeded in-process runs, or run
+every planner on random world families.
 
     fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal]
                  [--workers 2] [--seed 0] [--out docs/] [--report table2] [--json FILE] [--no-figures]
-                 [--progress]
+                 [--progress] [--planner-set NAME=VALUE ...]
+    fastep-bench --families [FAMILY ...] [--worlds 30] [--runs 1] [--algorithms ...] [--seed 0] [--out DIR]
+                 [--report families] [--json FILE] [--planner-set NAME=VALUE ...] ...
 
 Writes OUT/REPORT.md (the Markdown tables) and OUT/figures/REPORT_{path_length,compute_time,paths}.png (box
 plots and example paths, drawn by msg_tools.plots), prints the Markdown on stdout and a progress bar on stderr
 (when stderr is a terminal, or with --progress). The engine is `fastep_core.experiments` (why this command
-lives in msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is the same command. Exit 0 when
-the runs were made, 2 with one line on stderr for bad input.
+lives in msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is the same command.
+
+--families (all of them when none is named) runs the families benchmark instead (fastep_core.families,
+docs/clutter.md): WORLDS unseen worlds per family, RUNS seeded runs per world and planner; it writes
+OUT/REPORT.md (the family table), OUT/REPORT.json (or --json: per-run rows and the per family and planner
+summary) and OUT/figures/REPORT_{path_opt,cpu,worst}.png (--worst-of ALG: that planner's worst worlds).
+--planner-set overrides planner parameters (PlannerParams) for every planner in either mode. Exit 0 when the
+runs were made, 2 with one line on stderr for bad input.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import math
 import shlex
 import sys
+import time
 from pathlib import Path
 from typing import Sequence
 
-from fastep_core import experiments
+from fastep_core import experiments, families
 from fastep_core.cli import Parser, fail, guard, positive_int, seed
 from fastep_core.planning.algorithms import ALGORITHMS
+from fastep_core.planning.params import PlannerParams
+from fastep_core.random_scenarios import FAMILIES, FAMILY_SEED0
 from fastep_core.scenario import builtin_names, load_scenario
 
 __all__ = ['main']
 
 
 def _parser(prog: str) -> argparse.ArgumentParser:
-    p = Parser(prog=prog, description='Regenerate Table 2: FAStep-Kinematic vs ACO-Kinematic (vs the optimum).')
-    p.add_argument('--runs', type=positive_int, default=30, help='seeded runs per scenario and planner (default 30)')
-    p.add_argument('--scenarios', nargs='+', default=list(experiments.TABLE2), metavar='SCENARIO',
-                   help='built-in names or YAML paths, or "all" for every built-in (default: Table 2)')
+    p = Parser(prog=prog, description='Regenerate Table 2: FAStep-Kinematic vs ACO-Kinematic (vs the optimum); '
+                                      'or run every planner on random world families (--families).')
+    p.add_argument('--runs', type=positive_int,
+                   help='seeded runs per scenario (default 30) or per family world (default 1) and planner')
+    what = p.add_mutually_exclusive_group()
+    what.add_argument('--scenarios', nargs='+', metavar='SCENARIO',
+                      help='built-in names or YAML paths, or "all" for every built-in (default: Table 2)')
+    what.add_argument('--families', nargs='*', choices=FAMILIES, metavar='FAMILY',
+                      help=f'random world families among {", ".join(FAMILIES)} (none named: all)')
+    p.add_argument('--worlds', type=positive_int, help='worlds per family with --families (default 30)')
+    p.add_argument('--worst-of', choices=ALGORITHMS, metavar='ALG',
+                   help='with --families: the worst-world table and figure show where this planner\'s path / '
+                        'optimum was worst (default: any planner but optimal)')
     p.add_argument('--algorithms', nargs='+', default=list(ALGORITHMS), choices=ALGORITHMS, metavar='ALG',
                    help=f'planners among {", ".join(ALGORITHMS)} (default: all; optimal runs once)')
+    p.add_argument('--planner-set', nargs='+', default=[], type=_override, metavar='NAME=VALUE',
+                   help='planner parameter overrides for every planner, e.g. stuck_steps=1 plan_horizon=2')
     p.add_argument('--workers', type=positive_int, default=2, help='worker processes (default 2)')
-    p.add_argument('--seed', type=seed, default=0, help='first seed (default 0)')
+    p.add_argument('--seed', type=seed, default=0, help='first run seed (default 0)')
     p.add_argument('--out', type=Path, default=Path('docs'), help='output folder (default docs/)')
-    p.add_argument('--report', default='table2', help='report name: OUT/REPORT.md, figures/REPORT_*.png')
-    p.add_argument('--json', type=Path, metavar='FILE', help='also write every run record as JSON')
+    p.add_argument('--report', help='report name: OUT/REPORT.md, figures/REPORT_*.png (default table2, or '
+                                    'families with --families)')
+    p.add_argument('--json', type=Path, metavar='FILE',
+                   help='also write every run record as JSON (--families: instead of OUT/REPORT.json)')
     p.add_argument('--no-figures', action='store_true', help='skip the PNG figures')
     p.add_argument('--progress', action='store_true',
                    help='show the progress bar on stderr even when it is not a terminal (e.g. a log file)')
     return p
+
+
+def _override(text: str) -> tuple[str, float]:
+    """argparse type of NAME=VALUE: a planner parameter and a number (checked against PlannerParams later)."""
+    name, equals, value = text.partition('=')
+    if not equals or not name:
+        raise argparse.ArgumentTypeError(f'expected NAME=VALUE, got {text!r}')
+    try:
+        number = float(value)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'{name}: expected a number, got {value!r}') from None
+    if not math.isfinite(number):
+        raise argparse.ArgumentTypeError(f'{name}: expected a finite number, got {value!r}')
+    return name, number
 
 
 def main(argv: Sequence[str] | None = None, prog: str = 'fastep-bench') -> int:
@@ -53,30 +93,84 @@ def main(argv: Sequence[str] | None = None, prog: str = 'fastep-bench') -> int:
 def _run(argv: Sequence[str] | None, prog: str) -> int:
     parser = _parser(prog)
     args = parser.parse_args(argv)
-    if not args.report or '/' in args.report:
-        parser.error(f'--report must be a plain file name, got {args.report!r}')
-    scenarios = builtin_names() if args.scenarios == ['all'] else list(dict.fromkeys(args.scenarios))
+    report_name = args.report if args.report is not None else 'table2' if args.families is None else 'families'
+    if not report_name or '/' in report_name:
+        parser.error(f'--report must be a plain file name, got {report_name!r}')
+    for flag in ('worlds', 'worst_of'):
+        if getattr(args, flag) is not None and args.families is None:
+            parser.error(f'--{flag.replace("_", "-")} needs --families')
+    if args.worst_of is not None and args.worst_of not in args.algorithms:
+        parser.error(f'--worst-of {args.worst_of} is not among --algorithms')
+    overrides = dict(args.planner_set)
+    PlannerParams().with_overrides(overrides)   # an unknown name or a bad value: one line before any run starts
+    command = ' '.join([prog, *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
+    if args.families is not None:
+        return _run_families(args, prog, report_name, overrides, command)
+    scenarios = list(experiments.TABLE2) if args.scenarios is None else \
+        builtin_names() if args.scenarios == ['all'] else list(dict.fromkeys(args.scenarios))
     for name in scenarios:  # a bad one is a FastepError: one line before any run starts
         load_scenario(name)
-    records = experiments.run_batch(scenarios, args.algorithms, args.runs, args.workers, seed0=args.seed,
-                                    progress=True if args.progress else None, label=prog)
+    records = experiments.run_batch(scenarios, args.algorithms, args.runs or 30, args.workers, seed0=args.seed,
+                                    progress=True if args.progress else None, label=prog, overrides=overrides)
     optimal = {s: experiments.optimal_lengths(s) for s in scenarios}
-    command = ' '.join([prog, *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
     title = 'Table 2 regenerated' if scenarios == list(experiments.TABLE2) else \
         'FAStep-Kinematic, ACO-Kinematic and the optimum'
     text = experiments.markdown_report(records, optimal, title=title, command=command)
     try:
         args.out.mkdir(parents=True, exist_ok=True)
-        report = args.out / f'{args.report}.md'
+        report = args.out / f'{report_name}.md'
         report.write_text(text)
         written = [report]
         if not args.no_figures:
             from msg_tools.plots import bench_figures  # matplotlib only when figures are drawn
-            written += bench_figures(records, optimal, args.out / 'figures', prefix=args.report)
+            written += bench_figures(records, optimal, args.out / 'figures', prefix=report_name)
         if args.json is not None:
             args.json.parent.mkdir(parents=True, exist_ok=True)
             args.json.write_text(json.dumps({'records': [r.to_json() for r in records], 'optimal': optimal}) + '\n')
             written.append(args.json)
+    except OSError as exc:
+        return fail(prog, f'cannot write output: {exc}')
+    print(text)
+    for path in written:
+        print(f'wrote {path}')
+    return 0
+
+
+def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrides: dict[str, float],
+                  command: str) -> int:
+    """--families: the family table, its JSON and figures (fastep_core.families)."""
+    chosen = list(dict.fromkeys(args.families)) or list(FAMILIES)
+    worlds, runs = args.worlds or 30, args.runs or 1
+    load_before, wall = families.load_average(), time.perf_counter()
+    records = families.run_families(chosen, args.algorithms, worlds, runs, args.workers, seed0=args.seed,
+                                    progress=True if args.progress else None, label=prog, overrides=overrides)
+    rows = families.rows_of(records)
+    wall = time.perf_counter() - wall
+    load_after = families.load_average()
+    run_cpu = sum({(r.scenario, r.algorithm, r.seed): r.cpu_time for r in records}.values())
+    notes = [f'Worlds per family: {worlds} (seeds {FAMILY_SEED0}-{FAMILY_SEED0 + worlds - 1}); '
+             f'runs per world: {runs} (seeds {args.seed}-{args.seed + runs - 1}; deterministic planners once). '
+             f'Wall time {wall:.0f} s with {args.workers} worker(s), CPU in the runs {run_cpu:.0f} s; load average '
+             f'(1 min) {load_before:.2f} at the start, {load_after:.2f} at the end.' +
+             (f' Planner overrides: {", ".join(f"{k}={v:g}" for k, v in overrides.items())}.' if overrides else '')]
+    text = families.markdown_report(rows, command=command, notes=notes, worst_of=args.worst_of)
+    summary = families.summarise(rows)
+    try:
+        args.out.mkdir(parents=True, exist_ok=True)
+        report = args.out / f'{report_name}.md'
+        report.write_text(text)
+        out_json = args.json if args.json is not None else args.out / f'{report_name}.json'
+        out_json.parent.mkdir(parents=True, exist_ok=True)
+        out_json.write_text(json.dumps({
+            'command': command, 'families': chosen, 'worlds': worlds, 'runs': runs, 'algorithms': args.algorithms,
+            'overrides': overrides, 'workers': args.workers, 'wall_time': wall,
+            'load_average': [load_before, load_after],
+            'summary': [s.to_json() for s in summary], 'rows': [r.to_json() for r in rows]}, indent=1) + '\n')
+        written = [report, out_json]
+        if not args.no_figures:
+            from msg_tools.plots import family_figures  # matplotlib only when figures are drawn
+            written += family_figures(rows, args.out / 'figures', prefix=report_name, overrides=overrides,
+                                      worst_of=args.worst_of)
     except OSError as exc:
         return fail(prog, f'cannot write output: {exc}')
     print(text)

@@ -4,7 +4,8 @@
   run (fastep-sim --plot, fastep-launch --plot) and of a recording (fastep-report paths.png), one drawing;
 - cost over time (Fig. 3/6/9) and the controller's velocities (Fig. 4) of a recording (fastep-report);
 - fastep-bench: box plots of path length and compute time per scenario and planner, and example paths with
-  the exact optimum.
+  the exact optimum; with --families box plots of path / optimum and CPU per run per family and planner, and
+  each family's worst world.
 
 Plotting lives here, never in the algorithms (fastep_core imports no matplotlib). Each figure is built by a
 function that returns the matplotlib Figure (tests read its lines and patches); `save` writes it as PNG with
@@ -29,16 +30,19 @@ from matplotlib.figure import Figure  # noqa: E402
 from numpy.typing import ArrayLike, NDArray  # noqa: E402
 
 from fastep_core.experiments import METRICS, PAPER, ExamplePaths, Record, example_paths, metric_values  # noqa: E402
+from fastep_core.families import FAMILY_NAMES, worst_runs  # noqa: E402
+from fastep_core.families import Row as FamilyRow  # noqa: E402
 from fastep_core.geometry import Circle, Obstacle, Segment  # noqa: E402
 from fastep_core.planning.algorithms import algorithm_name  # noqa: E402
+from fastep_core.random_scenarios import family_source  # noqa: E402
 
 if TYPE_CHECKING:
     from fastep_core.scenario import Scenario
     from fastep_core.simulator import Run
 
 __all__ = ['PLOT_POINTS', 'RobotPath', 'Velocities', 'bench_figures', 'box_plot_figure', 'cost_figure',
-           'draw_world', 'example_paths_figure', 'paths_figure', 'plot_paths', 'run_paths_figure', 'save', 'title',
-           'velocity_figure']
+           'draw_world', 'example_paths_figure', 'family_box_figure', 'family_figures', 'paths_figure', 'plot_paths',
+           'run_paths_figure', 'save', 'title', 'velocity_figure']
 
 FloatArray = NDArray[np.float64]
 PLOT_POINTS = 5000   # points drawn per line at most: long recordings are thinned for drawing only
@@ -290,4 +294,54 @@ def bench_figures(records: Sequence[Record], optimal: Mapping[str, Mapping[str, 
     algorithms = list(dict.fromkeys(r.algorithm for r in records))
     examples = example_paths(scenarios, algorithms, seed=min(r.seed for r in records))
     written.append(save(example_paths_figure(examples), out_dir / f'{prefix}_paths.png', dpi=90))
+    return written
+
+
+# ----------------------------------------------------------------------------------------------- families
+
+def family_box_figure(rows: Sequence[FamilyRow], metric: str, label: str, log: bool = False) -> Figure:
+    """One panel per family: a box per planner of `metric`, a field of fastep_core.families.Row (None and nan
+    values left out: path_opt exists only for robots that arrived); cpu_time counted once per run."""
+    family_list = list(dict.fromkeys(r.family for r in rows))
+    algorithms = list(dict.fromkeys(r.algorithm for r in rows))
+    rows_, cols = _grid(len(family_list), max_cols=5)
+    fig, axes = plt.subplots(rows_, cols, figsize=(3.4 * cols, 3.8 * rows_), squeeze=False)
+    for ax in axes.flat[len(family_list):]:
+        ax.set_visible(False)
+    for ax, family in zip(axes.flat, family_list):
+        data = []
+        for a in algorithms:
+            mine = [r for r in rows if r.family == family and r.algorithm == a]
+            if metric == 'cpu_time':   # one value per run, not per robot
+                mine = list({(r.world, r.seed): r for r in mine}.values())
+            values = [getattr(r, metric) for r in mine]
+            data.append(np.array([v for v in values if v is not None and math.isfinite(v)], dtype=float))
+        ax.boxplot(data, tick_labels=[algorithm_name(a).replace('-Kinematic', '') for a in algorithms])
+        if log:
+            ax.set_yscale('log')
+        ax.set_title(FAMILY_NAMES.get(family, family))
+        ax.set_ylabel(label)
+        ax.grid(axis='y', alpha=0.3)
+        ax.tick_params(axis='x', labelrotation=30)
+    fig.tight_layout()
+    return fig
+
+
+def family_figures(rows: Sequence[FamilyRow], out_dir: Path, prefix: str = 'families',
+                   overrides: Mapping[str, float] | None = None, worst_of: str | None = None) -> list[Path]:
+    """fastep-bench --families' figures: out_dir/PREFIX_path_opt.png (path / optimum per family and planner),
+    PREFIX_cpu.png (CPU seconds per run, log scale) and PREFIX_worst.png (each family's world where a planner's
+    path / optimum was worst - planner `worst_of`'s, or any but the optimal one's - every planner's run on it with
+    that seed, and the exact optimum)."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    written = [save(family_box_figure(rows, 'path_opt', 'path / exact optimum'), out_dir / f'{prefix}_path_opt.png',
+                    dpi=100),
+               save(family_box_figure(rows, 'cpu_time', 'CPU seconds per run', log=True),
+                    out_dir / f'{prefix}_cpu.png', dpi=100)]
+    worst = worst_runs(rows, worst_of)
+    if worst:
+        algorithms = list(dict.fromkeys(r.algorithm for r in rows))
+        examples = [example_paths([family_source(row.family, row.world)], algorithms, row.seed,
+                                  dict(overrides or {}))[0] for row in worst.values()]
+        written.append(save(example_paths_figure(examples), out_dir / f'{prefix}_worst.png', dpi=80))
     return written

@@ -7,8 +7,20 @@ import pytest
 import yaml
 
 from fastep_core.errors import ParameterError
+from fastep_core.experiments import cached_scenario
 from fastep_core.geometry import Circle
-from fastep_core.random_scenarios import main, random_scenario, random_scenario_data, solvable, u_trap_scenario_data
+from fastep_core.random_scenarios import (
+    FAMILIES,
+    FAMILY_SEED0,
+    family_source,
+    main,
+    parse_family_source,
+    random_family_data,
+    random_scenario,
+    random_scenario_data,
+    solvable,
+    u_trap_scenario_data,
+)
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
 from fastep_core.world import World
@@ -82,3 +94,50 @@ def test_main_refuses_a_bad_seed_with_one_line(capsys, argv):
 def test_a_small_soak_every_robot_arrives_and_none_collides(seed):
     run = simulate(random_scenario(seed), 'fastep', seed)
     assert all(r.reached and not r.collided for r in run.robots), [r.status for r in run.robots]
+
+
+# ----------------------------------------------------------------------------------------- world families
+
+@pytest.mark.parametrize('family', FAMILIES)
+def test_a_family_world_is_valid_solvable_and_the_same_for_the_same_seed(family):
+    seed = FAMILY_SEED0 + 3
+    data = random_family_data(family, seed)
+    assert data == random_family_data(family, seed)
+    assert data != random_family_data(family, seed + 1)
+    assert data['name'] == f'{family}_{seed}'
+    scenario = parse_scenario(data)
+    assert solvable(scenario)
+    models = {r.model for r in scenario.robots}
+    if family == 'multi_robot':
+        assert 2 <= len(scenario.robots) <= 4
+    else:
+        assert len(scenario.robots) == 1
+        assert models == {'tractor_trailer' if family == 'tractor_trailer' else 'point_mass'}
+    kinds = {type(o).__name__ for o in scenario.world.obstacle_list}
+    if family == 'circle_field':
+        assert kinds == {'Circle'}
+    if family in ('circles_walls', 'u_trap'):
+        assert 'Segment' in kinds
+
+
+def test_the_families_cover_their_ranges_over_a_few_worlds():
+    counts = {len(random_family_data('multi_robot', FAMILY_SEED0 + k)['robots']) for k in range(12)}
+    assert counts == {2, 3, 4}
+
+
+def test_a_family_world_is_a_source_the_experiments_load():
+    source = family_source('u_trap', FAMILY_SEED0)
+    assert parse_family_source(source) == ('u_trap', FAMILY_SEED0)
+    assert cached_scenario(source).name == f'u_trap_{FAMILY_SEED0}'
+    for other in ('table2_s1', 'nope:3', 'u_trap:x', 'u_trap:-1', 'u_trap'):
+        assert parse_family_source(other) is None
+
+
+def test_an_unknown_family_is_a_parameter_error():
+    with pytest.raises(ParameterError, match='unknown world family'):
+        random_family_data('nope', 1)
+
+
+def test_main_prints_a_family_world(capsys):
+    assert main(['--family', 'circles_walls', str(FAMILY_SEED0)]) == 0
+    assert yaml.safe_load(capsys.readouterr().out) == random_family_data('circles_walls', FAMILY_SEED0)
