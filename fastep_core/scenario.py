@@ -332,13 +332,14 @@ _OBSTACLE_PARSERS: dict[str, Callable[[Any, str], Obstacle]] = {'circle': _circl
 def _obstacle(value: Any, path: str) -> ObstacleSpec:
     entry = _mapping(value, path)
     kinds = ', '.join(_OBSTACLE_PARSERS)
-    shapes = [key for key in entry if key not in _OBSTACLE_EXTRAS]
+    for key in entry:
+        if key not in _OBSTACLE_PARSERS and key not in _OBSTACLE_EXTRAS:
+            raise _Invalid(f'{path}: unknown key {_show(key)} (allowed: {kinds}, {", ".join(_OBSTACLE_EXTRAS)})')
+    shapes = [key for key in entry if key in _OBSTACLE_PARSERS]
     if len(shapes) != 1:
         raise _Invalid(f'{path} must have exactly one key ({kinds}) besides {", ".join(_OBSTACLE_EXTRAS)}, '
                        f'got {_show(sorted(entry))}')
     kind = shapes[0]
-    if kind not in _OBSTACLE_PARSERS:
-        raise _Invalid(f'{path}: unknown key {_show(kind)} (allowed: {kinds}, {", ".join(_OBSTACLE_EXTRAS)})')
     shape = _OBSTACLE_PARSERS[kind](entry[kind], f'{path}.{kind}')
     motion = None
     if 'motion' in entry:
