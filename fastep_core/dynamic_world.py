@@ -25,7 +25,7 @@ waypoint on the centre) stands still. All movers at all times are one array comp
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,11 +34,14 @@ from fastep_core.geometry import Circle, Obstacle, Segment
 from fastep_core.planning.others import OtherRobot
 from fastep_core.world import World
 
-__all__ = ['MAP_STREAM', 'Motion', 'Movers', 'ObstacleSpec', 'DynamicWorld', 'PlannerMap', 'map_generator',
-           'mover_name']
+__all__ = ['MAP_STREAM', 'Motion', 'Movers', 'ObstacleSpec', 'DynamicWorld', 'PlannerMap', 'dynamic_feature',
+           'map_generator', 'mover_name']
 
 FloatArray = NDArray[np.float64]
 
+LOOKUP_ELEMENTS = 1 << 20
+"""Times x movers x segments compared at once when locating movers on their polylines: a long track against
+movers with many waypoints goes in chunks of times, so memory stays bounded (about 10 MB of booleans)."""
 MAP_STREAM = 0x6D6170   # 'map': the spawn key of the map's stream, far above any robot's index
 """SeedSequence spawn key of the map errors' stream (robots' swarms use keys 0 .. n_robots - 1)."""
 
@@ -69,6 +72,21 @@ class ObstacleSpec:
     def v1(self) -> bool:
         """Does it mean what a v1 file means (nothing v2 adds)?"""
         return self.motion is None and self.known and self.position_sigma == 0.0
+
+
+def dynamic_feature(obstacles: Sequence[ObstacleSpec]) -> str:
+    """The first thing v2 adds to these obstacles, as 'obstacles[K] moves (motion)'; '' for a v1 world.
+
+    For what cannot run v2 worlds yet (the ROS graph, fastep-sim's recordings) to refuse them in one line.
+    """
+    for i, spec in enumerate(obstacles):
+        if spec.motion is not None:
+            return f'obstacles[{i}] moves (motion)'
+        if not spec.known:
+            return f'obstacles[{i}] is unknown (known: false)'
+        if spec.position_sigma > 0.0:
+            return f'obstacles[{i}] is misplaced (position_sigma)'
+    return ''
 
 
 def mover_name(index: int) -> str:
@@ -148,8 +166,28 @@ class Movers:
         fraction = np.where(length > 0.0, (arc - start) / np.where(length > 0.0, length, 1.0), 0.0)
         return index, np.clip(fraction, 0.0, 1.0)
 
+    def _in_chunks(self, method: Callable[[FloatArray], FloatArray], t: ArrayLike) -> FloatArray:
+        """method over times t (any shape) in chunks of at most LOOKUP_ELEMENTS compared elements."""
+        times = np.asarray(t, dtype=float)
+        per_time = max(1, len(self) * self._steps.shape[1])
+        size = max(1, LOOKUP_ELEMENTS // per_time)
+        if times.size <= size:
+            return method(times)
+        flat = times.reshape(-1)
+        parts = [method(flat[k:k + size]) for k in range(0, len(flat), size)]
+        out: FloatArray = np.concatenate(parts).reshape(times.shape + (len(self), 2))
+        return out
+
     def positions(self, t: ArrayLike) -> FloatArray:
         """Centres (..., m, 2) of every mover at times t (a scalar or an array of shape (...))."""
+        return self._in_chunks(self._positions, t)
+
+    def velocities(self, t: ArrayLike) -> FloatArray:
+        """Velocities (..., m, 2) at times t: speed along the current segment, outward or back (zero for a
+        mover whose polyline has no length). At a vertex, the segment it is entering."""
+        return self._in_chunks(self._velocities, t)
+
+    def _positions(self, t: FloatArray) -> FloatArray:
         arc, _ = self.arc_lengths(t)
         index, fraction = self._locate(arc)
         mover = np.arange(len(self))
@@ -158,9 +196,7 @@ class Movers:
         out: FloatArray = start + fraction[..., None] * step
         return out
 
-    def velocities(self, t: ArrayLike) -> FloatArray:
-        """Velocities (..., m, 2) at times t: speed along the current segment, outward or back (zero for a
-        mover whose polyline has no length). At a vertex, the segment it is entering."""
+    def _velocities(self, t: FloatArray) -> FloatArray:
         arc, direction = self.arc_lengths(t)
         # On the way back the mover enters the segment that ends at its arc length: look a hair behind it.
         index, _ = self._locate(np.where(direction > 0.0, arc, np.maximum(arc - 1e-12 * (1.0 + arc), 0.0)))

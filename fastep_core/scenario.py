@@ -348,7 +348,9 @@ def _obstacle(value: Any, path: str) -> ObstacleSpec:
         motion = _motion(entry['motion'], f'{path}.motion')
     known = _boolean(entry['known'], f'{path}.known') if 'known' in entry else True
     sigma = _non_negative(entry['position_sigma'], f'{path}.position_sigma') if 'position_sigma' in entry else 0.0
-    return ObstacleSpec(shape, motion, known, sigma)
+    spec = ObstacleSpec(shape, motion, known, sigma)
+    _check_motion_length(spec, path)
+    return spec
 
 
 def _motion(value: Any, path: str) -> Motion:
@@ -359,6 +361,17 @@ def _motion(value: Any, path: str) -> Motion:
         raise _Invalid(f'{path}.waypoints must be a non-empty list of [x, y] points, got {_show(points)}')
     waypoints = tuple(_point(p, f'{path}.waypoints[{i}]') for i, p in enumerate(points))
     return Motion(waypoints, _positive(body['speed'], f'{path}.speed'))
+
+
+def _check_motion_length(spec: ObstacleSpec, path: str) -> None:
+    """The polyline's length must be a finite number (points near +-1e308 apart overflow it)."""
+    if spec.motion is None or not isinstance(spec.shape, Circle):
+        return
+    vertices = np.array([spec.shape.center, *spec.motion.waypoints], dtype=float)
+    with np.errstate(over='ignore', invalid='ignore'):
+        length = float(np.sqrt((np.diff(vertices, axis=0) ** 2).sum(axis=1)).sum())
+    if not math.isfinite(length):
+        raise _Invalid(f'{path}.motion.waypoints: the path is too long to measure (its length overflows)')
 
 
 def _boolean(value: Any, path: str) -> bool:

@@ -3,6 +3,7 @@ launcher checks its command line with them before it starts anything). docs/robu
 
 from __future__ import annotations
 
+from fastep_core.dynamic_world import dynamic_feature
 from fastep_core.planning.algorithms import MISSING_DIFF_DRIVE
 from fastep_core.scenario import MODELS, Scenario
 
@@ -54,15 +55,9 @@ def graph_problem(scenario: Scenario, robots: bool = True) -> str:
     them rather than run a different world than the file says. A `sensor` is accepted (no `scan` topic yet).
     robots=False: the obstacles only (the map node publishes no robot).
     """
-    for i, spec in enumerate(scenario.obstacle_specs):
-        if spec.motion is not None:
-            return f'obstacles[{i}] moves (motion): moving obstacles do not run on the ROS graph yet; use fastep-sim'
-        if not spec.known:
-            return f'obstacles[{i}] is unknown (known: false): unknown obstacles do not run on the ROS graph yet; ' \
-                'use fastep-sim'
-        if spec.position_sigma > 0.0:
-            return f'obstacles[{i}] is misplaced (position_sigma): misplaced obstacles do not run on the ROS ' \
-                'graph yet; use fastep-sim'
+    feature = dynamic_feature(scenario.obstacle_specs)
+    if feature:
+        return f'{feature}: moving, unknown and misplaced obstacles do not run on the ROS graph yet; use fastep-sim'
     for i, robot in enumerate(scenario.robots):
         if robots and robot.model not in MODELS:
             return f'robots[{i}] ({robot.name}): {MISSING_DIFF_DRIVE}'

@@ -127,3 +127,13 @@ def test_a_misplaced_mover_keeps_one_error(t: float) -> None:
     error = np.array(planner.others(t)[0].position) - truth.movers.positions(t)[0]
     np.testing.assert_allclose(error, planner.offsets[0])
     assert np.hypot(*error) > 0.0
+
+
+def test_long_series_go_in_chunks_with_the_same_result(monkeypatch: pytest.MonkeyPatch) -> None:
+    movers = Movers([c for c, _ in MOVERS], [m for _, m in MOVERS])
+    times = np.linspace(0.0, 100.0, 999).reshape(27, 37)
+    whole_p, whole_v = movers.positions(times), movers.velocities(times)
+    monkeypatch.setattr('fastep_core.dynamic_world.LOOKUP_ELEMENTS', 50)
+    np.testing.assert_array_equal(movers.positions(times), whole_p)
+    np.testing.assert_array_equal(movers.velocities(times), whole_v)
+    assert whole_p.shape == (27, 37, len(MOVERS), 2)

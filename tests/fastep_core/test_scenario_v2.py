@@ -196,3 +196,14 @@ def test_fastep_sim_refuses_diff_drive_until_its_model_exists(tmp_path: Path,
 
 def test_parse_scenario_accepts_v2_mappings() -> None:
     assert len(parse_scenario(v2()).obstacle_specs) == 4
+
+
+def test_a_path_too_long_to_measure(tmp_path: Path) -> None:
+    data = mover(motion={'waypoints': [[1e308, 25], [-1e308, 25]], 'speed': 1})
+    assert 'obstacles[0].motion.waypoints: the path is too long to measure' in message(tmp_path, data)
+
+
+def test_fastep_sim_refuses_to_record_a_v2_world(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    assert sim_cli.main([str(write(tmp_path, v2())), '--mcap', str(tmp_path / 'x.mcap')]) == 2
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and '--mcap: obstacles[0] moves (motion)' in err
