@@ -382,8 +382,9 @@ def _boolean(value: Any, path: str) -> bool:
 
 
 def _integer(value: Any, path: str, low: int, high: int) -> int:
-    if isinstance(value, bool) or not isinstance(value, int):
+    if isinstance(value, bounded_yaml.MisreadNumber) or (isinstance(value, str) and _text_number_hint(value)):
         _number(value, path)   # a misread or quoted number: its own message
+    if isinstance(value, bool) or not isinstance(value, int):
         raise _Invalid(f'{path} must be a whole number in [{low}, {high}], got {_show(value)}')
     if not low <= value <= high:
         raise _Invalid(f'{path} must be in [{low}, {high}], got {_show(value)}')
