@@ -6,7 +6,8 @@ never read directly: the movers' true motion, the obstacles a map leaves out, th
 Three views of one scenario:
 
 - the truth (`DynamicWorld.still`, `DynamicWorld.movers`): every still obstacle where it really is (known or
-  not), every moving circle where DESIGN.md's formula puts it at time t. Collisions, margins and scans use it.
+  not), every moving circle where DESIGN.md's formula puts it at time t. Collisions, margins and scans
+  (`DynamicWorld.scan`) use it.
 - the planner's map (`DynamicWorld.planner_map`): known still obstacles only, each misplaced one moved by its
   Gaussian error, as a `World`; and the known movers, reported each tick at their current positions (plus
   their map error) and velocities as `OtherRobot`s named 'mover K' (K: the obstacle's index in the file),
@@ -32,6 +33,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from fastep_core.geometry import Circle, Obstacle, Segment
 from fastep_core.planning.others import OtherRobot
+from fastep_core.sensing import laser
+from fastep_core.sensing.laser import LaserSpec, Scan
 from fastep_core.world import World
 
 __all__ = ['MAP_STREAM', 'Motion', 'Movers', 'ObstacleSpec', 'DynamicWorld', 'PlannerMap', 'dynamic_feature',
@@ -247,6 +250,20 @@ class DynamicWorld:
         object.__setattr__(self, 'still', World(self.workspace, still))
         object.__setattr__(self, 'movers', Movers(circles, motions, [i for i, _ in moving]))
         object.__setattr__(self, 'known_movers', np.array([o.known for _, o in moving], dtype=bool))
+
+    def scan(self, spec: LaserSpec, pose: Sequence[float], t: float, rng: np.random.Generator | None = None,
+             robots: tuple[ArrayLike, ArrayLike] | None = None) -> Scan:
+        """What a scanner at `pose` (x, y, heading) sees of the truth at time t: every still obstacle where it
+        is (known or not), every mover where it is at t, and `robots` (centres (n, 2), radii (n,): the other
+        robots, not the scanning one) as circles."""
+        obstacles = self.still.obstacles
+        centres = [obstacles.centers, self.movers.positions(t).reshape(-1, 2)]
+        radii = [obstacles.radii, self.movers.radii]
+        if robots is not None:
+            centres.append(np.asarray(robots[0], dtype=float).reshape(-1, 2))
+            radii.append(np.asarray(robots[1], dtype=float).reshape(-1))
+        return laser.scan(spec, pose, rng, t, np.concatenate(centres), np.concatenate(radii), obstacles.starts,
+                          obstacles.ends)
 
     @property
     def is_static(self) -> bool:

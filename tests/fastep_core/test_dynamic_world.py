@@ -9,6 +9,7 @@ import pytest
 
 from fastep_core.dynamic_world import DynamicWorld, Motion, Movers, ObstacleSpec, map_generator
 from fastep_core.geometry import Circle, Segment
+from fastep_core.sensing.laser import LaserSpec
 
 
 def reference_position(center: tuple[float, float], waypoints: list[tuple[float, float]], speed: float,
@@ -137,3 +138,18 @@ def test_long_series_go_in_chunks_with_the_same_result(monkeypatch: pytest.Monke
     np.testing.assert_array_equal(movers.positions(times), whole_p)
     np.testing.assert_array_equal(movers.velocities(times), whole_v)
     assert whole_p.shape == (27, 37, len(MOVERS), 2)
+
+
+def test_a_scan_sees_the_truth_at_its_time() -> None:
+    """Unknown obstacles, movers where they are at t, still ones where they really are, and other robots."""
+    truth = world()
+    spec = LaserSpec(range=20.0, fov=0.2, beams=3, noise=0.0)
+    # From (35, 2) looking up (+y): the unknown circle at (35, 12) radius 2: 8 m.
+    assert truth.scan(spec, (35.0, 2.0, math.pi / 2), 0.0).ranges[1] == pytest.approx(8.0)
+    # From (24, 20) looking up: mover 0 is at (24, 25) at t = 10 (radius 1): 4 m; at t = 0 it is at (20, 25).
+    assert truth.scan(spec, (24.0, 20.0, math.pi / 2), 10.0).ranges[1] == pytest.approx(4.0)
+    assert math.isinf(truth.scan(spec, (24.0, 20.0, math.pi / 2), 0.0).ranges[1])
+    # The misplaced wall y = 30 where it really is, whatever the map says; a robot in front of it first.
+    assert truth.scan(spec, (15.0, 26.0, math.pi / 2), 0.0).ranges[1] == pytest.approx(4.0)
+    seen = truth.scan(spec, (15.0, 26.0, math.pi / 2), 0.0, robots=(np.array([[15.0, 28.0]]), np.array([0.5])))
+    assert seen.ranges[1] == pytest.approx(1.5)
