@@ -558,9 +558,7 @@ def _check_movers(obstacles: Sequence[ObstacleSpec], robots: Sequence[RobotSpec]
         if spec.motion is None or not isinstance(spec.shape, Circle):
             continue
         path = np.array([spec.shape.center, *spec.motion.waypoints], dtype=float)
-        a, b = path[:-1], path[1:]
-        if not len(a):
-            a = b = path
+        a, b = path[:-1], path[1:]   # at least one segment: waypoints is never empty
         for i, robot in enumerate(robots):
             reach = spec.shape.radius + robot.radius
             gap = math.hypot(spec.shape.center[0] - robot.start[0], spec.shape.center[1] - robot.start[1])
