@@ -6,6 +6,9 @@ with trajectory_margins, so their min_clearance numbers mean the same thing:
 - against the obstacles: the smallest distance from a robot's reference point (the state's x, y) at one of its
   samples to the nearest obstacle surface, minus its radius;
 - against another robot: the smallest centre distance over time, minus both radii;
+- against a moving circle (scenario format v2): the smallest distance from the robot's reference point to the
+  circle's centre at each of the robot's sample times (where DESIGN.md's formula puts it at that instant),
+  minus both radii; counted with the obstacles;
 - negative means the discs touched (a collision), inf that there was nothing to measure against.
 
 Time alignment (robot against robot): two robots are compared at every time at which either of them has a
@@ -18,17 +21,27 @@ on one simulated clock) this compares exactly the sampled positions, with no int
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Protocol, Sequence
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from fastep_core.geometry import Obstacles
 
-__all__ = ['Margins', 'positions_at', 'trajectory_margins']
+__all__ = ['Margins', 'MovingCircles', 'positions_at', 'trajectory_margins']
 
 FloatArray = NDArray[np.float64]
 CHUNK = 16_384   # points per obstacles.clearance call: bounds the (points x obstacles) distance matrix
+
+
+class MovingCircles(Protocol):
+    """Circles that move (fastep_core.dynamic_world.Movers): their radii and their centres at any times."""
+
+    radii: FloatArray
+
+    def __len__(self) -> int: ...
+
+    def positions(self, t: ArrayLike) -> FloatArray: ...
 
 
 @dataclass(frozen=True)
@@ -70,11 +83,25 @@ def _closest_approach(a: FloatArray, b: FloatArray) -> float:
     return float(np.hypot(pa[:, 0] - pb[:, 0], pa[:, 1] - pb[:, 1]).min())
 
 
-def trajectory_margins(tracks: Sequence[ArrayLike], radii: ArrayLike, obstacles: Obstacles) -> Margins:
+def _mover_clearance(movers: MovingCircles, rows: FloatArray) -> float:
+    """Smallest distance from a track's points to the movers' centres at the same instants, minus the movers'
+    radii (chunked like _min_clearance)."""
+    best = np.inf
+    for k in range(0, len(rows), CHUNK):
+        part = rows[k:k + CHUNK]
+        centres = movers.positions(part[:, 0])                       # (n, m, 2)
+        gap = np.hypot(centres[..., 0] - part[:, 1, None], centres[..., 1] - part[:, 2, None]) - movers.radii
+        best = min(best, float(gap.min()))
+    return best
+
+
+def trajectory_margins(tracks: Sequence[ArrayLike], radii: ArrayLike, obstacles: Obstacles,
+                       movers: MovingCircles | None = None) -> Margins:
     """The margins of each robot along its track.
 
     tracks[i]: robot i's samples as rows (t, x, y, ...) in time order (further columns, e.g. headings, are
-    ignored; a robot may have no samples); radii[i]: its radius.
+    ignored; a robot may have no samples); radii[i]: its radius. movers: moving circles (v2), measured at each
+    of a robot's sample times and counted with the obstacles.
     """
     rows = [_rows(track) for track in tracks]
     radius = np.asarray(radii, dtype=float).reshape(-1)
@@ -85,6 +112,8 @@ def trajectory_margins(tracks: Sequence[ArrayLike], radii: ArrayLike, obstacles:
     for i, mine in enumerate(rows):
         if len(mine) and len(obstacles):
             to_obstacles[i] = _min_clearance(obstacles, mine[:, 1:3]) - radius[i]
+        if len(mine) and movers is not None and len(movers):
+            to_obstacles[i] = min(to_obstacles[i], _mover_clearance(movers, mine) - radius[i])
         for j in range(i + 1, len(rows)):
             if not len(mine) or not len(rows[j]):
                 continue

@@ -1,4 +1,10 @@
-"""Scenario files (format v1, YAML): a workspace, its obstacles, the robots and optional planner overrides.
+"""Scenario files (formats v1 and v2, YAML): a workspace, its obstacles, the robots and optional planner overrides.
+
+Format v2 (shared/DESIGN.md) adds moving circles (`motion`), obstacles missing from the map (`known: false`),
+misplaced ones (`position_sigma`), a robot's laser `sensor` and the `diff_drive` model; every v1 file loads and
+means what it did. `Scenario.world` is the true world of the still obstacles (known or not, where they really
+are); `Scenario.obstacle_specs` lists every obstacle with its v2 keys, and fastep_core/dynamic_world.py turns
+them into the truth over time and the planner's map.
 
 A scenario is loaded from a path or from a built-in name (the ``fastep_core/scenarios/*.yaml`` files that ship
 with the package), parsed with PyYAML's safe loader within bounds (:mod:`fastep_core.bounded_yaml`: size,
@@ -23,26 +29,36 @@ from importlib.resources.abc import Traversable
 from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
+import numpy as np
 import yaml
 
 from fastep_core import bounded_yaml
+from fastep_core.dynamic_world import Motion, ObstacleSpec
 from fastep_core.errors import GoalError, ParameterError, ScenarioError
-from fastep_core.geometry import Circle, Obstacle, Segment
+from fastep_core.geometry import Circle, Obstacle, Segment, point_segment_distance
 from fastep_core.kinematics.tractor_trailer import wrap_angle
 from fastep_core.planning.params import PlannerParams
+from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, MAX_BEAMS, LaserSpec
 from fastep_core.world import World
 
 __all__ = [
-    'MODELS', 'RobotSpec', 'Scenario',
+    'MODELS', 'SCENARIO_MODELS', 'ObstacleSpec', 'Motion', 'RobotSpec', 'Scenario',
     'load_scenario', 'parse_scenario', 'builtin_names', 'builtin_path',
 ]
 
 MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer')
-"""Robot models a scenario may name."""
+"""Robot models the planners and plants implement."""
+SCENARIO_MODELS: tuple[str, ...] = MODELS + ('diff_drive',)
+"""Robot models a scenario may name (format v2 adds diff_drive; its model belongs to issue 14, "Real robot")."""
 
-_START_LENGTH = {'point_mass': 2, 'tractor_trailer': 4}
+_START_LENGTH = {'point_mass': 2, 'tractor_trailer': 4, 'diff_drive': 3}
+_START_FORM = {2: '[x, y]', 3: '[x, y, theta]', 4: '[x, y, theta0, theta1]'}
 _TOP_KEYS = ('name', 'description', 'workspace', 'obstacles', 'robots', 'planner')
 _ROBOT_KEYS = ('name', 'model', 'start', 'goal', 'radius')
+_OPTIONAL_ROBOT_KEYS = ('sensor',)
+_SENSOR_KEYS = ('range', 'fov', 'beams', 'noise')
+_OBSTACLE_EXTRAS = ('motion', 'known', 'position_sigma')   # v2: beside the shape key of an obstacle entry
+_MOTION_KEYS = ('waypoints', 'speed')
 _TRACTOR_KEYS = ('length', 'trailer_length', 'width', 'hitch_offset')
 _ROBOT_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
 _IGNORED_PREFIX = 'x_'
@@ -70,6 +86,7 @@ class RobotSpec:
     trailer_length: float = 1.0   # tractor_trailer only: Lt (m)
     width: float = 0.5            # tractor_trailer only: b, tractor width (m)
     hitch_offset: float = 0.0     # tractor_trailer only: c in eq. 13 (m)
+    sensor: LaserSpec | None = None   # v2: a planar laser scanner at the reference point
 
 
 @dataclass(frozen=True)
@@ -81,6 +98,19 @@ class Scenario:
     robots: tuple[RobotSpec, ...]
     planner: PlannerParams
     description: str = ''
+    obstacles: tuple[ObstacleSpec, ...] | None = None   # every obstacle with its v2 keys; None: world's, as v1
+
+    @property
+    def obstacle_specs(self) -> tuple[ObstacleSpec, ...]:
+        """Every obstacle in file order with its v2 keys (a scenario built from a World alone: all still)."""
+        if self.obstacles is None:
+            return tuple(ObstacleSpec(o) for o in self.world.obstacle_list)
+        return self.obstacles
+
+    @property
+    def is_static(self) -> bool:
+        """Does it mean what a v1 file could say (no mover, no unknown or misplaced obstacle)?"""
+        return all(o.v1 for o in self.obstacle_specs)
 
 
 class _Invalid(Exception):
@@ -299,21 +329,89 @@ def _segment(value: Any, path: str) -> Segment:
 _OBSTACLE_PARSERS: dict[str, Callable[[Any, str], Obstacle]] = {'circle': _circle, 'segment': _segment}
 
 
-def _obstacle(value: Any, path: str) -> Obstacle:
+def _obstacle(value: Any, path: str) -> ObstacleSpec:
     entry = _mapping(value, path)
     kinds = ', '.join(_OBSTACLE_PARSERS)
-    if len(entry) != 1:
-        raise _Invalid(f'{path} must have exactly one key ({kinds}), got {_show(sorted(entry))}')
-    (kind, body), = entry.items()
-    if kind not in _OBSTACLE_PARSERS:
-        raise _Invalid(f'{path}: unknown key {_show(kind)} (allowed: {kinds})')
-    return _OBSTACLE_PARSERS[kind](body, f'{path}.{kind}')
+    for key in entry:
+        if key not in _OBSTACLE_PARSERS and key not in _OBSTACLE_EXTRAS:
+            raise _Invalid(f'{path}: unknown key {_show(key)} (allowed: {kinds}, {", ".join(_OBSTACLE_EXTRAS)})')
+    shapes = [key for key in entry if key in _OBSTACLE_PARSERS]
+    if len(shapes) != 1:
+        raise _Invalid(f'{path} must have exactly one key ({kinds}) besides {", ".join(_OBSTACLE_EXTRAS)}, '
+                       f'got {_show(sorted(entry))}')
+    kind = shapes[0]
+    shape = _OBSTACLE_PARSERS[kind](entry[kind], f'{path}.{kind}')
+    motion = None
+    if 'motion' in entry:
+        if not isinstance(shape, Circle):
+            raise _Invalid(f'{path}.motion: only circles move, this obstacle is a {kind}')
+        motion = _motion(entry['motion'], f'{path}.motion')
+    known = _boolean(entry['known'], f'{path}.known') if 'known' in entry else True
+    sigma = _non_negative(entry['position_sigma'], f'{path}.position_sigma') if 'position_sigma' in entry else 0.0
+    spec = ObstacleSpec(shape, motion, known, sigma)
+    _check_motion_length(spec, path)
+    return spec
 
 
-def _obstacles(value: Any) -> tuple[Obstacle, ...]:
+def _motion(value: Any, path: str) -> Motion:
+    body = _mapping(value, path)
+    _check_keys(body, path, _MOTION_KEYS, _MOTION_KEYS)
+    points = body['waypoints']
+    if not isinstance(points, list) or not points:
+        raise _Invalid(f'{path}.waypoints must be a non-empty list of [x, y] points, got {_show(points)}')
+    waypoints = tuple(_point(p, f'{path}.waypoints[{i}]') for i, p in enumerate(points))
+    return Motion(waypoints, _positive(body['speed'], f'{path}.speed'))
+
+
+def _check_motion_length(spec: ObstacleSpec, path: str) -> None:
+    """The polyline's length must be a finite number (points near +-1e308 apart overflow it)."""
+    if spec.motion is None or not isinstance(spec.shape, Circle):
+        return
+    vertices = np.array([spec.shape.center, *spec.motion.waypoints], dtype=float)
+    with np.errstate(over='ignore', invalid='ignore'):
+        length = float(np.sqrt((np.diff(vertices, axis=0) ** 2).sum(axis=1)).sum())
+    if not math.isfinite(length):
+        raise _Invalid(f'{path}.motion.waypoints: the path is too long to measure (its length overflows)')
+
+
+def _boolean(value: Any, path: str) -> bool:
+    """true or false (YAML 1.1's yes/no/on/off load as booleans too); text, numbers and null are refused."""
+    if not isinstance(value, bool):
+        raise _Invalid(f'{path} must be true or false, got {_show(value)}')
+    return value
+
+
+def _integer(value: Any, path: str, low: int, high: int) -> int:
+    if isinstance(value, bounded_yaml.MisreadNumber) or (isinstance(value, str) and _text_number_hint(value)):
+        _number(value, path)   # a misread or quoted number: its own message
+    if isinstance(value, bool) or not isinstance(value, int):
+        raise _Invalid(f'{path} must be a whole number in [{low}, {high}], got {_show(value)}')
+    if not low <= value <= high:
+        raise _Invalid(f'{path} must be in [{low}, {high}], got {_show(value)}')
+    return int(value)
+
+
+def _obstacles(value: Any) -> tuple[ObstacleSpec, ...]:
     if value is None:
         return ()
     return tuple(_obstacle(v, f'obstacles[{i}]') for i, v in enumerate(_list(value, 'obstacles')))
+
+
+def _sensor(value: Any, path: str) -> LaserSpec:
+    """A robot's laser scanner: every key optional (defaults: fastep_core/sensing/laser.py's LaserSpec)."""
+    body = _mapping(value if value is not None else {}, path)
+    _check_keys(body, path, _SENSOR_KEYS, ())
+    defaults = LaserSpec()
+    rng = _positive(body['range'], f'{path}.range') if 'range' in body else defaults.range
+    fov = defaults.fov
+    if 'fov' in body:
+        fov = _number(body['fov'], f'{path}.fov')
+        if not 0.0 < fov <= 2.0 * math.pi + FULL_TURN_TOLERANCE:
+            raise _Invalid(f'{path}.fov must be in (0, 2 pi] radians (6.2832 is a full turn), got {_show(body["fov"])}')
+        fov = min(fov, 2.0 * math.pi)
+    beams = _integer(body['beams'], f'{path}.beams', 1, MAX_BEAMS) if 'beams' in body else defaults.beams
+    noise = _non_negative(body['noise'], f'{path}.noise') if 'noise' in body else defaults.noise
+    return LaserSpec(rng, fov, beams, noise)
 
 
 def _robot_name(value: Any, path: str) -> str:
@@ -324,8 +422,8 @@ def _robot_name(value: Any, path: str) -> str:
 
 
 def _model(value: Any, path: str) -> str:
-    if value not in MODELS:
-        raise _Invalid(f'{path} must be one of {", ".join(MODELS)}, got {_show(value)}')
+    if not isinstance(value, str) or value not in SCENARIO_MODELS:
+        raise _Invalid(f'{path} must be one of {", ".join(SCENARIO_MODELS)}, got {_show(value)}')
     return str(value)
 
 
@@ -341,7 +439,7 @@ def _tractor_dimensions(data: Mapping[str, Any], path: str) -> dict[str, float]:
 
 def _robot(value: Any, path: str) -> RobotSpec:
     data = _mapping(value, path)
-    _check_keys(data, path, _ROBOT_KEYS + _TRACTOR_KEYS, _ROBOT_KEYS)
+    _check_keys(data, path, _ROBOT_KEYS + _TRACTOR_KEYS + _OPTIONAL_ROBOT_KEYS, _ROBOT_KEYS)
     name = _robot_name(data['name'], f'{path}.name')
     model = _model(data['model'], f'{path}.model')
     if model != 'tractor_trailer':
@@ -349,10 +447,11 @@ def _robot(value: Any, path: str) -> RobotSpec:
             if key in data:
                 raise _Invalid(f'{path}.{key} is only valid for model tractor_trailer, not {model}')
     n = _START_LENGTH[model]
-    start = _numbers(data['start'], f'{path}.start', n, '[x, y]' if n == 2 else '[x, y, theta0, theta1]')
+    start = _numbers(data['start'], f'{path}.start', n, _START_FORM[n])
     start = start[:2] + tuple(_heading(theta) for theta in start[2:])
     robot = RobotSpec(name=name, model=model, start=start, goal=_point(data['goal'], f'{path}.goal'),
                       radius=_positive(data['radius'], f'{path}.radius'),
+                      sensor=_sensor(data['sensor'], f'{path}.sensor') if 'sensor' in data else None,
                       **_tractor_dimensions(data, path))
     if model == 'tractor_trailer':
         _check_tractor_radius(robot, path)
@@ -451,6 +550,29 @@ def _check_pairs(robots: Sequence[RobotSpec]) -> None:
                                    f'{gap:.3g} m apart, closer than the sum of their radii {reach:g} m')
 
 
+def _check_movers(obstacles: Sequence[ObstacleSpec], robots: Sequence[RobotSpec]) -> None:
+    """A mover may not start on a robot's start (they would touch at t = 0), nor pass over a robot's goal
+    (a robot that has arrived waits there: the mover would run it down, whatever its planner did). Its path
+    may cross a start: the robot can leave it in time (docs/scenarios.md, "Format v2")."""
+    for k, spec in enumerate(obstacles):
+        if spec.motion is None or not isinstance(spec.shape, Circle):
+            continue
+        path = np.array([spec.shape.center, *spec.motion.waypoints], dtype=float)
+        a, b = path[:-1], path[1:]   # at least one segment: waypoints is never empty
+        for i, robot in enumerate(robots):
+            reach = spec.shape.radius + robot.radius
+            gap = math.hypot(spec.shape.center[0] - robot.start[0], spec.shape.center[1] - robot.start[1])
+            if gap < reach:
+                raise _Invalid(f'obstacles[{k}] (a mover) starts {gap:.3g} m from robots[{i}] ({robot.name})\'s '
+                               f'start, closer than the sum of their radii {reach:g} m')
+            goal = np.array(robot.goal, dtype=float)
+            near = float(point_segment_distance(goal, a, b).min())
+            if near < reach:
+                raise _Invalid(f'obstacles[{k}].motion: the mover passes {near:.3g} m from robots[{i}] '
+                               f'({robot.name})\'s goal, closer than the sum of their radii {reach:g} m (an '
+                               f'arrived robot waits there)')
+
+
 # ----------------------------------------------------------------------------------------------- parsing
 
 def _scenario_name(data: Mapping[str, Any], default_name: str) -> str:
@@ -471,12 +593,17 @@ def _build(data: Any, default_name: str) -> Scenario:
             raise _Invalid(f'missing required top-level key {key!r}')
     name = _scenario_name(top, default_name)
     description = _description(top.get('description', ''))
-    world = World.from_obstacles(_workspace(top['workspace']), _obstacles(top.get('obstacles')))
+    obstacles = _obstacles(top.get('obstacles'))
+    # The true world of the still obstacles (known or not, where they really are): what starts, goals and
+    # collisions are judged against; movers are judged over time (fastep_core/dynamic_world.py).
+    world = World.from_obstacles(_workspace(top['workspace']), [o.shape for o in obstacles if o.still])
     robots = _robots(top['robots'])
     planner = _planner(top.get('planner'))
     _check_placement(world, robots)
     _check_pairs(robots)
-    return Scenario(name=name, world=world, robots=robots, planner=planner, description=description)
+    _check_movers(obstacles, robots)
+    return Scenario(name=name, world=world, robots=robots, planner=planner, description=description,
+                    obstacles=obstacles)
 
 
 def _parse(data: Any, default_name: str, label: str) -> Scenario:

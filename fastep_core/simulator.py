@@ -3,6 +3,12 @@
 It mirrors the ROS graph (a plant integrates each robot, a navigator commands it, each robot sees the others
 as moving obstacles) without DDS, so experiments run fast and are reproducible: each robot's swarm draws from
 its own Generator spawned from the run's seed.
+
+A v2 world (fastep_core/dynamic_world.py): movers move every tick; planners are given the map (known still
+obstacles, misplaced ones where the map says) and see known movers, at their positions (with their map error)
+and velocities at the start of each tick, as moving obstacles beside the other robots ('mover K'); unknown
+obstacles are absent from everything a planner is given. Collisions and min_clearance are judged against the
+truth: every still obstacle where it is, every mover where it is at each step's time.
 """
 
 from __future__ import annotations
@@ -15,13 +21,15 @@ from typing import Callable
 import numpy as np
 from numpy.typing import NDArray
 
+from fastep_core.dynamic_world import DynamicWorld, map_generator
+from fastep_core.errors import GoalError, ScenarioError
 from fastep_core.metrics import trajectory_margins
-from fastep_core.planning.algorithms import make_navigator
+from fastep_core.planning.algorithms import MISSING_DIFF_DRIVE, make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot, OtherRobots
-from fastep_core.scenario import Scenario
+from fastep_core.scenario import MODELS, Scenario
 
-__all__ = ['RobotRun', 'Run', 'Tick', 'simulate']
+__all__ = ['RobotRun', 'Run', 'Tick', 'check_simulable', 'simulate']
 
 FloatArray = NDArray[np.float64]
 SAMPLE_SPACING = 0.1  # metres of travel between trajectory samples (DESIGN: at least every 0.1 m)
@@ -85,6 +93,13 @@ class Tick:
     navigator: Navigator
 
 
+def check_simulable(scenario: Scenario) -> None:
+    """Raise ScenarioError (one line) if a robot's model has no implementation yet (diff_drive)."""
+    for i, spec in enumerate(scenario.robots):
+        if spec.model not in MODELS:
+            raise ScenarioError(f'scenario {scenario.name!r}: robots[{i}] ({spec.name}): {MISSING_DIFF_DRIVE}')
+
+
 def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
              observer: Callable[[Tick], None] | None = None) -> Run:
     """Run every robot of the scenario until each has arrived, failed, or max_sim_time has passed.
@@ -93,17 +108,25 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     its reference point to the nearest obstacle surface minus its radius, or to another robot's centre minus
     both radii, measured at every robot's position after each step; negative means it collided.
     """
+    check_simulable(scenario)
     params = scenario.planner
-    world = scenario.world
+    world = scenario.world                     # the true still world
     specs = scenario.robots
+    truth = DynamicWorld(world.workspace, scenario.obstacle_specs)
+    # The planner's map: a v1 world is its own map (the same object, as before); a v2 one is drawn from the seed.
+    planner_map = None if scenario.is_static else truth.planner_map(map_generator(seed))
+    planner_world = world if planner_map is None else planner_map.world
     streams = np.random.SeedSequence(seed).spawn(len(specs))
-    navigators = [make_navigator(algorithm, spec, spec.radius, world, params, np.random.default_rng(s))
+    navigators = [make_navigator(algorithm, spec, spec.radius, planner_world, params, np.random.default_rng(s))
                   for spec, s in zip(specs, streams)]
     states = [np.array(spec.start, dtype=float) for spec in specs]
     velocities = [np.zeros(2) for _ in specs]
     runs = [RobotRun(spec.name, spec.model) for spec in specs]
     for nav, spec, run, state in zip(navigators, specs, runs, states):
-        nav.set_goal(spec.goal)
+        try:
+            nav.set_goal(spec.goal)
+        except GoalError as exc:   # a misplaced obstacle covers the goal on the map: the robot refuses it
+            nav.fail(f'goal refused on the map: {exc}')
         run.trajectory.append([0.0, *state.tolist()])
     last_sample = [s[:2].copy() for s in states]
     pending: list[list[float] | None] = [None] * len(specs)
@@ -121,7 +144,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
         # Every robot sees the others as they are at the start of the tick: made once, viewed by each robot.
         robots = [OtherRobot(spec.name, (state[0], state[1]), (velocity[0], velocity[1]), spec.radius)
                   for spec, state, velocity in zip(specs, states, velocities)]
-        views = OtherRobots.views(robots)
+        if planner_map is not None:   # known movers where the map reports them now, seen by every robot
+            robots += planner_map.others(t)
+        views = OtherRobots.views(robots, len(specs))
         for i, nav in enumerate(navigators):
             if not active[i]:
                 commands.append(np.zeros(2))
@@ -169,7 +194,7 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     times = np.array(step_times)
     positions = np.array(step_positions).reshape(len(times), len(specs), 2)
     margins = trajectory_margins([np.column_stack([times, positions[:, i]]) for i in range(len(specs))],
-                                 [spec.radius for spec in specs], world.obstacles).overall
+                                 [spec.radius for spec in specs], world.obstacles, truth.movers).overall
     for i, (nav, run) in enumerate(zip(navigators, runs)):
         run.min_clearance = float(margins[i])
         run.collided = bool(margins[i] < 0.0)

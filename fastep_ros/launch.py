@@ -42,7 +42,7 @@ from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import GraphConflict, LaunchError
-from fastep_ros.limits import RTF_RANGE, robot_name_problem
+from fastep_ros.limits import RTF_RANGE, graph_problem, robot_name_problem
 
 __all__ = ['main']
 
@@ -666,6 +666,9 @@ def _main(argv: Sequence[str] | None) -> int:
     if args.no_clock and args.rtf != 1.0:
         parser.error('--no-clock runs on wall time: --rtf cannot be used with it')
     scenario = load_scenario(args.scenario)  # a FastepError: guard's one line, exit 2
+    problem = graph_problem(scenario)
+    if problem:
+        raise ScenarioError(f'scenario {args.scenario!r}: {problem}')
     for i, spec in enumerate(scenario.robots):
         problem = robot_name_problem(spec.name)
         if problem:

@@ -3,8 +3,12 @@ launcher checks its command line with them before it starts anything). docs/robu
 
 from __future__ import annotations
 
+from fastep_core.dynamic_world import dynamic_feature
+from fastep_core.planning.algorithms import MISSING_DIFF_DRIVE
+from fastep_core.scenario import MODELS, Scenario
+
 __all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ROBOT_NAME_MAX', 'RTF_RANGE', 'STEP_RANGE',
-           'robot_name_problem']
+           'graph_problem', 'robot_name_problem']
 
 RATE_RANGE = (0.1, 10_000.0)
 """Timer rates a node accepts (Hz): the planners' 1 / dt range (PlannerParams.dt is [1e-4, 10] s). Beyond it rclpy's
@@ -40,4 +44,21 @@ def robot_name_problem(name: str) -> str:
         return "ROS does not allow '__' in a name"
     if len(name) > ROBOT_NAME_MAX:
         return f'{len(name)} characters, more than the {ROBOT_NAME_MAX} a ROS namespace of fastep can have'
+    return ''
+
+
+def graph_problem(scenario: Scenario, robots: bool = True) -> str:
+    """What of a format-v2 scenario the live graph cannot honour yet; '' if nothing (docs/scenarios.md, v2).
+
+    Moving, unknown and misplaced obstacles need a world simulation and a map node that publishes only what
+    the map knows (issue 13, item 5); a diff_drive robot needs its model (issue 14). Until then the graph refuses
+    them rather than run a different world than the file says. A `sensor` is accepted (no `scan` topic yet).
+    robots=False: the obstacles only (the map node publishes no robot).
+    """
+    feature = dynamic_feature(scenario.obstacle_specs)
+    if feature:
+        return f'{feature}: moving, unknown and misplaced obstacles do not run on the ROS graph yet; use fastep-sim'
+    for i, robot in enumerate(scenario.robots):
+        if robots and robot.model not in MODELS:
+            return f'robots[{i}] ({robot.name}): {MISSING_DIFF_DRIVE}'
     return ''

@@ -22,6 +22,7 @@ from visualization_msgs.msg import MarkerArray
 from fastep_core.errors import FastepError
 from fastep_core.scenario import load_scenario
 from fastep_ros.common import StartupError, declare, guard_clock, node_main
+from fastep_ros.limits import graph_problem
 from msg_tools import convert, interface
 from msg_tools.interface import offered_qos
 
@@ -49,6 +50,9 @@ class MapNode(Node):
             self.scenario = load_scenario(source)
         except FastepError as exc:
             raise StartupError(str(exc)) from None
+        problem = graph_problem(self.scenario, robots=False)
+        if problem:
+            raise StartupError(f'scenario {source!r}: {problem}')
         world = self.scenario.world
         try:
             resolution = convert.grid_resolution(world.workspace, resolution or None)

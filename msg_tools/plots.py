@@ -25,10 +25,12 @@ import matplotlib
 matplotlib.use('Agg')
 import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
+from matplotlib.artist import Artist  # noqa: E402
 from matplotlib.axes import Axes  # noqa: E402
 from matplotlib.figure import Figure  # noqa: E402
 from numpy.typing import ArrayLike, NDArray  # noqa: E402
 
+from fastep_core.dynamic_world import DynamicWorld, map_generator  # noqa: E402
 from fastep_core.experiments import METRICS, PAPER, ExamplePaths, Record, example_paths, metric_values  # noqa: E402
 from fastep_core.families import FAMILY_NAMES, worst_runs  # noqa: E402
 from fastep_core.families import Row as FamilyRow  # noqa: E402
@@ -41,13 +43,15 @@ if TYPE_CHECKING:
     from fastep_core.simulator import Run
 
 __all__ = ['PLOT_POINTS', 'RobotPath', 'Velocities', 'bench_figures', 'box_plot_figure', 'cost_figure',
-           'draw_world', 'example_paths_figure', 'family_box_figure', 'family_figures', 'paths_figure', 'plot_paths',
-           'run_paths_figure', 'save', 'title', 'velocity_figure']
+           'draw_dynamic', 'draw_world', 'example_paths_figure', 'family_box_figure', 'family_figures', 'paths_figure',
+           'plot_paths', 'run_paths_figure', 'save', 'title', 'velocity_figure']
 
 FloatArray = NDArray[np.float64]
 PLOT_POINTS = 5000   # points drawn per line at most: long recordings are thinned for drawing only
 OBSTACLE_GREY = '0.55'
 WALL_GREY = '0.25'
+MOVER_COLOUR = 'tab:purple'
+MOVER_SNAPSHOTS = 5   # positions of each mover drawn over a run, t = 0 included
 # fastep-bench's planners keep their colours across panels.
 ALGORITHM_COLOURS = {'fastep': 'tab:red', 'aco': 'tab:blue', 'optimal': 'tab:olive'}
 
@@ -152,8 +156,57 @@ def paths_figure(obstacles: Sequence[Obstacle], workspace: Sequence[float] | Non
     return fig
 
 
+def _outline(ax: Axes, obstacle: Obstacle, style: str, colour: str) -> None:
+    if isinstance(obstacle, Circle):
+        ax.add_patch(plt.Circle(obstacle.center, obstacle.radius, fill=False, ls=style, lw=1.4, ec=colour))
+    else:
+        ax.plot(*zip(obstacle.start, obstacle.end), ls=style, color=colour, lw=1.6)
+
+
+def draw_dynamic(ax: Axes, scenario: Scenario, seed: int, duration: float) -> list[tuple[Artist, str]]:
+    """What a v2 world adds to the paths figure; returns legend entries (handle, label).
+
+    Unknown obstacles: their true place dashed, not filled (the planner was never told of them). Misplaced
+    ones: their true place as every obstacle (filled), where the run's map put them dotted. Movers: their
+    polyline dotted, and discs at MOVER_SNAPSHOTS evenly spaced times from 0 to `duration`, fading in and
+    labelled with the time.
+    """
+    specs = scenario.obstacle_specs
+    truth = DynamicWorld(scenario.world.workspace, specs)
+    believed = truth.planner_map(map_generator(seed))
+    entries: list[tuple[Artist, str]] = []
+    unknown = [o.shape for o in specs if o.still and not o.known]
+    for shape in unknown:
+        _outline(ax, shape, '--', 'black')
+    if unknown:
+        entries.append((plt.Line2D([], [], ls='--', color='black'), 'unknown: true place'))
+    known_true = [o.shape for o in specs if o.still and o.known]
+    misplaced = [b for t, b in zip(known_true, believed.world.obstacle_list) if t != b]
+    for shape in misplaced:
+        _outline(ax, shape, ':', 'tab:green')
+    if misplaced:
+        entries.append((plt.Line2D([], [], ls=':', color='tab:green'), 'misplaced: on the map'))
+    movers = truth.movers
+    if len(movers):
+        times = np.linspace(0.0, max(duration, 0.0), MOVER_SNAPSHOTS)
+        centres = movers.positions(times)                                   # (snapshots, movers, 2)
+        for k in range(len(movers)):
+            path = movers.vertices[k]
+            ax.plot(path[:, 0], path[:, 1], ':', color=MOVER_COLOUR, lw=1.2)
+            for j, t in enumerate(times):
+                centre = centres[j, k]
+                ax.add_patch(plt.Circle(tuple(centre), movers.radii[k], color=MOVER_COLOUR, lw=0,
+                                        alpha=0.15 + 0.5 * j / max(1, len(times) - 1)))
+                ax.annotate(f'{t:.0f}s', tuple(centre), fontsize=6, ha='center', va='center', color='white')
+            if not truth.known_movers[k]:
+                ax.add_patch(plt.Circle(tuple(centres[0, k]), movers.radii[k], fill=False, ls='--', ec='black'))
+        entries.append((plt.Line2D([], [], ls=':', marker='o', color=MOVER_COLOUR), 'mover: track, positions'))
+    return entries
+
+
 def run_paths_figure(scenario: Scenario, run: Run) -> Figure:
-    """The paths figure of a simulated (fastep-sim) or live (fastep-launch) run of a scenario."""
+    """The paths figure of a simulated (fastep-sim) or live (fastep-launch) run of a scenario; a v2 world's
+    movers, unknown and misplaced obstacles drawn as draw_dynamic says."""
     specs = {spec.name: spec for spec in scenario.robots}
     robots = []
     for robot in run.robots:
@@ -162,8 +215,18 @@ def run_paths_figure(scenario: Scenario, run: Run) -> Figure:
             robot.name, np.array([row[1:3] for row in robot.trajectory], dtype=float).reshape(-1, 2),
             robot.path_length, np.array(robot.waypoints, dtype=float).reshape(-1, 2),
             (float(spec.start[0]), float(spec.start[1])), (float(spec.goal[0]), float(spec.goal[1]))))
-    return paths_figure(scenario.world.obstacle_list, scenario.world.workspace, robots,
-                        title(scenario.name, run.algorithm, run.seed))
+    if scenario.is_static:
+        return paths_figure(scenario.world.obstacle_list, scenario.world.workspace, robots,
+                            title(scenario.name, run.algorithm, run.seed))
+    known = [o.shape for o in scenario.obstacle_specs if o.still and o.known]   # unknown: outlines only
+    fig = paths_figure(known, scenario.world.workspace, robots, title(scenario.name, run.algorithm, run.seed))
+    ax = fig.axes[0]
+    duration = max((row[0] for robot in run.robots for row in robot.trajectory[-1:]), default=0.0)
+    entries = draw_dynamic(ax, scenario, run.seed, duration)
+    handles, labels = ax.get_legend_handles_labels()
+    ax.legend(handles + [h for h, _ in entries], labels + [text for _, text in entries], loc='upper right',
+              fontsize=8)
+    return fig
 
 
 def plot_paths(scenario: Scenario, run: Run, out: str | Path) -> Path:

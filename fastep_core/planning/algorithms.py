@@ -19,7 +19,8 @@ from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'NAVIGATORS', 'algorithm_name', 'make_navigator', 'make_robot']
+__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'MISSING_DIFF_DRIVE', 'NAVIGATORS', 'algorithm_name', 'make_navigator',
+           'make_robot']
 
 NAVIGATORS: dict[str, type[Navigator]] = {
     'fastep': FAStepKinematic,   # the paper's algorithm, with the activation policy of docs/clutter_research.md
@@ -31,6 +32,11 @@ ALGORITHMS: tuple[str, ...] = tuple(NAVIGATORS)
 ALGORITHM_NAMES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'fastep_paper': 'FAStep-Kinematic (paper policy)',
                                    'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
 """What tables, reports and figure titles call each algorithm (the paper's names)."""
+
+
+MISSING_DIFF_DRIVE = ('robot model diff_drive has no kinematic model yet (it belongs to issue 14, "Real robot"): '
+                      'use point_mass or tractor_trailer')
+"""Why a diff_drive robot cannot run yet (scenario format v2 names the model; its kinematics are to come)."""
 
 
 def algorithm_name(algorithm: str) -> str:
@@ -61,6 +67,8 @@ def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Cont
     if spec.model == 'tractor_trailer':
         model = TractorTrailer(spec.length, spec.trailer_length, spec.hitch_offset)
         return model, TractorTrailerController(model, params.speed_gain, params.max_speed)
+    if spec.model == 'diff_drive':
+        raise ParameterError(MISSING_DIFF_DRIVE)
     raise ParameterError(f'unknown robot model {spec.model!r}')
 
 

@@ -1,4 +1,7 @@
-"""Other robots as a planner sees them: moving obstacles with a position, a velocity and a radius."""
+"""Other robots as a planner sees them: moving obstacles with a position, a velocity and a radius.
+
+Known moving obstacles of a v2 world reach planners the same way, named 'mover K' (fastep_core/dynamic_world.py).
+"""
 
 from __future__ import annotations
 
@@ -39,12 +42,14 @@ class OtherRobots(Sequence[OtherRobot]):
         self._arrays: tuple[FloatArray, FloatArray, FloatArray] | None = None
 
     @classmethod
-    def views(cls, robots: Sequence[OtherRobot]) -> list[OtherRobots]:
-        """For each robot, the others: views of one shared list and one set of arrays."""
+    def views(cls, robots: Sequence[OtherRobot], viewers: int | None = None) -> list[OtherRobots]:
+        """For each of the first `viewers` entries (default: all), the others: views of one shared list and one
+        set of arrays. Entries after the viewers are seen by every viewer but see nothing themselves (moving
+        obstacles, fastep_core/dynamic_world.py)."""
         arrays = (np.array([o.position for o in robots], dtype=float).reshape(-1, 2),
                   np.array([o.velocity for o in robots], dtype=float).reshape(-1, 2),
                   np.array([o.radius for o in robots], dtype=float))
-        return [cls(robots, i, arrays) for i in range(len(robots))]
+        return [cls(robots, i, arrays) for i in range(len(robots) if viewers is None else viewers)]
 
     def __len__(self) -> int:
         return len(self._robots) - 1

@@ -27,6 +27,7 @@ BUILTINS = {  # name -> robot models, in order
     'application': ('tractor_trailer', 'tractor_trailer'),
     'case_study_1': ('point_mass', 'point_mass'),
     'case_study_2': ('point_mass', 'point_mass'),
+    'crossing_movers': ('point_mass',),
     'open_field': ('point_mass',),
     'table2_s1': ('point_mass',),
     'table2_s2': ('point_mass',),

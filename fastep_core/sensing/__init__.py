@@ -1,0 +1,1 @@
+"""What a robot senses: the planar laser scanner (laser.py)."""

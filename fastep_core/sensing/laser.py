@@ -1,0 +1,230 @@
+"""A planar laser scanner: ray casting against circles and segments, with sensor_msgs/LaserScan semantics.
+
+One scan is a fan of `beams` rays from the scanner's position (a robot's reference point), centred on its
+heading. Each ray's true range is the distance to the nearest surface it meets: a circle (a still obstacle,
+a moving one placed where it is at the scan's time, another robot as a circle of its radius) or a segment (a
+wall of zero thickness). All beams against all obstacles are one numpy computation (beams x obstacles
+arrays), no Python loop over either.
+
+Beam placement (what `angle_min`, `angle_max`, `angle_increment` say, relative to the heading):
+
+- fov < 2 pi: the beams span the fov with both edges included, `angle_min = -fov / 2`,
+  `angle_increment = fov / (beams - 1)`, `angle_max = +fov / 2`; an odd number of beams has one straight ahead.
+- fov = 2 pi (a full turn; any fov within FULL_TURN_TOLERANCE of 2 pi, e.g. 6.2832, counts as one): the
+  beams divide the turn evenly with no beam twice (-pi and +pi are one direction): `angle_min = -pi`,
+  `angle_increment = 2 pi / beams`, `angle_max = pi - angle_increment`; an even number has one straight ahead.
+- one beam: straight ahead, `angle_min = angle_max = 0`, `angle_increment = fov`.
+
+Ranges: `range_min` is 0 (the scanner sees from its own centre); a beam with no surface within `range_max`
+reads +inf. A scanner inside a circle reads 0 on every beam (the disc covers it), one on a segment reads 0
+on the beams along it and the segment's other side elsewhere. A beam that grazes a circle (tangent) or ends
+exactly on a segment's end counts as a hit. Noise: each hit reading gets Gaussian noise of standard deviation
+`noise`, drawn from the Generator the caller passes (one draw per beam, hit or not, so the stream does not
+depend on the world), then is clipped into [range_min, range_max]: noise never makes a reading negative, never
+makes a hit a miss, and a miss (+inf) stays a miss.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ['DEFAULT_BEAMS', 'DEFAULT_FOV', 'DEFAULT_NOISE', 'DEFAULT_RANGE', 'FULL_TURN_TOLERANCE', 'MAX_BEAMS',
+           'LaserSpec', 'Scan', 'beam_angles', 'cast', 'main']
+
+FloatArray = NDArray[np.float64]
+
+DEFAULT_RANGE = 10.0
+"""Metres: a typical indoor 2D lidar (e.g. a TurtleBot 4's RPLIDAR A1 reaches 12 m)."""
+DEFAULT_FOV = 2.0 * math.pi
+"""A full turn, as most 2D lidars on small robots."""
+DEFAULT_BEAMS = 360
+"""One beam per degree over the default fov."""
+DEFAULT_NOISE = 0.01
+"""Metres, the standard deviation of each reading (about what low-cost lidars specify at a few metres)."""
+MAX_BEAMS = 10_000
+"""The most beams a sensor may have: more than any planar lidar gives per scan (4 x a 0.1-degree scanner)."""
+FULL_TURN_TOLERANCE = 1e-3
+"""Radians: a fov within this of 2 pi is a full turn (files write 6.2832 or 6.283 for 2 pi)."""
+
+
+@dataclass(frozen=True)
+class LaserSpec:
+    """A scanner's parameters (a scenario robot's `sensor`): range_max (m), fov (rad), beams, noise (m)."""
+
+    range: float = DEFAULT_RANGE
+    fov: float = DEFAULT_FOV
+    beams: int = DEFAULT_BEAMS
+    noise: float = DEFAULT_NOISE
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.range) and self.range > 0.0):
+            raise ValueError(f'range must be > 0, got {self.range}')
+        if not (math.isfinite(self.fov) and 0.0 < self.fov <= 2.0 * math.pi + FULL_TURN_TOLERANCE):
+            raise ValueError(f'fov must be in (0, 2 pi], got {self.fov}')
+        if isinstance(self.beams, bool) or not isinstance(self.beams, int) or not 1 <= self.beams <= MAX_BEAMS:
+            raise ValueError(f'beams must be an integer in [1, {MAX_BEAMS}], got {self.beams}')
+        if not (math.isfinite(self.noise) and self.noise >= 0.0):
+            raise ValueError(f'noise must be >= 0, got {self.noise}')
+
+    @property
+    def full_turn(self) -> bool:
+        return self.fov >= 2.0 * math.pi - FULL_TURN_TOLERANCE
+
+
+@dataclass(frozen=True)
+class Scan:
+    """One scan, field for field what a sensor_msgs/LaserScan carries (angles relative to the heading)."""
+
+    angle_min: float
+    angle_max: float
+    angle_increment: float
+    range_min: float
+    range_max: float
+    ranges: FloatArray           # (beams,), +inf where no return within range_max
+    time: float = 0.0            # simulated seconds at which it was taken
+
+    def angles(self) -> FloatArray:
+        """Each beam's angle relative to the heading."""
+        angles: FloatArray = self.angle_min + self.angle_increment * np.arange(len(self.ranges), dtype=float)
+        return angles
+
+
+def beam_angles(spec: LaserSpec) -> tuple[float, float, FloatArray]:
+    """(angle_min, angle_increment, angles) of the spec's beams, relative to the heading (module docstring)."""
+    n = spec.beams
+    if n == 1:
+        return 0.0, float(min(spec.fov, 2.0 * math.pi)), np.zeros(1)
+    if spec.full_turn:
+        increment = 2.0 * math.pi / n
+        return -math.pi, increment, -math.pi + increment * np.arange(n, dtype=float)
+    increment = spec.fov / (n - 1)
+    return -spec.fov / 2.0, increment, -spec.fov / 2.0 + increment * np.arange(n, dtype=float)
+
+
+def _points(value: ArrayLike | None) -> FloatArray:
+    return np.zeros((0, 2)) if value is None else np.asarray(value, dtype=float).reshape(-1, 2)
+
+
+def _circle_hits(origin: FloatArray, dx: FloatArray, dy: FloatArray, centres: FloatArray,
+                 radii: FloatArray) -> FloatArray:
+    """Distance along each beam (rows) to each circle (columns): the first crossing t >= 0 of
+    |origin + t d - c| = r, 0 from inside a circle, inf when the line misses or the circle is behind."""
+    fx, fy = origin[0] - centres[:, 0], origin[1] - centres[:, 1]          # (C,)
+    b = dx[:, None] * fx + dy[:, None] * fy                                 # (B, C): d . (o - c)
+    c = fx * fx + fy * fy - radii * radii                                   # (C,): |o - c|^2 - r^2
+    disc = b * b - c
+    root = np.sqrt(np.maximum(disc, 0.0))
+    near = -b - root
+    hit = (disc >= 0.0) & (near >= 0.0)
+    out = np.where(hit, near, np.inf)
+    return np.where(c <= 0.0, 0.0, out)                                     # inside or on the circle
+
+
+def _segment_hits(origin: FloatArray, dx: FloatArray, dy: FloatArray, starts: FloatArray,
+                  ends: FloatArray) -> FloatArray:
+    """Distance along each beam (rows) to each segment (columns), inf for a miss.
+
+    Beam o + t d, segment p + u e: t = (w x e) / (d x e), u = (w x d) / (d x e) with w = p - o; a hit needs
+    t >= 0 and 0 <= u <= 1. A beam along a segment (d x e = 0, w x d = 0) hits its nearer end ahead, or at 0
+    when the scanner is on it.
+    """
+    ex, ey = ends[:, 0] - starts[:, 0], ends[:, 1] - starts[:, 1]           # (S,)
+    wx, wy = starts[:, 0] - origin[0], starts[:, 1] - origin[1]             # (S,)
+    denom = dx[:, None] * ey - dy[:, None] * ex                             # (B, S): d x e
+    w_cross_d = wx * dy[:, None] - wy * dx[:, None]                         # (B, S): w x d
+    w_cross_e = wx * ey - wy * ex                                           # (S,)
+    crossing = denom != 0.0
+    safe = np.where(crossing, denom, 1.0)
+    t = w_cross_e / safe
+    u = w_cross_d / safe
+    out = np.where(crossing & (t >= 0.0) & (u >= 0.0) & (u <= 1.0), t, np.inf)
+    # Collinear: the beam's line contains the segment; the distances to its ends along the beam.
+    along = ~crossing & (w_cross_d == 0.0)
+    if along.any():
+        t0 = dx[:, None] * wx + dy[:, None] * wy
+        t1 = t0 + dx[:, None] * ex + dy[:, None] * ey
+        low, high = np.minimum(t0, t1), np.maximum(t0, t1)
+        first = np.where(low >= 0.0, low, np.where(high >= 0.0, 0.0, np.inf))
+        out = np.where(along, first, out)
+    return out
+
+
+def cast(origin: ArrayLike, angles: ArrayLike, range_max: float, circles: ArrayLike | None = None,
+         radii: ArrayLike | None = None, starts: ArrayLike | None = None,
+         ends: ArrayLike | None = None) -> FloatArray:
+    """True ranges (no noise) of beams from `origin` at absolute `angles` (map frame): the nearest circle
+    (centres (C, 2), radii (C,)) or segment (starts, ends (S, 2)) surface along each, +inf beyond range_max."""
+    o = np.asarray(origin, dtype=float).reshape(2)
+    a = np.asarray(angles, dtype=float).reshape(-1)
+    dx, dy = np.cos(a), np.sin(a)
+    best = np.full(len(a), np.inf)
+    centres, r = _points(circles), np.asarray(radii if radii is not None else [], dtype=float).reshape(-1)
+    if len(centres) != len(r):
+        raise ValueError(f'{len(centres)} circle centres but {len(r)} radii')
+    if len(centres):
+        best = np.minimum(best, _circle_hits(o, dx, dy, centres, r).min(axis=1))
+    a_ends, b_ends = _points(starts), _points(ends)
+    if len(a_ends) != len(b_ends):
+        raise ValueError(f'{len(a_ends)} segment starts but {len(b_ends)} ends')
+    if len(a_ends):
+        best = np.minimum(best, _segment_hits(o, dx, dy, a_ends, b_ends).min(axis=1))
+    return np.where(best <= range_max, best, np.inf)
+
+
+def scan(spec: LaserSpec, pose: Sequence[float], rng: np.random.Generator | None = None, t: float = 0.0,
+         circles: ArrayLike | None = None, radii: ArrayLike | None = None, starts: ArrayLike | None = None,
+         ends: ArrayLike | None = None) -> Scan:
+    """One scan from `pose` (x, y, heading) against circles and segments as they are at time t.
+
+    Moving circles and other robots are circles at their positions at t. `rng` draws the noise (required
+    when spec.noise > 0; one normal per beam).
+    """
+    x, y, heading = float(pose[0]), float(pose[1]), float(pose[2])
+    angle_min, increment, relative = beam_angles(spec)
+    ranges = cast((x, y), heading + relative, spec.range, circles, radii, starts, ends)
+    if spec.noise > 0.0:
+        if rng is None:
+            raise ValueError('a scanner with noise needs a Generator')
+        noisy = ranges + rng.normal(0.0, spec.noise, len(ranges))
+        ranges = np.where(np.isfinite(ranges), np.clip(noisy, 0.0, spec.range), np.inf)
+    angle_max = angle_min + increment * (spec.beams - 1)
+    return Scan(angle_min, angle_max, increment, 0.0, spec.range, ranges, t)
+
+
+# ----------------------------------------------------------------------------------------------- main
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Print one scan of a small world: a circle ahead, a wall to the left, a robot behind."""
+    parser = argparse.ArgumentParser(description=main.__doc__)
+    parser.add_argument('--beams', type=int, default=16)
+    parser.add_argument('--fov', type=float, default=DEFAULT_FOV)
+    parser.add_argument('--range', type=float, default=DEFAULT_RANGE)
+    parser.add_argument('--noise', type=float, default=DEFAULT_NOISE)
+    parser.add_argument('--seed', type=int, default=0)
+    args = parser.parse_args(argv)
+    try:
+        spec = LaserSpec(args.range, args.fov, args.beams, args.noise)
+    except ValueError as exc:
+        parser.error(str(exc))
+    start = time.perf_counter()
+    result = scan(spec, (0.0, 0.0, 0.0), np.random.default_rng(args.seed),
+                  circles=[(5.0, 0.0), (-3.0, 0.0)], radii=[1.0, 0.5],
+                  starts=[(-4.0, 2.0)], ends=[(4.0, 2.0)])
+    elapsed = time.perf_counter() - start
+    print(f'angle_min {result.angle_min:.4f}  angle_max {result.angle_max:.4f}  '
+          f'angle_increment {result.angle_increment:.4f}  range [{result.range_min:g}, {result.range_max:g}]  '
+          f'({elapsed * 1e3:.3f} ms)')
+    for angle, reading in zip(result.angles(), result.ranges):
+        print(f'{math.degrees(angle):8.2f} deg  {reading:8.3f}')
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
