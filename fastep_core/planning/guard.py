@@ -4,8 +4,9 @@ Whatever chose the command (the kinematic controller, a manoeuvre, a recovery), 
 control tick of it takes the robot and stops the robot instead when that point is
 - within the robot's radius of an obstacle surface and nearer than where the robot is now (a robot already
   that near may still move away), or
-- within the sum of both radii of another robot, plus the other robot's travel in one tick and a quarter of
-  the clearance margin (odometry a tick old, a command a tick late on a real graph), and nearer than now.
+- within the sum of both radii of another robot, plus the other robot's travel in one tick (at max_speed, or
+  at its own speed when it reports more: a mover) and a quarter of the clearance margin (odometry a tick old,
+  a command a tick late on a real graph), and nearer than now.
 The prediction integrates the command exactly as the plant does (RK4 for a tractor-trailer): a straight Euler
 guess cuts the corner of a tight turn and once let a robot end a tick 2.3 mm inside its radius.
 """
@@ -64,7 +65,10 @@ class Guard:
         if len(others):
             # All the others at once (one by one, this loop was a tenth of a 40-robot run); the same numbers.
             centres, velocities, radii = other_arrays(others)
-            speed = self.params.max_speed if self.params.max_speed > 0 else np.hypot(*velocities.T)
+            # Another robot moves at most max_speed; a mover (a v2 world) may be faster: its own speed counts then.
+            speed = np.hypot(*velocities.T)
+            if self.params.max_speed > 0:
+                speed = np.where(speed > self.params.max_speed, speed, self.params.max_speed)
             reach = speed * dt + 0.25 * self.params.clearance_margin
             gap_now = np.hypot(*(position - centres).T)
             gap_then = np.hypot(*(after - centres).T)

@@ -47,6 +47,16 @@ def test_the_guard_gives_way_to_another_robot_it_would_close_in_on():
     assert guard.check(EMPTY, state, away, 0.05, [other]) is away
 
 
+def test_the_guard_counts_a_mover_faster_than_the_robots_at_its_own_speed():
+    guard, state, ahead = Guard(PointMass(), 0.5, PlannerParams()), np.array([5.0, 5.0]), np.array([1.0, 0.0])
+    # 1.2 m apart, 1.15 m after the tick: clear of radii 1 m + a robot's reach 0.1 m (1 m/s), not of a mover
+    # coming at 3 m/s (reach 0.2 m).
+    slow = OtherRobot('r2', (6.2, 5.0), (-1.0, 0.0), 0.5)
+    fast = OtherRobot('mover 0', (6.2, 5.0), (-3.0, 0.0), 0.5)
+    assert guard.check(EMPTY, state, ahead, 0.05, [slow]) is ahead
+    assert np.all(guard.check(EMPTY, state, ahead, 0.05, [fast]) == 0.0) and 'giving way to mover 0' in guard.reason
+
+
 def test_detection_is_asked_again_when_the_world_changes():
     nav = make_navigator('fastep', SPEC, 0.5, EMPTY, PlannerParams(), 0)
     nav.set_goal((15.0, 5.0))

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
@@ -77,7 +78,7 @@ def test_the_fan_turns_with_the_heading() -> None:
     assert ranges[1] == pytest.approx(4.0) and np.isinf(ranges[0]) and np.isinf(ranges[2])
 
 
-def world() -> dict[str, object]:
+def world() -> dict[str, Any]:
     rng = np.random.default_rng(0)
     return {'circles': rng.uniform(-8, 8, (20, 2)), 'radii': rng.uniform(0.2, 1.0, 20),
             'starts': rng.uniform(-8, 8, (5, 2)), 'ends': rng.uniform(-8, 8, (5, 2))}
@@ -85,10 +86,10 @@ def world() -> dict[str, object]:
 
 def test_noise_is_deterministic_per_seed_and_never_turns_misses_into_hits() -> None:
     spec = LaserSpec(range=6.0, beams=720, noise=0.05)
-    first = scan(spec, (0.0, 0.0, 0.0), np.random.default_rng(1), **world())  # type: ignore[arg-type]  # test data
-    again = scan(spec, (0.0, 0.0, 0.0), np.random.default_rng(1), **world())  # type: ignore[arg-type]  # test data
-    other = scan(spec, (0.0, 0.0, 0.0), np.random.default_rng(2), **world())  # type: ignore[arg-type]  # test data
-    truth = scan(LaserSpec(range=6.0, beams=720, noise=0.0), (0.0, 0.0, 0.0), **world())  # type: ignore[arg-type]
+    first = scan(spec, (0.0, 0.0, 0.0), np.random.default_rng(1), **world())
+    again = scan(spec, (0.0, 0.0, 0.0), np.random.default_rng(1), **world())
+    other = scan(spec, (0.0, 0.0, 0.0), np.random.default_rng(2), **world())
+    truth = scan(LaserSpec(range=6.0, beams=720, noise=0.0), (0.0, 0.0, 0.0), **world())
     np.testing.assert_array_equal(first.ranges, again.ranges)
     assert not np.array_equal(first.ranges, other.ranges)
     np.testing.assert_array_equal(np.isinf(first.ranges), np.isinf(truth.ranges))
