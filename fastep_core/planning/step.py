@@ -17,7 +17,10 @@ the swarm is still pulled toward feasibility.
 
 from __future__ import annotations
 
+import copy
+from contextlib import contextmanager
 from dataclasses import dataclass, field
+from typing import Iterator
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,7 +31,7 @@ from fastep_core.optimize import OptimizeResult, aco_r, fastep
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step', 'plan_step_passing_right']
+__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step', 'plan_step_passing_right', 'recorded_step_problems']
 
 FloatArray = NDArray[np.float64]
 INFEASIBLE = 1e6
@@ -136,6 +139,8 @@ class StepPlan:
 def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Generator,
               method: str = 'fastep') -> StepPlan | None:
     """Minimise the step fitness with FAStep (or ACO_R); None when no feasible waypoint was found."""
+    for recorder in _recorders:
+        recorder.append(copy.copy(problem))   # as posed: plan_step_passing_right reassigns pass_on_right
     if method == 'fastep':
         result = fastep(problem.fitness, problem.bounds(), n_fireflies=params.n_fireflies,
                         max_iter=params.max_iter, patience=params.patience, gamma=params.gamma,
@@ -150,6 +155,24 @@ def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Genera
     if not result.fun < INFEASIBLE:
         return None
     return StepPlan(np.asarray(result.x, dtype=float), float(result.fun), result)
+
+
+_recorders: list[list[StepProblem]] = []
+
+
+@contextmanager
+def recorded_step_problems() -> Iterator[list[StepProblem]]:
+    """Collect every StepProblem plan_step is given inside the block, in order (benchmarks replay them).
+
+    A problem is recorded as it was posed (a shallow copy: plan_step_passing_right sets and resets its
+    pass_on_right). Recording does not change what is planned.
+    """
+    problems: list[StepProblem] = []
+    _recorders.append(problems)
+    try:
+        yield problems
+    finally:
+        _recorders[:] = [r for r in _recorders if r is not problems]
 
 
 def plan_step_passing_right(problem: StepProblem, params: PlannerParams, rng: np.random.Generator, method: str,

@@ -102,3 +102,20 @@ def test_robots_out_of_reach_are_skipped_without_changing_a_bit():
         run = point_segment_distance(problem.others, problem.origin, X[:, None, :])
         expected = np.maximum(problem._path_robot_clearance - run, 0.0).sum(axis=1)
         assert np.array_equal(problem._robot_run_violation(X), expected)
+
+
+def test_recorded_step_problems_are_those_posed_inside_the_block():
+    from fastep_core.planning.step import recorded_step_problems
+    ahead = np.array([[3.0, 0.0]])
+    p = problem()
+    with recorded_step_problems() as outer:
+        plan_step(p, PlannerParams(), np.random.default_rng(0))
+        with recorded_step_problems() as inner:
+            p.pass_on_right = ahead
+            plan_step(p, PlannerParams(), np.random.default_rng(0))
+            p.pass_on_right = np.zeros((0, 2))
+    plan_step(p, PlannerParams(), np.random.default_rng(0))
+    assert len(outer) == 2 and len(inner) == 1
+    assert outer[0].pass_on_right.shape == (0, 2)
+    assert np.array_equal(inner[0].pass_on_right, ahead)
+    assert np.array_equal(outer[1].pass_on_right, ahead)       # as posed, not as left afterwards
