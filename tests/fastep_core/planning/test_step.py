@@ -90,7 +90,7 @@ def test_an_unknown_step_optimizer_is_a_parameter_error():
 def test_robots_out_of_reach_are_skipped_without_changing_a_bit():
     """In a crowd, the runs' clearance from the other robots is measured only for the robots a run can reach
     (issue 15, many robots); every violation must stay the same, bit for bit, as measuring them all."""
-    from fastep_core.geometry import point_segment_distance
+    from fastep_testing.step_reference import reference_terms
     rng = np.random.default_rng(5)
     world = World.from_obstacles([0, 0, 60, 60], [])
     for _ in range(50):
@@ -99,9 +99,7 @@ def test_robots_out_of_reach_are_skipped_without_changing_a_bit():
         problem = StepProblem(world, origin, np.array([59.0, 59.0]), 0.7, 2.0, others=others,
                               robot_clearance=rng.uniform(0.8, 1.5, len(others)))
         X = origin + rng.uniform(-2.0, 2.0, (500, 2))
-        run = point_segment_distance(problem.others, problem.origin, X[:, None, :])
-        expected = np.maximum(problem._path_robot_clearance - run, 0.0).sum(axis=1)
-        assert np.array_equal(problem._robot_run_violation(X), expected)
+        assert np.array_equal(problem.terms(X)[1], reference_terms(problem, X)[1])
 
 
 def test_recorded_step_problems_are_those_posed_inside_the_block():
@@ -119,3 +117,4 @@ def test_recorded_step_problems_are_those_posed_inside_the_block():
     assert outer[0].pass_on_right.shape == (0, 2)
     assert np.array_equal(inner[0].pass_on_right, ahead)
     assert np.array_equal(outer[1].pass_on_right, ahead)       # as posed, not as left afterwards
+
