@@ -368,7 +368,7 @@ def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Genera
         result = fastep(problem.fitness, problem.bounds(), n_fireflies=params.n_fireflies,
                         max_iter=params.max_iter, patience=params.patience, gamma=params.gamma,
                         beta0=params.beta0, alpha=params.alpha, alpha_damping=params.alpha_damping, tol=params.tol,
-                        rng=rng)
+                        rng=rng, attraction_sample=params.attraction_sample or None)
     elif method == 'aco':
         result = aco_r(problem.fitness, problem.bounds(), archive_size=params.aco_archive,
                        n_ants=params.aco_ants, q=params.aco_q, xi=params.aco_xi, max_iter=params.aco_iter,
