@@ -81,14 +81,15 @@ class StepProblem:
         """Constants of terms(): everything that depends on the problem but not on the candidates."""
         obstacles = self.world.obstacles
         self._ox, self._oy = float(self.origin[0]), float(self.origin[1])
-        self._tx, self._ty = float(self.target[0]), float(self.target[1])
-        # Obstacle rows of the distance matrix (n_obstacles, m), circles first, as Obstacles.distance_rows.
+        # The points each candidate's offset (x - px, y - py) is taken from, one row each: the origin (the run),
+        # the target (eq. 5), the circles' centres (eq. 6-7), then the walls' starts (the minimum distance
+        # technique); the distance itself is taken for all but the walls' starts.
         nc = obstacles.n_circles
-        self._n_circles = nc
-        self._circle_x, self._circle_y = obstacles.centers[:, 0, None], obstacles.centers[:, 1, None]
+        points = np.concatenate([self.origin[None], self.target[None], obstacles.centers, obstacles.starts])
+        self._px, self._py = points[:, 0, None], points[:, 1, None]
+        self._n_norms = 2 + nc
         self._circle_r = obstacles.radii[:, None]
-        # The very constants distance_rows uses (the same floats give the same distances).
-        self._seg_x, self._seg_y = obstacles.starts[:, 0, None], obstacles.starts[:, 1, None]
+        # The very constants Obstacles.distance_rows uses (the same floats give the same distances).
         self._seg_dx, self._seg_dy = obstacles._ab[:, 0, None], obstacles._ab[:, 1, None]
         self._seg_inv_length2 = obstacles._inv_length2[:, None]
         # The local obstacles (the clearance rule), relative to the origin, as Obstacles.fan_clearance has them:
@@ -130,31 +131,24 @@ class StepProblem:
         """
         X = np.asarray(X, dtype=float)
         x, y = X[:, 0], X[:, 1]
-        # The run origin -> X (shared by the step radius, the runs' clearance and the traffic rule).
-        dx, dy = x - self._ox, y - self._oy
-        run2 = dx * dx
-        run2 += dy * dy
-        reach = np.sqrt(run2)
+        # Row 0: the run origin -> X (the step radius, the runs' clearance, the traffic rule); row 1: the
+        # target; rows 2...: the obstacles (circles, then walls), as Obstacles.distance_rows.
+        rows, dx, dy, run2 = self._distance_rows(x, y)
+        reach = rows[0]
         viol = reach - self.step_radius
         np.maximum(viol, 0.0, out=viol)
         reach_max = float(reach.max(initial=0.0))
         if reach_max > self._border_free_reach:
             viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
-        f = x - self._tx
-        f *= f
-        ty = y - self._ty
-        ty *= ty
-        f += ty
-        np.sqrt(f, out=f)
-        f *= self.c
+        f = np.multiply(rows[1], self.c)
         if len(self.world.obstacles):
-            dist = self._obstacle_rows(x, y)
+            dist = rows[2:]
             total = dist.sum(axis=0)
             np.maximum(total, 1e-9, out=total)
             f += np.divide(self.a, total, out=total)
             if len(self._local_rows):
-                rows = self._local_rows
-                nearest = dist[rows[0]] if len(rows) == 1 else dist[rows].min(axis=0)
+                local = self._local_rows
+                nearest = dist[local[0]] if len(local) == 1 else dist[local].min(axis=0)
                 viol += np.maximum(np.subtract(self.clearance, nearest), 0.0)
                 run = self._run_clearance(dx, dy, run2, dist)
                 np.subtract(self._path_clearance, run, out=run)
@@ -176,20 +170,22 @@ class StepProblem:
             viol += np.maximum(ox * dy - oy * dx, 0.0)
         return f, viol
 
-    def _obstacle_rows(self, x: FloatArray, y: FloatArray) -> FloatArray:
-        """Surface distance of each candidate to each obstacle, (n_obstacles, m): Obstacles.distance_rows."""
-        nc = self._n_circles
-        dist = np.empty((len(self.world.obstacles), len(x)))
-        circle = dist[:nc]
-        np.subtract(x, self._circle_x, out=circle)
-        circle *= circle
-        cy = y - self._circle_y
-        cy *= cy
-        circle += cy
-        np.sqrt(circle, out=circle)
-        circle -= self._circle_r
-        if nc < len(dist):
-            ax, ay = x - self._seg_x, y - self._seg_y
+    def _distance_rows(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Distance of each candidate to the origin, the target and each obstacle surface: (2 + n_obstacles, m);
+        and the run vectors x - ox, y - oy and their squared length.
+
+        Each row is computed with the very operations of geometry.norm and Obstacles.distance_rows, so to the
+        same floats, but all rows at once.
+        """
+        k = self._n_norms
+        DX, DY = x - self._px, y - self._py
+        square = DX[:k] * DX[:k]
+        square += DY[:k] * DY[:k]
+        rows = np.empty((len(DX), len(x)))
+        np.sqrt(square, out=rows[:k])
+        rows[2:k] -= self._circle_r
+        if k < len(rows):
+            ax, ay = DX[k:], DY[k:]
             t = ax * self._seg_dx
             t += ay * self._seg_dy
             t *= self._seg_inv_length2
@@ -201,8 +197,8 @@ class StepProblem:
             ax *= ax
             ay *= ay
             ax += ay
-            np.sqrt(ax, out=dist[nc:])
-        return dist
+            np.sqrt(ax, out=rows[k:])
+        return rows, DX[0], DY[0], square[0]
 
     def _run_clearance(self, dx: FloatArray, dy: FloatArray, run2: FloatArray, dist: FloatArray) -> FloatArray:
         """Closest approach of each run origin -> X to a local obstacle surface: Obstacles.fan_clearance.
