@@ -6,7 +6,7 @@ the attraction sample, and against a plain-Python-loop FAStep.
 Step problems: the ones FAStep-Kinematic poses in a table2_s2 run (real positions, circles and walls, the
 clearance rule), and with --crowd N those of the first 30 s of benchmarks.scale's crowd of N robots (N / 2
 circles, every other robot in eq. 10's f2 and in the clearance rule). Each problem is solved with seeds
-0..S-1, the variants interleaved per seed so they share the machine's load:
+0..S-1, the variants interleaved per seed (in turn first) so they share the machine's load:
 - before: the vectorised `fastep` on the plain step fitness (fastep_testing/step_reference.py, StepProblem's
   terms as they were before they were made fast; the swarm is the same code);
 - after: `fastep` on StepProblem.fitness. Same moves and floats: the waypoints must be identical;
@@ -36,6 +36,7 @@ from fastep_testing.fastep_loop import fastep_loop
 from fastep_testing.step_reference import ReferenceTerms
 
 Timed = dict[str, list[float]]
+VARIANTS = ('before', 'after', 'sample')
 
 
 def solve(optimizer: Callable[..., OptimizeResult], fun: Callable[[np.ndarray], np.ndarray], problem: StepProblem,
@@ -66,10 +67,12 @@ def bench(title: str, problems: list[StepProblem], params: PlannerParams, seeds:
     for problem in problems:
         reference = ReferenceTerms(problem)
         for seed in range(seeds):
-            before = timed(wall, cpu, 'before', fastep, reference.fitness, problem, params, seed)
-            after = timed(wall, cpu, 'after', fastep, problem.fitness, problem, params, seed)
-            sampled = timed(wall, cpu, 'sample', fastep, problem.fitness, problem, params, seed,
-                            attraction_sample=sample)
+            results = {}
+            for name in VARIANTS[seed % 3:] + VARIANTS[:seed % 3]:        # each variant first as often
+                fun = reference.fitness if name == 'before' else problem.fitness
+                extra = {'attraction_sample': sample} if name == 'sample' else {}
+                results[name] = timed(wall, cpu, name, fastep, fun, problem, params, seed, **extra)
+            before, after, sampled = results['before'], results['after'], results['sample']
             same += int(np.array_equal(before.x, after.x) and before.fun == after.fun)
             nfev['after'].append(after.nfev)
             nfev['sample'].append(sampled.nfev)
