@@ -17,7 +17,9 @@ The contenders, each with its own defaults:
   paper's Table 1, n = 50, gamma = 1, beta0 = 2, alpha = 0.2, damping 0.8; both evaluate every attraction
   pair, n (n - 1) / 2 + 1 = 1226 candidates per iteration, so 20,000 evaluations are about 15 iterations.
   'FAStep n20' and 'firefly n20' are the same code with niapy's population (20) and damping (0.97): 191
-  candidates per iteration, about 100 iterations within the budget.
+  candidates per iteration, about 100 iterations within the budget. 'FAStep k5' is FAStep with
+  attraction_sample=5 (each firefly attracted to at most 5 brighter ones, a departure from the paper): at most
+  250 candidates per iteration, about 75 iterations.
 - niapy.algorithms.basic.FireflyAlgorithm (the firefly algorithm, not "FA" = fireworks): niapy's defaults,
   population 20, alpha 1, beta0 1, gamma 0.01, theta 0.97; one evaluation per move, up to 400 per iteration.
 - scipy.optimize.differential_evolution: best1bin, popsize 15 (x d individuals), Latin hypercube start,
@@ -149,6 +151,7 @@ OPTIMIZERS: dict[str, Callable[[Budget, FloatArray, int], None]] = {
     'FAStep': _swarm(fastep),
     'firefly': _swarm(firefly),
     'FAStep n20': _swarm(fastep, n_fireflies=20, alpha_damping=0.97),
+    'FAStep k5': _swarm(fastep, attraction_sample=5),
     'firefly n20': _swarm(firefly, n_fireflies=20, alpha_damping=0.97),
     'niapy FA': _run_niapy,
     'DE (scipy)': _run_de,
@@ -205,6 +208,17 @@ def markdown(rows: Sequence[tuple[str, int, str, int, float, float, int]], dims:
     return '\n'.join(lines) + '\n'
 
 
+def kept_sections(path: Path) -> str:
+    """The hand-written sections after the generated table of an existing file (from its second '## ' heading
+    on), so that regenerating the table does not drop them."""
+    try:
+        old = path.read_text()
+    except OSError:
+        return ''
+    at = old.find('\n## ', 1)
+    return '' if at < 0 else old[at:]
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     p = Parser(prog='python -m benchmarks.optimizers', description=__doc__.splitlines()[0])
     p.add_argument('--budget', type=int, default=20_000, help='objective evaluations per run (default 20000)')
@@ -226,7 +240,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     print(text)
     if args.out is not None:
         args.out.parent.mkdir(parents=True, exist_ok=True)
-        args.out.write_text(text)
+        args.out.write_text(text + kept_sections(args.out))
         print(f'wrote {args.out}')
     return 0
 

@@ -1,48 +1,124 @@
-"""Benchmark (a): latency of one FAStep step plan (50 fireflies) against a plain-Python-loop FAStep.
+"""Benchmark (a): latency of one FAStep step plan (50 fireflies), before and after the fast step fitness, with
+the attraction sample, and against a plain-Python-loop FAStep.
 
-Both optimizers make the same moves with the same draws on the same step problems: the ones FAStep-Kinematic
-poses in a table2_s2 run. Run: `.venv/bin/python -m benchmarks.step_latency`.
+    python -m benchmarks.step_latency [--seeds 20] [--sample 5] [--crowd 40] [--no-loop]
+
+Step problems: the ones FAStep-Kinematic poses in a table2_s2 run (real positions, circles and walls, the
+clearance rule), and with --crowd N those of the first 30 s of benchmarks.scale's crowd of N robots (N / 2
+circles, every other robot in eq. 10's f2 and in the clearance rule). Each problem is solved with seeds
+0..S-1, the variants interleaved per seed (in turn first) so they share the machine's load:
+- before: the vectorised `fastep` on the plain step fitness (fastep_testing/step_reference.py, StepProblem's
+  terms as they were before they were made fast; the swarm is the same code);
+- after: `fastep` on StepProblem.fitness. Same moves and floats: the waypoints must be identical;
+- sample k: `fastep(..., attraction_sample=k)` on StepProblem.fitness (a departure from the paper, off by
+  default; its fitness reached is compared with the paper's);
+- loop: fastep_testing/fastep_loop.py (seed 0 only), the same algorithm with loops over fireflies and pairs.
+Wall time (perf_counter) and CPU time (process_time) per plan, medians, and the load average: the machine is
+shared, say it with the numbers.
 """
 
 from __future__ import annotations
 
+import argparse
+import os
 import time
+from typing import Callable
 
 import numpy as np
 
 from benchmarks.common import captured_step_problems, median_ms
-from fastep_core.optimize import fastep
+from benchmarks.scale import crowd_scenario_data
+from fastep_core.optimize import OptimizeResult, fastep
 from fastep_core.planning import PlannerParams
+from fastep_core.planning.step import StepProblem
+from fastep_core.scenario import parse_scenario
 from fastep_testing.fastep_loop import fastep_loop
+from fastep_testing.step_reference import ReferenceTerms
+
+Timed = dict[str, list[float]]
+VARIANTS = ('before', 'after', 'sample')
 
 
-def solve(optimizer, problem, params: PlannerParams, seed: int):
-    return optimizer(problem.fitness, problem.bounds(), n_fireflies=params.n_fireflies, max_iter=params.max_iter,
+def solve(optimizer: Callable[..., OptimizeResult], fun: Callable[[np.ndarray], np.ndarray], problem: StepProblem,
+          params: PlannerParams, seed: int, **extra: object) -> OptimizeResult:
+    return optimizer(fun, problem.bounds(), n_fireflies=params.n_fireflies, max_iter=params.max_iter,
                      patience=params.patience, gamma=params.gamma, beta0=params.beta0, alpha=params.alpha,
-                     alpha_damping=params.alpha_damping, tol=params.tol, rng=np.random.default_rng(seed))
+                     alpha_damping=params.alpha_damping, tol=params.tol, rng=np.random.default_rng(seed), **extra)
 
 
-def main() -> None:
-    params = PlannerParams()
-    problems = captured_step_problems('table2_s2')
-    fast, slow, same = [], [], 0
+def timed(wall: Timed, cpu: Timed, name: str, optimizer: Callable[..., OptimizeResult],
+          fun: Callable[[np.ndarray], np.ndarray], problem: StepProblem, params: PlannerParams, seed: int,
+          **extra: object) -> OptimizeResult:
+    w, c = time.perf_counter(), time.process_time()
+    result = solve(optimizer, fun, problem, params, seed, **extra)
+    wall.setdefault(name, []).append(time.perf_counter() - w)
+    cpu.setdefault(name, []).append(time.process_time() - c)
+    return result
+
+
+def bench(title: str, problems: list[StepProblem], params: PlannerParams, seeds: int, sample: int,
+          loop: bool) -> None:
+    wall: Timed = {}
+    cpu: Timed = {}
+    nfev: dict[str, list[int]] = {'after': [], 'sample': []}
+    excess: list[float] = []
+    same = 0
+    load = os.getloadavg()[0]
     for problem in problems:
-        for seed in range(20):
-            start = time.perf_counter()
-            solve(fastep, problem, params, seed)
-            fast.append(time.perf_counter() - start)
-        start = time.perf_counter()
-        reference = solve(fastep_loop, problem, params, 0)
-        slow.append(time.perf_counter() - start)
-        same += int(np.allclose(reference.x, solve(fastep, problem, params, 0).x))
-    nfev = [solve(fastep, p, params, 0).nfev for p in problems]
-    print(f'step problems from a table2_s2 run: {len(problems)}; fireflies {params.n_fireflies}; '
-          f'median evaluations per plan {int(np.median(nfev))}')
-    print(f'vectorised fastep: median {median_ms(fast):.2f} ms per step plan ({len(fast)} plans)')
-    print(f'plain-loop fastep: median {median_ms(slow):.1f} ms per step plan ({len(slow)} plans)')
-    print(f'speed-up (medians, same run): {median_ms(slow) / median_ms(fast):.0f}x; '
-          f'same waypoint in {same}/{len(problems)} problems')
+        reference = ReferenceTerms(problem)
+        for seed in range(seeds):
+            results = {}
+            for name in VARIANTS[seed % 3:] + VARIANTS[:seed % 3]:        # each variant first as often
+                fun = reference.fitness if name == 'before' else problem.fitness
+                extra = {'attraction_sample': sample} if name == 'sample' else {}
+                results[name] = timed(wall, cpu, name, fastep, fun, problem, params, seed, **extra)
+            before, after, sampled = results['before'], results['after'], results['sample']
+            same += int(np.array_equal(before.x, after.x) and before.fun == after.fun)
+            nfev['after'].append(after.nfev)
+            nfev['sample'].append(sampled.nfev)
+            if after.fun < 1e6:
+                excess.append(sampled.fun - after.fun)
+        if loop:
+            timed(wall, cpu, 'loop', fastep_loop, problem.fitness, problem, params, 0)
+    load = max(load, os.getloadavg()[0])
+    plans = len(problems) * seeds
+    print(f'\n{title}: {len(problems)} step problems x {seeds} seeds; fireflies {params.n_fireflies}; '
+          f'load average up to {load:.2f}')
+    print(f'  before (plain fitness, main):   median {median_ms(wall["before"]):.2f} ms wall, '
+          f'{median_ms(cpu["before"]):.2f} ms CPU per plan')
+    print(f'  after (fast fitness):           median {median_ms(wall["after"]):.2f} ms wall, '
+          f'{median_ms(cpu["after"]):.2f} ms CPU per plan; same waypoint and value in {same}/{plans} plans; '
+          f'median evaluations {int(np.median(nfev["after"]))}')
+    print(f'  attraction_sample={sample}:          median {median_ms(wall["sample"]):.2f} ms wall, '
+          f'{median_ms(cpu["sample"]):.2f} ms CPU per plan; median evaluations {int(np.median(nfev["sample"]))}')
+    if excess:
+        e = np.asarray(excess)
+        print(f'    fitness reached minus the paper\'s (same seed): median {np.median(e):+.1e}, '
+              f'90th percentile {np.percentile(e, 90):+.1e}, worst {e.max():+.1e}; worse by more than tol '
+              f'({params.tol:g}) in {np.mean(e > params.tol) * 100:.0f} % of plans, better in '
+              f'{np.mean(e < -params.tol) * 100:.0f} %')
+    if loop:
+        print(f'  plain-loop fastep:              median {median_ms(wall["loop"]):.1f} ms wall per plan; speed-up '
+              f'of after over it (medians, same run) {median_ms(wall["loop"]) / median_ms(wall["after"]):.0f}x')
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog='step_latency', description=__doc__.splitlines()[0])
+    p.add_argument('--seeds', type=int, default=20, help='seeds per step problem (default 20)')
+    p.add_argument('--sample', type=int, default=5, help='k of attraction_sample (default 5)')
+    p.add_argument('--crowd', type=int, default=0, metavar='N', help='also a crowd of N robots (e.g. 40)')
+    p.add_argument('--crowd-problems', type=int, default=30, metavar='K', help='of which K problems (default 30)')
+    p.add_argument('--no-loop', action='store_true', help='skip the plain-loop reference (slow)')
+    args = p.parse_args(argv)
+    params = PlannerParams()
+    bench('table2_s2', captured_step_problems('table2_s2'), params, args.seeds, args.sample, not args.no_loop)
+    if args.crowd:
+        problems = captured_step_problems(parse_scenario(crowd_scenario_data(args.crowd, 0, 30.0)))
+        every = max(1, len(problems) // args.crowd_problems)
+        bench(f'crowd of {args.crowd} robots (benchmarks.scale, first 30 s)', problems[::every][:args.crowd_problems],
+              params, max(1, args.seeds // 4), args.sample, False)
+    return 0
 
 
 if __name__ == '__main__':
-    main()
+    raise SystemExit(main())

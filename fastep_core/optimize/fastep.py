@@ -44,6 +44,16 @@ row-major order of the ranked swarm) and one `rng.random((d, k))` block for the 
 (ascending index). `fastep_testing/fastep_loop.py` makes the same moves and draws with plain Python loops, and
 returns the same result bit for bit.
 
+Departure from the paper, off by default: `attraction_sample=k` attracts each firefly to at most k of the
+fireflies brighter than it, drawn uniformly without replacement every iteration, instead of to all of them
+(step 1 above; a firefly with k or fewer brighter ones still gets all of them, the brightest still walks).
+The paper's attraction makes n (n - 1) / 2 + 1 = 1,226 candidates per iteration for 50 fireflies, which is
+what keeps one planned step above a millisecond; with k = 5 it makes at most n k = 250. Everything else
+(stepping ahead, the preference rule, elitism, damping, stopping) is unchanged. Its draws: per iteration one
+`rng.random((n, n))` block of sampling keys before the attraction block (`firefly.Swarm.sampled`), so its
+runs differ from the paper's even when no firefly has more than k brighter ones. Measured in
+docs/optimizers.md ("Attraction to a sample") and docs/benchmarks.md (step latency).
+
 Objective values are only compared, never subtracted, so +inf and huge values (the planner scores an
 infeasible candidate 1e6 + violation) raise no floating-point warnings; NaN counts as +inf. The objective
 receives (m, d) arrays in Fortran order (see `firefly.Swarm`).
@@ -60,6 +70,7 @@ from fastep_core.optimize.result import (
     OptimizeResult,
     RngLike,
     VectorisedFunction,
+    check_count,
     check_number,
     check_problem,
     initial_population,
@@ -74,7 +85,7 @@ PREFERENCE_TOLERANCE = 0.01
 def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50, max_iter: int = 30,
            patience: int = 5, gamma: float = 1.0, beta0: float = 2.0, alpha: float = 0.2,
            alpha_damping: float = 0.8, tol: float = 0.0, rng: RngLike = None,
-           x0: ArrayLike | None = None) -> OptimizeResult:
+           x0: ArrayLike | None = None, attraction_sample: int | None = None) -> OptimizeResult:
     """Minimise a vectorised function over a box with the Stepping Ahead Firefly algorithm.
 
     Parameters
@@ -97,6 +108,9 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
         Source of every random draw; an int or None seeds `numpy.random.default_rng`.
     x0 : array_like, shape (k, d) or (d,), optional
         Initial candidates replacing the first k fireflies (clipped into the box); k <= n_fireflies.
+    attraction_sample : int >= 1, optional
+        Attract each firefly to at most this many brighter fireflies, sampled at random every iteration (a
+        departure from the paper, see the module docstring); None (default): to all of them, as the paper.
 
     Returns
     -------
@@ -105,6 +119,8 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
     """
     _check_swarm_parameters(n_fireflies, max_iter, patience, gamma, beta0, alpha, alpha_damping)
     check_number('tol', tol)
+    if attraction_sample is not None:
+        check_count('attraction_sample', attraction_sample, 1)
     low, high, gen, x0 = check_problem(bounds, rng, x0, n_fireflies)
     objective = Objective(fun)
     swarm = Swarm(n_fireflies, low, high, gamma=gamma, beta0=beta0)
@@ -119,7 +135,7 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
         X, F = swarm.rank(X, F)                          # 0. brightest first
 
         # 1. Attraction moves (eq. 3): relocate where the best candidate is strictly better.
-        C, fc = swarm.attraction(X, F, objective, gen, scale)
+        C, fc = swarm.attraction(X, F, objective, gen, scale, attraction_sample)
         moved = fc < F
         X = np.where(moved, C, X)
         F = np.where(moved, fc, F)

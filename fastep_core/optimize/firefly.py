@@ -38,7 +38,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-from numpy.typing import ArrayLike
+from numpy.typing import ArrayLike, NDArray
 
 from fastep_core.optimize.result import (
     FloatArray,
@@ -168,13 +168,15 @@ class Swarm:
         return C
 
     def attraction(self, X: FloatArray, F: FloatArray, objective: Objective, rng: np.random.Generator,
-                   scale: FloatArray) -> tuple[FloatArray, FloatArray]:
+                   scale: FloatArray, sample: int | None = None) -> tuple[FloatArray, FloatArray]:
         """Eq. 3 for every pair (i, j) with j brighter than i; return each firefly's best candidate and value.
 
-        X is (d, n); the result is a new (d, n) array and its (n,) values. One objective call.
+        X is (d, n); the result is a new (d, n) array and its (n,) values. One objective call. With `sample`
+        = k, a firefly with more than k brighter fireflies is attracted to k of them only, drawn at random
+        without replacement (see `sampled`); None: to all of them (the paper).
         """
         n = F.size
-        if bool((F[1:] > F[:-1]).all()):               # ranked, no ties: the precomputed lower triangle
+        if sample is None and bool((F[1:] > F[:-1]).all()):   # ranked, no ties: the precomputed lower triangle
             i, j, pair = self._ranked_i, self._ranked_j, self._ranked_pair
             C = self.candidates(X.take(i, axis=1), X.take(j, axis=1), rng, scale)
             fc = objective(C.T)
@@ -184,6 +186,8 @@ class Swarm:
             return C.take(k, axis=1), fc.take(k)
 
         brighter = F < F[:, None]                        # brighter[i, j]: firefly j outshines firefly i
+        if sample is not None:
+            brighter = self.sampled(brighter, rng, sample)
         lonely = np.flatnonzero(F == F.min())            # nobody outshines them: random walk, pair (i, i)
         brighter[lonely, lonely] = True
         pair = np.flatnonzero(brighter)                  # i * n + j, row-major
@@ -198,6 +202,25 @@ class Swarm:
             best[unused] = brighter[unused].argmax(axis=1)
         k = np.searchsorted(pair, self._rows * n + best)  # position of pair (i, best_i) among the candidates
         return C.take(k, axis=1), fc.take(k)
+
+    def sampled(self, brighter: NDArray[np.bool_], rng: np.random.Generator, sample: int) -> NDArray[np.bool_]:
+        """Keep at most `sample` brighter fireflies per row of `brighter` (n, n), uniformly without replacement.
+
+        One `rng.random((n, n))` block of keys: row i keeps the brighter fireflies with its `sample` smallest
+        keys, all of them when it has no more than `sample`. Returns a new mask.
+        """
+        n = len(brighter)
+        keys = rng.random((n, n))
+        crowded = np.flatnonzero(brighter.sum(axis=1) > sample)
+        if not len(crowded):
+            return brighter.copy()
+        keys = keys[crowded]
+        keys[~brighter[crowded]] = np.inf
+        keep = brighter.copy()
+        keep[crowded] = False
+        chosen = np.argpartition(keys, sample - 1, axis=1)[:, :sample]
+        keep[crowded[:, None], chosen] = True
+        return keep
 
 
 @functools.lru_cache(maxsize=16)

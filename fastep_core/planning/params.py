@@ -55,6 +55,9 @@ class PlannerParams:
     patience: int = _p(3, 'stop the swarm after this many iterations without improvement', 1, 10_000)
     tol: float = _p(1e-4, 'a swarm iteration improves only if the best fitness drops by more than this '
                           '(with c = 0.01, 1e-4 is 1 cm closer to the goal)', 0.0)
+    attraction_sample: int = _p(0, 'FAStep attracts each firefly to at most this many brighter fireflies, drawn at '
+                                   'random every iteration (fewer candidates per iteration; a departure from the '
+                                   'paper); 0: to all of them, as the paper', 0, 10_000)
     # Step fitness f = a/f1 + b/f2 + c*d (eq. 10; Table 1 rows 6-8).
     a: float = _p(0.18, 'obstacle safety weight a, paper range [0.1, 1]', 0.0)
     b: float = _p(0.18, 'robot safety weight b, paper range [0.1, 1]', 0.0)

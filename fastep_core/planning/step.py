@@ -17,18 +17,22 @@ the swarm is still pulled toward feasibility.
 
 from __future__ import annotations
 
+import copy
+from contextlib import contextmanager
 from dataclasses import dataclass, field
+from typing import Iterator
 
 import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.errors import ParameterError
-from fastep_core.geometry import norm, point_segment_distance
+from fastep_core.geometry import point_segment_distance
 from fastep_core.optimize import OptimizeResult, aco_r, fastep
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step', 'plan_step_passing_right']
+__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step', 'plan_step_passing_right', 'recorded_step_problems',
+           'sparse_row_sum']
 
 FloatArray = NDArray[np.float64]
 INFEASIBLE = 1e6
@@ -67,61 +71,279 @@ class StepProblem:
         self._slack = 1e-6 + 1e-9 * scale   # rounding of the runs' distances, with room to spare
         # Only obstacles that reach into the step disk (plus clearance) can violate the clearance rule; the
         # swarm evaluates thousands of candidates per step, so the rule is checked against those alone.
-        obstacles = self.world.obstacles
-        self._local = obstacles.distances(self.origin) < self.step_radius + self.clearance
-        self._local_obstacles = obstacles.subset(self._local)
+        self._local = self.world.obstacles.distances(self.origin) < self.step_radius + self.clearance
+        self._prepare_terms()
 
     def bounds(self) -> FloatArray:
         return np.stack([self.origin - self.step_radius, self.origin + self.step_radius], axis=1)
 
+    def _prepare_terms(self) -> None:
+        """Constants of terms(): everything that depends on the problem but not on the candidates."""
+        obstacles = self.world.obstacles
+        self._ox, self._oy = float(self.origin[0]), float(self.origin[1])
+        # The points each candidate's offset (x - px, y - py) is taken from, one row each: the origin (the run),
+        # the target (eq. 5), the circles' centres (eq. 6-7), then the walls' starts (the minimum distance
+        # technique); the distance itself is taken for all but the walls' starts.
+        nc = obstacles.n_circles
+        points = np.concatenate([self.origin[None], self.target[None], obstacles.centers, obstacles.starts])
+        self._px, self._py = points[:, 0, None], points[:, 1, None]
+        self._n_norms = 2 + nc
+        self._circle_r = obstacles.radii[:, None]
+        # The very constants Obstacles.distance_rows uses (the same floats give the same distances).
+        self._seg_dx, self._seg_dy = obstacles._ab[:, 0, None], obstacles._ab[:, 1, None]
+        self._seg_inv_length2 = obstacles._inv_length2[:, None]
+        # The local obstacles (the clearance rule), relative to the origin, as Obstacles.fan_clearance has them:
+        # the points whose distance to each run is measured (circle centres, then wall starts, then wall ends).
+        local = np.flatnonzero(self._local)
+        self._local_rows = local
+        lc, ls = local[local < nc], local[local >= nc]
+        self._run_circles, self._run_walls = len(lc), ls
+        centres, starts, ends = (obstacles.centers[lc] - self.origin, obstacles.starts[ls - nc] - self.origin,
+                                 obstacles.ends[ls - nc] - self.origin)
+        points = np.concatenate([centres, starts, ends])
+        self._run_px, self._run_py = points[:, 0, None], points[:, 1, None]
+        self._run_radii = obstacles.radii[lc][:, None]
+        sx, sy, ex, ey = starts[:, 0, None], starts[:, 1, None], ends[:, 0, None], ends[:, 1, None]
+        self._run_sx, self._run_sy, self._run_ex, self._run_ey = sx, sy, ex, ey
+        self._run_wx, self._run_wy = ex - sx, ey - sy
+        self._run_side = self._run_wy * sx - self._run_wx * sy
+        self._run_from_origin = point_segment_distance(self.origin, obstacles.starts[ls - nc],
+                                                       obstacles.ends[ls - nc])[:, None]
+        # Candidates within this distance of the origin keep `clearance` from the workspace border (with room
+        # for the rounding of their distances): the border term is 0.0 for them.
+        xmin, ymin, xmax, ymax = self.world.workspace
+        slack = 1e-6 + 1e-9 * (max(abs(v) for v in self.world.workspace) + float(np.abs(self.origin).max()))
+        self._border_free_reach = min(self._ox - xmin, xmax - self._ox, self._oy - ymin, ymax - self._oy) - \
+            self.clearance - slack
+        self._other_x, self._other_y = self.others[:, 0], self.others[:, 1]
+        rel = self.others - self.origin
+        self._other_rel_x, self._other_rel_y = rel[:, 0, None], rel[:, 1, None]
+
     def terms(self, X: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """(eq. 10 fitness, total constraint violation) of each candidate; violation 0 means feasible."""
+        """(eq. 10 fitness, total constraint violation) of each candidate; violation 0 means feasible.
+
+        Fast and exact: the same floats, bit for bit, as the plain formulation in
+        fastep_testing/step_reference.py (the swarm compares them, so a different last bit would change its
+        moves). What makes it fast: a term proven to be 0.0 for every candidate is skipped (adding 0.0 changes
+        nothing); what two terms share (the run vectors, the distances to the local walls) is computed once;
+        constants are prepared once per problem. Every sum keeps its order and its array shape (numpy sums
+        rows of an (n, m) array one after another, rows of an (m, n) array pairwise).
+        """
         X = np.asarray(X, dtype=float)
         x, y = X[:, 0], X[:, 1]
-        viol = np.maximum(norm(x - self.origin[0], y - self.origin[1]) - self.step_radius, 0.0)
-        viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
-        f = self.c * norm(x - self.target[0], y - self.target[1])
+        # Row 0: the run origin -> X (the step radius, the runs' clearance, the traffic rule); row 1: the
+        # target; rows 2...: the obstacles (circles, then walls), as Obstacles.distance_rows.
+        rows, dx, dy, run2 = self._distance_rows(x, y)
+        reach = rows[0]
+        viol = reach - self.step_radius
+        np.maximum(viol, 0.0, out=viol)
+        reach_max = float(reach.max(initial=0.0))
+        if reach_max > self._border_free_reach:
+            viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
+        f = np.multiply(rows[1], self.c)
         if len(self.world.obstacles):
-            dist = self.world.obstacles.distance_rows(x, y)
-            f += self.a / np.maximum(dist.sum(axis=0), 1e-9)
-            if len(self._local_obstacles):
-                viol += np.maximum(self.clearance - dist[self._local].min(axis=0), 0.0)
-                run = self._local_obstacles.fan_clearance(self.origin, X)
-                viol += np.maximum(self._path_clearance - run, 0.0)
+            dist = rows[2:]
+            total = dist.sum(axis=0)
+            np.maximum(total, 1e-9, out=total)
+            f += np.divide(self.a, total, out=total)
+            if len(self._local_rows):
+                local = self._local_rows
+                nearest = dist[local[0]] if len(local) == 1 else dist[local].min(axis=0)
+                viol += np.maximum(np.subtract(self.clearance, nearest), 0.0)
+                run = self._run_clearance(dx, dy, run2, dist)
+                np.subtract(self._path_clearance, run, out=run)
+                viol += np.maximum(run, 0.0, out=run)
         if len(self.others):
-            gap = norm(x[:, None] - self.others[:, 0], y[:, None] - self.others[:, 1])
-            f += self.b / np.maximum(gap.sum(axis=1), 1e-9)
-            viol += np.maximum(self.robot_clearance - gap, 0.0).sum(axis=1)
-            viol += self._robot_run_violation(X)
+            gap = x[:, None] - self._other_x
+            gap *= gap
+            gy = y[:, None] - self._other_y
+            gy *= gy
+            gap += gy
+            np.sqrt(gap, out=gap)
+            total = gap.sum(axis=1)
+            np.maximum(total, 1e-9, out=total)
+            f += np.divide(self.b, total, out=total)
+            self._add_robot_gap_violation(viol, gap, reach_max)
+            self._add_robot_run_violation(viol, dx, dy, run2, reach_max)
         for ox, oy in self.pass_on_right:
             # cross(other - origin, X - origin) > 0 means X is left of the line toward the other robot.
-            viol += np.maximum(ox * (y - self.origin[1]) - oy * (x - self.origin[0]), 0.0)
+            viol += np.maximum(ox * dy - oy * dx, 0.0)
         return f, viol
 
-    def _robot_run_violation(self, X: FloatArray) -> FloatArray:
-        """Sum over the other robots of how far each run origin-X comes inside the robot's clearance.
+    def _distance_rows(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """Distance of each candidate to the origin, the target and each obstacle surface: (2 + n_obstacles, m);
+        and the run vectors x - ox, y - oy and their squared length.
 
-        A robot farther from the origin than the farthest candidate by more than its clearance cannot reach
-        any run: its column is 0.0, as measuring it gave (in a crowd, most of them). The columns stay in
-        place, so each row is summed in the same order as before, to the same bits.
+        Each row is computed with the very operations of geometry.norm and Obstacles.distance_rows, so to the
+        same floats, but all rows at once.
         """
-        reach = float(norm(X[:, 0] - self.origin[0], X[:, 1] - self.origin[1]).max(initial=0.0))
-        near = self._other_gap - reach < self._path_robot_clearance + self._slack
-        if near.all():
-            run = point_segment_distance(self.others, self.origin, X[:, None, :])
-            total: FloatArray = np.maximum(self._path_robot_clearance - run, 0.0).sum(axis=1)
-            return total
-        columns = np.zeros((len(X), len(self.others)))
-        if near.any():
-            run = point_segment_distance(self.others[near], self.origin, X[:, None, :])
-            columns[:, near] = np.maximum(self._path_robot_clearance[near] - run, 0.0)
-        total = columns.sum(axis=1)
-        return total
+        k = self._n_norms
+        DX, DY = x - self._px, y - self._py
+        square = DX[:k] * DX[:k]
+        square += DY[:k] * DY[:k]
+        rows = np.empty((len(DX), len(x)))
+        np.sqrt(square, out=rows[:k])
+        rows[2:k] -= self._circle_r
+        if k < len(rows):
+            ax, ay = DX[k:], DY[k:]
+            t = ax * self._seg_dx
+            t += ay * self._seg_dy
+            t *= self._seg_inv_length2
+            np.maximum(t, 0.0, out=t)
+            np.minimum(t, 1.0, out=t)
+            ax -= t * self._seg_dx
+            t *= self._seg_dy
+            ay -= t
+            ax *= ax
+            ay *= ay
+            ax += ay
+            np.sqrt(ax, out=rows[k:])
+        return rows, DX[0], DY[0], square[0]
+
+    def _run_clearance(self, dx: FloatArray, dy: FloatArray, run2: FloatArray, dist: FloatArray) -> FloatArray:
+        """Closest approach of each run origin -> X to a local obstacle surface: Obstacles.fan_clearance.
+
+        The minimum is taken in another order (minima are exact in any order); the distances from the run
+        ends to the walls are the rows of `dist`.
+        """
+        inv_length2 = np.maximum(run2, 1e-300)
+        np.divide(1.0, inv_length2, out=inv_length2)
+        # Distance from each point (a circle's centre, a wall's end) to each run: (points, m).
+        t = self._run_px * dx
+        t += self._run_py * dy
+        t *= inv_length2
+        np.maximum(t, 0.0, out=t)
+        np.minimum(t, 1.0, out=t)
+        to_run = t * dx
+        np.subtract(self._run_px, to_run, out=to_run)
+        t *= dy
+        np.subtract(self._run_py, t, out=t)
+        to_run *= to_run
+        t *= t
+        to_run += t
+        np.sqrt(to_run, out=to_run)
+        nc, walls = self._run_circles, self._run_walls
+        if nc:
+            circles = to_run[:nc]
+            circles -= self._run_radii
+            run: FloatArray = circles[0] if nc == 1 else circles.min(axis=0)
+            if not len(walls):
+                return run
+        ns = len(walls)
+        d = np.minimum(to_run[nc:nc + ns], to_run[nc + ns:])
+        np.minimum(d, dist[walls], out=d)
+        np.minimum(d, self._run_from_origin, out=d)
+        # A run that properly crosses a wall: the wall's ends lie strictly on either side of the run and the
+        # run's ends strictly on either side of the wall.
+        sx, sy, ex, ey = self._run_sx, self._run_sy, self._run_ex, self._run_ey
+        a = dx * sy
+        a -= dy * sx
+        b = dx * ey
+        b -= dy * ex
+        a *= b
+        crossing = a < 0.0
+        b = np.subtract(dy, sy, out=b)
+        b *= self._run_wx
+        c = np.subtract(dx, sx, out=a)
+        c *= self._run_wy
+        b -= c
+        b *= self._run_side
+        crossing &= b < 0.0
+        np.copyto(d, 0.0, where=crossing)
+        nearest: FloatArray = d[0] if ns == 1 else d.min(axis=0)
+        if nc:
+            np.minimum(run, nearest, out=nearest)
+        return nearest
+
+    def _add_robot_gap_violation(self, viol: FloatArray, gap: FloatArray, reach: float) -> None:
+        """viol += sum over the other robots of how far each candidate comes inside the robot's clearance.
+
+        A robot whose centre is farther from the origin than `reach` plus its clearance is out of every
+        candidate's way: its column of the (m, n_others) sum is 0.0 (in a crowd, most of them), and only the
+        others are added, in the order numpy's row sum would add them (sparse_row_sum), to the same bits.
+        """
+        near = np.flatnonzero(self._other_gap - reach < self.robot_clearance + self._slack)
+        if len(near) == len(self.others):
+            viol += np.maximum(self.robot_clearance - gap, 0.0).sum(axis=1)
+            return
+        columns = {int(k): np.maximum(np.subtract(self.robot_clearance[k], gap[:, k]), 0.0) for k in near}
+        total = sparse_row_sum(columns, len(self.others))
+        if total is not None:
+            viol += total
+
+    def _add_robot_run_violation(self, viol: FloatArray, dx: FloatArray, dy: FloatArray, run2: FloatArray,
+                                 reach: float) -> None:
+        """viol += sum over the other robots of how far each run origin-X comes inside the robot's clearance.
+
+        As geometry.point_segment_distance(others, origin, X) computes it, for the robots a run can reach;
+        the others' columns are 0.0, as in _add_robot_gap_violation.
+        """
+        near = np.flatnonzero(self._other_gap - reach < self._path_robot_clearance + self._slack)
+        if not len(near):
+            return
+        qx, qy = self._other_rel_x[near], self._other_rel_y[near]
+        t = qx * dx
+        t += qy * dy
+        t /= np.where(run2 > 0.0, run2, 1.0)
+        np.maximum(t, 0.0, out=t)
+        np.minimum(t, 1.0, out=t)
+        u = t * dx
+        np.subtract(qx, u, out=u)
+        t *= dy
+        np.subtract(qy, t, out=t)
+        u *= u
+        t *= t
+        u += t
+        np.sqrt(u, out=u)                                     # (near, m): distance of each run to each robot
+        np.subtract(self._path_robot_clearance[near][:, None], u, out=u)
+        np.maximum(u, 0.0, out=u)
+        total = sparse_row_sum({int(k): row for k, row in zip(near, u)}, len(self.others))
+        if total is not None:
+            viol += total
 
     def fitness(self, X: FloatArray) -> FloatArray:
         """What the swarm minimises: eq. 10 where feasible, INFEASIBLE + violation elsewhere."""
         f, viol = self.terms(X)
         return np.where(viol > 0.0, INFEASIBLE + viol, f)
+
+
+def sparse_row_sum(columns: dict[int, FloatArray], n: int) -> FloatArray | None:
+    """A.sum(axis=1), bit for bit, of an (m, n) array A that is +0.0 outside `columns` (index -> column of
+    values >= +0.0), without building A; None when there are no columns (the sum is all +0.0).
+
+    numpy sums each row of a C-ordered array pairwise: fewer than 8 values one after another from 0.0; up to
+    128 values in eight interleaved partial sums (value i goes to partial i % 8) combined as a tree, then
+    the last n % 8 values one after another; more values in two halves. Adding +0.0 changes no value, so
+    adding the given columns alone, each where the tree puts it, gives the same floats. (numpy is pinned in
+    requirements.txt; tests/fastep_core/planning/test_step_terms.py checks this against numpy itself.)
+    """
+    def add(u: FloatArray | None, v: FloatArray | None) -> FloatArray | None:
+        return v if u is None else u if v is None else u + v
+
+    def total(start: int, count: int) -> FloatArray | None:
+        if not any(start <= k < start + count for k in columns):
+            return None
+        if count < 8:
+            result = None
+            for k in range(start, start + count):
+                result = add(result, columns.get(k))
+            return result
+        if count <= 128:
+            body = count - count % 8
+            part = [columns.get(start + j) for j in range(8)]
+            for i in range(8, body, 8):
+                for j in range(8):
+                    part[j] = add(part[j], columns.get(start + i + j))
+            result = add(add(add(part[0], part[1]), add(part[2], part[3])),
+                         add(add(part[4], part[5]), add(part[6], part[7])))
+            for k in range(start + body, start + count):
+                result = add(result, columns.get(k))
+            return result
+        half = count // 2
+        half -= half % 8
+        return add(total(start, half), total(start + half, count - half))
+
+    return total(0, n)
 
 
 @dataclass(frozen=True)
@@ -136,11 +358,13 @@ class StepPlan:
 def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Generator,
               method: str = 'fastep') -> StepPlan | None:
     """Minimise the step fitness with FAStep (or ACO_R); None when no feasible waypoint was found."""
+    for recorder in _recorders:
+        recorder.append(copy.copy(problem))   # as posed: plan_step_passing_right reassigns pass_on_right
     if method == 'fastep':
         result = fastep(problem.fitness, problem.bounds(), n_fireflies=params.n_fireflies,
                         max_iter=params.max_iter, patience=params.patience, gamma=params.gamma,
                         beta0=params.beta0, alpha=params.alpha, alpha_damping=params.alpha_damping, tol=params.tol,
-                        rng=rng)
+                        rng=rng, attraction_sample=params.attraction_sample or None)
     elif method == 'aco':
         result = aco_r(problem.fitness, problem.bounds(), archive_size=params.aco_archive,
                        n_ants=params.aco_ants, q=params.aco_q, xi=params.aco_xi, max_iter=params.aco_iter,
@@ -150,6 +374,24 @@ def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Genera
     if not result.fun < INFEASIBLE:
         return None
     return StepPlan(np.asarray(result.x, dtype=float), float(result.fun), result)
+
+
+_recorders: list[list[StepProblem]] = []
+
+
+@contextmanager
+def recorded_step_problems() -> Iterator[list[StepProblem]]:
+    """Collect every StepProblem plan_step is given inside the block, in order (benchmarks replay them).
+
+    A problem is recorded as it was posed (a shallow copy: plan_step_passing_right sets and resets its
+    pass_on_right). Recording does not change what is planned.
+    """
+    problems: list[StepProblem] = []
+    _recorders.append(problems)
+    try:
+        yield problems
+    finally:
+        _recorders[:] = [r for r in _recorders if r is not problems]
 
 
 def plan_step_passing_right(problem: StepProblem, params: PlannerParams, rng: np.random.Generator, method: str,

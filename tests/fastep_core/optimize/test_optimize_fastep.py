@@ -174,3 +174,63 @@ def test_loop_reference_makes_exactly_the_same_moves(fun):
     b = fastep_loop(fun, BOX, max_iter=12, patience=12, rng=5)
     assert np.array_equal(a.x, b.x) and a.fun == b.fun
     assert np.array_equal(a.history, b.history) and (a.nit, a.nfev) == (b.nit, b.nfev)
+
+
+# Attraction to a sample of k brighter fireflies (attraction_sample; a departure from the paper, off by default).
+
+@pytest.mark.parametrize('seed', range(5))
+def test_attraction_sample_reaches_the_sphere_minimum(seed):
+    r = fastep(sphere, BOX, max_iter=200, patience=50, rng=seed, attraction_sample=5)
+    assert np.linalg.norm(r.x - CENTRE) < 1e-3 and r.fun < 1e-6
+
+
+def test_attraction_sample_is_deterministic_per_seed_and_stays_in_the_box():
+    bounds = np.array([[-1.0, 1.0], [0.0, 2.0]])
+    a, b = Recorder(lambda X: np.sum((X - 5.0) ** 2, axis=1)), Recorder(lambda X: np.sum((X - 5.0) ** 2, axis=1))
+    ra = fastep(a, bounds, rng=4, attraction_sample=3)
+    rb = fastep(b, bounds, rng=np.random.default_rng(4), attraction_sample=3)
+    assert np.array_equal(ra.x, rb.x) and np.array_equal(ra.history, rb.history) and ra.nfev == rb.nfev
+    assert np.array_equal(a.points, b.points)
+    assert np.all(a.points >= bounds[:, 0]) and np.all(a.points <= bounds[:, 1])
+    rc = fastep(rastrigin, RASTRIGIN_BOX, rng=5, attraction_sample=3)
+    rd = fastep(rastrigin, RASTRIGIN_BOX, rng=6, attraction_sample=3)
+    assert not np.array_equal(rc.history, rd.history)
+
+
+def test_attraction_sample_makes_at_most_k_candidates_per_firefly():
+    rec = Recorder(rastrigin)
+    r = fastep(rec, RASTRIGIN_BOX, n_fireflies=50, max_iter=4, patience=4, rng=0, attraction_sample=5)
+    attraction_batches = rec.batches[1::2]                 # initial swarm, then attraction / stepping ahead
+    assert r.nit == 4 and len(attraction_batches) == 4
+    # Ranked fireflies 0..4 have 0..4 brighter ones (all taken; the brightest walks), the 45 others take 5.
+    assert all(len(b) == 1 + (1 + 2 + 3 + 4) + 45 * 5 for b in attraction_batches)
+    paper = Recorder(rastrigin)
+    fastep(paper, RASTRIGIN_BOX, n_fireflies=50, max_iter=1, patience=1, rng=0)
+    assert len(paper.batches[1]) == 1 + 50 * 49 // 2
+
+
+def test_sampled_keeps_k_brighter_fireflies_per_row_without_replacement():
+    from fastep_core.optimize.firefly import Swarm
+    swarm = Swarm(8, np.zeros(2), np.ones(2), gamma=1.0, beta0=2.0)
+    F = np.array([0.0, 1.0, 1.0, 2.0, 3.0, 4.0, 5.0, 6.0])   # a tie: fireflies 1 and 2 outshine neither
+    brighter = F < F[:, None]
+    keep = swarm.sampled(brighter, np.random.default_rng(0), 3)
+    assert not (keep & ~brighter).any()                              # only brighter fireflies
+    assert np.array_equal(keep.sum(axis=1), np.minimum(brighter.sum(axis=1), 3))
+    assert np.array_equal(keep[:4], brighter[:4])                    # three or fewer brighter: all of them
+    draws = [swarm.sampled(brighter, np.random.default_rng(s), 3)[7] for s in range(40)]
+    assert len({tuple(np.flatnonzero(d)) for d in draws}) > 5          # a different sample per draw
+
+
+def test_attraction_sample_off_is_the_paper():
+    a = fastep(rastrigin, RASTRIGIN_BOX, rng=7)
+    b = fastep(rastrigin, RASTRIGIN_BOX, rng=7, attraction_sample=None)
+    loop = fastep_loop(rastrigin, RASTRIGIN_BOX, rng=7)
+    assert np.array_equal(a.x, b.x) and np.array_equal(a.history, b.history) and a.nfev == b.nfev
+    assert np.array_equal(a.x, loop.x) and np.array_equal(a.history, loop.history)
+
+
+@pytest.mark.parametrize('k', [0, -1, 2.5, True])
+def test_attraction_sample_must_be_a_positive_integer(k):
+    with pytest.raises(ParameterError, match='attraction_sample'):
+        fastep(sphere, BOX, attraction_sample=k)

@@ -90,7 +90,7 @@ def test_an_unknown_step_optimizer_is_a_parameter_error():
 def test_robots_out_of_reach_are_skipped_without_changing_a_bit():
     """In a crowd, the runs' clearance from the other robots is measured only for the robots a run can reach
     (issue 15, many robots); every violation must stay the same, bit for bit, as measuring them all."""
-    from fastep_core.geometry import point_segment_distance
+    from fastep_testing.step_reference import reference_terms
     rng = np.random.default_rng(5)
     world = World.from_obstacles([0, 0, 60, 60], [])
     for _ in range(50):
@@ -99,6 +99,51 @@ def test_robots_out_of_reach_are_skipped_without_changing_a_bit():
         problem = StepProblem(world, origin, np.array([59.0, 59.0]), 0.7, 2.0, others=others,
                               robot_clearance=rng.uniform(0.8, 1.5, len(others)))
         X = origin + rng.uniform(-2.0, 2.0, (500, 2))
-        run = point_segment_distance(problem.others, problem.origin, X[:, None, :])
-        expected = np.maximum(problem._path_robot_clearance - run, 0.0).sum(axis=1)
-        assert np.array_equal(problem._robot_run_violation(X), expected)
+        assert np.array_equal(problem.terms(X)[1], reference_terms(problem, X)[1])
+
+
+def test_recorded_step_problems_are_those_posed_inside_the_block():
+    from fastep_core.planning.step import recorded_step_problems
+    ahead = np.array([[3.0, 0.0]])
+    p = problem()
+    with recorded_step_problems() as outer:
+        plan_step(p, PlannerParams(), np.random.default_rng(0))
+        with recorded_step_problems() as inner:
+            p.pass_on_right = ahead
+            plan_step(p, PlannerParams(), np.random.default_rng(0))
+            p.pass_on_right = np.zeros((0, 2))
+    plan_step(p, PlannerParams(), np.random.default_rng(0))
+    assert len(outer) == 2 and len(inner) == 1
+    assert outer[0].pass_on_right.shape == (0, 2)
+    assert np.array_equal(inner[0].pass_on_right, ahead)
+    assert np.array_equal(outer[1].pass_on_right, ahead)       # as posed, not as left afterwards
+
+
+def test_default_step_plan_is_the_loop_reference_move_for_move():
+    """The paper's FAStep (attraction_sample 0) on a real step problem: the vectorised swarm and the plain-loop
+    reference make the same moves, so they return the same waypoint, bit for bit."""
+    from fastep_testing.fastep_loop import fastep_loop
+    params = PlannerParams()
+    p = problem(others=np.array([[8.5, 6.0]]), robot_clearance=np.array([1.2]))
+    kw = dict(n_fireflies=params.n_fireflies, max_iter=params.max_iter, patience=params.patience,
+              gamma=params.gamma, beta0=params.beta0, alpha=params.alpha, alpha_damping=params.alpha_damping,
+              tol=params.tol)
+    for seed in range(2):
+        step = plan_step(p, params, np.random.default_rng(seed))
+        reference = fastep_loop(p.fitness, p.bounds(), rng=np.random.default_rng(seed), **kw)
+        assert step is not None and np.array_equal(step.waypoint, reference.x) and step.cost == reference.fun
+
+
+@pytest.mark.parametrize('seed', range(5))
+def test_attraction_sample_plans_a_feasible_step_close_to_the_papers(seed):
+    p = problem()
+    paper = plan_step(p, PlannerParams(), np.random.default_rng(seed))
+    sampled = plan_step(p, PlannerParams(attraction_sample=5), np.random.default_rng(seed))
+    again = plan_step(p, PlannerParams(attraction_sample=5), np.random.default_rng(seed))
+    assert paper is not None and sampled is not None and again is not None
+    assert np.array_equal(sampled.waypoint, again.waypoint)
+    w = sampled.waypoint
+    assert np.hypot(*(w - p.origin)) <= 2.0 + 1e-9 and WORLD.obstacles.clearance(w) >= 0.7 - 1e-9
+    assert WORLD.obstacles.path_clearance(p.origin, w) >= 0.7 - 1e-9
+    assert sampled.cost <= paper.cost + 2e-3                  # 2e-3 of fitness: 20 cm nearer the goal at c = 0.01
+    assert sampled.result.nfev < paper.result.nfev / 2
