@@ -1,6 +1,6 @@
 """fastep-bench: regenerate the paper's Table 2 (and optimality ratios) from many seeded in-process runs.
 
-    fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal]
+    fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal dwa]
                  [--workers 2] [--seed 0] [--out docs/] [--report table2] [--json FILE] [--no-figures]
                  [--progress]
 
@@ -34,7 +34,8 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument('--scenarios', nargs='+', default=list(experiments.TABLE2), metavar='SCENARIO',
                    help='built-in names or YAML paths, or "all" for every built-in (default: Table 2)')
     p.add_argument('--algorithms', nargs='+', default=list(ALGORITHMS), choices=ALGORITHMS, metavar='ALG',
-                   help=f'planners among {", ".join(ALGORITHMS)} (default: all; optimal runs once)')
+                   help=f'planners among {", ".join(ALGORITHMS)} (default: all; optimal runs once; dwa skips '
+                   'scenarios with a tractor-trailer)')
     p.add_argument('--workers', type=positive_int, default=2, help='worker processes (default 2)')
     p.add_argument('--seed', type=seed, default=0, help='first seed (default 0)')
     p.add_argument('--out', type=Path, default=Path('docs'), help='output folder (default docs/)')

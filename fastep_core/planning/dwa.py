@@ -8,8 +8,11 @@ guard, its 'no valid path' check and progress checker; planning/navigator.py).
 Every control tick, as in the paper:
 1. The search space (section 4.1 of the paper). Velocities (vx, vy) on a `dwa_samples` x `dwa_samples` grid
    over the dynamic window, the velocities reachable within one tick from the current one under the
-   acceleration limit (`dwa_acceleration` per axis), minus those faster than `max_speed` (the paper's V_s).
-   The current velocity is the command last sent (the point mass's plant follows its command exactly).
+   acceleration limit `dwa_acceleration`, minus those faster than `max_speed` (the paper's V_s). A holonomic
+   robot's acceleration is a vector, so the window is a disc: a square one (a limit per axis) would let the
+   velocity term favour its corners, and a robot starting from rest would veer off the straight line.
+   The current velocity is the command last sent (the point mass's plant follows its command exactly), or
+   rest after a gap of more than two ticks (a planner node that held the robot still).
 2. The rollout: each sample is held for `dwa_horizon` seconds, in `dwa_rollout_steps` straight segments, and
    checked against the obstacles (circles, segments), the workspace walls and the other robots, which move
    on at their last known velocities (moving obstacles). A segment "hits" when it comes within the robot's
@@ -26,10 +29,12 @@ Every control tick, as in the paper:
    - progress: how much closer to the goal the rollout ends, over max_speed * horizon (in [-1, 1]). The
      paper's heading term scores the angle to the goal of a robot that must turn first; a holonomic robot
      has no heading to turn, so the goal progress takes its place, and it slows the robot down at the goal;
-   - clearance: the smallest distance the rollout keeps from any obstacle, wall or robot (beyond the contact
-     distance of step 2), capped at `dwa_clearance_cap` and divided by it (the paper's dist term, which is
-     the free run along the trajectory: in a straight-line rollout that is what the admissibility already
-     uses, so the score here rewards keeping away from obstacles, like DWB's obstacle critic);
+   - clearance: the smallest margin the rollout keeps from any obstacle, wall or robot (beyond the contact
+     distance of step 2), capped at `dwa_clearance_cap` and divided by it. The paper's dist term is the free
+     run along the trajectory, which in a straight-line rollout is what the admissibility already uses; so
+     the score here rewards keeping away, like DWB's obstacle critic. The margin is not floored at zero: a
+     rollout that would cut less deep into another robot's way (admissible, as it could still stop) scores
+     better, so the robot swerves for an oncoming one instead of driving on until it must brake;
    - velocity: speed / max_speed (the paper's vel term).
    The terms are scaled by fixed bounds, not by the spread of the samples (a tick where all the samples are
    alike would otherwise blow up noise), and the paper's smoothing of G over the window is left out. The
@@ -103,6 +108,8 @@ class DynamicWindow(Navigator):
         self.escapes_traps = bool(self.params.dwa_escape)
 
     def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
+        if self._last_t is not None and t - self._last_t > 2.0 * self.params.dt:
+            self.velocity = np.zeros(2)   # ticks were missed (a planner node holding a robot): start from rest
         command = super().update(t, state, others)
         # Whatever was sent (a guarded stop, zeros at the goal) is the velocity the next window starts from.
         self.velocity = np.array(command[:2], dtype=float)
@@ -134,11 +141,12 @@ class DynamicWindow(Navigator):
 
     # ------------------------------------------------------------------------------------- the search
     def window(self, dt: float) -> FloatArray:
-        """The velocity samples (n, 2): a grid over the dynamic window around the current velocity."""
+        """The velocity samples (n, 2): a grid over the dynamic window (a disc) around the current velocity."""
         reach = self.params.dwa_acceleration * dt
         offsets = np.linspace(-reach, reach, self.params.dwa_samples)
-        vx, vy = np.meshgrid(self.velocity[0] + offsets, self.velocity[1] + offsets, indexing='ij')
-        return np.column_stack([vx.ravel(), vy.ravel()])
+        dx, dy = np.meshgrid(offsets, offsets, indexing='ij')
+        inside = dx * dx + dy * dy <= reach * reach * (1.0 + 1e-9)
+        return self.velocity + np.column_stack([dx[inside], dy[inside]])
 
     def rollout(self, position: FloatArray, samples: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Times (k + 1,) and positions (n, k + 1, 2) of each sample held over the horizon (straight lines)."""
@@ -164,7 +172,7 @@ class DynamicWindow(Navigator):
         if robots is not None:
             hit |= ((robots < 0.0) & (robots < robots_now)).any(axis=-1)
             margin = np.minimum(margin, robots.min(axis=-1))
-            near = near or bool((robots_now < reach).any())
+            near = True   # a robot whose path the rollouts can reach
 
         # Step 3: admissible if it can stop before the first hit (with none, before the end of the horizon).
         first = np.where(hit.any(axis=1), times[np.argmax(hit, axis=1)], horizon)
@@ -177,7 +185,7 @@ class DynamicWindow(Navigator):
         scale = p.max_speed * horizon
         progress = (math.hypot(goal[0] - position[0], goal[1] - position[1]) -
                     np.hypot(goal[0] - points[:, -1, 0], goal[1] - points[:, -1, 1])) / scale
-        clearance = np.clip(margin.min(axis=1), 0.0, p.dwa_clearance_cap) / p.dwa_clearance_cap
+        clearance = np.minimum(margin.min(axis=1), p.dwa_clearance_cap) / p.dwa_clearance_cap
         score = p.dwa_heading * progress + p.dwa_clearance * clearance + p.dwa_velocity * speed / p.max_speed
         score = np.where(admissible, score, -np.inf)
         best = int(np.argmax(score))

@@ -100,8 +100,8 @@ class PlannerParams:
     aco_iter: int = _p(30, 'ACO_R iterations per step at most', 1, 10_000)
     # DWA, the Dynamic Window Approach (Fox, Burgard & Thrun 1997; planning/dwa.py); defaults measured in
     # docs/benchmarks.md ("DWA").
-    dwa_acceleration: float = _p(1.0, 'DWA acceleration and braking limit per axis: the dynamic window is the '
-                                      'current velocity +- this times the tick (m/s^2)', 1e-3, 100.0)
+    dwa_acceleration: float = _p(1.0, 'DWA acceleration and braking limit: the dynamic window is the disc of '
+                                      'velocities within this times the tick of the current one (m/s^2)', 1e-3, 100.0)
     dwa_samples: int = _p(11, 'DWA velocity samples per axis of the dynamic window (odd: the current velocity is '
                               'one of them)', 2, 51)
     dwa_horizon: float = _p(2.0, 'DWA rollout: each sampled velocity is held this long (s)', 0.1, 20.0)

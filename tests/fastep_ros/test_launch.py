@@ -152,6 +152,7 @@ def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str]
 @pytest.mark.parametrize('module,params,words', [
     ('map_server', ['scenario:=no_such_scenario_here'], 'no built-in scenario'),
     ('planner', ['algorithm:=dijkstra'], 'algorithm must be one of'),
+    ('planner', ['algorithm:=dwa', 'model:=tractor_trailer'], 'dwa drives point_mass robots only'),
     ('planner', ['max_speed:=-1.0'], 'max_speed'),
     ('plant', ['model:=tractor_trailer', 'start:=[1.0, 2.0]'], 'start must have 4 values'),
     ('plant', ['start:=[.nan, 2.0]'], 'start must be finite'),
