@@ -10,7 +10,9 @@ Every control tick, as in the paper:
    over the dynamic window, the velocities reachable within one tick from the current one under the
    acceleration limit `dwa_acceleration`, minus those faster than `max_speed` (the paper's V_s). A holonomic
    robot's acceleration is a vector, so the window is a disc: a square one (a limit per axis) would let the
-   velocity term favour its corners, and a robot starting from rest would veer off the straight line.
+   velocity term favour its corners, and a robot starting from rest would veer off the straight line. The
+   grid's axes lie along and across the bearing to the goal, for the same reason: on axes of the map a grid
+   point just off a diagonal bearing is faster than the one on it, and the robot veered.
    The current velocity is the command last sent (the point mass's plant follows its command exactly), or
    rest after a gap of more than two ticks (a planner node that held the robot still).
 2. The rollout: each sample is held for `dwa_horizon` seconds, in `dwa_rollout_steps` straight segments, and
@@ -140,13 +142,16 @@ class DynamicWindow(Navigator):
         return self.guard(state, choice.velocity, dt, others)
 
     # ------------------------------------------------------------------------------------- the search
-    def window(self, dt: float) -> FloatArray:
-        """The velocity samples (n, 2): a grid over the dynamic window (a disc) around the current velocity."""
+    def window(self, dt: float, bearing: float = 0.0) -> FloatArray:
+        """The velocity samples (n, 2): a grid over the dynamic window (a disc) around the current velocity,
+        its axes along `bearing` (radians) and across it."""
         reach = self.params.dwa_acceleration * dt
         offsets = np.linspace(-reach, reach, self.params.dwa_samples)
-        dx, dy = np.meshgrid(offsets, offsets, indexing='ij')
-        inside = dx * dx + dy * dy <= reach * reach * (1.0 + 1e-9)
-        return self.velocity + np.column_stack([dx[inside], dy[inside]])
+        along, across = np.meshgrid(offsets, offsets, indexing='ij')
+        inside = along * along + across * across <= reach * reach * (1.0 + 1e-9)
+        along, across = along[inside], across[inside]
+        c, s = math.cos(bearing), math.sin(bearing)
+        return self.velocity + np.column_stack([c * along - s * across, s * along + c * across])
 
     def rollout(self, position: FloatArray, samples: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Times (k + 1,) and positions (n, k + 1, 2) of each sample held over the horizon (straight lines)."""
@@ -156,7 +161,7 @@ class DynamicWindow(Navigator):
     def search(self, position: FloatArray, goal: FloatArray, dt: float, others: Sequence[OtherRobot]) -> Choice:
         """One tick of DWA (module docstring, steps 1-4)."""
         p = self.params
-        samples = self.window(dt)
+        samples = self.window(dt, math.atan2(goal[1] - position[1], goal[0] - position[0]))
         speed = np.hypot(samples[:, 0], samples[:, 1])
         times, points = self.rollout(position, samples)
         horizon = float(times[-1])
