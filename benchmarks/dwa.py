@@ -1,13 +1,14 @@
 """DWA's parameters measured: arrival, collisions, path / exact optimum and CPU per setting, on fixed worlds.
 
     python -m benchmarks.dwa [--config '{"dwa_clearance": 0.5}' ...] [--random 1 2 5 9 11 12 13] [--u-traps 0]
+                             [--algorithm dwa]
 
 Each --config (JSON planner overrides; '{}' is the defaults) runs `dwa` once (it draws no random numbers) on
 table2_s1-s3, case_study_1-2, the given random worlds (fastep_core.random_scenarios, point masses only) and
 U-trap worlds (u_trap_scenario_data seeds 0..N-1), one process. Prints one line per setting: robots arrived
 without collision, collisions, path / exact optimum (mean, worst) and simulated seconds per optimal metre over
 the arrivals, the smallest margin kept, and CPU seconds of the whole setting. How the defaults of the `dwa_*`
-parameters were chosen: docs/benchmarks.md ("DWA").
+parameters were chosen: docs/benchmarks.md ("DWA"). --algorithm runs another planner (seed 0) on the same worlds.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import numpy as np
 
 from fastep_core import cli
 from fastep_core.errors import ParameterError
+from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.random_scenarios import random_scenario_data, u_trap_scenario_data
 from fastep_core.scenario import Scenario, load_scenario, parse_scenario
@@ -38,7 +40,7 @@ def worlds(random: Sequence[int], u_traps: int) -> dict[str, Scenario]:
     return out
 
 
-def measure(scenarios: dict[str, Scenario], overrides: dict[str, float]) -> str:
+def measure(scenarios: dict[str, Scenario], overrides: dict[str, float], algorithm: str = 'dwa') -> str:
     arrived = total = collided = 0
     ratios: list[float] = []
     pace: list[float] = []
@@ -46,7 +48,7 @@ def measure(scenarios: dict[str, Scenario], overrides: dict[str, float]) -> str:
     cpu = time.process_time()
     for scenario in scenarios.values():
         scenario = dataclasses.replace(scenario, planner=scenario.planner.with_overrides(overrides))
-        run = simulate(scenario, 'dwa', 0)
+        run = simulate(scenario, algorithm, 0)
         for spec, robot in zip(scenario.robots, run.robots):
             best = shortest_path(scenario.world, spec.start[:2], spec.goal,
                                  spec.radius + scenario.planner.clearance_margin)
@@ -58,7 +60,7 @@ def measure(scenarios: dict[str, Scenario], overrides: dict[str, float]) -> str:
                 ratios.append(robot.path_length / best.length)
                 pace.append((robot.sim_time or 0.0) / best.length)
     cpu = time.process_time() - cpu
-    return (f'{json.dumps(overrides):44s} arrived {arrived}/{total}, collided {collided}, path/opt mean '
+    return (f'{algorithm} {json.dumps(overrides):40s} arrived {arrived}/{total}, collided {collided}, path/opt mean '
             f'{np.mean(ratios):.4f} worst {np.max(ratios):.3f}, {np.mean(pace):.3f} s per optimal m, '
             f'min margin {margin:.3f} m, CPU {cpu:.1f} s')
 
@@ -69,6 +71,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     p.add_argument('--config', nargs='+', default=['{}'], help='JSON planner overrides per setting')
     p.add_argument('--random', nargs='*', type=cli.seed, default=list(RANDOM), help='random world seeds')
     p.add_argument('--u-traps', type=int, default=0, help='U-trap worlds, seeds 0..N-1')
+    p.add_argument('--algorithm', choices=ALGORITHMS, default='dwa', help='planner (default dwa; seed 0)')
 
     def run() -> int:
         args = p.parse_args(argv)
@@ -79,7 +82,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         scenarios = worlds(args.random, args.u_traps)
         print(f'{len(scenarios)} worlds; load average ' + ' '.join(f'{v:.2f}' for v in os.getloadavg()))
         for overrides in configs:
-            print(measure(scenarios, overrides), flush=True)
+            print(measure(scenarios, overrides, args.algorithm), flush=True)
         return 0
     return cli.guard(prog, run)
 

@@ -108,7 +108,7 @@ class PlannerParams:
     dwa_rollout_steps: int = _p(20, 'DWA rollout: straight segments per rollout, checked for collisions', 1, 200)
     dwa_heading: float = _p(1.0, 'DWA objective weight of goal progress over the rollout (the paper\'s heading)',
                             0.0)
-    dwa_clearance: float = _p(0.5, 'DWA objective weight of the clearance the rollout keeps (the paper\'s dist)',
+    dwa_clearance: float = _p(0.2, 'DWA objective weight of the clearance the rollout keeps (the paper\'s dist)',
                               0.0)
     dwa_velocity: float = _p(0.2, 'DWA objective weight of speed / max_speed (the paper\'s vel)', 0.0)
     dwa_clearance_cap: float = _p(1.0, 'DWA clearance beyond this no longer scores (m)', 1e-3)
