@@ -48,7 +48,8 @@ on arrays of samples x steps x obstacles, only over the obstacles the rollouts c
 What it does not do: it is a local planner. In a U-shaped trap facing the robot it drives into the pocket and
 stays where no admissible velocity brings it closer to the goal; FAStep-Kinematic and ACO-Kinematic leave
 such traps along the exact path (the navigator's trap escape), which DWA deliberately does not get. The
-progress checker then ends the run: "failed to make progress ... (DWA: a local minimum)". With
+progress checker then ends the run: "failed to make progress ... (DWA: a local minimum)", with ", another
+robot in the way" when one is within sensing_range (two robots face to face in a corridor hold each other). With
 `dwa_escape` = 1 it gets that escape too: after trap_timeout without progress, the target whose progress DWA
 scores is the exact path's carrot instead of the goal, until the robot has left the trap (the yardstick with
 the same safety net as the others; what a Nav2 user gets from a global planner above DWB).
@@ -116,7 +117,11 @@ class DynamicWindow(Navigator):
         # Whatever was sent (a guarded stop, zeros at the goal) is the velocity the next window starts from.
         self.velocity = np.array(command[:2], dtype=float)
         if self.failed and self.reason.startswith('failed to make progress') and LOCAL_MINIMUM not in self.reason:
-            self.reason = f'{self.reason} ({LOCAL_MINIMUM})'
+            # Two robots face to face in a corridor hold each other there too: say so.
+            x, y = float(state[0]), float(state[1])
+            blocked = any(math.hypot(o.position[0] - x, o.position[1] - y) - o.radius - self.radius <
+                          self.params.sensing_range for o in others)
+            self.reason = f'{self.reason} ({LOCAL_MINIMUM}{", another robot in the way" if blocked else ""})'
         return command
 
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:

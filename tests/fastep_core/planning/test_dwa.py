@@ -221,3 +221,17 @@ def test_a_circle_on_the_straight_line_is_passed_with_the_clearance():
         if nav.mode.value == 'arrived':
             break
     assert nav.mode.value == 'arrived' and closest >= nav.params.clearance_margin - 1e-9
+
+
+def test_two_robots_face_to_face_in_a_corridor_fail_saying_so_without_touching():
+    # Random world 10, with the escape: r1 and r3 meet head-on between two walls, each the other's obstacle;
+    # neither has an admissible velocity that brings it closer (a known failure of reciprocal DWA).
+    scenario = random_scenario(10, tractor_share=0.0)
+    scenario = dataclasses.replace(scenario, planner=scenario.planner.with_overrides(
+        {'dwa_escape': 1, 'progress_timeout': 30.0}))
+    run = simulate(scenario, 'dwa', 0)
+    assert_safe(scenario, run)
+    statuses = {robot.name: robot.status for robot in run.robots}
+    assert statuses['r2'] == statuses['r4'] == 'arrived: goal reached'
+    assert statuses['r1'] == statuses['r3'] == ('failed: failed to make progress: not 0.5 m closer to the goal in '
+                                                f'30 s ({LOCAL_MINIMUM}, another robot in the way)')
