@@ -252,17 +252,3 @@ class DynamicWindow(Navigator):
         brake: NDArray[np.float64] = self.velocity * (slower / speed) if speed > 0.0 else np.zeros(2)
         return brake
 
-
-def main() -> None:
-    """Drive DWA through table2_s2 and print what it did."""
-    from fastep_core.scenario import load_scenario
-    from fastep_core.simulator import simulate
-
-    run = simulate(load_scenario('table2_s2'), 'dwa', 0)
-    for robot in run.robots:
-        print(f'{robot.name}: {robot.status}; path {robot.path_length:.2f} m in {robot.sim_time} s, '
-              f'min clearance {robot.min_clearance:.3f} m, compute {robot.compute_time:.2f} s')
-
-
-if __name__ == '__main__':
-    main()
