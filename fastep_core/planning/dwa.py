@@ -6,7 +6,7 @@ controller descends from it), so it is the yardstick, run in the same harness (t
 guard, its 'no valid path' check and progress checker; planning/navigator.py).
 
 Every control tick, as in the paper:
-1. The search space (section 4.1 of the paper). Velocities (vx, vy) on a `dwa_samples` x `dwa_samples` grid
+1. The search space. Velocities (vx, vy) on a `dwa_samples` x `dwa_samples` grid
    over the dynamic window, the velocities reachable within one tick from the current one under the
    acceleration limit `dwa_acceleration`, minus those faster than `max_speed` (the paper's V_s). A holonomic
    robot's acceleration is a vector, so the window is a disc: a square one (a limit per axis) would let the
@@ -26,7 +26,7 @@ Every control tick, as in the paper:
    `dwa_acceleration` after one tick at the sampled speed: dt + speed / (2 a) <= time of the hit (the start
    of the first hitting segment, which errs on the safe side; with no hit, the end of the horizon, the only
    stretch known to be free). The others are discarded. With none left, the robot brakes as hard as allowed.
-4. The objective (the paper's eq. 14), maximised over the admissible samples:
+4. The objective (the paper's G, without its smoothing), maximised over the admissible samples:
        G(v) = dwa_heading * progress(v) + dwa_clearance * clearance(v) + dwa_velocity * velocity(v)
    - progress: how much closer to the goal the rollout ends, over max_speed * horizon (in [-1, 1]). The
      paper's heading term scores the angle to the goal of a robot that must turn first; a holonomic robot
@@ -49,10 +49,11 @@ What it does not do: it is a local planner. In a U-shaped trap facing the robot 
 stays where no admissible velocity brings it closer to the goal; FAStep-Kinematic and ACO-Kinematic leave
 such traps along the exact path (the navigator's trap escape), which DWA deliberately does not get. The
 progress checker then ends the run: "failed to make progress ... (DWA: a local minimum)", with ", another
-robot in the way" when one is within sensing_range (two robots face to face in a corridor hold each other). With
-`dwa_escape` = 1 it gets that escape too: after trap_timeout without progress, the target whose progress DWA
-scores is the exact path's carrot instead of the goal, until the robot has left the trap (the yardstick with
-the same safety net as the others; what a Nav2 user gets from a global planner above DWB).
+robot in the way" when one is within sensing_range (two robots face to face in a corridor hold each
+other). With `dwa_escape` = 1 it gets that escape too: after trap_timeout without progress, the target
+whose progress DWA scores is the exact path's carrot instead of the goal, until the robot has left the trap
+(the yardstick with the same safety net as the others; what a Nav2 user gets from a global planner above
+DWB).
 
 Robot models: the holonomic point mass only. A tractor-trailer is refused when the navigator is made (one
 line, from `make_navigator`). The sampling is generic enough for another model: `window` gives the samples
