@@ -41,7 +41,7 @@ import numpy as np
 
 from fastep_core.cli import progress_bar
 from fastep_core.errors import ParameterError
-from fastep_core.planning.algorithms import algorithm_name
+from fastep_core.planning.algorithms import algorithm_name, drives
 from fastep_core.planning.optimal import OptimalPath, shortest_path
 from fastep_core.random_scenarios import parse_family_source, random_family_data
 from fastep_core.scenario import Scenario, load_scenario, parse_scenario
@@ -49,7 +49,7 @@ from fastep_core.simulator import Run, simulate
 
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
-    'tasks', 'run_task', 'run_batch', 'pool_context', 'summarise', 'compare', 'enhancement',
+    'tasks', 'drives_scenario', 'run_task', 'run_batch', 'pool_context', 'summarise', 'compare', 'enhancement',
     'optimal_lengths', 'straight_lengths', 'markdown_report', 'metric_values', 'cached_scenario', 'ExamplePaths',
     'example_paths',
 ]
@@ -106,9 +106,18 @@ Task = tuple[str, str, int]
 
 
 def tasks(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0: int = 0) -> list[Task]:
-    """Every (scenario, algorithm, seed) simulate call of a batch; deterministic algorithms get one seed."""
-    return [(s, a, seed) for s in scenarios for a in algorithms
+    """Every (scenario, algorithm, seed) simulate call of a batch; deterministic algorithms get one seed.
+
+    An algorithm is left out of a scenario with a robot it cannot drive (dwa and a tractor-trailer): its row is
+    missing from the report, the rest of the batch runs.
+    """
+    return [(s, a, seed) for s in scenarios for a in algorithms if drives_scenario(a, s)
             for seed in range(seed0, seed0 + (1 if a in DETERMINISTIC else runs))]
+
+
+def drives_scenario(algorithm: str, source: str) -> bool:
+    """Can the algorithm drive every robot of the scenario (planning.algorithms.drives)?"""
+    return all(drives(algorithm, spec.model) for spec in cached_scenario(source).robots)
 
 
 @functools.lru_cache(maxsize=1024)
@@ -385,6 +394,6 @@ def example_paths(scenarios: Sequence[str], algorithms: Sequence[str], seed: int
         exact = {spec.name: shortest_path(scenario.world, spec.start[:2], spec.goal,
                                           spec.radius + scenario.planner.clearance_margin)
                  for spec in scenario.robots}
-        runs = {a: simulate(scenario, a, seed) for a in algorithms if a != 'optimal'}
+        runs = {a: simulate(scenario, a, seed) for a in algorithms if a != 'optimal' and drives_scenario(a, source)}
         out.append(ExamplePaths(source, scenario, seed, exact, runs))
     return out

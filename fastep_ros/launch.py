@@ -1,6 +1,6 @@
 """fastep-launch: run a scenario through the live ROS 2 graph and report what every robot did.
 
-    fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco] [--seed N]
+    fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco|optimal|dwa] [--seed N]
                   [--json OUT] [--plot OUT.png] [--no-clock] [--verbose]
 
 Starts, each as its own process (`python -m fastep_ros.<node> --ros-args ...`): the map, then a plant and a
@@ -38,7 +38,7 @@ import numpy as np
 from fastep_core.cli import Parser, fail, guard, seed
 from fastep_core.errors import ScenarioError
 from fastep_core.metrics import trajectory_margins
-from fastep_core.planning.algorithms import ALGORITHMS
+from fastep_core.planning.algorithms import ALGORITHMS, check_drives
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import GraphConflict, LaunchError
@@ -675,6 +675,7 @@ def _main(argv: Sequence[str] | None) -> int:
             raise ScenarioError(f'scenario {args.scenario!r}: robots[{i}].name {spec.name[:40]!r}'
                                 f'{"..." if len(spec.name) > 40 else ""} cannot name a robot on the ROS graph: '
                                 f'{problem}')
+        check_drives(args.algorithm, spec.model, spec.name)   # dwa and a tractor-trailer: one line, nothing started
     # Outputs are checked before anything starts: a run is not wasted on a file that cannot be written.
     for flag, path in (('--json', args.json), ('--plot', args.plot), ('--record', args.record)):
         if path is not None:

@@ -1,4 +1,4 @@
-"""fastep-planner: FAStep-Kinematic (or ACO-Kinematic) planning and control for one robot.
+"""fastep-planner: FAStep-Kinematic (or ACO-Kinematic, Optimal-Kinematic, DWA) planning and control for one robot.
 
     fastep-planner --ros-args -r __ns:=/r1 -p algorithm:=fastep -p model:=point_mass -p robot_radius:=0.5
 
@@ -48,7 +48,7 @@ from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import GoalError, ParameterError
-from fastep_core.planning.algorithms import ALGORITHMS, make_navigator
+from fastep_core.planning.algorithms import ALGORITHM_NAMES, ALGORITHMS, check_drives, make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
@@ -99,8 +99,9 @@ class PlannerNode(Node):
         super().__init__(node_name, **kwargs)
         guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.params = self._declare_planner_params()
-        self.algorithm = declare(self, 'algorithm', 'fastep', 'fastep (FAStep-Kinematic) or aco (ACO-Kinematic)',
-                                 constraints='fastep | aco')
+        self.algorithm = declare(self, 'algorithm', 'fastep',
+                                 ', '.join(f'{a} ({name})' for a, name in ALGORITHM_NAMES.items()),
+                                 constraints=' | '.join(ALGORITHMS))
         self.model = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
                              constraints='point_mass | tractor_trailer')
         self.radius = declare(self, 'robot_radius', 0.5, 'safety radius: centre-to-obstacle-surface distance '
@@ -203,6 +204,10 @@ class PlannerNode(Node):
                                f'got {self.algorithm!r}')
         if self.model not in MODELS:
             raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model!r}')
+        try:
+            check_drives(self.algorithm, self.model)
+        except ParameterError as exc:
+            raise StartupError(f'parameter algorithm: {exc}') from None
         check_range('control_rate_hz', self.control_rate_hz, *RATE_RANGE, ' Hz')
         for name, value in (('robot_radius', self.radius), ('odom_timeout', self.odom_timeout), ('length', length),
                             ('trailer_length', trailer_length)):

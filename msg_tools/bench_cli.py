@@ -1,7 +1,7 @@
 """fastep-bench: regenerate the paper's Table 2 (and optimality ratios) from many seeded in-process runs, or run
 every planner on random world families.
 
-    fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal]
+    fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal dwa]
                  [--workers 2] [--seed 0] [--out docs/] [--report table2] [--json FILE] [--no-figures]
                  [--progress] [--planner-set NAME=VALUE ...]
     fastep-bench --families [FAMILY ...] [--worlds 30] [--runs 1] [--algorithms ...] [--seed 0] [--out DIR]
@@ -56,7 +56,8 @@ def _parser(prog: str) -> argparse.ArgumentParser:
                    help='with --families: the worst-world table and figure show where this planner\'s path / '
                         'optimum was worst (default: any planner but optimal)')
     p.add_argument('--algorithms', nargs='+', default=list(ALGORITHMS), choices=ALGORITHMS, metavar='ALG',
-                   help=f'planners among {", ".join(ALGORITHMS)} (default: all; optimal runs once)')
+                   help=f'planners among {", ".join(ALGORITHMS)} (default: all; optimal runs once; dwa skips '
+                   'scenarios with a tractor-trailer)')
     p.add_argument('--planner-set', nargs='+', default=[], type=_override, metavar='NAME=VALUE',
                    help='planner parameter overrides for every planner, e.g. stuck_steps=1 plan_horizon=2')
     p.add_argument('--workers', type=positive_int, default=2, help='worker processes (default 2)')

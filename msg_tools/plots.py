@@ -53,7 +53,7 @@ WALL_GREY = '0.25'
 MOVER_COLOUR = 'tab:purple'
 MOVER_SNAPSHOTS = 5   # positions of each mover drawn over a run, t = 0 included
 # fastep-bench's planners keep their colours across panels.
-ALGORITHM_COLOURS = {'fastep': 'tab:red', 'aco': 'tab:blue', 'optimal': 'tab:olive'}
+ALGORITHM_COLOURS = {'fastep': 'tab:red', 'aco': 'tab:blue', 'optimal': 'tab:olive', 'dwa': 'tab:purple'}
 
 
 def title(what: str, algorithm: str = '', seed: int | None = None) -> str:

@@ -1,6 +1,6 @@
 """fastep-sim: run a scenario in-process (no ROS) and report what every robot did.
 
-    fastep-sim SCENARIO [--algorithm fastep|aco] [--seed N] [--runs K] [--json OUT] [--plot OUT.png]
+    fastep-sim SCENARIO [--algorithm fastep|aco|optimal|dwa] [--seed N] [--runs K] [--json OUT] [--plot OUT.png]
                [--mcap OUT.mcap]
     fastep-sim --list
 

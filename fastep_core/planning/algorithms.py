@@ -14,23 +14,25 @@ from fastep_core.errors import ParameterError
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.aco_kinematic import ACOKinematic
+from fastep_core.planning.dwa import DynamicWindow
 from fastep_core.planning.navigator import FAStepKinematic, FAStepPaper, Navigator
 from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'MISSING_DIFF_DRIVE', 'NAVIGATORS', 'algorithm_name', 'make_navigator',
-           'make_robot']
+__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'MISSING_DIFF_DRIVE', 'NAVIGATORS', 'POINT_MASS_ONLY', 'algorithm_name',
+           'check_drives', 'drives', 'make_navigator', 'make_robot']
 
 NAVIGATORS: dict[str, type[Navigator]] = {
     'fastep': FAStepKinematic,   # the paper's algorithm, with the activation policy of docs/clutter_research.md
     'fastep_paper': FAStepPaper,  # the paper's algorithm with its literal activation policy
     'aco': ACOKinematic,         # the paper's baseline
     'optimal': OptimalKinematic,  # the exact shortest path, driven by the same controller (a reference)
+    'dwa': DynamicWindow,        # the Dynamic Window Approach (Fox et al. 1997): the local planner users know
 }
 ALGORITHMS: tuple[str, ...] = tuple(NAVIGATORS)
 ALGORITHM_NAMES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'fastep_paper': 'FAStep-Kinematic (paper policy)',
-                                   'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
+                                   'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic', 'dwa': 'DWA'}
 """What tables, reports and figure titles call each algorithm (the paper's names)."""
 
 
@@ -72,10 +74,28 @@ def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Cont
     raise ParameterError(f'unknown robot model {spec.model!r}')
 
 
+POINT_MASS_ONLY = frozenset({'dwa'})
+"""Algorithms that drive holonomic point masses only (planning/dwa.py samples (vx, vy))."""
+
+
+def drives(algorithm: str, model: str) -> bool:
+    """Can the algorithm drive a robot of this model ('point_mass', 'tractor_trailer')?"""
+    return algorithm not in POINT_MASS_ONLY or model == 'point_mass'
+
+
+def check_drives(algorithm: str, model: str, robot: str = '') -> None:
+    """Raise ParameterError (one line) when the algorithm cannot drive a robot of this model."""
+    if not drives(algorithm, model):
+        which = f'robot {robot} is' if robot else 'the robot is'
+        able = ', '.join(a for a in ALGORITHMS if drives(a, model))
+        raise ParameterError(f'{algorithm} drives point_mass robots only; {which} a {model} (choose {able})')
+
+
 def make_navigator(algorithm: str, spec: RobotLike, radius: float, world: World, params: PlannerParams,
                    rng: np.random.Generator | int | None = None) -> Navigator:
     """A navigator of the named algorithm (one of ALGORITHMS) for a scenario robot."""
     if algorithm not in NAVIGATORS:
         raise ParameterError(f'unknown algorithm {algorithm!r}; choose one of {", ".join(ALGORITHMS)}')
+    check_drives(algorithm, spec.model, getattr(spec, 'name', ''))
     model, controller = make_robot(spec, params)
     return NAVIGATORS[algorithm](model, controller, radius, world, params, rng)

@@ -43,7 +43,7 @@ def _p(default: float | int, description: str, low: float, high: float = math.in
 
 @dataclass(frozen=True)
 class PlannerParams:
-    """Every tunable of FAStep-Kinematic and ACO-Kinematic, with the paper's Table 1 as defaults."""
+    """Every tunable of FAStep-Kinematic, ACO-Kinematic and DWA, with the paper's Table 1 as defaults."""
 
     # Stepping Ahead Firefly swarm (Table 1, rows 1-5; gamma from the authors' code).
     n_fireflies: int = _p(50, 'fireflies in the swarm (Table 1: 50)', 2, 10_000)
@@ -102,6 +102,23 @@ class PlannerParams:
     aco_q: float = _p(0.5, 'ACO_R locality of the search q', 1e-6)
     aco_xi: float = _p(1.0, 'ACO_R pheromone evaporation / spread xi', 1e-6)
     aco_iter: int = _p(30, 'ACO_R iterations per step at most', 1, 10_000)
+    # DWA, the Dynamic Window Approach (Fox, Burgard & Thrun 1997; planning/dwa.py); defaults measured in
+    # docs/benchmarks.md ("DWA").
+    dwa_acceleration: float = _p(1.0, 'DWA acceleration and braking limit: the dynamic window is the disc of '
+                                      'velocities within this times the tick of the current one (m/s^2)', 1e-3, 100.0)
+    dwa_samples: int = _p(11, 'DWA velocity samples per axis of the dynamic window (odd: the current velocity is '
+                              'one of them)', 2, 51)
+    dwa_horizon: float = _p(2.0, 'DWA rollout: each sampled velocity is held this long (s)', 0.1, 20.0)
+    dwa_rollout_steps: int = _p(20, 'DWA rollout: straight segments per rollout, checked for collisions', 1, 200)
+    dwa_heading: float = _p(1.0, 'DWA objective weight of goal progress over the rollout (the paper\'s heading)',
+                            0.0)
+    dwa_clearance: float = _p(0.2, 'DWA objective weight of the clearance the rollout keeps (the paper\'s dist)',
+                              0.0)
+    dwa_velocity: float = _p(0.2, 'DWA objective weight of speed / max_speed (the paper\'s vel)', 0.0)
+    dwa_clearance_cap: float = _p(1.0, 'DWA clearance beyond this no longer scores (m)', 1e-3)
+    dwa_escape: int = _p(0, 'DWA leaves a trap along the exact shortest path like fastep and aco do (the '
+                            'navigator\'s trap escape, trap_timeout), steering by DWA to the path\'s carrot: 1; '
+                            '0: pure DWA, a local planner that fails in a local minimum', 0, 1)
 
     def __post_init__(self) -> None:
         for f in fields(self):

@@ -76,6 +76,22 @@ def test_planner_waits_for_the_world_then_takes_a_pending_goal(context: Any) -> 
         node.destroy_node()
 
 
+def test_planner_runs_dwa_and_refuses_it_for_a_tractor_trailer(context: Any) -> None:
+    from fastep_core.planning.dwa import DynamicWindow
+    from fastep_ros.common import StartupError
+
+    node = make(PlannerNode, context, algorithm='dwa', workspace=[0.0, 0.0, 10.0, 10.0])
+    try:
+        assert node.describe_parameter('algorithm').additional_constraints == 'fastep | aco | optimal | dwa'
+        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        assert isinstance(node.navigator, DynamicWindow)
+    finally:
+        node.destroy_node()
+    with pytest.raises(StartupError, match='parameter algorithm: dwa drives point_mass robots only; the robot is '
+                                           'a tractor_trailer'):
+        make(PlannerNode, context, algorithm='dwa', model='tractor_trailer')
+
+
 def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) -> None:
     node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0])
     try:

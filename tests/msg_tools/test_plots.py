@@ -79,7 +79,7 @@ def test_the_title_names_the_algorithm(algorithm: str) -> None:
     scenario = load_scenario('open_field')
     run = Run(7, algorithm, [RobotRun(name=spec.name, model=spec.model) for spec in scenario.robots])
     expected = {'fastep': 'FAStep-Kinematic', 'fastep_paper': 'FAStep-Kinematic (paper policy)', 'aco': 'ACO-Kinematic',
-                'optimal': 'Optimal-Kinematic'}.get(algorithm, algorithm_name(algorithm))
+                'optimal': 'Optimal-Kinematic', 'dwa': 'DWA'}.get(algorithm, algorithm_name(algorithm))
     assert plots.run_paths_figure(scenario, run).axes[0].get_title() == f'open_field: {expected}, seed 7'
 
 

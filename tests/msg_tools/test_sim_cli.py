@@ -37,6 +37,17 @@ def test_json_has_the_documented_keys(tmp_path):
     assert all(len(row) == 3 for row in robot['trajectory'])
 
 
+def test_dwa_runs_a_point_mass_and_refuses_a_tractor_trailer_in_one_line(tmp_path):
+    out = tmp_path / 'd.json'
+    assert main(['table2_s3', '--algorithm', 'dwa', '--json', str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc['algorithm'] == 'dwa' and doc['runs'][0]['robots'][0]['reached'] is True
+    proc = run_cli('application', '--algorithm', 'dwa')
+    assert proc.returncode == 2 and proc.stdout == ''
+    assert proc.stderr == ('fastep-sim: error: dwa drives point_mass robots only; robot r1 is a tractor_trailer '
+                           '(choose fastep, aco, optimal)\n')
+
+
 def test_tractor_trailer_trajectory_rows_carry_both_headings(tmp_path):
     out = tmp_path / 'a.json'
     assert main(['application', '--json', str(out)]) == 0

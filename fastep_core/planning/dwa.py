@@ -1,0 +1,255 @@
+"""DWA: the Dynamic Window Approach (Fox, Burgard & Thrun, "The Dynamic Window Approach to Collision
+Avoidance", IEEE Robotics & Automation Magazine 4(1), 1997), adapted to the holonomic point mass.
+
+Why it is here: it is the local planner a ROS user would pick instead of FAStep-Kinematic (Nav2's DWB
+controller descends from it), so it is the yardstick, run in the same harness (the shared Navigator loop, its
+guard, its 'no valid path' check and progress checker; planning/navigator.py).
+
+Every control tick, as in the paper:
+1. The search space. Velocities (vx, vy) on a `dwa_samples` x `dwa_samples` grid
+   over the dynamic window, the velocities reachable within one tick from the current one under the
+   acceleration limit `dwa_acceleration`, minus those faster than `max_speed` (the paper's V_s). A holonomic
+   robot's acceleration is a vector, so the window is a disc: a square one (a limit per axis) would let the
+   velocity term favour its corners, and a robot starting from rest would veer off the straight line. The
+   grid's axes lie along and across the bearing to the goal, for the same reason: on axes of the map a grid
+   point just off a diagonal bearing is faster than the one on it, and the robot veered.
+   The current velocity is the command last sent (the point mass's plant follows its command exactly), or
+   rest after a gap of more than two ticks (a planner node that held the robot still).
+2. The rollout: each sample is held for `dwa_horizon` seconds, in `dwa_rollout_steps` straight segments, and
+   checked against the obstacles (circles, segments), the workspace walls and the other robots, which move
+   on at their last known velocities (moving obstacles). A segment "hits" when it comes within the robot's
+   clearance (radius + `clearance_margin`, the distance every planned waypoint of the other planners keeps)
+   of an obstacle or wall, or within both radii plus `clearance_margin` of another robot, and nearer than
+   the robot is now (a robot already that near may still move away, as the guard allows). Without the
+   margin, the objective's pull to the goal makes the robot skim obstacles at exactly its radius.
+3. Admissible velocities (the paper's V_a): those the robot can stop on before the first hit, braking at
+   `dwa_acceleration` after one tick at the sampled speed: dt + speed / (2 a) <= time of the hit (the start
+   of the first hitting segment, which errs on the safe side; with no hit, the end of the horizon, the only
+   stretch known to be free). The others are discarded. With none left, the robot brakes as hard as allowed.
+4. The objective (the paper's G, without its smoothing), maximised over the admissible samples:
+       G(v) = dwa_heading * progress(v) + dwa_clearance * clearance(v) + dwa_velocity * velocity(v)
+   - progress: how much closer to the goal the rollout ends, over max_speed * horizon (in [-1, 1]). The
+     paper's heading term scores the angle to the goal of a robot that must turn first; a holonomic robot
+     has no heading to turn, so the goal progress takes its place, and it slows the robot down at the goal;
+   - clearance: the smallest margin the rollout keeps from any obstacle, wall or robot (beyond the contact
+     distance of step 2), capped at `dwa_clearance_cap` and divided by it. The paper's dist term is the free
+     run along the trajectory, which in a straight-line rollout is what the admissibility already uses; so
+     the score here rewards keeping away, like DWB's obstacle critic. The margin is not floored at zero: a
+     rollout that would cut less deep into another robot's way (admissible, as it could still stop) scores
+     better, so the robot swerves for an oncoming one instead of driving on until it must brake;
+   - velocity: speed / max_speed (the paper's vel term).
+   The terms are scaled by fixed bounds, not by the spread of the samples (a tick where all the samples are
+   alike would otherwise blow up noise), and the paper's smoothing of G over the window is left out. The
+   best sample, ties broken by grid order, is the command: no random numbers are drawn.
+
+Vectorised over the samples, the rollout steps and the obstacles: one tick is a few dozen numpy operations
+on arrays of samples x steps x obstacles, only over the obstacles the rollouts can reach.
+
+What it does not do: it is a local planner. In a U-shaped trap facing the robot it drives into the pocket and
+stays where no admissible velocity brings it closer to the goal; FAStep-Kinematic and ACO-Kinematic leave
+such traps along the exact path (the navigator's trap escape), which DWA deliberately does not get. The
+progress checker then ends the run: "failed to make progress ... (DWA: a local minimum)", with ", another
+robot in the way" when one is within sensing_range (two robots face to face in a corridor hold each
+other). With `dwa_escape` = 1 it gets that escape too: after trap_timeout without progress, the target
+whose progress DWA scores is the exact path's carrot instead of the goal, until the robot has left the trap
+(the yardstick with the same safety net as the others; what a Nav2 user gets from a global planner above
+DWB).
+
+Robot models: the holonomic point mass only. A tractor-trailer is refused when the navigator is made (one
+line, from `make_navigator`). The sampling is generic enough for another model: `window` gives the samples
+and `rollout` their positions over the horizon; a differential drive (issue 14) would sample (v, omega)
+within its window and roll out arcs (chords of `dwa_rollout_steps`), and a heading term would be added.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.errors import ParameterError
+from fastep_core.geometry import point_segment_distance, segment_segment_distance
+from fastep_core.kinematics.model import Controller, RobotModel
+from fastep_core.planning.navigator import FloatArray, Mode, Navigator
+from fastep_core.planning.others import OtherRobot, other_arrays
+from fastep_core.planning.params import PlannerParams
+from fastep_core.world import World
+
+__all__ = ['DynamicWindow', 'Choice', 'LOCAL_MINIMUM']
+
+LOCAL_MINIMUM = 'DWA: a local minimum'
+"""Added to the progress checker's reason when a DWA run fails to make progress."""
+
+
+@dataclass(frozen=True)
+class Choice:
+    """The outcome of one tick's search: the command, its score and what the search saw."""
+
+    velocity: FloatArray   # (vx, vy), the command
+    score: float           # G of the chosen sample (-inf when none was admissible and the robot brakes)
+    admissible: int        # how many samples were admissible
+    near: bool             # was any obstacle, wall or robot within reach of the rollouts
+
+
+class DynamicWindow(Navigator):
+    """Samples velocities in the dynamic window, rolls each out, keeps the admissible ones, takes the best."""
+
+    method = 'dwa'
+    escapes_traps = False   # a local planner: no escape along the exact path, unless dwa_escape (module docstring)
+
+    def __init__(self, model: RobotModel, controller: Controller, radius: float, world: World,
+                 params: PlannerParams | None = None, rng: np.random.Generator | int | None = None) -> None:
+        super().__init__(model, controller, radius, world, params, rng)
+        if not model.holonomic:
+            raise ParameterError(f'dwa drives holonomic robots (point_mass) only, not a {type(model).__name__}')
+        if self.params.max_speed <= 0.0:
+            raise ParameterError('dwa needs a speed limit: max_speed must be > 0')
+        self.velocity = np.zeros(2)   # the command last sent: the centre of the next dynamic window
+        self.escapes_traps = bool(self.params.dwa_escape)
+
+    def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
+        if self._last_t is not None and t - self._last_t > 2.0 * self.params.dt:
+            self.velocity = np.zeros(2)   # ticks were missed (a planner node holding a robot): start from rest
+        command = super().update(t, state, others)
+        # Whatever was sent (a guarded stop, zeros at the goal) is the velocity the next window starts from.
+        self.velocity = np.array(command[:2], dtype=float)
+        if self.failed and self.reason.startswith('failed to make progress') and LOCAL_MINIMUM not in self.reason:
+            # Two robots face to face in a corridor hold each other there too: say so.
+            x, y = float(state[0]), float(state[1])
+            blocked = any(math.hypot(o.position[0] - x, o.position[1] - y) - o.radius - self.radius <
+                          self.params.sensing_range for o in others)
+            self.reason = f'{self.reason} ({LOCAL_MINIMUM}{", another robot in the way" if blocked else ""})'
+        return command
+
+    def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+        return self.goal
+
+    def drive_to(self, state: FloatArray, target: FloatArray, t: float, dt: float,
+                 others: Sequence[OtherRobot]) -> FloatArray:
+        """The best admissible velocity of the dynamic window, through the guard (the last check)."""
+        self._target = target
+        start = time.perf_counter()
+        choice = self.search(state[:2], target, dt, others)
+        self.plan_time += time.perf_counter() - start
+        self.activations += 1
+        self.cost = choice.score if math.isfinite(choice.score) else 0.0
+        if self.escape.active:
+            pass   # the status stays the escape's: DWA steers to the exact path's carrot
+        elif choice.admissible == 0:
+            self.mode, self.reason = Mode.AVOIDING, 'dwa: no admissible velocity; braking'
+        elif choice.near:
+            self.mode, self.reason = Mode.AVOIDING, 'dwa: steering round obstacles'
+        else:
+            self.mode, self.reason = Mode.KINEMATIC, 'dwa: way is clear'
+        return self.guard(state, choice.velocity, dt, others)
+
+    # ------------------------------------------------------------------------------------- the search
+    def window(self, dt: float, bearing: float = 0.0) -> FloatArray:
+        """The velocity samples (n, 2): a grid over the dynamic window (a disc) around the current velocity,
+        its axes along `bearing` (radians) and across it."""
+        reach = self.params.dwa_acceleration * dt
+        offsets = np.linspace(-reach, reach, self.params.dwa_samples)
+        along, across = np.meshgrid(offsets, offsets, indexing='ij')
+        inside = along * along + across * across <= reach * reach * (1.0 + 1e-9)
+        along, across = along[inside], across[inside]
+        c, s = math.cos(bearing), math.sin(bearing)
+        return self.velocity + np.column_stack([c * along - s * across, s * along + c * across])
+
+    def rollout(self, position: FloatArray, samples: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Times (k + 1,) and positions (n, k + 1, 2) of each sample held over the horizon (straight lines)."""
+        times = np.linspace(0.0, self.params.dwa_horizon, self.params.dwa_rollout_steps + 1)
+        return times, position + samples[:, None, :] * times[None, :, None]
+
+    def search(self, position: FloatArray, goal: FloatArray, dt: float, others: Sequence[OtherRobot]) -> Choice:
+        """One tick of DWA (module docstring, steps 1-4)."""
+        p = self.params
+        samples = self.window(dt, math.atan2(goal[1] - position[1], goal[0] - position[0]))
+        speed = np.hypot(samples[:, 0], samples[:, 1])
+        times, points = self.rollout(position, samples)
+        horizon = float(times[-1])
+        starts, ends = points[:, :-1], points[:, 1:]                 # the rollout's segments (n, k, 2)
+
+        # Step 2: the margin each segment keeps (negative: a hit), against obstacles and walls, then robots.
+        reach = p.max_speed * horizon + self.clearance + p.dwa_clearance_cap   # nothing farther can matter
+        static, static_now = self._static_margins(position, starts, ends, points, reach)
+        robots, robots_now = self._robot_margins(position, times, points, others, reach)
+        hit = (static < 0.0) & (static < static_now)
+        margin = static
+        near = bool(static_now < reach - self.clearance)
+        if robots is not None:
+            hit |= ((robots < 0.0) & (robots < robots_now)).any(axis=-1)
+            margin = np.minimum(margin, robots.min(axis=-1))
+            near = True   # a robot whose path the rollouts can reach
+
+        # Step 3: admissible if it can stop before the first hit (with none, before the end of the horizon).
+        first = np.where(hit.any(axis=1), times[np.argmax(hit, axis=1)], horizon)
+        admissible = (dt + speed / (2.0 * p.dwa_acceleration) <= first) & (speed <= p.max_speed * (1 + 1e-9))
+        count = int(admissible.sum())
+        if count == 0:
+            return Choice(self._brake(dt), -math.inf, 0, True)
+
+        # Step 4: the objective.
+        scale = p.max_speed * horizon
+        progress = (math.hypot(goal[0] - position[0], goal[1] - position[1]) -
+                    np.hypot(goal[0] - points[:, -1, 0], goal[1] - points[:, -1, 1])) / scale
+        clearance = np.minimum(margin.min(axis=1), p.dwa_clearance_cap) / p.dwa_clearance_cap
+        score = p.dwa_heading * progress + p.dwa_clearance * clearance + p.dwa_velocity * speed / p.max_speed
+        score = np.where(admissible, score, -np.inf)
+        best = int(np.argmax(score))
+        return Choice(samples[best].copy(), float(score[best]), count, near)
+
+    def _static_margins(self, position: FloatArray, starts: FloatArray, ends: FloatArray, points: FloatArray,
+                        reach: float) -> tuple[FloatArray, float]:
+        """Each segment's margin (n, k) to the obstacles and walls beyond the clearance, and the margin now."""
+        contact = self.clearance
+        walls = self.world.wall_distance(points) - contact                # the border: concave, ends suffice
+        margin = np.minimum(walls[:, :-1], walls[:, 1:])
+        now = float(self.world.wall_distance(position)) - contact
+        obstacles = self.world.obstacles
+        if not len(obstacles):
+            return margin, now
+        gaps = obstacles.distances(position)
+        close = gaps < reach
+        if not close.any():
+            return margin, now
+        now = min(now, float(gaps.min()) - contact)
+        a, b = starts[:, :, None, :], ends[:, :, None, :]
+        circles = close[:obstacles.n_circles]
+        if circles.any():
+            to_circles = point_segment_distance(obstacles.centers[circles], a, b) - obstacles.radii[circles]
+            margin = np.minimum(margin, to_circles.min(axis=-1) - contact)
+        segments = close[obstacles.n_circles:]
+        if segments.any():
+            to_segments = segment_segment_distance(a, b, obstacles.starts[segments], obstacles.ends[segments])
+            margin = np.minimum(margin, to_segments.min(axis=-1) - contact)
+        return margin, now
+
+    def _robot_margins(self, position: FloatArray, times: FloatArray, points: FloatArray,
+                       others: Sequence[OtherRobot], reach: float) -> tuple[FloatArray | None, FloatArray]:
+        """Each segment's margin (n, k, m) to the m other robots within reach, moving on at their velocities,
+        beyond both radii plus clearance_margin; and the margins now (m,). None when no robot is in reach."""
+        if not len(others):
+            return None, np.zeros(0)
+        centres, velocities, radii = other_arrays(others)
+        contact = self.radius + radii + self.params.clearance_margin
+        now = np.hypot(*(centres - position).T) - contact
+        close = now < reach + np.hypot(*velocities.T) * float(times[-1])
+        if not close.any():
+            return None, np.zeros(0)
+        centres, velocities, contact, now = centres[close], velocities[close], contact[close], now[close]
+        # Relative to each robot the motion on a segment is straight: its closest approach is exact.
+        relative = points[:, :, None, :] - (centres + velocities * times[:, None, None])[None]   # (n, k+1, m, 2)
+        gap = point_segment_distance(np.zeros(2), relative[:, :-1], relative[:, 1:])
+        return gap - contact, now
+
+    def _brake(self, dt: float) -> FloatArray:
+        """The slowest velocity of the window along the current direction: braking at dwa_acceleration."""
+        speed = float(np.hypot(*self.velocity))
+        slower = max(0.0, speed - self.params.dwa_acceleration * dt)
+        brake: NDArray[np.float64] = self.velocity * (slower / speed) if speed > 0.0 else np.zeros(2)
+        return brake
+
