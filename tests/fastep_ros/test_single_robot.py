@@ -155,5 +155,8 @@ def test_stale_odometry_stops_the_robot(one: Graph) -> None:
     assert status['level'] == 'warn' and 'odometry stale' in status['reason']
     first = len(cmds)
     h.spin_for(0.5)  # 5 simulated seconds: ~100 control ticks
-    assert len(cmds) - first > 10, 'the planner must keep publishing (zero) commands'
-    assert all(m.linear.x == 0.0 and m.linear.y == 0.0 for m in cmds[first:])
+    # cmd_vel and status are separate topics: a command sent just before the planner went stale may arrive
+    # after its status. Once a zero command arrived, every later one must be zero too.
+    zero = [m.linear.x == 0.0 and m.linear.y == 0.0 for m in cmds[first:]]
+    assert sum(zero) > 10, 'the planner must keep publishing (zero) commands'
+    assert all(zero[zero.index(True):]), 'a command after the robot went stale moved it'
