@@ -20,7 +20,11 @@ The method (a tangent visibility graph, exact for discs; Chen & Wang's "shortest
 - Arc edges join consecutive nodes along each circle (either way round, as long as the arc is free). The
   free part of a circle is computed in closed form: the angles where it enters another inflated disc, the
   strip of a capsule, or leaves the shrunk workspace are intervals of the form {A cos t + B sin t < h}.
-- Dijkstra (heapq) from start to goal; the path's length is exact (tangent lengths plus R * angle).
+- The search (planning/tangent_search.py) makes the graph only where it looks: A* (heapq; heuristic: the
+  straight line to the goal) expands a node by making the free tangents and arcs of its circle, for that
+  circle at once, the first time; then Dijkstra over the expanded nodes picks, among equally short paths, the
+  one Dijkstra over the whole graph picks (fastep_testing/optimal_eager.py builds the whole graph, the tests
+  compare). The path's length is exact (tangent lengths plus R * angle).
 
 The border: planned waypoints keep `clearance` from it too (as the step planner's rule does), except that a
 start or goal that is nearer the border lowers that margin to its own distance, so it is never excluded.
@@ -91,7 +95,7 @@ class OptimalPath:
 
     length: exact length (m). points: polyline (n, 2) from start to goal; arcs as circumscribed polygons.
     pieces: the exact lines and arcs. clearance: the r it keeps. border: the margin kept from the workspace
-    border. nodes, edges: size of the visibility graph.
+    border. nodes, edges: the part of the visibility graph the search made (nodes reached, edges made).
     """
 
     length: float
