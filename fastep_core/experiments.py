@@ -318,7 +318,8 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
               'arrived without collision, compute time (wall seconds planning and simulating the robot, as '
               'fastep-sim reports it) and CPU time (process CPU seconds of the whole run, not inflated by other '
               'load on the machine) over all runs. "opt." is path length / exact shortest path keeping radius + '
-              'clearance margin.', '']
+              'clearance margin (planning/optimal.py: the tangent visibility graph of the inflated obstacles, '
+              'searched with A*).', '']
     lines += ['| scenario | robot | planner | arrived | path (m) | paper path | path / opt. | '
               'sim time (s) | compute time (s) | CPU time (s) | paper time (s) |',
               '|---|---|---|---|---|---|---|---|---|---|---|']

@@ -20,7 +20,11 @@ The method (a tangent visibility graph, exact for discs; Chen & Wang's "shortest
 - Arc edges join consecutive nodes along each circle (either way round, as long as the arc is free). The
   free part of a circle is computed in closed form: the angles where it enters another inflated disc, the
   strip of a capsule, or leaves the shrunk workspace are intervals of the form {A cos t + B sin t < h}.
-- Dijkstra (heapq) from start to goal; the path's length is exact (tangent lengths plus R * angle).
+- The search (planning/tangent_search.py) makes the graph only where it looks: A* (heapq; heuristic: the
+  straight line to the goal) expands a node by making the free tangents and arcs of its circle, for that
+  circle at once, the first time; then Dijkstra over the expanded nodes picks, among equally short paths, the
+  one Dijkstra over the whole graph picks (fastep_testing/optimal_eager.py builds the whole graph, the tests
+  compare). The path's length is exact (tangent lengths plus R * angle).
 
 The border: planned waypoints keep `clearance` from it too (as the step planner's rule does), except that a
 start or goal that is nearer the border lowers that margin to its own distance, so it is never excluded.
@@ -35,10 +39,9 @@ by a factor of about 1 + delta^2 / 12 on arcs (0.06 % at 0.25 m spacing on a 3 m
 
 from __future__ import annotations
 
-import heapq
 import math
 from dataclasses import dataclass
-from typing import Iterator, Sequence
+from typing import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -46,16 +49,14 @@ from numpy.typing import NDArray
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle, Segment, point_segment_distance
 from fastep_core.planning.obstacle_grid import ObstacleGrid
+from fastep_core.planning.tangent_search import TWO_PI, ArcShape, search, wrap_angle
 from fastep_core.world import World
 
-__all__ = ['OptimalPath', 'PathPiece', 'shortest_path', 'TOL', 'main']
+__all__ = ['OptimalPath', 'PathPiece', 'assemble', 'prepare', 'shortest_path', 'TOL', 'main']
 
 FloatArray = NDArray[np.float64]
-IntArray = NDArray[np.int64]
-ArcShape = tuple[int, float, float]   # an arc edge: (circle index, angle at its start, signed sweep)
 TOL = 1e-9
 """Absolute slack (m) on every clearance test, so tangential contact counts as free."""
-TWO_PI = 2.0 * math.pi
 _MAX_REFINE = 12          # a chord is split at most 2^12 times when a neighbour is tighter than the bulge
 MAX_ARC_VERTICES = 4096   # an arc's polygon starts with at most this many vertices (a vast circle: coarser)
 MAX_SAMPLES = 1_000_000   # OptimalPath.sample gives at most about this many points per piece
@@ -94,7 +95,7 @@ class OptimalPath:
 
     length: exact length (m). points: polyline (n, 2) from start to goal; arcs as circumscribed polygons.
     pieces: the exact lines and arcs. clearance: the r it keeps. border: the margin kept from the workspace
-    border. nodes, edges: size of the visibility graph.
+    border. nodes, edges: the part of the visibility graph the search made (nodes reached, edges made).
     """
 
     length: float
@@ -121,18 +122,13 @@ class OptimalPath:
 Pieces = list[tuple[float, float]]     # disjoint-or-not open intervals inside [0, 2 pi]
 
 
-def _wrap(t: float) -> float:
-    t = math.fmod(t, TWO_PI)
-    return t + TWO_PI if t < 0.0 else t
-
-
 def _arc_pieces(lo: float, width: float) -> Pieces:
     """The circular interval (lo, lo + width) as at most two intervals inside [0, 2 pi]."""
     if width >= TWO_PI:
         return [(0.0, TWO_PI)]
     if width <= 0.0:
         return []
-    lo = _wrap(lo)
+    lo = wrap_angle(lo)
     hi = lo + width
     if hi <= TWO_PI:
         return [(lo, hi)]
@@ -199,7 +195,8 @@ class _Problem:
         self.disc_radii = np.array([d.radius for d in self.disc_obstacles], dtype=float)
         self.seg_starts = np.array([s.start for s in segments], dtype=float).reshape(-1, 2)
         self.seg_ends = np.array([s.end for s in segments], dtype=float).reshape(-1, 2)
-        self.blocked = [self._blocked(k) for k in range(len(self.circles))]
+        self.blocked: dict[int, Pieces] = {}
+        """The blocked angles of each circle an arc was asked of."""
         self.grid = ObstacleGrid(world.obstacles, self.box, clearance - TOL, self.scale)
 
     # ------------------------------------------------------------------ free arcs of one circle
@@ -254,6 +251,8 @@ class _Problem:
     def arc_free(self, k: int, angle0: float, sweep: float) -> bool:
         if sweep < 0.0:
             angle0, sweep = angle0 + sweep, -sweep
+        if k not in self.blocked:
+            self.blocked[k] = self._blocked(k)
         return not _overlaps(_arc_pieces(angle0, sweep), self.blocked[k])
 
     # ------------------------------------------------------------------ straight edges
@@ -274,164 +273,6 @@ class _Problem:
         return ok
 
 
-
-
-class _Graph:
-    """Nodes (points, with the circle they lie on or -1) and weighted undirected edges with their shape."""
-
-    def __init__(self) -> None:
-        self.points: list[np.ndarray] = []
-        self.circle: list[int] = []
-        self.adj: dict[int, dict[int, tuple[float, ArcShape | None]]] = {}
-
-    def node(self, point: np.ndarray, circle: int) -> int:
-        self.points.append(point)
-        self.circle.append(circle)
-        return len(self.points) - 1
-
-    def edge(self, u: int, v: int, length: float, shape: ArcShape | None) -> None:
-        """shape: None for a line, (circle, angle at u, signed sweep u -> v) for an arc."""
-        old = self.adj.setdefault(u, {}).get(v)
-        if old is None or length < old[0]:
-            self.adj[u][v] = (length, shape)
-            if shape is None:
-                back = None
-            else:
-                k, a0, sweep = shape
-                back = (k, a0 + sweep, -sweep)
-            self.adj.setdefault(v, {})[u] = (length, back)
-
-    @property
-    def n_edges(self) -> int:
-        return sum(len(v) for v in self.adj.values()) // 2
-
-    def dijkstra(self, source: int, target: int) -> list[int] | None:
-        dist = {source: 0.0}
-        prev: dict[int, int] = {}
-        heap = [(0.0, source)]
-        done = set()
-        while heap:
-            d, u = heapq.heappop(heap)
-            if u in done:
-                continue
-            if u == target:
-                break
-            done.add(u)
-            for v, (w, _) in self.adj.get(u, {}).items():
-                nd = d + w
-                if nd < dist.get(v, math.inf):
-                    dist[v], prev[v] = nd, u
-                    heapq.heappush(heap, (nd, v))
-        if target not in dist:
-            return None
-        path = [target]
-        while path[-1] != source:
-            path.append(prev[path[-1]])
-        return path[::-1]
-
-
-def _pair_tangents(c1: FloatArray, r1: FloatArray, c2: FloatArray, r2: FloatArray,
-                   inner: bool) -> tuple[FloatArray, FloatArray, NDArray[np.bool_], NDArray[np.bool_]]:
-    """_tangents for many pairs at once, the same numbers bit for bit (math.hypot, then the same operations).
-
-    Returns the points on circle 1 and on circle 2 of the first and second tangent, shape (m, 2, 2) each
-    (index 1: first, second), and which of the two exist.
-    """
-    dx, dy = c2[:, 0] - c1[:, 0], c2[:, 1] - c1[:, 1]
-    D = np.array([math.hypot(x, y) for x, y in zip(dx.tolist(), dy.tolist())], dtype=float)
-    apart = D > 1e-12
-    D = np.where(apart, D, 1.0)
-    s2 = -r2 if inner else r2
-    ratio = (r1 - s2) / D
-    first = apart & ~(np.abs(ratio) > 1.0)
-    vx, vy = dx / D, dy / D
-    with np.errstate(invalid='ignore'):
-        h = np.sqrt(np.maximum(0.0, 1.0 - ratio * ratio))
-    second = first & (h > 0.0)
-    on1 = np.empty((len(D), 2, 2))
-    on2 = np.empty((len(D), 2, 2))
-    for slot, k in enumerate((1.0, -1.0)):
-        kh = k * h
-        nx, ny = vx * ratio - kh * vy, vy * ratio + kh * vx
-        on1[:, slot, 0], on1[:, slot, 1] = c1[:, 0] + r1 * nx, c1[:, 1] + r1 * ny
-        on2[:, slot, 0], on2[:, slot, 1] = c2[:, 0] + s2 * nx, c2[:, 1] + s2 * ny
-    return on1, on2, first, second
-
-
-PAIRS_PER_TANGENT_BLOCK = 1 << 16
-"""Circle pairs whose common tangents are made and tested at once (4 candidate edges each)."""
-
-
-Candidates = tuple[FloatArray, FloatArray, IntArray, IntArray, IntArray, IntArray]
-
-
-def _candidate_blocks(centers: FloatArray, radii: FloatArray, start: FloatArray,
-                      goal: FloatArray) -> Iterator[Candidates]:
-    """The candidate tangent edges in the order the graph numbers its nodes, in blocks of bounded size.
-
-    Each block: P, Q (m, 2), the circle of each end (-1: start or goal) and the existing node of each end
-    (-1: a new tangent point). First start's and goal's tangents to every circle, then every pair i < j:
-    the outer tangents, then the inner ones.
-    """
-    n = len(radii)
-    none = np.full(1, -1)
-    yield start[None], goal[None], none, none, np.zeros(1, dtype=int), np.ones(1, dtype=int)   # the straight run
-    for node, point in ((0, start), (1, goal)):
-        if n == 0:
-            break
-        on1, _, first, second = _pair_tangents(centers, radii, np.tile(point, (n, 1)), np.zeros(n), False)
-        keep = np.stack([first, second], axis=1).ravel()
-        k = np.repeat(np.arange(n), 2)[keep]
-        Q = on1.reshape(-1, 2)[keep]
-        yield np.tile(point, (len(Q), 1)), Q, np.full(len(Q), -1), k, np.full(len(Q), node), np.full(len(Q), -1)
-    rows = max(1, PAIRS_PER_TANGENT_BLOCK // max(n, 1))
-    for i0 in range(0, n - 1, rows):
-        first_rows = np.arange(i0, min(i0 + rows, n - 1))
-        counts = n - 1 - first_rows
-        i = np.repeat(first_rows, counts)                    # i < j, row by row: the order of nested loops
-        j = np.arange(len(i)) - np.repeat(np.cumsum(counts) - counts, counts) + i + 1
-        parts = [_pair_tangents(centers[i], radii[i], centers[j], radii[j], inner) for inner in (False, True)]
-        # Per pair: outer first, outer second, inner first, inner second.
-        keep = np.stack([parts[0][2], parts[0][3], parts[1][2], parts[1][3]], axis=1).ravel()
-        P = np.stack([parts[0][0][:, 0], parts[0][0][:, 1], parts[1][0][:, 0], parts[1][0][:, 1]], axis=1)
-        Q = np.stack([parts[0][1][:, 0], parts[0][1][:, 1], parts[1][1][:, 0], parts[1][1][:, 1]], axis=1)
-        m = int(keep.sum())
-        yield (P.reshape(-1, 2)[keep], Q.reshape(-1, 2)[keep], np.repeat(i, 4)[keep], np.repeat(j, 4)[keep],
-               np.full(m, -1), np.full(m, -1))
-
-
-def _build(problem: _Problem, start: np.ndarray, goal: np.ndarray) -> _Graph:
-    graph = _Graph()
-    s, g = graph.node(start, -1), graph.node(goal, -1)
-    circles = problem.circles
-    centers = np.array([c.center for c in circles], dtype=float).reshape(-1, 2)
-    radii = np.array([c.radius for c in circles], dtype=float)
-    on_circle: dict[int, list[int]] = {}
-    for P, Q, K1, K2, N1, N2 in _candidate_blocks(centers, radii, start, goal):
-        free = np.flatnonzero(problem.edges_free(P, Q))
-        for p, q, ki, kj, ni, nj in zip(P[free], Q[free], K1[free].tolist(), K2[free].tolist(),
-                                        N1[free].tolist(), N2[free].tolist()):
-            u = ni if ni >= 0 else graph.node(p, ki)
-            v = nj if nj >= 0 else graph.node(q, kj)
-            for node, k in ((u, ki), (v, kj)):
-                if k >= 0:                          # a new tangent point (start and goal lie on no circle)
-                    on_circle.setdefault(k, []).append(node)
-            graph.edge(u, v, float(np.hypot(*(q - p))), None)
-    assert (s, g) == (0, 1)
-    for k, nodes in on_circle.items():
-        c = circles[k]
-        angles = [(_wrap(math.atan2(graph.points[n][1] - c.center[1], graph.points[n][0] - c.center[0])), n)
-                  for n in nodes]
-        angles.sort()
-        m = len(angles)
-        if m < 2:
-            continue
-        for idx in range(m):
-            (t0, u), (t1, v) = angles[idx], angles[(idx + 1) % m]
-            sweep = t1 - t0 if idx + 1 < m else t1 + TWO_PI - t0    # counter-clockwise u -> v
-            if problem.arc_free(k, t0, sweep):
-                graph.edge(u, v, c.radius * sweep, (k, t0, sweep))
-    return graph
 
 
 # ----------------------------------------------------------------------------------------- polyline
@@ -461,21 +302,34 @@ def _arc_polygon(problem: _Problem, piece: PathPiece, spacing: float) -> list[np
     return list(verts) + [end]                  # pragma: no cover - the exact arc is free, refinement converges
 
 
-def _pieces(graph: _Graph, problem: _Problem, path: list[int]) -> list[PathPiece]:
+def _pieces(problem: _Problem, points: Sequence[tuple[float, float]],
+            steps: Sequence[tuple[float, ArcShape | None]]) -> list[PathPiece]:
+    """The path's pieces: steps[i] = (length, shape) joins points[i] to points[i + 1]; empty arcs dropped."""
     out = []
-    for u, v in zip(path[:-1], path[1:]):
-        length, shape = graph.adj[u][v]
-        p, q = graph.points[u], graph.points[v]
+    for p, q, (length, shape) in zip(points[:-1], points[1:], steps):
         if shape is None:
-            out.append(PathPiece('line', (float(p[0]), float(p[1])), (float(q[0]), float(q[1])), length))
+            out.append(PathPiece('line', p, q, length))
         else:
             k, a0, sweep = shape
             if sweep == 0.0:
                 continue
             c = problem.circles[k]
-            out.append(PathPiece('arc', (float(p[0]), float(p[1])), (float(q[0]), float(q[1])), length,
-                                 c.center, c.radius, a0, sweep))
+            out.append(PathPiece('arc', p, q, length, c.center, c.radius, a0, sweep))
     return out
+
+
+def assemble(problem: _Problem, start: FloatArray, points: Sequence[tuple[float, float]],
+             steps: Sequence[tuple[float, ArcShape | None]], spacing: float, nodes: int, edges: int) -> OptimalPath:
+    """The OptimalPath of a path through the graph (its nodes' points and its edges' (length, shape))."""
+    pieces = _pieces(problem, points, steps)
+    polyline = [start]
+    for piece in pieces:
+        if piece.kind == 'line':
+            polyline.append(np.array(piece.end))
+        else:
+            polyline.extend(_arc_polygon(problem, piece, spacing))
+    return OptimalPath(float(sum(p.length for p in pieces)), np.array(polyline), tuple(pieces), problem.clearance,
+                       problem.border, nodes, edges)
 
 
 # ----------------------------------------------------------------------------------------- the API
@@ -488,6 +342,21 @@ def shortest_path(world: World, start: Sequence[float] | FloatArray, goal: Seque
     for the shortest collision-free path). `spacing` is the largest distance between polyline vertices on
     arcs. Returns None when no path exists, or when start or goal is closer than `clearance` to an obstacle.
     """
+    prepared = prepare(world, start, goal, clearance, spacing)
+    if prepared is None:
+        return None
+    problem, a, b = prepared
+    if np.array_equal(a, b):
+        return OptimalPath(0.0, np.array([a]), (), clearance, problem.border, 1, 0)
+    found = search(problem, a, b)
+    if found is None:
+        return None
+    return assemble(problem, a, found.points, found.steps, spacing, found.nodes, found.edges)
+
+
+def prepare(world: World, start: Sequence[float] | FloatArray, goal: Sequence[float] | FloatArray,
+            clearance: float, spacing: float) -> tuple[_Problem, FloatArray, FloatArray] | None:
+    """Checked arguments: the problem, start and goal; None when start or goal is too near an obstacle or outside."""
     if not (math.isfinite(clearance) and clearance > 0.0):
         raise ParameterError(f'clearance must be a finite number > 0, got {clearance!r}')
     if not (math.isfinite(spacing) and spacing > 0.0):
@@ -502,22 +371,7 @@ def shortest_path(world: World, start: Sequence[float] | FloatArray, goal: Seque
     border = min(clearance, float(walls.min()))
     if len(world.obstacles) and float(world.obstacles.clearance(np.array([a, b])).min()) < clearance - TOL:
         return None
-    problem = _Problem(world, clearance, border)
-    if np.array_equal(a, b):
-        return OptimalPath(0.0, np.array([a]), (), clearance, border, 1, 0)
-    graph = _build(problem, a, b)
-    path = graph.dijkstra(0, 1)
-    if path is None:
-        return None
-    pieces = _pieces(graph, problem, path)
-    points = [a]
-    for piece in pieces:
-        if piece.kind == 'line':
-            points.append(np.array(piece.end))
-        else:
-            points.extend(_arc_polygon(problem, piece, spacing))
-    return OptimalPath(float(sum(p.length for p in pieces)), np.array(points), tuple(pieces), clearance, border,
-                       len(graph.points), graph.n_edges)
+    return _Problem(world, clearance, border), a, b
 
 
 def main(argv: Sequence[str] | None = None) -> int:
