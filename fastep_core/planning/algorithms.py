@@ -14,6 +14,7 @@ from fastep_core.errors import ParameterError
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.aco_kinematic import ACOKinematic
+from fastep_core.planning.fastep_route import FAStepRoute
 from fastep_core.planning.navigator import FAStepKinematic, Navigator
 from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
@@ -25,9 +26,11 @@ NAVIGATORS: dict[str, type[Navigator]] = {
     'fastep': FAStepKinematic,   # the paper's algorithm
     'aco': ACOKinematic,         # the paper's baseline
     'optimal': OptimalKinematic,  # the exact shortest path, driven by the same controller (a reference)
+    'fastep_route': FAStepRoute,  # FAStep-Kinematic toward the farthest vertex in sight of the exact route
 }
 ALGORITHMS: tuple[str, ...] = tuple(NAVIGATORS)
-ALGORITHM_NAMES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}
+ALGORITHM_NAMES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic',
+                                   'fastep_route': 'FAStep-Route'}
 """What tables, reports and figure titles call each algorithm (the paper's names)."""
 
 

@@ -1,0 +1,322 @@
+"""FAStep-Route: FAStep-Kinematic guided by the exact shortest route over what the robot knows (issue 12, item 2).
+
+Why: FAStep-Kinematic measures d in eq. 10 to the goal, so its steps are greedy: in clutter they lead into
+wedges and U-traps whose way out lies behind the robot, and its path is on average 10 % longer than the
+optimum (44 % in the worst world, issue 12). What the robot knows of the world - the map it was given and the
+robots standing still - already fixes the shortest way; only what moves is left for the swarm to decide.
+
+Algorithm 1 with a route in place of the goal (`FAStepRoute.choose_target`, every tick):
+1. The route is the exact shortest path (planning/optimal.py through `Navigator.exact_path`: radius + margin
+   from every obstacle where there is room, less through a narrow gap, more for a robot that cannot turn in
+   place) from the robot to its goal. It is planned when the goal is set (the base class's first-tick path,
+   which checks the goal anyway, is the first route) and again only when `replan_reason` gives a reason: the
+   world given to the navigator changed, another robot has stood on the route ahead for BLOCK_TIME (the new
+   route goes round the robots standing still), a robot the route was planned round has moved away, or no
+   route vertex is in sight any more (after a swarm step, a backup or a manoeuvre). `replan` is the one
+   method that plans; a future trigger (moving or sensed obstacles) adds a reason to `replan_reason`.
+2. The route target is the farthest route vertex in sight: the straight run to it keeps the route's clearance
+   (a hair less: half the margin) from the world the route was planned in. It is the goal of Algorithm 1:
+3. when no other robot within sensing range lies on the straight run to it (eq. 11, with both radii), the
+   kinematic controller drives there (eq. 12 / 13); the run is free of obstacles by construction;
+4. otherwise the swarm plans one step (eq. 3-10) with d measured to the route target, and the robot drives to
+   that waypoint as FAStep-Kinematic does (the lead of `aim`, the hold breaker, recoveries: planning/navigator.py).
+Static obstacles therefore never start the swarm: it plans only round other robots (and round an obstacle the
+route does not know of, until the next replan).
+
+Speed: eq. 12 slows a point mass in proportion to the distance to its target. The route target only sets a
+direction, so a holonomic robot is aimed `lead` beyond it on the same ray (the run driven is the same
+straight run): `max_speed / alpha` when the speed is limited (eq. 12 then commands full speed), else
+`waypoint_lead`. The goal itself is aimed at directly (the paper's approach). A robot that cannot turn in
+place is aimed at the vertex, pushed out to `step_radius` along the same bearing when that run is free too
+(as the trap escape does, planning/escape.py), so it does not circle a vertex a few centimetres ahead.
+
+Progress along the route (a shorter way left, not a smaller distance to the goal) restarts the progress
+checker and the trap detector: a route that leads away from the goal round a long wall is not a trap. The
+trap escape stays as the safety net (robots that block the way for trap_timeout).
+
+Cost: one exact path per goal and per replan, never per tick; the farthest vertex in sight is tested every
+`detection_interval` of travel against at most SIGHT_VERTICES vertices within SIGHT metres of route.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from fastep_core.geometry import point_segment_distance
+from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason
+from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
+from fastep_core.planning.optimal import OptimalPath
+from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
+from fastep_core.world import World
+
+__all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES']
+
+BLOCK_TIME = 1.0        # s: another robot standing on the route ahead this long makes the route go round it
+REPLAN_INTERVAL = 1.0   # s: the route is planned at most this often for robots (blocking, or gone)
+MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
+SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
+SIGHT_VERTICES = 256    # vertices tested for sight at most
+
+
+@dataclass
+class Route:
+    """The route being followed: its vertices after the start (the goal last), and what it was planned for."""
+
+    vertices: list[FloatArray]   # one array per vertex: the navigator tells a new target by its identity
+    keep: float                  # the clearance the route keeps ...
+    world: World                 # ... from the obstacles of this world (robots standing still included)
+    base: World                  # the navigator's world when the route was planned
+    parked: FloatArray           # (k, 2) centres of the robots the route was planned round
+    index: int = 0               # the vertex in sight farthest along the route, last time it was looked for
+    stacked: FloatArray = field(init=False, repr=False)   # the vertices as one (n, 2) array
+    rest: FloatArray = field(init=False, repr=False)      # route length from each vertex to the goal
+
+    def __post_init__(self) -> None:
+        self.stacked = np.array(self.vertices, dtype=float).reshape(-1, 2)
+        legs = np.hypot(*np.diff(self.stacked, axis=0).T)
+        self.rest = np.concatenate([np.cumsum(legs[::-1])[::-1], [0.0]])
+
+    @classmethod
+    def from_path(cls, path: OptimalPath, world: World, base: World, parked: FloatArray) -> Route:
+        points = path.points[1:] if len(path.points) > 1 else path.points
+        return cls([p.copy() for p in points], path.clearance, world, base, parked)
+
+    def remaining(self, position: FloatArray) -> float:
+        """Route length left from position (via the vertex last in sight)."""
+        return math.hypot(*(self.stacked[self.index] - position)) + float(self.rest[self.index])
+
+    def in_sight(self, position: FloatArray, radius: float, margin: float) -> int | None:
+        """The index of the farthest route vertex in sight from position (and `index` moves there); None when no
+        vertex ahead is in sight.
+
+        In sight: the straight run keeps the route's clearance less half the margin (a vertex lies exactly at
+        the route's clearance), or what the robot has now if that is less. Of the vertices ahead (within SIGHT
+        metres of route, SIGHT_VERTICES at most) the first one in sight and the run of vertices in sight after
+        it count; the last of that run is the farthest.
+        """
+        ahead = self.rest[self.index:]
+        count = min(SIGHT_VERTICES, int(np.searchsorted(-ahead, -(ahead[0] - SIGHT), side='right')))
+        candidates = self.stacked[self.index:self.index + max(2, count)]   # the next vertex, however far
+        obstacles = self.world.obstacles
+        within = min(radius + 0.5 * margin, self.keep - 1e-3)
+        if len(obstacles):
+            within = min(within, float(obstacles.clearance(position)) - 1e-6)
+            seen = obstacles.fan_clearance(position, candidates) >= within
+        else:
+            seen = np.ones(len(candidates), dtype=bool)
+        if not seen.any():
+            return None
+        first = int(np.argmax(seen))
+        hidden = np.flatnonzero(~seen[first:])
+        last = first + (int(hidden[0]) - 1 if len(hidden) else len(seen) - first - 1)
+        self.index += last
+        return self.index
+
+    def passing(self, position: FloatArray, tolerance: float) -> None:
+        """Aim past the vertices within `tolerance` of position (a vertex counts as passed, as any waypoint):
+        the next vertex is in sight from there by construction, and aiming beyond a vertex the robot stands on
+        would turn round with every tick."""
+        last = len(self.vertices) - 1
+        while self.index < last and math.hypot(*(self.stacked[self.index] - position)) <= tolerance:
+            self.index += 1
+
+
+class FAStepRoute(FAStepKinematic):
+    """Algorithm 1 toward the farthest route vertex in sight; the swarm only where other robots block the run."""
+
+    method = 'fastep_route'
+    route: Route | None = None   # the route being followed (None before the first tick and once arrived)
+    replans = 0                  # routes planned after the first one
+    route_time = 0.0             # wall seconds spent planning routes (the first included)
+    replan_log: list[tuple[float, str]]   # (t, reason) of every replan
+
+    def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
+        super().set_goal(goal, t)
+        self.route, self.replans, self.route_time, self.replan_log = None, 0, 0.0, []
+        self._vertex: FloatArray | None = None        # the route target (identity tells a new one)
+        self._aim: FloatArray | None = None           # what the controller is aimed at for it
+        self._looked_at: FloatArray | None = None     # where the robot was when the target was last looked for
+        self._blocked_since: float | None = None      # since when a robot has stood on the route ahead
+        self._replanned_at = -math.inf
+        self._route_best = math.inf                   # the shortest route left so far (progress)
+
+    # ---------------------------------------------------------------- the route
+    def replan(self, position: FloatArray, others: Sequence[OtherRobot], reason: str) -> bool:
+        """Plan the route from position round the obstacles and the robots standing still; False (and failed)
+        when there is none."""
+        start = time.perf_counter()
+        path = self.exact_path(position, others)
+        self.route_time += time.perf_counter() - start
+        t = self._last_t or 0.0
+        if path is None:
+            assert self.goal is not None
+            self.fail(no_path_reason(self.radius, position, self.goal))
+            return False
+        self.replans += 1
+        self.replan_log.append((t, reason))
+        self._install(path, self.path_world, self._parked(others))
+        self._replanned_at = t
+        return True
+
+    def _install(self, path: OptimalPath, world: World, parked: FloatArray) -> None:
+        self.route = Route.from_path(path, world, self.world, parked)
+        self._vertex = self._aim = self._looked_at = None
+        self._blocked_since = None
+        self._route_best = math.inf   # progress is measured along the new route from here on
+
+    def _parked(self, others: Sequence[OtherRobot]) -> FloatArray:
+        """Centres of the other robots standing still (not at this robot's goal): what the route goes round."""
+        if not others or self.goal is None:
+            return np.zeros((0, 2))
+        centres, velocities, radii = other_arrays(others)
+        still = (np.hypot(*velocities.T) < PARKED_SPEED) & \
+            (np.hypot(*(centres - self.goal).T) > radii + self.radius)
+        parked: FloatArray = centres[still]
+        return parked
+
+    def replan_reason(self, t: float, position: FloatArray, others: Sequence[OtherRobot]) -> str | None:
+        """Why the route must be planned again now, or None: what the robot knows has changed.
+
+        The world given to the navigator is checked every tick; robots (one standing on the route ahead for
+        BLOCK_TIME, one the route went round gone) at most every REPLAN_INTERVAL.
+        """
+        route = self.route
+        assert route is not None
+        if route.base is not self.world:
+            return 'the world changed'
+        on_route = bool(others) and self._robot_on_route(position, others)
+        if not on_route:
+            self._blocked_since = None
+        elif self._blocked_since is None:
+            self._blocked_since = t
+        if t - self._replanned_at < REPLAN_INTERVAL:
+            return None
+        if len(route.parked):
+            centres = other_arrays(others)[0] if others else np.zeros((0, 2))
+            if not len(centres) or (np.hypot(*(route.parked[:, None, :] - centres[None]).transpose(2, 0, 1))
+                                    .min(axis=1) > MOVED).any():
+                return 'a robot the route went round has moved'
+        if self._blocked_since is not None and t - self._blocked_since >= BLOCK_TIME:
+            return 'a robot stands on the route'
+        return None
+
+    def _robot_on_route(self, position: FloatArray, others: Sequence[OtherRobot]) -> bool:
+        """Does a robot standing still (not at this robot's goal) lie on the route ahead, within both radii
+        plus half the margin, and not already planned round?"""
+        route = self.route
+        assert route is not None and self.goal is not None
+        centres, velocities, radii = other_arrays(others)
+        still = (np.hypot(*velocities.T) < PARKED_SPEED) & \
+            (np.hypot(*(centres - self.goal).T) > radii + self.radius)
+        if not still.any():
+            return False
+        ahead = np.vstack([position, route.stacked[route.index:route.index + SIGHT_VERTICES]])
+        gaps = point_segment_distance(centres[still][:, None, :], ahead[None, :-1], ahead[None, 1:]).min(axis=1) \
+            if len(ahead) > 1 else np.hypot(*(centres[still] - position).T)
+        on = gaps < radii[still] + self.radius + 0.5 * self.params.clearance_margin
+        if not on.any() or not len(route.parked):
+            return bool(on.any())
+        known = np.hypot(*(centres[still][on][:, None, :] - route.parked[None]).transpose(2, 0, 1)).min(axis=1) <= MOVED
+        return bool((~known).any())
+
+    def route_target(self, position: FloatArray, t: float, others: Sequence[OtherRobot]) -> FloatArray | None:
+        """The farthest route vertex in sight, looked for again after detection_interval of travel; the route is
+        planned again when none is (at most every REPLAN_INTERVAL: a fresh route's first vertex counts as seen)."""
+        route = self.route
+        assert route is not None
+        looked = self._looked_at
+        if self._vertex is not None and looked is not None and \
+                math.hypot(position[0] - looked[0], position[1] - looked[1]) < self.params.detection_interval:
+            return self._vertex
+        index = route.in_sight(position, self.radius, self.params.clearance_margin)
+        if index is None:
+            if t - self._replanned_at >= REPLAN_INTERVAL or self._replanned_at == -math.inf:
+                if not self.replan(position, others, 'no route vertex in sight'):
+                    return None
+                route = self.route
+                assert route is not None
+                index = route.in_sight(position, self.radius, self.params.clearance_margin)
+            index = route.index if index is None else index   # a fresh route's first vertex is reachable
+        route.passing(position, self.params.waypoint_tolerance)
+        index = route.index
+        self._vertex, self._aim = route.vertices[index], None   # aimed afresh from where the robot is
+        self._looked_at = position.copy()
+        return self._vertex
+
+    def step_target(self) -> FloatArray:
+        """d in eq. 10 is measured to the route target."""
+        assert self.goal is not None
+        return self._vertex if self._vertex is not None else self.goal
+
+    def aim_route(self, position: FloatArray, vertex: FloatArray) -> FloatArray:
+        """What the controller is aimed at for the route target (see the module's "Speed")."""
+        assert self.route is not None
+        if vertex is self.route.vertices[-1]:
+            return vertex                      # the goal: the paper's approach
+        run = vertex - position
+        gap = math.hypot(run[0], run[1])
+        if gap < 1e-9:
+            return vertex
+        p = self.params
+        if self.model.holonomic:
+            lead = p.max_speed / min(p.alpha1, p.alpha2) if p.max_speed > 0.0 else p.waypoint_lead
+            return vertex if lead <= 0.0 else vertex + run * (lead / gap)
+        if gap >= p.step_radius:
+            return vertex
+        carrot = position + run * (p.step_radius / gap)
+        obstacles = self.route.world.obstacles
+        if float(self.world.wall_distance(carrot)) < self.clearance or (len(obstacles) and float(
+                obstacles.fan_clearance(position, carrot[None])[0]) < self.radius + 0.5 * p.clearance_margin):
+            return vertex
+        return carrot
+
+    # -------------------------------------------------------------- Algorithm 1
+    def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+        assert self.goal is not None
+        t = self._last_t or 0.0
+        if self.route is None:                 # the goal's first tick: the base class's path is the first route
+            if self.reference is None:
+                if not self.replan(position, others, 'goal set'):
+                    return None
+            else:
+                self._install(self.reference, self.world, np.zeros((0, 2)))
+        else:
+            reason = self.replan_reason(t, position, others)
+            if reason is not None and not self.replan(position, others, reason):
+                return None
+        vertex = self.route_target(position, t, others)
+        if vertex is None:
+            return None
+        self.note_progress(position, t)
+        following = self.keep_waypoint(position, others)     # a swarm waypoint not yet reached
+        self._committed = self._committed and following
+        if self._committed:                                  # a step that broke a hold is driven to its end
+            return self.waypoint
+        if not robots_on_run(others, self.radius, position, vertex, self.params.sensing_range,
+                             0.5 * self.params.clearance_margin):
+            self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'following the route'
+            if self._aim is None:
+                self._aim = self.aim_route(position, vertex)
+            return self._aim
+        if following:
+            return self.aim(position, self.waypoint)
+        waypoint = self.plan_next_step(position, others)     # eq. 3-10 toward the route target
+        if waypoint is not None and self.params.stuck_steps > 0:
+            self.note_stuck(position, waypoint, others)
+        return None if waypoint is None else self.aim(position, waypoint)
+
+    def note_progress(self, position: FloatArray, t: float) -> None:
+        """A route left progress_distance shorter than ever restarts the progress checker and the trap detector."""
+        assert self.route is not None and self.goal is not None
+        left = self.route.remaining(position)
+        if self._route_best == math.inf:
+            self._route_best = left
+        elif left < self._route_best - self.params.progress_distance:
+            self._route_best = left
+            self.progress.made_progress(t)
+            self.trap.reset(t, math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]))
