@@ -45,7 +45,7 @@ PLOT_POINTS = 5000   # points drawn per line at most: long recordings are thinne
 OBSTACLE_GREY = '0.55'
 WALL_GREY = '0.25'
 # fastep-bench's planners keep their colours across panels.
-ALGORITHM_COLOURS = {'fastep': 'tab:red', 'aco': 'tab:blue', 'optimal': 'tab:olive'}
+ALGORITHM_COLOURS = {'fastep': 'tab:red', 'aco': 'tab:blue', 'optimal': 'tab:olive', 'fastep_route': 'tab:purple'}
 
 
 def title(what: str, algorithm: str = '', seed: int | None = None) -> str:

@@ -78,7 +78,8 @@ def test_paths_figure_of_a_simulated_run(simulated: tuple[Any, Run]) -> None:
 def test_the_title_names_the_algorithm(algorithm: str) -> None:
     scenario = load_scenario('open_field')
     run = Run(7, algorithm, [RobotRun(name=spec.name, model=spec.model) for spec in scenario.robots])
-    expected = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic'}[algorithm]
+    expected = {'fastep': 'FAStep-Kinematic', 'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic',
+                'fastep_route': 'FAStep-Route'}[algorithm]
     assert plots.run_paths_figure(scenario, run).axes[0].get_title() == f'open_field: {expected}, seed 7'
 
 
