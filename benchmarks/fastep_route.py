@@ -29,7 +29,7 @@ from typing import Any, Sequence
 
 import numpy as np
 import yaml
-from scipy.stats import mannwhitneyu
+from scipy.stats import mannwhitneyu, wilcoxon
 
 from benchmarks.clutter_diagnosis import circle_field_data
 from fastep_core.planning.optimal import shortest_path
@@ -81,7 +81,7 @@ def run_one(job: tuple[str, int, str]) -> dict[str, Any]:
 def summary(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     """Per family and planner: the target's numbers; CPU / ACO's is the median over worlds of the ratio."""
     out = []
-    aco = {(r['family'], r['seed']): r['cpu'] for r in rows if r['algorithm'] == 'aco'}
+    aco = {(r['family'], r['seed']): (r['cpu'], r['compute']) for r in rows if r['algorithm'] == 'aco'}
     for family in dict.fromkeys(r['family'] for r in rows):
         for algorithm in dict.fromkeys(r['algorithm'] for r in rows if r['family'] == family):
             sel = [r for r in rows if r['family'] == family and r['algorithm'] == algorithm]
@@ -89,7 +89,8 @@ def summary(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
             ratios = [b['path_length'] / b['optimum'] for b in robots if b['reached'] and b['optimum']]
             worst = max(((b['path_length'] / b['optimum'], r['seed'], b['name']) for r in sel for b in r['robots']
                          if b['reached'] and b['optimum']), default=(float('nan'), -1, ''))
-            vs_aco = [r['cpu'] / aco[(family, r['seed'])] for r in sel if (family, r['seed']) in aco]
+            vs_aco = [r['cpu'] / aco[(family, r['seed'])][0] for r in sel if (family, r['seed']) in aco]
+            compute_vs_aco = [r['compute'] / aco[(family, r['seed'])][1] for r in sel if (family, r['seed']) in aco]
             out.append({
                 'family': family, 'algorithm': algorithm, 'runs': len(sel), 'robots': len(robots),
                 'arrived': sum(b['reached'] for b in robots), 'collided': sum(b['collided'] for b in robots),
@@ -99,6 +100,7 @@ def summary(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
                 'compute_median': float(np.median([r['compute'] for r in sel])),
                 'cpu_vs_aco_median': float(np.median(vs_aco)) if vs_aco else float('nan'),
                 'cpu_vs_aco_max': float(np.max(vs_aco)) if vs_aco else float('nan'),
+                'compute_vs_aco_median': float(np.median(compute_vs_aco)) if compute_vs_aco else float('nan'),
                 'activations': sum(b['activations'] for b in robots), 'escapes': sum(b['escapes'] for b in robots),
                 'manoeuvres': sum(b['manoeuvres'] for b in robots),
                 'sim_time_median': float(np.median([b['sim_time'] for b in robots if b['sim_time'] is not None]
@@ -107,38 +109,50 @@ def summary(rows: list[dict[str, Any]]) -> list[dict[str, Any]]:
     return out
 
 
+def _lengths(rows: list[dict[str, Any]], family: str, algorithm: str) -> dict[tuple[int, str], float]:
+    """Path length of every robot of a family's runs by one planner, by (seed, robot)."""
+    return {(r['seed'], b['name']): b['path_length'] for r in rows
+            if r['family'] == family and r['algorithm'] == algorithm for b in r['robots']}
+
+
 def path_tests(rows: list[dict[str, Any]], planner: str = 'fastep_route') -> list[str]:
-    """Two-sided Mann-Whitney U of the path length, planner against each other one, per single-robot family."""
+    """Path length, planner against each other one: on a built-in scenario (one world, many seeds) two-sided
+    Mann-Whitney U of the runs; in a family (one world per seed) two-sided Wilcoxon signed-rank of the pairs
+    (same world, same seed), over every robot."""
     lines = []
     for family in dict.fromkeys(r['family'] for r in rows):
-        mine = [r['robots'][0]['path_length'] for r in rows if r['family'] == family and r['algorithm'] == planner
-                and len(r['robots']) == 1]
+        mine = _lengths(rows, family, planner)
         for other in dict.fromkeys(r['algorithm'] for r in rows if r['family'] == family):
-            theirs = [r['robots'][0]['path_length'] for r in rows if r['family'] == family and r['algorithm'] == other
-                      and len(r['robots']) == 1]
-            if other == planner or not mine or not theirs:
+            theirs = _lengths(rows, family, other)
+            keys = sorted(set(mine) & set(theirs))
+            if other == planner or len(keys) < 2:
                 continue
-            p = mannwhitneyu(mine, theirs, alternative='two-sided').pvalue
-            lines.append(f'| {family} | {planner} {np.mean(mine):.2f} m | {other} {np.mean(theirs):.2f} m | '
-                         f'{(np.mean(theirs) - np.mean(mine)) / np.mean(theirs) * 100:.2f} % | {p:.2g} |')
+            a, b = np.array([mine[k] for k in keys]), np.array([theirs[k] for k in keys])
+            if family in FAMILIES:
+                test, p = 'Wilcoxon', float(wilcoxon(a, b).pvalue) if np.any(a != b) else 1.0
+            else:
+                test, p = 'Mann-Whitney', float(mannwhitneyu(a, b, alternative='two-sided').pvalue)
+            lines.append(f'| {family} | {planner} {a.mean():.2f} m | {other} {b.mean():.2f} m | '
+                         f'{(b.mean() - a.mean()) / b.mean() * 100:.2f} % | {p:.2g} ({test}, n = {len(keys)}) |')
     return lines
 
 
 def markdown(paths: Sequence[Path]) -> str:
     rows = [row for p in paths for row in json.loads(p.read_text())['rows']]
     head = ('| family | planner | runs | robots arrived | collided | path / opt. mean | worst (where) | CPU per run '
-            '(median s) | CPU / ACO\'s (median / max) | compute per run (median s) | activations | escapes | '
-            'manoeuvres | sim time (median s) |')
-    lines = [head, '|' + '---|' * 14]
+            '(median s) | CPU / ACO\'s (median / max) | compute per run (median s) | compute / ACO\'s (median) | '
+            'activations | escapes | manoeuvres | sim time (median s) |')
+    lines = [head, '|' + '---|' * 15]
     for s in summary(rows):
         lines.append(f'| {s["family"]} | {s["algorithm"]} | {s["runs"]} | {s["arrived"]}/{s["robots"]} | '
                      f'{s["collided"]} | {s["ratio_mean"]:.3f} | {s["ratio_worst"]:.3f} ({s["worst_at"]}) | '
                      f'{s["cpu_median"]:.3f} | {s["cpu_vs_aco_median"]:.2f} / {s["cpu_vs_aco_max"]:.2f} | '
-                     f'{s["compute_median"]:.3f} | {s["activations"]} | {s["escapes"]} | {s["manoeuvres"]} | '
+                     f'{s["compute_median"]:.3f} | {s["compute_vs_aco_median"]:.2f} | {s["activations"]} | '
+                     f'{s["escapes"]} | {s["manoeuvres"]} | '
                      f'{s["sim_time_median"]:.1f} |')
     tests = path_tests(rows)
     if tests:
-        lines += ['', '| family | mean path | against | shorter by | p (Mann-Whitney, path) |', '|---|---|---|---|---|',
+        lines += ['', '| family | mean path | against | shorter by | p (path) |', '|---|---|---|---|---|',
                   *tests]
     return '\n'.join(lines)
 

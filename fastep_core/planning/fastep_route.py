@@ -95,7 +95,10 @@ class Route:
         vertex ahead is in sight.
 
         In sight: the straight run keeps the route's clearance less half the margin (a vertex lies exactly at
-        the route's clearance), or what the robot has now if that is less. Of the vertices ahead (within SIGHT
+        the route's clearance). A robot already nearer than that (it cut a corner by up to that half margin)
+        may see along runs that keep a quarter margin, what the exact path keeps through a narrow gap, or what
+        it has now if that is less: else the next leg, passing a few millimetres nearer than the robot is,
+        would be out of sight and the route planned again at every bend. Of the vertices ahead (within SIGHT
         metres of route, SIGHT_VERTICES at most) the first one in sight and the run of vertices in sight after
         it count; the last of that run is the farthest.
         """
@@ -105,7 +108,9 @@ class Route:
         obstacles = self.world.obstacles
         within = min(radius + 0.5 * margin, self.keep - 1e-3)
         if len(obstacles):
-            within = min(within, float(obstacles.clearance(position)) - 1e-6)
+            here = float(obstacles.clearance(position))
+            if here < within:
+                within = min(within, here, radius + 0.25 * margin) - 1e-6
             seen = obstacles.fan_clearance(position, candidates) >= within
         else:
             seen = np.ones(len(candidates), dtype=bool)
@@ -141,6 +146,7 @@ class FAStepRoute(FAStepKinematic):
         self._vertex: FloatArray | None = None        # the route target (identity tells a new one)
         self._aim: FloatArray | None = None           # what the controller is aimed at for it
         self._looked_at: FloatArray | None = None     # where the robot was when the target was last looked for
+        self._look_after = 0.0                        # ... and how far it may drive before the next look
         self._blocked_since: float | None = None      # since when a robot has stood on the route ahead
         self._replanned_at = -math.inf
         self._route_best = math.inf                   # the shortest route left so far (progress)
@@ -225,13 +231,17 @@ class FAStepRoute(FAStepKinematic):
         return bool((~known).any())
 
     def route_target(self, position: FloatArray, t: float, others: Sequence[OtherRobot]) -> FloatArray | None:
-        """The farthest route vertex in sight, looked for again after detection_interval of travel; the route is
-        planned again when none is (at most every REPLAN_INTERVAL: a fresh route's first vertex counts as seen)."""
+        """The farthest route vertex in sight; the route is planned again when none is (at most every
+        REPLAN_INTERVAL: a fresh route's first vertex counts as seen).
+
+        It is looked for again after `_look_after` metres of travel (see `next_look`), and at once when the
+        robot drove anything else than the route target's aim last tick (a swarm step, an escape, a backup).
+        """
         route = self.route
         assert route is not None
         looked = self._looked_at
-        if self._vertex is not None and looked is not None and \
-                math.hypot(position[0] - looked[0], position[1] - looked[1]) < self.params.detection_interval:
+        if self._vertex is not None and looked is not None and self._aim is not None and self._target is self._aim \
+                and math.hypot(position[0] - looked[0], position[1] - looked[1]) < self._look_after:
             return self._vertex
         index = route.in_sight(position, self.radius, self.params.clearance_margin)
         if index is None:
@@ -246,7 +256,25 @@ class FAStepRoute(FAStepKinematic):
         index = route.index
         self._vertex, self._aim = route.vertices[index], None   # aimed afresh from where the robot is
         self._looked_at = position.copy()
+        self._look_after = self.next_look(position, self._vertex)
         return self._vertex
+
+    def next_look(self, position: FloatArray, vertex: FloatArray) -> float:
+        """Metres of travel before the farthest vertex in sight is looked for again.
+
+        detection_interval, as eq. 11's detection runs. A holonomic robot drives the straight run to the vertex,
+        along which the vertex stays in sight (a part of a free run is free): while it is farther than
+        sensing_range, half of what lies beyond that is driven before the next look (a vertex past a bend comes
+        into sight only near the bend), and the goal, once in sight, is never looked for again.
+        """
+        interval = self.params.detection_interval
+        if not self.model.holonomic:
+            return interval
+        assert self.route is not None
+        if vertex is self.route.vertices[-1]:
+            return math.inf
+        gap = math.hypot(vertex[0] - position[0], vertex[1] - position[1])
+        return max(interval, 0.5 * (gap - self.params.sensing_range))
 
     def step_target(self) -> FloatArray:
         """d in eq. 10 is measured to the route target."""
