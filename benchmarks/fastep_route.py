@@ -2,6 +2,7 @@
 
     python -m benchmarks.fastep_route --worlds 8 --workers 2 --out /tmp/route/families.json
     python -m benchmarks.fastep_route --families table2_s1 table2_s2 table2_s3 --worlds 10 --out /tmp/route/t2.json
+    python -m benchmarks.fastep_route --families multi --algorithms fastep_route --planner waypoint_lead=2 ...
     python -m benchmarks.fastep_route --markdown /tmp/route/families.json /tmp/route/t2.json
 
 Families (world seed = run seed = 0..N-1, so every planner meets the same worlds with the same seeds):
@@ -23,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import time
+from collections import Counter
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any, Sequence
@@ -59,9 +61,12 @@ def world_data(family: str, seed: int) -> dict[str, Any]:
     return data
 
 
-def run_one(job: tuple[str, int, str]) -> dict[str, Any]:
-    family, seed, algorithm = job
-    scenario = parse_scenario(world_data(family, seed))
+def run_one(job: tuple[str, int, str, dict[str, float]]) -> dict[str, Any]:
+    family, seed, algorithm, planner = job
+    data = world_data(family, seed)
+    if planner:
+        data['planner'] = {**data.get('planner', {}), **planner}
+    scenario = parse_scenario(data)
     start = time.process_time()
     run = simulate(scenario, algorithm, seed)
     cpu = time.process_time() - start
@@ -74,7 +79,15 @@ def run_one(job: tuple[str, int, str]) -> dict[str, Any]:
                        'compute_time': robot.compute_time, 'sim_time': robot.sim_time,
                        'activations': robot.activations, 'escapes': robot.escapes, 'manoeuvres': robot.manoeuvres,
                        'status': robot.status})
-    return {'family': family, 'seed': seed, 'algorithm': algorithm, 'cpu': cpu,
+    if algorithm == 'fastep_route':   # the route's own numbers, from a second, untimed run (same seed, same run)
+        navigators: dict[str, Any] = {}
+        simulate(scenario, algorithm, seed, lambda tick: navigators.setdefault(tick.name, tick.navigator))
+        for robot in robots:
+            nav = navigators[robot['name']]
+            robot.update(route_time=nav.route_time, replans=nav.replans,
+                         reasons=dict(Counter(reason for _, reason in nav.replan_log)))
+    label = ' '.join([algorithm, *(f'{k}={v:g}' for k, v in planner.items())])
+    return {'family': family, 'seed': seed, 'algorithm': label, 'cpu': cpu,
             'compute': sum(r['compute_time'] for r in robots), 'robots': robots}
 
 
@@ -150,6 +163,20 @@ def markdown(paths: Sequence[Path]) -> str:
                      f'{s["compute_median"]:.3f} | {s["compute_vs_aco_median"]:.2f} | {s["activations"]} | '
                      f'{s["escapes"]} | {s["manoeuvres"]} | '
                      f'{s["sim_time_median"]:.1f} |')
+    routed = [(r['family'], b) for r in rows if r['algorithm'] == 'fastep_route' for b in r['robots']
+              if 'route_time' in b]
+    if routed:
+        lines += ['', '| family | robots | route wall s per robot (median / max) | replans (total / max per robot) '
+                  '| why |', '|---|---|---|---|---|']
+        for family in dict.fromkeys(f for f, _ in routed):
+            mine = [b for f, b in routed if f == family]
+            why: Counter[str] = Counter()
+            for b in mine:
+                why.update(b['reasons'])
+            times = [b['route_time'] for b in mine]
+            lines.append(f'| {family} | {len(mine)} | {np.median(times):.3f} / {max(times):.3f} | '
+                         f'{sum(b["replans"] for b in mine)} / {max(b["replans"] for b in mine)} | '
+                         f'{", ".join(f"{k}: {v}" for k, v in why.most_common()) or "-"} |')
     tests = path_tests(rows)
     if tests:
         lines += ['', '| family | mean path | against | shorter by | p (path) |', '|---|---|---|---|---|',
@@ -163,6 +190,8 @@ def main() -> int:
     p.add_argument('--worlds', type=int, default=8, help='worlds (seeds 0..N-1) per family')
     p.add_argument('--first', type=int, default=0, help='first seed')
     p.add_argument('--algorithms', nargs='+', default=['fastep_route', 'fastep', 'aco'])
+    p.add_argument('--planner', nargs='+', default=[], metavar='NAME=VALUE',
+                   help='planner parameters for every run (the rows are labelled with them)')
     p.add_argument('--workers', type=int, default=2)
     p.add_argument('--out', type=Path)
     p.add_argument('--markdown', nargs='+', type=Path, help='print the tables of earlier --out files and stop')
@@ -170,7 +199,8 @@ def main() -> int:
     if args.markdown:
         print(markdown(args.markdown))
         return 0
-    jobs = [(f, s, a) for f in args.families for s in range(args.first, args.first + args.worlds)
+    planner = {name: float(value) for name, value in (item.split('=', 1) for item in args.planner)}
+    jobs = [(f, s, a, planner) for f in args.families for s in range(args.first, args.first + args.worlds)
             for a in args.algorithms]
     start, cpu = time.perf_counter(), time.process_time()
     with ProcessPoolExecutor(args.workers) as pool:

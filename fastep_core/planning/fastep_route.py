@@ -137,7 +137,7 @@ class FAStepRoute(FAStepKinematic):
     method = 'fastep_route'
     route: Route | None = None   # the route being followed (None before the first tick and once arrived)
     replans = 0                  # routes planned after the first one
-    route_time = 0.0             # wall seconds spent planning routes (the first included)
+    route_time = 0.0             # wall seconds spent in exact paths (the first route, replans, escapes)
     replan_log: list[tuple[float, str]]   # (t, reason) of every replan
 
     def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
@@ -155,9 +155,7 @@ class FAStepRoute(FAStepKinematic):
     def replan(self, position: FloatArray, others: Sequence[OtherRobot], reason: str) -> bool:
         """Plan the route from position round the obstacles and the robots standing still; False (and failed)
         when there is none."""
-        start = time.perf_counter()
         path = self.exact_path(position, others)
-        self.route_time += time.perf_counter() - start
         t = self._last_t or 0.0
         if path is None:
             assert self.goal is not None
@@ -168,6 +166,13 @@ class FAStepRoute(FAStepKinematic):
         self._install(path, self.path_world, self._parked(others))
         self._replanned_at = t
         return True
+
+    def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:
+        """The base class's exact path (the goal's first tick, replans, trap escapes), its wall time counted."""
+        start = time.perf_counter()
+        path = super().exact_path(position, others)
+        self.route_time += time.perf_counter() - start
+        return path
 
     def _install(self, path: OptimalPath, world: World, parked: FloatArray) -> None:
         self.route = Route.from_path(path, world, self.world, parked)
