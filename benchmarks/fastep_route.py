@@ -4,6 +4,7 @@
     python -m benchmarks.fastep_route --families table2_s1 table2_s2 table2_s3 --worlds 10 --out /tmp/route/t2.json
     python -m benchmarks.fastep_route --families multi --algorithms fastep_route --planner waypoint_lead=2 ...
     python -m benchmarks.fastep_route --markdown /tmp/route/families.json /tmp/route/t2.json
+    python -m benchmarks.fastep_route --figure multi 2 docs/figures/fastep_route_worst.png
 
 Families (world seed = run seed = 0..N-1, so every planner meets the same worlds with the same seeds):
 - sparse, dense: `benchmarks.clutter_diagnosis.circle_field_data` with 20-35 / 40-60 circles (50 x 50 m);
@@ -184,6 +185,25 @@ def markdown(paths: Sequence[Path]) -> str:
     return '\n'.join(lines)
 
 
+def figure(family: str, seed: int, out: Path) -> Path:
+    """FAStep-Route's paths in world `seed` of a family, each robot's exact optimum dashed beside its path."""
+    from msg_tools import plots  # matplotlib only for the figure
+
+    scenario = parse_scenario(world_data(family, seed))
+    run = simulate(scenario, 'fastep_route', seed)
+    fig = plots.run_paths_figure(scenario, run)
+    ax = fig.axes[0]
+    for spec in scenario.robots:
+        keep = spec.radius + scenario.planner.clearance_margin
+        optimum = shortest_path(scenario.world, spec.start[:2], spec.goal, keep)
+        if optimum is not None:
+            xy = optimum.sample(0.05)
+            ax.plot(xy[:, 0], xy[:, 1], 'k--', lw=0.9, label=f'{spec.name} optimum ({optimum.length:.1f} m)')
+    ax.legend(loc='upper right', fontsize=8)
+    ax.set_title(f'{family} world {seed}: FAStep-Route, seed {seed}')
+    return plots.save(fig, out)
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument('--families', nargs='+', default=list(FAMILIES))
@@ -195,7 +215,12 @@ def main() -> int:
     p.add_argument('--workers', type=int, default=2)
     p.add_argument('--out', type=Path)
     p.add_argument('--markdown', nargs='+', type=Path, help='print the tables of earlier --out files and stop')
+    p.add_argument('--figure', nargs=3, metavar=('FAMILY', 'SEED', 'OUT.png'),
+                   help='draw FAStep-Route\'s paths in one world against the optimum and stop')
     args = p.parse_args()
+    if args.figure:
+        print(figure(args.figure[0], int(args.figure[1]), Path(args.figure[2])))
+        return 0
     if args.markdown:
         print(markdown(args.markdown))
         return 0
