@@ -20,22 +20,25 @@ Algorithm 1 with a route in place of the goal (`FAStepRoute.choose_target`, ever
    kinematic controller drives there (eq. 12 / 13); the run is free of obstacles by construction;
 4. otherwise the swarm plans one step (eq. 3-10) with d measured to the route target, and the robot drives to
    that waypoint as FAStep-Kinematic does (the lead of `aim`, the hold breaker, recoveries: planning/navigator.py).
-Static obstacles therefore never start the swarm: it plans only round other robots (and round an obstacle the
-route does not know of, until the next replan).
+Static obstacles therefore never start the swarm (the route knows them, and a changed world is replanned at
+once): it plans only round other robots.
 
-Speed: eq. 12 slows a point mass in proportion to the distance to its target. The route target only sets a
-direction, so a holonomic robot is aimed `lead` beyond it on the same ray (the run driven is the same
-straight run): `max_speed / alpha` when the speed is limited (eq. 12 then commands full speed), else
-`waypoint_lead`. The goal itself is aimed at directly (the paper's approach). A robot that cannot turn in
-place is aimed at the vertex, pushed out to `step_radius` along the same bearing when that run is free too
-(as the trap escape does, planning/escape.py), so it does not circle a vertex a few centimetres ahead.
+Speed: the kinematic controllers slow down in proportion to the distance to their target (eq. 12: alpha1 x
+distance; eq. 13: speed_gain x distance). The route target only sets a direction, so the controller is aimed
+`lead` beyond it on the ray from the robot: max_speed / gain when the speed is limited (the controller then
+commands full speed; 10 m with Table 1's gains), else `waypoint_lead`. A point mass drives that ray exactly, so
+its path is the same straight run; a tractor-trailer steers onto it as it would onto the vertex. The goal
+itself is aimed at directly (the paper's approach). A robot that cannot turn in place takes the route with
+turn room (planning/exact_path.py) only when it is at most TURN_ROOM_SLACK longer than the usual one.
 
 Progress along the route (a shorter way left, not a smaller distance to the goal) restarts the progress
 checker and the trap detector: a route that leads away from the goal round a long wall is not a trap. The
 trap escape stays as the safety net (robots that block the way for trap_timeout).
 
-Cost: one exact path per goal and per replan, never per tick; the farthest vertex in sight is tested every
-`detection_interval` of travel against at most SIGHT_VERTICES vertices within SIGHT metres of route.
+Cost: one exact path per goal and per replan, never per tick (two for a robot that cannot turn in place: with
+and without turn room); the farthest vertex in sight is tested every `detection_interval` of travel (less often
+for a holonomic robot far from it: `next_look`) against at most SIGHT_VERTICES vertices within SIGHT metres of
+route. docs/fastep_route.md has the numbers.
 """
 
 from __future__ import annotations
@@ -48,19 +51,20 @@ from typing import Sequence
 import numpy as np
 
 from fastep_core.geometry import point_segment_distance
-from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason
+from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason, robot_path
 from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
 from fastep_core.world import World
 
-__all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES']
+__all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES', 'TURN_ROOM_SLACK']
 
 BLOCK_TIME = 1.0        # s: another robot standing on the route ahead this long makes the route go round it
 REPLAN_INTERVAL = 1.0   # s: the route is planned at most this often for robots (blocking, or gone)
 MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
+TURN_ROOM_SLACK = 0.03  # a robot that cannot turn in place takes the route with turn room if at most 3 % longer
 
 
 @dataclass
@@ -95,23 +99,29 @@ class Route:
         vertex ahead is in sight.
 
         In sight: the straight run keeps the route's clearance less half the margin (a vertex lies exactly at
-        the route's clearance). A robot already nearer than that (it cut a corner by up to that half margin)
-        may see along runs that keep a quarter margin, what the exact path keeps through a narrow gap, or what
-        it has now if that is less: else the next leg, passing a few millimetres nearer than the robot is,
-        would be out of sight and the route planned again at every bend. Of the vertices ahead (within SIGHT
-        metres of route, SIGHT_VERTICES at most) the first one in sight and the run of vertices in sight after
-        it count; the last of that run is the farthest.
+        the route's clearance; a route through a narrow gap, keeping less than radius + margin, a hair less).
+        So a route that keeps turn room for a robot that cannot turn in place is not cut short round a bend. A
+        robot already nearer than that (it cut a corner by up to that half margin) may see along runs that
+        keep a quarter margin less, or what it has now if that is less: else the next leg, passing a few
+        millimetres nearer than the robot is, would be out of sight and the route planned at every bend.
+        Of the vertices ahead (within SIGHT metres of route, SIGHT_VERTICES at most) the first one in sight and
+        the run of vertices in sight after it count; the last of that run is the farthest. The first of them is
+        the one aimed at so far, which stays in sight down to a quarter margin less (hysteresis).
         """
         ahead = self.rest[self.index:]
         count = min(SIGHT_VERTICES, int(np.searchsorted(-ahead, -(ahead[0] - SIGHT), side='right')))
         candidates = self.stacked[self.index:self.index + max(2, count)]   # the next vertex, however far
         obstacles = self.world.obstacles
-        within = min(radius + 0.5 * margin, self.keep - 1e-3)
+        within = max(self.keep - 0.5 * margin, min(radius + 0.5 * margin, self.keep - 1e-3))
         if len(obstacles):
             here = float(obstacles.clearance(position))
             if here < within:
-                within = min(within, here, radius + 0.25 * margin) - 1e-6
-            seen = obstacles.fan_clearance(position, candidates) >= within
+                within = min(within - 0.25 * margin, here) - 1e-6
+            runs = obstacles.fan_clearance(position, candidates)
+            seen = runs >= within
+            # The vertex aimed at so far (the first candidate) stays in sight a quarter margin longer: the robot
+            # drives the run to it, which keeps what it kept, give or take a rounding error or a trailer's curve.
+            seen[0] = runs[0] >= within - 0.25 * margin
         else:
             seen = np.ones(len(candidates), dtype=bool)
         if not seen.any():
@@ -168,9 +178,23 @@ class FAStepRoute(FAStepKinematic):
         return True
 
     def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:
-        """The base class's exact path (the goal's first tick, replans, trap escapes), its wall time counted."""
+        """The exact path (the goal's first tick, replans, trap escapes), its wall time counted.
+
+        For a robot that cannot turn in place the base class takes the path with TURN_ROOM more clearance
+        whenever there is one, however much longer (a way round a whole cluster of circles instead of through a
+        gap it fits). Here it is taken only when it is at most TURN_ROOM_SLACK longer than the path keeping the
+        usual clearance; else the robot takes the gap and leaves tight corners to its manoeuvres.
+        """
         start = time.perf_counter()
         path = super().exact_path(position, others)
+        if path is not None and not self.model.turns_in_place and path.clearance > self.clearance:
+            assert self.goal is not None
+            roomy_world = self.path_world
+            tight, tight_world = robot_path(self.world, others, position, self.goal, self.radius, self.params)
+            if tight is not None and path.length > (1.0 + TURN_ROOM_SLACK) * tight.length:
+                path, self.path_world = tight, tight_world
+            else:
+                self.path_world = roomy_world
         self.route_time += time.perf_counter() - start
         return path
 
@@ -296,17 +320,9 @@ class FAStepRoute(FAStepKinematic):
         if gap < 1e-9:
             return vertex
         p = self.params
-        if self.model.holonomic:
-            lead = p.max_speed / min(p.alpha1, p.alpha2) if p.max_speed > 0.0 else p.waypoint_lead
-            return vertex if lead <= 0.0 else vertex + run * (lead / gap)
-        if gap >= p.step_radius:
-            return vertex
-        carrot = position + run * (p.step_radius / gap)
-        obstacles = self.route.world.obstacles
-        if float(self.world.wall_distance(carrot)) < self.clearance or (len(obstacles) and float(
-                obstacles.fan_clearance(position, carrot[None])[0]) < self.radius + 0.5 * p.clearance_margin):
-            return vertex
-        return carrot
+        gain = min(p.alpha1, p.alpha2) if self.model.holonomic else p.speed_gain
+        lead = p.max_speed / gain if p.max_speed > 0.0 else p.waypoint_lead
+        return vertex if lead <= 0.0 else vertex + run * (lead / gap)
 
     # -------------------------------------------------------------- Algorithm 1
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
