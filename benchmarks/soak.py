@@ -21,6 +21,7 @@ from typing import Any
 import yaml
 
 from fastep_core.cli import progress_bar
+from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.random_scenarios import random_scenario_data
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
@@ -67,7 +68,7 @@ def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument('--scenarios', type=int, default=500)
     p.add_argument('--first', type=int, default=0, help='seed of the first scenario')
-    p.add_argument('--algorithm', default='fastep', choices=('fastep', 'aco'))
+    p.add_argument('--algorithm', default='fastep', choices=ALGORITHMS)
     p.add_argument('--trap-timeout', type=float, default=None,
                    help='override planner trap_timeout (0 disables trap escape)')
     p.add_argument('--workers', type=int, default=2)

@@ -48,7 +48,7 @@ from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import GoalError, ParameterError
-from fastep_core.planning.algorithms import ALGORITHM_NAMES, ALGORITHMS, check_drives, make_navigator
+from fastep_core.planning.algorithms import ALGORITHMS, algorithm_name, check_drives, make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
@@ -100,7 +100,7 @@ class PlannerNode(Node):
         guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.params = self._declare_planner_params()
         self.algorithm = declare(self, 'algorithm', 'fastep',
-                                 ', '.join(f'{a} ({name})' for a, name in ALGORITHM_NAMES.items()),
+                                 'planner: ' + ', '.join(f'{a} ({algorithm_name(a)})' for a in ALGORITHMS),
                                  constraints=' | '.join(ALGORITHMS))
         self.model = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
                              constraints='point_mass | tractor_trailer')

@@ -15,6 +15,7 @@ from fastep_core.kinematics import PointMass, PointMassController, TractorTraile
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.aco_kinematic import ACOKinematic
 from fastep_core.planning.dwa import DynamicWindow
+from fastep_core.planning.fastep_route import FAStepRoute
 from fastep_core.planning.navigator import FAStepKinematic, FAStepPaper, Navigator
 from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
@@ -29,10 +30,12 @@ NAVIGATORS: dict[str, type[Navigator]] = {
     'aco': ACOKinematic,         # the paper's baseline
     'optimal': OptimalKinematic,  # the exact shortest path, driven by the same controller (a reference)
     'dwa': DynamicWindow,        # the Dynamic Window Approach (Fox et al. 1997): the local planner users know
+    'fastep_route': FAStepRoute,  # FAStep-Kinematic toward the farthest vertex in sight of the exact route
 }
 ALGORITHMS: tuple[str, ...] = tuple(NAVIGATORS)
 ALGORITHM_NAMES: dict[str, str] = {'fastep': 'FAStep-Kinematic', 'fastep_paper': 'FAStep-Kinematic (paper policy)',
-                                   'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic', 'dwa': 'DWA'}
+                                   'aco': 'ACO-Kinematic', 'optimal': 'Optimal-Kinematic', 'dwa': 'DWA',
+                                   'fastep_route': 'FAStep-Route'}
 """What tables, reports and figure titles call each algorithm (the paper's names)."""
 
 

@@ -257,13 +257,14 @@ class Navigator:
         assert self.goal is not None
         if self._last_t is not None and self._last_t < self._retry_at:
             return None
+        target = self.step_target()
         centres, sums = robot_arrays(others, self.radius)
-        problem = StepProblem(self.world, position, self.goal, self.clearance, self.params.step_radius,
+        problem = StepProblem(self.world, position, target, self.clearance, self.params.step_radius,
                               self.params.a, self.params.b, self.params.c, centres,
                               sums + self.params.clearance_margin)
         self.activations += 1
         offset = centres - position
-        ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (self.goal - position) > 0)
+        ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (target - position) > 0)
         start = time.perf_counter()
         step = plan_step_passing_right(problem, self.params, self.rng, self.step_method, offset[ahead])
         self.plan_time += time.perf_counter() - start
@@ -276,6 +277,11 @@ class Navigator:
         self.waypoint, self.cost = step.waypoint, step.cost
         self.plan.append(step.waypoint)
         return step.waypoint
+
+    def step_target(self) -> FloatArray:
+        """The point d in eq. 10 is measured to: the goal (FAStep-Route: the route vertex it aims at)."""
+        assert self.goal is not None
+        return self.goal
 
     def keep_waypoint(self, position: FloatArray, others: Sequence[OtherRobot]) -> bool:
         """Follow the current waypoint unless it is reached or a robot has moved onto the run to it.

@@ -13,7 +13,7 @@ from matplotlib.patches import Circle as CirclePatch
 
 from fastep_core.experiments import PAPER, Record, example_paths
 from fastep_core.geometry import Circle, Segment
-from fastep_core.planning.algorithms import ALGORITHMS, algorithm_name
+from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.scenario import load_scenario, parse_scenario
 from fastep_core.simulator import RobotRun, Run, simulate
 from msg_tools import plots
@@ -79,7 +79,7 @@ def test_the_title_names_the_algorithm(algorithm: str) -> None:
     scenario = load_scenario('open_field')
     run = Run(7, algorithm, [RobotRun(name=spec.name, model=spec.model) for spec in scenario.robots])
     expected = {'fastep': 'FAStep-Kinematic', 'fastep_paper': 'FAStep-Kinematic (paper policy)', 'aco': 'ACO-Kinematic',
-                'optimal': 'Optimal-Kinematic', 'dwa': 'DWA'}.get(algorithm, algorithm_name(algorithm))
+                'optimal': 'Optimal-Kinematic', 'dwa': 'DWA', 'fastep_route': 'FAStep-Route'}[algorithm]
     assert plots.run_paths_figure(scenario, run).axes[0].get_title() == f'open_field: {expected}, seed 7'
 
 

@@ -45,7 +45,7 @@ def test_dwa_runs_a_point_mass_and_refuses_a_tractor_trailer_in_one_line(tmp_pat
     proc = run_cli('application', '--algorithm', 'dwa')
     assert proc.returncode == 2 and proc.stdout == ''
     assert proc.stderr == ('fastep-sim: error: dwa drives point_mass robots only; robot r1 is a tractor_trailer '
-                           '(choose fastep, fastep_paper, aco, optimal)\n')
+                           '(choose fastep, fastep_paper, aco, optimal, fastep_route)\n')
 
 
 def test_tractor_trailer_trajectory_rows_carry_both_headings(tmp_path):

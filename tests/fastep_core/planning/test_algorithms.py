@@ -21,7 +21,7 @@ TRACTOR = RobotSpec('r2', 'tractor_trailer', (5.0, 5.0, 0.0, 0.0), (45.0, 45.0),
 def test_every_registered_algorithm_builds_a_navigator_named_after_it(algorithm):
     nav = make_navigator(algorithm, POINT, 0.5, WORLD, PlannerParams(), 0)
     assert type(nav) is NAVIGATORS[algorithm] and nav.method == algorithm
-    assert algorithm_name(algorithm) != algorithm   # tables and figures show the algorithm's own name
+    assert algorithm_name(algorithm) != algorithm   # a display name of its own (FAStep-Kinematic, FAStep-Route ...)
 
 
 def test_an_unknown_algorithm_or_model_is_a_one_line_fastep_error():

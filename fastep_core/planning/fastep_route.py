@@ -1,0 +1,371 @@
+"""FAStep-Route: FAStep-Kinematic guided by the exact shortest route over what the robot knows (issue 12, item 2).
+
+Why: FAStep-Kinematic measures d in eq. 10 to the goal, so its steps are greedy: in clutter they lead into
+wedges and U-traps whose way out lies behind the robot, and its path is on average 10 % longer than the
+optimum (44 % in the worst world, issue 12). What the robot knows of the world - the map it was given and the
+robots standing still - already fixes the shortest way; only what moves is left for the swarm to decide.
+
+Algorithm 1 with a route in place of the goal (`FAStepRoute.choose_target`, every tick):
+1. The route is the exact shortest path (planning/optimal.py through `Navigator.exact_path`: radius + margin
+   from every obstacle where there is room, less through a narrow gap, more for a robot that cannot turn in
+   place) from the robot to its goal. It is planned when the goal is set (the base class's first-tick path,
+   which checks the goal anyway, is the first route) and again only when `replan_reason` gives a reason: the
+   world given to the navigator changed, another robot has stood on the route ahead for BLOCK_TIME (the new
+   route goes round the robots standing still), a robot the route was planned round has moved away, or no
+   route vertex is in sight any more (after a swarm step, a backup or a manoeuvre). `replan` is the one
+   method that plans; a future trigger (moving or sensed obstacles) adds a reason to `replan_reason`.
+2. The route target is the farthest route vertex in sight: the straight run to it keeps the route's clearance
+   (a hair less: half the margin) from the world the route was planned in. It is the goal of Algorithm 1:
+3. when no other robot within sensing range lies on the straight run to it (eq. 11, with both radii), the
+   kinematic controller drives there (eq. 12 / 13); the run is free of obstacles by construction;
+4. otherwise the swarm plans one step (eq. 3-10) with d measured to the route target, and the robot drives to
+   that waypoint as FAStep-Kinematic does (the lead of `aim`, the hold breaker, recoveries: planning/navigator.py).
+Static obstacles therefore never start the swarm (the route knows them, and a changed world is replanned at
+once): it plans only round other robots.
+
+Speed: the kinematic controllers slow down in proportion to the distance to their target (eq. 12: alpha1 x
+distance; eq. 13: speed_gain x distance). The route target only sets a direction, so the controller is aimed
+`lead` beyond it on the ray from the robot: max_speed / gain when the speed is limited (the controller then
+commands full speed; 10 m with Table 1's gains), else `waypoint_lead`. A point mass drives that ray exactly, so
+its path is the same straight run; a tractor-trailer steers onto it as it would onto the vertex. The goal
+itself is aimed at directly (the paper's approach). A robot that cannot turn in place takes the route with
+turn room (planning/exact_path.py) only when it is at most TURN_ROOM_SLACK longer than the usual one.
+
+Progress along the route (a shorter way left, not a smaller distance to the goal) restarts the progress
+checker and the trap detector: a route that leads away from the goal round a long wall is not a trap. The
+trap escape stays as the safety net (robots that block the way for trap_timeout).
+
+Cost: one exact path per goal and per replan, never per tick (two for a robot that cannot turn in place: with
+and without turn room); the farthest vertex in sight is tested every `detection_interval` of travel (less often
+for a holonomic robot far from it: `next_look`) against at most SIGHT_VERTICES vertices within SIGHT metres of
+route. docs/fastep_route.md has the numbers.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+
+from fastep_core.geometry import point_segment_distance
+from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason, robot_path
+from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
+from fastep_core.planning.optimal import OptimalPath
+from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
+from fastep_core.world import World
+
+__all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES', 'TURN_ROOM_SLACK']
+
+BLOCK_TIME = 1.0        # s: another robot standing on the route ahead this long makes the route go round it
+REPLAN_INTERVAL = 1.0   # s: the route is planned at most this often for robots (blocking, or gone)
+MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
+SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
+SIGHT_VERTICES = 256    # vertices tested for sight at most
+TURN_ROOM_SLACK = 0.03  # a robot that cannot turn in place takes the route with turn room if at most 3 % longer
+
+
+@dataclass
+class Route:
+    """The route being followed: its vertices after the start (the goal last), and what it was planned for."""
+
+    vertices: list[FloatArray]   # one array per vertex: the navigator tells a new target by its identity
+    keep: float                  # the clearance the route keeps ...
+    world: World                 # ... from the obstacles of this world (robots standing still included)
+    base: World                  # the navigator's world when the route was planned
+    parked: FloatArray           # (k, 2) centres of the robots the route was planned round
+    index: int = 0               # the vertex in sight farthest along the route, last time it was looked for
+    stacked: FloatArray = field(init=False, repr=False)   # the vertices as one (n, 2) array
+    rest: FloatArray = field(init=False, repr=False)      # route length from each vertex to the goal
+
+    def __post_init__(self) -> None:
+        self.stacked = np.array(self.vertices, dtype=float).reshape(-1, 2)
+        legs = np.hypot(*np.diff(self.stacked, axis=0).T)
+        self.rest = np.concatenate([np.cumsum(legs[::-1])[::-1], [0.0]])
+
+    @classmethod
+    def from_path(cls, path: OptimalPath, world: World, base: World, parked: FloatArray) -> Route:
+        points = path.points[1:] if len(path.points) > 1 else path.points
+        return cls([p.copy() for p in points], path.clearance, world, base, parked)
+
+    def remaining(self, position: FloatArray) -> float:
+        """Route length left from position (via the vertex last in sight)."""
+        return math.hypot(*(self.stacked[self.index] - position)) + float(self.rest[self.index])
+
+    def in_sight(self, position: FloatArray, radius: float, margin: float) -> int | None:
+        """The index of the farthest route vertex in sight from position (and `index` moves there); None when no
+        vertex ahead is in sight.
+
+        In sight: the straight run keeps the route's clearance less half the margin (a vertex lies exactly at
+        the route's clearance; a route through a narrow gap, keeping less than radius + margin, a hair less).
+        So a route that keeps turn room for a robot that cannot turn in place is not cut short round a bend. A
+        robot already nearer than that (it cut a corner by up to that half margin) may see along runs that
+        keep a quarter margin less, or what it has now if that is less: else the next leg, passing a few
+        millimetres nearer than the robot is, would be out of sight and the route planned at every bend.
+        Of the vertices ahead (within SIGHT metres of route, SIGHT_VERTICES at most) the first one in sight and
+        the run of vertices in sight after it count; the last of that run is the farthest. The first of them is
+        the one aimed at so far, which stays in sight down to a quarter margin less (hysteresis).
+        """
+        ahead = self.rest[self.index:]
+        count = min(SIGHT_VERTICES, int(np.searchsorted(-ahead, -(ahead[0] - SIGHT), side='right')))
+        candidates = self.stacked[self.index:self.index + max(2, count)]   # the next vertex, however far
+        obstacles = self.world.obstacles
+        within = max(self.keep - 0.5 * margin, min(radius + 0.5 * margin, self.keep - 1e-3))
+        if len(obstacles):
+            here = float(obstacles.clearance(position))
+            if here < within:
+                within = min(within - 0.25 * margin, here) - 1e-6
+            runs = obstacles.fan_clearance(position, candidates)
+            seen = runs >= within
+            # The vertex aimed at so far (the first candidate) stays in sight a quarter margin longer: the robot
+            # drives the run to it, which keeps what it kept, give or take a rounding error or a trailer's curve.
+            seen[0] = runs[0] >= within - 0.25 * margin
+        else:
+            seen = np.ones(len(candidates), dtype=bool)
+        if not seen.any():
+            return None
+        first = int(np.argmax(seen))
+        hidden = np.flatnonzero(~seen[first:])
+        last = first + (int(hidden[0]) - 1 if len(hidden) else len(seen) - first - 1)
+        self.index += last
+        return self.index
+
+    def passing(self, position: FloatArray, tolerance: float) -> None:
+        """Aim past the vertices within `tolerance` of position (a vertex counts as passed, as any waypoint):
+        the next vertex is in sight from there by construction, and aiming beyond a vertex the robot stands on
+        would turn round with every tick."""
+        last = len(self.vertices) - 1
+        while self.index < last and math.hypot(*(self.stacked[self.index] - position)) <= tolerance:
+            self.index += 1
+
+
+class FAStepRoute(FAStepKinematic):
+    """Algorithm 1 toward the farthest route vertex in sight; the swarm only where other robots block the run."""
+
+    method = 'fastep_route'
+    route: Route | None = None   # the route being followed (None before the first tick and once arrived)
+    replans = 0                  # routes planned after the first one
+    route_time = 0.0             # wall seconds spent in exact paths (the first route, replans, escapes)
+    replan_log: list[tuple[float, str]]   # (t, reason) of every replan
+
+    def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
+        super().set_goal(goal, t)
+        self.route, self.replans, self.route_time, self.replan_log = None, 0, 0.0, []
+        self._vertex: FloatArray | None = None        # the route target (identity tells a new one)
+        self._aim: FloatArray | None = None           # what the controller is aimed at for it
+        self._looked_at: FloatArray | None = None     # where the robot was when the target was last looked for
+        self._look_after = 0.0                        # ... and how far it may drive before the next look
+        self._blocked_since: float | None = None      # since when a robot has stood on the route ahead
+        self._replanned_at = -math.inf
+        self._route_best = math.inf                   # the shortest route left so far (progress)
+
+    # ---------------------------------------------------------------- the route
+    def replan(self, position: FloatArray, others: Sequence[OtherRobot], reason: str) -> bool:
+        """Plan the route from position round the obstacles and the robots standing still; False (and failed)
+        when there is none."""
+        path = self.exact_path(position, others)
+        t = self._last_t or 0.0
+        if path is None:
+            assert self.goal is not None
+            self.fail(no_path_reason(self.radius, position, self.goal))
+            return False
+        self.replans += 1
+        self.replan_log.append((t, reason))
+        self._install(path, self.path_world, self._parked(others))
+        self._replanned_at = t
+        return True
+
+    def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:
+        """The exact path (the goal's first tick, replans, trap escapes), its wall time counted.
+
+        For a robot that cannot turn in place the base class takes the path with TURN_ROOM more clearance
+        whenever there is one, however much longer (a way round a whole cluster of circles instead of through a
+        gap it fits). Here it is taken only when it is at most TURN_ROOM_SLACK longer than the path keeping the
+        usual clearance; else the robot takes the gap and leaves tight corners to its manoeuvres.
+        """
+        start = time.perf_counter()
+        path = super().exact_path(position, others)
+        if path is not None and not self.model.turns_in_place and path.clearance > self.clearance:
+            assert self.goal is not None
+            roomy_world = self.path_world
+            tight, tight_world = robot_path(self.world, others, position, self.goal, self.radius, self.params)
+            if tight is not None and path.length > (1.0 + TURN_ROOM_SLACK) * tight.length:
+                path, self.path_world = tight, tight_world
+            else:
+                self.path_world = roomy_world
+        self.route_time += time.perf_counter() - start
+        return path
+
+    def _install(self, path: OptimalPath, world: World, parked: FloatArray) -> None:
+        self.route = Route.from_path(path, world, self.world, parked)
+        self._vertex = self._aim = self._looked_at = None
+        self._blocked_since = None
+        self._route_best = math.inf   # progress is measured along the new route from here on
+
+    def _parked(self, others: Sequence[OtherRobot]) -> FloatArray:
+        """Centres of the other robots standing still (not at this robot's goal): what the route goes round."""
+        if not others or self.goal is None:
+            return np.zeros((0, 2))
+        centres, velocities, radii = other_arrays(others)
+        still = (np.hypot(*velocities.T) < PARKED_SPEED) & \
+            (np.hypot(*(centres - self.goal).T) > radii + self.radius)
+        parked: FloatArray = centres[still]
+        return parked
+
+    def replan_reason(self, t: float, position: FloatArray, others: Sequence[OtherRobot]) -> str | None:
+        """Why the route must be planned again now, or None: what the robot knows has changed.
+
+        The world given to the navigator is checked every tick; robots (one standing on the route ahead for
+        BLOCK_TIME, one the route went round gone) at most every REPLAN_INTERVAL.
+        """
+        route = self.route
+        assert route is not None
+        if route.base is not self.world:
+            return 'the world changed'
+        on_route = bool(others) and self._robot_on_route(position, others)
+        if not on_route:
+            self._blocked_since = None
+        elif self._blocked_since is None:
+            self._blocked_since = t
+        if t - self._replanned_at < REPLAN_INTERVAL:
+            return None
+        if len(route.parked):
+            centres = other_arrays(others)[0] if others else np.zeros((0, 2))
+            if not len(centres) or (np.hypot(*(route.parked[:, None, :] - centres[None]).transpose(2, 0, 1))
+                                    .min(axis=1) > MOVED).any():
+                return 'a robot the route went round has moved'
+        if self._blocked_since is not None and t - self._blocked_since >= BLOCK_TIME:
+            return 'a robot stands on the route'
+        return None
+
+    def _robot_on_route(self, position: FloatArray, others: Sequence[OtherRobot]) -> bool:
+        """Does a robot standing still (not at this robot's goal) lie on the route ahead, within both radii
+        plus half the margin, and not already planned round?"""
+        route = self.route
+        assert route is not None and self.goal is not None
+        centres, velocities, radii = other_arrays(others)
+        still = (np.hypot(*velocities.T) < PARKED_SPEED) & \
+            (np.hypot(*(centres - self.goal).T) > radii + self.radius)
+        if not still.any():
+            return False
+        ahead = np.vstack([position, route.stacked[route.index:route.index + SIGHT_VERTICES]])
+        gaps = point_segment_distance(centres[still][:, None, :], ahead[None, :-1], ahead[None, 1:]).min(axis=1) \
+            if len(ahead) > 1 else np.hypot(*(centres[still] - position).T)
+        on = gaps < radii[still] + self.radius + 0.5 * self.params.clearance_margin
+        if not on.any() or not len(route.parked):
+            return bool(on.any())
+        known = np.hypot(*(centres[still][on][:, None, :] - route.parked[None]).transpose(2, 0, 1)).min(axis=1) <= MOVED
+        return bool((~known).any())
+
+    def route_target(self, position: FloatArray, t: float, others: Sequence[OtherRobot]) -> FloatArray | None:
+        """The farthest route vertex in sight; the route is planned again when none is (at most every
+        REPLAN_INTERVAL: a fresh route's first vertex counts as seen).
+
+        It is looked for again after `_look_after` metres of travel (see `next_look`), and at once when the
+        robot drove anything else than the route target's aim last tick (a swarm step, an escape, a backup).
+        """
+        route = self.route
+        assert route is not None
+        looked = self._looked_at
+        if self._vertex is not None and looked is not None and self._aim is not None and self._target is self._aim \
+                and math.hypot(position[0] - looked[0], position[1] - looked[1]) < self._look_after:
+            return self._vertex
+        index = route.in_sight(position, self.radius, self.params.clearance_margin)
+        if index is None:
+            if t - self._replanned_at >= REPLAN_INTERVAL or self._replanned_at == -math.inf:
+                if not self.replan(position, others, 'no route vertex in sight'):
+                    return None
+                route = self.route
+                assert route is not None
+                index = route.in_sight(position, self.radius, self.params.clearance_margin)
+            index = route.index if index is None else index   # a fresh route's first vertex is reachable
+        route.passing(position, self.params.waypoint_tolerance)
+        index = route.index
+        self._vertex, self._aim = route.vertices[index], None   # aimed afresh from where the robot is
+        self._looked_at = position.copy()
+        self._look_after = self.next_look(position, self._vertex)
+        return self._vertex
+
+    def next_look(self, position: FloatArray, vertex: FloatArray) -> float:
+        """Metres of travel before the farthest vertex in sight is looked for again.
+
+        detection_interval, as eq. 11's detection runs. A holonomic robot drives the straight run to the vertex,
+        along which the vertex stays in sight (a part of a free run is free): while it is farther than
+        sensing_range, half of what lies beyond that is driven before the next look (a vertex past a bend comes
+        into sight only near the bend), and the goal, once in sight, is never looked for again.
+        """
+        interval = self.params.detection_interval
+        if not self.model.holonomic:
+            return interval
+        assert self.route is not None
+        if vertex is self.route.vertices[-1]:
+            return math.inf
+        gap = math.hypot(vertex[0] - position[0], vertex[1] - position[1])
+        return max(interval, 0.5 * (gap - self.params.sensing_range))
+
+    def step_target(self) -> FloatArray:
+        """d in eq. 10 is measured to the route target."""
+        assert self.goal is not None
+        return self._vertex if self._vertex is not None else self.goal
+
+    def aim_route(self, position: FloatArray, vertex: FloatArray) -> FloatArray:
+        """What the controller is aimed at for the route target (see the module's "Speed")."""
+        assert self.route is not None
+        if vertex is self.route.vertices[-1]:
+            return vertex                      # the goal: the paper's approach
+        run = vertex - position
+        gap = math.hypot(run[0], run[1])
+        if gap < 1e-9:
+            return vertex
+        p = self.params
+        gain = min(p.alpha1, p.alpha2) if self.model.holonomic else p.speed_gain
+        lead = p.max_speed / gain if p.max_speed > 0.0 else p.waypoint_lead
+        return vertex if lead <= 0.0 else vertex + run * (lead / gap)
+
+    # -------------------------------------------------------------- Algorithm 1
+    def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+        assert self.goal is not None
+        t = self._last_t or 0.0
+        if self.route is None:                 # the goal's first tick: the base class's path is the first route
+            if self.reference is None:
+                if not self.replan(position, others, 'goal set'):
+                    return None
+            else:
+                self._install(self.reference, self.world, np.zeros((0, 2)))
+        else:
+            reason = self.replan_reason(t, position, others)
+            if reason is not None and not self.replan(position, others, reason):
+                return None
+        vertex = self.route_target(position, t, others)
+        if vertex is None:
+            return None
+        self.note_progress(position, t)
+        following = self.keep_waypoint(position, others)     # a swarm waypoint not yet reached
+        self._committed = self._committed and following
+        if self._committed:                                  # a step that broke a hold is driven to its end
+            return self.waypoint
+        if not robots_on_run(others, self.radius, position, vertex, self.params.sensing_range,
+                             0.5 * self.params.clearance_margin):
+            self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'following the route'
+            if self._aim is None:
+                self._aim = self.aim_route(position, vertex)
+            return self._aim
+        if following:
+            return self.aim(position, self.waypoint)
+        waypoint = self.plan_next_step(position, others)     # eq. 3-10 toward the route target
+        if waypoint is not None and self.params.stuck_steps > 0:
+            self.note_stuck(position, waypoint, others)
+        return None if waypoint is None else self.aim(position, waypoint)
+
+    def note_progress(self, position: FloatArray, t: float) -> None:
+        """A route left progress_distance shorter than ever restarts the progress checker and the trap detector."""
+        assert self.route is not None and self.goal is not None
+        left = self.route.remaining(position)
+        if self._route_best == math.inf:
+            self._route_best = left
+        elif left < self._route_best - self.params.progress_distance:
+            self._route_best = left
+            self.progress.made_progress(t)
+            self.trap.reset(t, math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]))

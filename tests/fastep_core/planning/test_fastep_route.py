@@ -1,0 +1,180 @@
+"""FAStep-Route: FAStep-Kinematic toward the farthest vertex in sight of the exact shortest route."""
+
+import json
+import math
+
+import numpy as np
+import pytest
+
+from fastep_core.geometry import Circle, Segment
+from fastep_core.planning import Mode
+from fastep_core.planning.algorithms import ALGORITHM_NAMES, ALGORITHMS, make_navigator
+from fastep_core.planning.fastep_route import BLOCK_TIME, FAStepRoute
+from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.params import PlannerParams
+from fastep_core.random_scenarios import u_trap, u_trap_scenario_data
+from fastep_core.scenario import RobotSpec, load_scenario, parse_scenario
+from fastep_core.simulator import simulate
+from fastep_core.world import World
+from msg_tools.bench_cli import main as bench_main
+from msg_tools.sim_cli import main as sim_main
+
+SPEC = RobotSpec('r1', 'point_mass', (5.0, 5.0), (45.0, 45.0), 0.5)
+
+
+def ratio(scenario, robot, spec):
+    optimum = shortest_path(scenario.world, spec.start[:2], spec.goal, spec.radius + scenario.planner.clearance_margin)
+    return robot.path_length / optimum.length
+
+
+def u_scenario(model='point_mass', width=6.0, depth=4.0):
+    robot = {'name': 'r1', 'model': model, 'start': [5, 15], 'goal': [35, 15], 'radius': 0.5}
+    if model == 'tractor_trailer':
+        robot.update(start=[5, 15, 0.0, 0.0], radius=0.6, length=1.0, trailer_length=1.0, width=0.5)
+    return parse_scenario({'name': 'u', 'workspace': [0, 0, 40, 30], 'robots': [robot],
+                           'obstacles': u_trap((20, 15), width, depth, np.pi)})
+
+
+def test_registered_everywhere_an_algorithm_is_chosen():
+    assert 'fastep_route' in ALGORITHMS and ALGORITHM_NAMES['fastep_route'] == 'FAStep-Route'
+    nav = make_navigator('fastep_route', SPEC, 0.5, World.from_obstacles([0, 0, 50, 50], []), PlannerParams(), 0)
+    assert isinstance(nav, FAStepRoute) and nav.method == 'fastep_route'
+
+
+@pytest.mark.parametrize('name', ['table2_s2', 'table2_s3', 'case_study_2', 'application'])
+def test_arrives_without_collision_on_built_in_scenarios(name):
+    scenario = load_scenario(name)
+    run = simulate(scenario, 'fastep_route', 0)
+    for robot in run.robots:
+        assert robot.reached and not robot.collided and robot.min_clearance > 0.0, (name, robot.name, robot.status)
+
+
+@pytest.mark.parametrize('name', ['table2_s2', 'table2_s3'])
+def test_path_within_the_target_on_table_2_and_static_obstacles_never_start_the_swarm(name):
+    scenario = load_scenario(name)
+    robot = simulate(scenario, 'fastep_route', 0).robots[0]
+    assert robot.reached and ratio(scenario, robot, scenario.robots[0]) <= 1.03
+    assert robot.activations == 0 and robot.escapes == 0
+
+
+def test_u_trap_where_plain_fastep_wanders_is_driven_round_on_the_route():
+    scenario = u_scenario()
+    route, fastep = (simulate(scenario, a, 0).robots[0] for a in ('fastep_route', 'fastep'))
+    assert route.reached and not route.collided and route.escapes == 0 and route.activations == 0
+    assert fastep.reached and fastep.escapes == 1   # fastep walks into the U and escapes along the exact path
+    assert ratio(scenario, route, scenario.robots[0]) <= 1.03
+    assert route.path_length < 0.9 * fastep.path_length and route.compute_time < fastep.compute_time
+
+
+@pytest.mark.parametrize('seed', [0, 1, 2])
+def test_random_u_traps_within_the_target(seed):
+    scenario = parse_scenario(u_trap_scenario_data(seed))
+    robot = simulate(scenario, 'fastep_route', seed).robots[0]
+    assert robot.reached and not robot.collided and robot.escapes == 0
+    assert ratio(scenario, robot, scenario.robots[0]) <= 1.03
+
+
+def test_tractor_trailer_drives_round_the_u_trap():
+    robot = simulate(u_scenario('tractor_trailer'), 'fastep_route', 0).robots[0]
+    assert robot.reached and not robot.collided and robot.min_clearance > 0.0
+    hitch = [abs(math.remainder(row[4] - row[3], 2 * math.pi)) for row in robot.trajectory]
+    assert max(hitch) < math.pi / 2
+
+
+def drive(nav, state, others=lambda t: (), until=300.0, step=None):
+    """Tick a navigator against a fixed world (the simulator's loop for one robot); the states visited."""
+    dt = nav.params.dt
+    states = [state.copy()]
+    for k in range(int(until / dt)):
+        t = k * dt
+        command = nav.update(t, state, others(t))
+        if nav.mode in (Mode.ARRIVED, Mode.FAILED):
+            break
+        state = nav.model.integrate(state, command, dt)
+        states.append(state.copy())
+        if step is not None:
+            step(t, state)
+    return np.array(states)
+
+
+def test_replans_when_the_world_given_to_it_changes():
+    world = World.from_obstacles([0, 0, 50, 50], [])
+    nav = make_navigator('fastep_route', SPEC, 0.5, world, PlannerParams(), 0)
+    nav.set_goal((45.0, 45.0))
+    blocker = Circle((30.0, 30.0), 3.0)   # on the straight route, put in the map at t = 10 s
+    changed = World.from_obstacles([0, 0, 50, 50], [blocker])
+
+    def at(t, state):
+        if 10.0 <= t < 10.0 + nav.params.dt:
+            nav.world = changed
+
+    states = drive(nav, np.array([5.0, 5.0]), step=at)
+    assert nav.mode is Mode.ARRIVED
+    assert [reason for _, reason in nav.replan_log] == ['the world changed']
+    assert nav.activations == 0   # the new route goes round it: the swarm never ran
+    assert float(changed.obstacles.clearance(states).min()) > nav.radius
+
+
+def test_replans_round_a_robot_standing_on_the_route_and_back_once_it_has_gone():
+    world = World.from_obstacles([0, 0, 50, 50], [])
+    nav = make_navigator('fastep_route', SPEC, 0.5, world, PlannerParams(), 0)
+    nav.set_goal((45.0, 45.0))
+    parked = OtherRobot('r2', (25.0, 25.0), (0.0, 0.0), 0.5)
+
+    def others(t):
+        return (parked,) if t < 40.0 else (OtherRobot('r2', (5.0, 45.0), (0.0, 0.0), 0.5),)
+
+    states = drive(nav, np.array([5.0, 5.0]), others)
+    assert nav.mode is Mode.ARRIVED
+    reasons = [reason for _, reason in nav.replan_log]
+    assert reasons[0] == 'a robot stands on the route' and 'a robot the route went round has moved' in reasons
+    first = nav.replan_log[0][0]
+    assert first >= BLOCK_TIME   # it waited BLOCK_TIME with the robot on its route before planning round it
+    gaps = np.hypot(*(states[: int(40.0 / nav.params.dt)] - parked.position).T)
+    assert gaps.min() > 2 * 0.5
+
+
+def test_deterministic_per_seed():
+    scenario = load_scenario('case_study_2')   # two robots meet: the swarm plans round the other
+    a, b = (simulate(scenario, 'fastep_route', 3) for _ in range(2))
+    assert sum(r.activations for r in a.robots) > 0
+    assert [r.trajectory for r in a.robots] == [r.trajectory for r in b.robots]
+
+
+def test_goal_nothing_reaches_fails_with_a_reason():
+    a, b = 29.0, 31.0   # a closed square around the goal
+    walls = [{'segment': {'start': p, 'end': q}} for p, q in
+             (([a, a], [b, a]), ([b, a], [b, b]), ([b, b], [a, b]), ([a, b], [a, a]))]
+    scenario = parse_scenario({'name': 'walled', 'workspace': [0, 0, 40, 40], 'obstacles': walls, 'robots': [
+        {'name': 'r1', 'model': 'point_mass', 'start': [5, 5], 'goal': [30, 30], 'radius': 0.5}]})
+    robot = simulate(scenario, 'fastep_route', 0).robots[0]
+    assert not robot.reached and robot.status.startswith('failed: no valid path') and robot.path_length == 0.0
+
+
+def test_goal_walled_in_later_fails_on_the_replan_with_a_reason():
+    nav = make_navigator('fastep_route', SPEC, 0.5, World.from_obstacles([0, 0, 50, 50], []), PlannerParams(), 0)
+    nav.set_goal((45.0, 45.0))
+    a, b = 43.0, 47.0
+    walls = [Segment((a, a), (b, a)), Segment((b, a), (b, b)), Segment((b, b), (a, b)), Segment((a, b), (a, a))]
+
+    def at(t, state):
+        if 5.0 <= t < 5.0 + nav.params.dt:
+            nav.world = World.from_obstacles([0, 0, 50, 50], walls)
+
+    drive(nav, np.array([5.0, 5.0]), step=at)
+    assert nav.mode is Mode.FAILED and nav.reason.startswith('no valid path')
+
+
+def test_fastep_sim_and_fastep_bench_accept_it(tmp_path):
+    out = tmp_path / 'run.json'
+    assert sim_main(['table2_s1', '--algorithm', 'fastep_route', '--json', str(out)]) == 0
+    doc = json.loads(out.read_text())
+    assert doc['algorithm'] == 'fastep_route' and doc['runs'][0]['robots'][0]['reached']
+    bench = tmp_path / 'bench.json'
+    assert bench_main(['--runs', '1', '--scenarios', 'table2_s1', '--algorithms', 'fastep_route', 'optimal',
+                       '--json', str(bench), '--workers', '1', '--out', str(tmp_path), '--report', 'route']) == 0
+    records = json.loads(bench.read_text())['records']
+    assert {r['algorithm'] for r in records} == {'fastep_route', 'optimal'}
+    assert 'FAStep-Route' in (tmp_path / 'route.md').read_text()
+    assert list((tmp_path / 'figures').glob('route_*.png'))
