@@ -54,7 +54,7 @@ def test_dwa_is_registered_under_its_name_and_refuses_a_tractor_trailer_in_one_l
     assert algorithm_name('dwa') == ALGORITHM_NAMES['dwa'] == 'DWA'
     assert drives('dwa', 'point_mass') and not drives('dwa', 'tractor_trailer') and drives('fastep', 'tractor_trailer')
     with pytest.raises(ParameterError, match=r'^dwa drives point_mass robots only; robot r2 is a tractor_trailer '
-                                             r'\(choose fastep, fastep_paper, aco, optimal\)$'):
+                                             r'\(choose fastep, fastep_paper, aco, optimal, fastep_route\)$'):
         make_navigator('dwa', TRACTOR, 0.5, World.from_obstacles([0, 0, 50, 50], []), PlannerParams())
     with pytest.raises(ParameterError, match='the robot is a tractor_trailer'):
         check_drives('dwa', 'tractor_trailer')
