@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from fastep_core.planning.algorithms import drives
 from fastep_core.random_scenarios import random_scenario_data, u_trap_scenario_data
 from fastep_core.scenario import Scenario, builtin_names, load_scenario, parse_scenario
 from fastep_core.simulator import simulate
@@ -64,7 +65,10 @@ def main(argv: list[str] | None = None) -> int:
     scenarios += [f'u_trap:{model}:{i}' for i in range(args.u_traps) for model in ('point_mass', 'tractor_trailer')]
     scenarios += [f'random:{i}' for i in range(args.random)]
     for scenario in scenarios:
+        models = {spec.model for spec in scenario_named(scenario).robots}
         for algorithm in args.algorithms:
+            if not all(drives(algorithm, model) for model in models):
+                continue   # dwa and a tractor-trailer: refused, nothing to compare
             for seed in range(args.seeds):
                 key = f'{scenario} {algorithm} {seed}'
                 table[key] = list(run_digest(scenario, algorithm, seed))

@@ -45,7 +45,8 @@ def test_the_guard_gives_way_to_the_first_robot_in_reach_as_it_did_one_by_one():
             after = PointMass().integrate(state, command, 0.05)
             for other in robots:   # the loop the guard ran before
                 centre = np.asarray(other.position, dtype=float)
-                reach = (max_speed if max_speed > 0 else float(np.hypot(*other.velocity))) * 0.05 + 0.25 * 0.2
+                speed = float(np.hypot(*other.velocity))   # a robot at max_speed at most, a faster one at its own
+                reach = (max(max_speed, speed) if max_speed > 0 else speed) * 0.05 + 0.25 * 0.2
                 gap_now, gap_then = float(np.hypot(*(state - centre))), float(np.hypot(*(after - centre)))
                 if gap_then < 0.5 + other.radius + reach and gap_then < gap_now:
                     expected = other.name
@@ -57,3 +58,27 @@ def test_the_guard_gives_way_to_the_first_robot_in_reach_as_it_did_one_by_one():
                     assert out is command
                 else:
                     assert out is not command and guard.reason == f'stopped: giving way to {expected}'
+
+
+def test_views_from_arrays_are_the_views_of_the_robots_and_know_their_distances():
+    robots = crowd(6, seed=4)
+    names = [o.name for o in robots]
+    positions = np.array([o.position for o in robots])
+    velocities = np.array([o.velocity for o in robots])
+    radii = np.array([o.radius for o in robots])
+    from_arrays = OtherRobots.from_arrays(names, positions, velocities, radii, 4)
+    for view, plain in zip(from_arrays, OtherRobots.views(robots, 4)):
+        assert list(view) == list(plain) and len(view) == 5
+        assert all(np.array_equal(a, b) for a, b in zip(view.arrays, plain.arrays))
+    for i, view in enumerate(OtherRobots.views(robots)):
+        own = positions[i]
+        gaps = view.gaps_from(own.copy())
+        assert gaps is not None and np.array_equal(gaps, np.hypot(*(view.arrays[0] - own).T))   # the same bits
+        assert view.gaps_from(own + 1e-9) is None   # another point: the caller measures
+
+
+def test_a_view_is_finite_unless_one_of_its_others_is_not():
+    robots = crowd(4)
+    robots[1] = OtherRobot('lost', (float('nan'), 1.0))
+    views = OtherRobots.views(robots)
+    assert views[1].finite and not views[0].finite and not views[2].finite
