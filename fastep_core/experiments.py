@@ -351,6 +351,25 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
                          f'{_num(te, 2, " %")} | {_p(c["compute_time"].p_value)} | '
                          f'{_num(c["cpu_time"].enhancement, 2, " %")} | {_p(c["cpu_time"].p_value)} | '
                          f'{_num(c["sim_time"].enhancement, 2, " %")} | {_p(c["sim_time"].p_value)} |')
+    baselines = [b for b in ('aco', 'dwa') if b in algorithms]
+    others = [a for a in algorithms if a != 'optimal']
+    if baselines and len(others) > 1:
+        lines += ['', '### Every planner against the baselines: path length', '',
+                  'Mean path of each planner against ACO-Kinematic\'s and DWA\'s in the same scenario (all robots '
+                  'pooled); enhancement = (baseline - planner) / baseline * 100 (positive: shorter); p: two-sided '
+                  'Mann-Whitney U ("1" where every run of both has the same length).', '',
+                  '| scenario | planner | path (m) | ' +
+                  ' | '.join(f'vs {algorithm_name(b)}: enh. | p' for b in baselines) + ' |',
+                  '|---|---|---|' + '---|---|' * len(baselines)]
+        for scenario in scenarios:
+            for a in others:
+                cells = []
+                for b in baselines:
+                    versus = compare(records, scenario, 'path_length', a, b) if a != b else None
+                    cells.append('- | -' if versus is None else
+                                 f'{_num(versus.enhancement, 2, " %")} | {_p(versus.p_value)}')
+                mean = compare(records, scenario, 'path_length', a, baselines[0]).mean_a
+                lines.append(f'| {scenario} | {algorithm_name(a)} | {_num(mean)} | ' + ' | '.join(cells) + ' |')
     lines += ['', '### Optimality', '',
               '| scenario | robot | straight line (m) | optimal (m) | ' +
               ' | '.join(f'{algorithm_name(a)} path / opt.' for a in algorithms) + ' |',

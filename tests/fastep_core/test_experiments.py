@@ -60,6 +60,21 @@ def test_markdown_report_has_the_papers_numbers_and_ours():
     assert f'{50.0 / 45.51:.3f}'[:4] in text                              # the optimality ratio
 
 
+def test_markdown_report_puts_every_planner_against_each_baseline():
+    rng = np.random.default_rng(1)
+    records = [Record('table2_s3', r.algorithm, r.seed, 'r1', True, False, r.path_length, r.sim_time,
+                      r.compute_time, 0.3, 1, '', r.compute_time)
+               for r in synthetic(8) + [record('dwa', k, 51.0 + rng.normal(0, 0.1), 0.2) for k in range(8)]]
+    text = experiments.markdown_report(records, {'table2_s3': {'r1': 45.51}})
+    table = text.split('### Every planner against the baselines')[1].split('###')[0]
+    assert '| planner | path (m) | vs ACO-Kinematic: enh. | p | vs DWA: enh. | p |' in table
+    fastep = next(line for line in table.splitlines() if line.startswith('| table2_s3 | FAStep-Kinematic |'))
+    cells = [c.strip() for c in fastep.strip('|').split('|')]
+    assert float(cells[3].rstrip(' %')) == pytest.approx((52.0 - 50.0) / 52.0 * 100, abs=0.5)   # vs ACO
+    assert float(cells[5].rstrip(' %')) == pytest.approx((51.0 - 50.0) / 51.0 * 100, abs=0.5)   # vs DWA
+    assert '| table2_s3 | ACO-Kinematic | 52.' in table and '| - | - |' in table   # no comparison with itself
+
+
 def test_run_batch_shows_its_progress_on_stderr_when_asked(capsys):
     records = experiments.run_batch(['table2_s3'], ['optimal'], 1, workers=1, progress=True, label='bench')
     captured = capsys.readouterr()
