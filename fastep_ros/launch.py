@@ -38,7 +38,7 @@ import numpy as np
 from fastep_core.cli import Parser, fail, guard, seed
 from fastep_core.errors import ScenarioError
 from fastep_core.metrics import trajectory_margins
-from fastep_core.planning.algorithms import ALGORITHMS, check_drives
+from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import GraphConflict, LaunchError
@@ -64,7 +64,8 @@ def _parser() -> argparse.ArgumentParser:
                    '(default 1): each tick waits for every plant and planner, so a busy machine runs slower')
     p.add_argument('--timeout', type=float, default=None,
                    help='give up after this many simulated seconds (default: the scenario\'s max_sim_time)')
-    p.add_argument('--algorithm', choices=ALGORITHMS, default='fastep', help='planner (default fastep)')
+    p.add_argument('--algorithm', choices=ALGORITHMS, default=DEFAULT_ALGORITHM,
+                   help=f'planner (default {DEFAULT_ALGORITHM}: README, "Which planner")')
     p.add_argument('--seed', type=seed, default=0, help='seed of the swarms (default 0; robot k uses stream k '
                    'of the seed, as fastep-sim does)')
     p.add_argument('--json', type=Path, metavar='OUT', help='write the summary and odometry trajectories')

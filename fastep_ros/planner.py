@@ -48,7 +48,7 @@ from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import GoalError, ParameterError
-from fastep_core.planning.algorithms import ALGORITHMS, algorithm_name, check_drives, make_navigator
+from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, algorithm_name, check_drives, make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
@@ -99,7 +99,7 @@ class PlannerNode(Node):
         super().__init__(node_name, **kwargs)
         guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.params = self._declare_planner_params()
-        self.algorithm = declare(self, 'algorithm', 'fastep',
+        self.algorithm = declare(self, 'algorithm', DEFAULT_ALGORITHM,
                                  'planner: ' + ', '.join(f'{a} ({algorithm_name(a)})' for a in ALGORITHMS),
                                  constraints=' | '.join(ALGORITHMS))
         self.model = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',

@@ -57,7 +57,8 @@ robots:
 planner: {alpha1: 0.5, alpha2: 0.5, max_speed: 2.0}
 """
 
-FAST = {'alpha1': 0.5, 'alpha2': 0.5, 'max_speed': 2.0}
+# 'fastep' (not the nodes' default, fastep_route): the tests count the swarm's steps round the circle.
+FAST = {'alpha1': 0.5, 'alpha2': 0.5, 'max_speed': 2.0, 'algorithm': 'fastep'}
 
 
 _held: dict[int, Any] = {}  # domain -> open lock file (flock released when this process exits)

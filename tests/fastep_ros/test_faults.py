@@ -25,7 +25,7 @@ from fastep_testing.graph import Graph, Helper, distance, odom_xy, write
 
 NS = '/r1'
 START, GOAL, RADIUS = (2.0, 10.0), (18.0, 10.5), 0.5
-FAST = {'alpha1': 1.0, 'alpha2': 1.0, 'max_speed': 3.0}
+FAST = {'alpha1': 1.0, 'alpha2': 1.0, 'max_speed': 3.0, 'algorithm': 'fastep'}
 ARRIVE = 90.0   # wall seconds at most for the rest of a run (normally a few)
 WORLD = """\
 name: fault_world

@@ -82,7 +82,8 @@ def test_planner_runs_dwa_and_refuses_it_for_a_tractor_trailer(context: Any) -> 
 
     node = make(PlannerNode, context, algorithm='dwa', workspace=[0.0, 0.0, 10.0, 10.0])
     try:
-        assert node.describe_parameter('algorithm').additional_constraints == 'fastep | aco | optimal | dwa'
+        constraints = node.describe_parameter('algorithm').additional_constraints
+        assert constraints == 'fastep | fastep_paper | aco | optimal | dwa | fastep_route'
         node.on_obstacles(convert.obstacles_to_marker_array([]))
         assert isinstance(node.navigator, DynamicWindow)
     finally:
