@@ -54,7 +54,7 @@ MOVER_COLOUR = 'tab:purple'
 MOVER_SNAPSHOTS = 5   # positions of each mover drawn over a run, t = 0 included
 # fastep-bench's planners keep their colours across panels.
 ALGORITHM_COLOURS = {'fastep': 'tab:red', 'fastep_paper': 'tab:orange', 'aco': 'tab:blue', 'optimal': 'tab:olive',
-                     'dwa': 'tab:brown', 'fastep_route': 'tab:cyan'}
+                     'dwa': 'tab:brown', 'fastep_route': 'tab:pink'}
 
 
 def title(what: str, algorithm: str = '', seed: int | None = None) -> str:
