@@ -20,7 +20,7 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 # The two-robot case study on the live ROS 2 graph (separate node processes over DDS, simulated clock).
 demo: $(STAMP)
 	mkdir -p $(OUT)
-	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(BIN)/fastep-launch case_study_1 --rtf 50 --seed 0 \
+	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(BIN)/fastep-launch case_study_1 --algorithm fastep --rtf 50 --seed 0 \
 		--record $(OUT)/demo.mcap --json $(OUT)/demo.json --plot $(OUT)/demo.png
 	$(BIN)/fastep-report $(OUT)/demo.mcap --out $(OUT)/demo_report
 
