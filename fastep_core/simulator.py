@@ -26,7 +26,7 @@ from fastep_core.errors import GoalError, ScenarioError
 from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import MISSING_DIFF_DRIVE, make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
-from fastep_core.planning.others import OtherRobots
+from fastep_core.planning.others import OtherRobot, OtherRobots
 from fastep_core.scenario import MODELS, Scenario
 
 __all__ = ['RobotRun', 'Run', 'Tick', 'check_simulable', 'simulate']
@@ -135,8 +135,6 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     step_times: list[float] = []               # every robot's position after each step, for the margins
     step_positions: list[FloatArray] = []
 
-    names = [spec.name for spec in specs]
-    radii = np.array([spec.radius for spec in specs], dtype=float)
     for k in range(n_ticks):
         t = k * dt
         active = [nav.mode not in (Mode.ARRIVED, Mode.FAILED) for nav in navigators]
@@ -144,17 +142,11 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             break
         commands = []
         # Every robot sees the others as they are at the start of the tick: made once, viewed by each robot.
-        positions = np.array([state[:2] for state in states])
-        moving = np.array(velocities)
+        robots = [OtherRobot(spec.name, (state[0], state[1]), (velocity[0], velocity[1]), spec.radius)
+                  for spec, state, velocity in zip(specs, states, velocities)]
         if planner_map is not None:   # known movers where the map reports them now, seen by every robot
-            movers = planner_map.others(t)
-            if movers:
-                positions = np.concatenate([positions, [m.position for m in movers]])
-                moving = np.concatenate([moving, [m.velocity for m in movers]])
-            views = OtherRobots.from_arrays(names + [m.name for m in movers], positions, moving,
-                                            np.concatenate([radii, [m.radius for m in movers]]), len(specs))
-        else:
-            views = OtherRobots.from_arrays(names, positions, moving, radii, len(specs))
+            robots += planner_map.others(t)
+        views = OtherRobots.views(robots, len(specs))
         for i, nav in enumerate(navigators):
             if not active[i]:
                 commands.append(np.zeros(2))

@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.kinematics.model import RobotModel
-from fastep_core.planning.others import OtherRobot, OtherRobots, other_arrays
+from fastep_core.planning.others import OtherRobot, other_arrays
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
@@ -70,8 +70,7 @@ class Guard:
             if self.params.max_speed > 0:
                 speed = np.where(speed > self.params.max_speed, speed, self.params.max_speed)
             reach = speed * dt + 0.25 * self.params.clearance_margin
-            gaps = others.gaps_from(position) if isinstance(others, OtherRobots) else None
-            gap_now = np.hypot(*(position - centres).T) if gaps is None else gaps
+            gap_now = np.hypot(*(position - centres).T)
             gap_then = np.hypot(*(after - centres).T)
             giving_way = (gap_then < self.radius + radii + reach) & (gap_then < gap_now)
             if giving_way.any():

@@ -60,23 +60,6 @@ def test_the_guard_gives_way_to_the_first_robot_in_reach_as_it_did_one_by_one():
                     assert out is not command and guard.reason == f'stopped: giving way to {expected}'
 
 
-def test_views_from_arrays_are_the_views_of_the_robots_and_know_their_distances():
-    robots = crowd(6, seed=4)
-    names = [o.name for o in robots]
-    positions = np.array([o.position for o in robots])
-    velocities = np.array([o.velocity for o in robots])
-    radii = np.array([o.radius for o in robots])
-    from_arrays = OtherRobots.from_arrays(names, positions, velocities, radii, 4)
-    for view, plain in zip(from_arrays, OtherRobots.views(robots, 4)):
-        assert list(view) == list(plain) and len(view) == 5
-        assert all(np.array_equal(a, b) for a, b in zip(view.arrays, plain.arrays))
-    for i, view in enumerate(OtherRobots.views(robots)):
-        own = positions[i]
-        gaps = view.gaps_from(own.copy())
-        assert gaps is not None and np.array_equal(gaps, np.hypot(*(view.arrays[0] - own).T))   # the same bits
-        assert view.gaps_from(own + 1e-9) is None   # another point: the caller measures
-
-
 def test_a_view_is_finite_unless_one_of_its_others_is_not():
     robots = crowd(4)
     robots[1] = OtherRobot('lost', (float('nan'), 1.0))
