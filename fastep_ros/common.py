@@ -5,15 +5,17 @@ Topic names and QoS profiles are in msg_tools.interface.
 
 from __future__ import annotations
 
+import copy
 import math
 import os
 import signal
 import sys
+import time
 from typing import Any, Callable, Sequence
 
 import rclpy
-from rcl_interfaces.msg import ParameterDescriptor
-from rclpy.exceptions import ParameterException
+from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
+from rclpy.exceptions import InvalidParameterValueException, ParameterException
 from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
 from rclpy.node import Node
 from rclpy.parameter import Parameter
@@ -22,10 +24,13 @@ from fastep_core.cli import guard
 from fastep_core.errors import FastepError
 from fastep_ros.errors import StartupError  # re-exported: every node raises it next to declare()
 from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-exported for the nodes
+from fastep_ros.parameters import warn_unknown_overrides
 
-__all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'StartupError', 'check_range', 'declare', 'guard_clock',
-           'node_main']
+__all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'StartupError', 'check_range', 'declare',
+           'guard_clock', 'node_main']
 
+
+INT64_MAX = 2**63 - 1
 
 _TYPES = {bool: Parameter.Type.BOOL, int: Parameter.Type.INTEGER, float: Parameter.Type.DOUBLE,
           str: Parameter.Type.STRING}
@@ -47,22 +52,65 @@ def _widen_integer_override(node: Node, name: str, default: Any) -> None:
         overrides[name] = Parameter(name, Parameter.Type.DOUBLE_ARRAY, [float(v) for v in given.value])
 
 
+def _descriptor_range(descriptor: ParameterDescriptor, default: Any, value_range: tuple[float, float]) -> None:
+    """Put value_range into the descriptor as ROS tools read it (integer_range / floating_point_range)."""
+    low, high = value_range
+    if isinstance(default, bool):
+        return
+    if isinstance(default, int):
+        descriptor.integer_range = [IntegerRange(from_value=int(max(low, -INT64_MAX)),
+                                                 to_value=int(min(high, INT64_MAX)), step=1)]
+    elif isinstance(default, float):
+        # An open end is the largest double: tools (rqt_reconfigure, `ros2 param describe`) expect finite bounds.
+        descriptor.floating_point_range = [FloatingPointRange(from_value=max(float(low), -sys.float_info.max),
+                                                              to_value=min(float(high), sys.float_info.max), step=0.0)]
+
+
+def _declare_empty_double_array(node: Node, name: str, descriptor: ParameterDescriptor) -> list[float]:
+    """A double array parameter whose default is []. Declared by its type alone it had no value (GetParameters
+    answered an empty list for it, and parameter dumps broke), and rclpy infers an empty list's type as a byte
+    array: it is declared writable, given [] unless overridden, then made read-only if it is."""
+    writable = copy.deepcopy(descriptor)
+    writable.read_only = False
+    if node.declare_parameter(name, Parameter.Type.DOUBLE_ARRAY, writable).type_ == Parameter.Type.NOT_SET:
+        node.set_parameters([Parameter(name, Parameter.Type.DOUBLE_ARRAY, [])])
+    descriptor.type = writable.type
+    node.set_descriptor(name, descriptor)
+    return list(node.get_parameter(name).value)
+
+
 def declare(node: Node, name: str, default: Any, description: str, *, read_only: bool = True,
-            constraints: str = '') -> Any:
+            constraints: str = '', value_range: tuple[float, float] | None = None, unit: str = '') -> Any:
     """Declare a statically typed parameter with a description and return its value.
 
-    `default` None declares a double array with no default (the value is then [] unless given).
+    `default` None declares a double array whose default is empty ([]). value_range (low, high) goes into the
+    descriptor as integer_range / floating_point_range, which rclpy enforces on every set (the override included:
+    a value outside it is a StartupError here, `unit` after the range); constraints is free text beside it.
+    read_only False: the node changes it at runtime (fastep_ros.parameters.DynamicParameters).
     Integers are accepted for doubles; any other wrong type is a StartupError with one line.
     """
+    if value_range is not None and not constraints:
+        constraints = f'range [{value_range[0]:g}, {value_range[1]:g}]{unit}'
     descriptor = ParameterDescriptor(name=name, description=description, read_only=read_only,
                                      additional_constraints=constraints)
+    if value_range is not None:
+        _descriptor_range(descriptor, default, value_range)
     _widen_integer_override(node, name, default)
     try:
         if default is None:
-            value = node.declare_parameter(name, Parameter.Type.DOUBLE_ARRAY, descriptor).value
-            value = [] if value is None else list(value)
+            value = _declare_empty_double_array(node, name, descriptor)
         else:
             value = node.declare_parameter(name, default, descriptor).value
+    except InvalidParameterValueException as exc:
+        if value_range is not None:
+            override = getattr(node, '_parameter_overrides', {}).get(name)
+            given = None if override is None else override.value
+            if isinstance(given, (int, float)) and not math.isfinite(given):
+                raise StartupError(f'parameter {name} must be finite, got {given}') from None
+            shown = f'{given:g}' if isinstance(given, (int, float)) else str(exc)
+            raise StartupError(f'parameter {name} must be in [{value_range[0]:g}, {value_range[1]:g}]{unit}, '
+                               f'got {shown}') from None
+        raise StartupError(f'parameter {name}: {exc}') from None
     except ParameterException as exc:
         kind = _TYPES.get(type(default), Parameter.Type.DOUBLE_ARRAY).name.lower().replace('_', ' ')
         raise StartupError(f'parameter {name} must be of type {kind}: {exc}') from None
@@ -79,7 +127,7 @@ def check_range(name: str, value: float, low: float, high: float, unit: str = ''
         raise StartupError(f'parameter {name} must be in [{low:g}, {high:g}]{unit}, got {value:g}')
 
 
-class _ClockGuard:
+class ClockGuard:
     """The /clock handler of a node on simulated time: rclpy's TimeSource.clock_callback behind two checks.
 
     A message rclpy cannot turn into a time (sec < 0: "Seconds value must not be negative", raised inside the
@@ -92,6 +140,7 @@ class _ClockGuard:
     def __init__(self, node: Node, deliver: Callable[[Any], None]) -> None:
         self.node = node
         self.deliver = deliver
+        self.heard: float | None = None     # time.monotonic() of the last message taken (sim_time.SimTimeWatch)
         self.last: float | None = None      # seconds of the last time taken
         self.pending: float | None = None   # a jump waiting for its confirmation
 
@@ -110,27 +159,32 @@ class _ClockGuard:
                       f'{CLOCK_JUMP_LIMIT:g} s ahead is taken only when the next message confirms it')
             return
         self.last = t
+        self.heard = time.monotonic()
         self.deliver(msg)
 
     def warn(self, text: str) -> None:
         self.node.get_logger().warning(text, throttle_duration_sec=5.0)
 
 
-def guard_clock(node: Node) -> None:
-    """Put _ClockGuard in front of the node's /clock handling (now, and if use_sim_time is switched on later).
+def guard_clock(node: Node) -> ClockGuard | None:
+    """Put ClockGuard in front of the node's /clock handling (now, and if use_sim_time is switched on later).
 
     rclpy builds the TimeSource and its /clock subscription inside Node.__init__; this reaches into both (private
-    attributes). Should they change, the node starts anyway, unguarded (the test of the guard fails then).
+    attributes). Should they change, the node starts anyway, unguarded (the test of the guard fails then), and
+    None is returned.
     """
     source = getattr(node, '_time_source', None)
     deliver = getattr(source, 'clock_callback', None)
-    if source is None or deliver is None or isinstance(deliver, _ClockGuard):
-        return
-    guarded = _ClockGuard(node, deliver)
+    if isinstance(deliver, ClockGuard):
+        return deliver
+    if source is None or deliver is None:
+        return None
+    guarded = ClockGuard(node, deliver)
     source.clock_callback = guarded
     subscription = getattr(source, '_clock_sub', None)
     if subscription is not None:
         subscription.callback = guarded
+    return guarded
 
 
 PARENT_ENV = 'FASTEP_PARENT_PID'
@@ -215,6 +269,7 @@ def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
         # (or a test) stops, so by then the executor must exist.
         executor = _Executor()
         node = factory()
+        warn_unknown_overrides(node)
         _spin(node, executor)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass

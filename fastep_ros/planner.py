@@ -48,18 +48,31 @@ from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import GoalError, ParameterError
-from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, algorithm_name, check_drives, make_navigator
+from fastep_core.planning.algorithms import (
+    ALGORITHMS,
+    DEFAULT_ALGORITHM,
+    NAVIGATORS,
+    algorithm_name,
+    check_drives,
+    make_navigator,
+    make_robot,
+)
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
-from fastep_ros.common import RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.diagnostics import Diagnostics, Task
+from fastep_ros.parameters import DynamicParameters
+from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import convert, interface
 from msg_tools.interface import LATCHED, LATEST, RELIABLE, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
+TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radius', 'max_extrapolation')
+"""The node's own parameters that change while it runs, besides every PlannerParams field."""
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots
 HEARTBEAT_TICKS = 4      # status, waypoint and plan are re-published every 4 * 0.25 s = 1 s of wall time
 
@@ -97,7 +110,7 @@ class PlannerNode(Node):
 
     def __init__(self, node_name: str = 'planner', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        guard_clock(self)   # a bad /clock message is ignored, never the end of the node
+        clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.params = self._declare_planner_params()
         self.algorithm = declare(self, 'algorithm', DEFAULT_ALGORITHM,
                                  'planner: ' + ', '.join(f'{a} ({algorithm_name(a)})' for a in ALGORITHMS),
@@ -113,17 +126,21 @@ class PlannerNode(Node):
         self.seed_stream = declare(self, 'seed_stream', -1, 'if >= 0: use stream k of SeedSequence(seed).spawn, '
                                    'as fastep-sim does for the k-th robot of a scenario; -1: default_rng(seed)')
         self.control_rate_hz = declare(self, 'control_rate_hz', 20.0, 'control ticks per second of the node '
-                                       'clock (1 / dt of the in-process simulator)',
-                                       constraints=f'range [{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}]')
+                                       'clock (1 / dt of the in-process simulator)', value_range=RATE_RANGE,
+                                       unit=' Hz', read_only=False)
         self.odom_timeout = declare(self, 'odom_timeout', 1.0, 'odometry older than this (s, node clock) is '
-                                    'stale: the robot is stopped', constraints='> 0')
+                                    'stale: the robot is stopped', constraints='> 0', read_only=False)
+        clock_timeout = declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
+                                'seconds is a warning on status and /diagnostics, and the robot is stopped',
+                                value_range=PERIOD_RANGE, unit=' s', read_only=False)
         stamped = declare(self, 'use_stamped_cmd_vel', False, 'publish cmd_vel as TwistStamped, not Twist')
         other_radius = declare(self, 'other_robot_radius', 0.0, 'safety radius assumed for other robots (m); '
-                               '0 means robot_radius', constraints='>= 0')
+                               '0 means robot_radius', value_range=(0.0, math.inf), read_only=False)
         self.max_extrapolation = declare(
             self, 'max_extrapolation', 0.25, 'latency compensation: odometry (own and other robots\') is '
             'predicted forward from its stamp to the control time by at most this much (s); own odometry stamped '
-            'longer ago is stale: the robot is held still; 0 disables both', constraints='>= 0')
+            'longer ago is stale: the robot is held still; 0 disables both', value_range=(0.0, math.inf),
+            read_only=False)
         workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans')
         self._check(length, trailer_length, hitch_offset, other_radius, workspace)
@@ -181,6 +198,12 @@ class PlannerNode(Node):
         self.wall_timer = self.create_timer(DISCOVERY_PERIOD, self.on_wall_tick, clock=steady)
         self.discover()
         self.update_world()
+        self.sim_time = SimTimeWatch(self, clock_guard, clock_timeout)
+        self.clock_problem = ''   # why this node's time stands still ('' when it does not)
+        self.diagnostics = Diagnostics(self)
+        # Tunable while running (docs/parameters.md); the robot's body, the algorithm, the seed, the topics and
+        # frames are what the node was built with and stay read-only.
+        self.dynamic = DynamicParameters(self, (*PlannerParams.names(), *TUNABLE), self.apply_parameters)
         self.get_logger().info(f'{self.algorithm} planner for a {self.model} of radius {self.radius:g} m, '
                                f'control at {self.control_rate_hz:g} Hz')
 
@@ -191,7 +214,7 @@ class PlannerNode(Node):
         for f in fields(PlannerParams):
             low, high = f.metadata['range']
             values[f.name] = declare(self, f.name, getattr(defaults, f.name), f.metadata['description'],
-                                     constraints=f'range [{low:g}, {high:g}]')
+                                     value_range=(low, high), read_only=False)
         try:
             return defaults.with_overrides(values)
         except ParameterError as exc:
@@ -220,6 +243,34 @@ class PlannerNode(Node):
             raise StartupError('parameters hitch_offset, other_robot_radius and max_extrapolation must be >= 0')
         if workspace and (len(workspace) != 4 or not (workspace[0] < workspace[2] and workspace[1] < workspace[3])):
             raise StartupError(f'parameter workspace must be [xmin, ymin, xmax, ymax] with min < max, got {workspace}')
+
+    def apply_parameters(self, changes: dict[str, Any]) -> str:
+        """DynamicParameters' apply: check every change, then apply them all to the running node; why not if not."""
+        planner = {name: value for name, value in changes.items() if name in PlannerParams.names()}
+        params = self.params
+        if planner:
+            try:
+                params = self.params.with_overrides(planner)
+                NAVIGATORS[self.algorithm].check_params(params)
+            except ParameterError as exc:
+                return str(exc)
+        odom_timeout = changes.get('odom_timeout', self.odom_timeout)
+        if odom_timeout <= 0.0:
+            return f'parameter odom_timeout must be > 0, got {odom_timeout:g}'
+        if planner:
+            if self.navigator is not None:
+                self.navigator.retune(params, make_robot(self.body, params)[1])
+            self.params = params
+        self.odom_timeout = odom_timeout
+        self.max_extrapolation = changes.get('max_extrapolation', self.max_extrapolation)
+        if 'other_robot_radius' in changes:
+            self.other_radius = changes['other_robot_radius'] if changes['other_robot_radius'] > 0.0 else self.radius
+        if 'control_rate_hz' in changes:
+            self.control_rate_hz = changes['control_rate_hz']
+            self.control_timer.timer_period_ns = int(round(1e9 / self.control_rate_hz))
+        self.sim_time.timeout = changes.get('clock_timeout', self.sim_time.timeout)
+        self._status_key = None
+        return ''
 
     # ------------------------------------------------------------------------------------------- helpers
     def now(self) -> float:
@@ -398,6 +449,8 @@ class PlannerNode(Node):
         return min(max(t - stamp, 0.0), self.max_extrapolation)
 
     def on_control(self) -> None:
+        if self.sim_time.switched():
+            self.on_clock_switched()
         t = self.now()
         nav = self.navigator
         command = np.zeros(2)
@@ -463,6 +516,14 @@ class PlannerNode(Node):
 
     # ------------------------------------------------------------------------------------------- status
     def status(self) -> tuple[bytes, str, str]:
+        level, message, reason = self.navigation_status()
+        if self.clock_problem and level != DiagnosticStatus.ERROR:
+            # The control loop stands still with the clock: a robot under way is held (check_clock).
+            return DiagnosticStatus.WARN, 'stale' if message in (Mode.KINEMATIC.value, Mode.AVOIDING.value) else \
+                message, self.clock_problem
+        return level, message, reason
+
+    def navigation_status(self) -> tuple[bytes, str, str]:
         nav = self.navigator
         if nav is None:
             missing = [name for name, have in ((interface.OBSTACLES, self.obstacles is not None),
@@ -511,15 +572,76 @@ class PlannerNode(Node):
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 
     def on_wall_tick(self) -> None:
-        """Every DISCOVERY_PERIOD wall seconds: discover robots; once a wall second, re-publish status, target
-        and plan (for late listeners)."""
+        """Every DISCOVERY_PERIOD wall seconds: look at the clock, discover robots; once a wall second, re-publish
+        status, target and plan (for late listeners) and publish /diagnostics."""
         self.wall_ticks += 1
+        self.check_clock()
         found = self.discover()
         if found or self.wall_ticks % HEARTBEAT_TICKS == 0:
             self.publish_status(force=True)
+        else:
+            self.publish_status()
         if self.wall_ticks % HEARTBEAT_TICKS == 0:
             self.publish_target(force=True)
             self.publish_plan(force=True)
+            self.diagnostics.publish(self.diagnostic_tasks())
+
+    # ------------------------------------------------------------------------------------------- time
+    def check_clock(self) -> None:
+        """On the wall clock: a switch of use_sim_time, a /clock that stopped (then the robot is stopped: a base
+        without a command timeout would go on with the last command while the control loop stands still)."""
+        if self.sim_time.switched():
+            self.on_clock_switched()
+        problem = self.sim_time.problem()
+        if problem and not self.clock_problem:
+            self.get_logger().warning(problem)
+        self.clock_problem = problem
+        if problem and np.any(self.last_command):
+            self.last_command = np.zeros(2)
+            self.publish_command(self.last_command)
+
+    def on_clock_switched(self) -> None:
+        """use_sim_time was switched: what was timed on the other clock restarts on this one.
+
+        The control timer (on the node clock) stood still on simulated time without /clock, and the times kept
+        (odometry's arrival, the navigator's timers) were read on the other clock: the odometry looked stale or
+        from the future, and a switch back to wall time, years ahead, failed the progress checker.
+        """
+        t = self.now()
+        self.get_logger().warning(f'use_sim_time is now {str(self.sim_time.active).lower()} (time {t:.3f} s): '
+                                  'odometry and timers restart on this clock')
+        self.odom, self.odom_received, self.odom_stamp, self.odom_problem = None, -math.inf, -math.inf, ''
+        for other in self.others.values():
+            other.received = -math.inf
+        if self.navigator is not None:
+            self.navigator.restart_clock(t)
+        self.last_command = np.zeros(2)
+        self.publish_command(self.last_command)
+        self.clock_problem = self.sim_time.problem()   # the silence counts from the switch
+        self._status_key = None
+
+    def diagnostic_tasks(self) -> list[Task]:
+        """/diagnostics: the navigation (as on status), the odometry (STALE when it stopped), the clock."""
+        level, message, reason = self.status()
+        tasks = [Task('navigation', level, message, {'reason': reason, 'goal': self.goal,
+                                                     'algorithm': self.algorithm})]
+        t = self.now()
+        topic = self.own_odom_topic
+        if self.odom_problem:
+            odometry = Task('odometry', DiagnosticStatus.ERROR, 'rejected', {'reason': self.odom_problem})
+        elif self.odom is None:
+            odometry = Task('odometry', DiagnosticStatus.WARN, 'waiting', {'reason': f'no odometry on {topic} yet'})
+        elif t - self.odom_received > self.odom_timeout or self.hold.startswith('odometry stale'):
+            why = self.hold if self.hold.startswith('odometry stale') else \
+                f'none for {t - self.odom_received:.2f} s (odom_timeout {self.odom_timeout:g} s)'
+            odometry = Task('odometry', DiagnosticStatus.STALE, 'stale', {'reason': why, 'topic': topic})
+        else:
+            odometry = Task('odometry', DiagnosticStatus.OK, 'fresh', {'topic': topic, 'lag': self.odom_lag,
+                                                                       'heard': self.odom_heard})
+        kind = 'simulated time' if self.sim_time.active else 'wall time'
+        clock = Task('clock', DiagnosticStatus.WARN if self.clock_problem else DiagnosticStatus.OK, kind,
+                     {'reason': self.clock_problem, 't': t})
+        return [*tasks, odometry, clock]
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -29,6 +29,7 @@ import math
 from typing import Any, Sequence
 
 import numpy as np
+from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.clock import Clock, ClockType, ROSClock
@@ -36,13 +37,17 @@ from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.scenario import MODELS
-from fastep_ros.common import RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.diagnostics import Diagnostics, Task
+from fastep_ros.parameters import DynamicParameters
+from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import convert, interface
 from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlantNode', 'main']
 
 MAX_CATCH_UP = 100_000  # integration steps done in one go at most (a clock jump beyond that is skipped)
+DIAGNOSTICS_PERIOD = 1.0  # wall seconds between /diagnostics arrays
 AT_REST_PERIOD = 0.25   # wall seconds between start-state odometry messages before simulated time starts
 
 
@@ -51,7 +56,7 @@ class PlantNode(Node):
 
     def __init__(self, node_name: str = 'plant', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        guard_clock(self)   # a bad /clock message is ignored, never the end of the node
+        clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.model_name = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
                                   constraints='point_mass | tractor_trailer')
         start = declare(self, 'start', None, 'start state: [x, y] (point_mass) or [x, y, theta0, theta1] '
@@ -60,14 +65,17 @@ class PlantNode(Node):
         trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)')
         hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
         self.rate_hz = declare(self, 'rate_hz', 50.0, 'integration rate: fixed steps of 1/rate_hz s of the '
-                               'node clock (simulated time with use_sim_time)',
-                               constraints=f'range [{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}]')
+                               'node clock (simulated time with use_sim_time)', value_range=RATE_RANGE, unit=' Hz')
         self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'a cmd_vel acts for at most this long after it '
                                    'was sent (its stamp; for a Twist on wall time its DDS source time): stop '
-                                   '(zero velocity) when no newer one came (s, node clock)', constraints='> 0')
+                                   '(zero velocity) when no newer one came (s, node clock)', constraints='> 0',
+                                   read_only=False)
         stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of the odometry pose (the simulated '
                                 'pose is the map pose)')
+        clock_timeout = declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
+                                'seconds is a warning on /diagnostics', value_range=PERIOD_RANGE, unit=' s',
+                                read_only=False)
 
         if self.model_name not in MODELS:
             raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model_name!r}')
@@ -109,10 +117,35 @@ class PlantNode(Node):
         self.timer = self.create_timer(self.step, self.on_timer)
         self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick,
                                                clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.sim_time = SimTimeWatch(self, clock_guard, clock_timeout)
+        self.diagnostics = Diagnostics(self)
+        self.diagnostics_timer = self.create_timer(DIAGNOSTICS_PERIOD, self.publish_diagnostics,
+                                                   clock=Clock(clock_type=ClockType.STEADY_TIME))
+        # Only the command timeout changes while running: the step is what the odometry of a group of plants
+        # lines up on (stamps are whole steps), the start is the start, and the body and the topics are the robot's.
+        self.dynamic = DynamicParameters(self, ('cmd_timeout', 'clock_timeout'), self.apply_parameters)
         self.get_logger().info(f'{self.model_name} at {np.round(self.state, 3).tolist()}, '
                                f'integrating at {self.rate_hz:g} Hz')
 
+    def apply_parameters(self, changes: dict[str, Any]) -> str:
+        """DynamicParameters' apply: '' when applied, else why not (nothing changed)."""
+        cmd_timeout = changes.get('cmd_timeout', self.cmd_timeout)
+        if cmd_timeout <= 0.0:
+            return f'parameter cmd_timeout must be > 0, got {cmd_timeout:g}'
+        self.cmd_timeout = cmd_timeout
+        self.sim_time.timeout = changes.get('clock_timeout', self.sim_time.timeout)
+        return ''
+
     # ------------------------------------------------------------------------------------------- time
+    def check_clock(self) -> None:
+        """use_sim_time switched: the command's time is on the other clock. From simulated time (~0) to wall time
+        it looked years old (dropped: fine); from wall time to simulated time it looked sent in the far future and
+        would have acted until then: it is dropped, and the robot waits for a command sent on this clock."""
+        if self.sim_time.switched():
+            self.get_logger().warning(f'use_sim_time is now {str(self.sim_time.active).lower()}: the last command '
+                                      'is dropped')
+            self.command, self.command_time = np.zeros(2), None
+
     def now(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 
@@ -171,6 +204,7 @@ class PlantNode(Node):
 
     def on_cmd_vel(self, msg: Twist | TwistStamped, sent: float | None = None) -> None:
         """Take a command sent at `sent` (node clock; None: now). It acts until cmd_timeout after it was sent."""
+        self.check_clock()
         now = self.now()
         self.advance(now)  # the old command holds until now
         try:
@@ -185,6 +219,7 @@ class PlantNode(Node):
         self.command, self.command_time = command, now if sent is None else min(sent, now)
 
     def on_timer(self) -> None:
+        self.check_clock()
         self.advance(self.now())
         # Publish when the state moved on since the last odometry, here or in on_cmd_vel.
         if self.tick is not None and self.tick != self.published_tick:
@@ -198,6 +233,27 @@ class PlantNode(Node):
             self.at_rest_timer.cancel()   # integrating: on_timer publishes from now on
         elif self.now() <= 0.0 and self.cmd_sub.get_publisher_count() > 0:
             self.publish()
+
+    def publish_diagnostics(self) -> None:
+        """/diagnostics once a wall second: the integration (odometry published), the command, the clock."""
+        self.check_clock()
+        t = self.now()
+        if self.tick is None:
+            odometry = Task('odometry', DiagnosticStatus.OK, 'at rest', {'state': self.state.tolist()})
+        else:
+            odometry = Task('odometry', DiagnosticStatus.OK, 'integrating', {'state': self.state.tolist(),
+                                                                              't': self.tick * self.step})
+        if self.command_time is None:
+            command = Task('cmd_vel', DiagnosticStatus.OK, 'none yet', {})
+        elif t - self.command_time > self.cmd_timeout:
+            why = f'none for {t - self.command_time:.2f} s (cmd_timeout {self.cmd_timeout:g} s): holding still'
+            command = Task('cmd_vel', DiagnosticStatus.STALE, 'stale', {'reason': why})
+        else:
+            command = Task('cmd_vel', DiagnosticStatus.OK, 'fresh', {'command': self.command.tolist()})
+        problem = self.sim_time.problem()
+        clock = Task('clock', DiagnosticStatus.WARN if problem else DiagnosticStatus.OK,
+                     'simulated time' if self.sim_time.active else 'wall time', {'reason': problem, 't': t})
+        self.diagnostics.publish([odometry, command, clock])
 
     def publish(self) -> None:
         """Odometry (and trailer pose) of the state at the integrated time (0 before the first step)."""

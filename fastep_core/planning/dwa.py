@@ -106,10 +106,18 @@ class DynamicWindow(Navigator):
         super().__init__(model, controller, radius, world, params, rng)
         if not model.holonomic:
             raise ParameterError(f'dwa drives holonomic robots (point_mass) only, not a {type(model).__name__}')
-        if self.params.max_speed <= 0.0:
-            raise ParameterError('dwa needs a speed limit: max_speed must be > 0')
+        self.check_params(self.params)
         self.velocity = np.zeros(2)   # the command last sent: the centre of the next dynamic window
         self.escapes_traps = bool(self.params.dwa_escape)
+
+    @classmethod
+    def check_params(cls, params: PlannerParams) -> None:
+        if params.max_speed <= 0.0:
+            raise ParameterError('dwa needs a speed limit: max_speed must be > 0')
+
+    def retune(self, params: PlannerParams, controller: Controller | None = None) -> None:
+        super().retune(params, controller)
+        self.escapes_traps = bool(params.dwa_escape)
 
     def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
         if self._last_t is not None and t - self._last_t > 2.0 * self.params.dt:

@@ -139,6 +139,47 @@ class Navigator:
         self.mode, self.reason = Mode.FAILED, reason
         self.waypoint, self._target, self.cost = None, None, 0.0
 
+    # ------------------------------------------------------- while running
+    @classmethod
+    def check_params(cls, params: PlannerParams) -> None:
+        """Raise ParameterError (one line) when this algorithm cannot run with these parameters."""
+
+    def retune(self, params: PlannerParams, controller: Controller | None = None) -> None:
+        """Take new parameters while running (the ROS planner's dynamic parameters).
+
+        Every part that reads them sees the new values from the next tick; the goal, the plan and the timers
+        carry on. A new controller (the gains are its own) starts afresh at its first command. Raises
+        ParameterError, changing nothing, when this navigator cannot run with them.
+        """
+        self.check_params(params)
+        self.params = params
+        self.guard_check.params = params
+        if self.manoeuvring is not None:
+            self.manoeuvring.params = params
+        self.progress.distance, self.progress.timeout = params.progress_distance, params.progress_timeout
+        self.trap.distance, self.trap.timeout = params.progress_distance, params.trap_timeout
+        self._detection = self._near_detection = None   # cached with the old sensing range and margin
+        if controller is not None:
+            self.controller = controller
+            self._target = None   # drive_to resets a controller when its target is new
+
+    def restart_clock(self, t: float) -> None:
+        """The clock was switched (wall <-> simulated time): every timer restarts at t; the goal stays.
+
+        Times kept from the other clock would be read on this one: a jump of years ahead failed the progress
+        checker and made the guard look a tick of that length ahead.
+        """
+        self._last_t = None
+        self._retry_at = -math.inf
+        self.progress.reset(t)
+        self.trap.reset(t)
+        self.escape.stop()
+        self.stops = StopTimer()
+        self.backup = BackUp(self.model)
+        if self.manoeuvring is not None:
+            self.manoeuvring.reset()
+        self._target = None
+
     # ------------------------------------------------------------- the loop
     def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
         """One control tick: returns the command for the model (zeros when stopped)."""
