@@ -7,8 +7,12 @@ from __future__ import annotations
 import base64
 import json
 import math
+import socket
+import subprocess
+import sys
 import threading
 import time
+from pathlib import Path
 from typing import Any, Callable
 
 import pytest
@@ -23,6 +27,7 @@ from websockets.sync.client import ClientConnection, connect
 from fastep_core.geometry import Circle, Segment
 from fastep_ros.errors import StartupError
 from fastep_ros.foxglove_bridge import CHANNELS, FoxgloveNode
+from fastep_testing.graph import ONE_CIRCLE, free_domain, isolated_env, stop_process, write
 from msg_tools import convert, interface
 
 SUBPROTOCOL = 'foxglove.sdk.v1'
@@ -222,3 +227,67 @@ def test_a_port_in_use_is_one_line(context: Any) -> None:
             FoxgloveNode('second', context=context, parameter_overrides=[Parameter('port', value=first.port)])
     finally:
         first.destroy_node()
+
+
+def _free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind(('127.0.0.1', 0))
+        return int(probe.getsockname()[1])
+
+
+def test_fastep_launch_serves_the_live_run_and_shows_its_progress(tmp_path: Path) -> None:
+    """fastep-launch --foxglove: a client sees the running robot where its transform puts it, and the launcher's
+    stderr (not a terminal) carries plain progress lines, the last one when every robot has arrived."""
+    port = _free_port()
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '2',
+                             '--foxglove', str(port)], env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                            text=True, stdin=subprocess.DEVNULL)
+    client = Client()
+    try:
+        end = time.monotonic() + 60.0
+        while True:   # the node needs a few seconds to start
+            try:
+                ws = connect(f'ws://127.0.0.1:{port}', subprotocols=[SUBPROTOCOL], open_timeout=5.0)
+                break
+            except OSError:
+                assert proc.poll() is None and time.monotonic() < end, 'fastep-foxglove never listened'
+                time.sleep(0.2)
+        with ws:
+            client.receive(ws, lambda got: bool(got.get('/fastep/obstacles')) and bool(got.get('/tf'))
+                           and bool(got.get('/fastep/robots')))
+        out, err = proc.communicate(timeout=120)
+    finally:
+        stop_process(proc)
+    assert proc.returncode == 0, out + err
+    assert f'live view: open ws://localhost:{port} in Foxglove' in out
+    assert err.splitlines()[-1].startswith('fastep-launch: 1/1 arrived, simulated '), err
+    assert 'x real time' in err.splitlines()[-1] and 'Traceback' not in err, err
+    assert {'/fastep/obstacles', '/fastep/robots', '/tf'} <= set(client.channels.values())
+    assert _circles(client.got) == [(10.0, 10.0, 3.0)]
+    entity = client.got['/fastep/robots'][-1].entities[0]
+    transform = next(t for update in client.got['/tf'] for t in update.transforms
+                     if (t.timestamp.seconds, t.timestamp.nanos) == (entity.timestamp.seconds, entity.timestamp.nanos))
+    assert entity.id == 'r1' and transform.child_frame_id == 'r1/base_link'
+    disc = entity.cylinders[0]
+    assert (disc.pose.position.x, disc.pose.position.y) == (transform.translation.x, transform.translation.y)
+    assert 0.0 < disc.pose.position.x < 20.0 and 0.0 < disc.pose.position.y < 20.0
+    assert disc.size.x == pytest.approx(1.0)   # the scenario's radius 0.5
+
+
+@pytest.mark.parametrize('port,words', [('70000', '--foxglove: a port must be in [1, 65535], got 70000'),
+                                        ('busy', 'cannot listen on 127.0.0.1:{port}: Address already in use')])
+def test_fastep_launch_refuses_a_port_it_cannot_serve_on_before_starting(tmp_path: Path, port: str,
+                                                                         words: str) -> None:
+    scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as busy:
+        busy.bind(('127.0.0.1', 0))
+        busy.listen()
+        if port == 'busy':
+            port = str(busy.getsockname()[1])
+        result = subprocess.run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--foxglove', port],
+                                env=env, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60)
+    assert result.returncode == 2 and result.stdout == '', result.stdout + result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and words.format(port=port) in result.stderr, result.stderr
