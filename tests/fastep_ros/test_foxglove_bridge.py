@@ -291,3 +291,21 @@ def test_fastep_launch_refuses_a_port_it_cannot_serve_on_before_starting(tmp_pat
                                 env=env, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60)
     assert result.returncode == 2 and result.stdout == '', result.stdout + result.stderr
     assert len(result.stderr.strip().splitlines()) == 1 and words.format(port=port) in result.stderr, result.stderr
+
+
+@pytest.mark.parametrize('params,words', [
+    (['port:=70000'], 'parameter port must be in [0, 65535], got 70000'),
+    (['scene_rate_hz:=0.0'], 'parameter scene_rate_hz must be in [0.1, 10000] Hz, got 0'),
+    (['discovery_period:=1e-9'], 'parameter discovery_period must be in [0.01, 3600] s'),
+    (['robot_radius:=-1.0'], 'parameter robot_radius must be > 0, got -1'),
+    (['scenario:=no_such_scenario_here'], 'parameter scenario: '),
+    (['host:=no.such.host.invalid'], 'cannot serve Foxglove on no.such.host.invalid:'),
+])
+def test_fastep_foxglove_refuses_bad_parameters_with_one_line(tmp_path: Path, params: list[str], words: str) -> None:
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    cmd = [sys.executable, '-m', 'fastep_ros.foxglove_bridge', '--ros-args', '-p', 'port:=0']
+    for p in params:
+        cmd += ['-p', p]
+    result = subprocess.run(cmd, env=env, capture_output=True, text=True, stdin=subprocess.DEVNULL, timeout=60)
+    assert result.returncode == 2, result.stderr
+    assert len(result.stderr.strip().splitlines()) == 1 and words in result.stderr, result.stderr
