@@ -2,7 +2,7 @@
 
 On a terminal (the stream is a TTY) one tqdm bar is redrawn in place at most every `refresh` wall seconds:
 
-    arrived   3/16 [...] simulated 42.0 s, 6.3x real time, 1 failed
+    arrived 3/16 |█████     |, simulated 42.0 s, 6.3x real time, 1 failed
 
 Anywhere else (a log file, a pipe, CI) a plain line every `every` wall seconds and one at the end, so a log
 shows that the run goes on without carriage-return clutter:
@@ -43,8 +43,9 @@ class Progress:
         self.bar: Any = None
         if self.tty:
             from tqdm import tqdm  # here: 0.1 s of import a run without a terminal does not need
+            # (tqdm puts ', ' before the postfix itself)
             self.bar = tqdm(total=total, desc='arrived', unit='robot', file=self.stream, dynamic_ncols=True,
-                            mininterval=refresh, bar_format='{desc} {n_fmt}/{total_fmt} |{bar}| {postfix}')
+                            mininterval=refresh, bar_format='{desc} {n_fmt}/{total_fmt} |{bar}|{postfix}')
         self.started: float | None = None   # wall time the clock started
         self.last_line = -float('inf')
         self.state = (0, 0, 0.0)              # arrived, failed, simulated seconds
