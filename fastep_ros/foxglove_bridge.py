@@ -9,7 +9,8 @@ WebSocket -> ws://localhost:8765. Channels (protobuf, the foxglove schemas):
 
 - /fastep/obstacles (foxglove.SceneUpdate): circles (cylinders) and walls (lines) from /obstacles, when it changes;
 - /fastep/robots (SceneUpdate): per robot (entity id = its name) a disc of its radius at its odometry pose, a
-  heading arrow, its name, and for a tractor-trailer the trailer (from trailer_pose) on its drawbar;
+  heading arrow, a line to where its velocity takes it in a second, its name, and for a tractor-trailer the
+  trailer (from trailer_pose) on its drawbar;
 - /fastep/plans (SceneUpdate): per robot (entity `<name>/plan`) the planned waypoints and the goal as a line;
 - /fastep/waypoints (SceneUpdate): per robot (entity `<name>/waypoint`) the point it drives to now;
 - /tf (foxglove.FrameTransforms): map -> `<name>/base_link` of every robot, from its odometry;
@@ -132,6 +133,7 @@ class RobotView:
     radius: float
     subs: dict[str, Any] = field(default_factory=dict)   # topic (relative) -> subscription on the inbox node
     pose: tuple[float, float, float] | None = None        # x, y, yaw from odometry
+    velocity: tuple[float, float] = (0.0, 0.0)            # map-frame velocity of the reference point (m/s)
     stamp_ns: int = 0                                     # of that odometry
     trailer: tuple[float, float, float] | None = None     # trailer axle x, y, yaw
     plan: list[tuple[float, float]] | None = None
@@ -267,6 +269,7 @@ class FoxgloveNode(Node):
                 try:
                     x, y = convert.odometry_position(odom)
                     yaw = convert.quaternion_to_yaw(odom.pose.pose.orientation)
+                    robot.velocity = convert.odometry_velocity(odom)
                 except ValueError:
                     pass
                 else:
@@ -374,6 +377,12 @@ class FoxgloveNode(Node):
         texts = [TextPrimitive(pose=_pose(x, y, 0.0, ROBOT_HEIGHT + r), billboard=True, font_size=14.0,
                                scale_invariant=True, color=Color(r=0.0, g=0.0, b=0.0, a=1.0), text=robot.name)]
         cubes, lines = [], []
+        vx, vy = robot.velocity
+        if vx or vy:   # where it goes in the next second: a point mass's heading stays along +x
+            lines.append(LinePrimitive(type=LinePrimitiveLineType.LineStrip, pose=_pose(0.0, 0.0), thickness=0.05,
+                                       points=[Point3(x=x, y=y, z=ROBOT_HEIGHT),
+                                               Point3(x=x + vx, y=y + vy, z=ROBOT_HEIGHT)],
+                                       color=Color(r=0.1, g=0.1, b=0.1, a=0.6)))
         if robot.trailer is not None:
             tx, ty, tyaw = robot.trailer
             cubes.append(CubePrimitive(pose=_pose(tx, ty, tyaw, 0.5 * ROBOT_HEIGHT),

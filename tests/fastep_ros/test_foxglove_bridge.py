@@ -79,7 +79,7 @@ def _publisher(context: Any) -> tuple[Any, Any]:
 
     def publish() -> None:
         stamp = convert.seconds_to_stamp(12.5)
-        pubs['/r1/odom'].publish(convert.state_to_odometry([R1[0], R1[1], R1[2], 0.0], stamp))
+        pubs['/r1/odom'].publish(convert.state_to_odometry([R1[0], R1[1], R1[2], 0.0], stamp, linear=(1.0, 0.0)))
         pubs['/r2/odom'].publish(convert.state_to_odometry([R2[0], R2[1], R2[2], 0.0], stamp))
         pubs['/r2/trailer_pose'].publish(convert.point_to_pose_stamped(TRAILER[:2], stamp, yaw=TRAILER[2]))
         pubs['/r1/plan'].publish(convert.waypoints_to_path(PLAN, stamp))
@@ -140,6 +140,8 @@ def test_a_foxglove_client_sees_obstacles_robots_plans_waypoints_scans_and_trans
     assert disc.size.x == pytest.approx(0.8)   # robot_radius 0.4: nothing named r1's radius
     assert _yaw(r1.arrows[0].pose.orientation) == pytest.approx(R1[2])
     assert r1.texts[0].text == 'r1'
+    motion = [(p.x, p.y) for p in r1.lines[0].points]   # 1 m/s along the heading: a second ahead
+    assert motion == [pytest.approx(R1[:2]), pytest.approx((R1[0] + math.cos(R1[2]), R1[1] + math.sin(R1[2])))]
     r2 = robots['r2']
     assert (r2.cubes[0].pose.position.x, r2.cubes[0].pose.position.y) == pytest.approx(TRAILER[:2])
     assert _yaw(r2.cubes[0].pose.orientation) == pytest.approx(TRAILER[2])
