@@ -1,6 +1,7 @@
 """Benchmark: the CPU fastep-foxglove costs while N robots publish 50 Hz odometry and a Foxglove client watches.
 
     python -m benchmarks.foxglove_load [--robots 2,16] [--seconds 30] [--odom-rate 50] [--scene-rate 10]
+    python -m benchmarks.foxglove_load --launch case_study_1 [--rtf 5]
 
 For each N, on an isolated DDS domain (fastep_testing.graph: a free ROS_DOMAIN_ID, localhost only), three
 processes: a synthetic graph (`--publish N`: one node whose 50 Hz timer publishes /r1/odom .. /rN/odom, each robot
@@ -11,6 +12,9 @@ pays, i.e. a bridge built like the other nodes). A WebSocket client in this proc
 fastep-foxglove advertises and counts what it receives. After a 5 s warm-up, the CPU time (utime + stime from
 /proc/<pid>/stat) of each process over --seconds wall seconds, as a percentage of one core, with the load
 average. Every process is stopped (SIGINT, then SIGKILL) at the end.
+
+--launch SCENARIO: `fastep-launch SCENARIO --rtf X --foxglove PORT` on a free domain with the same client
+watching; fastep-foxglove's CPU (/proc, sampled every 0.5 s while it lives) from its first to its last sample.
 """
 
 from __future__ import annotations
@@ -202,12 +206,51 @@ def measure(robots: int, seconds: float, odom_rate: float, scene_rate: float) ->
     return out
 
 
+def measure_launch(scenario: str, rtf: float) -> dict[str, Any]:
+    env = isolated_env(free_domain(), Path('/tmp') / f'foxglove_load_{os.getpid()}')
+    port = _free_port()
+    load = os.getloadavg()
+    start = time.perf_counter()
+    launch = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', scenario, '--rtf', str(rtf),
+                               '--foxglove', str(port), '--no-progress'], env=env, cwd=ROOT,
+                              stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
+    watcher = Watcher(port)
+    pid: int | None = None
+    samples: list[tuple[float, float]] = []
+    try:
+        watcher.start()
+        while launch.poll() is None:
+            if pid is None:
+                kids = subprocess.run(['ps', '-o', 'pid=,args=', '--ppid', str(launch.pid)], capture_output=True,
+                                      text=True).stdout
+                pid = next((int(line.split()[0]) for line in kids.splitlines() if 'foxglove_bridge' in line), None)
+            if pid is not None:
+                try:
+                    samples.append((time.perf_counter(), cpu_seconds(pid)))
+                except OSError:   # it has just ended
+                    pass
+            time.sleep(0.5)
+        out, err = launch.communicate()
+    finally:
+        watcher.stop.set()
+        watcher.join(timeout=5.0)
+        stop_process(launch)
+    (t0, c0), (t1, c1) = samples[0], samples[-1]
+    return {'command': f'fastep-launch {scenario} --rtf {rtf:g} --foxglove PORT', 'exit': launch.returncode,
+            'result': out.strip().splitlines()[1:], 'foxglove_cpu_s': round(c1, 2), 'lived_s': round(t1 - t0, 1),
+            'cpu_percent_after_start': round(100.0 * (c1 - c0) / (t1 - t0), 1), 'client_messages': watcher.messages,
+            'wall_s': round(time.perf_counter() - start, 1), 'load_average_before': load,
+            'load_average_after': os.getloadavg()}
+
+
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument('--robots', default='2,16', help='robot counts, comma-separated')
     p.add_argument('--seconds', type=float, default=30.0)
     p.add_argument('--odom-rate', type=float, default=50.0)
     p.add_argument('--scene-rate', type=float, default=10.0)
+    p.add_argument('--launch', metavar='SCENARIO', help='measure inside fastep-launch SCENARIO --foxglove instead')
+    p.add_argument('--rtf', type=float, default=5.0, help='--rtf of the launch (default 5)')
     p.add_argument('--publish', type=int, help=argparse.SUPPRESS)
     p.add_argument('--listen', type=int, help=argparse.SUPPRESS)
     args = p.parse_args()
@@ -216,6 +259,9 @@ def main() -> None:
         return
     if args.listen:
         listen(args.listen)
+        return
+    if args.launch:
+        print(json.dumps(measure_launch(args.launch, args.rtf)), flush=True)
         return
     print(f'load average before: {os.getloadavg()}', flush=True)
     for n in (int(v) for v in args.robots.split(',')):
