@@ -28,8 +28,10 @@ status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed
 run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry
 stamped more than max_extrapolation before the control time or more than odom_timeout after it, received
 before the clock went back, or not finite; zero cmd_vel is sent). Levels: OK
-(idle, kinematic, avoiding, arrived), WARN (waiting, stale), ERROR (failed, which includes a refused goal:
-reason is the goal check's message, e.g. "... is occupied ...").
+(idle, kinematic, avoiding, arrived), WARN (waiting, stale, and a refused goal while the goal before it is
+still driven to: kinematic or avoiding with the refusal as reason), ERROR (failed, which includes a refused goal
+when none is under way: reason is the goal check's message, e.g. "... is occupied ...").
+Goals: one subscription that volatile and latched publishers both reach (fastep_ros.goals).
 """
 
 from __future__ import annotations
@@ -56,9 +58,10 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
 from fastep_ros.common import RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.goals import GoalSubscription
 from fastep_ros.robots import RobotFollower
 from msg_tools import convert, interface
-from msg_tools.interface import LATCHED, LATEST, RELIABLE, offered_qos
+from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
@@ -147,6 +150,7 @@ class PlannerNode(Node):
         self.trailer: float | None = None
         self.fault_logged = False
         self.hold = ''  # why the robot is held still although it has a goal ('' when it is not)
+        self.goal_refused = ''  # why the last goal was refused, while the goal before it is driven to
         self.last_command = np.zeros(2)
         self.odom_lag = 0.0
         # What was last published.
@@ -163,10 +167,9 @@ class PlannerNode(Node):
         self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST)
         if self.model == 'tractor_trailer':
             self.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
-        # Goals from anyone (volatile, as `ros2 topic pub` sends them) and from latched publishers (fastep-launch):
-        # a planner restarted mid-run gets the goal it was driving to again and resumes from the odometry.
-        self.create_subscription(PoseStamped, interface.GOAL_POSE, self.on_goal, RELIABLE)
-        self.create_subscription(PoseStamped, interface.GOAL_POSE, self.on_goal, LATCHED)
+        # Goals from anyone (volatile, as RViz and `ros2 topic pub` send them) and from latched publishers
+        # (fastep-launch: a planner restarted mid-run gets the goal it was driving to again): fastep_ros.goals.
+        self.goal_sub = GoalSubscription(self, self.on_goal)
         self.create_subscription(MarkerArray, interface.OBSTACLES, self.on_obstacles, offered_qos(interface.OBSTACLES))
         if self.workspace_param is None:
             self.create_subscription(OccupancyGrid, interface.MAP, self.on_map, offered_qos(interface.MAP))
@@ -302,10 +305,14 @@ class PlannerNode(Node):
                 raise GoalError(f'goal frame {frame!r} is not {self.frame_id!r} (no transforms here)')
             self.navigator.set_goal(point, self.now())
         except GoalError as exc:
-            self.goal = None
-            self.navigator.fail(f'goal refused: {exc}')
-            self.get_logger().warning(f'goal refused: {exc}')
+            self.goal_refused = f'goal ({point[0]:g}, {point[1]:g}) refused: {exc}'
+            self.get_logger().warning(self.goal_refused)
+            if self.goal is None or nav.mode not in (Mode.KINEMATIC, Mode.AVOIDING):
+                self.goal = None
+                nav.fail(f'goal refused: {exc}')
+            # else the goal under way stays: a bad goal must not stop a robot driving to a good one
         else:
+            self.goal_refused = ''
             self.goal = (float(point[0]), float(point[1]))
             self.get_logger().info(f'new goal ({point[0]:g}, {point[1]:g})')
         self.publish_plan(force=True)
@@ -441,6 +448,9 @@ class PlannerNode(Node):
             if self.hold.startswith('waiting'):
                 return DiagnosticStatus.WARN, 'waiting', self.hold
             return DiagnosticStatus.WARN, 'stale', self.hold
+        if self.goal_refused and self.goal is not None:
+            return DiagnosticStatus.WARN, mode.value, f'{self.goal_refused}; still driving to ' \
+                                                     f'({self.goal[0]:g}, {self.goal[1]:g})'
         return DiagnosticStatus.OK, mode.value, nav.reason
 
     def publish_status(self, force: bool = False) -> None:
@@ -478,6 +488,7 @@ class PlannerNode(Node):
         and plan (for late listeners)."""
         self.wall_ticks += 1
         found = self.discover()
+        self.goal_sub.look()
         if found or self.wall_ticks % HEARTBEAT_TICKS == 0:
             self.publish_status(force=True)
         if self.wall_ticks % HEARTBEAT_TICKS == 0:

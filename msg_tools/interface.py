@@ -142,8 +142,8 @@ LATEST = _profile(1)
 OFFERED_QOS: dict[str, QoSProfile] = {
     ODOM: RELIABLE,
     CMD_VEL: RELIABLE,
-    # The planner also takes latched goals (fastep-launch sends them latched), but goals come from anyone
-    # (`ros2 topic pub`, RViz), volatile: a recorder that asked for transient-local would miss those.
+    # The planner also takes latched goals (fastep-launch sends them latched; fastep_ros.goals), but goals come
+    # from anyone (`ros2 topic pub`, RViz), volatile: a recorder that asked for transient-local would miss those.
     GOAL_POSE: RELIABLE,
     WAYPOINT: RELIABLE,
     PLAN: RELIABLE,
