@@ -147,3 +147,38 @@ def test_volatile_and_latched_goal_publishers_without_incompatible_qos_events(co
         if planner is not None:
             planner.destroy_node()
         user.destroy_node()
+
+
+def test_a_volatile_publisher_that_comes_during_a_catch_up_ends_it(context: Any) -> None:
+    """A latched publisher with nothing sent yet (fastep-launch before the goals) keeps the subscription
+    transient-local for up to CATCH_UP seconds; RViz started in that time turns it volatile at once (the planner
+    does not warn; RViz's end may see the one match it had), and RViz's goals are taken."""
+    import rclpy
+    from rclpy.executors import SingleThreadedExecutor
+
+    user = rclpy.create_node('user', context=context)
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(user)
+    planner = None
+    try:
+        user.create_publisher(PoseStamped, '/goal_pose', LATCHED)   # sends nothing
+        planner = make(context)
+        executor.add_node(planner)
+        planner.on_obstacles(convert.obstacles_to_marker_array([]))
+        planner.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        spin_until(executor, lambda: planner.goal_sub.durability == DurabilityPolicy.TRANSIENT_LOCAL, 30.0,
+                   'the catch-up')
+        volatile = user.create_publisher(PoseStamped, '/goal_pose', RELIABLE)
+        spin_until(executor, lambda: planner.goal_sub.durability == DurabilityPolicy.VOLATILE, 30.0,
+                   'the subscription to turn volatile')
+
+        def taken() -> bool:
+            volatile.publish(convert.point_to_pose_stamped((2.0, 8.0)))
+            executor.spin_once(timeout_sec=0.1)
+            return planner.goal == (2.0, 8.0)
+        spin_until(executor, taken, 30.0, 'the volatile goal')
+    finally:
+        executor.shutdown()
+        if planner is not None:
+            planner.destroy_node()
+        user.destroy_node()
