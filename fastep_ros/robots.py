@@ -5,9 +5,11 @@ circle as geometry_msgs/PolygonStamped in `<ns>/base_link`, latched) on `<ns>/fo
 the robot of namespace `<ns>` (subscribes to `<ns>/odom` and avoids it) only while
 
 - `<ns>/footprint` has a publisher that is a node of namespace `<ns>` (a robot's own planner; a replay or
-  another tool republishing the topic from elsewhere does not make a robot),
+  another tool republishing the topic from elsewhere does not make a robot); checked at every look at the graph
+  until it holds, then every GRAPH_CHECK_TICKS looks,
 - `<ns>/odom` has a publisher (a planner whose plant is not running announces nothing that moves: its own
-  subscription makes the topic appear, with no publisher),
+  subscription makes the topic appear, with no publisher); asked until the odometry is subscribed to, after
+  which the odometry's freshness (below) tells whether it still has one,
 - `<ns>` is neither the planner's own namespace nor below it (its own base may publish more odometry, such as
   ros2_control's `/d1/diff_drive_controller/odom`: never another robot),
 - its odometry is fresh: a robot whose odometry has not come for `timeout` seconds (node clock) is dropped,
@@ -40,7 +42,7 @@ if TYPE_CHECKING:
 
 __all__ = ['GRAPH_CHECK_TICKS', 'Fleet', 'Robot', 'RobotFollower', 'announced', 'namespace_of']
 
-GRAPH_CHECK_TICKS = 4   # the publishers of every known robot are checked every 4th look at the graph (1 s)
+GRAPH_CHECK_TICKS = 8   # the footprint publishers of every known robot are checked every 8th look (2 s)
 
 
 def namespace_of(topic: str, leaf: str) -> str | None:
@@ -196,7 +198,8 @@ class RobotFollower:
             self.subscriptions[namespace] = [node.create_subscription(
                 PolygonStamped, robot.footprint_topic, functools.partial(self.on_footprint, namespace),
                 offered_qos(interface.FOOTPRINT))]
-        check = list(self.fleet.robots) if self.looks % GRAPH_CHECK_TICKS == 0 else new
+        every = self.looks % GRAPH_CHECK_TICKS == 0
+        check = [ns for ns, robot in self.fleet.robots.items() if every or not robot.announced]
         self.looks += 1
         for namespace in check:
             self.check(namespace)
@@ -210,10 +213,16 @@ class RobotFollower:
         try:
             count = node.count_publishers(robot.footprint_topic)
             seen = self.footprints.get(namespace)
-            if seen is None or seen[0] != count:   # which nodes publish it: asked only when that may have changed
+            # Which nodes publish it: asked again only when that may have changed, or when no node of the robot's
+            # namespace was among them (DDS can list an endpoint before the node it belongs to is known: its node
+            # is then '_NODE_NAMESPACE_UNKNOWN_').
+            if seen is None or seen[0] != count or not robot.announced:
                 infos = node.get_publishers_info_by_topic(robot.footprint_topic)
                 seen = self.footprints[namespace] = (count, [(i.node_name, i.node_namespace) for i in infos])
-            verdict = announced(namespace, seen[1], node.count_publishers(robot.odom_topic))
+            # Once its odometry is followed, freshness tells whether it still has a publisher (asking the graph
+            # for every robot, every time, cost four times the CPU of the rest of a look with 100 robots).
+            subscribed = len(self.subscriptions[namespace]) > 1
+            verdict = announced(namespace, seen[1], 1 if subscribed else node.count_publishers(robot.odom_topic))
         except Exception as exc:  # the graph can change under us (rclpy raises its own errors): look again later
             node.get_logger().debug(f'graph look at {namespace} failed: {exc}')
             return
