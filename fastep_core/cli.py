@@ -19,7 +19,7 @@ from fastep_core.errors import FastepError
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ['Parser', 'guard', 'fail', 'seed', 'positive_int', 'progress_bar']
+__all__ = ['Parser', 'guard', 'fail', 'seed', 'positive_int', 'progress_bar', 'tcp_port', 'tcp_port_problem']
 
 INTERRUPTED = 130
 """Exit code after Ctrl-C: 128 + SIGINT, as a shell reports it."""
@@ -71,6 +71,25 @@ def positive_int(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f'must be at least 1, got {value}')
     return value
+
+
+def tcp_port(text: str) -> int:
+    """argparse type of a TCP port to listen on: a whole number in [1, 65535]."""
+    value = int(text)
+    if not 1 <= value <= 65535:
+        raise argparse.ArgumentTypeError(f'a port must be in [1, 65535], got {value}')
+    return value
+
+
+def tcp_port_problem(port: int, host: str = '127.0.0.1') -> str:
+    """Why a server could not listen on host:port ('' if it can): tried, then released at once."""
+    import socket
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        try:
+            probe.bind((host, port))
+        except OSError as exc:
+            return f'cannot listen on {host}:{port}: {exc.strerror or exc}'
+    return ''
 
 
 def progress_bar(total: int, label: str, show: bool | None = None, unit: str = 'run') -> tqdm[Any]:

@@ -2,6 +2,7 @@
 
     fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco|optimal|dwa] [--seed N]
                   [--json OUT] [--plot OUT.png] [--no-clock] [--verbose]
+                  [--foxglove PORT] [--no-progress]       (fastep_ros.foxglove_bridge, fastep_ros.progress)
 
 Starts, each as its own process (`python -m fastep_ros.<node> --ros-args ...`): the map, then a plant and a
 planner per robot in the robot's namespace with its parameters from the scenario (the scenario's planner
@@ -35,7 +36,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from fastep_core.cli import Parser, fail, guard, seed
+from fastep_core.cli import Parser, fail, guard, seed, tcp_port, tcp_port_problem
 from fastep_core.errors import ScenarioError
 from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
@@ -43,6 +44,7 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.limits import RTF_RANGE, graph_problem, robot_name_problem
+from fastep_ros.progress import Progress
 
 __all__ = ['main']
 
@@ -73,6 +75,10 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--record', type=Path, metavar='OUT.mcap',
                    help='record every fastep topic into an MCAP file (fastep-record), finished on exit')
     p.add_argument('--no-clock', action='store_true', help='no simulated clock: every node runs on wall time')
+    p.add_argument('--foxglove', type=tcp_port, metavar='PORT', help='serve a live view for Foxglove (fastep-foxglove) '
+                   'on ws://localhost:PORT while the run goes')
+    p.add_argument('--no-progress', action='store_true', help='no progress on stderr (robots arrived, simulated '
+                   'time, real-time factor: a bar on a terminal, a line every 10 s otherwise)')
     p.add_argument('--startup-timeout', type=float, default=STARTUP_TIMEOUT, help=argparse.SUPPRESS)
     p.add_argument('--verbose', action='store_true', help='show the nodes\' INFO logs')
     return p
@@ -419,6 +425,10 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             procs.start(f'fastep-plant /{spec.name}', 'plant', f'/{spec.name}', plant_params(spec, sim_time))
             procs.start(f'fastep-planner /{spec.name}', 'planner', f'/{spec.name}',
                         planner_params(scenario, i, args.algorithm, args.seed, sim_time))
+        if args.foxglove is not None:   # on wall time: not a /clock subscriber, nor in the lock step
+            procs.start('fastep-foxglove', 'foxglove_bridge', '/', {'port': args.foxglove,
+                                                                     'scenario': _scenario_arg(args.scenario)})
+            print(f'live view: open ws://localhost:{args.foxglove} in Foxglove (Open connection)', flush=True)
         if args.record is not None:
             # Started before the goals and the clock, so the recording holds the whole run.
             procs.start('fastep-record', 'recorder', '/', {'output': str(args.record.resolve()),
@@ -482,6 +492,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         pace = f'simulated time at rtf {args.rtf:g} at most' if sim_time else 'wall time'
         print(f'{scenario.name}: {len(robots)} robot(s) on their way ({args.algorithm}, seed {args.seed}, {pace})',
               flush=True)
+        progress = Progress(PROG, len(robots), enabled=not args.no_progress)
+        progress.start()
         last_now, last_change = monitor.now(), time.monotonic()
         while any(not r.outcome for r in robots.values()):
             monitor.spin(0.05)
@@ -517,6 +529,10 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                         why = f'simulated time stopped at {now:.1f} s' if stalled else \
                             f'not arrived within {timeout:g} s'
                         robot.reason = f'{why} ({robot.status.get("message")}: {robot.status.get("reason", "")})'
+            outcomes = [r.outcome for r in robots.values()]
+            progress.update(outcomes.count('arrived'), len(outcomes) - outcomes.count('') - outcomes.count('arrived'),
+                            now)
+        progress.close()
         # Let the last odometry in before reporting.
         end = time.monotonic() + 0.2
         while time.monotonic() < end:
@@ -683,6 +699,8 @@ def _main(argv: Sequence[str] | None) -> int:
             problem = _output_problem(path, plot=flag == '--plot')
             if problem:
                 parser.error(f'{flag} {path}: {problem}')
+    if args.foxglove is not None and (problem := tcp_port_problem(args.foxglove)):
+        parser.error(f'--foxglove {args.foxglove}: {problem}')
     STOP.clear()
     previous = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:

@@ -7,8 +7,10 @@ progress checker...) is a ROS parameter of the same name, default and descriptio
 
 Inputs: `odom` (and `trailer_pose` for tractor-trailers) of its own robot; `goal_pose`; `/obstacles`
 (MarkerArray -> circles and segments) and `/map` (OccupancyGrid: only its extent, the workspace, is used,
-unless the `workspace` parameter gives it), both transient-local; and the `odom` of every other robot,
-discovered from the graph every 0.25 s of wall time (topics `/<name>/odom` of type nav_msgs/msg/Odometry).
+unless the `workspace` parameter gives it), both transient-local; and the `odom` of every other robot that
+announces itself: it publishes its `footprint` (as this planner does, latched) from a node of its namespace, and
+its odometry has a publisher; looked for every 0.25 s of wall time, dropped while its odometry is stale
+(fastep_ros.robots).
 Odometry is predicted forward from its stamp to the control time (at most max_extrapolation seconds) to make
 up for the transport delay. Own odometry stamped longer ago than that (an unset stamp counts as its arrival)
 is not acted on: the robot is held still (zero cmd_vel, `stale`) until fresher odometry comes, because a
@@ -19,20 +21,21 @@ Outputs, on a control timer of the node clock (simulated time with use_sim_time)
 they change (and once a wall second): `waypoint` (the point driven to now), `plan` (the waypoints planned so
 far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the namespace, message = mode, values
 reason / activations / escapes / manoeuvres / waypoint / goal / cost / algorithm / t / odom_lag / obstacles,
-and for a launcher: others (the robots whose odometry it has heard), cmd_vel_readers (subscriptions matched to
+and for a launcher: others (the robots followed now), cmd_vel_readers (subscriptions matched to
 cmd_vel) and odom_heard (own odometry messages taken)).
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
 run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry
 stamped more than max_extrapolation before the control time or more than odom_timeout after it, received
 before the clock went back, or not finite; zero cmd_vel is sent). Levels: OK
-(idle, kinematic, avoiding, arrived), WARN (waiting, stale), ERROR (failed, which includes a refused goal:
-reason is the goal check's message, e.g. "... is occupied ...").
+(idle, kinematic, avoiding, arrived), WARN (waiting, stale, and a refused goal while the goal before it is
+still driven to: kinematic or avoiding with the refusal as reason), ERROR (failed, which includes a refused goal
+when none is under way: reason is the goal check's message, e.g. "... is occupied ...").
+Goals: one subscription that volatile and latched publishers both reach (fastep_ros.goals).
 """
 
 from __future__ import annotations
 
-import functools
 import math
 import traceback
 from dataclasses import dataclass, fields
@@ -64,10 +67,12 @@ from fastep_core.scenario import MODELS
 from fastep_core.world import World
 from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from fastep_ros.diagnostics import Diagnostics, Task
+from fastep_ros.goals import GoalSubscription
 from fastep_ros.parameters import DynamicParameters
+from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import convert, interface
-from msg_tools.interface import LATCHED, LATEST, RELIABLE, offered_qos
+from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
@@ -94,15 +99,6 @@ class _Body:
     length: float
     trailer_length: float
     hitch_offset: float
-
-
-@dataclass
-class _Other:
-    name: str
-    position: tuple[float, float] | None = None
-    velocity: tuple[float, float] = (0.0, 0.0)
-    received: float = -math.inf
-    stamp: float = 0.0
 
 
 class PlannerNode(Node):
@@ -135,7 +131,13 @@ class PlannerNode(Node):
                                 value_range=PERIOD_RANGE, unit=' s', read_only=False)
         stamped = declare(self, 'use_stamped_cmd_vel', False, 'publish cmd_vel as TwistStamped, not Twist')
         other_radius = declare(self, 'other_robot_radius', 0.0, 'safety radius assumed for other robots (m); '
-                               '0 means robot_radius', value_range=(0.0, math.inf), read_only=False)
+                               '0: the radius each announces (its footprint), robot_radius until it is heard',
+                               value_range=(0.0, math.inf), read_only=False)
+        other_timeout = declare(self, 'other_robot_timeout', 3.0, 'another robot whose odometry has not come for '
+                                'this long (s, node clock) is no longer avoided (its publisher may be dead); '
+                                'after odom_timeout it is avoided standing still', constraints='> 0')
+        if not other_timeout > 0.0:
+            raise StartupError(f'parameter other_robot_timeout must be > 0, got {other_timeout:g}')
         self.max_extrapolation = declare(
             self, 'max_extrapolation', 0.25, 'latency compensation: odometry (own and other robots\') is '
             'predicted forward from its stamp to the control time by at most this much (s); own odometry stamped '
@@ -144,7 +146,6 @@ class PlannerNode(Node):
         workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans')
         self._check(length, trailer_length, hitch_offset, other_radius, workspace)
-        self.other_radius = other_radius if other_radius > 0.0 else self.radius
         self.body = _Body(self.model, length, trailer_length, hitch_offset)
         self.stamped = stamped
         self.workspace_param: tuple[float, float, float, float] | None = (
@@ -164,10 +165,9 @@ class PlannerNode(Node):
         self.odom_problem = ''
         self.odom_heard = 0            # own odometry messages taken
         self.trailer: float | None = None
-        self.others: dict[str, _Other] = {}
-        self.other_subs: dict[str, Any] = {}
         self.fault_logged = False
         self.hold = ''  # why the robot is held still although it has a goal ('' when it is not)
+        self.goal_refused = ''  # why the last goal was refused, while the goal before it is driven to
         self.last_command = np.zeros(2)
         self.odom_lag = 0.0
         # What was last published.
@@ -184,14 +184,16 @@ class PlannerNode(Node):
         self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST)
         if self.model == 'tractor_trailer':
             self.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
-        # Goals from anyone (volatile, as `ros2 topic pub` sends them) and from latched publishers (fastep-launch):
-        # a planner restarted mid-run gets the goal it was driving to again and resumes from the odometry.
-        self.create_subscription(PoseStamped, interface.GOAL_POSE, self.on_goal, RELIABLE)
-        self.create_subscription(PoseStamped, interface.GOAL_POSE, self.on_goal, LATCHED)
+        # Goals from anyone (volatile, as RViz and `ros2 topic pub` send them) and from latched publishers
+        # (fastep-launch: a planner restarted mid-run gets the goal it was driving to again): fastep_ros.goals.
+        self.goal_sub = GoalSubscription(self, self.on_goal)
         self.create_subscription(MarkerArray, interface.OBSTACLES, self.on_obstacles, offered_qos(interface.OBSTACLES))
         if self.workspace_param is None:
             self.create_subscription(OccupancyGrid, interface.MAP, self.on_map, offered_qos(interface.MAP))
         self.own_odom_topic = self.odom_sub.topic_name
+        # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
+        self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
+                                    lambda: self.publish_status(force=True))
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.wall_ticks = 0
@@ -263,8 +265,8 @@ class PlannerNode(Node):
             self.params = params
         self.odom_timeout = odom_timeout
         self.max_extrapolation = changes.get('max_extrapolation', self.max_extrapolation)
-        if 'other_robot_radius' in changes:
-            self.other_radius = changes['other_robot_radius'] if changes['other_robot_radius'] > 0.0 else self.radius
+        self.robots.fleet.still_after = self.odom_timeout
+        self.robots.override_radius = changes.get('other_robot_radius', self.robots.override_radius)
         if 'control_rate_hz' in changes:
             self.control_rate_hz = changes['control_rate_hz']
             self.control_timer.timer_period_ns = int(round(1e9 / self.control_rate_hz))
@@ -354,58 +356,26 @@ class PlannerNode(Node):
                 raise GoalError(f'goal frame {frame!r} is not {self.frame_id!r} (no transforms here)')
             self.navigator.set_goal(point, self.now())
         except GoalError as exc:
-            self.goal = None
-            self.navigator.fail(f'goal refused: {exc}')
-            self.get_logger().warning(f'goal refused: {exc}')
+            self.goal_refused = f'goal ({point[0]:g}, {point[1]:g}) refused: {exc}'
+            self.get_logger().warning(self.goal_refused)
+            if self.goal is None or nav.mode not in (Mode.KINEMATIC, Mode.AVOIDING):
+                self.goal = None
+                nav.fail(f'goal refused: {exc}')
+            # else the goal under way stays: a bad goal must not stop a robot driving to a good one
         else:
+            self.goal_refused = ''
             self.goal = (float(point[0]), float(point[1]))
             self.get_logger().info(f'new goal ({point[0]:g}, {point[1]:g})')
         self.publish_plan(force=True)
         self.publish_status()
 
     def discover(self) -> bool:
-        """Subscribe to the odometry of every other robot on the graph; True if one was new."""
-        found = False
-        for topic, types in self.get_topic_names_and_types():
-            suffix = '/' + interface.ODOM
-            if not topic.endswith(suffix) or interface.TYPES[interface.ODOM] not in types or \
-                    topic == self.own_odom_topic:
-                continue
-            if topic in self.other_subs:
-                continue
-            name = topic[1:-len(suffix)] or topic
-            self.others[topic] = _Other(name)
-            self.other_subs[topic] = self.create_subscription(
-                Odometry, topic, functools.partial(self.on_other_odom, topic), LATEST)
-            self.get_logger().info(f'following robot {name} on {topic}')
-            found = True
-        return found
-
-    def on_other_odom(self, topic: str, msg: Odometry) -> None:
-        other = self.others[topic]
-        try:
-            other.position = convert.odometry_position(msg)
-            other.velocity = convert.odometry_velocity(msg)
-        except ValueError as exc:
-            self.get_logger().warning(f'ignoring odometry of {other.name}: {exc}', throttle_duration_sec=5.0)
-            return
-        first = other.received == -math.inf
-        other.received = self.now()
-        other.stamp = convert.stamp_to_seconds(msg.header.stamp)
-        if first:
-            self.publish_status(force=True)   # `others` lists the robots heard
+        """Look at the graph for robots that announce themselves (fastep_ros.robots); True if those followed
+        changed."""
+        return self.robots.discover()
 
     def other_robots(self, t: float) -> list[OtherRobot]:
-        out = []
-        for other in self.others.values():
-            if other.position is None:
-                continue
-            # A robot whose odometry stopped is still there, but no longer known to move.
-            velocity = other.velocity if t - other.received <= self.odom_timeout else (0.0, 0.0)
-            lag = self.lag(t, other.stamp)
-            position = (other.position[0] + velocity[0] * lag, other.position[1] + velocity[1] * lag)
-            out.append(OtherRobot(other.name, position, velocity, self.other_radius))
-        return out
+        return self.robots.fleet.obstacles(t, self.robots.radius, lambda stamp: self.lag(t, stamp))
 
     # ------------------------------------------------------------------------------------------- control
     def state(self, t: float) -> tuple[np.ndarray | None, str]:
@@ -539,6 +509,9 @@ class PlannerNode(Node):
             if self.hold.startswith('waiting'):
                 return DiagnosticStatus.WARN, 'waiting', self.hold
             return DiagnosticStatus.WARN, 'stale', self.hold
+        if self.goal_refused and self.goal is not None:
+            return DiagnosticStatus.WARN, mode.value, f'{self.goal_refused}; still driving to ' \
+                                                     f'({self.goal[0]:g}, {self.goal[1]:g})'
         return DiagnosticStatus.OK, mode.value, nav.reason
 
     def publish_status(self, force: bool = False) -> None:
@@ -557,7 +530,7 @@ class PlannerNode(Node):
             'waypoint': waypoint,
             'goal': self.goal,
             'cost': 0.0 if nav is None else float(nav.cost),
-            'others': ' '.join(sorted(o.name for o in self.others.values() if o.position is not None)),
+            'others': ' '.join(self.robots.fleet.names(self.now())),
             'algorithm': self.algorithm,
             't': self.now(),
             'odom_lag': self.odom_lag,
@@ -577,6 +550,7 @@ class PlannerNode(Node):
         self.wall_ticks += 1
         self.check_clock()
         found = self.discover()
+        self.goal_sub.look()
         if found or self.wall_ticks % HEARTBEAT_TICKS == 0:
             self.publish_status(force=True)
         else:
@@ -611,8 +585,9 @@ class PlannerNode(Node):
         self.get_logger().warning(f'use_sim_time is now {str(self.sim_time.active).lower()} (time {t:.3f} s): '
                                   'odometry and timers restart on this clock')
         self.odom, self.odom_received, self.odom_stamp, self.odom_problem = None, -math.inf, -math.inf, ''
-        for other in self.others.values():
-            other.received = -math.inf
+        for robot in self.robots.fleet.robots.values():
+            if robot.received > -math.inf:   # kept where last heard, as if heard now: still avoided
+                robot.received = robot.stamp = t
         if self.navigator is not None:
             self.navigator.restart_clock(t)
         self.last_command = np.zeros(2)

@@ -30,10 +30,10 @@ if TYPE_CHECKING:
     from fastep_core.scenario import Scenario
 
 __all__ = [
-    'CLOCK', 'CMD_VEL', 'COST', 'GOAL_POSE', 'LATCHED', 'LATEST', 'MAP', 'MAP_FRAME', 'METADATA_NAME', 'OBSTACLES',
-    'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS', 'ROBOT_TOPIC_PATTERN', 'SHARED_TOPICS',
-    'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS', 'TRAILER_POSE', 'TYPES', 'WAYPOINT', 'is_interface_topic',
-    'message_type',
+    'CLOCK', 'CMD_VEL', 'COST', 'FOOTPRINT', 'GOAL_POSE', 'LATCHED', 'LATEST', 'MAP', 'MAP_FRAME', 'METADATA_NAME',
+    'OBSTACLES', 'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS', 'ROBOT_TOPIC_PATTERN',
+    'SHARED_TOPICS', 'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS', 'TRAILER_POSE', 'TYPES', 'WAYPOINT',
+    'is_interface_topic', 'message_type',
     'metadata_key', 'offered_qos', 'offered_qos_profiles', 'robot_topic', 'scenario_metadata', 'split_robot_topic',
 ]
 
@@ -48,7 +48,8 @@ PLAN = 'plan'                  # planner: the waypoints planned so far and the g
 COST = 'cost'                  # planner: fitness of the step in use
 STATUS = 'status'              # planner: mode and reasons
 TRAILER_POSE = 'trailer_pose'  # plant, tractor-trailers only: the trailer axle and heading
-ROBOT_TOPICS = (ODOM, CMD_VEL, GOAL_POSE, WAYPOINT, PLAN, COST, STATUS, TRAILER_POSE)
+FOOTPRINT = 'footprint'        # planner, latched: its safety circle; announces a robot of this graph
+ROBOT_TOPICS = (ODOM, CMD_VEL, GOAL_POSE, WAYPOINT, PLAN, COST, STATUS, TRAILER_POSE, FOOTPRINT)
 
 # Shared, in the root namespace.
 OBSTACLES = '/obstacles'   # map node: circles and walls
@@ -106,6 +107,7 @@ TYPES: dict[str, str] = {
     COST: 'std_msgs/msg/Float64',
     STATUS: 'diagnostic_msgs/msg/DiagnosticStatus',
     TRAILER_POSE: 'geometry_msgs/msg/PoseStamped',
+    FOOTPRINT: 'geometry_msgs/msg/PolygonStamped',
     OBSTACLES: 'visualization_msgs/msg/MarkerArray',
     MAP: 'nav_msgs/msg/OccupancyGrid',
     CLOCK: 'rosgraph_msgs/msg/Clock',
@@ -140,14 +142,16 @@ LATEST = _profile(1)
 OFFERED_QOS: dict[str, QoSProfile] = {
     ODOM: RELIABLE,
     CMD_VEL: RELIABLE,
-    # The planner also takes latched goals (fastep-launch sends them latched), but goals come from anyone
-    # (`ros2 topic pub`, RViz), volatile: a recorder that asked for transient-local would miss those.
+    # The planner also takes latched goals (fastep-launch sends them latched; fastep_ros.goals), but goals come
+    # from anyone (`ros2 topic pub`, RViz), volatile: a recorder that asked for transient-local would miss those.
     GOAL_POSE: RELIABLE,
     WAYPOINT: RELIABLE,
     PLAN: RELIABLE,
     COST: RELIABLE,
     STATUS: STATUS_QOS,
     TRAILER_POSE: RELIABLE,
+    # Latched: a planner that starts later learns the robots already there (and their radii) at once.
+    FOOTPRINT: LATCHED,
     OBSTACLES: LATCHED,
     MAP: LATCHED,
     CLOCK: RELIABLE,

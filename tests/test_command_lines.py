@@ -16,7 +16,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 COMMANDS = {'fastep-sim', 'fastep-bench', 'fastep-tune', 'fastep-report', 'fastep-recover', 'fastep-replay',
             'fastep-launch'}
-NODES = {'fastep-plant', 'fastep-map', 'fastep-planner', 'fastep-clock', 'fastep-record'}
+NODES = {'fastep-plant', 'fastep-map', 'fastep-planner', 'fastep-clock', 'fastep-record', 'fastep-foxglove'}
 
 
 def console_scripts() -> dict[str, str]:
@@ -53,6 +53,7 @@ SCENARIO_TOOLS = {
     'fastep-launch': ['{}'],
     'fastep-map': ['--ros-args', '-p', 'scenario:={}'],
     'fastep-record': ['--ros-args', '-p', 'scenario:={}', '-p', 'output:={dir}/r.mcap'],
+    'fastep-foxglove': ['--ros-args', '-p', 'scenario:={}', '-p', 'port:=0'],
 }
 LAUGHS = 'x_a: &a [lol, lol, lol, lol, lol, lol, lol, lol, lol]\n' + ''.join(
     f"x_{b}: &{b} [{', '.join([f'*{a}'] * 9)}]\n" for a, b in zip('abcdefgh', 'bcdefghi'))

@@ -108,27 +108,28 @@ def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) ->
         assert np.all(node.last_command == 0.0)
         node.on_odom(convert.state_to_odometry([1.0, 1.0]))
         assert node.odom_problem == ''
+        node.on_control()
         goal = convert.point_to_pose_stamped((5.0, 5.0), frame_id='odom')
-        node.on_goal(goal)
+        node.on_goal(goal)   # refused; the goal under way stays (tests/fastep_ros/test_goals.py)
         level, message, reason = node.status()
-        assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and "frame 'odom'" in reason
+        assert (level, message) == (DiagnosticStatus.WARN, 'kinematic') and "frame 'odom'" in reason
+        assert node.goal == (8.0, 8.0)
     finally:
         node.destroy_node()
 
 
 def test_planner_survives_bad_messages_from_unknown_robots_and_bad_goals(context: Any) -> None:
-    from fastep_ros.planner import _Other
     node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0])
     try:
         node.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
         node.on_odom(convert.state_to_odometry([1.0, 1.0]))
-        # Robots nobody announced: one sends NaN, one infinity, one a sound pose.
+        # Announced robots: one sends NaN, one infinity, one a sound pose.
         for name, x in (('ghost', math.nan), ('far', math.inf), ('known', 3.0)):
-            topic = f'/{name}/odom'
-            node.others[topic] = _Other(name)
+            node.robots.fleet.add(f'/{name}')
+            node.robots.fleet.judge(f'/{name}', True)
             msg = convert.state_to_odometry([3.0, 3.0])
             msg.pose.pose.position.x = x
-            node.on_other_odom(topic, msg)
+            node.robots.on_odom(f'/{name}', msg)
         assert [o.name for o in node.other_robots(node.now())] == ['known']
         for goal, words in (((50.0, 5.0), 'outside the map'), ((5.0, 5.0), 'inside an obstacle'),
                             ((math.nan, 1.0), 'not finite'), ((5.0, 6.2), 'occupied')):

@@ -63,6 +63,7 @@ def test_planner_tunables_set_through_the_service_reach_the_running_navigator(co
         assert nav.guard_check.params is nav.params and node.params is nav.params
         assert (nav.controller.alpha1, nav.controller.max_speed) == (0.3, 0.25)
         assert node.odom_timeout == 2.0 and node.control_timer.timer_period_ns == 100_000_000
+        assert services.set(other_robot_radius=0.7)[0].successful and node.robots.override_radius == 0.7
         node.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
         node.on_control()
         assert math.isclose(float(np.hypot(*node.last_command)), 0.25)   # the new speed limit drives the robot

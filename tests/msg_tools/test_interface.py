@@ -19,7 +19,7 @@ DESIGN = {
     'waypoint': 'geometry_msgs/msg/PoseStamped', 'plan': 'nav_msgs/msg/Path', 'cost': 'std_msgs/msg/Float64',
     'status': 'diagnostic_msgs/msg/DiagnosticStatus', 'trailer_pose': 'geometry_msgs/msg/PoseStamped',
     '/obstacles': 'visualization_msgs/msg/MarkerArray', '/map': 'nav_msgs/msg/OccupancyGrid',
-    '/clock': 'rosgraph_msgs/msg/Clock',
+    '/clock': 'rosgraph_msgs/msg/Clock', 'footprint': 'geometry_msgs/msg/PolygonStamped',
 }
 
 
@@ -59,7 +59,7 @@ def test_interface_topics_are_the_shared_and_per_robot_ones() -> None:
 
 
 def test_qos_per_topic() -> None:
-    latched = {'/map', '/obstacles', 'status'}
+    latched = {'/map', '/obstacles', 'status', 'footprint'}
     for topic in DESIGN:
         profile = interface.offered_qos(topic)
         assert profile.reliability == ReliabilityPolicy.RELIABLE, topic
@@ -75,6 +75,7 @@ def test_recorded_qos_is_derived_from_the_profiles() -> None:
     assert interface.offered_qos_profiles('/map') == [qos_dict(depth=1, transient_local=True)]
     assert interface.offered_qos_profiles('/obstacles') == [qos_dict(depth=1, transient_local=True)]
     assert interface.offered_qos_profiles('/r1/status') == [qos_dict(depth=10, transient_local=True)]
+    assert interface.offered_qos_profiles('/r1/footprint') == [qos_dict(depth=1, transient_local=True)]
     for topic in ('/clock', '/r1/odom', '/r1/cmd_vel', '/r1/goal_pose', '/r1/plan', '/r1/cost', '/r1/waypoint',
                   '/r1/trailer_pose'):
         assert interface.offered_qos_profiles(topic) == [qos_dict(depth=10)], topic

@@ -53,7 +53,7 @@ TYPES = {
         ('odom', 'nav_msgs/msg/Odometry'), ('cmd_vel', 'geometry_msgs/msg/Twist'),
         ('goal_pose', 'geometry_msgs/msg/PoseStamped'), ('waypoint', 'geometry_msgs/msg/PoseStamped'),
         ('plan', 'nav_msgs/msg/Path'), ('cost', 'std_msgs/msg/Float64'),
-        ('status', 'diagnostic_msgs/msg/DiagnosticStatus'))},
+        ('status', 'diagnostic_msgs/msg/DiagnosticStatus'), ('footprint', 'geometry_msgs/msg/PolygonStamped'))},
     '/r2/trailer_pose': 'geometry_msgs/msg/PoseStamped',
 }
 
@@ -139,7 +139,7 @@ def test_file_has_the_ros2_profile_channels_and_summary(recorded: dict[str, Any]
         assert schema.data.decode() == message_definition(schema.name)
         topics[channel.topic] = schema.name
         durability = 'transient_local' if channel.topic in ('/map', '/obstacles') or \
-            channel.topic.endswith('/status') else 'volatile'
+            channel.topic.endswith(('/status', '/footprint')) else 'volatile'
         recording = open_recording(recorded['path'])
         assert recording.topics[channel.topic].qos[0]['durability'] == durability
     assert topics == TYPES

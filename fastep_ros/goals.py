@@ -1,0 +1,154 @@
+"""The planner's one goal subscription: volatile publishers (RViz's 2D Goal Pose, `ros2 topic pub`) and latched
+ones (fastep-launch) alike, without an incompatible-QoS warning on either side.
+
+DDS matches a transient-local subscription only with transient-local publishers: a volatile publisher is
+"incompatible" and both ends warn. A volatile subscription matches every publisher but receives no history:
+a planner started after a latched goal was sent would never get it (fastep-launch relies on that to resume a
+restarted planner). ROS's own answer, QoSDurabilityPolicy.BEST_AVAILABLE, resolves once, when the subscription
+is created, against the publishers discovered by then (rmw_dds_common: transient-local only if every one is,
+and with none yet, transient-local), and never again: a volatile publisher discovered later is incompatible.
+
+So the durability is chosen here, again at every look at the graph (every 0.25 s, the planner's wall tick),
+by the rule `wanted`: the subscription is volatile, except while it catches up with the history of latched
+publishers it has not caught up with yet, and only while no volatile publisher is known. Catching up with a
+publisher ends when the goals sent during catch-up are at least as many as the publishers being caught up with
+(each latched publisher with a goal sends it at once), or CATCH_UP wall seconds after it began (a latched
+publisher that has sent nothing yet: its later goals reach the volatile subscription). When the rule changes
+the durability, the subscription is replaced (the new one first, so no goal falls between). A volatile
+publisher that appears during a catch-up is matched once by the transient-local subscription before the next
+look: that event is handled here (the subscription becomes volatile at once, logged at info level, no warning),
+though the publisher's side may report it once.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable, Iterable
+
+from geometry_msgs.msg import PoseStamped
+from rclpy import qos
+from rclpy.event_handler import SubscriptionEventCallbacks
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSPolicyKind, QoSProfile, ReliabilityPolicy
+
+from msg_tools import interface
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+
+__all__ = ['CATCH_UP', 'DEPTH', 'CatchUp', 'GoalSubscription', 'goal_qos']
+
+CATCH_UP = 5.0   # wall seconds a transient-local subscription waits at most for a latched publisher's history
+DEPTH = 10
+
+Gid = tuple[int, ...]
+
+
+def goal_qos(durability: DurabilityPolicy) -> QoSProfile:
+    return QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=DEPTH, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=durability)
+
+
+@dataclass
+class CatchUp:
+    """Which latched publishers' histories are still to be received; what durability that asks for. No ROS."""
+
+    timeout: float = CATCH_UP
+    pending: dict[Gid, float | None] = field(default_factory=dict)   # publisher -> when catching up began
+    done: set[Gid] = field(default_factory=set)
+    heard: int = 0               # goals received while catching up
+    durability: DurabilityPolicy = DurabilityPolicy.VOLATILE
+
+    def look(self, publishers: Iterable[tuple[Gid, bool]], now: float) -> DurabilityPolicy:
+        """The publishers now on the graph ((gid, latched) pairs): the durability the subscription should have."""
+        latched: set[Gid] = set()
+        volatile = False
+        for gid, is_latched in publishers:
+            if is_latched:
+                latched.add(gid)
+            else:
+                volatile = True
+        self.done &= latched
+        self.pending = {gid: since for gid, since in self.pending.items() if gid in latched}
+        for gid in latched - self.done - set(self.pending):
+            self.pending[gid] = now if self.durability == DurabilityPolicy.TRANSIENT_LOCAL else None
+        if self.durability == DurabilityPolicy.TRANSIENT_LOCAL:
+            caught_up = self.heard >= len(self.pending)
+            for gid, since in list(self.pending.items()):
+                if caught_up or (since is not None and now - since >= self.timeout):
+                    del self.pending[gid]
+                    self.done.add(gid)
+        wanted = DurabilityPolicy.TRANSIENT_LOCAL if self.pending and not volatile else DurabilityPolicy.VOLATILE
+        self.switch(wanted, now)
+        return wanted
+
+    def switch(self, durability: DurabilityPolicy, now: float) -> None:
+        if durability == self.durability:
+            return
+        self.durability = durability
+        self.heard = 0
+        if durability == DurabilityPolicy.TRANSIENT_LOCAL:   # the clock of every pending publisher starts now
+            self.pending = dict.fromkeys(self.pending, now)
+
+    def heard_goal(self) -> None:
+        if self.durability == DurabilityPolicy.TRANSIENT_LOCAL:
+            self.heard += 1
+
+
+class GoalSubscription:
+    """The node's subscription on `goal_pose`, re-made with the durability CatchUp asks for."""
+
+    def __init__(self, node: Node, callback: Callable[[PoseStamped], None], topic: str = interface.GOAL_POSE,
+                 timeout: float = CATCH_UP) -> None:
+        self.node = node
+        self.callback = callback
+        self.catch_up = CatchUp(timeout)
+        self.subscription = self._subscribe(DurabilityPolicy.VOLATILE, topic)
+        self.topic = self.subscription.topic_name
+
+    def _subscribe(self, durability: DurabilityPolicy, topic: str) -> Any:
+        events = SubscriptionEventCallbacks(incompatible_qos=self.on_incompatible)
+        return self.node.create_subscription(PoseStamped, topic, self.on_goal, goal_qos(durability),
+                                             event_callbacks=events)
+
+    @property
+    def durability(self) -> DurabilityPolicy:
+        return self.catch_up.durability
+
+    def look(self) -> None:
+        """Look at the goal's publishers on the graph; re-subscribe if the durability wanted changed."""
+        before = self.catch_up.durability
+        try:
+            infos = self.node.get_publishers_info_by_topic(self.topic)
+        except Exception as exc:   # the graph can change under us: look again next time
+            self.node.get_logger().debug(f'graph look at {self.topic} failed: {exc}')
+            return
+        publishers = [(tuple(i.endpoint_gid), i.qos_profile.durability == DurabilityPolicy.TRANSIENT_LOCAL)
+                      for i in infos]
+        wanted = self.catch_up.look(publishers, time.monotonic())
+        if wanted != before:
+            self._replace(wanted)
+
+    def _replace(self, durability: DurabilityPolicy) -> None:
+        old, self.subscription = self.subscription, self._subscribe(durability, self.topic)
+        self.node.destroy_subscription(old)
+        self.node.get_logger().debug(f'{self.topic}: subscription now {durability.name.lower()}')
+
+    def on_goal(self, msg: PoseStamped) -> None:
+        self.catch_up.heard_goal()
+        self.callback(msg)
+
+    def on_incompatible(self, info: Any) -> None:
+        """A volatile publisher met the transient-local subscription (between two looks): become volatile now.
+        Any other incompatibility (a best-effort publisher: goals are taken reliably) is warned about."""
+        if self.catch_up.durability != DurabilityPolicy.TRANSIENT_LOCAL or \
+                int(info.last_policy_kind) != QoSPolicyKind.DURABILITY:
+            policy = qos.qos_policy_name_from_kind(info.last_policy_kind)
+            self.node.get_logger().warning(f'{self.topic}: a publisher offers an incompatible QoS ({policy}); its '
+                                           'goals are not received (goals are taken reliably)',
+                                           throttle_duration_sec=5.0)
+            return
+        self.node.get_logger().info(f'{self.topic}: a volatile publisher appeared while catching up with latched '
+                                    'goals; the subscription is volatile again')
+        self.catch_up.switch(DurabilityPolicy.VOLATILE, time.monotonic())
+        self._replace(DurabilityPolicy.VOLATILE)

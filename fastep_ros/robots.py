@@ -1,0 +1,257 @@
+"""The other robots a planner avoids: which robots of the graph count, their odometry, and when they stop counting.
+
+A robot of this graph announces itself: its planner publishes its footprint (msg_tools.footprint: the safety
+circle as geometry_msgs/PolygonStamped in `<ns>/base_link`, latched) on `<ns>/footprint`. A planner follows
+the robot of namespace `<ns>` (subscribes to `<ns>/odom` and avoids it) only while
+
+- `<ns>/footprint` has a publisher that is a node of namespace `<ns>` (a robot's own planner; a replay or
+  another tool republishing the topic from elsewhere does not make a robot); checked at every look at the graph
+  until it holds, then every GRAPH_CHECK_TICKS looks,
+- `<ns>/odom` has a publisher (a planner whose plant is not running announces nothing that moves: its own
+  subscription makes the topic appear, with no publisher); asked until the odometry is subscribed to, after
+  which the odometry's freshness (below) tells whether it still has one,
+- `<ns>` is neither the planner's own namespace nor below it (its own base may publish more odometry, such as
+  ros2_control's `/d1/diff_drive_controller/odom`: never another robot),
+- its odometry is fresh: a robot whose odometry has not come for `timeout` seconds (node clock) is dropped,
+  as its publisher may be dead; it is followed again when odometry comes again. Older than `still_after` it is
+  avoided standing still (no longer known to move).
+
+The radius avoided is the `override` when one is given (> 0), else the announced footprint's radius, else the
+planner's own radius (until the footprint message arrives).
+
+Fleet is the bookkeeping without ROS (unit-tested alone); RobotFollower is its ROS side in the planner node.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
+
+from geometry_msgs.msg import PolygonStamped
+from nav_msgs.msg import Odometry
+
+from fastep_core.planning.others import OtherRobot
+from msg_tools import convert, interface
+from msg_tools.footprint import base_frame, circle_footprint, footprint_radius
+from msg_tools.interface import LATEST, offered_qos
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+
+__all__ = ['GRAPH_CHECK_TICKS', 'Fleet', 'Robot', 'RobotFollower', 'announced', 'namespace_of']
+
+GRAPH_CHECK_TICKS = 8   # the footprint publishers of every known robot are checked every 8th look (2 s)
+
+
+def namespace_of(topic: str, leaf: str) -> str | None:
+    """The namespace of a topic named `<ns>/<leaf>`: '/r1/footprint' -> '/r1', '/footprint' -> '/'; else None."""
+    suffix = '/' + leaf
+    if not topic.endswith(suffix):
+        return None
+    return topic[:-len(suffix)] or '/'
+
+
+def robot_name(namespace: str) -> str:
+    """How a robot is named in status and logs: its namespace without the leading slash ('/' for the root)."""
+    return namespace.strip('/') or '/'
+
+
+def is_own(namespace: str, own: str) -> bool:
+    """Whether `namespace` is the planner's own namespace or one below it (its own robot's topics)."""
+    if namespace == own:
+        return True
+    return own != '/' and namespace.startswith(own.rstrip('/') + '/')
+
+
+def announced(namespace: str, footprint_publishers: Iterable[tuple[str, str]], odom_publishers: int) -> bool:
+    """The graph's verdict on a robot: a node of its own namespace publishes its footprint ((node name, node
+    namespace) pairs) and its odometry has publishers."""
+    return odom_publishers > 0 and any(ns == namespace for _, ns in footprint_publishers)
+
+
+@dataclass
+class Robot:
+    """What a planner knows of another robot."""
+
+    namespace: str
+    announced: bool = False
+    radius: float | None = None          # the footprint's, once received
+    position: tuple[float, float] | None = None
+    velocity: tuple[float, float] = (0.0, 0.0)
+    received: float = -math.inf          # node time of the last odometry
+    stamp: float = 0.0                   # its header stamp
+
+    @property
+    def name(self) -> str:
+        return robot_name(self.namespace)
+
+    @property
+    def odom_topic(self) -> str:
+        return self.namespace.rstrip('/') + '/' + interface.ODOM
+
+    @property
+    def footprint_topic(self) -> str:
+        return self.namespace.rstrip('/') + '/' + interface.FOOTPRINT
+
+
+class Fleet:
+    """The other robots of the graph: who is followed, where they are. No ROS."""
+
+    def __init__(self, own_namespace: str, timeout: float, still_after: float) -> None:
+        self.own = own_namespace
+        self.timeout = timeout            # dropped beyond this since the last odometry
+        self.still_after = still_after    # avoided standing still beyond this
+        self.robots: dict[str, Robot] = {}
+
+    def candidates(self, topics: Iterable[tuple[str, Sequence[str]]]) -> list[str]:
+        """Namespaces not known yet that have a footprint topic of the interface's type (not the own robot's)."""
+        out = []
+        for topic, types in topics:
+            namespace = namespace_of(topic, interface.FOOTPRINT)
+            if namespace is None or namespace in self.robots or is_own(namespace, self.own) or \
+                    interface.TYPES[interface.FOOTPRINT] not in types:
+                continue
+            out.append(namespace)
+        return out
+
+    def add(self, namespace: str) -> Robot:
+        return self.robots.setdefault(namespace, Robot(namespace))
+
+    def judge(self, namespace: str, verdict: bool) -> bool:
+        """Record the graph's verdict on a robot; True if it changed."""
+        robot = self.robots[namespace]
+        changed = robot.announced != verdict
+        robot.announced = verdict
+        return changed
+
+    def heard_footprint(self, namespace: str, radius: float) -> None:
+        self.robots[namespace].radius = radius
+
+    def heard_odometry(self, namespace: str, position: tuple[float, float], velocity: tuple[float, float],
+                       stamp: float, now: float) -> bool:
+        """Take a robot's odometry; True if that made it followed (it was not a moment ago)."""
+        robot = self.robots[namespace]
+        was = self.is_followed(robot, now)
+        robot.position, robot.velocity, robot.received, robot.stamp = position, velocity, now, stamp
+        return not was and self.is_followed(robot, now)
+
+    def is_followed(self, robot: Robot, now: float) -> bool:
+        # A time before the last odometry (a clock that went back) counts as fresh: how old it is is not known.
+        return robot.announced and robot.position is not None and now - robot.received <= self.timeout
+
+    def followed(self, now: float) -> list[Robot]:
+        return [r for r in self.robots.values() if self.is_followed(r, now)]
+
+    def names(self, now: float) -> list[str]:
+        """The robots followed now, sorted (status `others`)."""
+        return sorted(r.name for r in self.followed(now))
+
+    def obstacles(self, now: float, radius: Callable[[Robot], float], lag: Callable[[float], float]) \
+            -> list[OtherRobot]:
+        """The robots followed, as the navigator's OtherRobot: each predicted forward by lag(its stamp) at its
+        velocity (zero once its odometry is older than still_after: still there, no longer known to move)."""
+        out = []
+        for robot in self.followed(now):
+            assert robot.position is not None
+            velocity = robot.velocity if now - robot.received <= self.still_after else (0.0, 0.0)
+            ahead = lag(robot.stamp)
+            position = (robot.position[0] + velocity[0] * ahead, robot.position[1] + velocity[1] * ahead)
+            out.append(OtherRobot(robot.name, position, velocity, radius(robot)))
+        return out
+
+
+class RobotFollower:
+    """The planner's side of the graph: announces its robot, finds and follows the others (Fleet's ROS side)."""
+
+    def __init__(self, node: Node, own_radius: float, override_radius: float, timeout: float,
+                 still_after: float, now: Callable[[], float], on_change: Callable[[], None]) -> None:
+        self.node = node
+        self.own_radius = own_radius
+        self.override_radius = override_radius
+        self.now = now
+        self.fleet = Fleet(node.get_namespace(), timeout, still_after)
+        self.on_change = on_change
+        self.looks = 0
+        self.last_names: list[str] = []
+        # Per namespace: how many publishers its footprint had at the last check, and which nodes they were.
+        self.footprints: dict[str, tuple[int, list[tuple[str, str]]]] = {}
+        self.subscriptions: dict[str, list[Any]] = {}
+        self.footprint_pub = node.create_publisher(PolygonStamped, interface.FOOTPRINT,
+                                                   offered_qos(interface.FOOTPRINT))
+        self.footprint_pub.publish(circle_footprint(own_radius, base_frame(node.get_namespace()),
+                                                    node.get_clock().now().to_msg()))
+
+    def radius(self, robot: Robot) -> float:
+        if self.override_radius > 0.0:
+            return self.override_radius
+        return robot.radius if robot.radius is not None else self.own_radius
+
+    def discover(self) -> bool:
+        """Look at the graph: new robots' footprints, and (every GRAPH_CHECK_TICKS looks, and for new ones) who
+        is announced. True if the robots followed changed since the last look (also by odometry going stale)."""
+        node = self.node
+        new = self.fleet.candidates(node.get_topic_names_and_types())
+        for namespace in new:
+            robot = self.fleet.add(namespace)
+            self.subscriptions[namespace] = [node.create_subscription(
+                PolygonStamped, robot.footprint_topic, functools.partial(self.on_footprint, namespace),
+                offered_qos(interface.FOOTPRINT))]
+        every = self.looks % GRAPH_CHECK_TICKS == 0
+        check = [ns for ns, robot in self.fleet.robots.items() if every or not robot.announced]
+        self.looks += 1
+        for namespace in check:
+            self.check(namespace)
+        names = self.fleet.names(self.now())
+        changed, self.last_names = names != self.last_names, names
+        return changed
+
+    def check(self, namespace: str) -> None:
+        """Ask the graph whether a robot is (still) announced; follow its odometry from the first time it is."""
+        node, robot = self.node, self.fleet.robots[namespace]
+        try:
+            count = node.count_publishers(robot.footprint_topic)
+            seen = self.footprints.get(namespace)
+            # Which nodes publish it: asked again only when that may have changed, or when no node of the robot's
+            # namespace was among them (DDS can list an endpoint before the node it belongs to is known: its node
+            # is then '_NODE_NAMESPACE_UNKNOWN_').
+            if seen is None or seen[0] != count or not robot.announced:
+                infos = node.get_publishers_info_by_topic(robot.footprint_topic)
+                seen = self.footprints[namespace] = (count, [(i.node_name, i.node_namespace) for i in infos])
+            # Once its odometry is followed, freshness tells whether it still has a publisher (asking the graph
+            # for every robot, every time, cost four times the CPU of the rest of a look with 100 robots).
+            subscribed = len(self.subscriptions[namespace]) > 1
+            verdict = announced(namespace, seen[1], 1 if subscribed else node.count_publishers(robot.odom_topic))
+        except Exception as exc:  # the graph can change under us (rclpy raises its own errors): look again later
+            node.get_logger().debug(f'graph look at {namespace} failed: {exc}')
+            return
+        if not self.fleet.judge(namespace, verdict):
+            return
+        if verdict and len(self.subscriptions[namespace]) == 1:
+            self.subscriptions[namespace].append(node.create_subscription(
+                Odometry, robot.odom_topic, functools.partial(self.on_odom, namespace), LATEST))
+        node.get_logger().info(f'{"following" if verdict else "no longer following"} robot {robot.name}: '
+                               f'{robot.footprint_topic} (from a node of {namespace}) and {robot.odom_topic} '
+                               f'{"have" if verdict else "lack"} publishers')
+
+    def on_footprint(self, namespace: str, msg: PolygonStamped) -> None:
+        try:
+            self.fleet.heard_footprint(namespace, footprint_radius(msg))
+        except ValueError as exc:
+            self.node.get_logger().warning(f'ignoring the footprint of {robot_name(namespace)}: {exc}',
+                                           throttle_duration_sec=5.0)
+
+    def on_odom(self, namespace: str, msg: Odometry) -> None:
+        """Take another robot's odometry; on_change() if that made it followed (status lists it at once)."""
+        try:
+            position = convert.odometry_position(msg)
+            velocity = convert.odometry_velocity(msg)
+        except ValueError as exc:
+            self.node.get_logger().warning(f'ignoring odometry of {robot_name(namespace)}: {exc}',
+                                           throttle_duration_sec=5.0)
+            return
+        if self.fleet.heard_odometry(namespace, position, velocity, convert.stamp_to_seconds(msg.header.stamp),
+                                     self.now()):
+            self.last_names = self.fleet.names(self.now())
+            self.on_change()
