@@ -46,7 +46,6 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from rclpy.clock import Clock, ClockType
-from rclpy.node import Node
 from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
 
@@ -68,6 +67,7 @@ from fastep_core.world import World
 from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.goals import GoalSubscription
+from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
@@ -101,7 +101,7 @@ class _Body:
     hitch_offset: float
 
 
-class PlannerNode(Node):
+class PlannerNode(ManagedNode):
     """One robot's navigator (fastep_core) between its odometry and its cmd_vel."""
 
     def __init__(self, node_name: str = 'planner', **kwargs: Any) -> None:
@@ -208,6 +208,25 @@ class PlannerNode(Node):
         self.dynamic = DynamicParameters(self, (*PlannerParams.names(), *TUNABLE), self.apply_parameters)
         self.get_logger().info(f'{self.algorithm} planner for a {self.model} of radius {self.radius:g} m, '
                                f'control at {self.control_rate_hz:g} Hz')
+        self.start_lifecycle()   # autostart: active at once (fastep_ros.lifecycle)
+
+    # ------------------------------------------------------------------------------------------- lifecycle
+    def activate(self) -> None:
+        if self.navigator is not None:
+            self.navigator.restart_clock(self.now())   # time spent inactive is no lack of progress
+        self.control_timer.reset()
+        self._status_key = None
+
+    def deactivate(self) -> None:
+        self.control_timer.cancel()
+        self.last_command = np.zeros(2)
+        self.publish_command(self.last_command)
+        self._status_key = None
+
+    def cleanup(self) -> None:
+        """A fresh navigator: the goal is forgotten (the world, latched, is kept)."""
+        self.navigator, self.goal, self.pending_goal = None, None, None
+        self.update_world()
 
     # ------------------------------------------------------------------------------------------- setup
     def _declare_planner_params(self) -> PlannerParams:
@@ -486,6 +505,8 @@ class PlannerNode(Node):
 
     # ------------------------------------------------------------------------------------------- status
     def status(self) -> tuple[bytes, str, str]:
+        if not self.is_active:
+            return DiagnosticStatus.OK, 'inactive', 'lifecycle: not active (no commands); activate to drive'
         level, message, reason = self.navigation_status()
         if self.clock_problem and level != DiagnosticStatus.ERROR:
             # The control loop stands still with the clock: a robot under way is held (check_clock).

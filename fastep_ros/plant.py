@@ -33,12 +33,12 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.clock import Clock, ClockType, ROSClock
-from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.scenario import MODELS
 from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from fastep_ros.diagnostics import Diagnostics, Task
+from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import convert, interface
@@ -51,7 +51,7 @@ DIAGNOSTICS_PERIOD = 1.0  # wall seconds between /diagnostics arrays
 AT_REST_PERIOD = 0.25   # wall seconds between start-state odometry messages before simulated time starts
 
 
-class PlantNode(Node):
+class PlantNode(ManagedNode):
     """Integrates one robot's model from the commands on cmd_vel; publishes odom (and trailer_pose)."""
 
     def __init__(self, node_name: str = 'plant', **kwargs: Any) -> None:
@@ -126,6 +126,17 @@ class PlantNode(Node):
         self.dynamic = DynamicParameters(self, ('cmd_timeout', 'clock_timeout'), self.apply_parameters)
         self.get_logger().info(f'{self.model_name} at {np.round(self.state, 3).tolist()}, '
                                f'integrating at {self.rate_hz:g} Hz')
+        self.start_lifecycle()   # autostart: active at once (fastep_ros.lifecycle)
+
+    # ------------------------------------------------------------------------------------------- lifecycle
+    def activate(self) -> None:
+        if self.tick is not None:   # the robot stood still while inactive: integrate from now on
+            self.tick = int(math.floor(self.now() / self.step + 1e-9))
+        self.timer.reset()
+
+    def deactivate(self) -> None:
+        self.timer.cancel()
+        self.command, self.command_time = np.zeros(2), None
 
     def apply_parameters(self, changes: dict[str, Any]) -> str:
         """DynamicParameters' apply: '' when applied, else why not (nothing changed)."""
@@ -204,6 +215,8 @@ class PlantNode(Node):
 
     def on_cmd_vel(self, msg: Twist | TwistStamped, sent: float | None = None) -> None:
         """Take a command sent at `sent` (node clock; None: now). It acts until cmd_timeout after it was sent."""
+        if not self.is_active:
+            return   # an inactive robot takes no commands
         self.check_clock()
         now = self.now()
         self.advance(now)  # the old command holds until now

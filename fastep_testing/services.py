@@ -64,3 +64,24 @@ class Services:
         self.executor.shutdown()
         self.client.destroy_node()
         self.node.destroy_node()
+
+    def change_state(self, transition: str) -> bool:
+        """A lifecycle transition by label (configure, activate, deactivate, cleanup, shutdown), as Nav2's
+        lifecycle manager asks for it; True if it succeeded."""
+        from lifecycle_msgs.msg import Transition
+        from lifecycle_msgs.srv import ChangeState
+        ids = {'configure': Transition.TRANSITION_CONFIGURE, 'activate': Transition.TRANSITION_ACTIVATE,
+               'deactivate': Transition.TRANSITION_DEACTIVATE, 'cleanup': Transition.TRANSITION_CLEANUP,
+               'shutdown': Transition.TRANSITION_UNCONFIGURED_SHUTDOWN}
+        request = ChangeState.Request()
+        request.transition.id = ids[transition]
+        if transition == 'shutdown':
+            request.transition.id = {'inactive': Transition.TRANSITION_INACTIVE_SHUTDOWN,
+                                     'active': Transition.TRANSITION_ACTIVE_SHUTDOWN}.get(
+                                         self.state(), Transition.TRANSITION_UNCONFIGURED_SHUTDOWN)
+        return bool(self.call(ChangeState, 'change_state', request).success)
+
+    def state(self) -> str:
+        """The lifecycle state's label (unconfigured, inactive, active, finalized)."""
+        from lifecycle_msgs.srv import GetState
+        return str(self.call(GetState, 'get_state', GetState.Request()).current_state.label)
