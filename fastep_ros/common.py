@@ -27,7 +27,7 @@ from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-e
 from fastep_ros.parameters import warn_unknown_overrides
 
 __all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'StartupError', 'check_range', 'declare',
-           'guard_clock', 'node_main']
+           'declare_empty_array', 'guard_clock', 'node_main']
 
 
 INT64_MAX = 2**63 - 1
@@ -66,14 +66,15 @@ def _descriptor_range(descriptor: ParameterDescriptor, default: Any, value_range
                                                               to_value=min(float(high), sys.float_info.max), step=0.0)]
 
 
-def _declare_empty_double_array(node: Node, name: str, descriptor: ParameterDescriptor) -> list[float]:
-    """A double array parameter whose default is []. Declared by its type alone it had no value (GetParameters
-    answered an empty list for it, and parameter dumps broke), and rclpy infers an empty list's type as a byte
-    array: it is declared writable, given [] unless overridden, then made read-only if it is."""
+def declare_empty_array(node: Node, name: str, kind: Parameter.Type, descriptor: ParameterDescriptor) -> list[Any]:
+    """An array parameter of type `kind` whose default is []; returns its value. Declared by its type alone it
+    had no value (GetParameters answered an empty list for it, and parameter dumps broke), and rclpy infers an
+    empty list's type as a byte array: it is declared writable, given [] unless overridden, then made read-only
+    if the descriptor says so. Raises rclpy's ParameterException for an override of another type."""
     writable = copy.deepcopy(descriptor)
     writable.read_only = False
-    if node.declare_parameter(name, Parameter.Type.DOUBLE_ARRAY, writable).type_ == Parameter.Type.NOT_SET:
-        node.set_parameters([Parameter(name, Parameter.Type.DOUBLE_ARRAY, [])])
+    if node.declare_parameter(name, kind, writable).type_ == Parameter.Type.NOT_SET:
+        node.set_parameters([Parameter(name, kind, [])])
     descriptor.type = writable.type
     node.set_descriptor(name, descriptor)
     return list(node.get_parameter(name).value)
@@ -98,7 +99,7 @@ def declare(node: Node, name: str, default: Any, description: str, *, read_only:
     _widen_integer_override(node, name, default)
     try:
         if default is None:
-            value = _declare_empty_double_array(node, name, descriptor)
+            value = declare_empty_array(node, name, Parameter.Type.DOUBLE_ARRAY, descriptor)
         else:
             value = node.declare_parameter(name, default, descriptor).value
     except InvalidParameterValueException as exc:

@@ -56,7 +56,15 @@ from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from fastep_core.errors import FastepError
-from fastep_ros.common import PERIOD_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.common import (
+    PERIOD_RANGE,
+    StartupError,
+    check_range,
+    declare,
+    declare_empty_array,
+    guard_clock,
+    node_main,
+)
 from msg_tools import convert, interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError
 from msg_tools.ros2_profile import message_class, qos_profile_to_dict
@@ -134,7 +142,7 @@ class RecorderNode(Node):
         descriptor = ParameterDescriptor(name='topics', type=Parameter.Type.STRING_ARRAY.value, read_only=True,
                                          description=f'topics to record; empty: {_DEFAULT_TOPICS} as they appear')
         try:
-            value = self.declare_parameter('topics', Parameter.Type.STRING_ARRAY, descriptor).value
+            value = declare_empty_array(self, 'topics', Parameter.Type.STRING_ARRAY, descriptor)
         except ParameterException as exc:
             raise StartupError(f'parameter topics must be a string array: {exc}') from None
         out = set()

@@ -25,6 +25,7 @@ from fastep_core.world import World
 from fastep_ros.clock import ClockNode
 from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
+from fastep_ros.recorder import RecorderNode
 from fastep_testing.graph import free_domain, isolated_env, stop_process
 from fastep_testing.services import Services
 from msg_tools import convert
@@ -109,10 +110,13 @@ def test_descriptors_carry_real_ranges(context: Any) -> None:
         services.close()
 
 
-@pytest.mark.parametrize('cls,params', [(PlannerNode, {}), (PlantNode, {}), (ClockNode, {}),
+@pytest.mark.parametrize('cls,params', [(PlannerNode, {}), (PlantNode, {}), (ClockNode, {}), (RecorderNode, {}),
                                         (PlannerNode, {'workspace': [0, 0, 10, 10]})])
-def test_every_parameter_has_a_value(context: Any, cls: type, params: dict[str, Any]) -> None:
-    # Main: `workspace` was declared without a default: GetParameters answered an empty list for it (a dump broke).
+def test_every_parameter_has_a_value(context: Any, tmp_path: Path, cls: type, params: dict[str, Any]) -> None:
+    # Main: `workspace` (planner), `start` (plant) and `topics` (recorder) were declared without a default:
+    # GetParameters answered an empty list for them (a parameter dump broke).
+    if cls is RecorderNode:
+        params = {'output': str(tmp_path / 'out.mcap')}
     node = make(cls, context, **params)
     services = Services(context, node)
     try:
