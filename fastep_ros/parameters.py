@@ -94,6 +94,6 @@ def warn_unknown_overrides(node: Node) -> list[str]:
         for name in unknown:
             close = difflib.get_close_matches(name, declared, n=1)
             hints.append(f'{name} (did you mean {close[0]}?)' if close else name)
-        node.get_logger().warning(f'ignoring unknown parameter(s): {", ".join(hints)}; '
-                                  f'this node takes: {", ".join(sorted(declared))}')
+        node.get_logger().warning(f'ignoring unknown parameter(s): {", ".join(hints)} (`ros2 param list` or '
+                                  f'`ros2 param describe` tell what this node takes)')
     return unknown
