@@ -32,6 +32,9 @@ before the clock went back, or not finite; zero cmd_vel is sent). Levels: OK
 still driven to: kinematic or avoiding with the refusal as reason), ERROR (failed, which includes a refused goal
 when none is under way: reason is the goal check's message, e.g. "... is occupied ...").
 Goals: one subscription that volatile and latched publishers both reach (fastep_ros.goals).
+On simulated time with no /clock for clock_timeout wall seconds: WARN, reason "no /clock ...", `stale` for a robot
+under way (a zero cmd_vel is sent). Not active (lifecycle, fastep_ros.lifecycle): OK, `inactive`.
+Also `/diagnostics` (fastep_ros.diagnostics); the tunable parameters change at runtime (docs/parameters.md).
 """
 
 from __future__ import annotations
