@@ -26,7 +26,7 @@ from websockets.sync.client import ClientConnection, connect
 
 from fastep_core.geometry import Circle, Segment
 from fastep_ros.errors import StartupError
-from fastep_ros.foxglove_bridge import CHANNELS, FoxgloveNode
+from fastep_ros.foxglove_bridge import CHANNELS, PALETTE, FoxgloveNode, RobotView
 from fastep_testing.graph import ONE_CIRCLE, free_domain, isolated_env, stop_process, write
 from msg_tools import convert, interface
 
@@ -44,21 +44,30 @@ class Decoder:
 
     def __init__(self) -> None:
         self.pool = descriptor_pool.DescriptorPool()
-        self.classes: dict[int, Any] = {}
+        self.classes: dict[int | str, Any] = {}
 
     def add(self, channel: dict[str, Any]) -> None:
         assert channel['encoding'] == 'protobuf' and channel['schemaEncoding'] == 'protobuf', channel
-        files = descriptor_pb2.FileDescriptorSet.FromString(base64.b64decode(channel['schema']))
+        self.add_schema(channel['id'], channel['schemaName'], base64.b64decode(channel['schema']))
+
+    def add_schema(self, key: int | str, name: str, data: bytes) -> None:
+        files = descriptor_pb2.FileDescriptorSet.FromString(data)
         for proto in files.file:
             try:
                 self.pool.FindFileByName(proto.name)
             except KeyError:
                 self.pool.Add(proto)
-        descriptor = self.pool.FindMessageTypeByName(channel['schemaName'])
-        self.classes[channel['id']] = message_factory.GetMessageClass(descriptor)
+        self.classes[key] = message_factory.GetMessageClass(self.pool.FindMessageTypeByName(name))
 
-    def decode(self, channel_id: int, payload: bytes) -> Any:
-        return self.classes[channel_id].FromString(payload)
+    def decode(self, key: int | str, payload: bytes) -> Any:
+        return self.classes[key].FromString(payload)
+
+    def message(self, msg: Any) -> Any:
+        """A foxglove.messages object (which shows no fields) as the protobuf message it encodes to."""
+        schema = type(msg).get_schema()
+        if schema.name not in self.classes:
+            self.add_schema(schema.name, schema.name, schema.data)
+        return self.decode(schema.name, msg.encode())
 
 
 def _yaw(q: Any) -> float:
@@ -220,6 +229,100 @@ def _complete(got: dict[str, list[Any]]) -> bool:
     return ({'r1', 'r2'} <= set(robots) and bool(robots['r2'].cubes) and frames >= {'r1/base_link', 'r2/base_link'}
             and all(got.get(topic) for topic in ('/fastep/obstacles', '/fastep/plans', '/fastep/waypoints',
                                                  '/r1/scan')))
+
+
+class Recorder:
+    """Stands in for a foxglove channel a client subscribes to: keeps what the node logs, decoded."""
+
+    def __init__(self, decoder: Decoder) -> None:
+        self.decoder = decoder
+        self.logged: list[Any] = []
+
+    def has_sinks(self) -> bool:
+        return True
+
+    def log(self, msg: Any) -> None:
+        self.logged.append(self.decoder.message(msg))
+
+
+def test_a_robot_is_sent_again_when_its_drawing_changes_and_a_plan_only_when_it_does(context: Any,
+                                                                                   monkeypatch: Any) -> None:
+    """The node's ticks fed by hand (no graph, no client): each view follows what it shows. A trailer pose taken
+    after the robot was sent, under the same odometry stamp, is sent (it was not: the robot waited for a new
+    stamp, and a test publishing one stamp saw r2 without its trailer); the same plan again is not."""
+    bridge = FoxgloveNode(context=context, parameter_overrides=[Parameter('port', value=0)])
+    try:
+        decoder = Decoder()
+        views = {name: Recorder(decoder) for name in ('obstacles_channel', 'robots_channel', 'plans_channel',
+                                                       'waypoints_channel', 'tf_channel')}
+        for name, recorder in views.items():
+            setattr(bridge, name, recorder)
+        inbox: dict[str, list[Any]] = {topic: [] for topic in (interface.OBSTACLES, interface.ODOM, interface.PLAN,
+                                                               interface.WAYPOINT, interface.TRAILER_POSE)}
+        monkeypatch.setattr(bridge, '_take', lambda sub: inbox[sub].pop(0) if inbox[sub] else None)
+        bridge.obstacles_sub = interface.OBSTACLES
+        bridge.robots['r2'] = RobotView('r2', PALETTE[1], 0.5, subs={topic: topic for topic in inbox})
+        stamp = convert.seconds_to_stamp(12.5)
+        odometry = convert.state_to_odometry([R2[0], R2[1], R2[2], 0.0], stamp)
+
+        def tick(**messages: Any) -> dict[str, int]:
+            for topic, msg in messages.items():
+                inbox[topic].append(msg)
+            bridge.tick()
+            return {name: len(recorder.logged) for name, recorder in views.items() if recorder.logged}
+
+        assert tick(odom=odometry, plan=convert.waypoints_to_path(PLAN, stamp)) == \
+            {'robots_channel': 1, 'plans_channel': 1, 'tf_channel': 1}
+        assert not views['robots_channel'].logged[-1].entities[0].cubes
+        # The trailer comes a tick later, the odometry keeps its stamp, the planner publishes its plan again.
+        assert tick(odom=odometry, trailer_pose=convert.point_to_pose_stamped(TRAILER[:2], stamp, yaw=TRAILER[2]),
+                    plan=convert.waypoints_to_path(PLAN, stamp)) == \
+            {'robots_channel': 2, 'plans_channel': 1, 'tf_channel': 1}
+        r2 = views['robots_channel'].logged[-1].entities[0]
+        assert (r2.id, r2.cubes[0].pose.position.x, r2.cubes[0].pose.position.y) == ('r2', *TRAILER[:2])
+        assert tick(odom=odometry) == {'robots_channel': 2, 'plans_channel': 1, 'tf_channel': 1}
+        assert tick(plan=convert.waypoints_to_path(PLAN[1:], stamp)) == \
+            {'robots_channel': 2, 'plans_channel': 2, 'tf_channel': 1}
+        bridge.resend.set()   # a client subscribes: everything again
+        assert tick() == {'robots_channel': 3, 'plans_channel': 3, 'tf_channel': 2}
+    finally:
+        bridge.destroy_node()
+
+
+def test_a_viewer_connected_as_the_server_starts_is_told_of_every_channel_at_once(context: Any, tmp_path: Path,
+                                                                                  monkeypatch: Any) -> None:
+    """A client that connects the moment the port listens (Foxglove retrying while fastep-launch starts the
+    node) is advertised every channel as it connects, the scan of each robot the scenario gives a scanner
+    included: a channel the server adds while a client is connected can be refused to that client
+    (FoxgloveNode.__init__).
+    The channels were created after the server started: such a client was advertised them one by one."""
+    import foxglove
+
+    start = foxglove.start_server
+    advertised: list[str] = []
+
+    def start_and_connect(**kwargs: Any) -> Any:
+        server = start(**kwargs)
+        with connect(f'ws://127.0.0.1:{server.port}', subprotocols=[SUBPROTOCOL], open_timeout=WAIT) as ws:
+            end = time.monotonic() + WAIT
+            while not advertised and time.monotonic() < end:   # the first advertisement
+                try:
+                    doc = json.loads(ws.recv(timeout=0.5))
+                except TimeoutError:
+                    continue
+                if doc['op'] == 'advertise':
+                    advertised.extend(channel['topic'] for channel in doc['channels'])
+        return server
+
+    monkeypatch.setattr(foxglove, 'start_server', start_and_connect)
+    with_scanner = ONE_CIRCLE.replace('    radius: 0.5\n', '    radius: 0.5\n    sensor: {}\n')
+    scenario = write(tmp_path / 'scanner.yaml', with_scanner)
+    bridge = FoxgloveNode(context=context, parameter_overrides=[Parameter('port', value=0),
+                                                                Parameter('scenario', value=str(scenario))])
+    try:
+        assert sorted(advertised) == sorted(set(CHANNELS) | {'/r1/scan'})
+    finally:
+        bridge.destroy_node()
 
 
 def test_a_port_in_use_is_one_line(context: Any) -> None:
