@@ -7,6 +7,7 @@ from __future__ import annotations
 import base64
 import json
 import math
+import re
 import socket
 import subprocess
 import sys
@@ -22,6 +23,7 @@ from nav_msgs.msg import Odometry
 from nav_msgs.msg import Path as PathMsg
 from rclpy.parameter import Parameter
 from sensor_msgs.msg import LaserScan
+from websockets.exceptions import ConnectionClosed
 from websockets.sync.client import ClientConnection, connect
 
 from fastep_core.geometry import Circle, Segment
@@ -31,6 +33,7 @@ from fastep_testing.graph import ONE_CIRCLE, free_domain, isolated_env, stop_pro
 from msg_tools import convert, interface
 
 SUBPROTOCOL = 'foxglove.sdk.v1'
+UNKNOWN_CHANNEL = re.compile(r'Unknown channel ID: (\d+)')   # a status the server sends for a refused subscription
 WAIT = 30.0   # wall seconds for the graph to match and the data to arrive (a loaded machine is slow, not wrong)
 R1 = (3.0, 4.0, 0.5)          # x, y, yaw of r1's odometry
 R2 = (10.0, 2.0, -1.0)        # r2 is a tractor-trailer
@@ -132,6 +135,7 @@ def test_a_foxglove_client_sees_obstacles_robots_plans_waypoints_scans_and_trans
 
     got, channels, decoder = client.got, client.channels, client.decoder
     advertised = sorted(channels.values())
+    print('subscriptions refused and asked again (channel ids):', client.refused)
     print('decoded channels:', ', '.join(f'{topic} ({decoder.classes[cid].DESCRIPTOR.full_name})'
                                          for cid, topic in sorted(channels.items(), key=lambda item: item[1])))
     assert advertised == sorted(set(CHANNELS) | {'/r1/scan'})
@@ -180,38 +184,62 @@ def test_a_foxglove_client_sees_obstacles_robots_plans_waypoints_scans_and_trans
 
 
 class Client:
-    """The Foxglove side: subscribes to every channel advertised and decodes the messages per channel topic."""
+    """The Foxglove side: subscribes to every channel advertised and decodes the messages per channel topic.
+
+    A subscription the server refuses as "Unknown channel ID" for a channel it advertised is asked for again:
+    foxglove-sdk 0.30.3 advertises a channel added while a client is connected before it records it for that
+    client, so a subscription that comes back at once can be refused (about 1 in 5 runs on a loaded machine;
+    FoxgloveNode.__init__). The node avoids it for every channel it can create before it listens; a scan found
+    later (this test's /r1/scan: no scenario) is exposed to it."""
 
     def __init__(self) -> None:
         self.decoder = Decoder()
         self.channels: dict[int, str] = {}
         self.got: dict[str, list[Any]] = {}
         self.subscribed: set[int] = set()
+        self.refused: list[int] = []   # channel ids whose subscription the server refused (then asked again)
+        self.closed = False            # the server closed the connection
 
     def receive(self, ws: ClientConnection, done: Callable[[dict[str, list[Any]]], bool]) -> None:
-        """Handle what the server sends until done(got) or WAIT wall seconds have passed."""
+        """Handle what the server sends until done(got), the server closes or WAIT wall seconds have passed."""
         end = time.monotonic() + WAIT
         while time.monotonic() < end and not done(self.got):
             try:
                 frame = ws.recv(timeout=0.5)
             except TimeoutError:
                 continue
+            except ConnectionClosed:   # the launch ended: the assertions say what was missing
+                self.closed = True
+                return
             if isinstance(frame, str):
-                doc = json.loads(frame)
-                if doc['op'] == 'advertise':
-                    for channel in doc['channels']:
-                        self.decoder.add(channel)
-                        self.channels[channel['id']] = channel['topic']
-                    new = [cid for cid in self.channels if cid not in self.subscribed]
-                    ws.send(json.dumps({'op': 'subscribe',
-                                        'subscriptions': [{'id': cid, 'channelId': cid} for cid in new]}))
-                    self.subscribed.update(new)
+                self._control(ws, json.loads(frame))
                 continue
             # messageData: opcode 1, subscription id (u32), log time (u64), payload (little-endian); the
             # subscription ids are the channel ids here
             assert frame[0] == 1
             cid = int.from_bytes(frame[1:5], 'little')
             self.got.setdefault(self.channels[cid], []).append(self.decoder.decode(cid, frame[13:]))
+
+    def _control(self, ws: ClientConnection, doc: dict[str, Any]) -> None:
+        if doc['op'] == 'advertise':
+            for channel in doc['channels']:
+                self.decoder.add(channel)
+                self.channels[channel['id']] = channel['topic']
+            self._subscribe(ws, [cid for cid in self.channels if cid not in self.subscribed])
+        elif doc['op'] == 'unadvertise':
+            for cid in doc['channelIds']:
+                self.channels.pop(cid, None)
+                self.subscribed.discard(cid)
+        elif doc['op'] == 'status' and (refused := UNKNOWN_CHANNEL.fullmatch(doc['message'])):
+            cid = int(refused.group(1))
+            if cid in self.channels:
+                self.refused.append(cid)
+                self._subscribe(ws, [cid])
+
+    def _subscribe(self, ws: ClientConnection, ids: list[int]) -> None:
+        if ids:
+            ws.send(json.dumps({'op': 'subscribe', 'subscriptions': [{'id': cid, 'channelId': cid} for cid in ids]}))
+            self.subscribed.update(ids)
 
 
 def _circles(got: dict[str, list[Any]]) -> list[tuple[float, float, float]]:
@@ -220,6 +248,18 @@ def _circles(got: dict[str, list[Any]]) -> list[tuple[float, float, float]]:
     if not updates:
         return []
     return [(c.pose.position.x, c.pose.position.y, c.size.x) for c in updates[-1].entities[0].cylinders]
+
+
+def _placed(got: dict[str, list[Any]]) -> tuple[Any, Any] | None:
+    """The newest robot entity that has a transform of the same stamp, and that transform (None: none yet)."""
+    transforms = {(t.timestamp.seconds, t.timestamp.nanos): t for update in got.get('/tf', [])
+                  for t in update.transforms}
+    for update in reversed(got.get('/fastep/robots', [])):
+        for entity in update.entities:
+            transform = transforms.get((entity.timestamp.seconds, entity.timestamp.nanos))
+            if transform is not None:
+                return entity, transform
+    return None
 
 
 def _complete(got: dict[str, list[Any]]) -> bool:
@@ -360,8 +400,9 @@ def test_fastep_launch_serves_the_live_run_and_shows_its_progress(tmp_path: Path
                 assert proc.poll() is None and time.monotonic() < end, 'fastep-foxglove never listened'
                 time.sleep(0.2)
         with ws:
-            client.receive(ws, lambda got: bool(got.get('/fastep/obstacles')) and bool(got.get('/tf'))
-                           and bool(got.get('/fastep/robots')))
+            # Until the robot and its transform of one stamp have come: the two channels are separate
+            # subscriptions, so the first robot update can come without its transform, or the other way round.
+            client.receive(ws, lambda got: bool(got.get('/fastep/obstacles')) and _placed(got) is not None)
         out, err = proc.communicate(timeout=120)
     finally:
         stop_process(proc)
@@ -371,9 +412,9 @@ def test_fastep_launch_serves_the_live_run_and_shows_its_progress(tmp_path: Path
     assert 'x real time' in err.splitlines()[-1] and 'Traceback' not in err, err
     assert {'/fastep/obstacles', '/fastep/robots', '/tf'} <= set(client.channels.values())
     assert _circles(client.got) == [(10.0, 10.0, 3.0)]
-    entity = client.got['/fastep/robots'][-1].entities[0]
-    transform = next(t for update in client.got['/tf'] for t in update.transforms
-                     if (t.timestamp.seconds, t.timestamp.nanos) == (entity.timestamp.seconds, entity.timestamp.nanos))
+    placed = _placed(client.got)
+    assert placed is not None, ({topic: len(messages) for topic, messages in client.got.items()}, client.closed)
+    entity, transform = placed
     assert entity.id == 'r1' and transform.child_frame_id == 'r1/base_link'
     disc = entity.cylinders[0]
     assert (disc.pose.position.x, disc.pose.position.y) == (transform.translation.x, transform.translation.y)
