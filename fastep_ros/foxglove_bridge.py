@@ -19,16 +19,18 @@ WebSocket -> ws://localhost:8765. Channels (protobuf, the foxglove schemas):
 
 Robots are discovered from the graph as fastep-record does: every `/<name>/odom` topic of type nav_msgs/Odometry
 (looked for every `discovery_period` wall seconds); trailer_pose and scan are taken when they appear. Sizes come
-from `scenario` when given (radius per robot), else `robot_radius`.
+from `scenario` when given (radius per robot), else `robot_radius`; the scenario's robots with a `sensor` have
+their scan channels from the start (a channel added while a viewer is connected can be refused to it under load,
+a foxglove-sdk race: see FoxgloveNode.__init__; such a viewer gets it on its next connection).
 
 Cheap by construction: the ROS subscriptions (keep-last 1) belong to an inner node that no executor spins, so
 a message arriving costs no Python wake-up (about 1 ms of CPU each in rclpy); every 1 / scene_rate_hz wall
 seconds the node takes the newest message of each topic and, only if a Foxglove client listens, sends one
-SceneUpdate per channel and one FrameTransforms for all robots. 16 robots at 50 Hz odometry thus cost
-scene_rate_hz x 16 takes per second, not 800 callbacks (docs/benchmarks.md, "Live view"). Obstacles, plans and
-waypoints are sent when they change, and all of them again when a client subscribes (the protocol keeps
-nothing for late joiners). The node runs on wall time (no /clock subscription: it is not part of the lock step);
-messages carry the stamps of the ROS messages they come from (simulated time under fastep-launch).
+SceneUpdate per channel and one FrameTransforms (of the robots whose drawing changed). 16 robots at 50 Hz
+odometry thus cost scene_rate_hz x 16 takes per second, not 800 callbacks (docs/benchmarks.md, "Live view").
+Obstacles, plans and waypoints are sent when they change, and all of them again when a client subscribes (the
+protocol keeps nothing for late joiners). The node runs on wall time (no /clock subscription: it is not part of
+the lock step); messages carry the stamps of the ROS messages they come from (simulated time under fastep-launch).
 
 A port that cannot be bound (in use, not allowed) or a bad parameter: one line on stderr, exit 2.
 """
@@ -88,7 +90,8 @@ PLANS_CHANNEL = '/fastep/plans'
 WAYPOINTS_CHANNEL = '/fastep/waypoints'
 TF_CHANNEL = '/tf'
 CHANNELS = (OBSTACLES_CHANNEL, ROBOTS_CHANNEL, PLANS_CHANNEL, WAYPOINTS_CHANNEL, TF_CHANNEL)
-"""The channels served from the start; `/<name>/scan` ones are added as scans appear."""
+"""The channels served from the start, with the `/<name>/scan` of each robot `scenario` gives a scanner; the
+`/<name>/scan` of other robots are added as their scans appear."""
 
 SCAN = 'scan'   # a robot's laser scan (sensor_msgs/LaserScan), published by plants of robots with a sensor
 SCAN_TYPE = 'sensor_msgs/msg/LaserScan'
@@ -143,6 +146,14 @@ class RobotView:
     scan: Any = None                                      # the newest sensor_msgs/LaserScan not sent yet
     scan_channel: LaserScanChannel | None = None
 
+    def placement(self) -> tuple[Any, ...]:
+        """What its transform shows: the odometry pose and stamp."""
+        return self.stamp_ns, self.pose
+
+    def drawn(self) -> tuple[Any, ...]:
+        """What its scene entity shows: pose, stamp, motion and trailer (its radius and colour never change)."""
+        return self.stamp_ns, self.pose, self.velocity, self.trailer
+
 
 class FoxgloveNode(Node):
     """Serves the fastep topics of the live graph to Foxglove clients as scene updates and transforms."""
@@ -168,7 +179,7 @@ class FoxgloveNode(Node):
         check_range('discovery_period', discovery_period, *PERIOD_RANGE, ' s')
         if not self.default_radius > 0.0:
             raise StartupError(f'parameter robot_radius must be > 0, got {self.default_radius:g}')
-        self.radii = self._scenario_radii(scenario)
+        self.radii, scanners = self._scenario_robots(scenario)
 
         # The inbox: subscriptions nobody spins (see the module docstring); its own name, no remapping.
         self.inbox = Node(f'{self.get_name()}_inbox', context=self.context, use_global_arguments=False,
@@ -177,23 +188,32 @@ class FoxgloveNode(Node):
                                                             interface.LATCHED)
         self.robots: dict[str, RobotView] = {}
 
-        self.fox_context = foxglove.Context()
-        self.resend = threading.Event()   # set from the server's thread when a client subscribes
-        try:
-            self.server = foxglove.start_server(name='fastep', host=host, port=port, context=self.fox_context,
-                                                server_listener=_Listener(self.resend))
-        except (RuntimeError, ValueError, OverflowError) as exc:
-            self.inbox.destroy_node()
-            raise StartupError(f'cannot serve Foxglove on {host}:{port}: {exc}'.splitlines()[0]) from None
-        ctx = self.fox_context
+        # Every channel known now exists before the server listens, so a client is told of it as it connects.
+        # A channel added while a client is connected is advertised to that client before the server records it
+        # for the client (foxglove-sdk 0.30.3): a subscription answered at once can be refused ("Unknown channel
+        # ID", about 1 in 5 on a loaded machine) and the client then never gets it. Hence the scenario's scanners
+        # get their channels here; only the scans of robots the scenario does not name are added later.
+        ctx = self.fox_context = foxglove.Context()
         self.obstacles_channel = SceneUpdateChannel(OBSTACLES_CHANNEL, context=ctx)
         self.robots_channel = SceneUpdateChannel(ROBOTS_CHANNEL, context=ctx)
         self.plans_channel = SceneUpdateChannel(PLANS_CHANNEL, context=ctx)
         self.waypoints_channel = SceneUpdateChannel(WAYPOINTS_CHANNEL, context=ctx)
         self.tf_channel = FrameTransformsChannel(TF_CHANNEL, context=ctx)
+        self.scan_channels = {name: LaserScanChannel(interface.robot_topic(name, SCAN), context=ctx)
+                              for name in scanners}
         self.obstacles: SceneEntity | None = None
         self.obstacles_changed = False
-        self.last_robot_stamps: dict[str, int] = {}
+        # What each client-facing view last showed of each robot: a robot is sent again when that changes.
+        self.sent_robots: dict[str, tuple[Any, ...]] = {}
+        self.sent_transforms: dict[str, tuple[Any, ...]] = {}
+
+        self.resend = threading.Event()   # set from the server's thread when a client subscribes
+        try:
+            self.server = foxglove.start_server(name='fastep', host=host, port=port, context=ctx,
+                                                server_listener=_Listener(self.resend))
+        except (RuntimeError, ValueError, OverflowError) as exc:
+            self.inbox.destroy_node()
+            raise StartupError(f'cannot serve Foxglove on {host}:{port}: {exc}'.splitlines()[0]) from None
 
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.discovery_timer = self.create_timer(discovery_period, self.discover, clock=steady)
@@ -206,14 +226,16 @@ class FoxgloveNode(Node):
         """The port the server listens on (the one chosen when the parameter was 0)."""
         return int(self.server.port)
 
-    def _scenario_radii(self, source: str) -> dict[str, float]:
+    def _scenario_robots(self, source: str) -> tuple[dict[str, float], list[str]]:
+        """The radius of each robot the scenario names, and the names of those with a laser scanner."""
         if not source:
-            return {}
+            return {}, []
         from fastep_core.scenario import load_scenario
         try:
-            return {r.name: float(r.radius) for r in load_scenario(source).robots}
+            robots = load_scenario(source).robots
         except FastepError as exc:
             raise StartupError(f'parameter scenario: {exc}') from None
+        return {r.name: float(r.radius) for r in robots}, [r.name for r in robots if r.sensor is not None]
 
     # ------------------------------------------------------------------------------------------- graph
     def discover(self) -> None:
@@ -241,7 +263,9 @@ class FoxgloveNode(Node):
             scan = interface.robot_topic(name, SCAN)
             if SCAN not in robot.subs and SCAN_TYPE in topics.get(scan, []):
                 robot.subs[SCAN] = self.inbox.create_subscription(RosLaserScan, scan, _ignore, NEWEST)
-                robot.scan_channel = LaserScanChannel(scan, context=self.fox_context)
+                robot.scan_channel = self.scan_channels.get(name)
+                if robot.scan_channel is None:
+                    robot.scan_channel = self.scan_channels[name] = LaserScanChannel(scan, context=self.fox_context)
 
     @staticmethod
     def _qos(relative: str) -> QoSProfile:
@@ -276,17 +300,23 @@ class FoxgloveNode(Node):
                     if math.isfinite(yaw):
                         robot.pose, robot.stamp_ns = (x, y, yaw), _header_ns(odom.header.stamp)
             plan = self._take(robot.subs[interface.PLAN])
-            if plan is not None:
+            if plan is not None:   # a planner publishes its plan on every replan: sent only when it differs
                 try:
-                    robot.plan, robot.plan_changed = convert.path_to_waypoints(plan), True
+                    waypoints = convert.path_to_waypoints(plan)
                 except ValueError:
                     pass
+                else:
+                    robot.plan_changed |= waypoints != robot.plan
+                    robot.plan = waypoints
             waypoint = self._take(robot.subs[interface.WAYPOINT])
             if waypoint is not None:
                 try:
-                    robot.waypoint, robot.waypoint_changed = convert.pose_stamped_to_point(waypoint), True
+                    point = convert.pose_stamped_to_point(waypoint)
                 except ValueError:
                     pass
+                else:
+                    robot.waypoint_changed |= point != robot.waypoint
+                    robot.waypoint = point
             if interface.TRAILER_POSE in robot.subs:
                 trailer = self._take(robot.subs[interface.TRAILER_POSE])
                 if trailer is not None:
@@ -333,11 +363,18 @@ class FoxgloveNode(Node):
             self.obstacles_channel.log(SceneUpdate(entities=[self.obstacles]))
             self.obstacles_changed = False
         placed = [r for r in self.robots.values() if r.pose is not None]
-        moved = [r for r in placed if resend or self.last_robot_stamps.get(r.name) != r.stamp_ns]
-        if moved and (self.robots_channel.has_sinks() or self.tf_channel.has_sinks()):
-            self.robots_channel.log(SceneUpdate(entities=[self._robot_entity(r) for r in moved]))
-            self.tf_channel.log(FrameTransforms(transforms=[self._transform(r) for r in moved]))
-            self.last_robot_stamps.update((r.name, r.stamp_ns) for r in moved)
+        # Each view follows what it draws, not the odometry stamp: a trailer pose taken after the robot was
+        # sent changes the drawing under the same stamp (and a paused clock keeps stamps still).
+        if self.robots_channel.has_sinks():
+            changed = [r for r in placed if resend or self.sent_robots.get(r.name) != r.drawn()]
+            if changed:
+                self.robots_channel.log(SceneUpdate(entities=[self._robot_entity(r) for r in changed]))
+                self.sent_robots.update((r.name, r.drawn()) for r in changed)
+        if self.tf_channel.has_sinks():
+            changed = [r for r in placed if resend or self.sent_transforms.get(r.name) != r.placement()]
+            if changed:
+                self.tf_channel.log(FrameTransforms(transforms=[self._transform(r) for r in changed]))
+                self.sent_transforms.update((r.name, r.placement()) for r in changed)
         plans = [r for r in self.robots.values() if r.plan is not None and (r.plan_changed or resend)]
         if plans and self.plans_channel.has_sinks():
             self.plans_channel.log(SceneUpdate(entities=[self._plan_entity(r) for r in plans]))
