@@ -4,8 +4,14 @@
 
 Subscribes `cmd_vel` (geometry_msgs/Twist, or TwistStamped when `use_stamped_cmd_vel` is true): for a point
 mass linear.x/y are the map-frame velocity (vx, vy); for a tractor-trailer linear.x is the speed v and
-angular.z the yaw rate omega. Publishes `odom` (nav_msgs/Odometry in the `map` frame, child `<ns>/base_link`)
-and, for tractor-trailers, `trailer_pose` (geometry_msgs/PoseStamped, the trailer axle, yaw theta1).
+angular.z the yaw rate omega. Publishes `odom` (nav_msgs/Odometry: the pose of `<ns>/base_link` in `<ns>/odom`,
+REP-105, root namespace `odom` -> `base_link`; its twist in base_link) and, for tractor-trailers, `trailer_pose`
+(geometry_msgs/PoseStamped in `<ns>/odom`, the trailer axle, yaw theta1). A point mass has no heading: its yaw is
+0, so base_link's axes stay parallel to odom's and its cmd_vel and odometry twist are odom-frame velocities too.
+A simulated robot's odometry does not drift: map -> odom is the identity, published on /tf_static (unless
+publish_map_to_odom is false, e.g. when a localization node publishes it); odom -> base_link goes on /tf with
+every odometry message (and odom -> `<ns>/trailer_link`). TF is published only where tf2_msgs is installed (a
+full ROS install; the log says so once when it is not): fastep_ros.frames.
 
 Time: the model is integrated in fixed steps of 1 / rate_hz seconds of the node's clock (simulated time with
 use_sim_time, wall time otherwise) up to "now", on a timer and before each new command takes effect (a
@@ -37,7 +43,8 @@ from rclpy.node import Node
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.scenario import MODELS
 from fastep_ros.common import RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
-from msg_tools import convert, interface
+from fastep_ros.frames import TfBroadcaster
+from msg_tools import convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlantNode', 'main']
@@ -66,8 +73,11 @@ class PlantNode(Node):
                                    'was sent (its stamp; for a Twist on wall time its DDS source time): stop '
                                    '(zero velocity) when no newer one came (s, node clock)', constraints='> 0')
         stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist')
-        self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of the odometry pose (the simulated '
-                                'pose is the map pose)')
+        frame_id = declare(self, 'frame_id', '', 'frame of the odometry pose; empty: <ns>/odom (REP-105; root '
+                           'namespace: odom)')
+        self.publish_map_to_odom = declare(self, 'publish_map_to_odom', True, 'publish map -> odom as the identity on '
+                                           '/tf_static (simulated odometry does not drift); false when a '
+                                           'localization node publishes it')
 
         if self.model_name not in MODELS:
             raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model_name!r}')
@@ -89,8 +99,9 @@ class PlantNode(Node):
             raise StartupError(f'parameter start must have {size} values for {self.model_name}, got {start}')
         self.state = np.array(start, dtype=float)
 
-        ns = self.get_namespace().strip('/')
-        self.child_frame_id = f'{ns}/base_link' if ns else 'base_link'
+        self.frame_id = frame_id or frames.odom_frame(self.get_namespace())
+        self.child_frame_id = frames.base_frame(self.get_namespace())
+        self.trailer_frame_id = frames.trailer_frame(self.get_namespace())
         self.step = 1.0 / self.rate_hz
         self.tick: int | None = None           # integrated time = tick * step
         self.published_tick: int | None = None  # tick of the last odometry published
@@ -106,6 +117,9 @@ class PlantNode(Node):
         take_cmd_vel: Any = self._take_cmd_vel
         self.cmd_sub = self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, take_cmd_vel,
                                                 LATEST)
+        self.tf = TfBroadcaster(self)
+        if self.publish_map_to_odom and self.frame_id != interface.MAP_FRAME:
+            self.tf.send_static([frames.static_map_to_odom(interface.MAP_FRAME, self.frame_id)])
         self.timer = self.create_timer(self.step, self.on_timer)
         self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick,
                                                clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -216,10 +230,14 @@ class PlantNode(Node):
             self.get_logger().error(f'not publishing odometry: {exc}', throttle_duration_sec=5.0)
             return
         self.odom_pub.publish(odom)
+        trailer = None
         if self.trailer_pub is not None:
             assert isinstance(self.model, TractorTrailer)
-            self.trailer_pub.publish(convert.trailer_pose(self.state, self.model.trailer_length,
-                                                          self.model.hitch_offset, stamp, self.frame_id))
+            trailer = convert.trailer_pose(self.state, self.model.trailer_length, self.model.hitch_offset, stamp,
+                                           self.frame_id)
+            self.trailer_pub.publish(trailer)
+        if self.tf.available:
+            self.tf.send(frames.odometry_transforms(odom, trailer, self.trailer_frame_id))
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -1,9 +1,11 @@
 """Pure conversions between fastep_core types and ROS 2 messages (no node, no DDS needed).
 
 Conventions (DESIGN.md "ROS 2 interface", REP-103/105):
-- poses are in the `map` frame (the simulated pose *is* the map pose; there is no odometry drift);
-- a point mass has yaw 0, so its `base_link` axes are the map axes and its twist (vx, vy) is both the
-  child-frame and the map-frame velocity; its command is a Twist with linear.x = vx, linear.y = vy (map frame);
+- goals, waypoints, plans and obstacles are in the `map` frame; odometry is in the robot's odom frame (REP-105;
+  map -> odom is the identity in simulation, msg_tools.frames), trailer poses too; the functions take the
+  frame names they are given;
+- a point mass has yaw 0, so its `base_link` axes are parallel to odom's and its twist (vx, vy) is both the
+  child-frame and the odom-frame velocity; its command is a Twist with linear.x = vx, linear.y = vy (body frame);
 - a tractor-trailer's yaw is the tractor heading theta0; its command is (v, omega) = (linear.x, angular.z);
   its odometry twist is the reference point's velocity in the tractor frame: linear.x = v,
   linear.y = L * omega / 2 (the mid-axle point slides sideways while turning, eq. 13) and angular.z = omega;

@@ -235,7 +235,7 @@ def test_plant_tractor_trailer_publishes_consistent_odometry(context: Any) -> No
         node.publish()
         odom = seen[-1]
         assert convert.stamp_to_seconds(odom.header.stamp) == pytest.approx(1.4)
-        assert odom.header.frame_id == 'map' and odom.child_frame_id == 'base_link'
+        assert odom.header.frame_id == 'odom' and odom.child_frame_id == 'base_link'   # REP-105, root namespace
         assert convert.quaternion_to_yaw(odom.pose.pose.orientation) == pytest.approx(node.state[2])
         expected = node.model.velocity(node.state, np.array([1.0, 0.2]))
         assert convert.odometry_velocity(odom) == pytest.approx(tuple(expected))
