@@ -4,6 +4,7 @@ process with their callbacks called directly."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 from typing import Any
 
 import numpy as np
@@ -204,3 +205,19 @@ def test_planner_turns_a_tractor_trailers_headings_by_map_to_odom(context: Any) 
         assert state == pytest.approx([5.0, 5.0, 0.75, 1.0], abs=1e-6)
     finally:
         node.destroy_node()
+
+
+def test_recorder_tf_parameter_derives_records_the_graphs_or_leaves_tf_out(context: Any, tmp_path: Path) -> None:
+    from fastep_ros.common import StartupError
+    from fastep_ros.recorder import RecorderNode
+
+    for mode, derives, graph in (('derive', True, False), ('graph', False, True), ('none', False, False)):
+        node = make(RecorderNode, context, output=str(tmp_path / f'{mode}.mcap'), tf=mode)
+        try:
+            assert (node.tf_from_odometry is not None, node.wants('/tf'), node.wants('/tf_static')) == \
+                (derives, graph, graph)
+            assert node.wants('/r1/odom')
+        finally:
+            node.destroy_node()
+    with pytest.raises(StartupError, match='parameter tf must be derive, graph or none'):
+        make(RecorderNode, context, output=str(tmp_path / 'bad.mcap'), tf='tf2')
