@@ -344,6 +344,8 @@ class Monitor:
         if robot.spec.model == 'tractor_trailer':
             yaw = self.convert.quaternion_to_yaw(msg.pose.pose.orientation)
             robot.rows.append([t, x, y, yaw, robot.trailer])
+        elif robot.spec.model == 'diff_drive':   # rows [t, x, y, theta], as fastep-sim's
+            robot.rows.append([t, x, y, self.convert.quaternion_to_yaw(msg.pose.pose.orientation)])
         else:
             robot.rows.append([t, x, y])
 

@@ -9,7 +9,9 @@ Conventions (DESIGN.md "ROS 2 interface", REP-103/105):
 - a tractor-trailer's yaw is the tractor heading theta0; its command is (v, omega) = (linear.x, angular.z);
   its odometry twist is the reference point's velocity in the tractor frame: linear.x = v,
   linear.y = L * omega / 2 (the mid-axle point slides sideways while turning, eq. 13) and angular.z = omega;
-  the trailer heading theta1 travels on `trailer_pose` (the trailer axle point, yaw theta1).
+  the trailer heading theta1 travels on `trailer_pose` (the trailer axle point, yaw theta1);
+- a diff-drive (unicycle) robot's state is (x, y, theta), its command (v, omega) = (linear.x, angular.z) in its
+  body frame, its odometry twist linear.x = v, angular.z = omega.
 
 Functions that read messages raise ValueError (with a one-line reason) for values that are not finite or
 malformed; the nodes turn that into a status message instead of crashing.
@@ -32,7 +34,8 @@ from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
 from fastep_core.world import World
 
 __all__ = [
-    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'command_to_twist', 'grid_resolution', 'grid_shape',
+    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'SPEED_TURN_MODELS', 'STATE_SIZES', 'command_to_twist',
+    'grid_resolution', 'grid_shape',
     'diagnostic_to_dict', 'make_status', 'marker_array_to_obstacles',
     'obstacles_to_marker_array', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
     'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point',
@@ -42,6 +45,9 @@ __all__ = [
 ]
 
 CIRCLES_NS = 'circles'
+SPEED_TURN_MODELS = frozenset({'tractor_trailer', 'diff_drive'})
+"""Models commanded by (v, omega) = (linear.x, angular.z); a point mass by (vx, vy) = (linear.x, linear.y)."""
+STATE_SIZES = {'point_mass': 2, 'diff_drive': 3, 'tractor_trailer': 4}
 SEGMENTS_NS = 'segments'
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR,
           'stale': DiagnosticStatus.STALE}
@@ -129,13 +135,14 @@ def path_to_waypoints(msg: Path) -> list[tuple[float, float]]:
 def state_to_odometry(state: Vector, stamp: Time | None = None, *, child_frame_id: str = 'base_link',
                       frame_id: str = 'map', linear: Sequence[float] = (0.0, 0.0),
                       angular: float = 0.0) -> Odometry:
-    """Odometry of a model state: (x, y) (point mass, yaw 0) or (x, y, theta0, theta1) (yaw theta0).
+    """Odometry of a model state: (x, y) (point mass, yaw 0), (x, y, theta) (diff drive) or (x, y, theta0, theta1)
+    (tractor-trailer, yaw theta0).
 
     `linear` (x, y) and `angular` (z) are the twist in the child frame (see the module docstring).
     """
     s = [float(v) for v in state]
-    if len(s) not in (2, 4):
-        raise ValueError(f'state must have 2 or 4 values, got {len(s)}')
+    if len(s) not in (2, 3, 4):
+        raise ValueError(f'state must have 2, 3 or 4 values, got {len(s)}')
     _finite(s, 'state')
     _finite((*linear, angular), 'velocity')
     msg = Odometry()
@@ -144,7 +151,7 @@ def state_to_odometry(state: Vector, stamp: Time | None = None, *, child_frame_i
         msg.header.stamp = stamp
     msg.child_frame_id = child_frame_id
     msg.pose.pose.position = Point(x=s[0], y=s[1], z=0.0)
-    msg.pose.pose.orientation = yaw_to_quaternion(s[2] if len(s) == 4 else 0.0)
+    msg.pose.pose.orientation = yaw_to_quaternion(s[2] if len(s) > 2 else 0.0)
     msg.twist.twist.linear.x = float(linear[0])
     msg.twist.twist.linear.y = float(linear[1])
     msg.twist.twist.angular.z = float(angular)
@@ -159,13 +166,16 @@ def odometry_position(msg: Odometry) -> tuple[float, float]:
 
 
 def odometry_to_state(msg: Odometry, model: str = 'point_mass', trailer: float | None = None) -> np.ndarray:
-    """Model state from odometry: (x, y) for a point mass; (x, y, yaw, trailer) for a tractor-trailer.
+    """Model state from odometry: (x, y) for a point mass; (x, y, yaw) for a diff drive; (x, y, yaw, trailer) for
+    a tractor-trailer.
 
     `trailer` is theta1 (from `trailer_pose`), required for tractor-trailers. ValueError if not finite.
     """
     x, y = odometry_position(msg)
     if model == 'point_mass':
         return np.array([x, y])
+    if model == 'diff_drive':
+        return np.array([x, y, quaternion_to_yaw(msg.pose.pose.orientation)])
     if model == 'tractor_trailer':
         if trailer is None:
             raise ValueError('tractor-trailer state needs the trailer heading (trailer_pose)')
@@ -204,11 +214,11 @@ def trailer_yaw(msg: PoseStamped) -> float:
 # ------------------------------------------------------------------------------------------------- commands
 
 def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
-    """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer (v, omega) -> linear.x,
-    angular.z."""
+    """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer and diff drive (v, omega) ->
+    linear.x, angular.z."""
     a, b = float(command[0]), float(command[1])
     msg = Twist()
-    if model == 'tractor_trailer':
+    if model in SPEED_TURN_MODELS:
         msg.linear.x, msg.angular.z = a, b
     else:
         msg.linear.x, msg.linear.y = a, b
@@ -218,7 +228,7 @@ def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
 def twist_to_command(msg: Twist | TwistStamped, model: str = 'point_mass') -> np.ndarray:
     """Inverse of command_to_twist (TwistStamped accepted); ValueError if the used fields are not finite."""
     twist = msg.twist if isinstance(msg, TwistStamped) else msg
-    if model == 'tractor_trailer':
+    if model in SPEED_TURN_MODELS:
         cmd = (float(twist.linear.x), float(twist.angular.z))
     else:
         cmd = (float(twist.linear.x), float(twist.linear.y))

@@ -263,7 +263,7 @@ class Velocities:
 
     name: str
     source: str            # the topic they come from: cmd_vel or odom
-    model: str             # point_mass: vx, vy and the speed; tractor_trailer: v and omega
+    model: str             # point_mass: vx, vy and the speed; tractor_trailer, diff_drive: v and omega
     rows: FloatArray
 
 
@@ -275,7 +275,7 @@ def velocity_figure(robots: Sequence[Velocities], text: str) -> Figure:
         data = _thin(np.asarray(robot.rows, dtype=float).reshape(-1, 4))
         if len(data):
             t = data[:, 0]
-            if robot.model == 'tractor_trailer':
+            if robot.model in ('tractor_trailer', 'diff_drive'):   # commanded by (v, omega)
                 ax.plot(t, data[:, 1], lw=1.1, label='v (m/s)')
                 ax.plot(t, data[:, 3], lw=1.1, label='omega (rad/s)')
             else:

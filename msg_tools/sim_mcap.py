@@ -124,6 +124,8 @@ class SimRecorder:
             v, omega = float(command[0]), float(command[1])
             linear: tuple[float, float] = (v, 0.5 * spec.length * omega)
             angular = omega
+        elif spec.model == 'diff_drive':   # (v, omega) of the base, in base_link
+            linear, angular = (float(command[0]), 0.0), float(command[1])
         else:
             linear, angular = (float(command[0]), float(command[1])), 0.0
         odom_frame = frames.odom_frame(spec.name)

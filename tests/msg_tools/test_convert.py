@@ -98,7 +98,13 @@ def test_state_to_odometry_rejects_nan_and_bad_sizes() -> None:
     with pytest.raises(ValueError):
         convert.state_to_odometry([0.0, 0.0], linear=(math.inf, 0.0))
     with pytest.raises(ValueError):
-        convert.state_to_odometry([0.0, 0.0, 0.0])
+        convert.state_to_odometry([0.0, 0.0, 0.0, 0.0, 0.0])
+
+
+def test_diff_drive_odometry_round_trip() -> None:
+    msg = convert.state_to_odometry([1.0, -2.0, 0.75], child_frame_id='d1/base_link', linear=(0.4, 0.0), angular=0.3)
+    np.testing.assert_allclose(convert.odometry_to_state(msg, 'diff_drive'), [1.0, -2.0, 0.75])
+    assert convert.odometry_velocity(msg) == pytest.approx((0.4 * math.cos(0.75), 0.4 * math.sin(0.75)))
 
 
 def test_trailer_pose_geometry() -> None:
@@ -121,6 +127,7 @@ def test_pose_and_path_round_trip() -> None:
 @pytest.mark.parametrize('model,command,fields', [
     ('point_mass', (0.3, -0.7), ('linear.x', 'linear.y')),
     ('tractor_trailer', (0.9, 0.2), ('linear.x', 'angular.z')),
+    ('diff_drive', (0.4, -0.6), ('linear.x', 'angular.z')),
 ])
 def test_command_twist_round_trip(model: str, command: tuple[float, float], fields: tuple[str, str]) -> None:
     twist = convert.command_to_twist(command, model)
