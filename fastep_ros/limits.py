@@ -4,11 +4,16 @@ launcher checks its command line with them before it starts anything). docs/robu
 from __future__ import annotations
 
 from fastep_core.dynamic_world import dynamic_feature
-from fastep_core.planning.algorithms import MISSING_DIFF_DRIVE
-from fastep_core.scenario import MODELS, Scenario
+from fastep_core.scenario import Scenario
 
 __all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ROBOT_NAME_MAX', 'RTF_RANGE', 'STEP_RANGE',
-           'graph_problem', 'robot_name_problem']
+           'GRAPH_MODELS', 'MISSING_DIFF_DRIVE', 'graph_problem', 'robot_name_problem']
+
+GRAPH_MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer')
+"""Robot models the ROS plant and planner nodes run (fastep-sim runs diff_drive too)."""
+MISSING_DIFF_DRIVE = ('robot model diff_drive does not run on the ROS graph yet (issue 14, item 1): '
+                      'use fastep-sim')
+"""Why the graph refuses a diff_drive robot for now (the model and controller are in fastep_core)."""
 
 RATE_RANGE = (0.1, 10_000.0)
 """Timer rates a node accepts (Hz): the planners' 1 / dt range (PlannerParams.dt is [1e-4, 10] s). Beyond it rclpy's
@@ -59,6 +64,6 @@ def graph_problem(scenario: Scenario, robots: bool = True) -> str:
     if feature:
         return f'{feature}: moving, unknown and misplaced obstacles do not run on the ROS graph yet; use fastep-sim'
     for i, robot in enumerate(scenario.robots):
-        if robots and robot.model not in MODELS:
+        if robots and robot.model not in GRAPH_MODELS:
             return f'robots[{i}] ({robot.name}): {MISSING_DIFF_DRIVE}'
     return ''
