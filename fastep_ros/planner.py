@@ -113,8 +113,8 @@ class PlannerNode(Node):
         self.algorithm = declare(self, 'algorithm', DEFAULT_ALGORITHM,
                                  'planner: ' + ', '.join(f'{a} ({algorithm_name(a)})' for a in ALGORITHMS),
                                  constraints=' | '.join(ALGORITHMS))
-        self.model = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
-                             constraints='point_mass | tractor_trailer')
+        self.model = declare(self, 'model', 'point_mass', 'robot model: ' + ' | '.join(MODELS),
+                             constraints=' | '.join(MODELS))
         self.radius = declare(self, 'robot_radius', 0.5, 'safety radius: centre-to-obstacle-surface distance '
                               'that counts as collision (m)', constraints='> 0')
         length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)')

@@ -1,13 +1,16 @@
 """fastep-plant: one simulated robot. It integrates the robot's kinematic model and publishes its odometry.
 
     fastep-plant --ros-args -r __ns:=/r1 -p model:=point_mass -p start:=[5.0,25.0] [-p use_sim_time:=true]
+    fastep-plant --ros-args -r __ns:=/d1 -p model:=diff_drive -p start:=[5.0,25.0,1.57]
 
-Subscribes `cmd_vel` (geometry_msgs/Twist, or TwistStamped when `use_stamped_cmd_vel` is true): for a point
-mass linear.x/y are the map-frame velocity (vx, vy); for a tractor-trailer linear.x is the speed v and
-angular.z the yaw rate omega. Publishes `odom` (nav_msgs/Odometry: the pose of `<ns>/base_link` in `<ns>/odom`,
-REP-105, root namespace `odom` -> `base_link`; its twist in base_link) and, for tractor-trailers, `trailer_pose`
-(geometry_msgs/PoseStamped in `<ns>/odom`, the trailer axle, yaw theta1). A point mass has no heading: its yaw is
-0, so base_link's axes stay parallel to odom's and its cmd_vel and odometry twist are odom-frame velocities too.
+Subscribes `cmd_vel` (geometry_msgs/Twist, or TwistStamped when `use_stamped_cmd_vel` is true), in the body
+frame: for a point mass linear.x/y are the velocity (vx, vy); for a tractor-trailer and a diff-drive base
+linear.x is the speed v and angular.z the yaw rate omega (a diff-drive base saturates them at max_speed and
+max_turn_rate, as ros2_control's diff_drive_controller does). Publishes `odom` (nav_msgs/Odometry: the pose of
+`<ns>/base_link` in `<ns>/odom`, REP-105, root namespace `odom` -> `base_link`; its twist in base_link) and,
+for tractor-trailers, `trailer_pose` (geometry_msgs/PoseStamped in `<ns>/odom`, the trailer axle, yaw theta1).
+A point mass has no heading: its yaw is 0, so base_link's axes stay parallel to odom's and its cmd_vel and
+odometry twist are odom-frame velocities too.
 A simulated robot's odometry does not drift: map -> odom is the identity, published on /tf_static (unless
 publish_map_to_odom is false, e.g. when a localization node publishes it); odom -> base_link goes on /tf with
 every odometry message (and odom -> `<ns>/trailer_link`). TF is published only where tf2_msgs is installed (a
@@ -41,6 +44,8 @@ from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.node import Node
 
 from fastep_core.kinematics import PointMass, TractorTrailer
+from fastep_core.kinematics.diff_drive import DiffDrive
+from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_ros.common import RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from fastep_ros.frames import TfBroadcaster
@@ -59,13 +64,19 @@ class PlantNode(Node):
     def __init__(self, node_name: str = 'plant', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         guard_clock(self)   # a bad /clock message is ignored, never the end of the node
-        self.model_name = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
-                                  constraints='point_mass | tractor_trailer')
-        start = declare(self, 'start', None, 'start state: [x, y] (point_mass) or [x, y, theta0, theta1] '
-                        '(tractor_trailer; metres, radians, map frame)')
+        self.model_name = declare(self, 'model', 'point_mass', 'robot model: ' + ' | '.join(MODELS),
+                                  constraints=' | '.join(MODELS))
+        start = declare(self, 'start', None, 'start state: [x, y] (point_mass), [x, y, theta] (diff_drive) or '
+                        '[x, y, theta0, theta1] (tractor_trailer; metres, radians, map frame = odom frame at the '
+                        'start)')
         length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)')
         trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)')
         hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
+        base = PlannerParams()
+        max_speed = declare(self, 'max_speed', base.max_speed, 'diff_drive: the base\'s speed limit |v| (m/s); 0 '
+                            'means unlimited', constraints='>= 0')
+        max_turn_rate = declare(self, 'max_turn_rate', base.max_turn_rate, 'diff_drive: the base\'s turn-rate '
+                                'limit |omega| (rad/s); 0 means unlimited', constraints='>= 0')
         self.rate_hz = declare(self, 'rate_hz', 50.0, 'integration rate: fixed steps of 1/rate_hz s of the '
                                'node clock (simulated time with use_sim_time)',
                                constraints=f'range [{RATE_RANGE[0]:g}, {RATE_RANGE[1]:g}]')
@@ -84,10 +95,15 @@ class PlantNode(Node):
         check_range('rate_hz', self.rate_hz, *RATE_RANGE, ' Hz')
         if self.cmd_timeout <= 0.0:
             raise StartupError(f'parameter cmd_timeout must be > 0, got {self.cmd_timeout:g}')
-        self.model: PointMass | TractorTrailer
+        self.model: PointMass | TractorTrailer | DiffDrive
         if self.model_name == 'point_mass':
             self.model = PointMass()
             size = 2
+        elif self.model_name == 'diff_drive':
+            if max_speed < 0.0 or max_turn_rate < 0.0:
+                raise StartupError('diff_drive needs max_speed >= 0 and max_turn_rate >= 0')
+            self.model = DiffDrive(max_speed, max_turn_rate)
+            size = 3
         else:
             if length <= 0.0 or trailer_length <= 0.0 or hitch_offset < 0.0:
                 raise StartupError('tractor-trailer needs length > 0, trailer_length > 0, hitch_offset >= 0')
@@ -221,6 +237,9 @@ class PlantNode(Node):
             v, omega = (float(c) for c in self.applied)
             linear: Sequence[float] = (v, 0.5 * self.model.length * omega)
             angular = omega
+        elif isinstance(self.model, DiffDrive):   # what the base executed: (v, omega) saturated
+            v, angular = self.model.saturate(self.applied)
+            linear = (v, 0.0)
         else:
             linear, angular = (float(self.applied[0]), float(self.applied[1])), 0.0
         try:
