@@ -128,3 +128,25 @@ def test_fastep_sim_recording_carries_tf_that_rosbags_decodes_and_fastep_report_
     recording = open_recording(out)
     assert next(recording.messages(['/tf'])).message.transforms[0].child_frame_id in ('r1/base_link', 'r2/base_link')
     assert report.main([str(out), '--out', str(tmp_path / 'report')]) == 0
+
+
+def test_the_live_diff_drive_bag_is_foxglove_ready() -> None:
+    """bags/diff_drive_swap_live.mcap (bags/README.md): a live fastep-launch run of two diff-drive bases, both at
+    their goals, odometry in odom frames, /tf and /tf_static that rosbags decodes."""
+    path = Path(__file__).resolve().parents[2] / 'bags' / 'diff_drive_swap_live.mcap'
+    assert path.stat().st_size < 2 * 1024 * 1024
+    with AnyReader([path]) as reader:
+        topics = {c.topic: c for c in reader.connections}
+        assert topics['/tf'].msgtype == topics['/tf_static'].msgtype == frames.TF_TYPE
+        tf = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages([topics['/tf_static'],
+                                                                                    topics['/tf']])]
+        odom = [reader.deserialize(raw, c.msgtype)
+                for c, _, raw in reader.messages([topics['/r1/odom'], topics['/r2/odom']])]
+    pairs = {(t.header.frame_id, t.child_frame_id) for m in tf for t in m.transforms}
+    assert pairs == {('map', 'r1/odom'), ('map', 'r2/odom'), ('r1/odom', 'r1/base_link'), ('r2/odom', 'r2/base_link')}
+    assert {(m.header.frame_id, m.child_frame_id) for m in odom} == {('r1/odom', 'r1/base_link'),
+                                                                   ('r2/odom', 'r2/base_link')}
+    recording = open_recording(path)
+    assert recording.metadata['fastep']['model/r1'] == recording.metadata['fastep']['model/r2'] == 'diff_drive'
+    statuses = {m.topic: m.message.message for m in recording.messages(['/r1/status', '/r2/status'])}
+    assert statuses == {'/r1/status': 'arrived', '/r2/status': 'arrived'}
