@@ -34,7 +34,7 @@ from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
 from fastep_core.world import World
 
 __all__ = [
-    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'SPEED_TURN_MODELS', 'STATE_SIZES', 'command_to_twist',
+    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'SPEED_TURN_MODELS', 'command_to_twist',
     'grid_resolution', 'grid_shape',
     'diagnostic_to_dict', 'make_status', 'marker_array_to_obstacles',
     'obstacles_to_marker_array', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
@@ -47,7 +47,6 @@ __all__ = [
 CIRCLES_NS = 'circles'
 SPEED_TURN_MODELS = frozenset({'tractor_trailer', 'diff_drive'})
 """Models commanded by (v, omega) = (linear.x, angular.z); a point mass by (vx, vy) = (linear.x, linear.y)."""
-STATE_SIZES = {'point_mass': 2, 'diff_drive': 3, 'tractor_trailer': 4}
 SEGMENTS_NS = 'segments'
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR,
           'stale': DiagnosticStatus.STALE}
