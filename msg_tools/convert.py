@@ -10,8 +10,8 @@ Conventions (DESIGN.md "ROS 2 interface", REP-103/105):
   its odometry twist is the reference point's velocity in the tractor frame: linear.x = v,
   linear.y = L * omega / 2 (the mid-axle point slides sideways while turning, eq. 13) and angular.z = omega;
   the trailer heading theta1 travels on `trailer_pose` (the trailer axle point, yaw theta1);
-- a diff-drive (unicycle) robot's state is (x, y, theta), its command (v, omega) = (linear.x, angular.z) in its
-  body frame, its odometry twist linear.x = v, angular.z = omega.
+- a diff_drive's yaw is its heading theta; its command is (v, omega) = (linear.x, angular.z) in the body frame,
+  and so is its odometry twist (linear.x = v, angular.z = omega: the axle midpoint does not slide sideways).
 
 Functions that read messages raise ValueError (with a one-line reason) for values that are not finite or
 malformed; the nodes turn that into a status message instead of crashing.
@@ -34,7 +34,7 @@ from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
 from fastep_core.world import World
 
 __all__ = [
-    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'SPEED_TURN_MODELS', 'command_to_twist',
+    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'command_to_twist',
     'grid_resolution', 'grid_shape',
     'diagnostic_to_dict', 'make_status', 'marker_array_to_obstacles',
     'obstacles_to_marker_array', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
@@ -45,8 +45,6 @@ __all__ = [
 ]
 
 CIRCLES_NS = 'circles'
-SPEED_TURN_MODELS = frozenset({'tractor_trailer', 'diff_drive'})
-"""Models commanded by (v, omega) = (linear.x, angular.z); a point mass by (vx, vy) = (linear.x, linear.y)."""
 SEGMENTS_NS = 'segments'
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR,
           'stale': DiagnosticStatus.STALE}
@@ -134,8 +132,8 @@ def path_to_waypoints(msg: Path) -> list[tuple[float, float]]:
 def state_to_odometry(state: Vector, stamp: Time | None = None, *, child_frame_id: str = 'base_link',
                       frame_id: str = 'map', linear: Sequence[float] = (0.0, 0.0),
                       angular: float = 0.0) -> Odometry:
-    """Odometry of a model state: (x, y) (point mass, yaw 0), (x, y, theta) (diff drive) or (x, y, theta0, theta1)
-    (tractor-trailer, yaw theta0).
+    """Odometry of a model state: (x, y) (point mass, yaw 0), (x, y, theta) (diff_drive, yaw theta) or
+    (x, y, theta0, theta1) (tractor-trailer, yaw theta0).
 
     `linear` (x, y) and `angular` (z) are the twist in the child frame (see the module docstring).
     """
@@ -165,8 +163,8 @@ def odometry_position(msg: Odometry) -> tuple[float, float]:
 
 
 def odometry_to_state(msg: Odometry, model: str = 'point_mass', trailer: float | None = None) -> np.ndarray:
-    """Model state from odometry: (x, y) for a point mass; (x, y, yaw) for a diff drive; (x, y, yaw, trailer) for
-    a tractor-trailer.
+    """Model state from odometry: (x, y) for a point mass; (x, y, yaw) for a diff_drive; (x, y, yaw, trailer)
+    for a tractor-trailer.
 
     `trailer` is theta1 (from `trailer_pose`), required for tractor-trailers. ValueError if not finite.
     """
@@ -212,12 +210,16 @@ def trailer_yaw(msg: PoseStamped) -> float:
 
 # ------------------------------------------------------------------------------------------------- commands
 
+STEERED_MODELS = ('tractor_trailer', 'diff_drive')
+"""Models commanded by (v, omega) in the body frame: Twist linear.x and angular.z."""
+
+
 def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
-    """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer and diff drive (v, omega) ->
+    """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer and diff_drive (v, omega) ->
     linear.x, angular.z."""
     a, b = float(command[0]), float(command[1])
     msg = Twist()
-    if model in SPEED_TURN_MODELS:
+    if model in STEERED_MODELS:
         msg.linear.x, msg.angular.z = a, b
     else:
         msg.linear.x, msg.linear.y = a, b
@@ -227,7 +229,7 @@ def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
 def twist_to_command(msg: Twist | TwistStamped, model: str = 'point_mass') -> np.ndarray:
     """Inverse of command_to_twist (TwistStamped accepted); ValueError if the used fields are not finite."""
     twist = msg.twist if isinstance(msg, TwistStamped) else msg
-    if model in SPEED_TURN_MODELS:
+    if model in STEERED_MODELS:
         cmd = (float(twist.linear.x), float(twist.angular.z))
     else:
         cmd = (float(twist.linear.x), float(twist.linear.y))

@@ -124,7 +124,7 @@ class SimRecorder:
             v, omega = float(command[0]), float(command[1])
             linear: tuple[float, float] = (v, 0.5 * spec.length * omega)
             angular = omega
-        elif spec.model == 'diff_drive':   # (v, omega) of the base, in base_link
+        elif spec.model == 'diff_drive':   # body-frame twist: the axle midpoint moves along the heading
             linear, angular = (float(command[0]), 0.0), float(command[1])
         else:
             linear, angular = (float(command[0]), float(command[1])), 0.0

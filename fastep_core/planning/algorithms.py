@@ -22,7 +22,7 @@ from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'DEFAULT_ALGORITHM', 'NAVIGATORS', 'POINT_MASS_ONLY',
+__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'DEFAULT_ALGORITHM', 'NAVIGATORS', 'REFUSED_MODELS', 'ROBOT_MODELS',
            'algorithm_name', 'check_drives', 'drives', 'make_navigator', 'make_robot']
 
 NAVIGATORS: dict[str, type[Navigator]] = {
@@ -85,13 +85,16 @@ def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Cont
     raise ParameterError(f'unknown robot model {spec.model!r}')
 
 
-POINT_MASS_ONLY = frozenset({'dwa'})
-"""Algorithms that drive holonomic point masses only (planning/dwa.py samples (vx, vy))."""
+ROBOT_MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer', 'diff_drive')
+"""The models make_robot builds (scenario.MODELS names the same)."""
+REFUSED_MODELS: dict[str, frozenset[str]] = {'dwa': frozenset({'tractor_trailer'})}
+"""Robot models an algorithm cannot drive: dwa samples velocities of a point mass or a unicycle (planning/dwa.py),
+not the steering of a tractor-trailer."""
 
 
 def drives(algorithm: str, model: str) -> bool:
-    """Can the algorithm drive a robot of this model ('point_mass', 'tractor_trailer')?"""
-    return algorithm not in POINT_MASS_ONLY or model == 'point_mass'
+    """Can the algorithm drive a robot of this model ('point_mass', 'tractor_trailer', 'diff_drive')?"""
+    return model not in REFUSED_MODELS.get(algorithm, frozenset())
 
 
 def check_drives(algorithm: str, model: str, robot: str = '') -> None:
@@ -99,7 +102,8 @@ def check_drives(algorithm: str, model: str, robot: str = '') -> None:
     if not drives(algorithm, model):
         which = f'robot {robot} is' if robot else 'the robot is'
         able = ', '.join(a for a in ALGORITHMS if drives(a, model))
-        raise ParameterError(f'{algorithm} drives point_mass robots only; {which} a {model} (choose {able})')
+        models = ' and '.join(m for m in ROBOT_MODELS if drives(algorithm, m))
+        raise ParameterError(f'{algorithm} drives {models} robots only; {which} a {model} (choose {able})')
 
 
 def make_navigator(algorithm: str, spec: RobotLike, radius: float, world: World, params: PlannerParams,

@@ -139,7 +139,8 @@ def test_launch_survives_a_second_ctrl_c_and_a_sigterm_while_it_stops_the_nodes(
     (['open_field', '--rtf', '-1'], '--rtf must be in [0.001, 10000], got -1'),
     (['open_field', '--rtf', '1e-300'], '--rtf must be in [0.001, 10000], got 1e-300'),   # create_timer traceback
     (['open_field', '--seed', '-1'], 'a seed must be >= 0'),
-    (['application', '--algorithm', 'dwa'], 'dwa drives point_mass robots only; robot r1 is a tractor_trailer'),
+    (['application', '--algorithm', 'dwa'],
+     'dwa drives point_mass and diff_drive robots only; robot r1 is a tractor_trailer'),
     # Checked before the run (they were after it: --record DIR aborted with exit 1 once the nodes were up).
     (['open_field', '--record', '{tmp}'], '--record {tmp}: is a directory'),
     (['open_field', '--json', '{tmp}'], '--json {tmp}: is a directory'),
@@ -165,7 +166,7 @@ def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str]
 @pytest.mark.parametrize('module,params,words', [
     ('map_server', ['scenario:=no_such_scenario_here'], 'no built-in scenario'),
     ('planner', ['algorithm:=dijkstra'], 'algorithm must be one of'),
-    ('planner', ['algorithm:=dwa', 'model:=tractor_trailer'], 'dwa drives point_mass robots only'),
+    ('planner', ['algorithm:=dwa', 'model:=tractor_trailer'], 'dwa drives point_mass and diff_drive robots only'),
     ('planner', ['max_speed:=-1.0'], 'max_speed'),
     ('plant', ['model:=tractor_trailer', 'start:=[1.0, 2.0]'], 'start must have 4 values'),
     ('plant', ['start:=[.nan, 2.0]'], 'start must be finite'),

@@ -88,8 +88,8 @@ def test_planner_runs_dwa_and_refuses_it_for_a_tractor_trailer(context: Any) -> 
         assert isinstance(node.navigator, DynamicWindow)
     finally:
         node.destroy_node()
-    with pytest.raises(StartupError, match='parameter algorithm: dwa drives point_mass robots only; the robot is '
-                                           'a tractor_trailer'):
+    with pytest.raises(StartupError, match='parameter algorithm: dwa drives point_mass and diff_drive robots only; '
+                                           'the robot is a tractor_trailer'):
         make(PlannerNode, context, algorithm='dwa', model='tractor_trailer')
 
 
