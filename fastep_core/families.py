@@ -2,8 +2,8 @@
 
 Why: Table 2's three worlds are the ones the paper (and every tuning) looked at. A planner's worth is what it
 does on worlds nobody picked: circle fields, circles + walls, U-traps, 2-4 robots, tractor-trailers, and
-differential-drive bases in circles + walls and 1-4 at a time (fastep_core.random_scenarios.FAMILIES). `fastep-bench --families` runs this module; docs/clutter.md shows
-its tables.
+differential-drive bases in circles + walls and 1-4 at a time (fastep_core.random_scenarios.FAMILIES).
+`fastep-bench --families` runs this module; docs/clutter.md shows its tables.
 
 - Worlds: world k of a family is `random_family_data(family, FAMILY_SEED0 + k)`, named by its source
   'FAMILY:SEED' (random_scenarios.family_source), solvable by construction. The runs are

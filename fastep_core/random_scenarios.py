@@ -47,8 +47,8 @@ from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.world import World
 
 __all__ = ['MODELS_MIX', 'FAMILIES', 'FAMILY_SEED0', 'u_trap', 'u_trap_scenario_data', 'circle_field_data',
-           'circles_walls_data', 'diff_drive_data', 'random_family_data', 'family_source', 'parse_family_source', 'random_scenario',
-           'random_scenario_data', 'solvable', 'main']
+           'circles_walls_data', 'diff_drive_data', 'random_family_data', 'family_source', 'parse_family_source',
+           'random_scenario', 'random_scenario_data', 'solvable', 'main']
 
 MODELS_MIX = 0.3
 """Share of tractor-trailers among random robots (the rest are point masses)."""

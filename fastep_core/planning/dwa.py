@@ -66,12 +66,15 @@ no trailer). For the unicycle, as in the paper:
 - the rollout holds (v, omega) and follows the exact arc (kinematics/diff_drive.py's closed form), checked as
   `dwa_rollout_steps` chords;
 - admissible: v can brake to rest at max_acceleration before the first hit;
-- the objective adds two terms. The paper's heading term, dwa_heading * HEADING_SHARE * (1 - e / (pi / 2)) with
-  e the angle by which the heading at the rollout's end points more than 90 degrees away from the bearing from
-  there to the goal (0 within 90 degrees): the goal progress alone scores a base facing away from its goal at
-  rest (every sample is slow) nearly equally for every turn rate. It is flat within 90 degrees because a base
-  facing an obstacle on the way must be free to turn away from the goal to skirt it: a term that pulled it
-  back to the goal held it there (diff_drive_walls: stuck 0.2 m from the first circle, 'a local minimum').
+- the objective adds two terms. The paper's heading term, dwa_heading * HEADING_SHARE * (1 - e / (pi - f))
+  with e the angle by which the heading at the rollout's end points more than f away from the bearing from
+  there to the goal (0 within f): the goal progress alone scores a base facing away from its goal at rest
+  (every sample is slow) nearly equally for every turn rate. f is 90 degrees while the rollout ends farther
+  from the goal than max_speed * dwa_horizon, narrowing in proportion to nothing at the goal. Flat within 90
+  degrees because a base facing an obstacle on the way must be free to turn away from the goal to skirt it: a
+  term that pulled it back to the goal held it there (diff_drive_walls: stuck 0.2 m from the first circle, 'a
+  local minimum'); narrowing near the goal because there a base 0.2 m beside its goal, facing across, had no
+  reason left to turn toward it and stood there (every forward arc ends farther away);
   And a look-ahead term, the paper's dist in spirit: dwa_clearance times the room beyond the clearance at
   dwa_clearance_cap metres ahead of the rollout's end along its final heading (capped at +-dwa_clearance_cap,
   over it): of the turns on the spot, whose rollouts all keep the same clearance, it picks the one that faces
@@ -282,7 +285,10 @@ class DynamicWindow(Navigator):
         final = float(state[2]) + samples[:, 1] * horizon            # the heading at the rollout's end
         bearing = np.arctan2(goal[1] - points[:, -1, 1], goal[0] - points[:, -1, 0])
         off = np.abs(np.arctan2(np.sin(bearing - final), np.cos(bearing - final)))
-        heading = 1.0 - np.maximum(0.0, off - 0.5 * math.pi) / (0.5 * math.pi)
+        # Flat within 90 degrees far from the goal, narrowing to nothing at the goal (module docstring).
+        left = np.hypot(goal[0] - points[:, -1, 0], goal[1] - points[:, -1, 1])
+        free = 0.5 * math.pi * np.minimum(1.0, left / (p.max_speed * horizon))
+        heading = 1.0 - np.maximum(0.0, off - free) / (math.pi - free)
         cap = p.dwa_clearance_cap
         ahead = points[:, -1] + cap * np.column_stack([np.cos(final), np.sin(final)])
         room = np.clip(self.world.room(ahead) - self.clearance, -cap, cap) / cap
