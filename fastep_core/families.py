@@ -1,9 +1,9 @@
 """The families benchmark: every planner on many unseen random worlds of each family, judged against the optimum.
 
 Why: Table 2's three worlds are the ones the paper (and every tuning) looked at. A planner's worth is what it
-does on worlds nobody picked: circle fields, circles + walls, U-traps, 2-4 robots, tractor-trailers
-(fastep_core.random_scenarios.FAMILIES). `fastep-bench --families` runs this module; docs/clutter.md shows
-its tables.
+does on worlds nobody picked: circle fields, circles + walls, U-traps, 2-4 robots, tractor-trailers, and
+differential-drive bases in circles + walls and 1-4 at a time (fastep_core.random_scenarios.FAMILIES).
+`fastep-bench --families` runs this module; docs/clutter.md shows its tables.
 
 - Worlds: world k of a family is `random_family_data(family, FAMILY_SEED0 + k)`, named by its source
   'FAMILY:SEED' (random_scenarios.family_source), solvable by construction. The runs are
@@ -39,7 +39,9 @@ __all__ = ['FAMILY_NAMES', 'Row', 'Summary', 'family_sources', 'run_families', '
 
 FAMILY_NAMES: dict[str, str] = {'circle_field': 'circle fields', 'circles_walls': 'circles + walls',
                                 'u_trap': 'U-traps', 'multi_robot': '2-4 robots',
-                                'tractor_trailer': 'tractor-trailers'}
+                                'tractor_trailer': 'tractor-trailers',
+                                'diff_drive_walls': 'diff drive: circles + walls',
+                                'diff_drive_robots': 'diff drive: 1-4 robots'}
 """What tables and figures call each family."""
 
 

@@ -21,7 +21,11 @@ World families (`FAMILIES`, `random_family_data(family, seed)`), what the famili
 - circles_walls: one point mass, 10-20 circles and 4-10 straight walls in a 50 x 50 m workspace, no traps;
 - u_trap: one point mass and a U-shaped trap across its straight line (`u_trap_scenario_data`);
 - multi_robot: 2-4 robots, point masses and tractor-trailers, circles, walls and traps (`random_scenario_data`);
-- tractor_trailer: one tractor-trailer among circles, walls and perhaps a trap (`random_scenario_data`).
+- tractor_trailer: one tractor-trailer among circles, walls and perhaps a trap (`random_scenario_data`);
+- diff_drive_walls: circles_walls' world with a differential-drive base instead of the point mass (same
+  radius), facing a random heading (`diff_drive_data`);
+- diff_drive_robots: 1-4 differential-drive bases among circles, walls and traps: random_scenario_data's
+  worlds with point masses only, each made a diff_drive facing a random heading (`diff_drive_data`).
 
 Benchmarks draw their worlds from seeds FAMILY_SEED0 + k, far above every seed the tests use (0-500), so the
 benchmark's worlds are ones no test, and no tuning, has seen.
@@ -43,13 +47,14 @@ from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.world import World
 
 __all__ = ['MODELS_MIX', 'FAMILIES', 'FAMILY_SEED0', 'u_trap', 'u_trap_scenario_data', 'circle_field_data',
-           'circles_walls_data', 'random_family_data', 'family_source', 'parse_family_source', 'random_scenario',
-           'random_scenario_data', 'solvable', 'main']
+           'circles_walls_data', 'diff_drive_data', 'random_family_data', 'family_source', 'parse_family_source',
+           'random_scenario', 'random_scenario_data', 'solvable', 'main']
 
 MODELS_MIX = 0.3
 """Share of tractor-trailers among random robots (the rest are point masses)."""
 _ATTEMPTS = 200  # random layouts tried per scenario before giving up (a few are usually enough)
-FAMILIES: tuple[str, ...] = ('circle_field', 'circles_walls', 'u_trap', 'multi_robot', 'tractor_trailer')
+FAMILIES: tuple[str, ...] = ('circle_field', 'circles_walls', 'u_trap', 'multi_robot', 'tractor_trailer',
+                             'diff_drive_walls', 'diff_drive_robots')
 """The world families of random_family_data, in the order tables list them."""
 FAMILY_SEED0 = 1_000_000
 """First world seed of the families benchmark: disjoint from the seeds the tests use."""
@@ -261,6 +266,21 @@ def circles_walls_data(seed: int) -> dict[str, Any]:
     raise RuntimeError(f'no solvable circles-and-walls world for seed {seed}')
 
 
+def diff_drive_data(data: dict[str, Any], seed: int) -> dict[str, Any]:
+    """`data` with every robot a differential-drive base at its start position, facing a heading drawn
+    uniformly in [-pi, pi) from a generator of its own (seeded 30_000 + seed: the world is the one `data` is).
+    The radius stays: a smaller one would only make the world easier, and the same radius compares the base
+    with the point mass on the same worlds."""
+    rng = np.random.default_rng(30_000 + seed)
+    robots = []
+    for robot in data['robots']:
+        x, y = robot['start'][:2]
+        robots.append({'name': robot['name'], 'model': 'diff_drive',
+                       'start': [x, y, round(float(rng.uniform(-math.pi, math.pi)), 6)],
+                       'goal': robot['goal'], 'radius': robot['radius']})
+    return {**data, 'robots': robots, 'description': f'{data.get("description", "")} (differential drive)'}
+
+
 def _far_apart(rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """A start and a goal uniform in the field less a 3 m border, at least 35 m apart."""
     while True:
@@ -287,6 +307,11 @@ def random_family_data(family: str, seed: int) -> dict[str, Any]:
         data = random_scenario_data(seed, n_robots=count)
     elif family == 'tractor_trailer':
         data = random_scenario_data(seed, n_robots=1, tractor_share=1.0)
+    elif family == 'diff_drive_walls':
+        data = diff_drive_data(circles_walls_data(seed), seed)
+    elif family == 'diff_drive_robots':
+        count = int(np.random.default_rng(seed).integers(1, 5))
+        data = diff_drive_data(random_scenario_data(seed, n_robots=count, tractor_share=0.0), seed)
     else:
         raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(FAMILIES)}')
     return {**data, 'name': f'{family}_{seed}'}

@@ -46,10 +46,10 @@ __all__ = [
     'load_scenario', 'parse_scenario', 'builtin_names', 'builtin_path',
 ]
 
-MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer')
-"""Robot models the planners and plants implement."""
-SCENARIO_MODELS: tuple[str, ...] = MODELS + ('diff_drive',)
-"""Robot models a scenario may name (format v2 adds diff_drive; its model belongs to issue 14, "Real robot")."""
+MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer', 'diff_drive')
+"""Robot models the planners and the in-process simulator implement."""
+SCENARIO_MODELS: tuple[str, ...] = MODELS
+"""Robot models a scenario may name (format v2 adds diff_drive)."""
 
 _START_LENGTH = {'point_mass': 2, 'tractor_trailer': 4, 'diff_drive': 3}
 _START_FORM = {2: '[x, y]', 3: '[x, y, theta]', 4: '[x, y, theta0, theta1]'}
@@ -78,8 +78,8 @@ class RobotSpec:
     """One robot of a scenario: its model, start pose, goal and body dimensions (metres, radians)."""
 
     name: str
-    model: str                    # 'point_mass' | 'tractor_trailer'
-    start: tuple[float, ...]      # (x, y) for point_mass; (x, y, theta0, theta1) for tractor_trailer
+    model: str                    # 'point_mass' | 'tractor_trailer' | 'diff_drive'
+    start: tuple[float, ...]      # (x, y) point_mass; (x, y, theta0, theta1) tractor_trailer; (x, y, theta) diff_drive
     goal: tuple[float, float]
     radius: float                 # safety radius (m)
     length: float = 1.0           # tractor_trailer only: L, tractor mid-axle length (m)

@@ -22,14 +22,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.dynamic_world import DynamicWorld, map_generator
-from fastep_core.errors import GoalError, ScenarioError
+from fastep_core.errors import GoalError
 from fastep_core.metrics import trajectory_margins
-from fastep_core.planning.algorithms import MISSING_DIFF_DRIVE, make_navigator
+from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot, OtherRobots
-from fastep_core.scenario import MODELS, Scenario
+from fastep_core.scenario import Scenario
 
-__all__ = ['RobotRun', 'Run', 'Tick', 'check_simulable', 'simulate']
+__all__ = ['RobotRun', 'Run', 'Tick', 'simulate']
 
 FloatArray = NDArray[np.float64]
 SAMPLE_SPACING = 0.1  # metres of travel between trajectory samples (DESIGN: at least every 0.1 m)
@@ -93,13 +93,6 @@ class Tick:
     navigator: Navigator
 
 
-def check_simulable(scenario: Scenario) -> None:
-    """Raise ScenarioError (one line) if a robot's model has no implementation yet (diff_drive)."""
-    for i, spec in enumerate(scenario.robots):
-        if spec.model not in MODELS:
-            raise ScenarioError(f'scenario {scenario.name!r}: robots[{i}] ({spec.name}): {MISSING_DIFF_DRIVE}')
-
-
 def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
              observer: Callable[[Tick], None] | None = None) -> Run:
     """Run every robot of the scenario until each has arrived, failed, or max_sim_time has passed.
@@ -108,7 +101,6 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     its reference point to the nearest obstacle surface minus its radius, or to another robot's centre minus
     both radii, measured at every robot's position after each step; negative means it collided.
     """
-    check_simulable(scenario)
     params = scenario.planner
     world = scenario.world                     # the true still world
     specs = scenario.robots

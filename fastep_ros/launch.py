@@ -113,11 +113,16 @@ def _planner_overrides(params: PlannerParams) -> dict[str, Any]:
     return {name: getattr(params, name) for name in params.names() if getattr(params, name) != getattr(defaults, name)}
 
 
-def plant_params(spec: RobotSpec, sim_time: bool) -> dict[str, Any]:
+def plant_params(spec: RobotSpec, sim_time: bool, params: PlannerParams | None = None) -> dict[str, Any]:
+    """The plant's parameters; a diff-drive base saturates at the scenario's max_speed and max_turn_rate (`params`,
+    the scenario's planner parameters), as fastep-sim's model does."""
     out: dict[str, Any] = {'model': spec.model, 'start': [float(v) for v in spec.start], 'use_sim_time': sim_time}
     if spec.model == 'tractor_trailer':
         out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
                    hitch_offset=float(spec.hitch_offset))
+    if spec.model == 'diff_drive':
+        limits = params or PlannerParams()
+        out.update(max_speed=float(limits.max_speed), max_turn_rate=float(limits.max_turn_rate))
     return out
 
 
@@ -350,6 +355,8 @@ class Monitor:
         if robot.spec.model == 'tractor_trailer':
             yaw = self.convert.quaternion_to_yaw(msg.pose.pose.orientation)
             robot.rows.append([t, x, y, yaw, robot.trailer])
+        elif robot.spec.model == 'diff_drive':   # rows [t, x, y, theta], as fastep-sim's
+            robot.rows.append([t, x, y, self.convert.quaternion_to_yaw(msg.pose.pose.orientation)])
         else:
             robot.rows.append([t, x, y])
 
@@ -422,7 +429,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         procs.start('fastep-map', 'map_server', '/', {'scenario': _scenario_arg(args.scenario),
                                                        'use_sim_time': sim_time})
         for i, spec in enumerate(scenario.robots):
-            procs.start(f'fastep-plant /{spec.name}', 'plant', f'/{spec.name}', plant_params(spec, sim_time))
+            procs.start(f'fastep-plant /{spec.name}', 'plant', f'/{spec.name}',
+                        plant_params(spec, sim_time, scenario.planner))
             procs.start(f'fastep-planner /{spec.name}', 'planner', f'/{spec.name}',
                         planner_params(scenario, i, args.algorithm, args.seed, sim_time))
         if args.foxglove is not None:   # on wall time: not a /clock subscriber, nor in the lock step

@@ -4,11 +4,13 @@ launcher checks its command line with them before it starts anything). docs/robu
 from __future__ import annotations
 
 from fastep_core.dynamic_world import dynamic_feature
-from fastep_core.planning.algorithms import MISSING_DIFF_DRIVE
 from fastep_core.scenario import MODELS, Scenario
 
 __all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ROBOT_NAME_MAX', 'RTF_RANGE', 'STEP_RANGE',
-           'graph_problem', 'robot_name_problem']
+           'GRAPH_MODELS', 'graph_problem', 'robot_name_problem']
+
+GRAPH_MODELS: tuple[str, ...] = MODELS
+"""Robot models the ROS plant and planner nodes run: every model (diff_drive included)."""
 
 RATE_RANGE = (0.1, 10_000.0)
 """Timer rates a node accepts (Hz): the planners' 1 / dt range (PlannerParams.dt is [1e-4, 10] s). Beyond it rclpy's
@@ -51,14 +53,14 @@ def graph_problem(scenario: Scenario, robots: bool = True) -> str:
     """What of a format-v2 scenario the live graph cannot honour yet; '' if nothing (docs/scenarios.md, v2).
 
     Moving, unknown and misplaced obstacles need a world simulation and a map node that publishes only what
-    the map knows (issue 13, item 5); a diff_drive robot needs its model (issue 14). Until then the graph refuses
-    them rather than run a different world than the file says. A `sensor` is accepted (no `scan` topic yet).
+    the map knows (issue 13, item 5). Until then the graph refuses them rather than run a different world than the
+    file says. A `sensor` is accepted (no `scan` topic yet).
     robots=False: the obstacles only (the map node publishes no robot).
     """
     feature = dynamic_feature(scenario.obstacle_specs)
     if feature:
         return f'{feature}: moving, unknown and misplaced obstacles do not run on the ROS graph yet; use fastep-sim'
     for i, robot in enumerate(scenario.robots):
-        if robots and robot.model not in MODELS:
-            return f'robots[{i}] ({robot.name}): {MISSING_DIFF_DRIVE}'
+        if robots and robot.model not in GRAPH_MODELS:
+            return f'robots[{i}] ({robot.name}): model {robot.model} does not run on the ROS graph; use fastep-sim'
     return ''

@@ -11,6 +11,16 @@ unless the `workspace` parameter gives it), both transient-local; and the `odom`
 announces itself: it publishes its `footprint` (as this planner does, latched) from a node of its namespace, and
 its odometry has a publisher; looked for every 0.25 s of wall time, dropped while its odometry is stale
 (fastep_ros.robots).
+Frames (REP-105, msg_tools.frames): own odometry must be in the map frame (`frame_id`) or in the robot's odom
+frame (`odom_frame_id`, default `<ns>/odom`; root namespace `odom`); any other frame is refused (status `stale`,
+reason "odometry rejected: frame ..."). The map pose is the odometry composed with map -> odom: the identity
+(simulation) unless `localization_topic` is set (e.g. `amcl_pose`, geometry_msgs/PoseWithCovarianceStamped, the
+map pose of base_link): then map -> odom = that pose o inverse(the odometry pose nearest to its stamp), updated
+with every localization pose, and until the first one has come the robot is held still (status `waiting`,
+"waiting for localization ..."). Commands computed in the map frame (a point mass's velocity) are rotated into
+the body frame (base_link) before they are sent; TwistStamped commands are stamped base_link
+(`<ns>/base_link`, never with a leading slash). Other robots' odometry is taken as map poses (map -> odom the
+identity, exact in simulation).
 Odometry is predicted forward from its stamp to the control time (at most max_extrapolation seconds) to make
 up for the transport delay. Own odometry stamped longer ago than that (an unset stamp counts as its arrival)
 is not acted on: the robot is held still (zero cmd_vel, `stale`) until fresher odometry comes, because a
@@ -46,7 +56,7 @@ from typing import Any, Sequence
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from rclpy.clock import Clock, ClockType
 from std_msgs.msg import Float64
@@ -69,12 +79,13 @@ from fastep_core.scenario import MODELS
 from fastep_core.world import World
 from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from fastep_ros.diagnostics import Diagnostics, Task
+from fastep_ros.frames import LOCALIZATION_QOS
 from fastep_ros.goals import GoalSubscription
 from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
-from msg_tools import convert, interface
+from msg_tools import convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlannerNode', 'main']
@@ -114,8 +125,8 @@ class PlannerNode(ManagedNode):
         self.algorithm = declare(self, 'algorithm', DEFAULT_ALGORITHM,
                                  'planner: ' + ', '.join(f'{a} ({algorithm_name(a)})' for a in ALGORITHMS),
                                  constraints=' | '.join(ALGORITHMS))
-        self.model = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
-                             constraints='point_mass | tractor_trailer')
+        self.model = declare(self, 'model', 'point_mass', 'robot model: ' + ' | '.join(MODELS),
+                             constraints=' | '.join(MODELS))
         self.radius = declare(self, 'robot_radius', 0.5, 'safety radius: centre-to-obstacle-surface distance '
                               'that counts as collision (m)', constraints='> 0')
         length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)')
@@ -148,12 +159,23 @@ class PlannerNode(ManagedNode):
             read_only=False)
         workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans')
+        odom_frame_id = declare(self, 'odom_frame_id', '', 'the robot\'s odometry frame (REP-105); empty: <ns>/odom '
+                                '(root namespace: odom). Odometry in it or in frame_id is taken, in any other '
+                                'frame refused')
+        self.localization_topic = declare(self, 'localization_topic', '', 'localization pose topic '
+                                          '(geometry_msgs/PoseWithCovarianceStamped, the map pose of base_link, e.g. '
+                                          'amcl_pose) giving map -> odom; empty: map -> odom is the identity '
+                                          '(simulation)')
         self._check(length, trailer_length, hitch_offset, other_radius, workspace)
         self.body = _Body(self.model, length, trailer_length, hitch_offset)
         self.stamped = stamped
         self.workspace_param: tuple[float, float, float, float] | None = (
             tuple(workspace) if workspace else None)
         self.rng = stream_rng(self.seed, self.seed_stream)
+        self.odom_frame_id = odom_frame_id or frames.odom_frame(self.get_namespace())
+        self.base_frame_id = frames.base_frame(self.get_namespace())
+        self.map_from_odom = frames.MapFromOdom()
+        self.body_yaw = 0.0   # map-frame heading of base_link at the last state: turns map commands into body ones
 
         # What the planner knows.
         self.obstacles: list[Any] | None = None
@@ -197,6 +219,12 @@ class PlannerNode(ManagedNode):
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
         self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
                                     lambda: self.publish_status(force=True))
+        if self.localization_topic:
+            # Best available durability: AMCL offers amcl_pose transient-local (then its last pose comes at once);
+            # a volatile publisher matches too, without incompatible-QoS warnings.
+            sub = self.create_subscription(PoseWithCovarianceStamped, self.localization_topic, self.on_localization,
+                                           LOCALIZATION_QOS)
+            self.localization_topic = sub.topic_name
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.wall_ticks = 0
@@ -341,8 +369,11 @@ class PlannerNode(ManagedNode):
     # ------------------------------------------------------------------------------------------- inputs
     def on_odom(self, msg: Odometry) -> None:
         try:
-            convert.odometry_position(msg)
-            convert.quaternion_to_yaw(msg.pose.pose.orientation)
+            pose = frames.odometry_pose(msg)
+            frame = msg.header.frame_id
+            if frame not in (self.frame_id, self.odom_frame_id):
+                raise ValueError(f'frame {frame!r} is neither the map frame {self.frame_id!r} nor this robot\'s odom '
+                                 f'frame {self.odom_frame_id!r} (parameters frame_id, odom_frame_id)')
         except ValueError as exc:
             self.odom_problem = f'odometry rejected: {exc}'
             self.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
@@ -350,9 +381,29 @@ class PlannerNode(ManagedNode):
         self.odom, self.odom_received, self.odom_problem = msg, self.now(), ''
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         self.odom_stamp = stamp if stamp > 0.0 else self.odom_received
+        if frame == self.odom_frame_id:
+            self.map_from_odom.add_odometry(self.odom_stamp, pose)
         self.odom_heard += 1
         if self.odom_heard == 1:
             self.publish_status(force=True)   # a launcher waits for the odometry path to be up
+
+    def on_localization(self, msg: PoseWithCovarianceStamped) -> None:
+        """A map pose of base_link: map -> odom = it o inverse(the odometry at its stamp)."""
+        try:
+            if msg.header.frame_id not in ('', self.frame_id):
+                raise ValueError(f'frame {msg.header.frame_id!r} is not the map frame {self.frame_id!r}')
+            pose = frames.odometry_pose(msg)
+        except ValueError as exc:
+            self.get_logger().warning(f'localization pose ignored: {exc}', throttle_duration_sec=5.0)
+            return
+        stamp = convert.stamp_to_seconds(msg.header.stamp)
+        self.map_from_odom.add_localization(stamp if stamp > 0.0 else self.now(), pose)
+
+    def map_to_odom(self) -> frames.Pose2D | None:
+        """map -> odom of the odometry last taken (None: not known yet, the robot holds still)."""
+        if self.odom is None or self.odom.header.frame_id == self.frame_id or not self.localization_topic:
+            return frames.IDENTITY
+        return self.map_from_odom.transform
 
     def on_trailer(self, msg: PoseStamped) -> None:
         try:
@@ -415,8 +466,12 @@ class PlannerNode(ManagedNode):
                          f'({t:.2f} s): the clock went back'
         if self.model == 'tractor_trailer' and self.trailer is None:
             return None, 'waiting for trailer_pose'
+        transform = self.map_to_odom()
+        if transform is None:
+            return None, f'waiting for localization on {self.localization_topic} (map -> {self.odom_frame_id})'
         try:
-            state = convert.odometry_to_state(self.odom, self.model, self.trailer)
+            state = frames.state_in_frame(transform, convert.odometry_to_state(self.odom, self.model, self.trailer))
+            self.body_yaw = frames.compose(transform, frames.odometry_pose(self.odom))[2]
         except ValueError as exc:
             return None, f'odometry rejected: {exc}'
         self.odom_lag = t - self.odom_stamp
@@ -471,12 +526,15 @@ class PlannerNode(ManagedNode):
         self.publish_status()
 
     def publish_command(self, command: np.ndarray) -> None:
+        """cmd_vel in the body frame: a point mass's map-frame velocity turned by its heading (the identity while
+        map -> odom and the odometry's yaw are 0, as in simulation); (v, omega) are body-frame already."""
+        if self.model == 'point_mass':
+            command = np.asarray(frames.body_velocity(command, self.body_yaw), dtype=float)
         twist = convert.command_to_twist(command, self.model)
         if self.stamped:
             msg = TwistStamped()
             msg.header.stamp = self.stamp()
-            msg.header.frame_id = self.get_namespace().strip('/') + '/base_link' if self.model == \
-                'tractor_trailer' else self.frame_id
+            msg.header.frame_id = self.base_frame_id
             msg.twist = twist
             self.cmd_pub.publish(msg)
         else:

@@ -1,11 +1,20 @@
 """fastep-plant: one simulated robot. It integrates the robot's kinematic model and publishes its odometry.
 
     fastep-plant --ros-args -r __ns:=/r1 -p model:=point_mass -p start:=[5.0,25.0] [-p use_sim_time:=true]
+    fastep-plant --ros-args -r __ns:=/d1 -p model:=diff_drive -p start:=[5.0,25.0,1.57]
 
-Subscribes `cmd_vel` (geometry_msgs/Twist, or TwistStamped when `use_stamped_cmd_vel` is true): for a point
-mass linear.x/y are the map-frame velocity (vx, vy); for a tractor-trailer linear.x is the speed v and
-angular.z the yaw rate omega. Publishes `odom` (nav_msgs/Odometry in the `map` frame, child `<ns>/base_link`)
-and, for tractor-trailers, `trailer_pose` (geometry_msgs/PoseStamped, the trailer axle, yaw theta1).
+Subscribes `cmd_vel` (geometry_msgs/Twist, or TwistStamped when `use_stamped_cmd_vel` is true), in the body
+frame: for a point mass linear.x/y are the velocity (vx, vy); for a tractor-trailer and a diff-drive base
+linear.x is the speed v and angular.z the yaw rate omega (a diff-drive base saturates them at max_speed and
+max_turn_rate, as ros2_control's diff_drive_controller does). Publishes `odom` (nav_msgs/Odometry: the pose of
+`<ns>/base_link` in `<ns>/odom`, REP-105, root namespace `odom` -> `base_link`; its twist in base_link) and,
+for tractor-trailers, `trailer_pose` (geometry_msgs/PoseStamped in `<ns>/odom`, the trailer axle, yaw theta1).
+A point mass has no heading: its yaw is 0, so base_link's axes stay parallel to odom's and its cmd_vel and
+odometry twist are odom-frame velocities too.
+A simulated robot's odometry does not drift: map -> odom is the identity, published on /tf_static (unless
+publish_map_to_odom is false, e.g. when a localization node publishes it); odom -> base_link goes on /tf with
+every odometry message (and odom -> `<ns>/trailer_link`). TF is published only where tf2_msgs is installed (a
+full ROS install; the log says so once when it is not): fastep_ros.frames.
 
 Time: the model is integrated in fixed steps of 1 / rate_hz seconds of the node's clock (simulated time with
 use_sim_time, wall time otherwise) up to "now", on a timer and before each new command takes effect (a
@@ -35,13 +44,16 @@ from nav_msgs.msg import Odometry
 from rclpy.clock import Clock, ClockType, ROSClock
 
 from fastep_core.kinematics import PointMass, TractorTrailer
+from fastep_core.kinematics.diff_drive import DiffDrive
+from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from fastep_ros.diagnostics import Diagnostics, Task
+from fastep_ros.frames import TfBroadcaster
 from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.sim_time import SimTimeWatch
-from msg_tools import convert, interface
+from msg_tools import convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlantNode', 'main']
@@ -57,13 +69,19 @@ class PlantNode(ManagedNode):
     def __init__(self, node_name: str = 'plant', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
-        self.model_name = declare(self, 'model', 'point_mass', 'robot model: point_mass | tractor_trailer',
-                                  constraints='point_mass | tractor_trailer')
-        start = declare(self, 'start', None, 'start state: [x, y] (point_mass) or [x, y, theta0, theta1] '
-                        '(tractor_trailer; metres, radians, map frame)')
+        self.model_name = declare(self, 'model', 'point_mass', 'robot model: ' + ' | '.join(MODELS),
+                                  constraints=' | '.join(MODELS))
+        start = declare(self, 'start', None, 'start state: [x, y] (point_mass), [x, y, theta] (diff_drive) or '
+                        '[x, y, theta0, theta1] (tractor_trailer; metres, radians, map frame = odom frame at the '
+                        'start)')
         length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)')
         trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)')
         hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
+        base = PlannerParams()
+        max_speed = declare(self, 'max_speed', base.max_speed, 'diff_drive: the base\'s speed limit |v| (m/s); 0 '
+                            'means unlimited', constraints='>= 0')
+        max_turn_rate = declare(self, 'max_turn_rate', base.max_turn_rate, 'diff_drive: the base\'s turn-rate '
+                                'limit |omega| (rad/s); 0 means unlimited', constraints='>= 0')
         self.rate_hz = declare(self, 'rate_hz', 50.0, 'integration rate: fixed steps of 1/rate_hz s of the '
                                'node clock (simulated time with use_sim_time)', value_range=RATE_RANGE, unit=' Hz')
         self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'a cmd_vel acts for at most this long after it '
@@ -71,8 +89,11 @@ class PlantNode(ManagedNode):
                                    '(zero velocity) when no newer one came (s, node clock)', constraints='> 0',
                                    read_only=False)
         stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist')
-        self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of the odometry pose (the simulated '
-                                'pose is the map pose)')
+        frame_id = declare(self, 'frame_id', '', 'frame of the odometry pose; empty: <ns>/odom (REP-105; root '
+                           'namespace: odom)')
+        self.publish_map_to_odom = declare(self, 'publish_map_to_odom', True, 'publish map -> odom as the identity on '
+                                           '/tf_static (simulated odometry does not drift); false when a '
+                                           'localization node publishes it')
         clock_timeout = declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
                                 'seconds is a warning on /diagnostics', value_range=PERIOD_RANGE, unit=' s',
                                 read_only=False)
@@ -82,10 +103,15 @@ class PlantNode(ManagedNode):
         check_range('rate_hz', self.rate_hz, *RATE_RANGE, ' Hz')
         if self.cmd_timeout <= 0.0:
             raise StartupError(f'parameter cmd_timeout must be > 0, got {self.cmd_timeout:g}')
-        self.model: PointMass | TractorTrailer
+        self.model: PointMass | TractorTrailer | DiffDrive
         if self.model_name == 'point_mass':
             self.model = PointMass()
             size = 2
+        elif self.model_name == 'diff_drive':
+            if max_speed < 0.0 or max_turn_rate < 0.0:
+                raise StartupError('diff_drive needs max_speed >= 0 and max_turn_rate >= 0')
+            self.model = DiffDrive(max_speed, max_turn_rate)
+            size = 3
         else:
             if length <= 0.0 or trailer_length <= 0.0 or hitch_offset < 0.0:
                 raise StartupError('tractor-trailer needs length > 0, trailer_length > 0, hitch_offset >= 0')
@@ -97,8 +123,9 @@ class PlantNode(ManagedNode):
             raise StartupError(f'parameter start must have {size} values for {self.model_name}, got {start}')
         self.state = np.array(start, dtype=float)
 
-        ns = self.get_namespace().strip('/')
-        self.child_frame_id = f'{ns}/base_link' if ns else 'base_link'
+        self.frame_id = frame_id or frames.odom_frame(self.get_namespace())
+        self.child_frame_id = frames.base_frame(self.get_namespace())
+        self.trailer_frame_id = frames.trailer_frame(self.get_namespace())
         self.step = 1.0 / self.rate_hz
         self.tick: int | None = None           # integrated time = tick * step
         self.published_tick: int | None = None  # tick of the last odometry published
@@ -114,6 +141,9 @@ class PlantNode(ManagedNode):
         take_cmd_vel: Any = self._take_cmd_vel
         self.cmd_sub = self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, take_cmd_vel,
                                                 LATEST)
+        self.tf = TfBroadcaster(self)
+        if self.publish_map_to_odom and self.frame_id != interface.MAP_FRAME:
+            self.tf.send_static([frames.static_map_to_odom(interface.MAP_FRAME, self.frame_id)])
         self.timer = self.create_timer(self.step, self.on_timer)
         self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick,
                                                clock=Clock(clock_type=ClockType.STEADY_TIME))
@@ -276,6 +306,9 @@ class PlantNode(ManagedNode):
             v, omega = (float(c) for c in self.applied)
             linear: Sequence[float] = (v, 0.5 * self.model.length * omega)
             angular = omega
+        elif isinstance(self.model, DiffDrive):   # what the base executed: (v, omega) saturated
+            v, angular = self.model.saturate(self.applied)
+            linear = (v, 0.0)
         else:
             linear, angular = (float(self.applied[0]), float(self.applied[1])), 0.0
         try:
@@ -285,10 +318,14 @@ class PlantNode(ManagedNode):
             self.get_logger().error(f'not publishing odometry: {exc}', throttle_duration_sec=5.0)
             return
         self.odom_pub.publish(odom)
+        trailer = None
         if self.trailer_pub is not None:
             assert isinstance(self.model, TractorTrailer)
-            self.trailer_pub.publish(convert.trailer_pose(self.state, self.model.trailer_length,
-                                                          self.model.hitch_offset, stamp, self.frame_id))
+            trailer = convert.trailer_pose(self.state, self.model.trailer_length, self.model.hitch_offset, stamp,
+                                           self.frame_id)
+            self.trailer_pub.publish(trailer)
+        if self.tf.available:
+            self.tf.send(frames.odometry_transforms(odom, trailer, self.trailer_frame_id))
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -19,6 +19,13 @@ the planner's subscription) is subscribed with the QoS the fastep nodes offer on
 after the recorder and send at once (goal_pose) are only recorded if their publisher matched the recorder's
 subscription first: wait until the publisher's subscription count includes the recorder.
 
+TF (parameter `tf`): `derive` (the default) writes /tf and /tf_static (tf2_msgs/msg/TFMessage, serialised with
+rosbags: tf2_msgs is not in the PyPI ROS wheels) derived from the odometry it records, so Foxglove draws the
+robots: map -> `<robot>/odom` as the identity on /tf_static (what simulation has), `<robot>/odom` ->
+`<robot>/base_link` with every odometry message, `<robot>/odom` -> `<robot>/trailer_link` with every trailer pose
+(msg_tools.frames.TfFromOdometry); `graph` records the graph's own /tf and /tf_static instead (a full ROS
+install, e.g. with AMCL's map -> odom); `none` records no TF.
+
 Status: `~/recording` (diagnostic_msgs/DiagnosticStatus, latched): values = the file and, per topic received,
 its message count; sent when a topic first delivers and once per flush. fastep-launch waits, before it starts
 the clock, until it counts every robot's odometry (plants publish their start state while time holds at 0).
@@ -65,7 +72,7 @@ from fastep_ros.common import (
     guard_clock,
     node_main,
 )
-from msg_tools import convert, interface
+from msg_tools import convert, frames, interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError
 from msg_tools.ros2_profile import message_class, qos_profile_to_dict
 
@@ -103,6 +110,9 @@ class RecorderNode(Node):
                               constraints='zstd | lz4 | none')
         discovery_period = declare(self, 'discovery_period', 0.5, 'wall seconds between looks at the graph for '
                                    'new topics', constraints=f'range [{PERIOD_RANGE[0]:g}, {PERIOD_RANGE[1]:g}]')
+        tf_mode = declare(self, 'tf', 'derive', 'TF in the recording: derive (from the recorded odometry; map -> '
+                          'odom the identity) | graph (the graph\'s /tf and /tf_static) | none',
+                          constraints='derive | graph | none')
         self.depth = declare(self, 'queue_depth', 1000, 'subscription queue depth (messages kept while the '
                              'recorder is busy)', constraints='>= 1')
         if chunk_size < 1024:
@@ -111,6 +121,10 @@ class RecorderNode(Node):
             check_range(name, value, *PERIOD_RANGE, ' s')
         if compression not in COMPRESSIONS:
             raise StartupError(f'parameter compression must be one of {", ".join(COMPRESSIONS)}, got {compression!r}')
+        if tf_mode not in ('derive', 'graph', 'none'):
+            raise StartupError(f'parameter tf must be derive, graph or none, got {tf_mode!r}')
+        self.tf_from_odometry = frames.TfFromOdometry() if tf_mode == 'derive' else None
+        self.record_graph_tf = tf_mode == 'graph'
         if self.depth < 1:
             raise StartupError(f'parameter queue_depth must be >= 1, got {self.depth}')
         metadata = self._scenario_metadata(scenario)
@@ -167,6 +181,8 @@ class RecorderNode(Node):
 
     # ------------------------------------------------------------------------------------------- graph
     def wants(self, topic: str) -> bool:
+        if self.record_graph_tf and topic in (frames.TF, frames.TF_STATIC):
+            return True
         return topic in self.wanted if self.wanted else interface.is_interface_topic(topic)
 
     def discover(self) -> None:
@@ -226,6 +242,10 @@ class RecorderNode(Node):
             if channel is None:  # registered at the first message, when the publishers' QoS is known
                 channel = self.channels[topic] = writer.add_channel(topic, self.types[topic], self.offered(topic))
             writer.write_raw(channel, data, now, now)
+            if self.tf_from_odometry is not None:
+                for tf_topic, tf_data in self.tf_from_odometry.take(topic, data):
+                    writer.write(tf_topic, tf_data, now, now, type_name=frames.TF_TYPE,
+                                 qos=frames.TF_QOS if tf_topic == frames.TF else frames.TF_STATIC_QOS)
         except WriteFailedError as exc:
             self.stop_writing(exc)
         self.counts[topic] += 1

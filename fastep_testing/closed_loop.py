@@ -16,6 +16,10 @@ def drive(model: Any, controller: Any, state: ArrayLike, target: ArrayLike, dt: 
     goal = np.asarray(target, dtype=float)
     states = [np.asarray(state, dtype=float)]
     controller.reset(states[0], goal)
+    applied = getattr(controller, 'applied', None)   # a controller with acceleration limits (diff_drive)
     for _ in range(steps):
-        states.append(model.integrate(states[-1], controller.command(states[-1], goal, dt), dt))
+        command = controller.command(states[-1], goal, dt)
+        if applied is not None:
+            applied(command)
+        states.append(model.integrate(states[-1], command, dt))
     return np.array(states)

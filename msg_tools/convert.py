@@ -1,13 +1,17 @@
 """Pure conversions between fastep_core types and ROS 2 messages (no node, no DDS needed).
 
 Conventions (DESIGN.md "ROS 2 interface", REP-103/105):
-- poses are in the `map` frame (the simulated pose *is* the map pose; there is no odometry drift);
-- a point mass has yaw 0, so its `base_link` axes are the map axes and its twist (vx, vy) is both the
-  child-frame and the map-frame velocity; its command is a Twist with linear.x = vx, linear.y = vy (map frame);
+- goals, waypoints, plans and obstacles are in the `map` frame; odometry is in the robot's odom frame (REP-105;
+  map -> odom is the identity in simulation, msg_tools.frames), trailer poses too; the functions take the
+  frame names they are given;
+- a point mass has yaw 0, so its `base_link` axes are parallel to odom's and its twist (vx, vy) is both the
+  child-frame and the odom-frame velocity; its command is a Twist with linear.x = vx, linear.y = vy (body frame);
 - a tractor-trailer's yaw is the tractor heading theta0; its command is (v, omega) = (linear.x, angular.z);
   its odometry twist is the reference point's velocity in the tractor frame: linear.x = v,
   linear.y = L * omega / 2 (the mid-axle point slides sideways while turning, eq. 13) and angular.z = omega;
-  the trailer heading theta1 travels on `trailer_pose` (the trailer axle point, yaw theta1).
+  the trailer heading theta1 travels on `trailer_pose` (the trailer axle point, yaw theta1);
+- a diff_drive's yaw is its heading theta; its command is (v, omega) = (linear.x, angular.z) in the body frame,
+  and so is its odometry twist (linear.x = v, angular.z = omega: the axle midpoint does not slide sideways).
 
 Functions that read messages raise ValueError (with a one-line reason) for values that are not finite or
 malformed; the nodes turn that into a status message instead of crashing.
@@ -30,7 +34,8 @@ from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
 from fastep_core.world import World
 
 __all__ = [
-    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'command_to_twist', 'grid_resolution', 'grid_shape',
+    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'command_to_twist',
+    'grid_resolution', 'grid_shape',
     'diagnostic_to_dict', 'make_status', 'marker_array_to_obstacles',
     'obstacles_to_marker_array', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
     'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point',
@@ -127,13 +132,14 @@ def path_to_waypoints(msg: Path) -> list[tuple[float, float]]:
 def state_to_odometry(state: Vector, stamp: Time | None = None, *, child_frame_id: str = 'base_link',
                       frame_id: str = 'map', linear: Sequence[float] = (0.0, 0.0),
                       angular: float = 0.0) -> Odometry:
-    """Odometry of a model state: (x, y) (point mass, yaw 0) or (x, y, theta0, theta1) (yaw theta0).
+    """Odometry of a model state: (x, y) (point mass, yaw 0), (x, y, theta) (diff_drive, yaw theta) or
+    (x, y, theta0, theta1) (tractor-trailer, yaw theta0).
 
     `linear` (x, y) and `angular` (z) are the twist in the child frame (see the module docstring).
     """
     s = [float(v) for v in state]
-    if len(s) not in (2, 4):
-        raise ValueError(f'state must have 2 or 4 values, got {len(s)}')
+    if len(s) not in (2, 3, 4):
+        raise ValueError(f'state must have 2, 3 or 4 values, got {len(s)}')
     _finite(s, 'state')
     _finite((*linear, angular), 'velocity')
     msg = Odometry()
@@ -142,7 +148,7 @@ def state_to_odometry(state: Vector, stamp: Time | None = None, *, child_frame_i
         msg.header.stamp = stamp
     msg.child_frame_id = child_frame_id
     msg.pose.pose.position = Point(x=s[0], y=s[1], z=0.0)
-    msg.pose.pose.orientation = yaw_to_quaternion(s[2] if len(s) == 4 else 0.0)
+    msg.pose.pose.orientation = yaw_to_quaternion(s[2] if len(s) > 2 else 0.0)
     msg.twist.twist.linear.x = float(linear[0])
     msg.twist.twist.linear.y = float(linear[1])
     msg.twist.twist.angular.z = float(angular)
@@ -157,13 +163,16 @@ def odometry_position(msg: Odometry) -> tuple[float, float]:
 
 
 def odometry_to_state(msg: Odometry, model: str = 'point_mass', trailer: float | None = None) -> np.ndarray:
-    """Model state from odometry: (x, y) for a point mass; (x, y, yaw, trailer) for a tractor-trailer.
+    """Model state from odometry: (x, y) for a point mass; (x, y, yaw) for a diff_drive; (x, y, yaw, trailer)
+    for a tractor-trailer.
 
     `trailer` is theta1 (from `trailer_pose`), required for tractor-trailers. ValueError if not finite.
     """
     x, y = odometry_position(msg)
     if model == 'point_mass':
         return np.array([x, y])
+    if model == 'diff_drive':
+        return np.array([x, y, quaternion_to_yaw(msg.pose.pose.orientation)])
     if model == 'tractor_trailer':
         if trailer is None:
             raise ValueError('tractor-trailer state needs the trailer heading (trailer_pose)')
@@ -201,12 +210,16 @@ def trailer_yaw(msg: PoseStamped) -> float:
 
 # ------------------------------------------------------------------------------------------------- commands
 
+STEERED_MODELS = ('tractor_trailer', 'diff_drive')
+"""Models commanded by (v, omega) in the body frame: Twist linear.x and angular.z."""
+
+
 def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
-    """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer (v, omega) -> linear.x,
-    angular.z."""
+    """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer and diff_drive (v, omega) ->
+    linear.x, angular.z."""
     a, b = float(command[0]), float(command[1])
     msg = Twist()
-    if model == 'tractor_trailer':
+    if model in STEERED_MODELS:
         msg.linear.x, msg.angular.z = a, b
     else:
         msg.linear.x, msg.linear.y = a, b
@@ -216,7 +229,7 @@ def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
 def twist_to_command(msg: Twist | TwistStamped, model: str = 'point_mass') -> np.ndarray:
     """Inverse of command_to_twist (TwistStamped accepted); ValueError if the used fields are not finite."""
     twist = msg.twist if isinstance(msg, TwistStamped) else msg
-    if model == 'tractor_trailer':
+    if model in STEERED_MODELS:
         cmd = (float(twist.linear.x), float(twist.angular.z))
     else:
         cmd = (float(twist.linear.x), float(twist.linear.y))

@@ -62,7 +62,8 @@ SHARED_TOPICS = (OBSTACLES, MAP, CLOCK)
 # recorder hears a robot before the run starts.
 RECORDING = '~/recording'
 
-MAP_FRAME = 'map'          # frame of every pose; a robot's own frame is `<name>/base_link`
+MAP_FRAME = 'map'          # frame of goals, waypoints, plans and obstacles; odometry is `<name>/odom` ->
+                           # `<name>/base_link` (REP-105: msg_tools.frames)
 
 # '/<robot>/<topic>' with a robot name of one level (a ROS name token) and a per-robot topic.
 ROBOT_TOPIC_PATTERN = re.compile(r'^/([A-Za-z_][A-Za-z0-9_]*)/(' + '|'.join(ROBOT_TOPICS) + r')$')

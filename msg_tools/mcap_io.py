@@ -25,6 +25,7 @@ fails (a full disk) raises WriteFailedError.
 
 from __future__ import annotations
 
+import functools
 import heapq
 import os
 import struct
@@ -743,24 +744,40 @@ class Recording:
             raise RecordingError(f'{self.path}: cannot read messages: {_one_line(exc)}') from None
 
     def messages(self, topics: Iterable[str] | None = None) -> Iterator[RecordedMessage]:
-        """Every message deserialised with rclpy, in log-time order: (topic, type, log_time, message)."""
-        from rclpy.serialization import deserialize_message
-
-        classes: dict[int, type] = {}
+        """Every message deserialised with rclpy, in log-time order: (topic, type, log_time, message). A type
+        rclpy does not have here (tf2_msgs/msg/TFMessage: not among the PyPI ROS wheels) is decoded by rosbags'
+        Jazzy typestore when it knows it (a rosbags message: a dataclass with the same fields)."""
+        decoders: dict[int, Callable[[bytes], Any]] = {}
         for raw in self.raw_messages(topics):
-            cls = classes.get(raw.channel_id)
-            if cls is None:
+            decode = decoders.get(raw.channel_id)
+            if decode is None:
                 ch = self.channels[raw.channel_id]
                 if ch.message_encoding != MESSAGE_ENCODING:
                     raise RecordingError(f'{self.path}: topic {ch.topic} has message encoding '
                                          f'{ch.message_encoding!r}, not cdr')
-                cls = classes[raw.channel_id] = message_class(ch.type)
+                decode = decoders[raw.channel_id] = _decoder(ch.type)
             try:
-                message = deserialize_message(raw.data, cls)
+                message = decode(raw.data)
             except Exception as exc:
                 raise RecordingError(f'{self.path}: cannot decode a {raw.type} message on {raw.topic} at log time '
                                      f'{raw.log_time * 1e-9:.3f} s: {_one_line(exc)}') from None
             yield RecordedMessage(raw.topic, raw.type, raw.log_time, message)
+
+
+def _decoder(type_name: str) -> Callable[[bytes], Any]:
+    """CDR bytes -> message: rclpy's class, else (a type not installed here) rosbags' typestore."""
+    from rclpy.serialization import deserialize_message
+
+    try:
+        cls = message_class(type_name)
+    except RecordingError:
+        from rosbags.typesys import Stores, get_typestore
+        store = get_typestore(Stores.ROS2_JAZZY)
+        full = normalize_type(type_name)
+        if full not in store.types:
+            raise
+        return functools.partial(store.deserialize_cdr, typename=full)
+    return functools.partial(deserialize_message, message_type=cls)
 
 
 def open_recording(path: str | os.PathLike[str], on_skip: Callable[[str], None] | None = None) -> Recording:

@@ -42,9 +42,10 @@ if TYPE_CHECKING:
     from fastep_core.scenario import Scenario
     from fastep_core.simulator import Run
 
-__all__ = ['PLOT_POINTS', 'RobotPath', 'Velocities', 'bench_figures', 'box_plot_figure', 'cost_figure',
-           'draw_dynamic', 'draw_world', 'example_paths_figure', 'family_box_figure', 'family_figures', 'paths_figure',
-           'plot_paths', 'run_paths_figure', 'save', 'title', 'velocity_figure']
+__all__ = ['HEADING_ARROWS', 'HEADING_MODELS', 'PLOT_POINTS', 'RobotPath', 'Velocities', 'bench_figures',
+           'box_plot_figure', 'cost_figure', 'draw_dynamic', 'draw_headings', 'draw_world', 'example_paths_figure',
+           'family_box_figure', 'family_figures', 'paths_figure', 'plot_paths', 'run_paths_figure', 'save', 'title',
+           'velocity_figure']
 
 FloatArray = NDArray[np.float64]
 PLOT_POINTS = 5000   # points drawn per line at most: long recordings are thinned for drawing only
@@ -52,6 +53,8 @@ OBSTACLE_GREY = '0.55'
 WALL_GREY = '0.25'
 MOVER_COLOUR = 'tab:purple'
 MOVER_SNAPSHOTS = 5   # positions of each mover drawn over a run, t = 0 included
+HEADING_ARROWS = 15   # arrows showing a robot's heading along its path (the start's included)
+HEADING_MODELS = ('diff_drive', 'tractor_trailer')   # models whose trajectory rows carry a heading (row[3])
 # fastep-bench's planners keep their colours across panels.
 ALGORITHM_COLOURS = {'fastep': 'tab:red', 'fastep_paper': 'tab:orange', 'aco': 'tab:blue', 'optimal': 'tab:olive',
                      'dwa': 'tab:brown', 'fastep_route': 'tab:pink'}
@@ -126,6 +129,7 @@ class RobotPath:
     waypoints: FloatArray               # (k, 2) the waypoints its swarm planned
     start: tuple[float, float] | None = None
     goal: tuple[float, float] | None = None
+    headings: FloatArray | None = None  # (n,) the heading at each point of xy (diff_drive, tractor-trailer)
 
 
 def paths_figure(obstacles: Sequence[Obstacle], workspace: Sequence[float] | None, robots: Sequence[RobotPath],
@@ -143,6 +147,7 @@ def paths_figure(obstacles: Sequence[Obstacle], workspace: Sequence[float] | Non
         waypoints = np.asarray(robot.waypoints, dtype=float).reshape(-1, 2)
         if len(waypoints):
             ax.plot(waypoints[:, 0], waypoints[:, 1], 'x', color=colour, ms=5, mew=1.2)
+        draw_headings(ax, robot, colour)
         if robot.start is not None:
             ax.plot(*robot.start, 'o', color=colour, ms=7, mfc='white', mew=2)
         if robot.goal is not None:
@@ -155,6 +160,20 @@ def paths_figure(obstacles: Sequence[Obstacle], workspace: Sequence[float] | Non
     ax.grid(alpha=0.3)
     fig.tight_layout()
     return fig
+
+
+def draw_headings(ax: Axes, robot: RobotPath, colour: str) -> None:
+    """Arrows of the robot's heading at HEADING_ARROWS points evenly spaced in time along its path, if it has one
+    (a differential-drive base turns on the spot: its path alone does not show where it faced)."""
+    if robot.headings is None:
+        return
+    xy = np.asarray(robot.xy, dtype=float).reshape(-1, 2)
+    headings = np.asarray(robot.headings, dtype=float).reshape(-1)
+    if not len(xy) or len(headings) != len(xy):
+        return
+    pick = np.unique(np.linspace(0, len(xy) - 1, HEADING_ARROWS).round().astype(int))
+    ax.quiver(xy[pick, 0], xy[pick, 1], np.cos(headings[pick]), np.sin(headings[pick]), color=colour,
+              angles='xy', scale_units='inches', scale=4.0, width=0.004, zorder=3)
 
 
 def _outline(ax: Axes, obstacle: Obstacle, style: str, colour: str) -> None:
@@ -212,10 +231,12 @@ def run_paths_figure(scenario: Scenario, run: Run) -> Figure:
     robots = []
     for robot in run.robots:
         spec = specs[robot.name]
+        headings = np.array([row[3] for row in robot.trajectory], dtype=float) if spec.model in HEADING_MODELS \
+            else None
         robots.append(RobotPath(
             robot.name, np.array([row[1:3] for row in robot.trajectory], dtype=float).reshape(-1, 2),
             robot.path_length, np.array(robot.waypoints, dtype=float).reshape(-1, 2),
-            (float(spec.start[0]), float(spec.start[1])), (float(spec.goal[0]), float(spec.goal[1]))))
+            (float(spec.start[0]), float(spec.start[1])), (float(spec.goal[0]), float(spec.goal[1])), headings))
     if scenario.is_static:
         return paths_figure(scenario.world.obstacle_list, scenario.world.workspace, robots,
                             title(scenario.name, run.algorithm, run.seed))
@@ -263,7 +284,7 @@ class Velocities:
 
     name: str
     source: str            # the topic they come from: cmd_vel or odom
-    model: str             # point_mass: vx, vy and the speed; tractor_trailer: v and omega
+    model: str             # point_mass: vx, vy and the speed; tractor_trailer, diff_drive: v and omega
     rows: FloatArray
 
 
@@ -275,7 +296,7 @@ def velocity_figure(robots: Sequence[Velocities], text: str) -> Figure:
         data = _thin(np.asarray(robot.rows, dtype=float).reshape(-1, 4))
         if len(data):
             t = data[:, 0]
-            if robot.model == 'tractor_trailer':
+            if robot.model in HEADING_MODELS:   # commanded by (v, omega): linear.x, angular.z
                 ax.plot(t, data[:, 1], lw=1.1, label='v (m/s)')
                 ax.plot(t, data[:, 3], lw=1.1, label='omega (rad/s)')
             else:

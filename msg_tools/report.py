@@ -77,6 +77,7 @@ class RobotRecord:
     name: str
     model: str = 'point_mass'
     odom: list[tuple[float, float, float]] = field(default_factory=list)           # t, x, y
+    yaw: list[float] = field(default_factory=list)                                 # of each odom (rad)
     odom_twist: list[tuple[float, float, float, float]] = field(default_factory=list)  # t, lin.x, lin.y, ang.z
     cmd: list[tuple[float, float, float, float]] = field(default_factory=list)     # t, lin.x, lin.y, ang.z
     cost: list[tuple[float, float]] = field(default_factory=list)
@@ -293,6 +294,7 @@ def load_run(recording: Recording) -> RecordedRun:
                     problems.count(topic, f'not finite or beyond {LIMIT:g}')
                     continue
                 robot.odom.append((t, v[0], v[1]))
+                robot.yaw.append(math.atan2(2.0 * (v[5] * v[4] + v[2] * v[3]), 1.0 - 2.0 * (v[3] * v[3] + v[4] * v[4])))
                 robot.odom_twist.append((t, v[6], v[7], v[8]))
                 continue
             if kind == OBSTACLES:
@@ -490,8 +492,9 @@ def figures(run: RecordedRun) -> dict[str, Any]:
         length = float(np.sqrt((np.diff(odom[:, 1:3], axis=0) ** 2).sum(axis=1)).sum())
         start = (float(odom[0, 1]), float(odom[0, 2])) if len(odom) else None
         waypoints = robot.plan[:-1] if robot.plan else robot.waypoints   # the plan's last pose is the goal
+        headings = np.array(robot.yaw, dtype=float) if robot.model in plots.HEADING_MODELS else None
         paths.append(plots.RobotPath(robot.name, odom[:, 1:3], length, np.array(waypoints, dtype=float).reshape(-1, 2),
-                                     start, robot.goal))
+                                     start, robot.goal, headings))
     costs = {robot.name: np.array(robot.cost, dtype=float).reshape(-1, 2) - [run.t0, 0.0]
              for robot in run.robots.values()}
     velocities = []

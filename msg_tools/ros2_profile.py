@@ -3,8 +3,9 @@ writes them in a channel's `offered_qos_profiles` metadata (msg_tools.mcap_io wr
 
 Schemas (encoding `ros2msg`, named `pkg/msg/Type`): the type's .msg file followed, for every nested type (depth
 first, each once), by a line of 80 `=`, a line `MSG: pkg/Type` and that type's .msg file, from the .msg files
-installed with the message packages, the source rosbag2 uses. QoS: rosbag2's metadata version 9 YAML, read
-within the scenario loader's bounds (the text comes from files anyone may have written).
+installed with the message packages, the source rosbag2 uses (for a type that is not installed, such as
+tf2_msgs/msg/TFMessage, rosbags' typestore gives the text in the same form). QoS: rosbag2's metadata version 9
+YAML, read within the scenario loader's bounds (the text comes from files anyone may have written).
 """
 
 from __future__ import annotations
@@ -116,7 +117,27 @@ def _dependencies(pkg: str, text: str) -> list[str]:
 
 @functools.cache
 def message_definition(type_name: str) -> str:
-    """The `ros2msg` schema text of a type, as rosbag2 writes it (see the module docstring)."""
+    """The `ros2msg` schema text of a type, as rosbag2 writes it (see the module docstring). A type whose package
+    is not installed (tf2_msgs is not among the PyPI ROS wheels) gets the text rosbags' Jazzy typestore generates
+    in the same form, when rosbags knows it."""
+    try:
+        return _installed_definition(type_name)
+    except RecordingError:
+        text = _typestore_definition(normalize_type(type_name))
+        if text is None:
+            raise
+        return text
+
+
+def _typestore_definition(full: str) -> str | None:
+    from rosbags.typesys import Stores, get_typestore
+    store = get_typestore(Stores.ROS2_JAZZY)
+    if full not in store.types:
+        return None
+    return str(store.generate_msgdef(full, ros_version=2)[0])
+
+
+def _installed_definition(type_name: str) -> str:
     pkg, _, name = normalize_type(type_name).split('/')
     seen = {f'{pkg}/{name}'}
     parts: list[str] = []

@@ -31,7 +31,7 @@ from fastep_core.cli import INTERRUPTED, Parser, fail, guard, positive_int, seed
 from fastep_core.dynamic_world import dynamic_feature
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.scenario import Scenario, builtin_names, load_scenario
-from fastep_core.simulator import Run, Tick, check_simulable, simulate
+from fastep_core.simulator import Run, Tick, simulate
 
 if TYPE_CHECKING:
     from msg_tools.sim_mcap import SimRecorder
@@ -165,7 +165,6 @@ def _run(argv: Sequence[str] | None) -> int:
     # A FastepError from here on (a bad scenario; RecordingError: the MCAP file cannot be written) is guard's
     # one line and exit 2.
     scenario = load_scenario(args.scenario)
-    check_simulable(scenario)   # before any output is opened
     recorder = None
     if args.mcap is not None and dynamic_feature(scenario.obstacle_specs):
         return fail(PROG, f'--mcap: {dynamic_feature(scenario.obstacle_specs)}: recordings of moving, unknown and '

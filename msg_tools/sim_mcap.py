@@ -9,7 +9,11 @@ conversions of msg_tools.convert:
   `cost` (every step), `waypoint` (when the point driven to changes), `plan` (when it changes; the goal is its
   last pose), `status` (when level, mode or reason change; the values the planner node sends plus
   `robot_radius`), `trailer_pose` with every odom of a tractor-trailer, `goal_pose` at t = 0;
-- `/obstacles` and `/map` at t = 0 (transient-local) and `/clock` at every simulated step.
+- `/obstacles` and `/map` at t = 0 (transient-local) and `/clock` at every simulated step;
+- TF (REP-105, msg_tools.frames) so Foxglove draws the robots: `/tf_static` at t = 0, map -> `<name>/odom` (the
+  identity: simulated odometry does not drift), and `/tf` with every odometry message, `<name>/odom` ->
+  `<name>/base_link` (and `<name>/odom` -> `<name>/trailer_link` from the trailer pose). Odometry and trailer
+  poses are in `<name>/odom`; goals, waypoints and plans in `map`.
 
 Time base: log_time = publish_time = header.stamp = simulated seconds since the start of the run (t = 0 is
 1970-01-01T00:00:00 as a ROS time), exactly what a live graph on simulated time (fastep-clock starts at 0)
@@ -35,7 +39,7 @@ from std_msgs.msg import Float64
 from fastep_core.planning.navigator import Mode
 from fastep_core.scenario import RobotSpec, Scenario
 from fastep_core.simulator import Run, Tick, simulate
-from msg_tools import convert
+from msg_tools import convert, frames
 from msg_tools.footprint import base_frame, circle_footprint
 from msg_tools.interface import (
     CLOCK,
@@ -97,6 +101,8 @@ class SimRecorder:
         for spec in self.scenario.robots:
             state = _RobotState(spec)
             self.robots[spec.name] = state
+            self._add(0.0, frames.TF_STATIC, frames.tf_message_cdr(
+                [frames.static_map_to_odom(MAP_FRAME, frames.odom_frame(spec.name), stamp)]))
             self._add(0.0, robot_topic(spec.name, GOAL_POSE),
                       convert.point_to_pose_stamped(spec.goal, stamp, MAP_FRAME))
             self._odom(spec, 0.0, np.array(spec.start, dtype=float), np.zeros(2))
@@ -122,14 +128,20 @@ class SimRecorder:
             v, omega = float(command[0]), float(command[1])
             linear: tuple[float, float] = (v, 0.5 * spec.length * omega)
             angular = omega
+        elif spec.model == 'diff_drive':   # body-frame twist: the axle midpoint moves along the heading
+            linear, angular = (float(command[0]), 0.0), float(command[1])
         else:
             linear, angular = (float(command[0]), float(command[1])), 0.0
-        self._add(t, robot_topic(spec.name, ODOM), convert.state_to_odometry(
-            state, stamp, child_frame_id=f'{spec.name}/base_link', frame_id=MAP_FRAME, linear=linear,
-            angular=angular))
+        odom_frame = frames.odom_frame(spec.name)
+        odom = convert.state_to_odometry(state, stamp, child_frame_id=frames.base_frame(spec.name),
+                                         frame_id=odom_frame, linear=linear, angular=angular)
+        self._add(t, robot_topic(spec.name, ODOM), odom)
+        trailer = None
         if spec.model == 'tractor_trailer':
-            self._add(t, robot_topic(spec.name, TRAILER_POSE),
-                      convert.trailer_pose(state, spec.trailer_length, spec.hitch_offset, stamp, MAP_FRAME))
+            trailer = convert.trailer_pose(state, spec.trailer_length, spec.hitch_offset, stamp, odom_frame)
+            self._add(t, robot_topic(spec.name, TRAILER_POSE), trailer)
+        self._add(t, frames.TF, frames.tf_message_cdr(
+            frames.odometry_transforms(odom, trailer, frames.trailer_frame(spec.name))))
 
     def _status(self, robot: _RobotState, t: float, mode: str, reason: str, activations: int,
                 waypoint: Any, cost: float) -> None:
@@ -197,7 +209,11 @@ class SimRecorder:
                         time_base='simulated seconds since the start of the run')
             writer.add_metadata(METADATA_NAME, meta)
             for log_time, _, topic, message in sorted(self.items, key=lambda item: item[:2]):
-                writer.write(topic, message, log_time, qos=offered_qos_profiles(topic))
+                if topic == frames.TF or topic == frames.TF_STATIC:
+                    writer.write(topic, message, log_time, type_name=frames.TF_TYPE,
+                                 qos=frames.TF_QOS if topic == frames.TF else frames.TF_STATIC_QOS)
+                else:
+                    writer.write(topic, message, log_time, qos=offered_qos_profiles(topic))
             return writer.message_count
 
 

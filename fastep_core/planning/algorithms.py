@@ -12,6 +12,7 @@ import numpy as np
 
 from fastep_core.errors import ParameterError
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
+from fastep_core.kinematics.diff_drive import DiffDrive, DiffDriveController
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.aco_kinematic import ACOKinematic
 from fastep_core.planning.dwa import DynamicWindow
@@ -21,7 +22,7 @@ from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'DEFAULT_ALGORITHM', 'MISSING_DIFF_DRIVE', 'NAVIGATORS', 'POINT_MASS_ONLY',
+__all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'DEFAULT_ALGORITHM', 'NAVIGATORS', 'REFUSED_MODELS', 'ROBOT_MODELS',
            'algorithm_name', 'check_drives', 'drives', 'make_navigator', 'make_robot']
 
 NAVIGATORS: dict[str, type[Navigator]] = {
@@ -43,11 +44,6 @@ DEFAULT_ALGORITHM = 'fastep_route'
 150 unseen worlds) FAStep-Route arrived in every run without collision, with the shortest paths (path / optimum
 1.003 at most on average per family) at the least compute (0.11-0.29 of ACO-Kinematic's). fastep-sim and
 fastep-bench keep 'fastep', the paper's algorithm, as their default: they reproduce the paper."""
-
-
-MISSING_DIFF_DRIVE = ('robot model diff_drive has no kinematic model yet (it belongs to issue 14, "Real robot"): '
-                      'use point_mass or tractor_trailer')
-"""Why a diff_drive robot cannot run yet (scenario format v2 names the model; its kinematics are to come)."""
 
 
 def algorithm_name(algorithm: str) -> str:
@@ -72,24 +68,33 @@ class RobotLike(Protocol):
 
 
 def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Controller]:
-    """The kinematic model and controller for a scenario robot ('point_mass' or 'tractor_trailer')."""
+    """The kinematic model and controller for a scenario robot ('point_mass', 'tractor_trailer', 'diff_drive').
+
+    A diff_drive's base limits and gains come from the planner parameters (max_speed, max_turn_rate,
+    max_acceleration, max_turn_acceleration, speed_gain, turn_gain; kinematics/diff_drive.py).
+    """
     if spec.model == 'point_mass':
         return PointMass(), PointMassController(params.alpha1, params.alpha2, params.max_speed)
     if spec.model == 'tractor_trailer':
         model = TractorTrailer(spec.length, spec.trailer_length, spec.hitch_offset)
         return model, TractorTrailerController(model, params.speed_gain, params.max_speed)
     if spec.model == 'diff_drive':
-        raise ParameterError(MISSING_DIFF_DRIVE)
+        return (DiffDrive(params.max_speed, params.max_turn_rate),
+                DiffDriveController(params.speed_gain, params.turn_gain, params.max_speed, params.max_turn_rate,
+                                    params.max_acceleration, params.max_turn_acceleration))
     raise ParameterError(f'unknown robot model {spec.model!r}')
 
 
-POINT_MASS_ONLY = frozenset({'dwa'})
-"""Algorithms that drive holonomic point masses only (planning/dwa.py samples (vx, vy))."""
+ROBOT_MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer', 'diff_drive')
+"""The models make_robot builds (scenario.MODELS names the same)."""
+REFUSED_MODELS: dict[str, frozenset[str]] = {'dwa': frozenset({'tractor_trailer'})}
+"""Robot models an algorithm cannot drive: dwa samples velocities of a point mass or a unicycle (planning/dwa.py),
+not the steering of a tractor-trailer."""
 
 
 def drives(algorithm: str, model: str) -> bool:
-    """Can the algorithm drive a robot of this model ('point_mass', 'tractor_trailer')?"""
-    return algorithm not in POINT_MASS_ONLY or model == 'point_mass'
+    """Can the algorithm drive a robot of this model ('point_mass', 'tractor_trailer', 'diff_drive')?"""
+    return model not in REFUSED_MODELS.get(algorithm, frozenset())
 
 
 def check_drives(algorithm: str, model: str, robot: str = '') -> None:
@@ -97,7 +102,8 @@ def check_drives(algorithm: str, model: str, robot: str = '') -> None:
     if not drives(algorithm, model):
         which = f'robot {robot} is' if robot else 'the robot is'
         able = ', '.join(a for a in ALGORITHMS if drives(a, model))
-        raise ParameterError(f'{algorithm} drives point_mass robots only; {which} a {model} (choose {able})')
+        models = ' and '.join(m for m in ROBOT_MODELS if drives(algorithm, m))
+        raise ParameterError(f'{algorithm} drives {models} robots only; {which} a {model} (choose {able})')
 
 
 def make_navigator(algorithm: str, spec: RobotLike, radius: float, world: World, params: PlannerParams,

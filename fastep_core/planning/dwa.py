@@ -1,5 +1,6 @@
 """DWA: the Dynamic Window Approach (Fox, Burgard & Thrun, "The Dynamic Window Approach to Collision
-Avoidance", IEEE Robotics & Automation Magazine 4(1), 1997), adapted to the holonomic point mass.
+Avoidance", IEEE Robotics & Automation Magazine 4(1), 1997), for the differential-drive base it was made for
+and adapted to the holonomic point mass.
 
 Why it is here: it is the local planner a ROS user would pick instead of FAStep-Kinematic (Nav2's DWB
 controller descends from it), so it is the yardstick, run in the same harness (the shared Navigator loop, its
@@ -55,10 +56,32 @@ whose progress DWA scores is the exact path's carrot instead of the goal, until 
 (the yardstick with the same safety net as the others; what a Nav2 user gets from a global planner above
 DWB).
 
-Robot models: the holonomic point mass only. A tractor-trailer is refused when the navigator is made (one
-line, from `make_navigator`). The sampling is generic enough for another model: `window` gives the samples
-and `rollout` their positions over the horizon; a differential drive (issue 14) would sample (v, omega)
-within its window and roll out arcs (chords of `dwa_rollout_steps`), and a heading term would be added.
+Robot models: the holonomic point mass (above) and a differential-drive base (a unicycle, the paper's own
+robot; kinematics/diff_drive.py), which the model tells apart by what it declares (not holonomic, turns in place,
+no trailer). For the unicycle, as in the paper:
+- the window is the rectangle of commands (v, omega) reachable within one tick from the current one, v within
+  max_acceleration * dt and omega within max_turn_acceleration * dt (the base's limits; dwa_acceleration, and
+  twice it per second for omega, where those are 0), cut to 0 <= v <= max_speed (forward only, as Nav2's
+  DWB with min_vel_x = 0) and |omega| <= max_turn_rate, `dwa_samples` values per axis;
+- the rollout holds (v, omega) and follows the exact arc (kinematics/diff_drive.py's closed form), checked as
+  `dwa_rollout_steps` chords;
+- admissible: v can brake to rest at max_acceleration before the first hit;
+- the objective adds two terms. The paper's heading term, dwa_heading * HEADING_SHARE * (1 - e / (pi - f))
+  with e the angle by which the heading at the rollout's end points more than f away from the bearing from
+  there to the goal (0 within f): the goal progress alone scores a base facing away from its goal at rest
+  (every sample is slow) nearly equally for every turn rate. f is 90 degrees while the rollout ends farther
+  from the goal than max_speed * dwa_horizon, narrowing in proportion to nothing at the goal. Flat within 90
+  degrees because a base facing an obstacle on the way must be free to turn away from the goal to skirt it: a
+  term that pulled it back to the goal held it there (diff_drive_walls: stuck 0.2 m from the first circle, 'a
+  local minimum'); narrowing near the goal because there a base 0.2 m beside its goal, facing across, had no
+  reason left to turn toward it and stood there (every forward arc ends farther away);
+  And a look-ahead term, the paper's dist in spirit: dwa_clearance times the room beyond the clearance at
+  dwa_clearance_cap metres ahead of the rollout's end along its final heading (capped at +-dwa_clearance_cap,
+  over it): of the turns on the spot, whose rollouts all keep the same clearance, it picks the one that faces
+  free room, so a base that drove up to an obstacle turns toward the side it can pass on;
+- braking lowers v and omega toward 0 at their accelerations.
+A tractor-trailer (steered, not turning in place) is refused when the navigator is made (one line, from
+`make_navigator`).
 """
 
 from __future__ import annotations
@@ -79,17 +102,19 @@ from fastep_core.planning.others import OtherRobot, other_arrays
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['DynamicWindow', 'Choice', 'LOCAL_MINIMUM']
+__all__ = ['DynamicWindow', 'Choice', 'HEADING_SHARE', 'LOCAL_MINIMUM']
 
 LOCAL_MINIMUM = 'DWA: a local minimum'
 """Added to the progress checker's reason when a DWA run fails to make progress."""
+HEADING_SHARE = 0.5
+"""A unicycle's heading term weighs this times dwa_heading (module docstring)."""
 
 
 @dataclass(frozen=True)
 class Choice:
     """The outcome of one tick's search: the command, its score and what the search saw."""
 
-    velocity: FloatArray   # (vx, vy), the command
+    velocity: FloatArray   # the command: (vx, vy) for a point mass, (v, omega) for a unicycle
     score: float           # G of the chosen sample (-inf when none was admissible and the robot brakes)
     admissible: int        # how many samples were admissible
     near: bool             # was any obstacle, wall or robot within reach of the rollouts
@@ -104,8 +129,10 @@ class DynamicWindow(Navigator):
     def __init__(self, model: RobotModel, controller: Controller, radius: float, world: World,
                  params: PlannerParams | None = None, rng: np.random.Generator | int | None = None) -> None:
         super().__init__(model, controller, radius, world, params, rng)
-        if not model.holonomic:
-            raise ParameterError(f'dwa drives holonomic robots (point_mass) only, not a {type(model).__name__}')
+        if not (model.holonomic or (model.turns_in_place and not model.trailer)):
+            raise ParameterError(f'dwa drives holonomic robots and unicycles (point_mass, diff_drive) only, '
+                                 f'not a {type(model).__name__}')
+        self.unicycle = not model.holonomic   # samples (v, omega) and rolls out arcs (module docstring)
         self.check_params(self.params)
         self.velocity = np.zeros(2)   # the command last sent: the centre of the next dynamic window
         self.escapes_traps = bool(self.params.dwa_escape)
@@ -141,7 +168,7 @@ class DynamicWindow(Navigator):
         """The best admissible velocity of the dynamic window, through the guard (the last check)."""
         self._target = target
         start = time.perf_counter()
-        choice = self.search(state[:2], target, dt, others)
+        choice = self.search(state, target, dt, others)
         self.plan_time += time.perf_counter() - start
         self.activations += 1
         self.cost = choice.score if math.isfinite(choice.score) else 0.0
@@ -167,17 +194,64 @@ class DynamicWindow(Navigator):
         c, s = math.cos(bearing), math.sin(bearing)
         return self.velocity + np.column_stack([c * along - s * across, s * along + c * across])
 
-    def rollout(self, position: FloatArray, samples: FloatArray) -> tuple[FloatArray, FloatArray]:
-        """Times (k + 1,) and positions (n, k + 1, 2) of each sample held over the horizon (straight lines)."""
-        times = np.linspace(0.0, self.params.dwa_horizon, self.params.dwa_rollout_steps + 1)
-        return times, position + samples[:, None, :] * times[None, :, None]
-
-    def search(self, position: FloatArray, goal: FloatArray, dt: float, others: Sequence[OtherRobot]) -> Choice:
-        """One tick of DWA (module docstring, steps 1-4)."""
+    def accelerations(self) -> tuple[float, float]:
+        """A unicycle's limits on dv/dt (m/s^2) and domega/dt (rad/s^2) (module docstring)."""
         p = self.params
-        samples = self.window(dt, math.atan2(goal[1] - position[1], goal[0] - position[0]))
-        speed = np.hypot(samples[:, 0], samples[:, 1])
-        times, points = self.rollout(position, samples)
+        linear = p.max_acceleration if p.max_acceleration > 0.0 else p.dwa_acceleration
+        angular = p.max_turn_acceleration if p.max_turn_acceleration > 0.0 else 2.0 * p.dwa_acceleration
+        return linear, angular
+
+    def unicycle_window(self, dt: float) -> FloatArray:
+        """A unicycle's samples (n, 2) of (v, omega): a grid over the reachable rectangle, cut to the limits."""
+        p = self.params
+        linear, angular = self.accelerations()
+        v0, w0 = float(self.velocity[0]), float(self.velocity[1])
+        v_low, v_high = max(0.0, v0 - linear * dt), min(p.max_speed, v0 + linear * dt)
+        if v_low > v_high:   # faster than max_speed (a limit lowered at run time): brake toward it
+            v_low = v_high = max(p.max_speed, v0 - linear * dt)
+        w_low, w_high = w0 - angular * dt, w0 + angular * dt
+        if p.max_turn_rate > 0.0:
+            w_low, w_high = max(-p.max_turn_rate, w_low), min(p.max_turn_rate, w_high)
+            if w_low > w_high:
+                w_low = w_high = min(max(0.0, w0 - angular * dt), w0 + angular * dt) if w0 > 0 else \
+                    max(min(0.0, w0 + angular * dt), w0 - angular * dt)
+        v, w = np.meshgrid(np.linspace(v_low, v_high, p.dwa_samples), np.linspace(w_low, w_high, p.dwa_samples),
+                           indexing='ij')
+        return np.unique(np.column_stack([v.ravel(), w.ravel()]), axis=0)
+
+    def rollout(self, position: FloatArray, samples: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Times (k + 1,) and positions (n, k + 1, 2) of each sample held over the horizon (straight lines; a
+        unicycle's position is its state (x, y, theta) and its rollouts are arcs)."""
+        times = np.linspace(0.0, self.params.dwa_horizon, self.params.dwa_rollout_steps + 1)
+        if self.unicycle:
+            return times, self.arcs(position, samples, times)
+        return times, position[:2] + samples[:, None, :] * times[None, :, None]
+
+    @staticmethod
+    def arcs(state: FloatArray, samples: FloatArray, times: FloatArray) -> FloatArray:
+        """Positions (n, k + 1, 2) of a unicycle at `state` holding each (v, omega) of samples: the exact arcs."""
+        v, w = samples[:, 0, None], samples[:, 1, None]
+        turn = w * times[None, :]                                    # (n, k + 1)
+        half = 0.5 * turn
+        small = np.abs(half) < 1e-4
+        sinc = np.where(small, 1.0 - half * half / 6.0, np.sin(half) / np.where(small, 1.0, half))
+        chord = v * times[None, :] * sinc
+        middle = float(state[2]) + half
+        return np.stack([state[0] + chord * np.cos(middle), state[1] + chord * np.sin(middle)], axis=-1)
+
+    def search(self, state: FloatArray, goal: FloatArray, dt: float, others: Sequence[OtherRobot]) -> Choice:
+        """One tick of DWA (module docstring, steps 1-4): state is the position (x, y), a unicycle's (x, y, theta)."""
+        p = self.params
+        position = state[:2]
+        if self.unicycle:
+            samples = self.unicycle_window(dt)
+            speed = np.abs(samples[:, 0])
+            braking = self.accelerations()[0]
+        else:
+            samples = self.window(dt, math.atan2(goal[1] - position[1], goal[0] - position[0]))
+            speed = np.hypot(samples[:, 0], samples[:, 1])
+            braking = p.dwa_acceleration
+        times, points = self.rollout(state, samples)
         horizon = float(times[-1])
         starts, ends = points[:, :-1], points[:, 1:]                 # the rollout's segments (n, k, 2)
 
@@ -195,7 +269,7 @@ class DynamicWindow(Navigator):
 
         # Step 3: admissible if it can stop before the first hit (with none, before the end of the horizon).
         first = np.where(hit.any(axis=1), times[np.argmax(hit, axis=1)], horizon)
-        admissible = (dt + speed / (2.0 * p.dwa_acceleration) <= first) & (speed <= p.max_speed * (1 + 1e-9))
+        admissible = (dt + speed / (2.0 * braking) <= first) & (speed <= p.max_speed * (1 + 1e-9))
         count = int(admissible.sum())
         if count == 0:
             return Choice(self._brake(dt), -math.inf, 0, True)
@@ -206,9 +280,28 @@ class DynamicWindow(Navigator):
                     np.hypot(goal[0] - points[:, -1, 0], goal[1] - points[:, -1, 1])) / scale
         clearance = np.minimum(margin.min(axis=1), p.dwa_clearance_cap) / p.dwa_clearance_cap
         score = p.dwa_heading * progress + p.dwa_clearance * clearance + p.dwa_velocity * speed / p.max_speed
+        if self.unicycle:
+            score = score + self._unicycle_terms(state, goal, samples, points, horizon)
         score = np.where(admissible, score, -np.inf)
         best = int(np.argmax(score))
         return Choice(samples[best].copy(), float(score[best]), count, near)
+
+    def _unicycle_terms(self, state: FloatArray, goal: FloatArray, samples: FloatArray, points: FloatArray,
+                        horizon: float) -> FloatArray:
+        """A unicycle's heading and look-ahead terms of the objective (module docstring), per sample."""
+        p = self.params
+        final = float(state[2]) + samples[:, 1] * horizon            # the heading at the rollout's end
+        bearing = np.arctan2(goal[1] - points[:, -1, 1], goal[0] - points[:, -1, 0])
+        off = np.abs(np.arctan2(np.sin(bearing - final), np.cos(bearing - final)))
+        # Flat within 90 degrees far from the goal, narrowing to nothing at the goal (module docstring).
+        left = np.hypot(goal[0] - points[:, -1, 0], goal[1] - points[:, -1, 1])
+        free = 0.5 * math.pi * np.minimum(1.0, left / (p.max_speed * horizon))
+        heading = 1.0 - np.maximum(0.0, off - free) / (math.pi - free)
+        cap = p.dwa_clearance_cap
+        ahead = points[:, -1] + cap * np.column_stack([np.cos(final), np.sin(final)])
+        room = np.clip(self.world.room(ahead) - self.clearance, -cap, cap) / cap
+        terms: FloatArray = p.dwa_heading * HEADING_SHARE * heading + p.dwa_clearance * room
+        return terms
 
     def _static_margins(self, position: FloatArray, starts: FloatArray, ends: FloatArray, points: FloatArray,
                         reach: float) -> tuple[FloatArray, float]:
@@ -255,7 +348,13 @@ class DynamicWindow(Navigator):
         return gap - contact, now
 
     def _brake(self, dt: float) -> FloatArray:
-        """The slowest velocity of the window along the current direction: braking at dwa_acceleration."""
+        """The slowest velocity of the window along the current direction: braking at dwa_acceleration (a
+        unicycle: v and omega toward 0 at the base's accelerations)."""
+        if self.unicycle:
+            linear, angular = self.accelerations()
+            v, w = float(self.velocity[0]), float(self.velocity[1])
+            return np.array([math.copysign(max(0.0, abs(v) - linear * dt), v),
+                             math.copysign(max(0.0, abs(w) - angular * dt), w)])
         speed = float(np.hypot(*self.velocity))
         slower = max(0.0, speed - self.params.dwa_acceleration * dt)
         brake: NDArray[np.float64] = self.velocity * (slower / speed) if speed > 0.0 else np.zeros(2)

@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import time
 from enum import Enum
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -69,6 +69,7 @@ class Navigator:
                  params: PlannerParams | None = None, rng: np.random.Generator | int | None = None) -> None:
         self.model = model
         self.controller = controller
+        self._applied: Callable[[FloatArray], None] | None = getattr(controller, 'applied', None)
         self.radius = float(radius)
         self.world = world
         self.params = p = params or PlannerParams()
@@ -182,7 +183,18 @@ class Navigator:
 
     # ------------------------------------------------------------- the loop
     def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
-        """One control tick: returns the command for the model (zeros when stopped)."""
+        """One control tick: returns the command for the model (zeros when stopped).
+
+        A controller with acceleration limits (diff_drive) is told the command the robot got, whatever chose it
+        (the controller, the guard's stop, a recovery): its next command starts from there.
+        """
+        command = self.tick(t, state, others)
+        if self._applied is not None:
+            self._applied(command)
+        return command
+
+    def tick(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
+        """The command of one control tick (`update` without telling the controller)."""
         stop = np.zeros(2)
         dt = self.params.dt if self._last_t is None or t <= self._last_t else t - self._last_t
         self._last_t = t

@@ -67,6 +67,14 @@ class PlannerParams:
     alpha2: float = _p(0.1, 'point-mass y gain: dy/dt = alpha2 (y1 - y) (1/s)', 1e-6)
     speed_gain: float = _p(0.1, 'tractor-trailer speed gain: v = speed_gain * distance (1/s)', 1e-6)
     max_speed: float = _p(1.0, 'speed limit (m/s); 0 means unlimited', 0.0)
+    # A differential-drive base (kinematics/diff_drive.py): its law's turn gain and the base's limits. Defaults:
+    # Nav2's TurtleBot3 DWB acceleration limits (2.5 m/s^2, 3.2 rad/s^2) and a TurtleBot3's turn rate (1.8-2.8).
+    turn_gain: float = _p(2.0, 'diff_drive turn gain k2: omega = k2 alpha + ... (1/s)', 1e-6)
+    max_turn_rate: float = _p(2.0, 'diff_drive turn-rate limit |omega| (rad/s); 0 means unlimited', 0.0)
+    max_acceleration: float = _p(2.5, 'diff_drive acceleration and braking limit |dv/dt| (m/s^2); 0 means '
+                                      'unlimited', 0.0)
+    max_turn_acceleration: float = _p(3.2, 'diff_drive turn acceleration limit |domega/dt| (rad/s^2); 0 means '
+                                           'unlimited', 0.0)
     # What the paper leaves open: detection range, step size, tolerances, time step.
     sensing_range: float = _p(3.0, 'epsilon of eq. 11: obstacles whose surface is nearer are detected (m)', 0.0)
     detection_interval: float = _p(0.1, 'obstacle detection reruns after this much travel (m); every tick near '

@@ -110,19 +110,34 @@ def test_a_family_world_is_valid_solvable_and_the_same_for_the_same_seed(family)
     models = {r.model for r in scenario.robots}
     if family == 'multi_robot':
         assert 2 <= len(scenario.robots) <= 4
+    elif family == 'diff_drive_robots':
+        assert 1 <= len(scenario.robots) <= 4 and models == {'diff_drive'}
     else:
         assert len(scenario.robots) == 1
-        assert models == {'tractor_trailer' if family == 'tractor_trailer' else 'point_mass'}
+        assert models == {'tractor_trailer' if family == 'tractor_trailer' else
+                          'diff_drive' if family == 'diff_drive_walls' else 'point_mass'}
     kinds = {type(o).__name__ for o in scenario.world.obstacle_list}
     if family == 'circle_field':
         assert kinds == {'Circle'}
-    if family in ('circles_walls', 'u_trap'):
+    if family in ('circles_walls', 'u_trap', 'diff_drive_walls'):
         assert 'Segment' in kinds
 
 
 def test_the_families_cover_their_ranges_over_a_few_worlds():
     counts = {len(random_family_data('multi_robot', FAMILY_SEED0 + k)['robots']) for k in range(12)}
     assert counts == {2, 3, 4}
+    counts = {len(random_family_data('diff_drive_robots', FAMILY_SEED0 + k)['robots']) for k in range(12)}
+    assert counts == {1, 2, 3, 4}
+
+
+def test_a_diff_drive_world_is_the_point_mass_world_with_a_base_facing_anywhere():
+    seed = FAMILY_SEED0 + 5
+    point, base = random_family_data('circles_walls', seed), random_family_data('diff_drive_walls', seed)
+    assert base['obstacles'] == point['obstacles'] and base['workspace'] == point['workspace']
+    (p,), (b,) = point['robots'], base['robots']
+    assert b['start'][:2] == p['start'] and b['goal'] == p['goal'] and b['radius'] == p['radius']
+    headings = [random_family_data('diff_drive_walls', FAMILY_SEED0 + k)['robots'][0]['start'][2] for k in range(12)]
+    assert min(headings) < -1.5 and max(headings) > 1.5
 
 
 def test_a_family_world_is_a_source_the_experiments_load():

@@ -5,6 +5,7 @@ Each bad file gives one ScenarioError line naming the key and the problem; faste
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -184,15 +185,20 @@ def test_fastep_sim_exits_2_with_one_line(tmp_path: Path, capsys: pytest.Capture
     assert err.count('\n') == 1 and 'obstacles[0].motion.speed must be > 0' in err
 
 
-def test_fastep_sim_refuses_diff_drive_until_its_model_exists(tmp_path: Path,
-                                                              capsys: pytest.CaptureFixture[str]) -> None:
+def test_fastep_sim_runs_a_diff_drive(tmp_path: Path) -> None:
+    """Issue 14 item 1: fastep-sim used to refuse diff_drive (exit 2, 'no kinematic model yet'); it runs it now,
+    with trajectory rows [t, x, y, theta]."""
     data = v2()
-    data['robots'][0].update(model='diff_drive', start=[5, 5, 0.0])
+    data['robots'][0].update(model='diff_drive', start=[5, 5, 3.0])
+    data['robots'][0].pop('sensor')
+    data['obstacles'] = data['obstacles'][3:]
     out = tmp_path / 'out.json'
-    assert sim_cli.main([str(write(tmp_path, data)), '--json', str(out)]) == 2
-    err = capsys.readouterr().err
-    assert err.count('\n') == 1 and 'robots[0] (r1): robot model diff_drive has no kinematic model yet' in err
-    assert not out.exists()   # refused before any output was opened
+    assert sim_cli.main([str(write(tmp_path, data)), '--algorithm', 'fastep_route', '--json', str(out)]) == 0
+    robot = json.loads(out.read_text())['runs'][0]['robots'][0]
+    assert robot['reached'] and not robot['collided'] and robot['model'] == 'diff_drive'
+    rows = robot['trajectory']
+    assert {len(row) for row in rows} == {4} and rows[0] == [0.0, 5.0, 5.0, 3.0]
+    assert all(-math.pi < row[3] <= math.pi for row in rows)
 
 
 def test_parse_scenario_accepts_v2_mappings() -> None:

@@ -33,7 +33,7 @@ def test_obstacles_the_graph_cannot_honour(extra: dict[str, object], fragment: s
 def test_diff_drive_and_sensors() -> None:
     robot = {**ROBOT, 'model': 'diff_drive', 'start': [5, 25, 0.0]}
     scenario = parse_scenario(world({'circle': {'center': [25, 40], 'radius': 1}}, robot))
-    assert 'robot model diff_drive has no kinematic model yet' in graph_problem(scenario)
+    assert graph_problem(scenario) == ''   # diff_drive runs on the graph (plant and planner)
     assert graph_problem(scenario, robots=False) == ''   # the map node publishes no robot
     sensing = parse_scenario(world({'circle': {'center': [25, 40], 'radius': 1}}, {**ROBOT, 'sensor': {}}))
     assert graph_problem(sensing) == ''

@@ -74,9 +74,20 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
     with AnyReader([recorded]) as reader:   # rosbags: a reader independent of ours
         connections = [c for c in reader.connections if c.topic == '/r1/odom']
         odometry = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=connections)]
+        # REP-105 TF, derived by the recorder from the odometry it records (Foxglove draws the robot with it).
+        tf = {c.topic: [reader.deserialize(raw, c.msgtype) for _, _, raw in reader.messages(connections=[c])]
+              for c in reader.connections if c.topic in ('/tf', '/tf_static')}
     stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in odometry]
     assert stamps[0] == 0.0 and (odometry[0].pose.pose.position.x, odometry[0].pose.pose.position.y) == (2.0, 10.0)
     assert stamps[-1] >= rows[-1][0] - 1e-9
+    assert {(m.header.frame_id, m.child_frame_id) for m in odometry} == {('r1/odom', 'r1/base_link')}
+    assert [(t.header.frame_id, t.child_frame_id) for m in tf['/tf_static'] for t in m.transforms] == \
+        [('map', 'r1/odom')]
+    assert len(tf['/tf']) == len(odometry)
+    last = tf['/tf'][-1].transforms[0]
+    assert (last.header.frame_id, last.child_frame_id) == ('r1/odom', 'r1/base_link')
+    assert (last.transform.translation.x, last.transform.translation.y) == \
+        (odometry[-1].pose.pose.position.x, odometry[-1].pose.pose.position.y)
 
 
 def launch_under_way(tmp_path: Path, domain: int | None = None) -> tuple[subprocess.Popen[str], list[int]]:
@@ -128,7 +139,8 @@ def test_launch_survives_a_second_ctrl_c_and_a_sigterm_while_it_stops_the_nodes(
     (['open_field', '--rtf', '-1'], '--rtf must be in [0.001, 10000], got -1'),
     (['open_field', '--rtf', '1e-300'], '--rtf must be in [0.001, 10000], got 1e-300'),   # create_timer traceback
     (['open_field', '--seed', '-1'], 'a seed must be >= 0'),
-    (['application', '--algorithm', 'dwa'], 'dwa drives point_mass robots only; robot r1 is a tractor_trailer'),
+    (['application', '--algorithm', 'dwa'],
+     'dwa drives point_mass and diff_drive robots only; robot r1 is a tractor_trailer'),
     # Checked before the run (they were after it: --record DIR aborted with exit 1 once the nodes were up).
     (['open_field', '--record', '{tmp}'], '--record {tmp}: is a directory'),
     (['open_field', '--json', '{tmp}'], '--json {tmp}: is a directory'),
@@ -154,7 +166,7 @@ def test_launch_bad_input_is_one_line_and_exit_2(tmp_path: Path, argv: list[str]
 @pytest.mark.parametrize('module,params,words', [
     ('map_server', ['scenario:=no_such_scenario_here'], 'no built-in scenario'),
     ('planner', ['algorithm:=dijkstra'], 'algorithm must be one of'),
-    ('planner', ['algorithm:=dwa', 'model:=tractor_trailer'], 'dwa drives point_mass robots only'),
+    ('planner', ['algorithm:=dwa', 'model:=tractor_trailer'], 'dwa drives point_mass and diff_drive robots only'),
     ('planner', ['max_speed:=-1.0'], 'max_speed'),
     ('plant', ['model:=tractor_trailer', 'start:=[1.0, 2.0]'], 'start must have 4 values'),
     ('plant', ['start:=[.nan, 2.0]'], 'start must be finite'),

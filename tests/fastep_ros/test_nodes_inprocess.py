@@ -88,8 +88,8 @@ def test_planner_runs_dwa_and_refuses_it_for_a_tractor_trailer(context: Any) -> 
         assert isinstance(node.navigator, DynamicWindow)
     finally:
         node.destroy_node()
-    with pytest.raises(StartupError, match='parameter algorithm: dwa drives point_mass robots only; the robot is '
-                                           'a tractor_trailer'):
+    with pytest.raises(StartupError, match='parameter algorithm: dwa drives point_mass and diff_drive robots only; '
+                                           'the robot is a tractor_trailer'):
         make(PlannerNode, context, algorithm='dwa', model='tractor_trailer')
 
 
@@ -236,7 +236,7 @@ def test_plant_tractor_trailer_publishes_consistent_odometry(context: Any) -> No
         node.publish()
         odom = seen[-1]
         assert convert.stamp_to_seconds(odom.header.stamp) == pytest.approx(1.4)
-        assert odom.header.frame_id == 'map' and odom.child_frame_id == 'base_link'
+        assert odom.header.frame_id == 'odom' and odom.child_frame_id == 'base_link'   # REP-105, root namespace
         assert convert.quaternion_to_yaw(odom.pose.pose.orientation) == pytest.approx(node.state[2])
         expected = node.model.velocity(node.state, np.array([1.0, 0.2]))
         assert convert.odometry_velocity(odom) == pytest.approx(tuple(expected))

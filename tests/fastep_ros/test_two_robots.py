@@ -54,6 +54,9 @@ def test_two_robots_cross_without_collision(tmp_path: Path) -> None:
         h.spin_for(0.2)
 
         tracks = {name: {round(stamp(m), 6): odom_xy(m) for m in h.records[f'/{name}/odom']} for name in ROBOTS}
+        for name in ROBOTS:   # REP-105: each plant's odometry is odom -> base_link in its namespace
+            assert {(m.header.frame_id, m.child_frame_id) for m in h.records[f'/{name}/odom']} == \
+                {(f'{name}/odom', f'{name}/base_link')}
         for name, (_, goal) in ROBOTS.items():
             last = max(tracks[name])
             assert distance(tracks[name][last], goal) <= 0.12

@@ -13,6 +13,7 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import TractorTrailer
+from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.world import World
 from msg_tools import convert
 
@@ -73,6 +74,16 @@ def test_tractor_odometry_round_trip_and_map_velocity() -> None:
         convert.odometry_to_state(msg, 'tractor_trailer')
 
 
+def test_diff_drive_odometry_round_trip_and_map_velocity() -> None:
+    """Issue 14 item 1: a diff_drive's yaw is its heading and its twist is (v, 0, omega) in the body frame;
+    state_to_odometry refused 3 values and odometry_to_state knew no diff_drive."""
+    model, state, command = DiffDrive(), np.array([1.0, 2.0, 2.2]), np.array([0.6, -0.9])
+    msg = convert.state_to_odometry(state, linear=(command[0], 0.0), angular=command[1])
+    np.testing.assert_allclose(convert.odometry_to_state(msg, 'diff_drive'), state)
+    assert convert.odometry_velocity(msg) == pytest.approx(tuple(model.velocity(state, command)))
+    assert msg.twist.twist.angular.z == command[1]
+
+
 def test_odometry_velocity_matches_the_model() -> None:
     model = TractorTrailer(1.2, 1.0, 0.1)
     state, command = np.array([0.0, 0.0, 0.7, 0.5]), np.array([0.8, 0.4])
@@ -98,7 +109,7 @@ def test_state_to_odometry_rejects_nan_and_bad_sizes() -> None:
     with pytest.raises(ValueError):
         convert.state_to_odometry([0.0, 0.0], linear=(math.inf, 0.0))
     with pytest.raises(ValueError):
-        convert.state_to_odometry([0.0, 0.0, 0.0])
+        convert.state_to_odometry([0.0, 0.0, 0.0, 0.0, 0.0])
 
 
 def test_trailer_pose_geometry() -> None:
@@ -121,6 +132,7 @@ def test_pose_and_path_round_trip() -> None:
 @pytest.mark.parametrize('model,command,fields', [
     ('point_mass', (0.3, -0.7), ('linear.x', 'linear.y')),
     ('tractor_trailer', (0.9, 0.2), ('linear.x', 'angular.z')),
+    ('diff_drive', (0.4, -1.1), ('linear.x', 'angular.z')),
 ])
 def test_command_twist_round_trip(model: str, command: tuple[float, float], fields: tuple[str, str]) -> None:
     twist = convert.command_to_twist(command, model)

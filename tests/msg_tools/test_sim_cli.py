@@ -44,8 +44,8 @@ def test_dwa_runs_a_point_mass_and_refuses_a_tractor_trailer_in_one_line(tmp_pat
     assert doc['algorithm'] == 'dwa' and doc['runs'][0]['robots'][0]['reached'] is True
     proc = run_cli('application', '--algorithm', 'dwa')
     assert proc.returncode == 2 and proc.stdout == ''
-    assert proc.stderr == ('fastep-sim: error: dwa drives point_mass robots only; robot r1 is a tractor_trailer '
-                           '(choose fastep, fastep_paper, aco, optimal, fastep_route)\n')
+    assert proc.stderr == ('fastep-sim: error: dwa drives point_mass and diff_drive robots only; robot r1 is a '
+                           'tractor_trailer (choose fastep, fastep_paper, aco, optimal, fastep_route)\n')
 
 
 def test_tractor_trailer_trajectory_rows_carry_both_headings(tmp_path):

@@ -12,6 +12,7 @@ import pytest
 from fastep_core.errors import ParameterError
 from fastep_core.experiments import drives_scenario, tasks
 from fastep_core.geometry import Circle, Segment
+from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.metrics import Margins, trajectory_margins
 from fastep_core.planning import PlannerParams, make_navigator
 from fastep_core.planning.algorithms import ALGORITHM_NAMES, algorithm_name, check_drives, drives
@@ -53,7 +54,8 @@ def assert_safe(scenario: Scenario, run: Run) -> Margins:
 def test_dwa_is_registered_under_its_name_and_refuses_a_tractor_trailer_in_one_line():
     assert algorithm_name('dwa') == ALGORITHM_NAMES['dwa'] == 'DWA'
     assert drives('dwa', 'point_mass') and not drives('dwa', 'tractor_trailer') and drives('fastep', 'tractor_trailer')
-    with pytest.raises(ParameterError, match=r'^dwa drives point_mass robots only; robot r2 is a tractor_trailer '
+    with pytest.raises(ParameterError, match=r'^dwa drives point_mass and diff_drive robots only; robot r2 is a '
+                                             r'tractor_trailer '
                                              r'\(choose fastep, fastep_paper, aco, optimal, fastep_route\)$'):
         make_navigator('dwa', TRACTOR, 0.5, World.from_obstacles([0, 0, 50, 50], []), PlannerParams())
     with pytest.raises(ParameterError, match='the robot is a tractor_trailer'):
@@ -235,3 +237,54 @@ def test_two_robots_face_to_face_in_a_corridor_fail_saying_so_without_touching()
     assert statuses['r2'] == statuses['r4'] == 'arrived: goal reached'
     assert statuses['r1'] == statuses['r3'] == ('failed: failed to make progress: not 0.5 m closer to the goal in '
                                                 f'30 s ({LOCAL_MINIMUM}, another robot in the way)')
+
+
+# ------------------------------------------------------------------------------- a differential-drive base
+
+DIFF = RobotSpec('d1', 'diff_drive', (5.0, 25.0, math.pi), (45.0, 25.0), 0.35)
+
+
+def unicycle(world: World, velocity=(0.0, 0.0)) -> DynamicWindow:
+    nav = make_navigator('dwa', DIFF, 0.35, world, PlannerParams())
+    assert isinstance(nav, DynamicWindow) and nav.unicycle
+    nav.velocity = np.array(velocity, dtype=float)
+    return nav
+
+
+def test_a_unicycle_samples_forward_speed_and_turn_rate_within_its_accelerations_and_limits():
+    """Issue 14 item 1: dwa refused every model but the point mass ('dwa drives point_mass robots only')."""
+    assert drives('dwa', 'diff_drive')
+    nav = unicycle(World.from_obstacles([0, 0, 50, 50], []), velocity=(0.98, 1.95))
+    p = nav.params
+    samples = nav.unicycle_window(0.05)
+    assert samples[:, 0].min() == pytest.approx(0.98 - p.max_acceleration * 0.05)
+    assert samples[:, 0].max() == pytest.approx(p.max_speed)           # cut to the speed limit
+    assert samples[:, 1].min() == pytest.approx(1.95 - p.max_turn_acceleration * 0.05)
+    assert samples[:, 1].max() == pytest.approx(p.max_turn_rate)       # cut to the turn-rate limit
+    at_rest = unicycle(World.from_obstacles([0, 0, 50, 50], [])).unicycle_window(0.05)
+    assert at_rest[:, 0].min() == 0.0                                  # forward only
+
+
+def test_a_unicycle_rollout_follows_the_exact_arcs_of_its_model():
+    nav = unicycle(World.from_obstacles([0, 0, 50, 50], []))
+    state = np.array([5.0, 25.0, 0.3])
+    samples = np.array([[0.5, 0.0], [0.8, 1.2], [0.0, -0.7]])
+    times, points = nav.rollout(state, samples)
+    model = DiffDrive()
+    for sample, track in zip(samples, points):
+        expected = [model.integrate(state, sample, t)[:2] for t in times]
+        np.testing.assert_allclose(track, expected, atol=1e-12)
+
+
+def test_a_unicycle_facing_away_turns_on_the_spot_toward_its_goal():
+    nav = unicycle(World.from_obstacles([0, 0, 50, 50], []))
+    choice = nav.search(np.array([5.0, 25.0, math.pi]), np.array([45.0, 25.0]), 0.05, [])
+    assert choice.velocity[0] == pytest.approx(0.0) and abs(choice.velocity[1]) > 0.0
+
+
+@pytest.mark.parametrize('name', ['diff_drive_walls', 'diff_drive_swap'])
+def test_dwa_drives_differential_drive_bases_to_their_goals_safely(name):
+    scenario = load_scenario(name)
+    run = simulate(scenario, 'dwa', 0)
+    assert all(robot.reached for robot in run.robots), [robot.status for robot in run.robots]
+    assert_safe(scenario, run)

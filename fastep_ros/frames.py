@@ -1,0 +1,62 @@
+"""Live TF for the nodes: /tf and /tf_static (tf2_msgs/msg/TFMessage) where tf2_msgs is importable.
+
+The PyPI ROS wheels this project installs have no tf2_msgs, so here a node cannot publish TF: it says so once
+in its log and goes on (recordings carry TF anyway: fastep-record and fastep-sim --mcap write it with rosbags,
+msg_tools.frames). In a full ROS install (tf2_msgs present) the same node publishes it, with the QoS of tf2_ros's
+broadcasters. The frame algebra itself is msg_tools.frames.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Sequence
+
+from geometry_msgs.msg import TransformStamped
+from rclpy.node import Node
+from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+from msg_tools import frames
+
+__all__ = ['LOCALIZATION_QOS', 'TfBroadcaster']
+
+_DYNAMIC = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.VOLATILE)
+_STATIC = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.RELIABLE,
+                     durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+# A localization pose (AMCL's amcl_pose is reliable and transient-local): best available matches every publisher
+# without incompatible-QoS warnings, and takes the last pose of a transient-local one at once.
+LOCALIZATION_QOS = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=1, reliability=ReliabilityPolicy.BEST_AVAILABLE,
+                              durability=DurabilityPolicy.BEST_AVAILABLE)
+
+
+class TfBroadcaster:
+    """Publishes transforms on /tf and /tf_static for a node, or (no tf2_msgs here) nothing, said once.
+
+    `message_class` is for tests: frames.tf_message_class() (None when tf2_msgs is not importable) by default."""
+
+    def __init__(self, node: Node, message_class: Callable[[], type | None] = frames.tf_message_class) -> None:
+        self.node = node
+        self.cls = message_class()
+        self.static: list[TransformStamped] = []
+        self.dynamic_pub: Any = None
+        self.static_pub: Any = None
+        if self.cls is None:
+            node.get_logger().info('tf2_msgs is not installed: not publishing /tf or /tf_static (recordings made '
+                                   'with fastep-record or fastep-sim --mcap carry them)')
+            return
+        self.dynamic_pub = node.create_publisher(self.cls, frames.TF, _DYNAMIC)
+        self.static_pub = node.create_publisher(self.cls, frames.TF_STATIC, _STATIC)
+
+    @property
+    def available(self) -> bool:
+        return self.cls is not None
+
+    def send(self, transforms: Sequence[TransformStamped]) -> None:
+        if self.dynamic_pub is not None and self.cls is not None:
+            self.dynamic_pub.publish(self.cls(transforms=list(transforms)))
+
+    def send_static(self, transforms: Sequence[TransformStamped]) -> None:
+        """Add static transforms: like tf2_ros's static broadcaster, one latched message holds all of them."""
+        self.static.extend(transforms)
+        if self.static_pub is not None and self.cls is not None:
+            self.static_pub.publish(self.cls(transforms=list(self.static)))

@@ -1,0 +1,290 @@
+"""REP-105 frames: planar pose algebra, the map -> odom transform, and TF messages (tf2_msgs/msg/TFMessage).
+
+Frames (REP-105), per robot namespace `<ns>` (names never start with a slash; in the root namespace plain
+`odom`, `base_link`):
+
+    map  ->  <ns>/odom  ->  <ns>/base_link          (and <ns>/odom -> <ns>/trailer_link for tractor-trailers)
+
+- The plant's odometry is the pose of `<ns>/base_link` in `<ns>/odom`, its twist in `<ns>/base_link` (the body
+  frame). A point mass has no heading: its odometry yaw is 0, so its base_link axes stay parallel to odom's and
+  its body-frame velocity is its odom-frame velocity.
+- The planner works in `map`. Its pose of the robot is the odometry composed with map -> odom: the identity in
+  simulation (the simulated odometry does not drift), and on a real robot the transform that makes a
+  localization pose (AMCL's `amcl_pose`: the map pose of base_link at a stamp) agree with the odometry at that
+  stamp: map->odom = localization pose o inverse(odometry pose at, or nearest to, the localization's stamp)
+  (what AMCL itself broadcasts on /tf). MapFromOdom keeps that transform.
+- A command the planner computes in `map` (a point mass's velocity) is rotated into the body frame before it
+  is sent; (v, omega) commands are body-frame quantities already.
+
+TF in recordings: tf2_msgs is not in the PyPI ROS wheels, so no rclpy class exists for TFMessage here. The
+recordings (fastep-record, fastep-sim --mcap) serialise it with rosbags' typestore (tf_message_cdr) and take its
+schema text from there too (msg_tools.ros2_profile). Nodes publish TF live only where tf2_msgs is importable
+(fastep_ros.frames).
+
+Poses are (x, y, yaw) tuples; angles in radians, wrapped to (-pi, pi].
+"""
+
+from __future__ import annotations
+
+import bisect
+import functools
+import math
+from typing import Any, Sequence
+
+import numpy as np
+from builtin_interfaces.msg import Time
+from geometry_msgs.msg import TransformStamped
+
+from msg_tools import convert
+from msg_tools.ros2_profile import qos_dict
+
+__all__ = [
+    'IDENTITY', 'TF', 'TF_QOS', 'TF_STATIC', 'TF_STATIC_QOS', 'TF_TYPE', 'MapFromOdom', 'Pose2D', 'base_frame',
+    'body_velocity', 'compose', 'frame_name', 'inverse', 'odom_frame', 'odometry_pose', 'odometry_transforms',
+    'state_in_frame', 'static_map_to_odom', 'tf_message_cdr', 'tf_message_class', 'trailer_frame',
+    'transform_stamped',
+]
+
+Pose2D = tuple[float, float, float]   # x, y, yaw
+IDENTITY: Pose2D = (0.0, 0.0, 0.0)
+
+TF = '/tf'
+TF_STATIC = '/tf_static'
+TF_TYPE = 'tf2_msgs/msg/TFMessage'
+# What tf2_ros's broadcasters offer: /tf reliable, volatile, 100 deep; /tf_static reliable, transient-local, 1 deep.
+TF_QOS = [qos_dict(depth=100)]
+TF_STATIC_QOS = [qos_dict(depth=1, transient_local=True)]
+
+
+# ----------------------------------------------------------------------------------------------- names
+
+def frame_name(namespace: str, frame: str) -> str:
+    """`r1/odom` for namespace `/r1`, `odom` for the root namespace: a frame id never starts with a slash."""
+    ns = namespace.strip('/')
+    return f'{ns}/{frame}' if ns else frame
+
+
+def odom_frame(namespace: str) -> str:
+    return frame_name(namespace, 'odom')
+
+
+def base_frame(namespace: str) -> str:
+    return frame_name(namespace, 'base_link')
+
+
+def trailer_frame(namespace: str) -> str:
+    return frame_name(namespace, 'trailer_link')
+
+
+# ----------------------------------------------------------------------------------------------- pose algebra
+
+def _wrap(angle: float) -> float:
+    return math.atan2(math.sin(angle), math.cos(angle))
+
+
+def compose(a: Pose2D, b: Pose2D) -> Pose2D:
+    """a o b: the pose b (given in frame A, whose pose in the parent is a) expressed in the parent."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1], _wrap(a[2] + b[2]))
+
+
+def inverse(a: Pose2D) -> Pose2D:
+    """The pose whose composition with a is the identity."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (-c * a[0] - s * a[1], s * a[0] - c * a[1], _wrap(-a[2]))
+
+
+def state_in_frame(transform: Pose2D, state: np.ndarray) -> np.ndarray:
+    """A model state [x, y, angles...] (every model's state is a point and headings) moved by `transform`: the
+    point transformed, every heading turned by its yaw. The identity returns the state unchanged (no rounding)."""
+    if transform == IDENTITY:
+        return state
+    out = np.array(state, dtype=float)
+    out[0], out[1], _ = compose(transform, (float(state[0]), float(state[1]), 0.0))
+    out[2:] = [_wrap(float(v) + transform[2]) for v in state[2:]]
+    return out
+
+
+def body_velocity(velocity: Sequence[float] | np.ndarray, heading: float) -> tuple[float, float]:
+    """A velocity given in a frame, rotated into a body frame whose heading in that frame is `heading`."""
+    if heading == 0.0:
+        return float(velocity[0]), float(velocity[1])
+    c, s = math.cos(heading), math.sin(heading)
+    return c * velocity[0] + s * velocity[1], -s * velocity[0] + c * velocity[1]
+
+
+# ----------------------------------------------------------------------------------------------- map -> odom
+
+class MapFromOdom:
+    """map -> odom of one robot: from localization poses (map pose of base_link, stamped) and the odometry.
+
+    add_odometry keeps the recent odometry poses (by stamp); add_localization sets map->odom = localization o
+    inverse(the odometry pose nearest to the localization's stamp). A localization pose that comes before any
+    odometry waits for the first odometry. transform is None until one was computed: the robot's map pose is not
+    known then.
+    """
+
+    def __init__(self, keep: int = 400) -> None:
+        self.keep = keep                    # odometry poses kept (20 s at the plant's 20 Hz odometry)
+        self.stamps: list[float] = []
+        self.poses: list[Pose2D] = []
+        self.pending: tuple[float, Pose2D] | None = None
+        self.transform: Pose2D | None = None
+        self.localizations = 0              # localization poses turned into a transform
+
+    def add_odometry(self, stamp: float, pose: Pose2D) -> None:
+        if self.stamps and stamp < self.stamps[-1]:
+            # Time went back (a restarted clock): what was kept belongs to another run.
+            self.stamps.clear()
+            self.poses.clear()
+        self.stamps.append(stamp)
+        self.poses.append(pose)
+        if len(self.stamps) > self.keep:
+            del self.stamps[0], self.poses[0]
+        if self.pending is not None:
+            pending, self.pending = self.pending, None
+            self.add_localization(*pending)
+
+    def odometry_at(self, stamp: float) -> Pose2D | None:
+        """The kept odometry pose whose stamp is nearest to `stamp` (None before any)."""
+        if not self.stamps:
+            return None
+        i = bisect.bisect_left(self.stamps, stamp)
+        if i == len(self.stamps) or (i > 0 and stamp - self.stamps[i - 1] <= self.stamps[i] - stamp):
+            i -= 1
+        return self.poses[i]
+
+    def add_localization(self, stamp: float, pose: Pose2D) -> None:
+        odometry = self.odometry_at(stamp)
+        if odometry is None:
+            self.pending = (stamp, pose)
+            return
+        self.transform = compose(pose, inverse(odometry))
+        self.localizations += 1
+
+
+# ----------------------------------------------------------------------------------------------- messages
+
+def odometry_pose(msg: Any) -> Pose2D:
+    """(x, y, yaw) of a nav_msgs/Odometry or geometry_msgs PoseStamped / PoseWithCovarianceStamped (ValueError
+    when not finite)."""
+    pose = msg.pose.pose if hasattr(msg.pose, 'pose') else msg.pose
+    x, y = float(pose.position.x), float(pose.position.y)
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise ValueError('position is not finite')
+    return x, y, convert.quaternion_to_yaw(pose.orientation)
+
+
+def transform_stamped(parent: str, child: str, pose: Pose2D, stamp: Time) -> TransformStamped:
+    """The TF of `child` in `parent` (a planar pose)."""
+    msg = TransformStamped()
+    msg.header.stamp = stamp
+    msg.header.frame_id = parent
+    msg.child_frame_id = child
+    msg.transform.translation.x, msg.transform.translation.y = float(pose[0]), float(pose[1])
+    msg.transform.rotation = convert.yaw_to_quaternion(pose[2])
+    return msg
+
+
+def odometry_transforms(odom: Any, trailer: Any = None, trailer_child: str = '') -> list[TransformStamped]:
+    """The TF an odometry message stands for (header.frame_id -> child_frame_id, as tf2's odometry broadcasters
+    send), and a trailer pose's (its frame -> trailer_child) when given."""
+    out = [_exact(transform_stamped(odom.header.frame_id, odom.child_frame_id, odometry_pose(odom),
+                                    odom.header.stamp), odom.pose.pose)]
+    if trailer is not None:
+        out.append(_exact(transform_stamped(trailer.header.frame_id, trailer_child, odometry_pose(trailer),
+                                            trailer.header.stamp), trailer.pose))
+    return out
+
+
+def _exact(transform: TransformStamped, pose: Any) -> TransformStamped:
+    """The transform with the pose's own numbers (no round trip through the yaw)."""
+    t, q = transform.transform, pose.orientation
+    t.translation.x, t.translation.y, t.translation.z = pose.position.x, pose.position.y, pose.position.z
+    t.rotation.x, t.rotation.y, t.rotation.z, t.rotation.w = q.x, q.y, q.z, q.w
+    return transform
+
+
+def static_map_to_odom(map_frame: str, odom: str, stamp: Time | None = None) -> TransformStamped:
+    """map -> odom as the identity: a simulated robot's odometry does not drift."""
+    return transform_stamped(map_frame, odom, IDENTITY, stamp if stamp is not None else Time())
+
+
+@functools.cache
+def _typestore() -> Any:
+    from rosbags.typesys import Stores, get_typestore
+    return get_typestore(Stores.ROS2_JAZZY)
+
+
+def tf_message_cdr(transforms: Sequence[TransformStamped]) -> bytes:
+    """The CDR bytes of a tf2_msgs/msg/TFMessage holding these transforms (rosbags' serialiser: no rclpy class)."""
+    store = _typestore()
+    types = store.types
+    tf_type, stamped, header, time, transform, vector, quaternion = (
+        types[n] for n in (TF_TYPE, 'geometry_msgs/msg/TransformStamped', 'std_msgs/msg/Header',
+                           'builtin_interfaces/msg/Time', 'geometry_msgs/msg/Transform', 'geometry_msgs/msg/Vector3',
+                           'geometry_msgs/msg/Quaternion'))
+    items = []
+    for t in transforms:
+        tr, q = t.transform.translation, t.transform.rotation
+        items.append(stamped(header=header(stamp=time(sec=t.header.stamp.sec, nanosec=t.header.stamp.nanosec),
+                                           frame_id=t.header.frame_id),
+                             child_frame_id=t.child_frame_id,
+                             transform=transform(translation=vector(x=tr.x, y=tr.y, z=tr.z),
+                                                 rotation=quaternion(x=q.x, y=q.y, z=q.z, w=q.w))))
+    return bytes(store.serialize_cdr(tf_type(transforms=items), TF_TYPE))
+
+
+def tf_message_class() -> type | None:
+    """rclpy's tf2_msgs/msg/TFMessage where tf2_msgs is installed (a full ROS install), else None."""
+    try:
+        from tf2_msgs.msg import TFMessage  # type: ignore[import-not-found]  # not in the PyPI ROS wheels
+    except ImportError:
+        return None
+    cls: type = TFMessage
+    return cls
+
+
+class TfFromOdometry:
+    """What a recorder derives from the odometry it records, when the graph has no TF of its own (no tf2_msgs):
+    take(topic, cdr) returns the (TF topic, TFMessage CDR) pairs to write beside a recorded message.
+
+    Per robot: the first odometry in a frame other than the map frame brings /tf_static map -> that frame (the
+    identity: simulated odometry does not drift); every odometry /tf header.frame_id -> child_frame_id; every
+    trailer pose /tf its frame -> `<robot>/trailer_link`. Messages that do not decode or are not finite give
+    nothing (the recording keeps them as they are)."""
+
+    def __init__(self, map_frame: str = 'map') -> None:
+        self.map_frame = map_frame
+        self.static: list[TransformStamped] = []
+        self.static_frames: set[str] = set()
+
+    def take(self, topic: str, data: bytes) -> list[tuple[str, bytes]]:
+        from nav_msgs.msg import Odometry
+        from rclpy.serialization import deserialize_message
+
+        from msg_tools.interface import ODOM, TRAILER_POSE, split_robot_topic
+
+        parts = split_robot_topic(topic)
+        if parts is None or parts[1] not in (ODOM, TRAILER_POSE):
+            return []
+        out = []
+        try:
+            if parts[1] == ODOM:
+                msg = deserialize_message(data, Odometry)
+                transforms = odometry_transforms(msg)
+                frame = msg.header.frame_id
+                if frame and frame != self.map_frame and frame not in self.static_frames:
+                    self.static_frames.add(frame)
+                    # One latched message holds every static transform, as tf2_ros's static broadcaster sends.
+                    self.static.append(static_map_to_odom(self.map_frame, frame, msg.header.stamp))
+                    out.append((TF_STATIC, tf_message_cdr(self.static)))
+            else:
+                from geometry_msgs.msg import PoseStamped
+                pose = deserialize_message(data, PoseStamped)
+                transforms = [transform_stamped(pose.header.frame_id, trailer_frame(parts[0]), odometry_pose(pose),
+                                                pose.header.stamp)]
+        except Exception:  # noqa: BLE001  (a message that does not decode or is not finite: no TF from it)
+            return []
+        out.append((TF, tf_message_cdr(transforms)))
+        return out
