@@ -74,10 +74,12 @@ class RobotLike(Protocol):
 def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Controller]:
     """The kinematic model and controller for a scenario robot ('point_mass' or 'tractor_trailer')."""
     if spec.model == 'point_mass':
-        return PointMass(), PointMassController(params.alpha1, params.alpha2, params.max_speed)
+        return PointMass(), PointMassController(params.alpha1, params.alpha2, params.max_speed,
+                                                params.min_approach_speed)
     if spec.model == 'tractor_trailer':
         model = TractorTrailer(spec.length, spec.trailer_length, spec.hitch_offset)
-        return model, TractorTrailerController(model, params.speed_gain, params.max_speed)
+        return model, TractorTrailerController(model, params.speed_gain, params.max_speed,
+                                               params.min_approach_speed)
     if spec.model == 'diff_drive':
         raise ParameterError(MISSING_DIFF_DRIVE)
     raise ParameterError(f'unknown robot model {spec.model!r}')
