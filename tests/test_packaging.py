@@ -120,11 +120,16 @@ def sourced(install: Path, script: str, **environ: str) -> subprocess.CompletedP
                           capture_output=True, text=True, timeout=300)
 
 
+def build_outputs() -> list[str]:
+    """What a build writing into the sources would leave in the checkout (other tests may add other files)."""
+    return sorted(p.name for p in ROOT.iterdir() if p.name in ('build', 'install', 'log') or p.suffix == '.egg-info')
+
+
 @pytest.fixture(scope='module')
 def colcon_install(tmp_path_factory: pytest.TempPathFactory) -> Path:
     """`colcon build` of this repository into a workspace of its own; the sources stay untouched."""
     workspace = tmp_path_factory.mktemp('colcon')
-    before = sorted(p.name for p in ROOT.iterdir())
+    before = build_outputs()
     colcon = 'import sys; from colcon_core.command import main; sys.exit(main())'
     env = {key: value for key, value in os.environ.items() if key not in ('PYTHONPATH', 'ROS_DISTRO')}
     env['COLCON_HOME'] = str(workspace / 'colcon_home')   # no user defaults or mixins
@@ -134,7 +139,7 @@ def colcon_install(tmp_path_factory: pytest.TempPathFactory) -> Path:
          '--event-handlers', 'console_direct-'],
         cwd=workspace, env=env, capture_output=True, text=True, timeout=300)
     assert done.returncode == 0, done.stdout[-3000:] + done.stderr[-3000:]
-    assert sorted(p.name for p in ROOT.iterdir()) == before
+    assert build_outputs() == before
     return workspace / 'install'
 
 

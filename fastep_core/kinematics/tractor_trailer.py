@@ -30,10 +30,12 @@ Minimum speed (`min_speed`, the planner's `min_approach_speed`), as for the poin
 v = max(speed_gain * distance, min(min_speed, distance / dt)), then capped at max_speed; 0 is the paper's law
 exactly. It changes neither the sign of v nor the steering angle phi, so the path's curvature tan(phi) / L is
 the law's at every point; only the heading filter xi, a function of time, runs over fewer metres (its time
-constant 1/k_xi = 0.5 s is 0.1 m at 0.2 m/s). Once the heading error e is below 90 degrees, the distance d falls
-at d' = -v cos(e) + O(L omega) <= -(min(min_speed, max_speed) cos(e) - O(L omega)), so arrival is a matter of
-metres, no longer of exponential decay; unlike the point mass there is no proof that e gets there (a target
-inside the turning circle can be orbited at any speed), which the tests measure instead.
+constant 1/k_xi = 0.5 s is 0.1 m at 0.2 m/s). With omega = v tan(phi) / L, x' and y' are v times a function of
+the state and phi, so the distance d to the target changes at d' = -v g(state, phi): v sets how fast d falls,
+g whether it falls, and v >= min(min_speed, max_speed) while d > min_speed dt. Where the law closes in on the
+target (g > 0: the heading error well under 90 degrees) it does so at least that fast instead of slowing
+down exponentially. Unlike the point mass there is no proof that g stays positive (a target inside the turning
+circle can be orbited at any speed), which the tests measure instead.
 """
 
 from __future__ import annotations
