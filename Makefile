@@ -14,7 +14,7 @@ $(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -r requirements-test.txt
-	$(BIN)/python -m pip install --quiet --no-deps --no-build-isolation -e .
+	$(BIN)/python -m pip install --quiet --no-build-isolation -e '.[ros-wheels,test]'
 	touch $(STAMP)
 
 # The two-robot case study on the live ROS 2 graph (separate node processes over DDS, simulated clock).

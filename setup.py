@@ -1,9 +1,29 @@
-"""ament_python package fastep_ros: the fastep_core, fastep_ros and msg_tools Python packages."""
+"""ament_python package fastep_ros: the fastep_core, fastep_ros and msg_tools Python packages.
+
+rclpy and the message packages come from one of two places, never both: a ROS 2 installation (apt's
+/opt/ros/jazzy, a colcon workspace; its setup script sets ROS_DISTRO), or the PyPI ROS wheels (the extra
+`ros-wheels`). Installed into a shell where ROS is sourced, this package leaves the wheels out, so `pip install`
+does not pull a second rclpy over the installed one; anywhere else (a fresh virtual environment) it lists them,
+so `pip install .` alone gives working console scripts. `pip install .[ros-wheels]` (what `make` installs)
+always brings them.
+"""
+import os
 from glob import glob
 
 from setuptools import find_packages, setup
 
 PACKAGE = 'fastep_ros'
+
+ROS_WHEELS = [
+    'ros-jazzy-rclpy[fastrtps]==7.1.6',
+    'ros-jazzy-common-interfaces==5.3.6',
+]
+
+
+def ros_installed() -> bool:
+    """A sourced ROS 2 installation provides rclpy and the messages (every ROS 2 setup script sets ROS_DISTRO)."""
+    return bool(os.environ.get('ROS_DISTRO'))
+
 
 setup(
     name=PACKAGE,
@@ -19,20 +39,22 @@ setup(
         (f'share/{PACKAGE}/scenarios', glob('fastep_core/scenarios/*.yaml')),
     ],
     python_requires='>=3.11',
-    install_requires=[
-        'ros-jazzy-rclpy[fastrtps]==7.1.6',
-        'ros-jazzy-common-interfaces==5.3.6',
+    install_requires=([] if ros_installed() else ROS_WHEELS) + [
         'numpy>=2.0',
         'scipy>=1.13',
         'PyYAML>=6.0',
         'matplotlib>=3.8',
         'mcap>=1.3',
-        'rosbags>=0.10',
+        'zstandard>=0.20',
+        'lz4>=4.0',
         'tqdm==4.70.1',
         'foxglove-sdk==0.30.3',
+        'rosbags>=0.10',
     ],
-    extras_require={'test': ['pytest>=8', 'pytest-xdist>=3.8', 'hypothesis>=6.100', 'websockets>=13',
-                             'protobuf>=5']},
+    extras_require={'ros-wheels': ROS_WHEELS,
+                    'test': ['pytest>=8', 'pytest-xdist>=3.8', 'hypothesis>=6.100', 'websockets>=13', 'protobuf>=5',
+                             'colcon-core>=0.21', 'colcon-ros>=0.5', 'colcon-python-setup-py>=0.2',
+                             'colcon-bash>=0.5']},
     zip_safe=True,
     maintainer='fastep developers',
     maintainer_email='dev@fastep.invalid',

@@ -25,6 +25,17 @@ xi(0) = e(0)) steers so gently that a target closer than the turning circle is o
 K = 3 turns about 2.5x tighter and reaches it (measured on a target 2 m abeam: K = 1 orbits at 1.3 m, K = 3
 arrives in 29 s), with the hitch angle still under 60 degrees. Tests check arrival and that the hitch angle
 stays far from 90 degrees.
+
+Minimum speed (`min_speed`, the planner's `min_approach_speed`), as for the point mass (kinematics/point_mass.py):
+v = max(speed_gain * distance, min(min_speed, distance / dt)), then capped at max_speed; 0 is the paper's law
+exactly. It changes neither the sign of v nor the steering angle phi, so the path's curvature tan(phi) / L is
+the law's at every point; only the heading filter xi, a function of time, runs over fewer metres (its time
+constant 1/k_xi = 0.5 s is 0.1 m at 0.2 m/s). With omega = v tan(phi) / L, x' and y' are v times a function of
+the state and phi, so the distance d to the target changes at d' = -v g(state, phi): v sets how fast d falls,
+g whether it falls, and v >= min(min_speed, max_speed) while d > min_speed dt. Where the law closes in on the
+target (g > 0: the heading error well under 90 degrees) it does so at least that fast instead of slowing
+down exponentially. Unlike the point mass there is no proof that g stays positive (a target inside the turning
+circle can be orbited at any speed), which the tests measure instead.
 """
 
 from __future__ import annotations
@@ -114,6 +125,7 @@ class TractorTrailerController:
     model: TractorTrailer = field(default_factory=TractorTrailer)
     speed_gain: float = 0.1
     max_speed: float = 0.0
+    min_speed: float = 0.0
     xi_rate: float = 2.0
     heading_gain: float = 3.0
     xi: float | None = None
@@ -144,6 +156,8 @@ class TractorTrailerController:
             self.xi = e + (self.xi - e) * math.exp(-self.xi_rate * dt)
         distance = math.hypot(target[0] - state[0], target[1] - state[1])
         v = self.speed_gain * distance
+        if self.min_speed > 0.0:
+            v = max(v, min(self.min_speed, distance / dt) if dt > 0.0 else self.min_speed)
         if self.max_speed > 0.0:
             v = min(v, self.max_speed)
         phi = self.steering(state)

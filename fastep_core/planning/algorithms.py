@@ -74,10 +74,12 @@ def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Cont
     max_acceleration, max_turn_acceleration, speed_gain, turn_gain; kinematics/diff_drive.py).
     """
     if spec.model == 'point_mass':
-        return PointMass(), PointMassController(params.alpha1, params.alpha2, params.max_speed)
+        return PointMass(), PointMassController(params.alpha1, params.alpha2, params.max_speed,
+                                                params.min_approach_speed)
     if spec.model == 'tractor_trailer':
         model = TractorTrailer(spec.length, spec.trailer_length, spec.hitch_offset)
-        return model, TractorTrailerController(model, params.speed_gain, params.max_speed)
+        return model, TractorTrailerController(model, params.speed_gain, params.max_speed,
+                                               params.min_approach_speed)
     if spec.model == 'diff_drive':
         return (DiffDrive(params.max_speed, params.max_turn_rate),
                 DiffDriveController(params.speed_gain, params.turn_gain, params.max_speed, params.max_turn_rate,

@@ -75,6 +75,12 @@ class PlannerParams:
                                       'unlimited', 0.0)
     max_turn_acceleration: float = _p(3.2, 'diff_drive turn acceleration limit |domega/dt| (rad/s^2); 0 means '
                                            'unlimited', 0.0)
+    min_approach_speed: float = _p(0.3, 'the kinematic controllers (eq. 12 / 13) drive at least this fast toward a '
+                                        'waypoint or the goal, capped at max_speed and at the distance left per '
+                                        'tick, so a robot arrives in bounded time where speed = gain x distance '
+                                        'alone slows down exponentially (with Table 1\'s gain 0.1, 19 s to cover '
+                                        'a 2 m step) (m/s); 0: the paper\'s gains alone (Table 2 runs with 0)',
+                                  0.0, 100.0)
     # What the paper leaves open: detection range, step size, tolerances, time step.
     sensing_range: float = _p(3.0, 'epsilon of eq. 11: obstacles whose surface is nearer are detected (m)', 0.0)
     detection_interval: float = _p(0.1, 'obstacle detection reruns after this much travel (m); every tick near '

@@ -298,7 +298,7 @@ def test_launch_passes_the_scenario_to_the_nodes() -> None:
     assert 'robot_radius:=0.6' in cmd and 'seed:=7' in cmd
     tiny = load_scenario('table2_s1')
     overrides = launch._planner_overrides(tiny.planner.with_overrides({'max_speed': 2.0, 'c': 1e-5}))
-    assert overrides == {'max_speed': 2.0, 'c': 1e-5}
+    assert overrides == {'max_speed': 2.0, 'c': 1e-5, 'min_approach_speed': 0.0}   # Table 2: the paper's gains
     assert launch._ros_value(1e-5) == '1e-05' and launch._ros_value([5, 25]) == '[5.0, 25.0]'
 
 

@@ -59,3 +59,31 @@ def test_headings_within_the_limit_are_integrated_as_they_are():
     s = np.array([0.0, 0.0, 1000.0, 1000.5])
     after = model.integrate(s, np.array([1.0, 0.5]), 0.05)
     assert after[2] == pytest.approx(1000.025) and after[3] > 1000.0
+
+
+def _arrival(states, target, tol=0.3):
+    """Index of the first state within tol of target, and the path driven until then."""
+    k = int(np.flatnonzero(np.hypot(*(states[:, :2] - target).T) < tol)[0])
+    return k, float(np.hypot(*np.diff(states[:k + 1, :2], axis=0).T).sum())
+
+
+@pytest.mark.parametrize('start, target', [
+    ([5.0, 5.0, 0.0, 0.0], [45.0, 45.0]),
+    ([25.0, 25.0, 0.0, 0.0], [15.0, 25.0]),       # straight behind
+    ([25.0, 25.0, math.pi / 2, 0.0], [40.0, 10.0]),  # a 90 degree hitch angle at the start
+    ([25.0, 25.0, 0.0, 0.0], [25.0, 27.0]),       # abeam, 2 m
+    ([25.0, 25.0, 0.0, 0.0], [27.0, 25.0]),       # ahead, 2 m
+])
+def test_minimum_speed_arrives_sooner_on_the_same_path(start, target):
+    """Issue 14, item 7: the paper's law needs 17-19 s for a target 2 m away; with min_speed 0.3 m/s, 6 s at most.
+    The steering is the law's, so the path and the hitch angle stay as they were until the robot arrives."""
+    model, target = TractorTrailer(1.0, 1.0, 0.0), np.array(target)
+    paper = drive(model, TractorTrailerController(model, 0.1, 1.0), start, target, steps=8000)
+    fast = drive(model, TractorTrailerController(model, 0.1, 1.0, min_speed=0.3), start, target, steps=8000)
+    (k_paper, path_paper), (k_fast, path_fast) = _arrival(paper, target), _arrival(fast, target)
+    assert k_fast < k_paper
+    assert path_fast == pytest.approx(path_paper, rel=0.03)
+    if np.hypot(*(target - start[:2])) <= 2.0:
+        assert k_fast * 0.05 <= 6.0 < k_paper * 0.05
+    assert np.degrees(np.abs([hitch_angle(s) for s in fast[200:k_fast + 1]])).max(initial=0.0) < 80.0
+
