@@ -37,6 +37,7 @@ from rclpy.node import Node
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.scenario import MODELS
 from fastep_ros.common import RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.executors import MessageInfoCallback
 from msg_tools import convert, interface
 from msg_tools.interface import LATEST, offered_qos
 
@@ -102,8 +103,8 @@ class PlantNode(Node):
         self.trailer_pub = (self.create_publisher(PoseStamped, interface.TRAILER_POSE,
                                                   offered_qos(interface.TRAILER_POSE))
                             if self.model_name == 'tractor_trailer' else None)
-        # rclpy passes (message, MessageInfo) to a callback of two parameters; its type hints know only one.
-        take_cmd_vel: Any = self._take_cmd_vel
+        # rclpy passes (message, MessageInfo) to a callback of two parameters (on either executor: MessageInfoCallback).
+        take_cmd_vel: Any = MessageInfoCallback(self._take_cmd_vel)
         self.cmd_sub = self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, take_cmd_vel,
                                                 LATEST)
         self.timer = self.create_timer(self.step, self.on_timer)
