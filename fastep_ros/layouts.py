@@ -21,7 +21,7 @@ from typing import Any, Sequence
 __all__ = ['DEFAULT_LAYOUT', 'LAYOUTS', 'Member', 'command', 'group']
 
 LAYOUTS = ('node', 'robot', 'graph')
-DEFAULT_LAYOUT = 'robot'
+DEFAULT_LAYOUT = 'graph'
 
 
 @dataclass(frozen=True)

@@ -55,6 +55,7 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
 from fastep_ros.common import RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.polled import PolledSubscription, polled
 from msg_tools import convert, interface
 from msg_tools.interface import LATCHED, LATEST, RELIABLE, offered_qos
 
@@ -324,7 +325,9 @@ class PlannerNode(Node):
                 continue
             name = topic[1:-len(suffix)] or topic
             self.others[topic] = _Other(name)
-            self.other_subs[topic] = self.create_subscription(
+            # Taken when used (take_others: each control tick, each wall tick), not on every 50 Hz message: the
+            # N^2 fan-in of a graph (fastep_ros.polled). A callback subscription if rclpy cannot make one.
+            self.other_subs[topic] = polled(self, Odometry, topic, LATEST) or self.create_subscription(
                 Odometry, topic, functools.partial(self.on_other_odom, topic), LATEST)
             self.get_logger().info(f'following robot {name} on {topic}')
             found = True
@@ -343,6 +346,21 @@ class PlannerNode(Node):
         other.stamp = convert.stamp_to_seconds(msg.header.stamp)
         if first:
             self.publish_status(force=True)   # `others` lists the robots heard
+
+    def take_others(self) -> None:
+        """The newest odometry of every other robot followed by a PolledSubscription."""
+        for topic, sub in self.other_subs.items():
+            if isinstance(sub, PolledSubscription):
+                msg = sub.take_latest()
+                if msg is not None:
+                    self.on_other_odom(topic, msg)
+
+    def destroy_node(self) -> None:
+        for sub in self.other_subs.values():
+            if isinstance(sub, PolledSubscription):
+                sub.destroy()
+        self.other_subs.clear()
+        super().destroy_node()
 
     def other_robots(self, t: float) -> list[OtherRobot]:
         out = []
@@ -399,6 +417,7 @@ class PlannerNode(Node):
 
     def on_control(self) -> None:
         t = self.now()
+        self.take_others()
         nav = self.navigator
         command = np.zeros(2)
         if nav is not None:
@@ -515,6 +534,7 @@ class PlannerNode(Node):
         and plan (for late listeners)."""
         self.wall_ticks += 1
         found = self.discover()
+        self.take_others()   # while simulated time holds (no control ticks), `others` in the status still fills
         if found or self.wall_ticks % HEARTBEAT_TICKS == 0:
             self.publish_status(force=True)
         if self.wall_ticks % HEARTBEAT_TICKS == 0:
