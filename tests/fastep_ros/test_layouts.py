@@ -53,7 +53,8 @@ def test_a_malformed_container_command_line_is_refused(argv: list[str], words: s
 
 def test_a_node_that_cannot_start_in_a_container_is_one_line_naming_it_and_exit_2(tmp_path: Path) -> None:
     env = isolated_env(free_domain(), tmp_path / 'roslog')
-    cmd = [sys.executable, '-m', 'fastep_ros.container', '--node', 'plant', '--ros-args', '-r', '__ns:=/r1',
+    cmd = [sys.executable, '-m', 'fastep_ros.container', '--ros-args', '--log-level', 'warn',
+           '--node', 'plant', '--ros-args', '-r', '__ns:=/r1',
            '--node', 'planner', '--ros-args', '-r', '__ns:=/r1', '-p', 'robot_radius:=-1.0']
     done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
     assert done.returncode == 2, done.stderr
