@@ -3,7 +3,9 @@
     node   one process per node (map, each plant, each planner, clock, recorder), as on separate computers
     robot  one process per robot (its plant and planner, fastep_ros.container), and the map, clock and recorder
            each in its own
-    graph  every node in one process, on one executor
+    graph  every node of the simulated graph (map, plants, planners, clock) in one process, on one executor; the
+           recorder, an observer writing a file with an exit code of its own (1: the file is incomplete), keeps its
+           own process, so its writes never hold up the lock step
 
 The nodes, their names, namespaces, parameters and topics are the same in every layout: a container builds each
 node from the very arguments its own process would get (fastep_ros.container). What changes is what it costs:
@@ -42,7 +44,9 @@ def group(layout: str, members: Sequence[Member]) -> list[tuple[str, list[Member
     if layout == 'node':
         return [(m.label, [m]) for m in members]
     if layout == 'graph':
-        return [('fastep-graph', list(members))] if members else []
+        simulated = [m for m in members if m.module != 'recorder']
+        return ([('fastep-graph', simulated)] if simulated else []) + \
+            [(m.label, [m]) for m in members if m.module == 'recorder']
     out: list[tuple[str, list[Member]]] = []
     robots: dict[str, list[Member]] = {}
     for m in members:

@@ -27,7 +27,7 @@ def _members() -> list[Member]:
     for name in ('r1', 'r2'):
         out += [Member(f'fastep-plant /{name}', 'plant', f'/{name}', {}),
                 Member(f'fastep-planner /{name}', 'planner', f'/{name}', {})]
-    return out + [Member('fastep-clock', 'clock', '/', {})]
+    return out + [Member('fastep-clock', 'clock', '/', {}), Member('fastep-record', 'recorder', '/', {})]
 
 
 def test_layouts_group_the_nodes_into_processes() -> None:
@@ -36,8 +36,8 @@ def test_layouts_group_the_nodes_into_processes() -> None:
     robot = group('robot', members)
     assert [(label, [m.module for m in ms]) for label, ms in robot] == [
         ('fastep-map', ['map_server']), ('fastep-robot /r1', ['plant', 'planner']),
-        ('fastep-robot /r2', ['plant', 'planner']), ('fastep-clock', ['clock'])]
-    assert [(label, len(ms)) for label, ms in group('graph', members)] == [('fastep-graph', 6)]
+        ('fastep-robot /r2', ['plant', 'planner']), ('fastep-clock', ['clock']), ('fastep-record', ['recorder'])]
+    assert [(label, len(ms)) for label, ms in group('graph', members)] == [('fastep-graph', 6), ('fastep-record', 1)]
 
 
 @pytest.mark.parametrize('argv,words', [
