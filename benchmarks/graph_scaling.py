@@ -3,6 +3,7 @@
     python -m benchmarks.graph_scaling [--max-robots 12] [--counts 1,2,4,6,8,10,12] [--seconds 20] [--json OUT]
     python -m benchmarks.graph_scaling --fan-in 0,3,7,11 [--seconds 20]
     python -m benchmarks.graph_scaling --demo-rtf [--demo case_study_1] [--rtf 50] [--seed 0]
+    every mode: [--layout node|robot|graph] [--executor single|events]   (default: node, single: as before them)
 
 Scaling: for each N, a generated scenario (a temporary YAML, format of docs/scenarios.md): N point-mass robots
 of radius 0.5 m spread evenly on a circle of radius --radius (20 m) around (25, 25) in a 50 x 50 m workspace
@@ -411,6 +412,7 @@ RESULT = re.compile(r'^(\w+): (arrived|failed|timeout).*?time ([0-9.]+) s')
 def demo_rtf(args: argparse.Namespace) -> None:
     domain = free_domain()
     cmd = [sys.executable, '-m', 'fastep_ros.launch', args.demo, '--rtf', f'{args.rtf:g}', '--seed', str(args.seed)]
+    cmd += [] if args.demo_launcher_defaults else ['--layout', args.layout, '--executor', args.executor]
     with tempfile.TemporaryDirectory(prefix='fastep-demo-rtf-') as tmp:
         env = isolated_env(domain, Path(tmp) / 'roslog')
         print(f'$ python {" ".join(cmd[1:])}   (ROS_DOMAIN_ID={domain}; {load_text()})', flush=True)
@@ -463,6 +465,8 @@ def main(argv: list[str] | None = None) -> None:
                    '50 Hz odometry instead (e.g. 0,3,7,11)')
     p.add_argument('--demo-rtf', action='store_true', help='measure the demo\'s real-time factor instead')
     p.add_argument('--demo', default='case_study_1')
+    p.add_argument('--demo-launcher-defaults', action='store_true', help='--demo-rtf with fastep-launch\'s own '
+                   'layout and executor instead of --layout / --executor')
     p.add_argument('--rtf', type=float, default=50.0)
     args = p.parse_args(argv)
     if args.demo_rtf:
