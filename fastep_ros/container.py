@@ -117,9 +117,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return fail(PROG, exc)
     code = node_main(PROG, lambda: _build(nodes), ['container', *head])
     if any(kind == 'recorder' for kind, _ in nodes):
-        from fastep_ros import recorder
-        # As fastep-record: a write failure is not bad input, exit 1.
-        return 1 if recorder._write_failures else code
+        from fastep_ros.recorder import exit_code
+        return exit_code(code, PROG)   # as fastep-record: a write failure is one line and exit 1
     return code
 
 
