@@ -7,8 +7,10 @@ and guard condition on each wake-up and looks for the ready one in Python, about
 project's machine (docs/benchmarks.md). `events` is rclpy.experimental.EventsExecutor (rclpy >= 7.1 in Jazzy's
 wheels): a C++ event queue fed by the middleware's listener callbacks and a timer manager of its own, so a
 message costs the callback and the conversion, not a wait-set rebuild. docs/benchmarks.md ("Executors and
-process layouts") measures both for every node and in each fastep-launch layout; DEFAULT_EXECUTOR is the one
-that won there.
+process layouts") measures both for every node and in each fastep-launch layout. The EventsExecutor costs less
+everywhere, but lock-step runs on it did not always step like fastep-sim (2 of 8 runs of case_study_1 in the
+graph layout: a robot's time or its recorded path off), none on the SingleThreadedExecutor: so DEFAULT_EXECUTOR
+stays `single`, and `events` is an option.
 
 Both are driven by fastep_ros.common's spin loop (spin_once with its stop-race handling); timers on simulated
 time (use_sim_time) and the /clock guard (common.guard_clock) work on both (tests/fastep_ros/test_executors.py).
@@ -28,7 +30,7 @@ __all__ = ['DEFAULT_EXECUTOR', 'EXECUTORS', 'EXECUTOR_ENV', 'MessageInfoCallback
 
 EXECUTOR_ENV = 'FASTEP_EXECUTOR'
 EXECUTORS = ('events', 'single')
-DEFAULT_EXECUTOR = 'events'
+DEFAULT_EXECUTOR = 'single'
 
 
 class _SingleThreaded(SingleThreadedExecutor):

@@ -82,7 +82,7 @@ def _parser() -> argparse.ArgumentParser:
                    help=f'which nodes share a process (default {DEFAULT_LAYOUT}): node (one process each), robot (a '
                    'robot\'s plant and planner together), graph (all in one); the topics are the same')
     p.add_argument('--executor', choices=EXECUTORS, default=None,
-                   help=f'rclpy executor of every node (default: ${EXECUTOR_ENV}, else events): events '
+                   help=f'rclpy executor of every node (default: ${EXECUTOR_ENV}, else single): events '
                    '(rclpy.experimental.EventsExecutor) or single (SingleThreadedExecutor)')
     p.add_argument('--startup-timeout', type=float, default=STARTUP_TIMEOUT, help=argparse.SUPPRESS)
     p.add_argument('--verbose', action='store_true', help='show the nodes\' INFO logs')
