@@ -66,6 +66,7 @@ setup(
             'fastep-map = fastep_ros.map_server:main',
             'fastep-planner = fastep_ros.planner:main',
             'fastep-clock = fastep_ros.clock:main',
+            'fastep-container = fastep_ros.container:main',
             'fastep-launch = fastep_ros.launch:main',
             'fastep-bench = msg_tools.bench_cli:main',
             'fastep-tune = fastep_core.tuning:main',

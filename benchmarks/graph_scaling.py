@@ -3,6 +3,7 @@
     python -m benchmarks.graph_scaling [--max-robots 12] [--counts 1,2,4,6,8,10,12] [--seconds 20] [--json OUT]
     python -m benchmarks.graph_scaling --fan-in 0,3,7,11 [--seconds 20]
     python -m benchmarks.graph_scaling --demo-rtf [--demo case_study_1] [--rtf 50] [--seed 0]
+    every mode: [--layout node|robot|graph] [--executor single|events]   (default: node, single: as before them)
 
 Scaling: for each N, a generated scenario (a temporary YAML, format of docs/scenarios.md): N point-mass robots
 of radius 0.5 m spread evenly on a circle of radius --radius (20 m) around (25, 25) in a 50 x 50 m workspace
@@ -53,7 +54,9 @@ from typing import Any
 
 import numpy as np
 
-from fastep_testing.graph import Graph, Helper, free_domain, isolated_env, stop_process
+from fastep_ros.executors import EXECUTORS
+from fastep_ros.layouts import LAYOUTS, Member, command, group
+from fastep_testing.graph import Graph, Helper, free_domain, isolated_env, ros_value, stop_process
 
 ROOT = Path(__file__).resolve().parents[1]
 PERIOD = 0.05            # control period of the planners (s)
@@ -126,14 +129,15 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
     graph = Graph(tmp)
     t_start = time.monotonic()
     try:
-        graph.start('map', 'map_server', '/', scenario=str(path))
+        members = [Member('map', 'map_server', '/', {'scenario': str(path)})]
         for i, spec in enumerate(scenario.robots):
             plant = launch.plant_params(spec, False)
             planner = launch.planner_params(scenario, i, 'fastep', args.seed, False)
             if stamped:
                 plant['use_stamped_cmd_vel'] = planner['use_stamped_cmd_vel'] = True
-            graph.start(f'plant/{spec.name}', 'plant', f'/{spec.name}', **plant)
-            graph.start(f'planner/{spec.name}', 'planner', f'/{spec.name}', **planner)
+            members += [Member(f'plant/{spec.name}', 'plant', f'/{spec.name}', plant),
+                        Member(f'planner/{spec.name}', 'planner', f'/{spec.name}', planner)]
+        start_layout(graph, args.layout, args.executor, members)
         graph.helper = helper = Helper(graph.domain)
         names = [spec.name for spec in scenario.robots]
         receipts: dict[str, list[float]] = {name: [] for name in names}
@@ -200,18 +204,22 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
             entry['activations'] = status.get('activations')
             robots[name] = entry
         cpu = {label: 100.0 * (cpu1[label] - cpu0[label]) / wall for label in pids}
-        planners = [cpu[f'planner/{k}'] for k in names]
-        plants = [cpu[f'plant/{k}'] for k in names]
+        # Per node only where each node has a process of its own (--layout node).
+        planners = [cpu.get(f'planner/{k}', math.nan) for k in names]
+        plants = [cpu.get(f'plant/{k}', math.nan) for k in names]
         monitor = 100.0 * (self1.ru_utime + self1.ru_stime - self0.ru_utime - self0.ru_stime) / wall
         busy = (machine1[0] - machine0[0]) / max(1, machine1[1] - machine0[1])
         worst_rate = min(r['receipt']['rate_hz'] for r in robots.values())
         worst_late = max(r['receipt']['late_fraction'] for r in robots.values())
         result = {
-            'n': n, 'domain': graph.domain, 'processes': len(pids), 'startup_s': startup, 'window_s': wall,
+            'n': n, 'layout': args.layout, 'executor': args.executor, 'domain': graph.domain,
+        'processes': len(pids), 'startup_s': startup, 'window_s': wall,
             'load_before': load_before, 'load_after': load_after, 'robots': robots,
             'cpu_percent': {'planner_mean': float(np.mean(planners)), 'planner_max': float(np.max(planners)),
                             'plant_mean': float(np.mean(plants)), 'plant_max': float(np.max(plants)),
-                            'map': cpu['map'], 'monitor': monitor, 'graph_total': float(sum(cpu.values())),
+                            'map': cpu.get('map', math.nan), 'monitor': monitor,
+                            'graph_total': float(sum(cpu.values())),
+                            'per_robot': float(sum(cpu.values()) - cpu.get('map', 0.0)) / n,
                             'machine_busy_percent_of_all_cores': 100.0 * busy},
             'worst_rate_hz': worst_rate, 'worst_late_fraction': worst_late,
             'passed': worst_rate >= MIN_RATE and worst_late < MAX_LATE_FRACTION,
@@ -229,7 +237,8 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
 
 def print_result(r: dict[str, Any]) -> None:
     c = r['cpu_percent']
-    print(f'N={r["n"]:2d} ({r["processes"]} node processes, domain {r["domain"]}, start-up {r["startup_s"]:.1f} s, '
+    print(f'N={r["n"]:2d} (layout {r["layout"]}, executor {r["executor"]}, {r["processes"]} node processes,'
+          f' domain {r["domain"]}, start-up {r["startup_s"]:.1f} s, '
           f'{load_text(r["load_before"])} before / {load_text(r["load_after"])} after): '
           f'{"PASS" if r["passed"] else "FAIL"}', flush=True)
     line = (f'    cmd_vel at the monitor: worst rate {r["worst_rate_hz"]:.2f} Hz, worst late fraction '
@@ -242,17 +251,31 @@ def print_result(r: dict[str, Any]) -> None:
     print(f'    worst robot {worst[0]}: {worst[1]["receipt"]} modes {worst[1]["modes"]}')
     print(f'    CPU % of one core over the window: planner mean {c["planner_mean"]:.1f} (max {c["planner_max"]:.1f}), '
           f'plant mean {c["plant_mean"]:.1f} (max {c["plant_max"]:.1f}), map {c["map"]:.1f}, '
-          f'monitor {c["monitor"]:.1f}; graph total {c["graph_total"]:.0f} % '
+          f'monitor {c["monitor"]:.1f}; per robot (plant + planner) {c["per_robot"]:.1f} %; '
+          f'graph total {c["graph_total"]:.0f} % '
           f'(of {100 * (os.cpu_count() or 1)} %); machine busy {c["machine_busy_percent_of_all_cores"]:.0f} % '
           f'of all cores (incl. other users)')
     arrived = sum(1 for x in r['robots'].values() if x['final'].startswith('arrived'))
     print(f'    robots arrived by the end of the window: {arrived}/{r["n"]}', flush=True)
 
 
+def start_layout(graph: Graph, layout: str, executor: str, members: list[Member]) -> None:
+    """Start `members` in the processes of a fastep-launch layout (fastep_ros.layouts), on `executor`; each
+    process is graph.procs[its label] (a node's label where it has a process of its own)."""
+    env = dict(graph.env, FASTEP_EXECUTOR=executor)
+    level = os.environ.get('FASTEP_TEST_LOG_LEVEL', 'warn')
+    for label, group_members in group(layout, members):
+        log = open(graph.tmp / f'{label.replace("/", "_").replace(" ", "_")}.log', 'wb')
+        graph.procs[label] = subprocess.Popen(command(group_members, level, ros_value), env=env, stdout=log,
+                                              stderr=subprocess.STDOUT, stdin=subprocess.DEVNULL)
+        log.close()
+
+
 def scaling(args: argparse.Namespace) -> None:
     counts = [int(v) for v in args.counts.split(',')] if args.counts else \
         [n for n in (1, 2, 4, 6, 8, 10, 12, 14, 16) if n <= args.max_robots]
-    print(f'graph_scaling: N in {counts}, {args.seconds:g} s each, circle radius {args.radius:g} m, max_speed '
+    print(f'graph_scaling: layout {args.layout}, executor {args.executor}; N in {counts}, {args.seconds:g} s each,'
+          f' circle radius {args.radius:g} m, max_speed '
           f'{args.max_speed:g} m/s, cmd_vel {"Twist" if args.unstamped else "TwistStamped"}; {load_text()} '
           f'({os.cpu_count()} cores)', flush=True)
     results = []
@@ -389,6 +412,7 @@ RESULT = re.compile(r'^(\w+): (arrived|failed|timeout).*?time ([0-9.]+) s')
 def demo_rtf(args: argparse.Namespace) -> None:
     domain = free_domain()
     cmd = [sys.executable, '-m', 'fastep_ros.launch', args.demo, '--rtf', f'{args.rtf:g}', '--seed', str(args.seed)]
+    cmd += [] if args.demo_launcher_defaults else ['--layout', args.layout, '--executor', args.executor]
     with tempfile.TemporaryDirectory(prefix='fastep-demo-rtf-') as tmp:
         env = isolated_env(domain, Path(tmp) / 'roslog')
         print(f'$ python {" ".join(cmd[1:])}   (ROS_DOMAIN_ID={domain}; {load_text()})', flush=True)
@@ -428,6 +452,10 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument('--radius', type=float, default=20.0)
     p.add_argument('--max-speed', type=float, default=2.0)
     p.add_argument('--seed', type=int, default=0)
+    p.add_argument('--layout', choices=LAYOUTS, default='node', help='processes as fastep-launch --layout '
+                   '(default node: one per node)')
+    p.add_argument('--executor', choices=EXECUTORS, default='single', help='FASTEP_EXECUTOR of every node '
+                   '(default single: rclpy\'s SingleThreadedExecutor, as before the option)')
     p.add_argument('--unstamped', action='store_true', help='cmd_vel as Twist (fastep-launch\'s default)')
     p.add_argument('--startup-timeout', type=float, default=60.0, help='wall s (plus 10 s per robot)')
     p.add_argument('--stop-after-fail', action='store_true')
@@ -437,6 +465,8 @@ def main(argv: list[str] | None = None) -> None:
                    '50 Hz odometry instead (e.g. 0,3,7,11)')
     p.add_argument('--demo-rtf', action='store_true', help='measure the demo\'s real-time factor instead')
     p.add_argument('--demo', default='case_study_1')
+    p.add_argument('--demo-launcher-defaults', action='store_true', help='--demo-rtf with fastep-launch\'s own '
+                   'layout and executor instead of --layout / --executor')
     p.add_argument('--rtf', type=float, default=50.0)
     args = p.parse_args(argv)
     if args.demo_rtf:

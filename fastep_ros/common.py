@@ -16,13 +16,14 @@ from typing import Any, Callable, Sequence
 import rclpy
 from rcl_interfaces.msg import FloatingPointRange, IntegerRange, ParameterDescriptor
 from rclpy.exceptions import InvalidParameterValueException, ParameterException
-from rclpy.executors import ExternalShutdownException, SingleThreadedExecutor
+from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
 from fastep_core.cli import guard
 from fastep_core.errors import FastepError
 from fastep_ros.errors import StartupError  # re-exported: every node raises it next to declare()
+from fastep_ros.executors import make_executor
 from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-exported for the nodes
 from fastep_ros.parameters import warn_unknown_overrides
 
@@ -206,22 +207,19 @@ def _die_with_parent() -> None:
         raise SystemExit(1)
 
 
-class _Executor(SingleThreadedExecutor):
-    """rclpy's, with a class default for the attribute its __del__ reads: a stop (the context shut down by a
-    signal) while its __init__ runs left the object without it, and Python printed an AttributeError from __del__."""
-
-    _sigint_gc = None  # type: ignore[assignment]  # only read when __init__ did not set it
-
-
-def _spin(node: Node, executor: rclpy.executors.Executor) -> None:
+def _spin(nodes: Sequence[Node], executor: rclpy.executors.Executor) -> None:
     """rclpy.spin, but quiet about the races of a stop: an error raised because the context was shut down
     (Ctrl-C / SIGINT) while spinning ends the loop, and a message rclpy cannot convert (seen with Fast DDS
     while a peer process stops) is dropped with one warning instead of ending the node."""
-    executor.add_node(node)
+    for node in nodes:
+        executor.add_node(node)
+    node = nodes[0]
     warned = False
     while rclpy.ok():
         try:
-            executor.spin_once()
+            # A timeout: rclpy 7.1.6's EventsExecutor never returned from spin_once() without one (nor handled a
+            # callback or a signal: fastep_ros.executors).
+            executor.spin_once(timeout_sec=1.0)
         except (KeyboardInterrupt, ExternalShutdownException):
             raise
         except Exception as exc:
@@ -239,8 +237,8 @@ def _ignore_stop_signals() -> None:
         signal.signal(sig, lambda signum, frame: None)
 
 
-def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None = None) -> int:
-    """rclpy.init, build the node, spin until Ctrl-C / shutdown.
+def node_main(prog: str, factory: Callable[[], Node | Sequence[Node]], args: Sequence[str] | None = None) -> int:
+    """rclpy.init, build the node (or the nodes: fastep_ros.container), spin until Ctrl-C / shutdown.
 
     Returns the exit code: 0 after a normal stop, 2 (with one line on stderr, no traceback) when the node
     cannot start with its parameters (a FastepError, e.g. StartupError: fastep_core.cli.guard prints it).
@@ -256,22 +254,25 @@ def node_main(prog: str, factory: Callable[[], Node], args: Sequence[str] | None
     return guard(prog, lambda: _run_node(factory, args))
 
 
-def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
+def _run_node(factory: Callable[[], Node | Sequence[Node]], args: Sequence[str] | None) -> int:
     """node_main's body: 0 after a stop (Ctrl-C is a normal stop for a node); a FastepError propagates,
     after the node is destroyed and ROS shut down."""
     try:
         rclpy.init(args=None if args is None else list(args))
     except Exception as exc:   # e.g. UnknownROSArgsError for a mistyped --ros-args
         raise StartupError(f'cannot start ROS: {type(exc).__name__}: {exc}'.splitlines()[0]) from None
-    node, executor = None, None
+    nodes: list[Node] = []
+    executor = None
     try:
         # The executor before the node: built on a context a signal has already shut down, it fails half-way
         # and rclpy's destructor prints an AttributeError; a node that has logged that it is up is what a user
         # (or a test) stops, so by then the executor must exist.
-        executor = _Executor()
-        node = factory()
-        warn_unknown_overrides(node)
-        _spin(node, executor)
+        executor = make_executor()   # FASTEP_EXECUTOR (fastep_ros.executors)
+        built = factory()
+        nodes = [built] if isinstance(built, Node) else list(built)
+        for each in nodes:
+            warn_unknown_overrides(each)
+        _spin(nodes, executor)
     except (KeyboardInterrupt, ExternalShutdownException):
         pass
     except FastepError:
@@ -283,7 +284,7 @@ def _run_node(factory: Callable[[], Node], args: Sequence[str] | None) -> int:
     finally:
         if executor is not None:
             executor.shutdown()
-        if node is not None:
+        for node in reversed(nodes):
             node.destroy_node()
         rclpy.try_shutdown()
         # Stopped and cleaned up: a second Ctrl-C / SIGTERM has nothing left to stop. Ignored at the OS level (a

@@ -1,11 +1,12 @@
 """fastep-launch: run a scenario through the live ROS 2 graph and report what every robot did.
 
     fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco|optimal|dwa] [--seed N]
-                  [--json OUT] [--plot OUT.png] [--no-clock] [--verbose]
-                  [--foxglove PORT] [--no-progress]       (fastep_ros.foxglove_bridge, fastep_ros.progress)
+                  [--json OUT] [--plot OUT.png] [--no-clock] [--layout node|robot|graph] [--executor events|single]
+                  [--foxglove PORT] [--no-progress] [--verbose]   (fastep_ros.foxglove_bridge, fastep_ros.progress)
 
-Starts, each as its own process (`python -m fastep_ros.<node> --ros-args ...`): the map, then a plant and a
-planner per robot in the robot's namespace with its parameters from the scenario (the scenario's planner
+Starts, in the processes --layout says (fastep_ros.layouts: each node in its own, `python -m fastep_ros.<node>
+--ros-args ...`; a robot's plant and planner in one fastep-container; or every node in one): the map, then a plant
+and a planner per robot in the robot's namespace with its parameters from the scenario (the scenario's planner
 overrides included), and waits until every planner knows the world and the other robots. It then sends each
 goal on `/<name>/goal_pose`, starts the clock (simulated time at --rtf; --no-clock runs every node on wall
 time instead), follows every `status` and `odom`, and prints one line per robot: arrived or not, the path
@@ -43,6 +44,9 @@ from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import GraphConflict, LaunchError
+from fastep_ros.executors import EXECUTOR_ENV, EXECUTORS
+from fastep_ros.layouts import DEFAULT_LAYOUT, LAYOUTS, Member, group
+from fastep_ros.layouts import command as layout_command
 from fastep_ros.limits import RTF_RANGE, graph_problem, robot_name_problem
 from fastep_ros.progress import Progress
 
@@ -79,6 +83,12 @@ def _parser() -> argparse.ArgumentParser:
                    'on ws://localhost:PORT while the run goes')
     p.add_argument('--no-progress', action='store_true', help='no progress on stderr (robots arrived, simulated '
                    'time, real-time factor: a bar on a terminal, a line every 10 s otherwise)')
+    p.add_argument('--layout', choices=LAYOUTS, default=DEFAULT_LAYOUT,
+                   help=f'which nodes share a process (default {DEFAULT_LAYOUT}): node (one process each), robot (a '
+                   'robot\'s plant and planner together), graph (all in one); the topics are the same')
+    p.add_argument('--executor', choices=EXECUTORS, default=None,
+                   help=f'rclpy executor of every node (default: ${EXECUTOR_ENV}, else single): events '
+                   '(rclpy.experimental.EventsExecutor) or single (SingleThreadedExecutor)')
     p.add_argument('--startup-timeout', type=float, default=STARTUP_TIMEOUT, help=argparse.SUPPRESS)
     p.add_argument('--verbose', action='store_true', help='show the nodes\' INFO logs')
     return p
@@ -101,11 +111,7 @@ def _ros_value(value: Any) -> str:
 
 
 def _command(module: str, namespace: str, params: dict[str, Any], verbose: bool) -> list[str]:
-    cmd = [sys.executable, '-m', f'fastep_ros.{module}', '--ros-args', '-r', f'__ns:={namespace}']
-    for name, value in params.items():
-        cmd += ['-p', f'{name}:={_ros_value(value)}']
-    cmd += ['--log-level', 'info' if verbose else 'warn']
-    return cmd
+    return layout_command([Member(module, module, namespace, params)], 'info' if verbose else 'warn', _ros_value)
 
 
 def _planner_overrides(params: PlannerParams) -> dict[str, Any]:
@@ -139,30 +145,51 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
 
 
 class Processes:
-    """The child processes of one launch; stop() ends every one of them."""
+    """The child processes of one launch; stop() ends every one of them.
 
-    def __init__(self, verbose: bool) -> None:
+    start() adds a node; with the `node` layout it starts at once in a process of its own, otherwise when launch()
+    starts every process of the layout (fastep_ros.layouts). `items` has one (label, process) per node, so a node
+    shares its container's process with the others in it."""
+
+    def __init__(self, verbose: bool, layout: str = 'node', executor: str | None = None) -> None:
         self.verbose = verbose
+        self.layout = layout
         self.items: list[tuple[str, subprocess.Popen[bytes]]] = []
+        self.pending: list[Member] = []
+        self.labels: dict[int, str] = {}   # process id -> its label (a container's: fastep-robot /r1, fastep-graph)
         self.env = dict(os.environ)
         root = str(Path(__file__).resolve().parent.parent)
         self.env['PYTHONPATH'] = os.pathsep.join(p for p in (root, self.env.get('PYTHONPATH', '')) if p)
         self.env['FASTEP_PARENT_PID'] = str(os.getpid())
         self.env.setdefault('PYTHONUNBUFFERED', '1')
+        if executor is not None:
+            self.env[EXECUTOR_ENV] = executor
 
     def start(self, label: str, module: str, namespace: str, params: dict[str, Any]) -> None:
-        cmd = _command(module, namespace, params, self.verbose)
-        # A new session: Ctrl-C in a terminal reaches only the launcher, which then stops the nodes in order.
-        proc = subprocess.Popen(cmd, env=self.env, stdin=subprocess.DEVNULL, start_new_session=True)
-        self.items.append((label, proc))
+        self.pending.append(Member(label, module, namespace, params))
+        if self.layout == 'node':
+            self.launch()
+
+    def launch(self) -> None:
+        """Start the processes of the nodes added since the last call, grouped as the layout says."""
+        pending, self.pending = self.pending, []
+        for label, members in group(self.layout, pending):
+            cmd = layout_command(members, 'info' if self.verbose else 'warn', _ros_value)
+            # A new session: Ctrl-C in a terminal reaches only the launcher, which then stops the nodes in order.
+            proc = subprocess.Popen(cmd, env=self.env, stdin=subprocess.DEVNULL, start_new_session=True)
+            self.labels[proc.pid] = label
+            self.items += [(m.label, proc) for m in members]
+
+    def processes(self) -> list[subprocess.Popen[bytes]]:
+        return list({proc.pid: proc for _, proc in self.items}.values())
 
     def dead(self) -> list[tuple[str, int]]:
-        return [(label, proc.returncode) for label, proc in self.items if proc.poll() is not None]
+        return [(self.labels[proc.pid], proc.returncode) for proc in self.processes() if proc.poll() is not None]
 
     def stop(self) -> None:
         """SIGINT every process (the clock first, so time stops before the nodes do), SIGKILL after GRACE."""
-        clocks = [proc for label, proc in self.items if label == 'fastep-clock']
-        others = [proc for label, proc in reversed(self.items) if label != 'fastep-clock']
+        clocks = [proc for proc in self.processes() if self.labels[proc.pid] == 'fastep-clock']
+        others = [proc for proc in reversed(self.processes()) if self.labels[proc.pid] != 'fastep-clock']
         self._interrupt(clocks, GRACE / 2)
         self._interrupt(others, GRACE)
 
@@ -416,7 +443,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
 
     sim_time = not args.no_clock
     timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
-    procs = Processes(args.verbose)
+    procs = Processes(args.verbose, args.layout, args.executor)
     monitor: Monitor | None = None
     code = 1
     try:
@@ -452,6 +479,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 'wait_for_subscribers': 2 + 2 * len(scenario.robots) + 2 * (args.record is not None),
                 'sync_topics': [robot_topic(spec.name, topic)
                                 for spec in scenario.robots for topic in (CMD_VEL, ODOM)]})
+        procs.launch()   # the nodes above, in the processes of --layout
         robots = monitor.robots
         names = set(robots)
         deadline = time.monotonic() + args.startup_timeout

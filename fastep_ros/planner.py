@@ -447,6 +447,14 @@ class PlannerNode(ManagedNode):
         changed."""
         return self.robots.discover()
 
+    def take_others(self) -> None:
+        """The newest odometry of every other robot followed (fastep_ros.robots takes it when it is used)."""
+        self.robots.take()
+
+    def destroy_node(self) -> None:
+        self.robots.destroy()
+        super().destroy_node()
+
     def other_robots(self, t: float) -> list[OtherRobot]:
         return self.robots.fleet.obstacles(t, self.robots.radius, lambda stamp: self.lag(t, stamp))
 
@@ -499,6 +507,7 @@ class PlannerNode(ManagedNode):
         if self.sim_time.switched():
             self.on_clock_switched()
         t = self.now()
+        self.take_others()
         nav = self.navigator
         command = np.zeros(2)
         if nav is not None:
@@ -633,6 +642,7 @@ class PlannerNode(ManagedNode):
         self.check_clock()
         found = self.discover()
         self.goal_sub.look()
+        self.take_others()   # while simulated time holds (no control ticks), `others` in the status still fills
         if found or self.wall_ticks % HEARTBEAT_TICKS == 0:
             self.publish_status(force=True)
         else:

@@ -49,6 +49,7 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from fastep_ros.diagnostics import Diagnostics, Task
+from fastep_ros.executors import MessageInfoCallback
 from fastep_ros.frames import TfBroadcaster
 from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.parameters import DynamicParameters
@@ -137,8 +138,8 @@ class PlantNode(ManagedNode):
         self.trailer_pub = (self.create_publisher(PoseStamped, interface.TRAILER_POSE,
                                                   offered_qos(interface.TRAILER_POSE))
                             if self.model_name == 'tractor_trailer' else None)
-        # rclpy passes (message, MessageInfo) to a callback of two parameters; its type hints know only one.
-        take_cmd_vel: Any = self._take_cmd_vel
+        # rclpy passes (message, MessageInfo) to a callback of two parameters (on either executor: MessageInfoCallback).
+        take_cmd_vel: Any = MessageInfoCallback(self._take_cmd_vel)
         self.cmd_sub = self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, take_cmd_vel,
                                                 LATEST)
         self.tf = TfBroadcaster(self)

@@ -62,6 +62,7 @@ from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
+from fastep_core.cli import fail
 from fastep_core.errors import FastepError
 from fastep_ros.common import (
     PERIOD_RANGE,
@@ -84,6 +85,7 @@ class RecordingStopped(FastepError):
 
 
 _write_failures: list[str] = []   # what stopped a recorder of this process: main() exits 1 instead of 0 or 2
+_stopped: list[str] = []          # ... of which the ones not printed yet (stop_writing): exit_code() prints them
 
 # What an empty `topics` parameter records.
 _DEFAULT_TOPICS = (', '.join(interface.SHARED_TOPICS) + ' and /<robot>/{' + ', '.join(interface.ROBOT_TOPICS) +
@@ -248,6 +250,7 @@ class RecorderNode(Node):
                                  qos=frames.TF_QOS if tf_topic == frames.TF else frames.TF_STATIC_QOS)
         except WriteFailedError as exc:
             self.stop_writing(exc)
+            return   # stopping: nothing more to publish
         self.counts[topic] += 1
         if self.counts[topic] == 1:
             self.publish_status()
@@ -258,6 +261,7 @@ class RecorderNode(Node):
                 self.writer.flush()
             except WriteFailedError as exc:
                 self.stop_writing(exc)
+                return
             self.publish_status()
 
     def stop_writing(self, exc: WriteFailedError) -> None:
@@ -272,7 +276,10 @@ class RecorderNode(Node):
         message = (f'{exc}; recording stopped after {kept} messages: {self.path} keeps the chunks written before '
                    f'(fastep-recover rewrites them as a complete file)')
         _write_failures.append(message)
-        raise RecordingStopped(message)
+        _stopped.append(message)
+        # The process stops (node_main's spin ends with the context) and exit_code() says why in one line. Raised
+        # from this callback, the EventsExecutor logged it as FATAL with where it was raised, besides the line.
+        self.context.try_shutdown()
 
     def publish_status(self) -> None:
         """What was received so far: the file, and the message count of every topic that delivered."""
@@ -305,10 +312,16 @@ class RecorderNode(Node):
         super().destroy_node()
 
 
-def main(args: Sequence[str] | None = None) -> int:
-    code = node_main('fastep-record', RecorderNode, args)
-    # A write failure (printed by node_main's guard or by close()) is not bad input: exit 1, not 2 (or 0).
+def exit_code(code: int, prog: str = 'fastep-record') -> int:
+    """The exit code of a process that ran recorders, after node_main returned `code`: a write failure (printed here
+    once, or by close()) is not bad input: exit 1, not 2 (or 0)."""
+    while _stopped:
+        fail(prog, _stopped.pop(0))
     return 1 if _write_failures else code
+
+
+def main(args: Sequence[str] | None = None) -> int:
+    return exit_code(node_main('fastep-record', RecorderNode, args))
 
 
 if __name__ == '__main__':

@@ -33,6 +33,7 @@ from geometry_msgs.msg import PolygonStamped
 from nav_msgs.msg import Odometry
 
 from fastep_core.planning.others import OtherRobot
+from fastep_ros.polled import PolledSubscription, polled
 from msg_tools import convert, interface
 from msg_tools.footprint import base_frame, circle_footprint, footprint_radius
 from msg_tools.interface import LATEST, offered_qos
@@ -229,8 +230,12 @@ class RobotFollower:
         if not self.fleet.judge(namespace, verdict):
             return
         if verdict and len(self.subscriptions[namespace]) == 1:
-            self.subscriptions[namespace].append(node.create_subscription(
-                Odometry, robot.odom_topic, functools.partial(self.on_odom, namespace), LATEST))
+            # Taken when used (take: each control tick, each wall tick), not on every 50 Hz message: the N^2
+            # fan-in of a graph (fastep_ros.polled). A callback subscription if rclpy cannot make one.
+            self.subscriptions[namespace].append(polled(node, Odometry, robot.odom_topic, LATEST) or
+                                                 node.create_subscription(Odometry, robot.odom_topic,
+                                                                          functools.partial(self.on_odom, namespace),
+                                                                          LATEST))
         node.get_logger().info(f'{"following" if verdict else "no longer following"} robot {robot.name}: '
                                f'{robot.footprint_topic} (from a node of {namespace}) and {robot.odom_topic} '
                                f'{"have" if verdict else "lack"} publishers')
@@ -255,3 +260,20 @@ class RobotFollower:
                                      self.now()):
             self.last_names = self.fleet.names(self.now())
             self.on_change()
+
+    def take(self) -> None:
+        """The newest odometry of every robot whose odometry is polled (fastep_ros.polled), handled as on_odom."""
+        for namespace, subscriptions in self.subscriptions.items():
+            for sub in subscriptions[1:]:
+                if isinstance(sub, PolledSubscription):
+                    msg = sub.take_latest()
+                    if msg is not None:
+                        self.on_odom(namespace, msg)
+
+    def destroy(self) -> None:
+        """Destroy the polled subscriptions (the node does not know them) before the node is destroyed."""
+        for subscriptions in self.subscriptions.values():
+            for sub in subscriptions:
+                if isinstance(sub, PolledSubscription):
+                    sub.destroy()
+        self.subscriptions.clear()

@@ -16,7 +16,8 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 COMMANDS = {'fastep-sim', 'fastep-bench', 'fastep-tune', 'fastep-report', 'fastep-recover', 'fastep-replay',
             'fastep-launch'}
-NODES = {'fastep-plant', 'fastep-map', 'fastep-planner', 'fastep-clock', 'fastep-record', 'fastep-foxglove'}
+NODES = {'fastep-plant', 'fastep-map', 'fastep-planner', 'fastep-clock', 'fastep-record', 'fastep-foxglove',
+         'fastep-container'}
 
 
 def console_scripts() -> dict[str, str]:

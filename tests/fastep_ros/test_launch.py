@@ -90,11 +90,13 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
         (odometry[-1].pose.pose.position.x, odometry[-1].pose.pose.position.y)
 
 
-def launch_under_way(tmp_path: Path, domain: int | None = None) -> tuple[subprocess.Popen[str], list[int]]:
+def launch_under_way(tmp_path: Path, domain: int | None = None,
+                     layout: str = 'node') -> tuple[subprocess.Popen[str], list[int]]:
     """fastep-launch of one robot, once the goals are in and the clock runs, and its node processes."""
     scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
     env = isolated_env(free_domain() if domain is None else domain, tmp_path / 'roslog')
-    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '0.5'], env=env,
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '0.5',
+                             '--layout', layout], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     assert proc.stdout is not None
     line = proc.stdout.readline()  # printed once the goals are in and the clock runs
@@ -104,10 +106,12 @@ def launch_under_way(tmp_path: Path, domain: int | None = None) -> tuple[subproc
     return proc, children(proc.pid)
 
 
-def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path) -> None:
-    proc, kids = launch_under_way(tmp_path)
+@pytest.mark.parametrize('layout,processes', [('node', 4), ('robot', 3), ('graph', 1)])
+def test_launch_stops_every_node_on_ctrl_c(tmp_path: Path, layout: str, processes: int) -> None:
+    proc, kids = launch_under_way(tmp_path, layout=layout)
     try:
-        assert len(kids) == 4, f'expected 4 node processes (map, plant, planner, clock), found {kids}'
+        # map, plant, planner, clock: each in its own process; map, robot (plant + planner), clock; all in one
+        assert len(kids) == processes, f'expected {processes} node processes with --layout {layout}, found {kids}'
         time.sleep(0.5)
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=20)

@@ -1,0 +1,126 @@
+"""fastep-launch --layout node|robot|graph: the same nodes and topics, and the same run, in one process per node,
+per robot or for the whole graph (fastep_ros.layouts, fastep_ros.container)."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from fastep_core.planning.algorithms import DEFAULT_ALGORITHM
+from fastep_core.scenario import load_scenario
+from fastep_core.simulator import simulate
+from fastep_ros.container import split_args
+from fastep_ros.errors import StartupError
+from fastep_ros.layouts import Member, group
+from fastep_testing.graph import CROSSING, Helper, free_domain, isolated_env, stop_process, write
+
+
+def _members() -> list[Member]:
+    out = [Member('fastep-map', 'map_server', '/', {})]
+    for name in ('r1', 'r2'):
+        out += [Member(f'fastep-plant /{name}', 'plant', f'/{name}', {}),
+                Member(f'fastep-planner /{name}', 'planner', f'/{name}', {})]
+    return out + [Member('fastep-clock', 'clock', '/', {}), Member('fastep-record', 'recorder', '/', {})]
+
+
+def test_layouts_group_the_nodes_into_processes() -> None:
+    members = _members()
+    assert [label for label, _ in group('node', members)] == [m.label for m in members]
+    robot = group('robot', members)
+    assert [(label, [m.module for m in ms]) for label, ms in robot] == [
+        ('fastep-map', ['map_server']), ('fastep-robot /r1', ['plant', 'planner']),
+        ('fastep-robot /r2', ['plant', 'planner']), ('fastep-clock', ['clock']), ('fastep-record', ['recorder'])]
+    assert [(label, len(ms)) for label, ms in group('graph', members)] == [('fastep-graph', 6), ('fastep-record', 1)]
+
+
+@pytest.mark.parametrize('argv,words', [
+    ([], 'no node to run'),
+    (['--node'], '--node needs a node kind'),
+    (['--node', 'teleport'], "'teleport': the node kind must be one of plant, planner"),
+    (['x', '--node', 'plant'], "unexpected argument 'x' before the first --node"),
+])
+def test_a_malformed_container_command_line_is_refused(argv: list[str], words: str) -> None:
+    with pytest.raises(StartupError, match=words.replace('(', r'\(')):
+        split_args(argv)
+
+
+def test_a_node_that_cannot_start_in_a_container_is_one_line_naming_it_and_exit_2(tmp_path: Path) -> None:
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    cmd = [sys.executable, '-m', 'fastep_ros.container', '--ros-args', '--log-level', 'warn',
+           '--node', 'plant', '--ros-args', '-r', '__ns:=/r1',
+           '--node', 'planner', '--ros-args', '-r', '__ns:=/r1', '-p', 'robot_radius:=-1.0']
+    done = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL)
+    assert done.returncode == 2, done.stderr
+    assert done.stderr.startswith('fastep-container: error: planner in /r1: parameter robot_radius must be > 0')
+    assert len(done.stderr.strip().splitlines()) == 1 and 'Traceback' not in done.stderr, done.stderr
+
+
+def _children(pid: int) -> list[int]:
+    out = subprocess.run(['ps', '-o', 'pid=', '--ppid', str(pid)], capture_output=True, text=True).stdout
+    return [int(p) for p in out.split()]
+
+
+def _launch(tmp_path: Path, layout: str) -> dict[str, Any]:
+    """fastep-launch CROSSING --layout `layout`, watched from a helper node on its domain: the graph's node names
+    and topics (with types) while the robots drive, its node processes, its output and --json."""
+    scenario = write(tmp_path / 'crossing.yaml', CROSSING)
+    out = tmp_path / f'{layout}.json'
+    domain = free_domain()
+    helper = Helper(domain)
+    env = isolated_env(domain, tmp_path / f'roslog_{layout}')
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '5', '--seed', '0',
+                             '--layout', layout, '--json', str(out)], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    lines: list[str] = []
+    assert proc.stdout is not None
+    reader = threading.Thread(target=lambda: lines.extend(proc.stdout or []), daemon=True)
+    reader.start()
+    nodes: set[str] = set()
+    topics: set[tuple[str, str]] = set()
+    processes = None
+    try:
+        deadline = time.monotonic() + 180
+        while proc.poll() is None and time.monotonic() < deadline:
+            helper.spin_for(0.1)
+            if any('on their way' in line for line in lines):
+                if processes is None:
+                    processes = len(_children(proc.pid))
+                nodes |= {ns.rstrip('/') + '/' + name for name, ns in helper.node.get_node_names_and_namespaces()}
+                topics |= {(topic, ','.join(types)) for topic, types in helper.node.get_topic_names_and_types()}
+        _, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)
+        helper.close()
+    reader.join(timeout=5)
+    return {'code': proc.returncode, 'stdout': ''.join(lines), 'stderr': err, 'processes': processes,
+            'nodes': nodes - {'/test_helper', '/fastep_launch'}, 'topics': topics,
+            'json': json.loads(out.read_text()) if out.is_file() else None}
+
+
+def test_every_layout_runs_the_same_graph_and_the_same_run(tmp_path: Path) -> None:
+    reference = simulate(load_scenario(str(write(tmp_path / 'c.yaml', CROSSING))), DEFAULT_ALGORITHM, 0)
+    runs = {layout: _launch(tmp_path, layout) for layout in ('node', 'robot', 'graph')}
+    for layout, run in runs.items():
+        assert run['code'] == 0, (layout, run['stdout'], run['stderr'])
+        assert 'Traceback' not in run['stderr'], (layout, run['stderr'])
+        for robot, sim in zip(run['json']['runs'][0]['robots'], reference.robots):
+            assert robot['reached'] and not robot['collided'], (layout, robot['status'])
+            # lock step: the same steps as fastep-sim, within what the live loop's odometry timing allows
+            assert robot['path_length'] == pytest.approx(sim.path_length, rel=0.05), layout
+            assert robot['sim_time'] == pytest.approx(sim.sim_time, rel=0.15), layout
+    # map, 2 plants, 2 planners, clock: one process each, one per robot (+ map and clock), or one
+    assert {layout: run['processes'] for layout, run in runs.items()} == {'node': 6, 'robot': 4, 'graph': 1}
+    expected = {'/map', '/clock', '/r1/plant', '/r1/planner', '/r2/plant', '/r2/planner'}
+    for layout, run in runs.items():
+        assert run['nodes'] == expected, layout
+        assert run['topics'] == runs['node']['topics'], (layout, run['topics'] ^ runs['node']['topics'])
+    assert {('/r1/odom', 'nav_msgs/msg/Odometry'), ('/r2/cmd_vel', 'geometry_msgs/msg/Twist'),
+            ('/clock', 'rosgraph_msgs/msg/Clock'), ('/obstacles', 'visualization_msgs/msg/MarkerArray')} <= \
+        runs['graph']['topics']
