@@ -32,14 +32,16 @@ from fastep_core import experiments
 from fastep_core.errors import ParameterError
 from fastep_core.experiments import Record
 from fastep_core.planning.algorithms import algorithm_name
-from fastep_core.random_scenarios import FAMILIES, FAMILY_SEED0, family_source, parse_family_source
+from fastep_core.random_scenarios import ALL_FAMILIES, FAMILY_SEED0, family_source, parse_family_source
 
 __all__ = ['FAMILY_NAMES', 'Row', 'Summary', 'family_sources', 'run_families', 'rows_of', 'summarise',
            'worst_runs', 'markdown_report', 'load_average']
 
 FAMILY_NAMES: dict[str, str] = {'circle_field': 'circle fields', 'circles_walls': 'circles + walls',
                                 'u_trap': 'U-traps', 'multi_robot': '2-4 robots',
-                                'tractor_trailer': 'tractor-trailers'}
+                                'tractor_trailer': 'tractor-trailers', 'crossing_movers': 'crossing movers',
+                                'unknown_obstacles': 'unknown obstacles', 'misplaced_obstacles': 'misplaced obstacles',
+                                'dynamic_mix': 'movers + unknown + misplaced, 2-4 robots'}
 """What tables and figures call each family."""
 
 
@@ -53,8 +55,8 @@ def run_families(families: Sequence[str], algorithms: Sequence[str], worlds: int
                  overrides: dict[str, float] | None = None) -> list[Record]:
     """Every planner on `worlds` worlds per family, run seeds seed0..seed0+runs-1 (deterministic planners once)."""
     for family in families:
-        if family not in FAMILIES:
-            raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(FAMILIES)}')
+        if family not in ALL_FAMILIES:
+            raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
     return experiments.run_batch(family_sources(families, worlds), algorithms, runs, workers, seed0=seed0,
                                  progress=progress, label=label, overrides=overrides)
 

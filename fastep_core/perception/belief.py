@@ -116,7 +116,8 @@ class Perception:
         new = ~explained(points, believed, centres, radii)
         points, beams = points[new], beams[new]
         labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
-        found = shapes(points, beams, labels, pose_array[:2], self.spec.noise, WALL_RANGE * self.spec.range)
+        found = shapes(points, beams, labels, pose_array[:2], self.spec.noise, WALL_RANGE * self.spec.range,
+                       abs(scan.angle_increment))
         tracker = self.tracker
         tracker.update(t, found.centres, found.radii)
         # Tracks that stood still long enough become still obstacles.

@@ -10,8 +10,9 @@ points at the edge of the range fit any circle) and the centre lies beyond the p
 (a convex surface facing it).
 Walls: every other cluster of at least MIN_POINTS points that comes within `wall_range` of the scanner becomes
 a polyline by Douglas-Peucker simplification (Douglas and Peucker 1973) with tolerance WALL_TOLERANCE, each
-piece a segment. Farther ones wait: the robot will see them better as it comes nearer (a circle that enters
-the range shows its nearest few points first, which are no wall).
+piece a segment, the polyline's two ends extended by the gap between beams there (`beam_gap` radians: the
+wall ends somewhere before the next beam). Farther ones wait: the robot will see them better as it comes
+nearer (a circle that enters the range shows its nearest few points first, which are no wall).
 """
 
 from __future__ import annotations
@@ -103,7 +104,7 @@ def polyline(points: FloatArray, tolerance: float = WALL_TOLERANCE) -> list[int]
 
 
 def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatArray, noise: float = 0.0,
-           wall_range: float = math.inf) -> Shapes:
+           wall_range: float = math.inf, beam_gap: float = 0.0) -> Shapes:
     """Circles and walls of clustered scan points (segmentation.segment) seen from origin (module docstring)."""
     if len(points) == 0:
         empty = np.zeros((0, 2))
@@ -133,7 +134,15 @@ def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatA
         if len(jumps):   # the cluster that closes a full turn: start it after its gap in beam order
             index = np.roll(index, -(int(jumps[0]) + 1))
         ordered = points[index]
-        vertices = ordered[polyline(ordered)]
+        vertices = ordered[polyline(ordered)].copy()
+        # The wall goes on somewhere between its last return and the next beam: extend each end by the gap
+        # between beams there (at 5 m and 1 degree, 9 cm), so the robot does not cut the true end.
+        for end, inner in ((0, 1), (-1, -2)):
+            run = vertices[end] - vertices[inner]
+            length = float(np.hypot(*run))
+            if length > 0.0:
+                reach = float(np.hypot(*(vertices[end] - origin))) * beam_gap
+                vertices[end] = vertices[end] + run * (reach / length)
         starts.append(vertices[:-1])
         ends.append(vertices[1:])
     return Shapes(centres[circle], radii[circle],
