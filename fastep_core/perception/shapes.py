@@ -80,6 +80,23 @@ def fit_circles(points: FloatArray, labels: IntArray, n_clusters: int) -> tuple[
     return centres + mean, radii, rms
 
 
+def _spans(points: FloatArray, labels: IntArray, n_clusters: int) -> FloatArray:
+    """Each cluster's chord: the distance between its two ends. Found as the point farthest from any point of
+    it (an end of an arc), then the point farthest from that one (the other end): in any beam order, so also for
+    the cluster that closes a full turn."""
+    index = np.arange(len(points))
+    anchor = np.zeros(n_clusters, dtype=np.int64)
+    anchor[labels[::-1]] = index[::-1]                                   # one point of each cluster
+    for _ in range(2):
+        d = np.hypot(*(points - points[anchor[labels]]).T)
+        best = np.full(n_clusters, -1.0)
+        np.maximum.at(best, labels, d)
+        farthest = np.zeros(n_clusters, dtype=np.int64)
+        farthest[labels[d == best[labels]]] = index[d == best[labels]]
+        anchor, span = farthest, best
+    return span
+
+
 def polyline(points: FloatArray, tolerance: float = WALL_TOLERANCE) -> list[int]:
     """Douglas-Peucker: indices of the points (in order) kept as the polyline's vertices."""
     keep = [0, len(points) - 1]
@@ -117,13 +134,7 @@ def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatA
     nearest = np.full(n_clusters, np.inf)
     np.minimum.at(nearest, labels, ranges)
     behind = np.hypot(*(centres - origin).T) > mean_range
-    # The first and last point of each cluster in beam order (the cluster closing a full turn: any two of its
-    # ends do, its chord is only used against a radius).
-    first = np.full(n_clusters, len(points))
-    np.minimum.at(first, labels, np.arange(len(points)))
-    last = np.zeros(n_clusters, dtype=np.int64)
-    np.maximum.at(last, labels, np.arange(len(points)))
-    chord = np.hypot(*(points[last] - points[first]).T)
+    chord = _spans(points, labels, n_clusters)
     circle = (counts >= MIN_CIRCLE_POINTS) & np.isfinite(radii) & (rms <= CIRCLE_RESIDUAL + 2.0 * noise) & \
         (radii <= MAX_CIRCLE_RADIUS) & (radii > 0.0) & behind & (chord >= MIN_ARC * radii)
     starts: list[FloatArray] = []
