@@ -12,7 +12,8 @@ control tick it scans the true world (the simulator, or a LaserScan on a real ro
    fits and the cluster is within WALL_RANGE of the range (shapes.shapes);
 5. tracks the circles with a constant-velocity Kalman filter (tracking.Tracker);
 6. believes in still obstacles: walls at once (straight walls merged with the collinear pieces it already
-   has), circles once their track has stood still (speed below STILL_SPEED) for STILL_TIME seconds;
+   has), circles once their track has stood still (speed below STILL_SPEED) for STILL_TIME seconds (such a
+   circle overlapping a map circle of about its size replaces it: the map's was misplaced);
 7. reports the other confirmed tracks as movers: OtherRobot('track K', position, velocity, radius), the way
    known movers and other robots reach planners.
 
@@ -124,8 +125,10 @@ class Perception:
         speed = np.hypot(tracker.states[:, 2], tracker.states[:, 3])
         still = tracker.confirmed & (t - tracker.born >= STILL_TIME) & (speed < STILL_SPEED) & (tracker.seen == t)
         if still.any():
-            self.seen_items += [Circle((float(s[0]), float(s[1])), float(r))
-                                for s, r in zip(tracker.states[still], tracker.radii[still])]
+            found_circles = [Circle((float(s[0]), float(s[1])), float(r))
+                             for s, r in zip(tracker.states[still], tracker.radii[still])]
+            self._replace_map_circles(found_circles)
+            self.seen_items += found_circles
             tracker.keep(~still)
             changed = True
         for start, end in zip(found.starts, found.ends):
@@ -141,6 +144,17 @@ class Perception:
         self.belief = Belief(t, self.world, tuple(self.map_items), tuple(self.seen_items), tuple(self.dropped),
                              movers, points)
         return self.belief
+
+    def _replace_map_circles(self, found: list[Circle]) -> None:
+        """A still circle perception found where the map has one of about its size, overlapping it, is that
+        one where it really is: the map's (misplaced) circle is dropped for it."""
+        for circle in found:
+            for item in self.map_items:
+                if isinstance(item, Circle) and 0.5 <= circle.radius / item.radius <= 2.0 and \
+                        math.dist(item.center, circle.center) < item.radius + circle.radius:
+                    self.map_items.remove(item)
+                    self.dropped.append(item)
+                    break
 
     def _add_wall(self, start: FloatArray, end: FloatArray) -> None:
         """Believe in a wall piece: extend a collinear believed wall it continues, else add it."""
