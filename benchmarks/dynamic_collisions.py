@@ -45,9 +45,9 @@ def first_contact(source: str, algorithm: str, seed: int, robot: str) -> dict[st
                 item = still.items[k]
                 spec = next(o for o in scenario.obstacle_specs if o.still and o.shape == item)
                 kind = 'unknown' if not spec.known else 'misplaced' if spec.position_sigma > 0 else 'known'
-                # Believed: the robot's belief (or, without a sensor, its map) has a surface within 0.5 m of it.
+                # Believed: the robot's belief has a surface within radius + 0.5 m of its centre.
                 believed = tick.belief is not None and len(tick.belief.world.obstacles) > 0 and \
-                    float(tick.belief.world.obstacles.clearance(p)) < 0.5
+                    float(tick.belief.world.obstacles.clearance(p)) < radius + 0.5
                 found.update(what=f'{kind} still {type(item).__name__.lower()}', how='moving' if speed > 0.05
                              else 'standing', believed=believed, t=tick.t, depth=float(-d[k]))
                 return
@@ -64,7 +64,8 @@ def first_contact(source: str, algorithm: str, seed: int, robot: str) -> dict[st
                 else:
                     heading = tick.velocity[:2] / speed
                     c = float(np.dot(heading, v_m) / max(np.hypot(*v_m), 1e-9))
-                    how = 'mover from the side' if abs(c) < 0.5 else 'head on' if c < 0 else 'mover from behind'
+                    how = 'mover crossing from the side' if abs(c) < 0.5 else 'head on' if c < 0 else \
+                        'mover going the robot\'s way (within 60 degrees)'
                 tracked = known or (tick.belief is not None and any(
                     math.dist(m.position, centres[k]) < 1.0 for m in tick.belief.movers))
                 found.update(what=f'{"known" if known else "unknown"} mover', how=how, believed=tracked, t=tick.t,
@@ -83,12 +84,13 @@ def first_contact(source: str, algorithm: str, seed: int, robot: str) -> dict[st
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument('json', nargs='+')
+    parser.add_argument('--algorithms', nargs='+', help='only these planners\' collisions')
     args = parser.parse_args()
     kinds: Counter[tuple[str, str, str]] = Counter()
     for path in args.json:
         rows = json.load(open(path))['rows']
         for row in rows:
-            if not row['collided']:
+            if not row['collided'] or (args.algorithms and row['algorithm'] not in args.algorithms):
                 continue
             contact = first_contact(family_source(row['family'], row['world']), row['algorithm'], row['seed'],
                                     row['robot'])
