@@ -24,8 +24,11 @@ __all__ = ['EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'explained', 'seen_t
 
 FloatArray = NDArray[np.float64]
 
-EXPLAINED = 0.25
-"""Metres from a believed surface within which a scan point is that surface (noise, small map errors)."""
+EXPLAINED = 0.12
+"""Metres from a believed surface within which a scan point is that surface: the noise (1 cm, 3 sigma), a fit's
+error, a polyline's tolerance (0.1 m). No more: a misplaced obstacle's surface would hide the true one's points
+within this distance, and the robot would pass the truth as closely as the ghost (0.25 m did: shallow
+collisions in the misplaced family, docs/dynamic_world.md)."""
 SEE_THROUGH = 0.3
 """Metres a reading must exceed a believed surface on its beam to contradict it."""
 SEE_THROUGH_BEAMS = 3
