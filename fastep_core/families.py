@@ -32,7 +32,7 @@ from fastep_core import experiments
 from fastep_core.errors import ParameterError
 from fastep_core.experiments import Record
 from fastep_core.planning.algorithms import algorithm_name
-from fastep_core.random_scenarios import FAMILIES, FAMILY_SEED0, family_source, parse_family_source
+from fastep_core.random_scenarios import ALL_FAMILIES, FAMILY_SEED0, family_source, parse_family_source
 
 __all__ = ['FAMILY_NAMES', 'Row', 'Summary', 'family_sources', 'run_families', 'rows_of', 'summarise',
            'worst_runs', 'markdown_report', 'load_average']
@@ -41,7 +41,9 @@ FAMILY_NAMES: dict[str, str] = {'circle_field': 'circle fields', 'circles_walls'
                                 'u_trap': 'U-traps', 'multi_robot': '2-4 robots',
                                 'tractor_trailer': 'tractor-trailers',
                                 'diff_drive_walls': 'diff drive: circles + walls',
-                                'diff_drive_robots': 'diff drive: 1-4 robots'}
+                                'diff_drive_robots': 'diff drive: 1-4 robots', 'crossing_movers': 'crossing movers',
+                                'unknown_obstacles': 'unknown obstacles', 'misplaced_obstacles': 'misplaced obstacles',
+                                'dynamic_mix': 'movers + unknown + misplaced, 2-4 robots'}
 """What tables and figures call each family."""
 
 
@@ -55,8 +57,8 @@ def run_families(families: Sequence[str], algorithms: Sequence[str], worlds: int
                  overrides: dict[str, float] | None = None) -> list[Record]:
     """Every planner on `worlds` worlds per family, run seeds seed0..seed0+runs-1 (deterministic planners once)."""
     for family in families:
-        if family not in FAMILIES:
-            raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(FAMILIES)}')
+        if family not in ALL_FAMILIES:
+            raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
     return experiments.run_batch(family_sources(families, worlds), algorithms, runs, workers, seed0=seed0,
                                  progress=progress, label=label, overrides=overrides)
 

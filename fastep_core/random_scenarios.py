@@ -26,6 +26,9 @@ World families (`FAMILIES`, `random_family_data(family, seed)`), what the famili
   radius), facing a random heading (`diff_drive_data`);
 - diff_drive_robots: 1-4 differential-drive bases among circles, walls and traps: random_scenario_data's
   worlds with point masses only, each made a diff_drive facing a random heading (`diff_drive_data`).
+- crossing_movers, unknown_obstacles, misplaced_obstacles, dynamic_mix: v2 worlds that move and that the map
+  gets wrong, every robot with a laser scanner (fastep_core/dynamic_families.py). Named with --families; the
+  families benchmark runs the static five (FAMILIES) when none is named.
 
 Benchmarks draw their worlds from seeds FAMILY_SEED0 + k, far above every seed the tests use (0-500), so the
 benchmark's worlds are ones no test, and no tuning, has seen.
@@ -39,6 +42,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core import cli
+from fastep_core.dynamic_families import DYNAMIC_FAMILIES, dynamic_family_data
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle
 from fastep_core.planning.optimal import shortest_path
@@ -46,8 +50,9 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.world import World
 
-__all__ = ['MODELS_MIX', 'FAMILIES', 'FAMILY_SEED0', 'u_trap', 'u_trap_scenario_data', 'circle_field_data',
-           'circles_walls_data', 'diff_drive_data', 'random_family_data', 'family_source', 'parse_family_source',
+__all__ = ['MODELS_MIX', 'ALL_FAMILIES', 'FAMILIES', 'FAMILY_SEED0', 'u_trap', 'u_trap_scenario_data',
+           'circle_field_data', 'circles_walls_data', 'diff_drive_data', 'random_family_data', 'family_source',
+           'parse_family_source',
            'random_scenario', 'random_scenario_data', 'solvable', 'main']
 
 MODELS_MIX = 0.3
@@ -55,7 +60,9 @@ MODELS_MIX = 0.3
 _ATTEMPTS = 200  # random layouts tried per scenario before giving up (a few are usually enough)
 FAMILIES: tuple[str, ...] = ('circle_field', 'circles_walls', 'u_trap', 'multi_robot', 'tractor_trailer',
                              'diff_drive_walls', 'diff_drive_robots')
-"""The world families of random_family_data, in the order tables list them."""
+"""The static world families of random_family_data, in the order tables list them (the default benchmark)."""
+ALL_FAMILIES: tuple[str, ...] = FAMILIES + DYNAMIC_FAMILIES
+"""Every family random_family_data knows: the static ones and the v2 ones (dynamic_families.py)."""
 FAMILY_SEED0 = 1_000_000
 """First world seed of the families benchmark: disjoint from the seeds the tests use."""
 FIELD_SIZE = 50.0   # metres: the square workspace of circle fields and circles + walls
@@ -312,8 +319,10 @@ def random_family_data(family: str, seed: int) -> dict[str, Any]:
     elif family == 'diff_drive_robots':
         count = int(np.random.default_rng(seed).integers(1, 5))
         data = diff_drive_data(random_scenario_data(seed, n_robots=count, tractor_share=0.0), seed)
+    elif family in DYNAMIC_FAMILIES:
+        data = dynamic_family_data(family, seed)
     else:
-        raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(FAMILIES)}')
+        raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
     return {**data, 'name': f'{family}_{seed}'}
 
 
@@ -326,7 +335,7 @@ def family_source(family: str, seed: int) -> str:
 def parse_family_source(source: str) -> tuple[str, int] | None:
     """(family, seed) of a family_source name; None for anything else (a built-in name or a file path)."""
     family, colon, seed = source.partition(':')
-    if not colon or family not in FAMILIES or not seed.isdigit():
+    if not colon or family not in ALL_FAMILIES or not seed.isdigit():
         return None
     return family, int(seed)
 
@@ -343,7 +352,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     prog = 'python -m fastep_core.random_scenarios'
     parser = cli.Parser(prog=prog, description='Print a random solvable scenario as YAML.')
     parser.add_argument('seed', nargs='?', type=cli.seed, default=0, help='scenario seed (default 0)')
-    parser.add_argument('--family', choices=FAMILIES,
+    parser.add_argument('--family', choices=ALL_FAMILIES,
                         help='a world of this family (the families benchmark\'s worlds are seeds 1000000 on)')
 
     def run() -> int:

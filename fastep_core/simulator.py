@@ -7,8 +7,10 @@ its own Generator spawned from the run's seed.
 A v2 world (fastep_core/dynamic_world.py): movers move every tick; planners are given the map (known still
 obstacles, misplaced ones where the map says) and see known movers, at their positions (with their map error)
 and velocities at the start of each tick, as moving obstacles beside the other robots ('mover K'); unknown
-obstacles are absent from everything a planner is given. Collisions and min_clearance are judged against the
-truth: every still obstacle where it is, every mover where it is at each step's time.
+obstacles are absent from everything a planner is given, unless a robot's own `sensor` shows them: such a
+robot scans the truth every tick and plans in what it believes (fastep_core/perception/robot.py). Collisions
+and min_clearance are judged against the truth: every still obstacle where it is, every mover where it is at
+each step's time.
 """
 
 from __future__ import annotations
@@ -24,6 +26,8 @@ from numpy.typing import NDArray
 from fastep_core.dynamic_world import DynamicWorld, map_generator
 from fastep_core.errors import GoalError
 from fastep_core.metrics import trajectory_margins
+from fastep_core.perception.belief import Belief
+from fastep_core.perception.robot import SensingRobot
 from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot, OtherRobots
@@ -91,6 +95,7 @@ class Tick:
     command: FloatArray
     velocity: FloatArray
     navigator: Navigator
+    belief: Belief | None = None   # what a robot with a sensor believes (fastep_core/perception)
 
 
 def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
@@ -111,6 +116,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     streams = np.random.SeedSequence(seed).spawn(len(specs))
     navigators = [make_navigator(algorithm, spec, spec.radius, planner_world, params, np.random.default_rng(s))
                   for spec, s in zip(specs, streams)]
+    # Robots with a sensor scan the truth each tick and plan in what they believe (fastep_core/perception).
+    senses = [None if spec.sensor is None else SensingRobot(spec.sensor, spec.model, i, truth, nav, seed)
+              for i, (spec, nav) in enumerate(zip(specs, navigators))]
     states = [np.array(spec.start, dtype=float) for spec in specs]
     velocities = [np.zeros(2) for _ in specs]
     runs = [RobotRun(spec.name, spec.model) for spec in specs]
@@ -144,7 +152,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 commands.append(np.zeros(2))
                 continue
             start = time.perf_counter()
-            commands.append(nav.update(t, states[i], views[i]))
+            sense = senses[i]
+            seen = views[i] if sense is None else sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
+            commands.append(nav.update(t, states[i], seen))
             runs[i].compute_time += time.perf_counter() - start
             if nav.mode is Mode.ARRIVED:
                 runs[i].reached, runs[i].sim_time = True, t
@@ -178,7 +188,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             else:
                 pending[i] = row
             if observer is not None:
-                observer(Tick(t_next, specs[i].name, new_state, commands[i], velocities[i], nav))
+                sense = senses[i]
+                observer(Tick(t_next, specs[i].name, new_state, commands[i], velocities[i], nav,
+                              None if sense is None else sense.belief))
         step_times.append(t_next)
         step_positions.append(np.array([s[:2] for s in states]))
 

@@ -12,12 +12,12 @@ plots and example paths, drawn by msg_tools.plots), prints the Markdown on stdou
 (when stderr is a terminal, or with --progress). The engine is `fastep_core.experiments` (why this command
 lives in msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is the same command.
 
---families (all of them when none is named) runs the families benchmark instead (fastep_core.families,
-docs/clutter.md): WORLDS unseen worlds per family, RUNS seeded runs per world and planner; it writes
-OUT/REPORT.md (the family table), OUT/REPORT.json (or --json: per-run rows and the per family and planner
-summary) and OUT/figures/REPORT_{path_opt,cpu,worst}.png (--worst-of ALG: that planner's worst worlds).
---planner-set overrides planner parameters (PlannerParams) for every planner in either mode. Exit 0 when the
-runs were made, 2 with one line on stderr for bad input.
+--families (the static ones when none is named; the v2 ones by name) runs the families benchmark instead
+(fastep_core.families, docs/clutter.md, docs/dynamic_world.md): WORLDS unseen worlds per family, RUNS seeded
+runs per world and planner; it writes OUT/REPORT.md (the family table), OUT/REPORT.json (or --json: per-run
+rows and the per family and planner summary) and OUT/figures/REPORT_{path_opt,cpu,worst}.png (--worst-of ALG:
+that planner's worst worlds). --planner-set overrides planner parameters (PlannerParams) for every planner in
+either mode. Exit 0 when the runs were made, 2 with one line on stderr for bad input.
 """
 
 from __future__ import annotations
@@ -35,7 +35,7 @@ from fastep_core import experiments, families
 from fastep_core.cli import Parser, fail, guard, positive_int, seed
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
-from fastep_core.random_scenarios import FAMILIES, FAMILY_SEED0
+from fastep_core.random_scenarios import ALL_FAMILIES, FAMILIES, FAMILY_SEED0
 from fastep_core.scenario import builtin_names, load_scenario
 
 __all__ = ['main']
@@ -49,8 +49,9 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     what = p.add_mutually_exclusive_group()
     what.add_argument('--scenarios', nargs='+', metavar='SCENARIO',
                       help='built-in names or YAML paths, or "all" for every built-in (default: Table 2)')
-    what.add_argument('--families', nargs='*', choices=FAMILIES, metavar='FAMILY',
-                      help=f'random world families among {", ".join(FAMILIES)} (none named: all)')
+    what.add_argument('--families', nargs='*', choices=ALL_FAMILIES, metavar='FAMILY',
+                      help=f'random world families among {", ".join(ALL_FAMILIES)} (none named: the static ones, '
+                           f'{", ".join(FAMILIES)})')
     p.add_argument('--worlds', type=positive_int, help='worlds per family with --families (default 30)')
     p.add_argument('--worst-of', choices=ALGORITHMS, metavar='ALG',
                    help='with --families: the worst-world table and figure show where this planner\'s path / '

@@ -36,7 +36,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ['DEFAULT_BEAMS', 'DEFAULT_FOV', 'DEFAULT_NOISE', 'DEFAULT_RANGE', 'FULL_TURN_TOLERANCE', 'MAX_BEAMS',
-           'LaserSpec', 'Scan', 'beam_angles', 'cast', 'main']
+           'LaserSpec', 'Scan', 'beam_angles', 'cast', 'hit_distances', 'main']
 
 FloatArray = NDArray[np.float64]
 
@@ -176,6 +176,19 @@ def cast(origin: ArrayLike, angles: ArrayLike, range_max: float, circles: ArrayL
     if len(a_ends):
         best = np.minimum(best, _segment_hits(o, dx, dy, a_ends, b_ends).min(axis=1))
     return np.where(best <= range_max, best, np.inf)
+
+
+def hit_distances(origin: ArrayLike, angles: ArrayLike, circles: ArrayLike | None = None,
+                  radii: ArrayLike | None = None, starts: ArrayLike | None = None,
+                  ends: ArrayLike | None = None) -> FloatArray:
+    """Distance along each beam (rows) to each obstacle (columns: the circles, then the segments) on its own,
+    +inf where the beam misses it: what a scan would read if that obstacle were the only one."""
+    o = np.asarray(origin, dtype=float).reshape(2)
+    a = np.asarray(angles, dtype=float).reshape(-1)
+    dx, dy = np.cos(a), np.sin(a)
+    centres, r = _points(circles), np.asarray(radii if radii is not None else [], dtype=float).reshape(-1)
+    a_ends, b_ends = _points(starts), _points(ends)
+    return np.concatenate([_circle_hits(o, dx, dy, centres, r), _segment_hits(o, dx, dy, a_ends, b_ends)], axis=1)
 
 
 def scan(spec: LaserSpec, pose: Sequence[float], rng: np.random.Generator | None = None, t: float = 0.0,

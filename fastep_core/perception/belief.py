@@ -1,0 +1,180 @@
+"""What a robot believes about its world, kept apart from the truth, and the perception loop that updates it.
+
+A robot with a sensor starts believing its map (the known obstacles, misplaced ones where the map says). Each
+control tick it scans the true world (the simulator, or a LaserScan on a real robot) and `Perception.update`:
+
+1. turns the readings into map-frame points (segmentation.scan_points);
+2. drops from the belief every obstacle the scan sees through (fusion.seen_through: a misplaced obstacle's
+   ghost, or a mover once taken for a still obstacle);
+3. sets aside the points a believed obstacle, another robot (its odometry) or a known mover explains
+   (fusion.explained);
+4. clusters the rest along the beam order (segmentation.segment) and fits circles, or walls where no circle
+   fits and the cluster is within WALL_RANGE of the range (shapes.shapes);
+5. tracks the circles with a constant-velocity Kalman filter (tracking.Tracker);
+6. believes in still obstacles: walls at once (straight walls merged with the collinear pieces it already
+   has), circles once their track has stood still (speed below STILL_SPEED) for STILL_TIME seconds (such a
+   circle overlapping a map circle of about its size replaces it: the map's was misplaced);
+7. reports the other confirmed tracks as movers: OtherRobot('track K', position, velocity, radius), the way
+   known movers and other robots reach planners.
+
+The result is a `Belief`: a World for the navigator (changed, as a new object, only when the still obstacles
+it believes in change, so planners replan only then) and the tracked movers. Nothing here draws random
+numbers: the scanner's noise is drawn by whoever scans (the simulator: `sensor_generator`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from fastep_core.perception.fusion import explained, seen_through
+from fastep_core.perception.segmentation import scan_points, segment
+from fastep_core.perception.shapes import WALL_TOLERANCE, shapes
+from fastep_core.perception.tracking import Tracker, TrackParams
+from fastep_core.planning.others import OtherRobot
+from fastep_core.sensing.laser import LaserSpec, Scan
+from fastep_core.world import World
+
+__all__ = ['MERGE_GAP', 'SENSOR_STREAM', 'STILL_SPEED', 'STILL_TIME', 'WALL_RANGE', 'Belief', 'Perception', 'heading',
+           'sensor_generator', 'track_name']
+
+FloatArray = NDArray[np.float64]
+
+STILL_SPEED = 0.15
+"""m/s: a confirmed track slower than this is a still obstacle (the families' movers go 0.3 m/s and more)."""
+STILL_TIME = 1.5
+"""Seconds a track must have been tracked before it may count as still (its velocity has settled)."""
+WALL_RANGE = 0.6
+"""Share of the scanner's range within which a cluster no circle fits is believed a wall (shapes.shapes)."""
+MERGE_GAP = 0.5
+"""Metres: a new wall piece this close to a collinear believed wall extends it instead of adding a segment."""
+SENSOR_STREAM = 0x736E73   # 'sns': spawn key of the scanners' noise streams, far above any robot's index
+
+
+def sensor_generator(seed: int, robot: int) -> np.random.Generator:
+    """The Generator of robot `robot`'s scanner noise in a run of `seed`: a stream no swarm or map uses."""
+    return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(SENSOR_STREAM, robot)))
+
+
+def track_name(track_id: int) -> str:
+    """What planners call a tracked mover ('track 4')."""
+    return f'track {track_id}'
+
+
+def heading(model: str, state: Sequence[float] | FloatArray) -> float:
+    """The scanner's heading (DESIGN.md, sensor): a point mass looks along +x; the others along theta (state[2])."""
+    return 0.0 if model == 'point_mass' else float(state[2])
+
+
+@dataclass(frozen=True)
+class Belief:
+    """What one robot believes at time t (never the truth): the world it plans in and the movers it tracks."""
+
+    t: float
+    world: World                               # the map's obstacles it still believes, plus the ones it saw
+    map_obstacles: tuple[Obstacle, ...]        # of the map's obstacles, those not seen through
+    seen_obstacles: tuple[Obstacle, ...]       # still obstacles perception added (circles and wall segments)
+    dropped: tuple[Obstacle, ...]              # the map's obstacles a scan saw through
+    movers: tuple[OtherRobot, ...]             # confirmed tracks that move (or have not yet stood still)
+    points: FloatArray                         # this scan's points nothing believed explained (for figures)
+
+
+class Perception:
+    """One robot's perception over a run: its belief, its tracker, the map it started from."""
+
+    def __init__(self, spec: LaserSpec, map_world: World, track_params: TrackParams | None = None) -> None:
+        self.spec = spec
+        self.map_world = map_world
+        self.map_items: list[Obstacle] = list(map_world.obstacle_list)
+        self.seen_items: list[Obstacle] = []
+        self.dropped: list[Obstacle] = []
+        self.tracker = Tracker(track_params)
+        self.world = map_world
+        self.belief = Belief(0.0, map_world, tuple(self.map_items), (), (), (), np.zeros((0, 2)))
+
+    def update(self, t: float, pose: Sequence[float], scan: Scan, others: Sequence[OtherRobot] = ()) -> Belief:
+        """Fold one scan taken at pose (x, y, heading) into the belief (module docstring); others: the other
+        robots (odometry) and known movers as the robot is told of them."""
+        pose_array = np.asarray(pose, dtype=float)[:3]
+        changed = False
+        believed = self.world.obstacles
+        through = seen_through(scan, pose_array, believed)
+        if through.any():
+            gone = {id(item) for item, drop in zip(believed.items, through) if drop}
+            self.dropped += [o for o in self.map_items if id(o) in gone]
+            self.map_items = [o for o in self.map_items if id(o) not in gone]
+            self.seen_items = [o for o in self.seen_items if id(o) not in gone]
+            believed = Obstacles(self.map_items + self.seen_items)
+            changed = True
+        points, beams = scan_points(scan, pose_array)
+        centres = np.array([o.position for o in others], dtype=float).reshape(-1, 2)
+        radii = np.array([o.radius for o in others], dtype=float)
+        new = ~explained(points, believed, centres, radii)
+        points, beams = points[new], beams[new]
+        labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
+        found = shapes(points, beams, labels, pose_array[:2], self.spec.noise, WALL_RANGE * self.spec.range,
+                       abs(scan.angle_increment))
+        tracker = self.tracker
+        tracker.update(t, found.centres, found.radii)
+        # Tracks that stood still long enough become still obstacles.
+        speed = np.hypot(tracker.states[:, 2], tracker.states[:, 3])
+        still = tracker.confirmed & (t - tracker.born >= STILL_TIME) & (speed < STILL_SPEED) & (tracker.seen == t)
+        if still.any():
+            found_circles = [Circle((float(s[0]), float(s[1])), float(r))
+                             for s, r in zip(tracker.states[still], tracker.radii[still])]
+            self._replace_map_circles(found_circles)
+            self.seen_items += found_circles
+            tracker.keep(~still)
+            changed = True
+        for start, end in zip(found.starts, found.ends):
+            self._add_wall(start, end)
+            changed = True
+        if changed:
+            self.world = World(self.map_world.workspace, tuple(self.map_items + self.seen_items))
+        confirmed = np.flatnonzero(tracker.confirmed)
+        movers = tuple(OtherRobot(track_name(int(tracker.ids[k])),
+                                  (float(tracker.states[k, 0]), float(tracker.states[k, 1])),
+                                  (float(tracker.states[k, 2]), float(tracker.states[k, 3])), float(tracker.radii[k]))
+                       for k in confirmed)
+        self.belief = Belief(t, self.world, tuple(self.map_items), tuple(self.seen_items), tuple(self.dropped),
+                             movers, points)
+        return self.belief
+
+    def _replace_map_circles(self, found: list[Circle]) -> None:
+        """A still circle perception found where the map has one of about its size, overlapping it, is that
+        one where it really is: the map's (misplaced) circle is dropped for it."""
+        for circle in found:
+            for item in self.map_items:
+                if isinstance(item, Circle) and 0.5 <= circle.radius / item.radius <= 2.0 and \
+                        math.dist(item.center, circle.center) < item.radius + circle.radius:
+                    self.map_items.remove(item)
+                    self.dropped.append(item)
+                    break
+
+    def _add_wall(self, start: FloatArray, end: FloatArray) -> None:
+        """Believe in a wall piece: extend a collinear believed wall it continues, else add it."""
+        new = np.array([start, end])
+        for k, item in enumerate(self.seen_items):
+            if not isinstance(item, Segment):
+                continue
+            a, b = np.array(item.start), np.array(item.end)
+            run = b - a
+            length = math.hypot(run[0], run[1])
+            if length <= 0.0:
+                continue
+            unit = run / length
+            offset = new - a
+            off_line = np.abs(unit[0] * offset[:, 1] - unit[1] * offset[:, 0])
+            along = offset @ unit
+            if off_line.max() > WALL_TOLERANCE or along.max() < -MERGE_GAP or along.min() > length + MERGE_GAP:
+                continue
+            low, high = min(0.0, float(along.min())), max(length, float(along.max()))
+            p, q = a + low * unit, a + high * unit
+            self.seen_items[k] = Segment((float(p[0]), float(p[1])), (float(q[0]), float(q[1])))
+            return
+        self.seen_items.append(Segment((float(start[0]), float(start[1])), (float(end[0]), float(end[1]))))

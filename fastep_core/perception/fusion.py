@@ -1,0 +1,78 @@
+"""Fusion of a scan with what the robot already believes: the points a believed surface explains, and the
+believed obstacles the scan sees through.
+
+- Explained points: a point within EXPLAINED of a believed obstacle's surface, or inside it, is that obstacle
+  (the map's, possibly misplaced; one perception added); a point within EXPLAINED of another robot's circle
+  (its odometry) or of a known mover's reported circle is that robot or mover. Only the rest can be new.
+- Seen through: a believed obstacle is contradicted by a beam that reads farther than the obstacle's surface
+  on that beam by more than SEE_THROUGH (the beam passed where the obstacle should be). Only obstacles whose
+  surface the beam would reach within range_max - SEE_THROUGH count (beyond, the beam says nothing), and the
+  obstacle is shrunk by SEE_THROUGH first (circles' radii, segments' ends: grazing beams say nothing). An
+  obstacle contradicted by at least SEE_THROUGH_BEAMS beams of one scan is not where the map says (a misplaced
+  obstacle's ghost, or a mover perception once took for a still obstacle). Vectorised: beams x obstacles.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.geometry import Obstacles
+from fastep_core.sensing.laser import Scan, hit_distances
+
+__all__ = ['EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'explained', 'seen_through']
+
+FloatArray = NDArray[np.float64]
+
+EXPLAINED = 0.12
+"""Metres from a believed surface within which a scan point is that surface: the noise (1 cm, 3 sigma), a fit's
+error, a polyline's tolerance (0.1 m). No more: a misplaced obstacle's surface would hide the true one's points
+within this distance, and the robot would pass the truth as closely as the ghost (0.25 m did: shallow
+collisions in the misplaced family, docs/dynamic_world.md)."""
+SEE_THROUGH = 0.3
+"""Metres a reading must exceed a believed surface on its beam to contradict it."""
+SEE_THROUGH_BEAMS = 3
+"""Beams of one scan that must see through an obstacle before it is dropped."""
+
+
+def explained(points: FloatArray, obstacles: Obstacles, centres: FloatArray, radii: FloatArray,
+              tolerance: float = EXPLAINED) -> NDArray[np.bool_]:
+    """Which points (n, 2) a believed obstacle or a circle (centres (k, 2), radii (k,): other robots, known
+    movers) explains."""
+    out = np.zeros(len(points), dtype=bool)
+    if not len(points):
+        return out
+    if len(obstacles):
+        out |= obstacles.clearance(points) < tolerance
+    if len(centres):
+        gap = np.hypot(points[:, None, 0] - centres[:, 0], points[:, None, 1] - centres[:, 1]) - radii
+        out |= (gap < tolerance).any(axis=1)
+    return out
+
+
+def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles) -> NDArray[np.bool_]:
+    """Which believed obstacles (circles first, as Obstacles orders them) this scan from pose sees through."""
+    out = np.zeros(len(obstacles), dtype=bool)
+    if not len(obstacles):
+        return out
+    reach = scan.range_max
+    candidates = np.flatnonzero(obstacles.distances(pose[:2]) < reach - SEE_THROUGH)
+    if not len(candidates):
+        return out
+    circles = candidates[candidates < obstacles.n_circles]
+    segments = candidates[candidates >= obstacles.n_circles] - obstacles.n_circles
+    angles = pose[2] + scan.angles()
+    # Shrunk by the margin (a circle's radius, a segment's ends): a beam grazing an edge that perception or the
+    # map drew a little too large says nothing.
+    radii = obstacles.radii[circles]
+    radii = radii - np.minimum(SEE_THROUGH, 0.5 * radii)
+    starts, ends = obstacles.starts[segments], obstacles.ends[segments]
+    run = ends - starts
+    length = np.maximum(np.hypot(run[:, 0], run[:, 1]), 1e-12)
+    cut = (np.minimum(SEE_THROUGH, 0.25 * length) / length)[:, None] * run
+    expected = hit_distances(pose[:2], angles, obstacles.centers[circles], radii, starts + cut,
+                             ends - cut)                                                  # (beams, candidates)
+    measured = np.where(np.isfinite(scan.ranges), scan.ranges, np.inf)[:, None]
+    through = (expected > 0.0) & (expected < reach - SEE_THROUGH) & (measured > expected + SEE_THROUGH)
+    out[candidates] = through.sum(axis=0) >= SEE_THROUGH_BEAMS
+    return out

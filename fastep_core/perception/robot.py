@@ -1,0 +1,54 @@
+"""A simulated robot's senses: each tick its scanner reads the true world and its perception updates its belief.
+
+What the in-process simulator calls for a robot with a `sensor` (fastep_core/simulator.py): the scan is of
+the truth (every still obstacle, known or not, where it really is; every mover where it is now; the other
+robots as circles of their radius), its noise drawn from the robot's own stream (belief.sensor_generator);
+the navigator is given the belief's world (only when it changed) and, beside the other robots and known
+movers it is told of, the movers it tracks.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.dynamic_world import DynamicWorld
+from fastep_core.perception.belief import Belief, Perception, heading, sensor_generator
+from fastep_core.planning.navigator import Navigator
+from fastep_core.planning.others import OtherRobot
+from fastep_core.sensing.laser import LaserSpec
+
+__all__ = ['SensingRobot']
+
+FloatArray = NDArray[np.float64]
+
+
+class SensingRobot:
+    """One robot's scanner and perception in a simulated run."""
+
+    def __init__(self, spec: LaserSpec, model: str, index: int, truth: DynamicWorld, navigator: Navigator,
+                 seed: int) -> None:
+        self.spec, self.model, self.index, self.truth = spec, model, index, truth
+        self.rng = sensor_generator(seed, index)
+        self.perception = Perception(spec, navigator.world)
+
+    @property
+    def belief(self) -> Belief:
+        return self.perception.belief
+
+    def sense(self, navigator: Navigator, t: float, state: FloatArray, others: Sequence[OtherRobot],
+              robots: Sequence[OtherRobot]) -> list[OtherRobot]:
+        """Scan the truth at t from state, update the belief, give the navigator its world; returns what the
+        navigator sees move: `others` (what it is told of) and the movers it tracks. `robots`: every robot at
+        its true place (this one among them, left out of the scan)."""
+        visible = [r for k, r in enumerate(robots) if k != self.index]
+        centres = np.array([r.position for r in visible], dtype=float).reshape(-1, 2)
+        radii = np.array([r.radius for r in visible], dtype=float)
+        pose = (float(state[0]), float(state[1]), heading(self.model, state))
+        scan = self.truth.scan(self.spec, pose, t, self.rng, (centres, radii))
+        belief = self.perception.update(t, pose, scan, others)
+        if belief.world is not navigator.world:
+            navigator.world = belief.world
+        return [*others, *belief.movers]

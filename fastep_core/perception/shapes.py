@@ -1,0 +1,161 @@
+"""Shapes of scan clusters: a circle fitted to each cluster at once, and straight walls for those no circle fits.
+
+Circles: the algebraic least-squares fit of Kasa (1976, "A circle fitting procedure and its error analysis",
+IEEE Trans. Instrum. Meas. 25): minimise sum (x^2 + y^2 + D x + E y + F)^2 over D, E, F, a 3 x 3 linear system
+per cluster; the sums of every cluster come from one np.bincount each and the systems are solved together.
+Centre (-D/2, -E/2), radius sqrt(cx^2 + cy^2 - F). A cluster is a circle when it has MIN_CIRCLE_POINTS points,
+the fit's RMS residual is within the scan's noise plus CIRCLE_RESIDUAL, the radius is at most MAX_CIRCLE_RADIUS,
+the chord from its first to its last point is at least MIN_ARC radii (an arc of 60 degrees or more: a few
+points at the edge of the range fit any circle) and the centre lies beyond the points as the scanner sees them
+(a convex surface facing it).
+Walls: every other cluster of at least MIN_POINTS points that comes within `wall_range` of the scanner becomes
+a polyline by Douglas-Peucker simplification (Douglas and Peucker 1973) with tolerance WALL_TOLERANCE, each
+piece a segment, the polyline's two ends extended by the gap between beams there (`beam_gap` radians: the
+wall ends somewhere before the next beam). Farther ones wait: the robot will see them better as it comes
+nearer (a circle that enters the range shows its nearest few points first, which are no wall).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+__all__ = ['CIRCLE_RESIDUAL', 'MAX_CIRCLE_RADIUS', 'MIN_ARC', 'MIN_CIRCLE_POINTS', 'MIN_POINTS', 'WALL_TOLERANCE',
+           'Shapes', 'fit_circles', 'polyline', 'shapes']
+
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+
+MIN_POINTS = 3
+"""Clusters of fewer points are left out (a lone return: noise, or an object that more beams will show soon)."""
+MIN_CIRCLE_POINTS = 5
+MIN_ARC = 1.0
+"""Chord / radius a circle's points must span (1: 60 degrees of arc)."""
+CIRCLE_RESIDUAL = 0.02
+"""Metres added to 2 x the scan noise: the RMS residual a circle fit may have."""
+MAX_CIRCLE_RADIUS = 4.0
+"""Metres: larger fits are walls (a straight wall fits a huge circle)."""
+WALL_TOLERANCE = 0.1
+"""Metres: Douglas-Peucker tolerance of walls."""
+
+
+@dataclass(frozen=True)
+class Shapes:
+    """What one scan's clusters are: circles (centres (c, 2), radii (c,)) and wall segments (starts, ends (s, 2))."""
+
+    centres: FloatArray
+    radii: FloatArray
+    starts: FloatArray
+    ends: FloatArray
+
+
+def fit_circles(points: FloatArray, labels: IntArray, n_clusters: int) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Kasa fits of every cluster: centres (k, 2), radii (k,) and RMS residuals (k,); nan where singular."""
+    def total(w: FloatArray) -> FloatArray:
+        out: FloatArray = np.bincount(labels, weights=w, minlength=n_clusters).astype(float)
+        return out
+
+    n: FloatArray = np.bincount(labels, minlength=n_clusters).astype(float)
+    # Each cluster about its own mean: the normal equations stay well conditioned far from the map's origin.
+    mean = np.column_stack([total(points[:, 0]), total(points[:, 1])]) / np.maximum(n, 1.0)[:, None]
+    local = points - mean[labels]
+    x, y = local[:, 0], local[:, 1]
+    z = x * x + y * y
+    sx, sy, sxx, syy, sxy = total(x), total(y), total(x * x), total(y * y), total(x * y)
+    sz, sxz, syz = total(z), total(x * z), total(y * z)
+    # Normal equations of min sum (z + D x + E y + F)^2: A [D, E, F] = -[sxz, syz, sz].
+    a = np.stack([np.stack([sxx, sxy, sx], -1), np.stack([sxy, syy, sy], -1), np.stack([sx, sy, n], -1)], -2)
+    b = -np.stack([sxz, syz, sz], -1)
+    ok = np.abs(np.linalg.det(a)) > 1e-12 * np.maximum(n, 1.0) ** 3
+    solution = np.full((n_clusters, 3), np.nan)
+    if ok.any():
+        solution[ok] = np.linalg.solve(a[ok], b[ok][..., None])[..., 0]
+    centres = -0.5 * solution[:, :2]
+    radii = np.sqrt(np.maximum((centres ** 2).sum(axis=1) - solution[:, 2], 0.0))
+    radial = np.hypot(x - centres[labels, 0], y - centres[labels, 1]) - radii[labels]
+    rms = np.sqrt(total(np.nan_to_num(radial, nan=np.inf) ** 2) / np.maximum(n, 1.0))
+    return centres + mean, radii, rms
+
+
+def _spans(points: FloatArray, labels: IntArray, n_clusters: int) -> FloatArray:
+    """Each cluster's chord: the distance between its two ends. Found as the point farthest from any point of
+    it (an end of an arc), then the point farthest from that one (the other end): in any beam order, so also for
+    the cluster that closes a full turn."""
+    index = np.arange(len(points))
+    anchor = np.zeros(n_clusters, dtype=np.int64)
+    anchor[labels[::-1]] = index[::-1]                                   # one point of each cluster
+    for _ in range(2):
+        d = np.hypot(*(points - points[anchor[labels]]).T)
+        best = np.full(n_clusters, -1.0)
+        np.maximum.at(best, labels, d)
+        farthest = np.zeros(n_clusters, dtype=np.int64)
+        farthest[labels[d == best[labels]]] = index[d == best[labels]]
+        anchor, span = farthest, best
+    return span
+
+
+def polyline(points: FloatArray, tolerance: float = WALL_TOLERANCE) -> list[int]:
+    """Douglas-Peucker: indices of the points (in order) kept as the polyline's vertices."""
+    keep = [0, len(points) - 1]
+    stack = [(0, len(points) - 1)]
+    while stack:
+        i, j = stack.pop()
+        if j - i < 2:
+            continue
+        a, b = points[i], points[j]
+        ab = b - a
+        length = float(np.hypot(*ab))
+        inner = points[i + 1:j] - a
+        if length > 0.0:
+            d = np.abs(ab[0] * inner[:, 1] - ab[1] * inner[:, 0]) / length
+        else:
+            d = np.hypot(*inner.T)
+        k = int(np.argmax(d))
+        if d[k] > tolerance:
+            keep.append(i + 1 + k)
+            stack += [(i, i + 1 + k), (i + 1 + k, j)]
+    return sorted(set(keep))
+
+
+def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatArray, noise: float = 0.0,
+           wall_range: float = math.inf, beam_gap: float = 0.0) -> Shapes:
+    """Circles and walls of clustered scan points (segmentation.segment) seen from origin (module docstring)."""
+    if len(points) == 0:
+        empty = np.zeros((0, 2))
+        return Shapes(empty, np.zeros(0), empty, empty)
+    n_clusters = int(labels.max()) + 1
+    counts = np.bincount(labels, minlength=n_clusters)
+    centres, radii, rms = fit_circles(points, labels, n_clusters)
+    ranges = np.hypot(*(points - origin).T)
+    mean_range = np.bincount(labels, weights=ranges, minlength=n_clusters) / np.maximum(counts, 1)
+    nearest = np.full(n_clusters, np.inf)
+    np.minimum.at(nearest, labels, ranges)
+    behind = np.hypot(*(centres - origin).T) > mean_range
+    chord = _spans(points, labels, n_clusters)
+    circle = (counts >= MIN_CIRCLE_POINTS) & np.isfinite(radii) & (rms <= CIRCLE_RESIDUAL + 2.0 * noise) & \
+        (radii <= MAX_CIRCLE_RADIUS) & (radii > 0.0) & behind & (chord >= MIN_ARC * radii)
+    starts: list[FloatArray] = []
+    ends: list[FloatArray] = []
+    for k in np.flatnonzero(~circle & (counts >= MIN_POINTS) & (nearest <= wall_range)):
+        index = np.flatnonzero(labels == k)
+        jumps = np.flatnonzero(np.diff(beams[index]) > 1)
+        if len(jumps):   # the cluster that closes a full turn: start it after its gap in beam order
+            index = np.roll(index, -(int(jumps[0]) + 1))
+        ordered = points[index]
+        vertices = ordered[polyline(ordered)].copy()
+        # The wall goes on somewhere between its last return and the next beam: extend each end by the gap
+        # between beams there (at 5 m and 1 degree, 9 cm), so the robot does not cut the true end.
+        for end, inner in ((0, 1), (-1, -2)):
+            run = vertices[end] - vertices[inner]
+            length = float(np.hypot(*run))
+            if length > 0.0:
+                reach = float(np.hypot(*(vertices[end] - origin))) * beam_gap
+                vertices[end] = vertices[end] + run * (reach / length)
+        starts.append(vertices[:-1])
+        ends.append(vertices[1:])
+    return Shapes(centres[circle], radii[circle],
+                  np.concatenate(starts) if starts else np.zeros((0, 2)),
+                  np.concatenate(ends) if ends else np.zeros((0, 2)))

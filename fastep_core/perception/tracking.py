@@ -1,0 +1,133 @@
+"""Tracks of circular obstacles over time: a constant-velocity Kalman filter per track, data association by
+the Hungarian method with a chi-square gate, and track birth, confirmation and deletion.
+
+Which filter: a small numpy Kalman filter written here (no library; filterpy would fit, but is unmaintained
+since 2018 and one 4-state model does not need it). All tracks are filtered at once as arrays (n, 4) and
+(n, 4, 4). The model is the discrete white-noise-acceleration constant-velocity model of Bar-Shalom, Li and
+Kirubarajan (2001, "Estimation with Applications to Tracking and Navigation", section 6.3.2): state
+[x, y, vx, vy], F = [[I, dt I], [0, I]], Q = q [[dt^4/4 I, dt^3/2 I], [dt^3/2 I, dt^2 I]], measurement of the
+position z = H s + v with H = [I 0] and R = r^2 I. The equations (ibid. section 5.2; Thrun, Burgard and Fox
+2005, "Probabilistic Robotics", table 3.1):
+    predict: s = F s, P = F P F^T + Q
+    update:  S = H P H^T + R, K = P H^T S^-1, s = s + K (z - H s), P = (I - K H) P.
+Association: the cost of pairing track i with detection j is the Mahalanobis distance d^2 = y^T S^-1 y of the
+innovation y = z_j - H s_i; pairs beyond the 99 % chi-square gate of 2 degrees of freedom (9.21), or farther
+than GATE_DISTANCE apart, are not allowed; scipy.optimize.linear_sum_assignment picks the pairing of least total
+cost among the allowed ones. Unpaired detections start tentative tracks; a track seen CONFIRM_HITS times is
+confirmed; a track not seen for MAX_COAST seconds is deleted. Nothing here draws random numbers.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+from scipy.optimize import linear_sum_assignment
+
+__all__ = ['CONFIRM_HITS', 'GATE', 'GATE_DISTANCE', 'MAX_COAST', 'TrackParams', 'Tracker']
+
+FloatArray = NDArray[np.float64]
+
+GATE = 9.21            # chi-square, 2 degrees of freedom, 99 %
+GATE_DISTANCE = 2.0    # metres: never pair farther apart (a tentative track's large covariance would allow it)
+CONFIRM_HITS = 3
+MAX_COAST = 1.0        # seconds a track lives unseen (occlusions), predicted at constant velocity
+
+
+@dataclass(frozen=True)
+class TrackParams:
+    """The filter's noise: q (m^2/s^3, acceleration spectral density), r (m, measurement standard deviation of
+    a fitted centre), the initial velocity standard deviation (m/s)."""
+
+    q: float = 0.5
+    r: float = 0.05
+    velocity_sigma: float = 1.0
+    radius_gain: float = 0.2     # exponential smoothing of the fitted radius
+
+
+class Tracker:
+    """Every track of one robot: states (n, 4), covariances (n, 4, 4), radii, hits, last seen, ids."""
+
+    def __init__(self, params: TrackParams | None = None) -> None:
+        self.params = params or TrackParams()
+        self.states = np.zeros((0, 4))
+        self.covariances = np.zeros((0, 4, 4))
+        self.radii = np.zeros(0)
+        self.hits = np.zeros(0, dtype=np.int64)
+        self.born = np.zeros(0)
+        self.seen = np.zeros(0)
+        self.ids = np.zeros(0, dtype=np.int64)
+        self._next_id = 0
+        self._t: float | None = None
+
+    def __len__(self) -> int:
+        return len(self.radii)
+
+    @property
+    def confirmed(self) -> NDArray[np.bool_]:
+        return self.hits >= CONFIRM_HITS
+
+    def predict(self, t: float) -> None:
+        """Move every track to time t (predict step)."""
+        dt = 0.0 if self._t is None else max(t - self._t, 0.0)
+        self._t = t
+        if dt == 0.0 or not len(self):
+            return
+        f = np.eye(4)
+        f[0, 2] = f[1, 3] = dt
+        q = self.params.q
+        i2 = np.eye(2)
+        noise = q * np.block([[dt ** 4 / 4 * i2, dt ** 3 / 2 * i2], [dt ** 3 / 2 * i2, dt ** 2 * i2]])
+        self.states = self.states @ f.T
+        self.covariances = f @ self.covariances @ f.T + noise
+
+    def update(self, t: float, centres: FloatArray, radii: FloatArray) -> None:
+        """One scan's circle detections at time t: predict, associate, update, start and delete tracks."""
+        self.predict(t)
+        r2 = self.params.r ** 2
+        paired_tracks = np.zeros(0, dtype=np.int64)
+        paired_detections = np.zeros(0, dtype=np.int64)
+        if len(self) and len(centres):
+            s = self.covariances[:, :2, :2] + r2 * np.eye(2)                       # (n, 2, 2)
+            inverse = np.linalg.inv(s)
+            y = centres[None, :, :] - self.states[:, None, :2]                       # (n, m, 2)
+            cost = np.einsum('nmi,nij,nmj->nm', y, inverse, y)
+            allowed = (cost <= GATE) & (np.hypot(y[..., 0], y[..., 1]) <= GATE_DISTANCE)
+            rows, cols = linear_sum_assignment(np.where(allowed, cost, 1e6))
+            good = allowed[rows, cols]
+            paired_tracks, paired_detections = rows[good], cols[good]
+            if len(paired_tracks):
+                p = self.covariances[paired_tracks]
+                gain = p[:, :, :2] @ inverse[paired_tracks]                          # K = P H^T S^-1, (k, 4, 2)
+                innovation = y[paired_tracks, paired_detections]
+                self.states[paired_tracks] += np.einsum('kij,kj->ki', gain, innovation)
+                self.covariances[paired_tracks] = p - gain @ p[:, :2, :]             # (I - K H) P
+                a = self.params.radius_gain
+                self.radii[paired_tracks] += a * (radii[paired_detections] - self.radii[paired_tracks])
+                self.hits[paired_tracks] += 1
+                self.seen[paired_tracks] = t
+        # Births: every detection no track took.
+        fresh = np.setdiff1d(np.arange(len(centres)), paired_detections)
+        if len(fresh):
+            k = len(fresh)
+            states = np.column_stack([centres[fresh], np.zeros((k, 2))])
+            cov = np.zeros((k, 4, 4))
+            cov[:, 0, 0] = cov[:, 1, 1] = r2
+            cov[:, 2, 2] = cov[:, 3, 3] = self.params.velocity_sigma ** 2
+            self.states = np.concatenate([self.states, states])
+            self.covariances = np.concatenate([self.covariances, cov])
+            self.radii = np.concatenate([self.radii, radii[fresh]])
+            self.hits = np.concatenate([self.hits, np.ones(k, dtype=np.int64)])
+            self.born = np.concatenate([self.born, np.full(k, t)])
+            self.seen = np.concatenate([self.seen, np.full(k, t)])
+            self.ids = np.concatenate([self.ids, self._next_id + np.arange(k)])
+            self._next_id += k
+        self.keep(t - self.seen <= MAX_COAST)
+
+    def keep(self, keep: NDArray[np.bool_]) -> None:
+        """Drop the tracks where keep is false."""
+        if keep.all():
+            return
+        for name in ('states', 'covariances', 'radii', 'hits', 'born', 'seen', 'ids'):
+            setattr(self, name, getattr(self, name)[keep])
