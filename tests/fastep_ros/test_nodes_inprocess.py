@@ -93,6 +93,17 @@ def test_planner_runs_dwa_and_refuses_it_for_a_tractor_trailer(context: Any) -> 
         make(PlannerNode, context, algorithm='dwa', model='tractor_trailer')
 
 
+def test_nodes_refuse_a_diff_drive_until_the_graph_runs_it(context: Any) -> None:
+    """fastep-sim runs diff_drive now (scenario.MODELS names it); the plant would have integrated it as a
+    tractor-trailer (its else branch), so both nodes refuse it in one line until their diff_drive support."""
+    from fastep_ros.common import StartupError
+
+    for node_class in (PlannerNode, PlantNode):
+        with pytest.raises(StartupError, match='parameter model must be one of point_mass, tractor_trailer, got '
+                                               "'diff_drive'"):
+            make(node_class, context, model='diff_drive')
+
+
 def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) -> None:
     node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0])
     try:
