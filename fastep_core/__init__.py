@@ -1,7 +1,7 @@
 """fastep_core: FAStep-Kinematic robot navigation without ROS (numpy/scipy only).
 
 The pieces, one module each: `optimize` (Stepping Ahead Firefly, standard firefly, ACO_R), `geometry`
-(circle and segment obstacles), `kinematics` (point mass and tractor-trailer with their controllers),
+(circle and segment obstacles), `kinematics` (point mass, tractor-trailer, differential drive and controllers),
 `planning` (the step fitness and the FAStep-Kinematic / ACO-Kinematic navigators), `scenario` (format v1),
 `simulator` (all robots of a scenario in one loop) and `cli` (fastep-sim).
 """
