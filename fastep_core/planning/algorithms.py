@@ -83,7 +83,8 @@ def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Cont
     if spec.model == 'diff_drive':
         return (DiffDrive(params.max_speed, params.max_turn_rate),
                 DiffDriveController(params.speed_gain, params.turn_gain, params.max_speed, params.max_turn_rate,
-                                    params.max_acceleration, params.max_turn_acceleration))
+                                    params.max_acceleration, params.max_turn_acceleration,
+                                    min_speed=params.min_approach_speed))
     raise ParameterError(f'unknown robot model {spec.model!r}')
 
 
