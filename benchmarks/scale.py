@@ -78,11 +78,14 @@ def cluttered_world(n: int, side: float, seed: int) -> World:
     return World((0.0, 0.0, side, side), tuple(circles))
 
 
-def bench_robots(counts: list[int], seed: int, max_sim_time: float) -> None:
+def bench_robots(counts: list[int], seed: int, max_sim_time: float, min_approach_speed: float | None = None) -> None:
     print(load_text())
     print(f'{"robots":>6} {"wall s":>8} {"CPU s":>8} {"sim s":>8} {"arrived":>8} {"collided":>8}')
     for n in counts:
-        scenario = parse_scenario(crowd_scenario_data(n, seed, max_sim_time))
+        data = crowd_scenario_data(n, seed, max_sim_time)
+        if min_approach_speed is not None:   # e.g. 0: the paper's gains (docs/approach_speed.md)
+            data.setdefault('planner', {})['min_approach_speed'] = min_approach_speed
+        scenario = parse_scenario(data)
         start, cpu = time.perf_counter(), time.process_time()
         run = simulate(scenario, 'fastep', seed)
         wall, cpu = time.perf_counter() - start, time.process_time() - cpu
@@ -116,13 +119,15 @@ def main(argv: list[str] | None = None) -> int:
     robots.add_argument('--counts', type=int, nargs='+', default=[10, 20, 40, 100])
     robots.add_argument('--seed', type=int, default=0)
     robots.add_argument('--max-sim-time', type=float, default=300.0)
+    robots.add_argument('--min-approach-speed', type=float, default=None,
+                        help='planner min_approach_speed (m/s; default: the planner default; 0: the paper\'s gains)')
     obstacles = sub.add_parser('obstacles', help='the exact shortest path among N circles')
     obstacles.add_argument('--counts', type=int, nargs='+', default=[200, 500, 1000])
     obstacles.add_argument('--side', type=float, default=50.0)
     obstacles.add_argument('--seed', type=int, default=0)
     args = p.parse_args(argv)
     if args.what == 'robots':
-        bench_robots(args.counts, args.seed, args.max_sim_time)
+        bench_robots(args.counts, args.seed, args.max_sim_time, args.min_approach_speed)
     else:
         bench_obstacles(args.counts, args.side, args.seed)
     return 0
