@@ -28,9 +28,9 @@ from typing import Any
 import numpy as np
 
 from fastep_core.geometry import Circle, Segment, point_segment_distance
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.exact_path import solvable
 from fastep_core.planning.params import PlannerParams
-from fastep_core.scenario import Scenario, parse_scenario
+from fastep_core.scenario import parse_scenario
 from fastep_core.world import World
 
 __all__ = ['DYNAMIC_FAMILIES', 'FAMILY_OFFSET', 'SENSOR', 'dynamic_family_data']
@@ -177,19 +177,6 @@ def _layout(family: str, rng: np.random.Generator) -> dict[str, Any]:
     return {'workspace': [0.0, 0.0, FIELD, FIELD], 'obstacles': _keep_clear(obstacles, robots), 'robots': robots}
 
 
-def _solvable(scenario: Scenario) -> bool:
-    """random_scenarios.solvable (which dispatches its families here, so it cannot be imported): every robot
-    has an exact path keeping radius + margin from the true still obstacles, the others parked at their goals."""
-    margin = scenario.planner.clearance_margin
-    for i, spec in enumerate(scenario.robots):
-        parked = [Circle((float(other.goal[0]), float(other.goal[1])), other.radius)
-                  for j, other in enumerate(scenario.robots) if j != i]
-        world = World(scenario.world.workspace, scenario.world.obstacle_list + tuple(parked))
-        if shortest_path(world, spec.start[:2], spec.goal, spec.radius + margin) is None:
-            return False
-    return True
-
-
 def dynamic_family_data(family: str, seed: int) -> dict[str, Any]:
     """The scenario mapping of world `seed` of a v2 family (module docstring), solvable from the truth."""
     rng = np.random.default_rng(FAMILY_OFFSET[family] + seed)
@@ -203,6 +190,6 @@ def dynamic_family_data(family: str, seed: int) -> dict[str, Any]:
         data = {'name': f'{family}_{seed}',
                 'description': f'{family} {seed}: {len(data["robots"])} robot(s), {len(data["obstacles"])} obstacles '
                                f'({", ".join(f"{v} {k}" for k, v in counts.items() if v)})', **data}
-        if _solvable(parse_scenario(data)):
+        if solvable(parse_scenario(data)):
             return data
     raise RuntimeError(f'no solvable {family} world for seed {seed}')

@@ -45,7 +45,7 @@ from fastep_core import cli
 from fastep_core.dynamic_families import DYNAMIC_FAMILIES, dynamic_family_data
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.exact_path import solvable
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.world import World
@@ -100,18 +100,6 @@ def _robot(rng: np.random.Generator, name: str, start: np.ndarray, goal: np.ndar
             'start': [round(float(start[0]), 3), round(float(start[1]), 3), round(heading, 6), round(heading, 6)],
             'goal': [round(float(v), 3) for v in goal], 'radius': 0.6, 'length': 1.0, 'trailer_length': 1.0,
             'width': 0.5}
-
-
-def solvable(scenario: Scenario) -> bool:
-    """Does every robot have an exact path keeping radius + margin, with the others parked at their goals?"""
-    margin = scenario.planner.clearance_margin
-    for i, spec in enumerate(scenario.robots):
-        parked = [Circle((float(other.goal[0]), float(other.goal[1])), other.radius)
-                  for j, other in enumerate(scenario.robots) if j != i]
-        world = World(scenario.world.workspace, scenario.world.obstacle_list + tuple(parked))
-        if shortest_path(world, spec.start[:2], spec.goal, spec.radius + margin) is None:
-            return False
-    return True
 
 
 def _layout(rng: np.random.Generator, n_robots: int, tractor_share: float) -> dict[str, Any]:

@@ -10,7 +10,7 @@ trap escapes (planning/escape.py) and by Optimal-Kinematic (planning/optimal_kin
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -21,7 +21,11 @@ from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'exact_path', 'no_path_reason', 'parked_world', 'robot_path']
+if TYPE_CHECKING:   # scenario.py imports planning (params): only for the annotation
+    from fastep_core.scenario import Scenario
+
+__all__ = ['PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'exact_path', 'no_path_reason', 'parked_world', 'robot_path',
+           'solvable']
 
 FloatArray = NDArray[np.float64]
 PATH_SPACING = 0.25   # metres between exact-path vertices along arcs (escape paths, the optimal reference)
@@ -92,3 +96,16 @@ def robot_path(world: World, others: Sequence[OtherRobot], position: FloatArray,
 def no_path_reason(radius: float, position: FloatArray, goal: FloatArray) -> str:
     return (f'no valid path: nothing keeps the robot radius {radius:g} m from the obstacles and the '
             f'border between ({position[0]:.3g}, {position[1]:.3g}) and the goal ({goal[0]:.3g}, {goal[1]:.3g})')
+
+
+def solvable(scenario: Scenario) -> bool:
+    """Does every robot of a scenario have an exact path keeping radius + clearance margin from the still
+    obstacles, with the other robots parked at their goals? (The random worlds' admission test.)"""
+    margin = scenario.planner.clearance_margin
+    for i, spec in enumerate(scenario.robots):
+        parked = [Circle((float(other.goal[0]), float(other.goal[1])), other.radius)
+                  for j, other in enumerate(scenario.robots) if j != i]
+        world = World(scenario.world.workspace, scenario.world.obstacle_list + tuple(parked))
+        if shortest_path(world, spec.start[:2], spec.goal, spec.radius + margin) is None:
+            return False
+    return True
