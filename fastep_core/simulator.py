@@ -159,6 +159,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             if nav.mode is Mode.ARRIVED:
                 runs[i].reached, runs[i].sim_time = True, t
                 active[i] = False
+                # It stands still from now on (a plant publishes the zero twist it is sent): its last velocity,
+                # kept, made the others see a parked robot as a moving one and never plan round it.
+                velocities[i] = np.zeros(2)
         t_next = t + dt
         for i, nav in enumerate(navigators):
             if not active[i]:

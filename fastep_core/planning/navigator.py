@@ -255,9 +255,9 @@ class Navigator:
         command = self.controller.command(state, target, dt)
         guarded = self.guard(state, command, dt, others)
         if guarded is command:
-            self.stops.moved()
+            self.stops.moved(state[:2])
             return guarded
-        if self.stops.stopped(t, self.guard_check.stop):
+        if self.stops.stopped(t, self.guard_check.stop, state[:2]):
             self._target = None   # the controller starts afresh after the recovery
             if not (self.manoeuvring is not None and self.start_manoeuvre(state, t, others)):
                 self.backup.start(t)

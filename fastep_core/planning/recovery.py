@@ -2,6 +2,10 @@
 
 - The hold breaker: two robots the guard holds for each other wait forever if each still sees its own way as
   clear. After HOLD_BEFORE_STEP seconds held for another robot, the held robot plans a step round it.
+- A robot counts as stopped until it is HOLD_RELEASE metres from where the guard first stopped it: a command
+  the guard lets through (a turn in place, a step of a few centimetres) is not a way out. Counting those as
+  moving restarted both timers every other tick, and two differential-drive robots face to face turned and
+  twitched for minutes without either backing up (docs/robustness.md, "Held robots that twitch").
 - Stuck: stopped HOLD_BEFORE_STEP seconds at a wall, or three times that at a robot (the hold breaker's step
   has had its chance). A robot that cannot turn in place first tries a manoeuvre (planning/manoeuvring.py);
   otherwise, or when none is found, it backs up for BACKUP_TIME seconds (Nav2's backup recovery):
@@ -24,11 +28,12 @@ from fastep_core.planning.guard import Stop
 from fastep_core.planning.others import OtherRobot
 from fastep_core.world import World
 
-__all__ = ['BACKUP_SPEED', 'BACKUP_TIME', 'HOLD_BEFORE_STEP', 'MAX_RECOVERY_HITCH', 'BackUp', 'StopTimer',
-           'free_room']
+__all__ = ['BACKUP_SPEED', 'BACKUP_TIME', 'HOLD_BEFORE_STEP', 'HOLD_RELEASE', 'MAX_RECOVERY_HITCH', 'BackUp',
+           'StopTimer', 'free_room']
 
 FloatArray = NDArray[np.float64]
 HOLD_BEFORE_STEP = 1.0    # seconds a robot waits for another before stepping around it
+HOLD_RELEASE = 0.25       # metres from where the guard first stopped it: until then the robot is still stopped
 BACKUP_SPEED = 0.25       # m/s of the backing-up recovery ...
 BACKUP_TIME = 4.0         # ... for this many seconds (1 m)
 MAX_RECOVERY_HITCH = 1.0  # rad: a recovery move may not fold the trailer beyond this (or beyond where it is)
@@ -40,9 +45,13 @@ class StopTimer:
     def __init__(self) -> None:
         self.held_since: float | None = None    # since when the guard holds the robot for another robot
         self.stuck_since: float | None = None   # since when the guard stops the robot without a break
+        self.where: tuple[float, float] | None = None   # where the guard first stopped it
 
-    def moved(self) -> None:
-        self.held_since = self.stuck_since = None
+    def moved(self, position: FloatArray) -> None:
+        """A command got through: the stop is over once the robot is HOLD_RELEASE from where it began."""
+        if self.where is None or math.hypot(position[0] - self.where[0],
+                                            position[1] - self.where[1]) >= HOLD_RELEASE:
+            self.held_since = self.stuck_since = self.where = None
 
     def hold_breaker_due(self, t: float) -> bool:
         """Held for another robot HOLD_BEFORE_STEP seconds: time to step round it (the clock restarts)."""
@@ -51,15 +60,17 @@ class StopTimer:
             return True
         return False
 
-    def stopped(self, t: float, stop: Stop | None) -> bool:
+    def stopped(self, t: float, stop: Stop | None, position: FloatArray) -> bool:
         """Note a tick the guard stopped; True when the robot is stuck and a recovery is due."""
+        if self.where is None:
+            self.where = (float(position[0]), float(position[1]))
         if self.held_since is None and stop is Stop.ROBOT:
             self.held_since = t
         if self.stuck_since is None:
             self.stuck_since = t
         patience = HOLD_BEFORE_STEP * (1.0 if stop is Stop.OBSTACLE else 3.0)
         if t - self.stuck_since >= patience:
-            self.stuck_since = None
+            self.stuck_since = self.where = None
             return True
         return False
 

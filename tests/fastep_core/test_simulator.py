@@ -150,3 +150,46 @@ def test_trajectory_samples_are_at_most_a_tenth_of_a_metre_apart():
     xy = np.array([row[1:3] for row in run.robots[0].trajectory])
     assert np.hypot(*np.diff(xy, axis=0).T).max() <= 0.1 + 1e-9
     assert run.robots[0].trajectory[0][0] == 0.0
+
+
+def test_a_robot_that_arrived_is_seen_standing_still(monkeypatch):
+    """An arrived robot kept its last velocity, so the others saw it moving and never planned round it as a
+    parked robot (a plant publishes the zero twist it is sent; the simulator now does the same)."""
+    from fastep_core import simulator
+
+    seen = []
+    real = simulator.make_navigator
+
+    def spy(algorithm, spec, *args):
+        navigator = real(algorithm, spec, *args)
+        if spec.name == 'far':
+            update = navigator.update
+
+            def recording(t, state, others=()):
+                seen.append((t, [(o.name, tuple(o.velocity)) for o in others]))
+                return update(t, state, others)
+            navigator.update = recording
+        return navigator
+
+    monkeypatch.setattr(simulator, 'make_navigator', spy)
+    scenario = parse_scenario({
+        'name': 'park', 'workspace': [0, 0, 30, 10],
+        'robots': [{'name': 'near', 'model': 'diff_drive', 'start': [3, 8, 0], 'goal': [6, 8], 'radius': 0.5},
+                   {'name': 'far', 'model': 'diff_drive', 'start': [3, 2, 0], 'goal': [27, 2], 'radius': 0.5}]})
+    run = simulate(scenario, 'fastep', 0)
+    near = run.robots[0]
+    assert near.reached and run.robots[1].reached
+    after = [v for t, others in seen if t > near.sim_time for name, v in others if name == 'near']
+    assert after and all(v == (0.0, 0.0) for v in after)
+
+
+@pytest.mark.parametrize('world', ['diff_drive_robots:1000015', 'diff_drive_robots:1000019'])
+def test_diff_drive_robots_held_face_to_face_or_by_a_parked_robot_get_out(world):
+    """FAStep-Kinematic's two failures on the diff_drive_robots family (issue 14): a robot held by another
+    turned in place between stops, which restarted the recovery clocks (1000015: two robots face to face for
+    three minutes); a robot that arrived was seen moving and not planned round (1000019). Both now arrive."""
+    from fastep_core.experiments import cached_scenario
+
+    scenario = cached_scenario(world)
+    run = simulate(scenario, 'fastep', 0)
+    assert all(r.reached and not r.collided for r in run.robots), [r.status for r in run.robots]

@@ -10,24 +10,51 @@ from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.kinematics.tractor_trailer import hitch_angle
 from fastep_core.planning.guard import Stop
-from fastep_core.planning.recovery import BACKUP_SPEED, BACKUP_TIME, HOLD_BEFORE_STEP, BackUp, StopTimer, free_room
+from fastep_core.planning.recovery import (
+    BACKUP_SPEED,
+    BACKUP_TIME,
+    HOLD_BEFORE_STEP,
+    HOLD_RELEASE,
+    BackUp,
+    StopTimer,
+    free_room,
+)
 from fastep_core.world import World
+
+HERE = np.zeros(2)
 
 
 def test_a_robot_held_for_another_gets_its_step_after_hold_before_step():
     timer = StopTimer()
-    assert not timer.stopped(0.0, Stop.ROBOT) and not timer.hold_breaker_due(0.5)
+    assert not timer.stopped(0.0, Stop.ROBOT, HERE) and not timer.hold_breaker_due(0.5)
     assert timer.hold_breaker_due(HOLD_BEFORE_STEP) and not timer.hold_breaker_due(HOLD_BEFORE_STEP + 0.1)
-    timer.moved()
+    timer.moved(np.array([HOLD_RELEASE, 0.0]))
     assert timer.held_since is None and timer.stuck_since is None
 
 
 def test_stuck_comes_after_one_hold_at_a_wall_and_three_at_a_robot():
     wall, robot = StopTimer(), StopTimer()
-    assert not wall.stopped(0.0, Stop.OBSTACLE) and wall.stopped(HOLD_BEFORE_STEP, Stop.OBSTACLE)
-    assert not robot.stopped(0.0, Stop.ROBOT) and not robot.stopped(2 * HOLD_BEFORE_STEP, Stop.ROBOT)
-    assert robot.stopped(3 * HOLD_BEFORE_STEP, Stop.ROBOT)
+    assert not wall.stopped(0.0, Stop.OBSTACLE, HERE) and wall.stopped(HOLD_BEFORE_STEP, Stop.OBSTACLE, HERE)
+    assert not robot.stopped(0.0, Stop.ROBOT, HERE) and not robot.stopped(2 * HOLD_BEFORE_STEP, Stop.ROBOT, HERE)
+    assert robot.stopped(3 * HOLD_BEFORE_STEP, Stop.ROBOT, HERE)
     assert robot.stuck_since is None   # the clock starts again after the recovery
+
+
+def test_turns_and_twitches_between_stops_do_not_restart_the_clocks():
+    """Two diff-drive robots face to face: every other tick a turn in place or a 2 cm step got through, and the
+    timers restarted each time, so neither robot ever backed up (diff_drive_robots worlds 1000015, 1000019)."""
+    timer = StopTimer()
+    t, position = 0.0, np.zeros(2)
+    recovery_due = False
+    while t < 3 * HOLD_BEFORE_STEP + 0.1 and not recovery_due:
+        recovery_due = timer.stopped(t, Stop.ROBOT, position)
+        position = position + np.array([0.002, 0.0])   # a command got through: 2 mm
+        timer.moved(position)
+        t += 0.1
+    assert recovery_due and float(position[0]) < HOLD_RELEASE
+    timer.stopped(10.0, Stop.ROBOT, HERE)
+    timer.moved(np.array([0.0, HOLD_RELEASE]))   # a real way out ends the stop
+    assert timer.held_since is None and timer.stuck_since is None and timer.where is None
 
 
 def test_a_holonomic_robot_backs_straight_away_from_what_is_nearest():
