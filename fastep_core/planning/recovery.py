@@ -5,7 +5,7 @@
 - A robot counts as stopped until it is HOLD_RELEASE metres from where the guard first stopped it: a command
   the guard lets through (a turn in place, a step of a few centimetres) is not a way out. Counting those as
   moving restarted both timers every other tick, and two differential-drive robots face to face turned and
-  twitched for minutes without either backing up (docs/robustness.md, "Held robots that twitch").
+  twitched for minutes without either backing up (docs/clutter.md, "Differential-drive bases").
 - Stuck: stopped HOLD_BEFORE_STEP seconds at a wall, or three times that at a robot (the hold breaker's step
   has had its chance). A robot that cannot turn in place first tries a manoeuvre (planning/manoeuvring.py);
   otherwise, or when none is found, it backs up for BACKUP_TIME seconds (Nav2's backup recovery):
