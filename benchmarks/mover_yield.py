@@ -2,8 +2,9 @@
 or moved it out of the way, the closest it came to a mover (against the truth), and the figure of it.
 
 Run: `PYTHONPATH=. .venv/bin/python -m benchmarks.mover_yield [SCENARIO] [--algorithm A] [--seed S]
-[--robot NAME] [--out FIGURE.png]` (default: the built-in crossing_movers with fastep, seed 0, its first robot,
-docs/figures/yield_crossing.png). `--mover-horizon 0` runs the same without yielding, for comparison.
+[--robot NAME] [--out FIGURE.png]` (default: world 1000019 of the crossing_movers family, where FAStep-Kinematic
+touched a mover without yielding, with fastep, seed 0, its first robot, docs/figures/yield_crossing.png).
+`--mover-horizon 0` runs the same without yielding, for comparison.
 """
 
 from __future__ import annotations
@@ -19,10 +20,30 @@ from fastep_core.experiments import cached_scenario
 from fastep_core.simulator import Tick, simulate
 from msg_tools.plots import save, title, yield_figure
 
+PAD = 5.0   # seconds drawn before and after the yielding episode
+
+
+def episode(times: list[float], kinds: list[str], gap: float = 2.0) -> tuple[float, float]:
+    """The longest stretch of ticks where yielding changed the command (changes less than `gap` s apart join
+    one stretch), padded by PAD; the whole run when yielding never changed anything."""
+    if not times:
+        return 0.0, 0.0
+    changed = [t for t, kind in zip(times, kinds) if kind]
+    if not changed:
+        return times[0], times[-1]
+    best, start, last = (changed[0], changed[0]), changed[0], changed[0]
+    for t in changed[1:] + [float('inf')]:
+        if t - last > gap:
+            if last - start > best[1] - best[0]:
+                best = (start, last)
+            start = t
+        last = t
+    return max(times[0], best[0] - PAD), min(times[-1], best[1] + PAD)
+
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument('scenario', nargs='?', default='crossing_movers')
+    parser.add_argument('scenario', nargs='?', default='crossing_movers:1000019')
     parser.add_argument('--algorithm', default='fastep')
     parser.add_argument('--seed', type=int, default=0)
     parser.add_argument('--robot', default=None, help='robot to follow (default: the first)')
@@ -57,14 +78,11 @@ def main(argv: list[str] | None = None) -> None:
     print('ticks: ' + ', '.join(f'{k or "as planned"} {n}' for k, n in sorted(counts.items())))
     if gaps:
         print(f'closest to a mover (surface to surface): {min(gaps):.3f} m')
-    yielded = [row[0] for row, kind in zip(rows, kinds) if kind]
-    if yielded and rows:
-        first, last = yielded[0], yielded[-1]
-        snapshots = list(np.linspace(max(0.0, first - 4.0), min(rows[-1][0], last + 4.0), 5))
-    else:
-        snapshots = list(np.linspace(0.0, rows[-1][0] if rows else 0.0, 5))
+    window = episode([row[0] for row in rows], kinds)
+    snapshots = list(np.linspace(window[0], window[1], 5))
+    print(f'figure: {window[0]:.1f}-{window[1]:.1f} s, the longest run of ticks yielding changed (+-{PAD:g} s)')
     text = title(f'{scenario.name} {robot}', args.algorithm, args.seed)
-    print(f'wrote {save(yield_figure(scenario, args.seed, rows, kinds, text, snapshots), args.out)}')
+    print(f'wrote {save(yield_figure(scenario, args.seed, rows, kinds, text, snapshots, window), args.out)}')
 
 
 if __name__ == '__main__':

@@ -316,13 +316,16 @@ YIELD_COLOURS = {'': 'tab:red', 'yielding': 'tab:orange', 'waiting': 'gold', 'ev
 
 
 def yield_figure(scenario: Scenario, seed: int, rows: ArrayLike, kinds: Sequence[str], text: str,
-                 snapshots: Sequence[float]) -> Figure:
+                 snapshots: Sequence[float], window: tuple[float, float] | None = None) -> Figure:
     """A robot meeting movers (planning/yielding.py): left, its path among the obstacles coloured by what
     yielding did each tick, with the robot and every mover at the same `snapshots` (s, numbered alike);
     right, its speed over time, shaded the same way. rows: (t, x, y, speed) per tick; kinds: per tick, '' (the
-    command as planned), 'yielding', 'waiting' or 'evading'."""
+    command as planned), 'yielding', 'waiting' or 'evading'; window: the times (s) drawn (default: all)."""
     data = np.asarray(rows, dtype=float).reshape(-1, 4)
     kind_of = np.asarray(list(kinds), dtype=object)
+    if window is not None and len(data):
+        inside = (data[:, 0] >= window[0]) & (data[:, 0] <= window[1])
+        data, kind_of = data[inside], kind_of[inside]
     fig, (ax, speed_ax) = plt.subplots(1, 2, figsize=(12, 5), dpi=110, gridspec_kw={'width_ratios': [1.1, 1]})
     draw_world(ax, [o.shape for o in scenario.obstacle_specs if o.still], scenario.world.workspace)
     truth = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs)
@@ -354,7 +357,9 @@ def yield_figure(scenario: Scenario, seed: int, rows: ArrayLike, kinds: Sequence
         ax.set_ylim(max(scenario.world.workspace[1], ys.min() - pad), min(scenario.world.workspace[3], ys.max() + pad))
     ax.set_aspect('equal')
     ax.legend(fontsize=7, loc='upper left', markerscale=3)
-    ax.set_title(f'{text}: path (numbers: robot and movers at the same time)', fontsize=9)
+    ax.set_title('path; numbers: the robot and the movers at the same time', fontsize=9)
+    fig.suptitle(text, fontsize=10)
+    speed_ax.set_ylim(bottom=0.0)
     speed_ax.set_xlabel('time (s)')
     speed_ax.set_ylabel('speed (m/s)')
     speed_ax.grid(alpha=0.3)

@@ -197,9 +197,26 @@ class Navigator:
         (the controller, the guard's stop, a recovery): its next command starts from there.
         """
         command = self.tick(t, state, others)
+        if not self.yield_kind and self.mode in (Mode.KINEMATIC, Mode.AVOIDING) and not np.any(command):
+            command = self.stand_clear(state, others)
         if self._applied is not None:
             self._applied(command)
         return command
+
+    def stand_clear(self, state: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
+        """A robot standing still (no valid step, held, waiting) that a mover would run into gets out of its
+        way (planning/yielding.py); zeros otherwise."""
+        stop = np.zeros(2)
+        state = np.asarray(state, dtype=float)
+        if not np.isfinite(state).all():
+            return stop
+        dt = self.params.dt
+        yielded = self.yielding.check(state, stop, others,
+                                      lambda c: self.guard_check.check(self.world, state, c, dt, others) is c)
+        if yielded.kind != 'evading':
+            return stop
+        self.yield_kind, self.reason = yielded.kind, yielded.reason
+        return yielded.command
 
     def tick(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
         """The command of one control tick (`update` without telling the controller)."""
@@ -327,6 +344,8 @@ class Navigator:
             return None
         target = self.step_target()
         centres, sums = robot_arrays(others, self.radius)
+        centres, sums = self.yielding.with_predictions(position, others, centres, sums,
+                                                       self.params.step_radius / max(self.params.max_speed, 1e-6))
         problem = StepProblem(self.world, position, target, self.clearance, self.params.step_radius,
                               self.params.a, self.params.b, self.params.c, centres,
                               sums + self.params.clearance_margin)

@@ -40,6 +40,7 @@ FloatArray = NDArray[np.float64]
 SAMPLE_TIME = 0.1              # seconds between predicted positions (distances between them are exact)
 SLOWER = (0.75, 0.5, 0.25)     # the command's fractions tried before standing still
 HEADINGS = 16                  # a holonomic robot's evasive headings
+PREDICTED = (0.5, 1.0)         # a step plans round movers also this far through the time to reach it
 
 
 @dataclass(frozen=True)
@@ -168,6 +169,22 @@ class Yielding:
             if scores[best] <= float((margins[-1] - floor).min()):
                 return Yield(candidates[-1], 'waiting', worst)   # nothing does better than standing still
         return Yield(options[best], 'evading', worst)
+
+    def with_predictions(self, position: FloatArray, others: Sequence[OtherRobot], centres: FloatArray,
+                         sums: FloatArray, reach_time: float) -> tuple[FloatArray, FloatArray]:
+        """A step problem's other centres and radius sums (robot_arrays) with each mover near also where it will
+        be halfway through and at the end of the time the robot needs to reach a step (reach_time, at most the
+        horizon): the swarm plans its step round the mover's coming track (f2 of eq. 8-9 and the step's
+        feasibility), not only round where the mover is now."""
+        movers = self.relevant(position, others)
+        if not movers:
+            return centres, sums
+        horizon = min(reach_time, self.horizon)
+        where = np.array([o.position for o in movers], dtype=float)
+        velocity = np.array([o.velocity for o in movers], dtype=float)
+        reach = np.array([o.radius for o in movers], dtype=float) + self.radius
+        ahead = np.concatenate([where + velocity * (horizon * f) for f in PREDICTED])
+        return np.concatenate([centres, ahead]), np.concatenate([sums, np.tile(reach, len(PREDICTED))])
 
     def evasive_commands(self, state: FloatArray) -> FloatArray:
         """The fan of moves out of a mover's way: headings at full and half speed, or a steered robot's arcs."""
