@@ -228,7 +228,7 @@ class PlannerMap:
             return []
         positions = self.movers.positions(t) + self.offsets
         velocities = self.movers.velocities(t)
-        return [OtherRobot(name, (float(p[0]), float(p[1])), (float(v[0]), float(v[1])), float(r))
+        return [OtherRobot(name, (float(p[0]), float(p[1])), (float(v[0]), float(v[1])), float(r), mover=True)
                 for name, p, v, r in zip(self.movers.names, positions, velocities, self.movers.radii)]
 
 

@@ -45,7 +45,7 @@ if TYPE_CHECKING:
 __all__ = ['HEADING_ARROWS', 'HEADING_MODELS', 'PLOT_POINTS', 'RobotPath', 'Velocities', 'bench_figures',
            'box_plot_figure', 'cost_figure', 'draw_dynamic', 'draw_headings', 'draw_world', 'example_paths_figure',
            'family_box_figure', 'family_figures', 'paths_figure', 'plot_paths', 'run_paths_figure', 'save', 'title',
-           'velocity_figure']
+           'velocity_figure', 'yield_figure']
 
 FloatArray = NDArray[np.float64]
 PLOT_POINTS = 5000   # points drawn per line at most: long recordings are thinned for drawing only
@@ -308,6 +308,63 @@ def velocity_figure(robots: Sequence[Velocities], text: str) -> Figure:
         ax.grid(alpha=0.3)
     axes[-1, 0].set_xlabel('time since the goal (s)')
     axes[0, 0].set_title(f'{text}: controller velocities')
+    fig.tight_layout()
+    return fig
+
+
+YIELD_COLOURS = {'': 'tab:red', 'yielding': 'tab:orange', 'waiting': 'gold', 'evading': 'tab:cyan'}
+
+
+def yield_figure(scenario: Scenario, seed: int, rows: ArrayLike, kinds: Sequence[str], text: str,
+                 snapshots: Sequence[float], window: tuple[float, float] | None = None) -> Figure:
+    """A robot meeting movers (planning/yielding.py): left, its path among the obstacles coloured by what
+    yielding did each tick, with the robot and every mover at the same `snapshots` (s, numbered alike);
+    right, its speed over time, shaded the same way. rows: (t, x, y, speed) per tick; kinds: per tick, '' (the
+    command as planned), 'yielding', 'waiting' or 'evading'; window: the times (s) drawn (default: all)."""
+    data = np.asarray(rows, dtype=float).reshape(-1, 4)
+    kind_of = np.asarray(list(kinds), dtype=object)
+    if window is not None and len(data):
+        inside = (data[:, 0] >= window[0]) & (data[:, 0] <= window[1])
+        data, kind_of = data[inside], kind_of[inside]
+    fig, (ax, speed_ax) = plt.subplots(1, 2, figsize=(12, 5), dpi=110, gridspec_kw={'width_ratios': [1.1, 1]})
+    draw_world(ax, [o.shape for o in scenario.obstacle_specs if o.still], scenario.world.workspace)
+    truth = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs)
+    movers = truth.movers
+    for k in range(len(movers)):
+        path = movers.vertices[k]
+        ax.plot(path[:, 0], path[:, 1], ':', color=MOVER_COLOUR, lw=1.2)
+    for kind, colour in YIELD_COLOURS.items():
+        mask = np.asarray(kind_of == kind, dtype=bool)
+        if mask.any():
+            ax.scatter(data[mask, 1], data[mask, 2], s=3, color=colour, zorder=3,
+                       label=kind or 'as planned')
+            speed_ax.scatter(data[mask, 0], data[mask, 3], s=3, color=colour, label=kind or 'as planned')
+    radius = scenario.robots[0].radius
+    for j, t in enumerate(snapshots):
+        k = int(np.clip(np.searchsorted(data[:, 0], t), 0, len(data) - 1))
+        ax.add_patch(plt.Circle((data[k, 1], data[k, 2]), radius, fill=False, ec='black', lw=0.8, zorder=4))
+        ax.annotate(str(j + 1), (data[k, 1], data[k, 2]), fontsize=7, ha='center', va='center', zorder=5)
+        if len(movers):
+            for centre, r in zip(movers.positions(np.array([data[k, 0]]))[0], movers.radii):
+                ax.add_patch(plt.Circle(tuple(centre), r, color=MOVER_COLOUR, alpha=0.35, lw=0, zorder=4))
+                ax.annotate(str(j + 1), tuple(centre), fontsize=7, ha='center', va='center', color='white', zorder=5)
+        speed_ax.axvline(data[k, 0], color='0.6', lw=0.6)
+        speed_ax.annotate(str(j + 1), (data[k, 0], 0.0), fontsize=7, ha='center', va='bottom')
+    if len(data):
+        pad = 6.0
+        xs, ys = data[:, 1], data[:, 2]
+        ax.set_xlim(max(scenario.world.workspace[0], xs.min() - pad), min(scenario.world.workspace[2], xs.max() + pad))
+        ax.set_ylim(max(scenario.world.workspace[1], ys.min() - pad), min(scenario.world.workspace[3], ys.max() + pad))
+    ax.set_aspect('equal')
+    ax.legend(fontsize=7, loc='upper left', markerscale=3)
+    ax.set_title('path; numbers: the robot and the movers at the same time', fontsize=9)
+    fig.suptitle(text, fontsize=10)
+    speed_ax.set_ylim(bottom=0.0)
+    speed_ax.set_xlabel('time (s)')
+    speed_ax.set_ylabel('speed (m/s)')
+    speed_ax.grid(alpha=0.3)
+    speed_ax.legend(fontsize=7, loc='lower right', markerscale=3)
+    speed_ax.set_title('speed, by what yielding did', fontsize=9)
     fig.tight_layout()
     return fig
 

@@ -12,8 +12,9 @@ control tick it scans the true world (the simulator, or a LaserScan on a real ro
    fits and the cluster is within WALL_RANGE of the range (shapes.shapes);
 5. tracks the circles with a constant-velocity Kalman filter (tracking.Tracker);
 6. believes in still obstacles: walls at once (straight walls merged with the collinear pieces it already
-   has), circles once their track has stood still (speed below STILL_SPEED) for STILL_TIME seconds (such a
-   circle overlapping a map circle of about its size replaces it: the map's was misplaced);
+   has; not a piece on a moving track, which is movers seen merged: the track coasts, kept alive by the
+   points near it), circles once their track has stood still (speed below STILL_SPEED) for STILL_TIME seconds
+   on end (such a circle overlapping a map circle of about its size replaces it: the map's was misplaced);
 7. reports the other confirmed tracks as movers: OtherRobot('track K', position, velocity, radius), the way
    known movers and other robots reach planners.
 
@@ -31,7 +32,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment, point_segment_distance
 from fastep_core.perception.fusion import explained, seen_through
 from fastep_core.perception.segmentation import scan_points, segment
 from fastep_core.perception.shapes import WALL_TOLERANCE, shapes
@@ -40,19 +41,21 @@ from fastep_core.planning.others import OtherRobot
 from fastep_core.sensing.laser import LaserSpec, Scan
 from fastep_core.world import World
 
-__all__ = ['MERGE_GAP', 'SENSOR_STREAM', 'STILL_SPEED', 'STILL_TIME', 'WALL_RANGE', 'Belief', 'Perception', 'heading',
-           'sensor_generator', 'track_name']
+__all__ = ['MERGE_GAP', 'MERGE_REACH', 'SENSOR_STREAM', 'STILL_SPEED', 'STILL_TIME', 'WALL_RANGE', 'Belief',
+           'Perception', 'heading', 'sensor_generator', 'track_name']
 
 FloatArray = NDArray[np.float64]
 
 STILL_SPEED = 0.15
 """m/s: a confirmed track slower than this is a still obstacle (the families' movers go 0.3 m/s and more)."""
 STILL_TIME = 1.5
-"""Seconds a track must have been tracked before it may count as still (its velocity has settled)."""
+"""Seconds a track must have been slower than STILL_SPEED, without a break, before it counts as still."""
 WALL_RANGE = 0.6
 """Share of the scanner's range within which a cluster no circle fits is believed a wall (shapes.shapes)."""
 MERGE_GAP = 0.5
 """Metres: a new wall piece this close to a collinear believed wall extends it instead of adding a segment."""
+MERGE_REACH = 0.3
+"""Metres beyond a moving track's radius within which a wall piece is that mover seen merged (Perception)."""
 SENSOR_STREAM = 0x736E73   # 'sns': spawn key of the scanners' noise streams, far above any robot's index
 
 
@@ -94,6 +97,7 @@ class Perception:
         self.seen_items: list[Obstacle] = []
         self.dropped: list[Obstacle] = []
         self.tracker = Tracker(track_params)
+        self.slow_since: dict[int, float] = {}   # track id -> since when it has been slower than STILL_SPEED
         self.world = map_world
         self.belief = Belief(0.0, map_world, tuple(self.map_items), (), (), (), np.zeros((0, 2)))
 
@@ -121,9 +125,14 @@ class Perception:
                        abs(scan.angle_increment))
         tracker = self.tracker
         tracker.update(t, found.centres, found.radii)
-        # Tracks that stood still long enough become still obstacles.
+        starts, ends, merged = self._merged_movers(t, points, found.starts, found.ends)
+        # Tracks that stood still long enough become still obstacles: slow for STILL_TIME without a break, so a
+        # mover whose velocity estimate dipped for a few scans (two movers merged into one detection) stays one.
         speed = np.hypot(tracker.states[:, 2], tracker.states[:, 3])
-        still = tracker.confirmed & (t - tracker.born >= STILL_TIME) & (speed < STILL_SPEED) & (tracker.seen == t)
+        slow = (speed < STILL_SPEED) & ~np.isin(tracker.ids, merged)
+        self.slow_since = {int(i): self.slow_since.get(int(i), t) for i in tracker.ids[slow]}
+        since = np.array([self.slow_since.get(int(i), math.inf) for i in tracker.ids])
+        still = tracker.confirmed & slow & (t - since >= STILL_TIME) & (tracker.seen == t)
         if still.any():
             found_circles = [Circle((float(s[0]), float(s[1])), float(r))
                              for s, r in zip(tracker.states[still], tracker.radii[still])]
@@ -131,7 +140,7 @@ class Perception:
             self.seen_items += found_circles
             tracker.keep(~still)
             changed = True
-        for start, end in zip(found.starts, found.ends):
+        for start, end in zip(starts, ends):
             self._add_wall(start, end)
             changed = True
         if changed:
@@ -139,11 +148,43 @@ class Perception:
         confirmed = np.flatnonzero(tracker.confirmed)
         movers = tuple(OtherRobot(track_name(int(tracker.ids[k])),
                                   (float(tracker.states[k, 0]), float(tracker.states[k, 1])),
-                                  (float(tracker.states[k, 2]), float(tracker.states[k, 3])), float(tracker.radii[k]))
+                                  (float(tracker.states[k, 2]), float(tracker.states[k, 3])), float(tracker.radii[k]),
+                                  mover=True)
                        for k in confirmed)
         self.belief = Belief(t, self.world, tuple(self.map_items), tuple(self.seen_items), tuple(self.dropped),
                              movers, points)
         return self.belief
+
+    def _merged_movers(self, t: float, points: FloatArray, starts: FloatArray,
+                       ends: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+        """After the tracker's update: the wall pieces that are walls, and the ids of the moving tracks seen merged.
+
+        Two movers near each other (or one passing an unknown obstacle) show one outline no circle fits: no
+        detection for either track, which died after MAX_COAST, and once near enough the outline was believed a
+        wall, which then explained the movers' points wherever they went near it (crossing_movers:1000022: both
+        unknown movers lost for good, and the robot touched one). So a confirmed track that moves and got no
+        detection this scan, but has unexplained points within MERGE_REACH of its predicted disc, was seen,
+        merged: it coasts on its velocity, alive, and is never made a still obstacle meanwhile; and a wall piece
+        within MERGE_REACH of a moving track is that mover, not a wall.
+        """
+        tracker = self.tracker
+        moving = tracker.confirmed & (np.hypot(tracker.states[:, 2], tracker.states[:, 3]) >= STILL_SPEED)
+        if not moving.any():
+            return starts, ends, np.zeros(0, dtype=np.int64)
+        centres, reach = tracker.states[moving, :2], tracker.radii[moving] + MERGE_REACH
+        near_points: NDArray[np.bool_] = np.zeros(int(moving.sum()), dtype=bool)
+        if len(points):
+            gaps = np.hypot(points[:, None, 0] - centres[None, :, 0], points[:, None, 1] - centres[None, :, 1])
+            near_points = np.asarray((gaps < reach[None, :]).any(axis=0))
+        walls: NDArray[np.bool_] = np.ones(len(starts), dtype=bool)
+        if len(starts):
+            on_track = point_segment_distance(centres[None, :, :], starts[:, None, :], ends[:, None, :]) < reach
+            walls = np.asarray(~on_track.any(axis=1))
+            near_points = near_points | on_track.any(axis=0)
+        merged = near_points & (tracker.seen[moving] < t)
+        ids = tracker.ids[moving][merged]
+        tracker.seen[np.isin(tracker.ids, ids)] = t
+        return starts[walls], ends[walls], ids
 
     def _replace_map_circles(self, found: list[Circle]) -> None:
         """A still circle perception found where the map has one of about its size, overlapping it, is that

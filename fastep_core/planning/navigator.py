@@ -40,6 +40,7 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
 from fastep_core.planning.recovery import BackUp, StopTimer, free_room
 from fastep_core.planning.step import StepProblem, plan_step_passing_right
+from fastep_core.planning.yielding import Yielding
 from fastep_core.world import World
 
 __all__ = ['FAStepKinematic', 'FAStepPaper', 'Mode', 'Navigator', 'OtherRobot']
@@ -94,6 +95,8 @@ class Navigator:
         self._near_detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # ... within plan_horizon
         self._stuck = 0                           # planned steps in a row that ended within waypoint_tolerance
         self.guard_check = Guard(model, self.radius, p)
+        self.yielding = self._yielding(p)
+        self.yield_kind = ''
         self.progress = ProgressChecker(p.progress_distance, p.progress_timeout)
         self.trap = TrapDetector(p.progress_distance, p.trap_timeout)
         self.escape = TrapEscape()
@@ -101,6 +104,10 @@ class Navigator:
         self.backup = BackUp(model)
         # A robot that cannot turn in place leaves traps and tight spots by manoeuvres of its own arcs.
         self.manoeuvring = None if model.turns_in_place else ManoeuvreDriver(model, self.radius, p)
+
+    def _yielding(self, p: PlannerParams) -> Yielding:
+        return Yielding(self.model, self.radius, p.mover_horizon, 0.5 * p.clearance_margin, p.max_speed,
+                        p.max_turn_rate)
 
     @property
     def clearance(self) -> float:
@@ -155,6 +162,7 @@ class Navigator:
         self.check_params(params)
         self.params = params
         self.guard_check.params = params
+        self.yielding = self._yielding(params)
         if self.manoeuvring is not None:
             self.manoeuvring.params = params
         self.progress.distance, self.progress.timeout = params.progress_distance, params.progress_timeout
@@ -189,13 +197,31 @@ class Navigator:
         (the controller, the guard's stop, a recovery): its next command starts from there.
         """
         command = self.tick(t, state, others)
+        if not self.yield_kind and self.mode in (Mode.KINEMATIC, Mode.AVOIDING) and not np.any(command):
+            command = self.stand_clear(state, others)
         if self._applied is not None:
             self._applied(command)
         return command
 
+    def stand_clear(self, state: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
+        """A robot standing still (no valid step, held, waiting) that a mover would run into gets out of its
+        way (planning/yielding.py); zeros otherwise."""
+        stop = np.zeros(2)
+        state = np.asarray(state, dtype=float)
+        if not np.isfinite(state).all():
+            return stop
+        dt = self.params.dt
+        yielded = self.yielding.check(state, stop, others,
+                                      lambda c: self.guard_check.check(self.world, state, c, dt, others) is c)
+        if yielded.kind != 'evading':
+            return stop
+        self.yield_kind, self.reason = yielded.kind, yielded.reason
+        return yielded.command
+
     def tick(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
         """The command of one control tick (`update` without telling the controller)."""
         stop = np.zeros(2)
+        self.yield_kind = ''   # what yielding to movers did this tick (planning/yielding.py), '' for nothing
         dt = self.params.dt if self._last_t is None or t <= self._last_t else t - self._last_t
         self._last_t = t
         if self.goal is None or self.mode in (Mode.ARRIVED, Mode.FAILED):
@@ -253,6 +279,12 @@ class Navigator:
             self.controller.reset(state, target)
             self._target = target
         command = self.controller.command(state, target, dt)
+        # Movers: slow down, wait or get out of the way over the time ahead (planning/yielding.py).
+        yielded = self.yielding.check(state, command, others,
+                                      lambda c: self.guard_check.check(self.world, state, c, dt, others) is c)
+        self.yield_kind = yielded.kind
+        if yielded.kind:
+            command, self.reason = yielded.command, yielded.reason
         guarded = self.guard(state, command, dt, others)
         if guarded is command:
             self.stops.moved(state[:2])
@@ -312,6 +344,8 @@ class Navigator:
             return None
         target = self.step_target()
         centres, sums = robot_arrays(others, self.radius)
+        centres, sums = self.yielding.with_predictions(position, others, centres, sums,
+                                                       self.params.step_radius / max(self.params.max_speed, 1e-6))
         problem = StepProblem(self.world, position, target, self.clearance, self.params.step_radius,
                               self.params.a, self.params.b, self.params.c, centres,
                               sums + self.params.clearance_margin)

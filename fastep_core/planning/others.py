@@ -26,6 +26,7 @@ class OtherRobot:
     position: tuple[float, float]
     velocity: tuple[float, float] = (0.0, 0.0)
     radius: float = 0.5
+    mover: bool = False   # a moving obstacle that does not plan or give way (planning/yielding.py), not a robot
 
 
 class OtherRobots(Sequence[OtherRobot]):
@@ -37,9 +38,11 @@ class OtherRobots(Sequence[OtherRobot]):
     view leaves its own row out.
     """
 
-    def __init__(self, robots: Sequence[OtherRobot], skip: int, arrays: tuple[FloatArray, FloatArray, FloatArray]):
+    def __init__(self, robots: Sequence[OtherRobot], skip: int, arrays: tuple[FloatArray, FloatArray, FloatArray],
+                 movers: Sequence[OtherRobot] | None = None):
         self._robots, self._skip, self._all = robots, skip, arrays
         self._arrays: tuple[FloatArray, FloatArray, FloatArray] | None = None
+        self._all_movers = movers   # every entry that is a mover, shared by the views of one tick
 
     @classmethod
     def views(cls, robots: Sequence[OtherRobot], viewers: int | None = None) -> list[OtherRobots]:
@@ -49,10 +52,19 @@ class OtherRobots(Sequence[OtherRobot]):
         arrays = (np.array([o.position for o in robots], dtype=float).reshape(-1, 2),
                   np.array([o.velocity for o in robots], dtype=float).reshape(-1, 2),
                   np.array([o.radius for o in robots], dtype=float))
-        return [cls(robots, i, arrays) for i in range(len(robots) if viewers is None else viewers)]
+        movers = [o for o in robots if o.mover]
+        return [cls(robots, i, arrays, movers) for i in range(len(robots) if viewers is None else viewers)]
 
     def __len__(self) -> int:
         return len(self._robots) - 1
+
+    def movers(self) -> list[OtherRobot]:
+        """The movers among the others (a v2 world's entries after the viewers), found once per tick."""
+        found = self._all_movers
+        if found is None:
+            found = self._all_movers = [o for o in self._robots if o.mover]
+        me = self._robots[self._skip]
+        return [o for o in found if o is not me] if found else []
 
     @overload
     def __getitem__(self, index: int) -> OtherRobot: ...

@@ -109,6 +109,11 @@ class PlannerParams:
                                     'run to it, so eq. 12 does not slow it down to a crawl as it nears the waypoint '
                                     '(the path is the same straight run; it is reached within waypoint_tolerance as '
                                     'before) (m); 0: aims at the waypoint', 0.0)
+    # Moving obstacles (a v2 world's movers, tracked obstacles; planning/yielding.py).
+    mover_horizon: float = _p(3.0, 'each command is checked against where the movers will be over this many seconds '
+                                   '(each at its velocity): the robot slows down, waits or gets out of the way '
+                                   'instead of driving into a mover\'s path (s); 0: movers count only where they are, '
+                                   'like still obstacles one tick ahead', 0.0, 30.0)
     max_sim_time: float = _p(1500.0, 'fastep-sim stops a run after this much simulated time (s)', 1.0)
     # ACO_R for the ACO-Kinematic baseline (Socha & Dorigo 2008).
     aco_archive: int = _p(10, 'ACO_R solution archive size k', 2, 10_000)

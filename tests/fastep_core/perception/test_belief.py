@@ -106,3 +106,25 @@ def test_runs_with_a_sensor_are_deterministic_and_a_robot_without_one_has_no_bel
     assert [r.trajectory for r in a.robots] == [r.trajectory for r in b.robots]
     assert all(t.belief is None for t in b_ticks if t.name == 'r2')
     assert any(t.belief is not None and t.belief.movers for t in b_ticks if t.name == 'r1')
+
+
+def test_two_unknown_movers_crossing_stay_two_tracked_movers_and_never_a_wall() -> None:
+    """Two unknown movers overlapping as they cross show one outline no circle fits: it was believed a wall at
+    once, both tracks died, and the 'wall' hid the movers from then on (crossing_movers:1000022, where the robot
+    then touched one). Now both are tracked through the crossing and nothing still is believed."""
+    movers = [{'circle': {'center': [27, 31], 'radius': 1.0}, 'motion': {'waypoints': [[27, 11]], 'speed': 0.45},
+               'known': False},
+              {'circle': {'center': [28, 13], 'radius': 1.1}, 'motion': {'waypoints': [[26.5, 37]], 'speed': 0.35},
+               'known': False}]
+    data = world(movers)
+    data['robots'][0].update(start=[12, 22], goal=[45, 22])
+    robot, ticks = beliefs(data)
+    assert robot.reached and not robot.collided
+    truth = DynamicWorld((0, 0, 50, 50), parse_scenario(data).obstacle_specs).movers
+    # While they overlap (centre distance < the sum of their radii), seen from within the scanner's range.
+    crossing = [tick for tick in ticks if tick.belief is not None and
+                np.hypot(*np.subtract(*truth.positions(np.array([tick.t]))[0])) < 2.1 and
+                np.hypot(*(truth.positions(np.array([tick.t]))[0] - tick.state[:2]).T).max() < 8.0]
+    assert len(crossing) > 20
+    assert all(len(tick.belief.movers) == 2 for tick in crossing if tick.belief is not None)
+    assert all(not tick.belief.seen_obstacles for tick in ticks if tick.belief is not None)
