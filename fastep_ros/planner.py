@@ -7,7 +7,9 @@ progress checker...) is a ROS parameter of the same name, default and descriptio
 
 Inputs: `odom` (and `trailer_pose` for tractor-trailers) of its own robot; `goal_pose`; `/obstacles`
 (MarkerArray -> circles and segments) and `/map` (OccupancyGrid: only its extent, the workspace, is used,
-unless the `workspace` parameter gives it), both transient-local; and the `odom` of every other robot that
+unless the `workspace` parameter gives it), both transient-local; with `obstacle_source:=map`, no
+`/obstacles`: the obstacles are the outline of `/map`'s occupied cells (as Nav2's map_server publishes it), so
+a user with a map and no scenario file needs nothing else; and the `odom` of every other robot that
 announces itself: it publishes its `footprint` (as this planner does, latched) from a node of its namespace, and
 its odometry has a publisher; looked for every 0.25 s of wall time, dropped while its odometry is stale
 (fastep_ros.robots).
@@ -158,6 +160,14 @@ class PlannerNode(ManagedNode):
             'longer ago is stale: the robot is held still; 0 disables both', value_range=(0.0, math.inf),
             read_only=False)
         workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
+        self.obstacle_source = declare(self, 'obstacle_source', 'markers', 'where the obstacles come from: markers '
+                                       '(the /obstacles MarkerArray of fastep-map: circles and walls) | map (the '
+                                       'occupied cells of the /map OccupancyGrid, as Nav2\'s map_server publishes '
+                                       'it: their outline, as walls)', constraints='markers | map')
+        self.occupied_threshold = declare(self, 'occupied_threshold', convert.OCCUPIED_THRESHOLD,
+                                          'with obstacle_source map: a cell is occupied from this value (0-100) on; '
+                                          'unknown cells (-1) are free (map_server\'s occupied_thresh 0.65)',
+                                          value_range=(1, 100))
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans')
         odom_frame_id = declare(self, 'odom_frame_id', '', 'the robot\'s odometry frame (REP-105); empty: <ns>/odom '
                                 '(root namespace: odom). Odometry in it or in frame_id is taken, in any other '
@@ -212,8 +222,10 @@ class PlannerNode(ManagedNode):
         # Goals from anyone (volatile, as RViz and `ros2 topic pub` send them) and from latched publishers
         # (fastep-launch: a planner restarted mid-run gets the goal it was driving to again): fastep_ros.goals.
         self.goal_sub = GoalSubscription(self, self.on_goal)
-        self.create_subscription(MarkerArray, interface.OBSTACLES, self.on_obstacles, offered_qos(interface.OBSTACLES))
-        if self.workspace_param is None:
+        if self.obstacle_source == 'markers':
+            self.create_subscription(MarkerArray, interface.OBSTACLES, self.on_obstacles,
+                                     offered_qos(interface.OBSTACLES))
+        if self.workspace_param is None or self.obstacle_source == 'map':
             self.create_subscription(OccupancyGrid, interface.MAP, self.on_map, offered_qos(interface.MAP))
         self.own_odom_topic = self.odom_sub.topic_name
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
@@ -291,6 +303,8 @@ class PlannerNode(ManagedNode):
         if self.seed < 0 or self.seed_stream < -1:
             raise StartupError(f'parameter seed must be >= 0 and seed_stream >= -1, got {self.seed} and '
                                f'{self.seed_stream}')
+        if self.obstacle_source not in ('markers', 'map'):
+            raise StartupError(f'parameter obstacle_source must be markers or map, got {self.obstacle_source!r}')
         if hitch_offset < 0.0 or other_radius < 0.0 or self.max_extrapolation < 0.0:
             raise StartupError('parameters hitch_offset, other_robot_radius and max_extrapolation must be >= 0')
         if workspace and (len(workspace) != 4 or not (workspace[0] < workspace[2] and workspace[1] < workspace[3])):
@@ -342,10 +356,15 @@ class PlannerNode(ManagedNode):
 
     def on_map(self, msg: OccupancyGrid) -> None:
         try:
-            self.map_workspace = convert.occupancy_grid_workspace(msg)
+            workspace = convert.occupancy_grid_workspace(msg)
+            obstacles = (convert.occupancy_grid_obstacles(msg, self.occupied_threshold)
+                         if self.obstacle_source == 'map' else None)
         except ValueError as exc:
             self.get_logger().error(f'ignoring /map: {exc}')
             return
+        self.map_workspace = workspace
+        if obstacles is not None:   # obstacle_source map: the occupied cells' outline (msg_tools.convert)
+            self.obstacles = list(obstacles)
         self.update_world()
 
     def update_world(self) -> None:

@@ -3,15 +3,16 @@
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import Point, PoseStamped, Quaternion, Twist, TwistStamped
-from nav_msgs.msg import Odometry
+from nav_msgs.msg import OccupancyGrid, Odometry
 from visualization_msgs.msg import Marker, MarkerArray
 
-from fastep_core.geometry import Circle, Segment
+from fastep_core.geometry import Circle, Obstacles, Segment
 from fastep_core.kinematics import TractorTrailer
 from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.world import World
@@ -247,3 +248,64 @@ def test_occupancy_grid_workspace_survives_float32_resolution() -> None:
     grid = convert.world_to_occupancy_grid(World.from_obstacles([0, 0, 50, 30], []), 0.1)
     grid.info.resolution = float(np.float32(0.1))  # what arrives over DDS
     assert convert.occupancy_grid_workspace(grid) == (0.0, 0.0, 50.0, 30.0)
+
+
+def _grid(cells: list[list[int]], resolution: float = 0.5, origin: tuple[float, float] = (1.0, 2.0)) -> OccupancyGrid:
+    """A grid from rows of cell values, the first row at the bottom (y = origin y), as OccupancyGrid stores it."""
+    msg = OccupancyGrid()
+    msg.info.resolution = resolution
+    msg.info.height, msg.info.width = len(cells), len(cells[0])
+    msg.info.origin.position.x, msg.info.origin.position.y = origin
+    msg.info.origin.orientation.w = 1.0
+    msg.data = [v for row in cells for v in row]
+    return msg
+
+
+def _edges(segments: list[Segment]) -> set[tuple[tuple[float, float], ...]]:
+    return {tuple(sorted(((float(s.start[0]), float(s.start[1])), (float(s.end[0]), float(s.end[1])))))
+            for s in segments}
+
+
+def test_occupancy_grid_obstacles_are_the_outline_of_the_occupied_cells() -> None:
+    # One 2 x 1 block of occupied cells (100, and 70 >= 65), an unknown cell (-1) and a 64 (free) beside it.
+    msg = _grid([[0, 0, 0, 0],
+                 [0, 100, 70, -1],
+                 [0, 0, 64, 0]])
+    segments = convert.occupancy_grid_obstacles(msg)
+    assert all(isinstance(s, Segment) for s in segments)
+    x0, x1, y0, y1 = 1.5, 2.5, 2.5, 3.0   # the block: columns 1-2, row 1, 0.5 m cells from (1, 2)
+    assert _edges(segments) == _edges([Segment((x0, y0), (x1, y0)), Segment((x0, y1), (x1, y1)),
+                                       Segment((x0, y0), (x0, y1)), Segment((x1, y0), (x1, y1))])
+    # A lower threshold takes the 64 in: an L of three cells, six sides.
+    assert len(convert.occupancy_grid_obstacles(msg, occupied_threshold=60)) == 6
+
+
+def test_occupancy_grid_obstacles_keep_every_free_cell_centre_outside_and_hold_back_nothing() -> None:
+    world = World.from_obstacles([0, 0, 10, 8], [Circle((5.0, 4.0), 1.5), Segment((1.0, 1.0), (1.0, 6.0))])
+    msg = convert.world_to_occupancy_grid(world, 0.25)
+    segments = convert.occupancy_grid_obstacles(msg)
+    occupied = np.asarray(msg.data).reshape(msg.info.height, msg.info.width) >= 65
+    xs = 0.125 + 0.25 * np.arange(msg.info.width)
+    ys = 0.125 + 0.25 * np.arange(msg.info.height)
+    gx, gy = np.meshgrid(xs, ys)
+    centres = np.stack([gx, gy], axis=-1)
+    distance = Obstacles(segments).clearance(centres.reshape(-1, 2)).reshape(occupied.shape)
+    # Every cell centre is half a cell from the nearest border at least, and the border of each occupied cell
+    # next to a free one is there: its centre is exactly half a cell from the outline.
+    assert distance.min() == pytest.approx(0.125)
+    edge = occupied & ~np.all([np.roll(occupied, k, axis=a) for a in (0, 1) for k in (1, -1)], axis=0)
+    assert np.allclose(distance[edge], 0.125)
+    # Runs are merged: far fewer segments than border cell sides.
+    assert len(segments) < int(edge.sum())
+
+
+@pytest.mark.parametrize('change, words', [
+    (lambda m: setattr(m, 'data', m.data[:-1]), 'map data has 11 cells, width x height is 4 x 3 = 12'),
+    (lambda m: setattr(m.info, 'resolution', 0.0), 'resolution <= 0'),
+    (lambda m: setattr(m.info.origin.orientation, 'z', 0.5), 'rotated map origin'),
+])
+def test_occupancy_grid_obstacles_refuse_a_bad_grid_in_one_line(change: Any, words: str) -> None:
+    msg = _grid([[0, 0, 0, 0], [0, 100, 0, 0], [0, 0, 0, 0]])
+    change(msg)
+    with pytest.raises(ValueError, match=words):
+        convert.occupancy_grid_obstacles(msg)
