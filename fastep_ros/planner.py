@@ -54,7 +54,7 @@ from __future__ import annotations
 import math
 import traceback
 from dataclasses import dataclass, fields
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticStatus
@@ -190,6 +190,7 @@ class PlannerNode(ManagedNode):
         # What the planner knows.
         self.obstacles: list[Any] | None = None
         self.map_workspace: tuple[float, float, float, float] | None = None
+        self.occupied: Callable[[Sequence[float]], bool] | None = None   # obstacle_source map: is a point occupied
         self.world: World | None = None
         self.navigator: Navigator | None = None
         self.pending_goal: PoseStamped | None = None
@@ -365,6 +366,7 @@ class PlannerNode(ManagedNode):
         self.map_workspace = workspace
         if obstacles is not None:   # obstacle_source map: the occupied cells' outline (msg_tools.convert)
             self.obstacles = list(obstacles)
+            self.occupied = convert.occupancy_grid_lookup(msg, self.occupied_threshold)
         self.update_world()
 
     def update_world(self) -> None:
@@ -446,6 +448,9 @@ class PlannerNode(ManagedNode):
         try:
             if frame not in ('', 'map', self.frame_id):
                 raise GoalError(f'goal frame {frame!r} is not {self.frame_id!r} (no transforms here)')
+            if self.occupied is not None and self.occupied(point):
+                # Inside an occupied region of /map, far from its outline: the walls alone would not say so.
+                raise GoalError(f'goal ({point[0]:g}, {point[1]:g}) is occupied: an occupied cell of /map')
             self.navigator.set_goal(point, self.now())
         except GoalError as exc:
             self.goal_refused = f'goal ({point[0]:g}, {point[1]:g}) refused: {exc}'

@@ -20,7 +20,7 @@ malformed; the nodes turn that into a status message instead of crashing.
 from __future__ import annotations
 
 import math
-from typing import Any, Iterable, Mapping, Sequence
+from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -35,14 +35,12 @@ from fastep_core.world import World
 
 __all__ = [
     'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'OCCUPIED_THRESHOLD', 'command_to_twist',
-    'grid_resolution', 'grid_shape',
-    'diagnostic_to_dict', 'make_status', 'marker_array_to_obstacles',
-    'obstacles_to_marker_array', 'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position',
-    'odometry_to_state',
-    'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point',
-    'quaternion_to_yaw', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds', 'state_to_odometry',
-    'trailer_pose', 'trailer_yaw', 'twist_to_command', 'waypoints_to_path', 'world_to_occupancy_grid',
-    'yaw_to_quaternion',
+    'diagnostic_to_dict', 'grid_resolution', 'grid_shape', 'make_status', 'marker_array_to_obstacles',
+    'obstacles_to_marker_array', 'occupancy_grid_lookup', 'occupancy_grid_obstacles', 'occupancy_grid_workspace',
+    'odometry_position', 'odometry_to_state', 'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped',
+    'pose_stamped_to_point', 'quaternion_to_yaw', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds',
+    'state_to_odometry', 'trailer_pose', 'trailer_yaw', 'twist_to_command', 'waypoints_to_path',
+    'world_to_occupancy_grid', 'yaw_to_quaternion',
 ]
 
 CIRCLES_NS = 'circles'
@@ -479,6 +477,21 @@ def occupancy_grid_obstacles(msg: OccupancyGrid, occupied_threshold: int = OCCUP
         for f, a, b in zip(fixed.tolist(), lo.tolist(), hi.tolist()):
             out.append(Segment((a, f), (b, f)) if along_x else Segment((f, a), (f, b)))
     return out
+
+
+def occupancy_grid_lookup(msg: OccupancyGrid,
+                          occupied_threshold: int = OCCUPIED_THRESHOLD) -> Callable[[Sequence[float]], bool]:
+    """A function telling whether a map point lies in an occupied cell of the grid (outside it: False)."""
+    xmin, ymin, _, _ = occupancy_grid_workspace(msg)
+    width, height = int(msg.info.width), int(msg.info.height)
+    resolution = float(f'{msg.info.resolution:.7g}')
+    occupied = np.asarray(msg.data, dtype=np.int16).reshape(height, width) >= occupied_threshold
+
+    def lookup(point: Sequence[float]) -> bool:
+        col = math.floor((float(point[0]) - xmin) / resolution)
+        row = math.floor((float(point[1]) - ymin) / resolution)
+        return bool(0 <= row < height and 0 <= col < width and occupied[row, col])
+    return lookup
 
 
 # ------------------------------------------------------------------------------------------------- status

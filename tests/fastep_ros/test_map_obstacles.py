@@ -57,6 +57,20 @@ def test_a_robot_drives_through_the_doorway_of_a_map_it_was_given_as_an_occupanc
         node.destroy_node()
 
 
+def test_a_goal_inside_an_occupied_region_far_from_its_outline_is_refused(context: Any) -> None:
+    node = make(context, obstacle_source='map', robot_radius=0.3)
+    try:
+        node.on_map(convert.world_to_occupancy_grid(ROOM, 0.1))
+        node.on_odom(convert.state_to_odometry([2.0, 2.0]))
+        node.on_goal(convert.point_to_pose_stamped((9.0, 7.0)))   # the pillar's centre: 0.8 m from its outline
+        level, message, reason = node.status()
+        assert message == 'failed' and 'occupied: an occupied cell of /map' in reason, reason
+        node.on_goal(convert.point_to_pose_stamped((9.0, 8.5)))   # beside it: taken
+        assert node.goal == (9.0, 8.5)
+    finally:
+        node.destroy_node()
+
+
 def test_with_markers_the_map_gives_only_the_workspace_and_a_bad_source_is_refused(context: Any) -> None:
     node = make(context)
     try:
