@@ -61,7 +61,12 @@ planner: {alpha1: 0.5, alpha2: 0.5, max_speed: 2.0}
 FAST = {'alpha1': 0.5, 'alpha2': 0.5, 'max_speed': 2.0, 'algorithm': 'fastep'}
 
 
-_held: dict[int, Any] = {}  # domain -> open lock file (flock released when this process exits)
+_held: dict[int, Any] = {}  # domain -> open lock file (flock released when this process exits or MAX_HELD passes)
+MAX_HELD = 30
+"""Domains one process holds at most. Each test graph takes a fresh domain and kept it locked until its process
+exited: a pytest worker that had run 100 graph tests held every domain, and the other worker, holding none to
+fall back on, failed with "no free ROS domain" (CI, 2026-11-26). Beyond MAX_HELD the oldest domain nobody runs
+on (its discovery port is free) is released to the other processes."""
 
 
 def _port_free(domain: int) -> bool:
@@ -99,11 +104,21 @@ def free_domain() -> int:
         lock = _lock(domain)
         if lock is not None:
             _held[domain] = lock
+            _release_oldest()
             return domain
     for domain in candidates:
         if domain in _held and _port_free(domain):
             return domain
     raise RuntimeError('no free ROS domain in 1..100 for an isolated test graph')
+
+
+def _release_oldest() -> None:
+    """Unlock the domains held longest, down to MAX_HELD, skipping any a participant still runs on."""
+    for domain in list(_held)[:-1]:   # oldest first; never the one just taken
+        if len(_held) <= MAX_HELD:
+            return
+        if _port_free(domain):
+            _held.pop(domain).close()   # closing the file releases its flock
 
 
 def isolated_env(domain: int, log_dir: Path) -> dict[str, str]:

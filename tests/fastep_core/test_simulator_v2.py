@@ -34,9 +34,10 @@ def crossing(**changes: Any) -> dict[str, Any]:
 @pytest.mark.parametrize('seed', [0, 1])
 def test_a_known_mover_is_avoided_an_unknown_one_is_not(seed: int) -> None:
     """Known movers reach the planner as moving obstacles ('mover 0'); an unknown one is absent from what it is
-    given (no scanner in perception yet), so it runs the robot down: judged from the truth."""
+    given (this robot has no sensor), so it runs the robot down: judged from the truth. The known one is let
+    pass (planning/yielding.py: the robot slows down for it) with more than the clearance margin to spare."""
     seen = simulate(parse_scenario(crossing()), 'fastep', seed).robots[0]
-    assert seen.reached and not seen.collided and seen.min_clearance > 1.0
+    assert seen.reached and not seen.collided and seen.min_clearance > 0.5
     unseen = simulate(parse_scenario(crossing(known=False)), 'fastep', seed).robots[0]
     assert unseen.reached and unseen.collided and unseen.min_clearance < -1.0
 

@@ -1,0 +1,25 @@
+"""The test graphs' ROS domains (fastep_testing/graph.py): a process holds at most MAX_HELD, so a pytest worker
+that ran many graph tests leaves domains to the other (CI failed with "no free ROS domain" when one held all)."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+
+from fastep_testing import graph
+
+
+def test_a_process_holds_at_most_max_held_domains_and_the_released_ones_are_free_to_others() -> None:
+    taken = [graph.free_domain() for _ in range(graph.MAX_HELD + 10)]
+    assert len(set(taken)) == len(taken)                 # a fresh domain each time ...
+    assert len(graph._held) <= graph.MAX_HELD            # ... but only the newest are kept
+    assert taken[-1] in graph._held
+    released = [d for d in taken if d not in graph._held]
+    assert len(released) >= 10
+    lock = Path(tempfile.gettempdir()) / f'fastep-ros-test-domain-{released[0]}.lock'
+    probe = ('import fcntl, sys; f = open(sys.argv[1], "a"); '
+             'fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB); print("locked")')
+    done = subprocess.run([sys.executable, '-c', probe, str(lock)], capture_output=True, text=True, timeout=30)
+    assert done.stdout.strip() == 'locked', done.stderr   # another process can take a released domain
