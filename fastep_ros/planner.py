@@ -61,10 +61,13 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from rclpy.clock import Clock, ClockType
+from rclpy.qos import qos_profile_sensor_data
+from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import GoalError, ParameterError
+from fastep_core.perception.belief import heading
 from fastep_core.planning.algorithms import (
     ALGORITHMS,
     DEFAULT_ALGORITHM,
@@ -85,6 +88,7 @@ from fastep_ros.frames import LOCALIZATION_QOS
 from fastep_ros.goals import GoalSubscription
 from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.parameters import DynamicParameters
+from fastep_ros.perception import ScanPerception
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import convert, frames, interface
@@ -164,6 +168,9 @@ class PlannerNode(ManagedNode):
                                        '(the /obstacles MarkerArray of fastep-map: circles and walls) | map (the '
                                        'occupied cells of the /map OccupancyGrid, as Nav2\'s map_server publishes '
                                        'it: their outline, as walls)', constraints='markers | map')
+        scan_noise = declare(self, 'scan_noise', 0.01, 'standard deviation of the laser\'s range noise (m), which a '
+                             'LaserScan does not carry: the perception of `scan` clusters and fits with it',
+                             value_range=(0.0, 1.0), unit=' m')
         self.occupied_threshold = declare(self, 'occupied_threshold', convert.OCCUPIED_THRESHOLD,
                                           'with obstacle_source map: a cell is occupied from this value (0-100) on; '
                                           'unknown cells (-1) are free (map_server\'s occupied_thresh 0.65)',
@@ -238,6 +245,12 @@ class PlannerNode(ManagedNode):
             sub = self.create_subscription(PoseWithCovarianceStamped, self.localization_topic, self.on_localization,
                                            LOCALIZATION_QOS)
             self.localization_topic = sub.topic_name
+        # Any LaserScan on `scan` (sensor-data QoS: a best-effort subscription matches reliable publishers too):
+        # the planner perceives with it (fastep_ros.perception) and shows its belief on `tracked_obstacles`.
+        self.scan_perception = ScanPerception(scan_noise)
+        self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
+        self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
+        self.scan_problem = ''
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control)
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.wall_ticks = 0
@@ -374,6 +387,7 @@ class PlannerNode(ManagedNode):
         if self.obstacles is None or workspace is None:
             return
         self.world = World.from_obstacles(workspace, self.obstacles)
+        self.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
         if self.navigator is None:
             self.navigator = make_navigator(self.algorithm, self.body, self.radius, self.world, self.params,
                                             self.rng)
@@ -480,7 +494,31 @@ class PlannerNode(ManagedNode):
         super().destroy_node()
 
     def other_robots(self, t: float) -> list[OtherRobot]:
-        return self.robots.fleet.obstacles(t, self.robots.radius, lambda stamp: self.lag(t, stamp))
+        """The other robots (their odometry) and the movers this robot's scans track."""
+        robots = self.robots.fleet.obstacles(t, self.robots.radius, lambda stamp: self.lag(t, stamp))
+        return [*robots, *self.scan_perception.movers(t)]
+
+    def on_scan(self, msg: LaserScan) -> None:
+        """Fold a scan into what the robot believes; the navigator plans in the belief from then on."""
+        nav, t = self.navigator, self.now()
+        if nav is None or self.world is None:
+            return   # no map yet: nothing to fuse the scan with
+        state, _ = self.state(t)
+        if state is None:
+            return   # where the scan was taken from is not known
+        stamp = convert.stamp_to_seconds(msg.header.stamp)
+        pose = (float(state[0]), float(state[1]), heading(self.model, state))
+        told = self.robots.fleet.obstacles(t, self.robots.radius, lambda s: self.lag(t, s))
+        try:
+            belief = self.scan_perception.update(msg, stamp if stamp > 0.0 else t, pose, self.world, told)
+        except ValueError as exc:
+            self.scan_problem = f'scan ignored: {exc}'
+            self.get_logger().warning(self.scan_problem, throttle_duration_sec=5.0)
+            return
+        self.scan_problem = ''
+        if belief.world is not nav.world:
+            nav.world = belief.world
+        self.tracked_pub.publish(convert.belief_to_marker_array(belief, self.stamp(), self.frame_id))
 
     # ------------------------------------------------------------------------------------------- control
     def state(self, t: float) -> tuple[np.ndarray | None, str]:
@@ -656,6 +694,10 @@ class PlannerNode(ManagedNode):
             # ... its odometry having reached this planner: while simulated time holds at 0 a plant publishes
             # its start state once its cmd_vel reader is matched (odometry is volatile: a match is not a delivery).
             'odom_heard': self.odom_heard,
+            # Perception of `scan`: scans taken, movers tracked now, and why the last scan was not (if it was not).
+            'scans': self.scan_perception.scans,
+            'tracks': len(self.scan_perception.movers(self.now())),
+            'scan_problem': self.scan_problem,
         }
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 

@@ -20,7 +20,7 @@ malformed; the nodes turn that into a status message instead of crashing.
 from __future__ import annotations
 
 import math
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Time
@@ -28,22 +28,30 @@ from diagnostic_msgs.msg import DiagnosticStatus, KeyValue
 from geometry_msgs.msg import Point, Pose, PoseStamped, Quaternion, Twist, TwistStamped
 from nav_msgs.msg import MapMetaData, OccupancyGrid, Odometry, Path
 from rosgraph_msgs.msg import Clock
+from sensor_msgs.msg import LaserScan
 from visualization_msgs.msg import Marker, MarkerArray
 
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from fastep_core.sensing.laser import LaserSpec, Scan
 from fastep_core.world import World
 
+if TYPE_CHECKING:   # perception (scipy) is imported only by nodes that perceive
+    from fastep_core.perception.belief import Belief
+
 __all__ = [
-    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'OCCUPIED_THRESHOLD', 'command_to_twist',
-    'diagnostic_to_dict', 'grid_resolution', 'grid_shape', 'make_status', 'marker_array_to_obstacles',
-    'obstacles_to_marker_array', 'occupancy_grid_lookup', 'occupancy_grid_obstacles', 'occupancy_grid_workspace',
-    'odometry_position', 'odometry_to_state', 'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped',
-    'pose_stamped_to_point', 'quaternion_to_yaw', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds',
+    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'OCCUPIED_THRESHOLD', 'TRACKS_NS', 'TRACK_VELOCITIES_NS',
+    'belief_to_marker_array', 'command_to_twist', 'diagnostic_to_dict', 'grid_resolution', 'grid_shape',
+    'laser_scan_to_scan', 'laser_spec', 'make_status', 'marker_array_to_obstacles', 'obstacles_to_marker_array',
+    'occupancy_grid_lookup', 'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position',
+    'odometry_to_state', 'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point',
+    'quaternion_to_yaw', 'scan_to_laser_scan', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds',
     'state_to_odometry', 'trailer_pose', 'trailer_yaw', 'twist_to_command', 'waypoints_to_path',
     'world_to_occupancy_grid', 'yaw_to_quaternion',
 ]
 
 CIRCLES_NS = 'circles'
+TRACKS_NS = 'tracks'                    # tracked_obstacles: a planner's tracked movers
+TRACK_VELOCITIES_NS = 'track_velocities'   # ... and their velocities
 SEGMENTS_NS = 'segments'
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR,
           'stale': DiagnosticStatus.STALE}
@@ -318,6 +326,77 @@ def marker_array_to_obstacles(msg: MarkerArray) -> list[Obstacle]:
                 segs.append(Segment((coords[0], coords[1]), (coords[2], coords[3])))
             found[key] = segs
     return [o for group in found.values() for o in group]
+
+
+# ------------------------------------------------------------------------------------------------- scans
+
+def scan_to_laser_scan(scan: Scan, stamp: Time | None = None, frame_id: str = 'base_link') -> LaserScan:
+    """sensor_msgs/LaserScan of a scan (fastep_core.sensing.laser.Scan carries its fields; +inf beyond range)."""
+    msg = LaserScan()
+    msg.header.frame_id = frame_id
+    if stamp is not None:
+        msg.header.stamp = stamp
+    msg.angle_min, msg.angle_max = float(scan.angle_min), float(scan.angle_max)
+    msg.angle_increment = float(scan.angle_increment)
+    msg.range_min, msg.range_max = float(scan.range_min), float(scan.range_max)
+    msg.ranges = np.asarray(scan.ranges, dtype=np.float32).tolist()
+    return msg
+
+
+def laser_scan_to_scan(msg: LaserScan, time: float = 0.0) -> Scan:
+    """The Scan of any sensor_msgs/LaserScan. Readings that are not a return (NaN, +-inf, below range_min or
+    beyond range_max: REP-117) become +inf, as the scanner model has them. ValueError (one line) for no
+    ranges, non-finite angles or range limits, a zero increment, or range_max <= range_min."""
+    fields = (msg.angle_min, msg.angle_max, msg.angle_increment, msg.range_min, msg.range_max)
+    _finite(fields, 'laser scan')
+    if not len(msg.ranges):
+        raise ValueError('laser scan has no ranges')
+    if msg.angle_increment == 0.0:
+        raise ValueError('laser scan angle_increment is 0')
+    if not 0.0 <= msg.range_min < msg.range_max:
+        raise ValueError(f'laser scan range limits [{msg.range_min:g}, {msg.range_max:g}] are not 0 <= min < max')
+    ranges = np.asarray(msg.ranges, dtype=float)
+    valid = np.isfinite(ranges) & (ranges >= msg.range_min) & (ranges <= msg.range_max)
+    return Scan(float(msg.angle_min), float(msg.angle_max), float(msg.angle_increment), float(msg.range_min),
+                float(msg.range_max), np.where(valid, ranges, np.inf), time)
+
+
+def laser_spec(msg: LaserScan, noise: float) -> LaserSpec:
+    """The scanner a LaserScan comes from, for perception: its range, field of view, beams, and `noise` (the
+    range noise's standard deviation, which the message does not carry)."""
+    beams = len(msg.ranges)
+    fov = min(abs(float(msg.angle_increment)) * (beams if beams > 1 else 1), 2.0 * math.pi)
+    return LaserSpec(float(msg.range_max), fov, beams, noise)
+
+
+def belief_to_marker_array(belief: Belief, stamp: Time | None = None, frame_id: str = 'map') -> MarkerArray:
+    """What a planner believes (fastep_core.perception.Belief), for a viewer: the still obstacles it saw (circles
+    and walls, as obstacles_to_marker_array draws them, in orange), and each tracked mover (namespace
+    TRACKS_NS) as a cylinder of its radius with an arrow of its velocity over one second (TRACK_VELOCITIES_NS)."""
+    out = obstacles_to_marker_array(belief.seen_obstacles, stamp, frame_id)
+    for m in out.markers[1:]:
+        m.ns = f'seen_{m.ns}'
+        m.color.r, m.color.g, m.color.b = 1.0, 0.55, 0.0
+    for i, mover in enumerate(belief.movers):
+        x, y = float(mover.position[0]), float(mover.position[1])
+        vx, vy = float(mover.velocity[0]), float(mover.velocity[1])
+        body, arrow = Marker(), Marker()
+        for m in (body, arrow):
+            m.header.frame_id = frame_id
+            if stamp is not None:
+                m.header.stamp = stamp
+            m.id, m.action = i, Marker.ADD
+            m.pose.orientation.w = 1.0
+            m.color.r, m.color.g, m.color.b, m.color.a = 0.6, 0.2, 0.8, 0.8
+        body.ns, body.type = TRACKS_NS, Marker.CYLINDER
+        body.pose.position = Point(x=x, y=y, z=0.5)
+        body.scale.x = body.scale.y = 2.0 * float(mover.radius)
+        body.scale.z = 1.0
+        arrow.ns, arrow.type = TRACK_VELOCITIES_NS, Marker.ARROW
+        arrow.points = [Point(x=x, y=y, z=1.0), Point(x=x + vx, y=y + vy, z=1.0)]
+        arrow.scale.x, arrow.scale.y, arrow.scale.z = 0.08, 0.2, 0.2
+        out.markers.extend([body, arrow])
+    return out
 
 
 # ------------------------------------------------------------------------------------------------- the map

@@ -32,7 +32,8 @@ if TYPE_CHECKING:
 __all__ = [
     'CLOCK', 'CMD_VEL', 'COST', 'FOOTPRINT', 'GOAL_POSE', 'LATCHED', 'LATEST', 'MAP', 'MAP_FRAME', 'METADATA_NAME',
     'OBSTACLES', 'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS', 'ROBOT_TOPIC_PATTERN',
-    'SHARED_TOPICS', 'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS', 'TRAILER_POSE', 'TYPES', 'WAYPOINT',
+    'SCAN', 'SHARED_TOPICS', 'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS', 'TRACKED_OBSTACLES', 'TRAILER_POSE',
+    'TYPES', 'WAYPOINT',
     'is_interface_topic', 'message_type',
     'metadata_key', 'offered_qos', 'offered_qos_profiles', 'robot_topic', 'scenario_metadata', 'split_robot_topic',
 ]
@@ -50,6 +51,10 @@ STATUS = 'status'              # planner: mode and reasons
 TRAILER_POSE = 'trailer_pose'  # plant, tractor-trailers only: the trailer axle and heading
 FOOTPRINT = 'footprint'        # planner, latched: its safety circle; announces a robot of this graph
 ROBOT_TOPICS = (ODOM, CMD_VEL, GOAL_POSE, WAYPOINT, PLAN, COST, STATUS, TRAILER_POSE, FOOTPRINT)
+# A robot's laser (any sensor_msgs/LaserScan; the planner perceives with it) and what its planner believes
+# (visualization_msgs/MarkerArray); neither is recorded yet.
+SCAN = 'scan'
+TRACKED_OBSTACLES = 'tracked_obstacles'
 
 # Shared, in the root namespace.
 OBSTACLES = '/obstacles'   # map node: circles and walls

@@ -1,0 +1,112 @@
+"""A planner that perceives with a LaserScan (`scan`): obstacles missing from its map, and movers, seen and avoided;
+its belief on `tracked_obstacles`. The node is built in this process, its callbacks called directly, the robot
+driven on the planner's own simulated clock, and each scan cast against the true world (fastep_core.sensing)."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+from rclpy.parameter import Parameter
+from rclpy.time import Time
+from visualization_msgs.msg import MarkerArray
+
+from fastep_core.geometry import Circle
+from fastep_core.sensing.laser import LaserSpec, scan
+from fastep_ros.planner import PlannerNode
+from msg_tools import convert
+
+SPEC = LaserSpec(range=8.0, fov=2 * math.pi, beams=360, noise=0.01)
+KNOWN = Circle((10.0, 16.0), 1.0)     # on the map
+UNKNOWN = Circle((12.0, 10.0), 1.5)   # not on the map, on the straight run from (3, 10) to (21, 10)
+
+
+def make(context: Any, **params: Any) -> PlannerNode:
+    overrides = [Parameter('workspace', value=[0.0, 0.0, 24.0, 20.0]), Parameter('use_sim_time', value=True),
+                 *(Parameter(k, value=v) for k, v in params.items())]
+    return PlannerNode(context=context, parameter_overrides=overrides)
+
+
+def drive(node: PlannerNode, scans: bool, mover: tuple[np.ndarray, np.ndarray] | None = None,
+          ticks: int = 1600) -> tuple[np.ndarray, float, list[MarkerArray]]:
+    """Drive the point mass from (3, 10) to (21, 10); returns where it ended, the smallest gap it kept to the true
+    obstacles (surface to body), and what it published on tracked_obstacles."""
+    clock: Any = node.get_clock()
+    published: list[MarkerArray] = []
+    node.tracked_pub.publish = published.append  # type: ignore[method-assign]  # keep what the planner believes
+    rng = np.random.default_rng(7)
+    node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+    state, dt, closest = np.array([3.0, 10.0]), 0.05, math.inf
+    node.on_goal(convert.point_to_pose_stamped((21.0, 10.0)))
+    for k in range(1, ticks):
+        t = k * dt
+        clock.set_ros_time_override(Time(nanoseconds=int(round(t * 1e9)), clock_type=clock.clock_type))
+        node.on_odom(convert.state_to_odometry(state, convert.seconds_to_stamp(t)))
+        circles, radii = [KNOWN.center, UNKNOWN.center], [KNOWN.radius, UNKNOWN.radius]
+        if mover is not None:
+            circles.append(tuple(mover[0] + mover[1] * t))
+            radii.append(0.6)
+        if scans:
+            reading = scan(SPEC, (state[0], state[1], 0.0), rng, t, np.array(circles), np.array(radii))
+            node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(t)))
+        node.on_control()
+        if node.status()[1] == 'arrived':
+            break
+        state = state + node.last_command * dt
+        gaps = np.hypot(*(np.array(circles) - state).T) - np.array(radii)
+        closest = min(closest, float(gaps.min()) - 0.5)
+    return state, closest, published
+
+
+def test_an_obstacle_missing_from_the_map_is_seen_in_the_scans_and_avoided(context: Any) -> None:
+    blind = make(context, algorithm='fastep_route')
+    try:
+        _, closest, _ = drive(blind, scans=False, ticks=600)
+        assert closest < 0.0   # without scans it drives into the obstacle its map lacks
+    finally:
+        blind.destroy_node()
+    node = make(context, algorithm='fastep_route')
+    try:
+        end, closest, published = drive(node, scans=True)
+        assert node.status()[1] == 'arrived' and np.hypot(*(end - (21.0, 10.0))) <= 0.1
+        assert closest >= 0.0
+        assert node.scan_perception.scans > 100
+        believed = convert.marker_array_to_obstacles(published[-1])
+        seen = [o for o in believed if isinstance(o, Circle)]
+        assert any(math.dist(o.center, UNKNOWN.center) < 0.1 and abs(o.radius - UNKNOWN.radius) < 0.1 for o in seen)
+    finally:
+        node.destroy_node()
+
+
+def test_a_mover_missing_from_the_map_is_tracked_and_shown(context: Any) -> None:
+    node = make(context, algorithm='fastep')
+    try:
+        # Crossing the robot's run at x = 17, upwards at 0.4 m/s, on the robot's line at about t = 15 s.
+        end, closest, published = drive(node, scans=True, mover=(np.array([17.0, 4.0]), np.array([0.0, 0.4])))
+        assert node.status()[1] == 'arrived' and closest >= 0.0
+        tracks = [m for msg in published for m in msg.markers if m.ns == convert.TRACKS_NS]
+        assert tracks, 'the mover was never tracked'
+        arrows = [m for msg in published for m in msg.markers if m.ns == convert.TRACK_VELOCITIES_NS]
+        vy = [a.points[1].y - a.points[0].y for a in arrows[-20:]]
+        assert np.median(vy) == np.clip(np.median(vy), 0.3, 0.5)   # its velocity, about 0.4 m/s upwards
+    finally:
+        node.destroy_node()
+
+
+def test_a_scan_that_is_not_one_is_ignored_with_a_reason(context: Any) -> None:
+    node = make(context)
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+        node.on_odom(convert.state_to_odometry([3.0, 10.0]))
+        bad = convert.scan_to_laser_scan(scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0)))
+        bad.angle_increment = 0.0
+        node.on_scan(bad)
+        assert node.scan_problem == 'scan ignored: laser scan angle_increment is 0'
+        assert node.scan_perception.scans == 0
+        good = convert.scan_to_laser_scan(scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0)))
+        good.ranges[0] = math.nan   # one reading that is not a return: taken as none (REP-117)
+        node.on_scan(good)
+        assert node.scan_problem == '' and node.scan_perception.scans == 1
+    finally:
+        node.destroy_node()
