@@ -43,7 +43,7 @@ from fastep_core.world import World
 
 __all__ = [
     'MODELS', 'SCENARIO_MODELS', 'ObstacleSpec', 'Motion', 'RobotSpec', 'Scenario',
-    'load_scenario', 'parse_scenario', 'builtin_names', 'builtin_path',
+    'load_scenario', 'parse_scenario', 'scenario_data', 'builtin_names', 'builtin_path',
 ]
 
 MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer', 'diff_drive')
@@ -626,6 +626,45 @@ def parse_scenario(data: object, *, default_name: str = 'scenario') -> Scenario:
     if isinstance(data, dict) and isinstance(data.get('name'), str) and data['name'].strip():
         label = data['name']
     return _parse(data, default_name, label)
+
+
+def scenario_data(scenario: Scenario) -> dict[str, Any]:
+    """The mapping parse_scenario makes `scenario` from (format v1 where v1 says it all, v2 keys where needed):
+    a run's scenario written into its recording, read back there (parse_scenario(scenario_data(s)) == s)."""
+    obstacles: list[dict[str, Any]] = []
+    for spec in scenario.obstacle_specs:
+        shape = spec.shape
+        entry: dict[str, Any] = ({'circle': {'center': list(shape.center), 'radius': shape.radius}}
+                                 if isinstance(shape, Circle) else
+                                 {'segment': {'start': list(shape.start), 'end': list(shape.end)}})
+        if spec.motion is not None:
+            entry['motion'] = {'waypoints': [list(p) for p in spec.motion.waypoints], 'speed': spec.motion.speed}
+        if not spec.known:
+            entry['known'] = False
+        if spec.position_sigma > 0.0:
+            entry['position_sigma'] = spec.position_sigma
+        obstacles.append(entry)
+    robots: list[dict[str, Any]] = []
+    for robot in scenario.robots:
+        item: dict[str, Any] = {'name': robot.name, 'model': robot.model, 'start': list(robot.start),
+                                'goal': list(robot.goal), 'radius': robot.radius}
+        if robot.model == 'tractor_trailer':
+            item.update(length=robot.length, trailer_length=robot.trailer_length, width=robot.width,
+                        hitch_offset=robot.hitch_offset)
+        if robot.sensor is not None:
+            item['sensor'] = {'range': robot.sensor.range, 'fov': robot.sensor.fov, 'beams': robot.sensor.beams,
+                              'noise': robot.sensor.noise}
+        robots.append(item)
+    defaults = PlannerParams()
+    planner = {name: getattr(scenario.planner, name) for name in PlannerParams.names()
+               if getattr(scenario.planner, name) != getattr(defaults, name)}
+    data: dict[str, Any] = {'name': scenario.name, 'workspace': list(scenario.world.workspace),
+                            'obstacles': obstacles, 'robots': robots}
+    if scenario.description:
+        data['description'] = scenario.description
+    if planner:
+        data['planner'] = planner
+    return data
 
 
 # ----------------------------------------------------------------------------------------------- files

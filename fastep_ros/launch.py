@@ -38,6 +38,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core.cli import Parser, fail, guard, seed, tcp_port, tcp_port_problem
+from fastep_core.dynamic_world import DynamicWorld
 from fastep_core.errors import ScenarioError
 from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
@@ -119,10 +120,16 @@ def _planner_overrides(params: PlannerParams) -> dict[str, Any]:
     return {name: getattr(params, name) for name in params.names() if getattr(params, name) != getattr(defaults, name)}
 
 
-def plant_params(spec: RobotSpec, sim_time: bool, params: PlannerParams | None = None) -> dict[str, Any]:
+def plant_params(spec: RobotSpec, sim_time: bool, params: PlannerParams | None = None, *, scenario: str = '',
+                 seed: int = 0, index: int = 0) -> dict[str, Any]:
     """The plant's parameters; a diff-drive base saturates at the scenario's max_speed and max_turn_rate (`params`,
-    the scenario's planner parameters), as fastep-sim's model does."""
+    the scenario's planner parameters), as fastep-sim's model does. A robot with a `sensor` scans the true world
+    of `scenario` (the file or built-in name), its noise from the run's `seed` stream `index`, as in fastep-sim."""
     out: dict[str, Any] = {'model': spec.model, 'start': [float(v) for v in spec.start], 'use_sim_time': sim_time}
+    if spec.sensor is not None:
+        out.update(sensor=[float(spec.sensor.range), float(spec.sensor.fov), float(spec.sensor.beams),
+                           float(spec.sensor.noise)], scenario=scenario, seed=int(seed), robot_index=int(index),
+                   scan_rate_hz=1.0 / (params or PlannerParams()).dt)
     if spec.model == 'tractor_trailer':
         out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
                    hitch_offset=float(spec.hitch_offset))
@@ -454,10 +461,11 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         monitor.connect()
         monitor.expected = watched_topics(scenario, sim_time)
         procs.start('fastep-map', 'map_server', '/', {'scenario': _scenario_arg(args.scenario),
-                                                       'use_sim_time': sim_time})
+                                                       'use_sim_time': sim_time, 'seed': int(args.seed)})
         for i, spec in enumerate(scenario.robots):
             procs.start(f'fastep-plant /{spec.name}', 'plant', f'/{spec.name}',
-                        plant_params(spec, sim_time, scenario.planner))
+                        plant_params(spec, sim_time, scenario.planner, scenario=_scenario_arg(args.scenario),
+                                     seed=args.seed, index=i))
             procs.start(f'fastep-planner /{spec.name}', 'planner', f'/{spec.name}',
                         planner_params(scenario, i, args.algorithm, args.seed, sim_time))
         if args.foxglove is not None:   # on wall time: not a /clock subscriber, nor in the lock step
@@ -638,8 +646,10 @@ def _scenario_arg(source: str) -> str:
 def _min_clearance(scenario: Scenario, robots: dict[str, RobotLive]) -> dict[str, float]:
     """Smallest margin each robot kept (negative: collided), from its odometry, to the obstacles and the other
     robots (fastep_core.metrics; with simulated time every plant stamps odometry on the same grid)."""
+    movers = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs).movers   # a v2 world's, over time
     margins = trajectory_margins([[row[:3] for row in robot.rows] for robot in robots.values()],
-                                 [robot.spec.radius for robot in robots.values()], scenario.world.obstacles)
+                                 [robot.spec.radius for robot in robots.values()], scenario.world.obstacles,
+                                 movers if len(movers) else None)
     return {name: float(margin) for name, margin in zip(robots, margins.overall)}
 
 

@@ -3,7 +3,6 @@ launcher checks its command line with them before it starts anything). docs/robu
 
 from __future__ import annotations
 
-from fastep_core.dynamic_world import dynamic_feature
 from fastep_core.scenario import MODELS, Scenario
 
 __all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ROBOT_NAME_MAX', 'RTF_RANGE', 'STEP_RANGE',
@@ -50,16 +49,13 @@ def robot_name_problem(name: str) -> str:
 
 
 def graph_problem(scenario: Scenario, robots: bool = True) -> str:
-    """What of a format-v2 scenario the live graph cannot honour yet; '' if nothing (docs/scenarios.md, v2).
+    """What of a scenario the live graph cannot honour; '' if nothing (docs/scenarios.md, v2).
 
-    Moving, unknown and misplaced obstacles need a world simulation and a map node that publishes only what
-    the map knows (issue 13, item 5). Until then the graph refuses them rather than run a different world than the
-    file says. A `sensor` is accepted (no `scan` topic yet).
-    robots=False: the obstacles only (the map node publishes no robot).
+    Format v2 runs: fastep-map publishes what the map knows (known still obstacles, misplaced ones where the map
+    says, known movers on /movers), plants of robots with a `sensor` scan the truth (fastep_ros.plant), and
+    planners perceive with the scans (fastep_ros.perception). robots=False: the obstacles only (the map node
+    publishes no robot); every obstacle runs, so only the robots' models are checked.
     """
-    feature = dynamic_feature(scenario.obstacle_specs)
-    if feature:
-        return f'{feature}: moving, unknown and misplaced obstacles do not run on the ROS graph yet; use fastep-sim'
     for i, robot in enumerate(scenario.robots):
         if robots and robot.model not in GRAPH_MODELS:
             return f'robots[{i}] ({robot.name}): model {robot.model} does not run on the ROS graph; use fastep-sim'

@@ -1,6 +1,6 @@
 """fastep-map: publishes a scenario's world once, latched, for every planner and for visualisation.
 
-    fastep-map --ros-args -p scenario:=table2_s2 [-p resolution:=0.1]
+    fastep-map --ros-args -p scenario:=table2_s2 [-p resolution:=0.1] [-p seed:=0]
 
 Publishes `obstacles` and `map` (relative names: `/obstacles` and `/map` in the root namespace):
 visualization_msgs/MarkerArray with a CYLINDER per circle and one LINE_LIST for all segments, and a
@@ -9,6 +9,14 @@ transient-local in the `map` frame, so nodes that start later still receive them
 The grid has at most msg_tools.convert.MAX_GRID_CELLS cells (4 million): `resolution` 0 (the default) is 0.1 m,
 or coarser for a workspace larger than 200 m x 200 m (what `fastep-sim --mcap` writes too); a resolution whose
 grid would be larger is refused. A bad scenario or resolution logs one line and exits with code 2.
+
+A format-v2 world: what the robots' map knows, as fastep-sim gives its planners. `/obstacles` and `/map` hold
+the known still obstacles only, misplaced ones where the map puts them (errors drawn from `seed`, the run's
+seed, as fastep-sim draws them: fastep_core.dynamic_world.map_generator); unknown obstacles are on neither.
+The known movers go on `/movers` (MarkerArray, msg_tools.convert.movers_to_marker_array: where the map puts
+them, with their velocities), `movers_rate_hz` times a second of the node clock (20; simulated time with
+use_sim_time), their motion the file's (the world simulation: each mover's place is a function of time, so
+every node that needs the truth, a plant's scanner, computes it from the scenario at its own clock's time).
 """
 
 from __future__ import annotations
@@ -19,6 +27,7 @@ from nav_msgs.msg import OccupancyGrid
 from rclpy.node import Node
 from visualization_msgs.msg import MarkerArray
 
+from fastep_core.dynamic_world import DynamicWorld, map_generator
 from fastep_core.errors import FastepError
 from fastep_core.scenario import load_scenario
 from fastep_ros.common import StartupError, declare, guard_clock, node_main
@@ -42,6 +51,10 @@ class MapNode(Node):
         thickness = declare(self, 'segment_thickness', 0.0, 'width a wall (segment) is rasterised with in the '
                             'occupancy grid (m); 0 means one cell')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of /obstacles and /map')
+        seed = declare(self, 'seed', 0, 'the run\'s seed: a v2 world\'s map errors (position_sigma) are drawn from '
+                       'it as fastep-sim draws them')
+        movers_rate = declare(self, 'movers_rate_hz', 20.0, 'how often the known movers are published on /movers '
+                              '(node clock)', value_range=(10.0, 1000.0), unit=' Hz')
         if not source:
             raise StartupError('parameter scenario is required (a YAML file or a built-in name)')
         if resolution < 0.0:
@@ -53,7 +66,13 @@ class MapNode(Node):
         problem = graph_problem(self.scenario, robots=False)
         if problem:
             raise StartupError(f'scenario {source!r}: {problem}')
-        world = self.scenario.world
+        if seed < 0:
+            raise StartupError(f'parameter seed must be >= 0, got {seed}')
+        # The map the robots are given (a v1 world: the world itself): known still obstacles, misplaced where
+        # the map says, and the known movers with their map errors.
+        truth = DynamicWorld(self.scenario.world.workspace, self.scenario.obstacle_specs)
+        self.known = truth.planner_map(map_generator(seed))
+        world = self.scenario.world if self.scenario.is_static else self.known.world
         try:
             resolution = convert.grid_resolution(world.workspace, resolution or None)
         except ValueError as exc:
@@ -69,9 +88,24 @@ class MapNode(Node):
         self.map_pub = self.create_publisher(OccupancyGrid, interface.MAP.lstrip('/'), offered_qos(interface.MAP))
         self.obstacles_pub.publish(self.obstacles_msg)
         self.map_pub.publish(self.map_msg)
+        self.movers_pub = None
+        if len(self.known.movers):
+            self.movers_pub = self.create_publisher(MarkerArray, interface.MOVERS.lstrip('/'),
+                                                    interface.RELIABLE)
+            self.movers_timer = self.create_timer(1.0 / movers_rate, self.publish_movers)
+            self.publish_movers()
         info = self.map_msg.info
         self.get_logger().info(f'scenario {self.scenario.name}: {len(world.obstacle_list)} obstacles, '
+                               f'{len(self.known.movers)} known movers, '
                                f'map {info.width}x{info.height} cells of {info.resolution:g} m')
+
+
+    def publish_movers(self) -> None:
+        """The known movers where the map puts them at this node clock's time."""
+        assert self.movers_pub is not None
+        now = self.get_clock().now()
+        t = max(0.0, now.nanoseconds * 1e-9)
+        self.movers_pub.publish(convert.movers_to_marker_array(self.known.others(t), now.to_msg(), self.frame_id))
 
 
 def main(args: Sequence[str] | None = None) -> int:

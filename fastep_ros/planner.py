@@ -248,6 +248,10 @@ class PlannerNode(ManagedNode):
         # Any LaserScan on `scan` (sensor-data QoS: a best-effort subscription matches reliable publishers too):
         # the planner perceives with it (fastep_ros.perception) and shows its belief on `tracked_obstacles`.
         self.scan_perception = ScanPerception(scan_noise)
+        # The known movers of a v2 world (fastep-map's /movers, where the map puts them), avoided and yielded to.
+        self.known_movers: list[OtherRobot] = []
+        self.movers_stamp = -math.inf
+        self.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
         self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
         self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
         self.scan_problem = ''
@@ -494,9 +498,29 @@ class PlannerNode(ManagedNode):
         super().destroy_node()
 
     def other_robots(self, t: float) -> list[OtherRobot]:
-        """The other robots (their odometry) and the movers this robot's scans track."""
+        """The other robots (their odometry), the known movers (/movers) and the movers this robot's scans track."""
         robots = self.robots.fleet.obstacles(t, self.robots.radius, lambda stamp: self.lag(t, stamp))
-        return [*robots, *self.scan_perception.movers(t)]
+        return [*robots, *self.movers_at(t), *self.scan_perception.movers(t)]
+
+    def on_movers(self, msg: MarkerArray) -> None:
+        try:
+            movers = convert.marker_array_to_movers(msg)
+        except ValueError as exc:
+            self.get_logger().warning(f'ignoring /movers: {exc}', throttle_duration_sec=5.0)
+            return
+        stamps = [convert.stamp_to_seconds(m.header.stamp) for m in msg.markers[1:2]]
+        self.known_movers = movers
+        self.movers_stamp = stamps[0] if stamps and stamps[0] > 0.0 else self.now()
+
+    def movers_at(self, t: float) -> list[OtherRobot]:
+        """The known movers predicted from their stamp to t (at most max_extrapolation); none once older than
+        odom_timeout (the map node stopped)."""
+        age = t - self.movers_stamp
+        if not self.known_movers or not -self.odom_timeout <= age <= self.odom_timeout:
+            return []
+        ahead = min(max(age, 0.0), self.max_extrapolation)
+        return [OtherRobot(m.name, (m.position[0] + m.velocity[0] * ahead, m.position[1] + m.velocity[1] * ahead),
+                           m.velocity, m.radius, mover=True) for m in self.known_movers]
 
     def on_scan(self, msg: LaserScan) -> None:
         """Fold a scan into what the robot believes; the navigator plans in the belief from then on."""
@@ -508,7 +532,7 @@ class PlannerNode(ManagedNode):
             return   # where the scan was taken from is not known
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         pose = (float(state[0]), float(state[1]), heading(self.model, state))
-        told = self.robots.fleet.obstacles(t, self.robots.radius, lambda s: self.lag(t, s))
+        told = [*self.robots.fleet.obstacles(t, self.robots.radius, lambda s: self.lag(t, s)), *self.movers_at(t)]
         try:
             belief = self.scan_perception.update(msg, stamp if stamp > 0.0 else t, pose, self.world, told)
         except ValueError as exc:

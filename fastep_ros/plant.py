@@ -30,11 +30,18 @@ sent, not from when this node took it, so a command that waited while the plant 
 for a fresh cmd_timeout after it (docs/robustness.md, "A loaded machine"): sent is the header stamp of a
 TwistStamped, and for a Twist the DDS source timestamp (the sender's system clock, hence on wall time only; on
 simulated time lock step holds the clock while a node is late, and a Twist's age counts from when it is taken).
+A robot with a `sensor` ([range, fov, beams, noise], a scenario robot's) scans the true world of `scenario`
+(fastep_core.dynamic_world: every still obstacle, known or not, where it really is; every mover where it is at
+the integrated time) scan_rate_hz times a second of integrated time, and publishes it on `scan`
+(sensor_msgs/LaserScan in base_link, stamped with the integrated time, sensor-data QoS), its noise drawn from
+the run's `seed` stream `robot_index`, as fastep-sim draws it. Other robots are not in the scan (their
+planners know them from their odometry).
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
@@ -42,11 +49,16 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.clock import Clock, ClockType, ROSClock
+from rclpy.qos import qos_profile_sensor_data
+from sensor_msgs.msg import LaserScan
 
+from fastep_core.dynamic_world import DynamicWorld
+from fastep_core.errors import FastepError
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.planning.params import PlannerParams
-from fastep_core.scenario import MODELS
+from fastep_core.scenario import MODELS, load_scenario
+from fastep_core.sensing.laser import LaserSpec
 from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
 from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.executors import MessageInfoCallback
@@ -62,6 +74,17 @@ __all__ = ['PlantNode', 'main']
 MAX_CATCH_UP = 100_000  # integration steps done in one go at most (a clock jump beyond that is skipped)
 DIAGNOSTICS_PERIOD = 1.0  # wall seconds between /diagnostics arrays
 AT_REST_PERIOD = 0.25   # wall seconds between start-state odometry messages before simulated time starts
+
+
+@dataclass
+class _Scanner:
+    """A plant's laser: what it is, the true world it scans, its noise stream, and when it scans next."""
+
+    spec: LaserSpec
+    truth: DynamicWorld
+    rng: np.random.Generator
+    period: float
+    next_time: float = 0.0
 
 
 class PlantNode(ManagedNode):
@@ -98,6 +121,16 @@ class PlantNode(ManagedNode):
         clock_timeout = declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
                                 'seconds is a warning on /diagnostics', value_range=PERIOD_RANGE, unit=' s',
                                 read_only=False)
+        sensor = declare(self, 'sensor', None, 'a laser scanner: [range (m), fov (rad), beams, noise (m)] (a '
+                         'scenario robot\'s `sensor`); empty: none. It scans the world of `scenario`, the truth')
+        scenario = declare(self, 'scenario', '', 'with a sensor: the scenario file or built-in name whose true world '
+                           '(every still obstacle, known or not, where it is; every mover where it is at the '
+                           'integrated time) the scanner sees')
+        seed = declare(self, 'seed', 0, 'with a sensor: the run\'s seed; the scanner\'s noise is drawn from its '
+                       'stream robot_index, as fastep-sim draws it')
+        robot_index = declare(self, 'robot_index', 0, 'with a sensor: this robot\'s index in the scenario')
+        scan_rate = declare(self, 'scan_rate_hz', 20.0, 'with a sensor: scans per second of integrated time',
+                            value_range=(0.1, 1000.0), unit=' Hz')
 
         if self.model_name not in MODELS:
             raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model_name!r}')
@@ -123,6 +156,7 @@ class PlantNode(ManagedNode):
         if len(start) != size:
             raise StartupError(f'parameter start must have {size} values for {self.model_name}, got {start}')
         self.state = np.array(start, dtype=float)
+        self.scanner = self._scanner(sensor, scenario, seed, robot_index, scan_rate)
 
         self.frame_id = frame_id or frames.odom_frame(self.get_namespace())
         self.child_frame_id = frames.base_frame(self.get_namespace())
@@ -135,6 +169,8 @@ class PlantNode(ManagedNode):
         self.applied = np.zeros(2)              # command used in the last step (for the odometry twist)
 
         self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
+        self.scan_pub = (self.create_publisher(LaserScan, interface.SCAN, qos_profile_sensor_data)
+                         if self.scanner is not None else None)
         self.trailer_pub = (self.create_publisher(PoseStamped, interface.TRAILER_POSE,
                                                   offered_qos(interface.TRAILER_POSE))
                             if self.model_name == 'tractor_trailer' else None)
@@ -160,6 +196,28 @@ class PlantNode(ManagedNode):
         self.start_lifecycle()   # autostart: active at once (fastep_ros.lifecycle)
 
     # ------------------------------------------------------------------------------------------- lifecycle
+    def _scanner(self, sensor: list[float], source: str, seed: int, index: int, rate: float) -> _Scanner | None:
+        """The laser scanner of `sensor` on the true world of `source`; None without a sensor."""
+        if not sensor:
+            return None
+        if len(sensor) != 4:
+            raise StartupError(f'parameter sensor must be [range, fov, beams, noise], got {sensor}')
+        if not source:
+            raise StartupError('parameter scenario is required with a sensor (the world it scans)')
+        if seed < 0 or index < 0:
+            raise StartupError(f'parameters seed and robot_index must be >= 0, got {seed} and {index}')
+        try:
+            spec = LaserSpec(float(sensor[0]), float(sensor[1]), int(sensor[2]), float(sensor[3]))
+        except ValueError as exc:
+            raise StartupError(f'parameter sensor: {exc}') from None
+        try:
+            scenario = load_scenario(source)
+        except FastepError as exc:
+            raise StartupError(str(exc)) from None
+        from fastep_core.perception.belief import sensor_generator  # here: only a plant with a sensor needs scipy
+        truth = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs)
+        return _Scanner(spec, truth, sensor_generator(seed, index), 1.0 / rate)
+
     def activate(self) -> None:
         if self.tick is not None:   # the robot stood still while inactive: integrate from now on
             self.tick = int(math.floor(self.now() / self.step + 1e-9))
@@ -327,6 +385,16 @@ class PlantNode(ManagedNode):
             self.trailer_pub.publish(trailer)
         if self.tf.available:
             self.tf.send(frames.odometry_transforms(odom, trailer, self.trailer_frame_id))
+        scanner = self.scanner
+        if scanner is not None and self.scan_pub is not None and self.tick is not None:
+            t = self.tick * self.step
+            if t + 1e-9 >= scanner.next_time:
+                scanner.next_time = t + scanner.period
+                # The scanner at base_link along the heading (a point mass: along +x; perception.belief.heading).
+                yaw = 0.0 if self.model_name == 'point_mass' else float(self.state[2])
+                reading = scanner.truth.scan(scanner.spec, (float(self.state[0]), float(self.state[1]), yaw), t,
+                                             scanner.rng)
+                self.scan_pub.publish(convert.scan_to_laser_scan(reading, stamp, self.child_frame_id))
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -32,26 +32,30 @@ from sensor_msgs.msg import LaserScan
 from visualization_msgs.msg import Marker, MarkerArray
 
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
-from fastep_core.sensing.laser import LaserSpec, Scan
+from fastep_core.planning.others import OtherRobot
+from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, LaserSpec, Scan
 from fastep_core.world import World
 
 if TYPE_CHECKING:   # perception (scipy) is imported only by nodes that perceive
     from fastep_core.perception.belief import Belief
 
 __all__ = [
-    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'OCCUPIED_THRESHOLD', 'TRACKS_NS', 'TRACK_VELOCITIES_NS',
-    'belief_to_marker_array', 'command_to_twist', 'diagnostic_to_dict', 'grid_resolution', 'grid_shape',
-    'laser_scan_to_scan', 'laser_spec', 'make_status', 'marker_array_to_obstacles', 'obstacles_to_marker_array',
-    'occupancy_grid_lookup', 'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position',
-    'odometry_to_state', 'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point',
-    'quaternion_to_yaw', 'scan_to_laser_scan', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds',
-    'state_to_odometry', 'trailer_pose', 'trailer_yaw', 'twist_to_command', 'waypoints_to_path',
-    'world_to_occupancy_grid', 'yaw_to_quaternion',
+    'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'MOVERS_NS', 'MOVER_VELOCITIES_NS', 'OCCUPIED_THRESHOLD',
+    'TRACKS_NS', 'TRACK_VELOCITIES_NS', 'belief_to_marker_array', 'command_to_twist', 'diagnostic_to_dict',
+    'grid_resolution', 'grid_shape', 'laser_scan_to_scan', 'laser_spec', 'make_status', 'marker_array_to_movers',
+    'marker_array_to_obstacles', 'movers_to_marker_array', 'obstacles_to_marker_array', 'occupancy_grid_lookup',
+    'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
+    'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point', 'quaternion_to_yaw',
+    'scan_to_laser_scan', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds', 'state_to_odometry',
+    'trailer_pose', 'trailer_yaw', 'twist_to_command', 'waypoints_to_path', 'world_to_occupancy_grid',
+    'yaw_to_quaternion',
 ]
 
 CIRCLES_NS = 'circles'
 TRACKS_NS = 'tracks'                    # tracked_obstacles: a planner's tracked movers
 TRACK_VELOCITIES_NS = 'track_velocities'   # ... and their velocities
+MOVERS_NS = 'movers'                    # /movers: the known movers as the map knows them
+MOVER_VELOCITIES_NS = 'mover_velocities'   # ... and their velocities
 SEGMENTS_NS = 'segments'
 LEVELS = {'ok': DiagnosticStatus.OK, 'warn': DiagnosticStatus.WARN, 'error': DiagnosticStatus.ERROR,
           'stale': DiagnosticStatus.STALE}
@@ -365,7 +369,10 @@ def laser_spec(msg: LaserScan, noise: float) -> LaserSpec:
     """The scanner a LaserScan comes from, for perception: its range, field of view, beams, and `noise` (the
     range noise's standard deviation, which the message does not carry)."""
     beams = len(msg.ranges)
-    fov = min(abs(float(msg.angle_increment)) * (beams if beams > 1 else 1), 2.0 * math.pi)
+    step = abs(float(msg.angle_increment))
+    # A full turn has `beams` increments (the last beam next to the first); a sector one fewer (both edges).
+    full = step * beams >= 2.0 * math.pi - FULL_TURN_TOLERANCE
+    fov = 2.0 * math.pi if full else min(step * max(beams - 1, 1), 2.0 * math.pi)
     return LaserSpec(float(msg.range_max), fov, beams, noise)
 
 
@@ -377,7 +384,16 @@ def belief_to_marker_array(belief: Belief, stamp: Time | None = None, frame_id: 
     for m in out.markers[1:]:
         m.ns = f'seen_{m.ns}'
         m.color.r, m.color.g, m.color.b = 1.0, 0.55, 0.0
-    for i, mover in enumerate(belief.movers):
+    out.markers.extend(_mover_markers(belief.movers, TRACKS_NS, TRACK_VELOCITIES_NS, stamp, frame_id))
+    return out
+
+
+def _mover_markers(movers: Sequence[OtherRobot], body_ns: str, arrow_ns: str, stamp: Time | None,
+                   frame_id: str) -> list[Marker]:
+    """Per mover a CYLINDER of its radius (its name as the marker's text) and an ARROW of its velocity over one
+    second, both with id = its index."""
+    out: list[Marker] = []
+    for i, mover in enumerate(movers):
         x, y = float(mover.position[0]), float(mover.position[1])
         vx, vy = float(mover.velocity[0]), float(mover.velocity[1])
         body, arrow = Marker(), Marker()
@@ -388,14 +404,55 @@ def belief_to_marker_array(belief: Belief, stamp: Time | None = None, frame_id: 
             m.id, m.action = i, Marker.ADD
             m.pose.orientation.w = 1.0
             m.color.r, m.color.g, m.color.b, m.color.a = 0.6, 0.2, 0.8, 0.8
-        body.ns, body.type = TRACKS_NS, Marker.CYLINDER
+        body.ns, body.type, body.text = body_ns, Marker.CYLINDER, mover.name
         body.pose.position = Point(x=x, y=y, z=0.5)
         body.scale.x = body.scale.y = 2.0 * float(mover.radius)
         body.scale.z = 1.0
-        arrow.ns, arrow.type = TRACK_VELOCITIES_NS, Marker.ARROW
+        arrow.ns, arrow.type = arrow_ns, Marker.ARROW
         arrow.points = [Point(x=x, y=y, z=1.0), Point(x=x + vx, y=y + vy, z=1.0)]
         arrow.scale.x, arrow.scale.y, arrow.scale.z = 0.08, 0.2, 0.2
-        out.markers.extend([body, arrow])
+        out.extend([body, arrow])
+    return out
+
+
+def movers_to_marker_array(movers: Sequence[OtherRobot], stamp: Time | None = None,
+                           frame_id: str = 'map') -> MarkerArray:
+    """The known movers as the map node publishes them on /movers: a DELETEALL, then per mover a cylinder
+    (MOVERS_NS) and an arrow of its velocity over one second (MOVER_VELOCITIES_NS), id = its index."""
+    out = MarkerArray()
+    clear = Marker()
+    clear.header.frame_id = frame_id
+    clear.action = Marker.DELETEALL
+    out.markers.append(clear)
+    out.markers.extend(_mover_markers(movers, MOVERS_NS, MOVER_VELOCITIES_NS, stamp, frame_id))
+    return out
+
+
+def marker_array_to_movers(msg: MarkerArray) -> list[OtherRobot]:
+    """The movers of a /movers MarkerArray (movers_to_marker_array): position and radius from each cylinder, the
+    velocity from the arrow of the same id (none: standing), the name from its text ('mover K' if empty).
+    ValueError (one line) for a non-finite value or a radius <= 0."""
+    bodies: dict[int, Marker] = {}
+    arrows: dict[int, Marker] = {}
+    for m in msg.markers:
+        if m.action == Marker.DELETEALL:
+            bodies.clear()
+            arrows.clear()
+        elif m.ns == MOVERS_NS and m.type == Marker.CYLINDER:
+            bodies[m.id] = m
+        elif m.ns == MOVER_VELOCITIES_NS and m.type == Marker.ARROW and len(m.points) == 2:
+            arrows[m.id] = m
+    out: list[OtherRobot] = []
+    for key, body in bodies.items():
+        x, y, r = float(body.pose.position.x), float(body.pose.position.y), 0.5 * float(body.scale.x)
+        arrow = arrows.get(key)
+        vx = vy = 0.0
+        if arrow is not None:
+            vx, vy = arrow.points[1].x - arrow.points[0].x, arrow.points[1].y - arrow.points[0].y
+        _finite((x, y, r, vx, vy), f'mover marker {body.ns}/{key}')
+        if r <= 0.0:
+            raise ValueError(f'mover marker {body.ns}/{key} has radius {r:g} <= 0')
+        out.append(OtherRobot(body.text or f'mover {key}', (x, y), (float(vx), float(vy)), r, mover=True))
     return out
 
 

@@ -14,11 +14,13 @@ anyway (the graph reports AUTOMATIC for it), so the recorded profile is the prof
 Recording metadata: one MCAP metadata record named METADATA_NAME with string values (scenario_metadata):
 `scenario`, `robots` (names, comma-separated, in the scenario's order), `workspace` (xmin,ymin,xmax,ymax) and
 per robot `model/<name>`, `radius/<name>`, `start/<name>`, `goal/<name>` and for tractor-trailers
-`length/<name>`; fastep-sim adds `algorithm`, `seed`, `source`, `time_base`, fastep-record `source`, `time_base`.
+`length/<name>`, and for a format-v2 world `scenario_data` (the whole scenario as JSON); fastep-sim adds
+`algorithm`, `seed`, `source`, `time_base`, fastep-record `source`, `time_base`.
 """
 
 from __future__ import annotations
 
+import json
 import re
 from typing import TYPE_CHECKING, Any
 
@@ -31,11 +33,10 @@ if TYPE_CHECKING:
 
 __all__ = [
     'CLOCK', 'CMD_VEL', 'COST', 'FOOTPRINT', 'GOAL_POSE', 'LATCHED', 'LATEST', 'MAP', 'MAP_FRAME', 'METADATA_NAME',
-    'OBSTACLES', 'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS', 'ROBOT_TOPIC_PATTERN',
-    'SCAN', 'SHARED_TOPICS', 'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS', 'TRACKED_OBSTACLES', 'TRAILER_POSE',
-    'TYPES', 'WAYPOINT',
-    'is_interface_topic', 'message_type',
-    'metadata_key', 'offered_qos', 'offered_qos_profiles', 'robot_topic', 'scenario_metadata', 'split_robot_topic',
+    'MOVERS', 'OBSTACLES', 'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS',
+    'ROBOT_TOPIC_PATTERN', 'SCAN', 'SCENARIO_DATA', 'SHARED_TOPICS', 'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS',
+    'TRACKED_OBSTACLES', 'TRAILER_POSE', 'TYPES', 'WAYPOINT', 'is_interface_topic', 'message_type', 'metadata_key',
+    'offered_qos', 'offered_qos_profiles', 'robot_topic', 'scenario_metadata', 'split_robot_topic',
 ]
 
 # ----------------------------------------------------------------------------------------------- topic names
@@ -55,6 +56,9 @@ ROBOT_TOPICS = (ODOM, CMD_VEL, GOAL_POSE, WAYPOINT, PLAN, COST, STATUS, TRAILER_
 # (visualization_msgs/MarkerArray); neither is recorded yet.
 SCAN = 'scan'
 TRACKED_OBSTACLES = 'tracked_obstacles'
+# The known movers of a format-v2 world where the map puts them, at >= 10 Hz (visualization_msgs/MarkerArray,
+# reliable, volatile: only the newest matters); fastep-map publishes it, planners avoid them. Not recorded yet.
+MOVERS = '/movers'
 
 # Shared, in the root namespace.
 OBSTACLES = '/obstacles'   # map node: circles and walls
@@ -177,6 +181,7 @@ def offered_qos_profiles(topic: str) -> list[dict[str, Any]]:
 # ----------------------------------------------------------------------------------------------- metadata
 
 METADATA_NAME = 'fastep'
+SCENARIO_DATA = 'scenario_data'   # metadata key of a v2 run's whole scenario (JSON)
 
 
 def metadata_key(field: str, robot: str) -> str:
@@ -195,4 +200,10 @@ def scenario_metadata(scenario: Scenario) -> dict[str, str]:
         out[metadata_key('goal', r.name)] = ','.join(f'{v:g}' for v in r.goal)
         if r.model == 'tractor_trailer':
             out[metadata_key('length', r.name)] = f'{r.length:g}'
+    if not scenario.is_static:
+        # A format-v2 world: the whole scenario (JSON of fastep_core.scenario.scenario_data), so a report judges
+        # the run against the truth (movers over time, obstacles missing from or misplaced on the map), not
+        # against the map the recording's /obstacles holds.
+        from fastep_core.scenario import scenario_data
+        out[SCENARIO_DATA] = json.dumps(scenario_data(scenario), separators=(',', ':'))
     return out

@@ -10,10 +10,12 @@ both and the numbers can be checked against each other. Everything is measured f
 - reached / time_to_goal: the first `status` whose message is `arrived`, its log time minus the robot's first
   `goal_pose` log time (or, without a goal_pose, its first odom);
 - min_clearance: smallest distance from an odom position to the surface of an obstacle of the file's
-  `/obstacles`, minus the robot radius (negative means it touched); min_robot_gap likewise against the other
-  robots, compared at each odom time of either (fastep_core.metrics.trajectory_margins). The radius is, in
-  this order: the `fastep` metadata record (fastep-sim and fastep-record with a scenario write it), a
-  `robot_radius` value in the robot's status, or --radius (default 0.5); `radius_source` says which;
+  `/obstacles` (a format-v2 run: of the true world in its metadata, every still obstacle where it really is and
+  every mover where it was at that time), minus the robot radius (negative means it touched); min_robot_gap
+  likewise against the other robots, compared at each odom time of either (fastep_core.metrics.
+  trajectory_margins). The radius is, in this order: the `fastep` metadata record (fastep-sim and fastep-record
+  with a scenario write it), a `robot_radius` value in the robot's status, or --radius (default 0.5);
+  `radius_source` says which;
 - activations: the `activations` value of the last status (how often the swarm planned a step), or else the
   number of distinct waypoints.
 
@@ -39,9 +41,11 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core.cli import Parser, fail, guard
+from fastep_core.dynamic_world import DynamicWorld
 from fastep_core.errors import FastepError
 from fastep_core.geometry import Circle, Obstacle, Obstacles
 from fastep_core.metrics import trajectory_margins
+from fastep_core.scenario import Scenario, parse_scenario
 from msg_tools.interface import (
     CMD_VEL,
     COST,
@@ -51,6 +55,7 @@ from msg_tools.interface import (
     OBSTACLES,
     ODOM,
     PLAN,
+    SCENARIO_DATA,
     STAMPED_CMD_VEL_TYPE,
     STATUS,
     TRAILER_POSE,
@@ -105,6 +110,17 @@ class RecordedRun:
     truncated: bool
     warning: str
     message_count: int
+
+    def truth(self) -> Scenario | None:
+        """A format-v2 run's scenario from the metadata (interface.SCENARIO_DATA): the true world it is judged
+        against; None for a v1 run (its /obstacles are the truth) or metadata that does not parse."""
+        text = self.metadata.get(SCENARIO_DATA)
+        if not text:
+            return None
+        try:
+            return parse_scenario(json.loads(text))
+        except (ValueError, FastepError):
+            return None
 
 
 def _robot(robots: dict[str, RobotRecord], name: str) -> RobotRecord:
@@ -432,8 +448,14 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
             notes.append(problem)
     rows = []
     arrays = {name: np.array(r.odom, dtype=float).reshape(-1, 3) for name, r in run.robots.items()}
+    truth = run.truth()
+    if truth is None:
+        obstacles, movers = Obstacles(run.obstacles), None
+    else:   # a v2 world: judged against the truth over time (log times are the run's simulated seconds)
+        world = DynamicWorld(truth.world.workspace, truth.obstacle_specs)
+        obstacles, movers = world.still.obstacles, world.movers
     kept = trajectory_margins(list(arrays.values()), [float(r.radius or 0.0) for r in run.robots.values()],
-                            Obstacles(run.obstacles))
+                            obstacles, movers)
     for k, (name, robot) in enumerate(run.robots.items()):
         odom = arrays[name]
         xy = odom[:, 1:3]

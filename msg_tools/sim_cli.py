@@ -167,8 +167,8 @@ def _run(argv: Sequence[str] | None) -> int:
     scenario = load_scenario(args.scenario)
     recorder = None
     if args.mcap is not None and dynamic_feature(scenario.obstacle_specs):
-        return fail(PROG, f'--mcap: {dynamic_feature(scenario.obstacle_specs)}: recordings of moving, unknown and '
-                          'misplaced obstacles are not written yet (the live graph cannot run them either)')
+        return fail(PROG, f'--mcap: {dynamic_feature(scenario.obstacle_specs)}: fastep-sim does not write '
+                          'recordings of moving, unknown and misplaced obstacles yet (fastep-launch --record does)')
     if args.mcap is not None:
         try:  # the ROS message packages only when a recording is asked for
             from msg_tools.sim_mcap import SimRecorder

@@ -214,3 +214,15 @@ def test_fastep_sim_refuses_to_record_a_v2_world(tmp_path: Path, capsys: pytest.
     assert sim_cli.main([str(write(tmp_path, v2())), '--mcap', str(tmp_path / 'x.mcap')]) == 2
     err = capsys.readouterr().err
     assert err.count('\n') == 1 and '--mcap: obstacles[0] moves (motion)' in err
+
+
+def test_scenario_data_is_what_parse_scenario_reads_back_for_every_builtin_and_v2_family() -> None:
+    from fastep_core.random_scenarios import random_family_data
+    from fastep_core.scenario import builtin_names, load_scenario, scenario_data
+    scenarios = [load_scenario(name) for name in builtin_names()]
+    scenarios += [parse_scenario(random_family_data(family, 1000001))
+                  for family in ('dynamic_mix', 'misplaced_obstacles', 'tractor_trailer', 'diff_drive_robots')]
+    for scenario in scenarios:
+        back = parse_scenario(scenario_data(scenario))
+        assert (back.name, back.world.workspace, back.robots, back.planner, back.obstacle_specs) == \
+            (scenario.name, scenario.world.workspace, scenario.robots, scenario.planner, scenario.obstacle_specs)

@@ -1,61 +1,121 @@
-"""What the live graph refuses of a v2 scenario until it can run it (fastep-launch and fastep-map: one line, exit 2)."""
+"""Format-v2 worlds on the live graph: what the map node gives the robots (the map's knowledge, movers on /movers),
+what a plant's scanner sees (the truth), and what the graph still refuses (one line, exit 2)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 import yaml
+from rclpy.parameter import Parameter
+from visualization_msgs.msg import MarkerArray
 
+from fastep_core.dynamic_world import DynamicWorld, map_generator
+from fastep_core.perception.belief import sensor_generator
 from fastep_core.scenario import load_scenario, parse_scenario
-from fastep_ros import launch
 from fastep_ros.limits import graph_problem
+from msg_tools import convert
 
 ROBOT = {'name': 'r1', 'model': 'point_mass', 'start': [5, 25], 'goal': [45, 25], 'radius': 0.5}
+V2 = {'workspace': [0, 0, 50, 50],
+      'obstacles': [{'circle': {'center': [25, 10], 'radius': 1}},
+                    {'circle': {'center': [25, 40], 'radius': 1}, 'motion': {'waypoints': [[25, 45]], 'speed': 0.5}},
+                    {'circle': {'center': [35, 20], 'radius': 1}, 'motion': {'waypoints': [[35, 30]], 'speed': 0.5},
+                     'known': False},
+                    {'circle': {'center': [12, 30], 'radius': 1.5}, 'known': False},
+                    {'circle': {'center': [15, 18], 'radius': 1.5}, 'position_sigma': 0.5}],
+      'robots': [{**ROBOT, 'sensor': {'range': 8.0, 'fov': 6.2832, 'beams': 90, 'noise': 0.01}}]}
 
 
-def world(obstacle: dict[str, object], robot: dict[str, object] = ROBOT) -> dict[str, object]:
-    return {'workspace': [0, 0, 50, 50], 'obstacles': [{'circle': {'center': [25, 10], 'radius': 1}}, obstacle],
-            'robots': [robot]}
-
-
-@pytest.mark.parametrize('extra, fragment', [
-    ({'motion': {'waypoints': [[25, 40]], 'speed': 0.5}}, 'obstacles[1] moves (motion)'),
-    ({'known': False}, 'obstacles[1] is unknown (known: false)'),
-    ({'position_sigma': 0.2}, 'obstacles[1] is misplaced (position_sigma)'),
-])
-def test_obstacles_the_graph_cannot_honour(extra: dict[str, object], fragment: str) -> None:
-    problem = graph_problem(parse_scenario(world({'circle': {'center': [25, 40], 'radius': 1}, **extra})))
-    assert problem.startswith(fragment) and 'use fastep-sim' in problem
-
-
-def test_diff_drive_and_sensors() -> None:
+def test_v2_worlds_run_on_the_graph_other_models_than_the_graph_s_do_not() -> None:
+    assert graph_problem(parse_scenario(V2)) == '' and graph_problem(parse_scenario(V2), robots=False) == ''
+    assert graph_problem(load_scenario('crossing_movers')) == ''
     robot = {**ROBOT, 'model': 'diff_drive', 'start': [5, 25, 0.0]}
-    scenario = parse_scenario(world({'circle': {'center': [25, 40], 'radius': 1}}, robot))
-    assert graph_problem(scenario) == ''   # diff_drive runs on the graph (plant and planner)
-    assert graph_problem(scenario, robots=False) == ''   # the map node publishes no robot
-    sensing = parse_scenario(world({'circle': {'center': [25, 40], 'radius': 1}}, {**ROBOT, 'sensor': {}}))
-    assert graph_problem(sensing) == ''
-    assert graph_problem(load_scenario('table2_s2')) == ''
+    assert graph_problem(parse_scenario({**V2, 'robots': [robot]})) == ''
 
 
-def test_fastep_launch_refuses_a_mover_before_starting_anything(tmp_path: Path,
-                                                                capsys: pytest.CaptureFixture[str]) -> None:
-    path = tmp_path / 'movers.yaml'
-    path.write_text(yaml.safe_dump(world({'circle': {'center': [25, 40], 'radius': 1},
-                                          'motion': {'waypoints': [[25, 45]], 'speed': 0.5}})))
-    assert launch.main([str(path)]) == 2
-    err = capsys.readouterr().err
-    assert err.count('\n') == 1 and 'obstacles[1] moves (motion)' in err
-
-
-def test_the_map_node_refuses_a_mover_in_one_line(context: Any, tmp_path: Path) -> None:
-    from rclpy.parameter import Parameter
-
-    from fastep_ros.errors import StartupError
+def test_the_map_node_publishes_what_the_map_knows_and_the_known_movers(context: Any, tmp_path: Path) -> None:
     from fastep_ros.map_server import MapNode
-    path = tmp_path / 'movers.yaml'
-    path.write_text(yaml.safe_dump(world({'circle': {'center': [25, 40], 'radius': 1}, 'known': False})))
-    with pytest.raises(StartupError, match=r'obstacles\[1\] is unknown \(known: false\): moving, unknown'):
-        MapNode(context=context, parameter_overrides=[Parameter('scenario', value=str(path))])
+    path = tmp_path / 'v2.yaml'
+    path.write_text(yaml.safe_dump(V2))
+    scenario = parse_scenario(V2)
+    node = MapNode(context=context, parameter_overrides=[Parameter('scenario', value=str(path)),
+                                                         Parameter('seed', value=3),
+                                                         Parameter('use_sim_time', value=True)])   # t = 0
+    try:
+        known = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs).planner_map(map_generator(3))
+        published = convert.marker_array_to_obstacles(node.obstacles_msg)
+        # The still ones the map knows, the misplaced one where fastep-sim's map puts it for seed 3; no unknown.
+        assert published == list(known.world.obstacle_list) and len(published) == 2
+        assert math.dist(published[1].center, (15, 18)) > 0.01   # type: ignore[union-attr]
+        sent: list[MarkerArray] = []
+        assert node.movers_pub is not None
+        node.movers_pub.publish = sent.append  # type: ignore[method-assign]
+        node.publish_movers()
+        movers = convert.marker_array_to_movers(sent[-1])
+        assert [m.name for m in movers] == ['mover 1'] and all(m.mover for m in movers)   # the known one only
+        assert movers[0].position == pytest.approx(known.others(0.0)[0].position)
+        assert movers[0].velocity == pytest.approx((0.0, 0.5))
+    finally:
+        node.destroy_node()
+
+
+def test_a_plant_with_a_sensor_scans_the_truth_as_fastep_sim_does(context: Any, tmp_path: Path) -> None:
+    from fastep_ros.plant import PlantNode
+    path = tmp_path / 'v2.yaml'
+    path.write_text(yaml.safe_dump(V2))
+    scenario = parse_scenario(V2)
+    node = PlantNode(context=context, parameter_overrides=[
+        Parameter('start', value=[5.0, 25.0]), Parameter('use_sim_time', value=True),
+        Parameter('sensor', value=[8.0, 6.2832, 90.0, 0.01]), Parameter('scenario', value=str(path)),
+        Parameter('seed', value=2), Parameter('robot_index', value=0)])
+    try:
+        sent: list[Any] = []
+        assert node.scan_pub is not None
+        node.scan_pub.publish = sent.append  # type: ignore[method-assign]
+        assert node.advance(0.02) and node.advance(0.04)
+        node.publish()
+        assert len(sent) == 1 and sent[0].header.frame_id == 'base_link'   # the root namespace's
+        truth = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs)
+        spec = scenario.robots[0].sensor
+        assert spec is not None
+        expected = truth.scan(spec, (5.0, 25.0, 0.0), 0.04, sensor_generator(2, 0))
+        got = convert.laser_scan_to_scan(sent[0])
+        assert np.allclose(got.ranges, expected.ranges, atol=1e-5, equal_nan=True)   # float32 on the wire
+        assert np.isfinite(got.ranges).sum() == np.isfinite(expected.ranges).sum()
+        # The unknown circle at (12, 30) is in it: the scanner sees the truth, not the map.
+        angles = got.angles()
+        hits = np.column_stack([5.0 + got.ranges * np.cos(angles), 25.0 + got.ranges * np.sin(angles)])
+        hits = hits[np.isfinite(got.ranges)]
+        assert (np.abs(np.hypot(*(hits - (12.0, 30.0)).T) - 1.5) < 0.05).any()
+    finally:
+        node.destroy_node()
+
+
+def test_a_plant_refuses_a_sensor_without_a_world_in_one_line(context: Any) -> None:
+    from fastep_ros.common import StartupError
+    from fastep_ros.plant import PlantNode
+    with pytest.raises(StartupError, match='parameter scenario is required with a sensor'):
+        PlantNode(context=context, parameter_overrides=[Parameter('sensor', value=[8.0, 6.28, 90.0, 0.01])])
+    with pytest.raises(StartupError, match=r'parameter sensor must be \[range, fov, beams, noise\]'):
+        PlantNode(context=context, parameter_overrides=[Parameter('sensor', value=[8.0, 6.28])])
+
+
+def test_a_planner_avoids_the_known_movers_of_movers_predicted_to_now(context: Any) -> None:
+    from fastep_core.planning.others import OtherRobot
+    from fastep_ros.planner import PlannerNode
+    node = PlannerNode(context=context, parameter_overrides=[Parameter('workspace', value=[0.0, 0.0, 50.0, 50.0])])
+    try:
+        mover = OtherRobot('mover 1', (25.0, 40.0), (0.0, -0.5), 1.0, mover=True)
+        node.on_movers(convert.movers_to_marker_array([mover], convert.seconds_to_stamp(node.now() - 0.1)))
+        seen = node.other_robots(node.now())
+        assert len(seen) == 1 and seen[0].mover and seen[0].name == 'mover 1'
+        assert seen[0].position[1] == pytest.approx(40.0 - 0.05, abs=0.02)   # predicted 0.1 s on
+        assert node.other_robots(node.now() + 10.0) == []   # the map node went quiet: no stale movers
+    finally:
+        node.destroy_node()
+
+

@@ -90,6 +90,37 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
         (odometry[-1].pose.pose.position.x, odometry[-1].pose.pose.position.y)
 
 
+def test_a_v2_world_runs_live_with_the_outcome_of_fastep_sim_judged_against_the_truth(tmp_path: Path) -> None:
+    """crossing_movers (a known mover across the run, an obstacle missing from the map, one misplaced on it; the
+    robot has a laser): fastep-map gives what the map knows and the mover on /movers, the plant scans the truth,
+    the planner perceives and yields; the recording carries the scenario, and fastep-report judges the run
+    against the truth (the mover where it was at each time): the same outcome as fastep-sim's."""
+    from msg_tools.interface import SCENARIO_DATA
+    from msg_tools.mcap_io import open_recording
+    from msg_tools.report import load_run, metrics
+    recorded, out = tmp_path / 'v2.mcap', tmp_path / 'v2.json'
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    result = run([sys.executable, '-m', 'fastep_ros.launch', 'crossing_movers', '--rtf', '20', '--seed', '0',
+                  '--json', str(out), '--record', str(recorded)], env, timeout=240)
+    assert result.returncode == 0, result.stdout + result.stderr
+    reference = simulate(load_scenario('crossing_movers'), DEFAULT_ALGORITHM, 0).robots[0]
+    assert reference.reached and not reference.collided
+    live = json.loads(out.read_text())['runs'][0]['robots'][0]
+    assert live['reached'] and not live['collided'] and live['min_clearance'] > 0.0
+    assert live['path_length'] == pytest.approx(reference.path_length, rel=0.05)
+    run_ = load_run(open_recording(recorded))
+    assert SCENARIO_DATA in run_.metadata and run_.truth() is not None
+    row = metrics(run_)['robots'][0]
+    assert row['reached'] and not row['collided']
+    assert row['min_clearance'] == pytest.approx(live['min_clearance'], abs=0.05)
+    with AnyReader([recorded]) as reader:
+        statuses = [c for c in reader.connections if c.topic == '/r1/status']
+        values = [{kv.key: kv.value for kv in reader.deserialize(raw, c.msgtype).values}
+                  for c, _, raw in reader.messages(connections=statuses)]
+    assert int(values[-1]['scans']) > 100                   # it perceived with the plant's scans ...
+    assert any('mover 1' in v['reason'] or 'mover 0' in v['reason'] for v in values)   # ... and met the mover
+
+
 def launch_under_way(tmp_path: Path, domain: int | None = None,
                      layout: str = 'node') -> tuple[subprocess.Popen[str], list[int]]:
     """fastep-launch of one robot, once the goals are in and the clock runs, and its node processes."""

@@ -309,3 +309,36 @@ def test_occupancy_grid_obstacles_refuse_a_bad_grid_in_one_line(change: Any, wor
     change(msg)
     with pytest.raises(ValueError, match=words):
         convert.occupancy_grid_obstacles(msg)
+
+
+def test_movers_round_trip_through_markers_and_a_bad_one_is_one_line() -> None:
+    from fastep_core.planning.others import OtherRobot
+    movers = [OtherRobot('mover 2', (1.5, -2.0), (0.25, 0.5), 0.7, mover=True),
+              OtherRobot('mover 5', (10.0, 3.0), (0.0, 0.0), 1.2, mover=True)]
+    back = convert.marker_array_to_movers(convert.movers_to_marker_array(movers))
+    assert [(m.name, m.radius, m.mover) for m in back] == [('mover 2', 0.7, True), ('mover 5', 1.2, True)]
+    assert back[0].position == pytest.approx((1.5, -2.0)) and back[0].velocity == pytest.approx((0.25, 0.5))
+    bad = convert.movers_to_marker_array(movers)
+    bad.markers[1].scale.x = math.nan
+    with pytest.raises(ValueError, match='mover marker movers/0'):
+        convert.marker_array_to_movers(bad)
+
+
+def test_laser_scans_round_trip_and_readings_that_are_no_return_become_inf() -> None:
+    from fastep_core.sensing.laser import LaserSpec, scan
+    spec = LaserSpec(range=8.0, fov=2 * math.pi, beams=36, noise=0.0)
+    reading = scan(spec, (0.0, 0.0, 0.0), None, 0.0, np.array([[3.0, 0.0]]), np.array([1.0]))
+    msg = convert.scan_to_laser_scan(reading)
+    back = convert.laser_scan_to_scan(msg)
+    assert back.angle_min == pytest.approx(reading.angle_min) and len(back.ranges) == 36
+    ahead = int(np.argmin(np.abs(back.angles())))   # the beam along +x hits the circle 2 m away
+    assert back.ranges[ahead] == pytest.approx(2.0) and np.isinf(back.ranges[(ahead + 18) % 36])
+    msg.ranges[ahead], msg.ranges[ahead + 1], msg.range_min = math.nan, 0.01, 0.05
+    back = convert.laser_scan_to_scan(msg)
+    assert np.isinf(back.ranges[ahead]) and np.isinf(back.ranges[ahead + 1])   # NaN, below range_min (REP-117)
+    spec_back = convert.laser_spec(msg, 0.02)
+    assert (spec_back.range, spec_back.beams, spec_back.noise) == (8.0, 36, 0.02)
+    assert spec_back.fov == pytest.approx(2 * math.pi) and spec_back.full_turn
+    sector = LaserSpec(range=5.0, fov=math.pi, beams=19, noise=0.0)   # both edges are beams: 18 increments
+    msg = convert.scan_to_laser_scan(scan(sector, (0.0, 0.0, 0.0)))
+    assert convert.laser_spec(msg, 0.0).fov == pytest.approx(math.pi)
