@@ -60,6 +60,7 @@ class RobotRun:
     waypoints: list[list[float]] = field(default_factory=list)
     cost: list[tuple[float, float]] = field(default_factory=list)        # (t, fitness of the step in use)
     velocity: list[tuple[float, float, float]] = field(default_factory=list)  # (t, vx, vy) map frame
+    belief: Belief | None = None  # a robot with a sensor: what it believed at the end (figures; not in the JSON)
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -216,4 +217,6 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
         run.manoeuvres = nav.manoeuvres
         run.plan_time = nav.plan_time
         run.waypoints = [w.tolist() for w in nav.plan]
+        sense = senses[i]
+        run.belief = None if sense is None else sense.belief
     return Run(seed, algorithm, runs)

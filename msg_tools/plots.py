@@ -39,13 +39,14 @@ from fastep_core.planning.algorithms import algorithm_name  # noqa: E402
 from fastep_core.random_scenarios import family_source  # noqa: E402
 
 if TYPE_CHECKING:
+    from fastep_core.perception.belief import Belief
     from fastep_core.scenario import Scenario
     from fastep_core.simulator import Run
 
 __all__ = ['HEADING_ARROWS', 'HEADING_MODELS', 'PLOT_POINTS', 'RobotPath', 'Velocities', 'bench_figures',
-           'box_plot_figure', 'cost_figure', 'draw_dynamic', 'draw_headings', 'draw_world', 'example_paths_figure',
-           'family_box_figure', 'family_figures', 'paths_figure', 'plot_paths', 'run_paths_figure', 'save', 'title',
-           'velocity_figure', 'yield_figure']
+           'box_plot_figure', 'cost_figure', 'draw_beliefs', 'draw_dynamic', 'draw_headings', 'draw_world',
+           'example_paths_figure', 'family_box_figure', 'family_figures', 'paths_figure', 'plot_paths',
+           'run_paths_figure', 'save', 'title', 'velocity_figure', 'yield_figure']
 
 FloatArray = NDArray[np.float64]
 PLOT_POINTS = 5000   # points drawn per line at most: long recordings are thinned for drawing only
@@ -224,6 +225,34 @@ def draw_dynamic(ax: Axes, scenario: Scenario, seed: int, duration: float) -> li
     return entries
 
 
+BELIEF_COLOUR = 'darkgoldenrod'   # apart from the robots' colour cycle
+
+
+def draw_beliefs(ax: Axes, beliefs: Sequence[Belief]) -> list[tuple[Artist, str]]:
+    """What robots with a sensor believed at the end of a run (fastep_core.perception): the still obstacles their
+    scans showed (dash-dotted outlines), the map's obstacles their scans saw through (grey crosses at the
+    centre), and the movers they tracked last (arrows of their velocity over 2 s); legend entries."""
+    entries: list[tuple[Artist, str]] = []
+    seen = [o for b in beliefs for o in b.seen_obstacles]
+    for shape in seen:
+        _outline(ax, shape, '-.', BELIEF_COLOUR)
+    if seen:
+        entries.append((plt.Line2D([], [], ls='-.', color=BELIEF_COLOUR), 'believed: seen by a scan'))
+    dropped = [o for b in beliefs for o in b.dropped]
+    for shape in dropped:
+        x, y = shape.center if isinstance(shape, Circle) else np.mean([shape.start, shape.end], axis=0)
+        ax.plot([x], [y], 'x', color='0.35', ms=7)
+    if dropped:
+        entries.append((plt.Line2D([], [], ls='', marker='x', color='0.35'), 'dropped: a scan saw through it'))
+    movers = [m for b in beliefs for m in b.movers]
+    for m in movers:
+        ax.annotate('', xy=(m.position[0] + 2.0 * m.velocity[0], m.position[1] + 2.0 * m.velocity[1]),
+                    xytext=m.position, arrowprops={'arrowstyle': '->', 'color': BELIEF_COLOUR, 'lw': 1.2})
+    if movers:
+        entries.append((plt.Line2D([], [], color=BELIEF_COLOUR, marker='>'), 'tracked at the end: 2 s ahead'))
+    return entries
+
+
 def run_paths_figure(scenario: Scenario, run: Run) -> Figure:
     """The paths figure of a simulated (fastep-sim) or live (fastep-launch) run of a scenario; a v2 world's
     movers, unknown and misplaced obstacles drawn as draw_dynamic says."""
@@ -245,6 +274,7 @@ def run_paths_figure(scenario: Scenario, run: Run) -> Figure:
     ax = fig.axes[0]
     duration = max((row[0] for robot in run.robots for row in robot.trajectory[-1:]), default=0.0)
     entries = draw_dynamic(ax, scenario, run.seed, duration)
+    entries += draw_beliefs(ax, [robot.belief for robot in run.robots if robot.belief is not None])
     handles, labels = ax.get_legend_handles_labels()
     ax.legend(handles + [h for h, _ in entries], labels + [text for _, text in entries], loc='upper right',
               fontsize=8)

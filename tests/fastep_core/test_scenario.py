@@ -28,6 +28,7 @@ BUILTINS = {  # name -> robot models, in order
     'case_study_1': ('point_mass', 'point_mass'),
     'case_study_2': ('point_mass', 'point_mass'),
     'crossing_movers': ('point_mass',),
+    'crossing_robots_movers': ('point_mass', 'point_mass'),
     'diff_drive_swap': ('diff_drive', 'diff_drive'),
     'diff_drive_walls': ('diff_drive',),
     'open_field': ('point_mass',),

@@ -16,7 +16,8 @@ def test_crossing_movers_figure_shows_what_the_world_adds() -> None:
     fig = run_paths_figure(scenario, run)
     ax = fig.axes[0]
     labels = [t.get_text() for t in ax.get_legend().get_texts()]
-    assert labels[1:] == ['unknown: true place', 'misplaced: on the map', 'mover: track, positions']
+    assert labels[1:] == ['unknown: true place', 'misplaced: on the map', 'mover: track, positions',
+                          'believed: seen by a scan']
     circles = [p for p in ax.patches if isinstance(p, plt.Circle)]
     dashed = [p for p in circles if p.get_linestyle() == '--' and not p.get_fill()]
     dotted = [p for p in circles if p.get_linestyle() == ':' and not p.get_fill()]
@@ -26,6 +27,9 @@ def test_crossing_movers_figure_shows_what_the_world_adds() -> None:
     movers = [p for p in circles if p.get_fill() and p.get_facecolor()[:3] == purple]
     assert len(movers) == MOVER_SNAPSHOTS
     assert movers[0].center == (25.0, 15.0)                          # t = 0: where the file starts it
+    # What r1 believed at the end: the unknown circle, seen by its scans where it really is (dash-dotted).
+    believed = [p for p in circles if p.get_linestyle() == '-.' and not p.get_fill()]
+    assert len(believed) == 1 and abs(believed[0].center[0] - 35.0) < 0.05 and abs(believed[0].center[1] - 21.5) < 0.05
     plt.close(fig)
 
 
