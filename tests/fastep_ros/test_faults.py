@@ -50,6 +50,10 @@ def graph(tmp_path: Path) -> Iterator[Graph]:
         g.close()
 
 
+def stamp(msg: Odometry) -> float:
+    return msg.header.stamp.sec + msg.header.stamp.nanosec * 1e-9
+
+
 def start_robot(g: Graph, world: str = WORLD.format(extra=''), goal: bool = True) -> Helper:
     scenario = write(g.tmp / 'world.yaml', world)
     g.start('map', 'map_server', scenario=str(scenario))
@@ -113,8 +117,16 @@ def test_planner_killed_and_restarted_mid_run_resumes_and_arrives(graph: Graph) 
     h.records[f'{NS}/status'].clear()
     start_planner(graph)
     wait_arrival(h)
-    resumed = [odom_xy(m) for m in h.records[f'{NS}/odom'][first:]]
-    assert distance(resumed[0], stopped_at) < 0.05, 'the run must go on from where the robot stopped'
+    # The run goes on from where the robot stopped: no jump anywhere from the last odometry before the restart on.
+    # (Judged from stamps: on a loaded machine this test's own subscription drops odometry it is too slow to
+    # take, so the first message it has after the restart may be a second of driving later; CI, 2026-11-26.)
+    odometry = h.records[f'{NS}/odom'][first - 1:]
+    assert distance(odom_xy(odometry[0]), stopped_at) < 0.05
+    for before, after in zip(odometry, odometry[1:]):
+        dt = stamp(after) - stamp(before)
+        assert distance(odom_xy(before), odom_xy(after)) <= FAST['max_speed'] * max(dt, 0.0) + 0.05, \
+            'the run must go on from where the robot stopped'
+    assert distance(odom_xy(odometry[-1]), GOAL) < 0.5   # and it got there
     assert min_circle_margin(h) >= 0.0
 
 
