@@ -50,10 +50,10 @@ def test_the_map_node_publishes_what_the_map_knows_and_the_known_movers(context:
         published = convert.marker_array_to_obstacles(node.obstacles_msg)
         # The still ones the map knows, the misplaced one where fastep-sim's map puts it for seed 3; no unknown.
         assert published == list(known.world.obstacle_list) and len(published) == 2
-        assert math.dist(published[1].center, (15, 18)) > 0.01   # type: ignore[union-attr]
+        assert math.dist(published[1].center, (15, 18)) > 0.01   # type: ignore[union-attr]  # a Circle
         sent: list[MarkerArray] = []
         assert node.movers_pub is not None
-        node.movers_pub.publish = sent.append  # type: ignore[method-assign]
+        node.movers_pub.publish = sent.append  # type: ignore[method-assign]  # keep what it publishes
         node.publish_movers()
         movers = convert.marker_array_to_movers(sent[-1])
         assert [m.name for m in movers] == ['mover 1'] and all(m.mover for m in movers)   # the known one only
@@ -75,7 +75,7 @@ def test_a_plant_with_a_sensor_scans_the_truth_as_fastep_sim_does(context: Any, 
     try:
         sent: list[Any] = []
         assert node.scan_pub is not None
-        node.scan_pub.publish = sent.append  # type: ignore[method-assign]
+        node.scan_pub.publish = sent.append  # type: ignore[method-assign]  # keep what it publishes
         assert node.advance(0.02) and node.advance(0.04)
         node.publish()
         assert len(sent) == 1 and sent[0].header.frame_id == 'base_link'   # the root namespace's
