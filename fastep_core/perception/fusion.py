@@ -9,7 +9,8 @@ believed obstacles the scan sees through.
   surface the beam would reach within range_max - SEE_THROUGH count (beyond, the beam says nothing), and the
   obstacle is shrunk by SEE_THROUGH first (circles' radii, segments' ends: grazing beams say nothing). An
   obstacle contradicted by at least SEE_THROUGH_BEAMS beams of one scan is not where the map says (a misplaced
-  obstacle's ghost, or a mover perception once took for a still obstacle). Vectorised: beams x obstacles.
+  obstacle's ghost, or a mover perception once took for a still obstacle). Vectorised: each obstacle against
+  the beams that can meet it (laser.fan_hits, the same distances as all beams x all obstacles).
 """
 
 from __future__ import annotations
@@ -18,7 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import Obstacles
-from fastep_core.sensing.laser import Scan, hit_distances
+from fastep_core.sensing.laser import Scan, fan_hits
 
 __all__ = ['EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'explained', 'seen_through']
 
@@ -43,7 +44,7 @@ def explained(points: FloatArray, obstacles: Obstacles, centres: FloatArray, rad
     if not len(points):
         return out
     if len(obstacles):
-        out |= obstacles.clearance(points) < tolerance
+        out |= obstacles.near(points, tolerance)
     if len(centres):
         gap = np.hypot(points[:, None, 0] - centres[:, 0], points[:, None, 1] - centres[:, 1]) - radii
         out |= (gap < tolerance).any(axis=1)
@@ -70,9 +71,10 @@ def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles) -> NDArray[
     run = ends - starts
     length = np.maximum(np.hypot(run[:, 0], run[:, 1]), 1e-12)
     cut = (np.minimum(SEE_THROUGH, 0.25 * length) / length)[:, None] * run
-    expected = hit_distances(pose[:2], angles, obstacles.centers[circles], radii, starts + cut,
-                             ends - cut)                                                  # (beams, candidates)
-    measured = np.where(np.isfinite(scan.ranges), scan.ranges, np.inf)[:, None]
+    # Only the (beam, candidate) pairs where the beam can meet the candidate: any other pair is a miss.
+    beam, candidate, expected = fan_hits(pose[:2], angles, scan.angle_increment, obstacles.centers[circles], radii,
+                                         starts + cut, ends - cut)
+    measured = np.where(np.isfinite(scan.ranges), scan.ranges, np.inf)[beam]
     through = (expected > 0.0) & (expected < reach - SEE_THROUGH) & (measured > expected + SEE_THROUGH)
-    out[candidates] = through.sum(axis=0) >= SEE_THROUGH_BEAMS
+    out[candidates] = np.bincount(candidate[through], minlength=len(candidates)) >= SEE_THROUGH_BEAMS
     return out
