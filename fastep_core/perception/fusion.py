@@ -62,7 +62,6 @@ def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles) -> NDArray[
         return out
     circles = candidates[candidates < obstacles.n_circles]
     segments = candidates[candidates >= obstacles.n_circles] - obstacles.n_circles
-    angles = pose[2] + scan.angles()
     # Shrunk by the margin (a circle's radius, a segment's ends): a beam grazing an edge that perception or the
     # map drew a little too large says nothing.
     radii = obstacles.radii[circles]
@@ -72,8 +71,8 @@ def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles) -> NDArray[
     length = np.maximum(np.hypot(run[:, 0], run[:, 1]), 1e-12)
     cut = (np.minimum(SEE_THROUGH, 0.25 * length) / length)[:, None] * run
     # Only the (beam, candidate) pairs where the beam can meet the candidate: any other pair is a miss.
-    beam, candidate, expected = fan_hits(pose[:2], angles, scan.angle_increment, obstacles.centers[circles], radii,
-                                         starts + cut, ends - cut)
+    beam, candidate, expected = fan_hits(pose[:2], pose[2], scan.angle_min, scan.angle_increment, len(scan.ranges),
+                                         obstacles.centers[circles], radii, starts + cut, ends - cut)
     measured = np.where(np.isfinite(scan.ranges), scan.ranges, np.inf)[beam]
     through = (expected > 0.0) & (expected < reach - SEE_THROUGH) & (measured > expected + SEE_THROUGH)
     out[candidates] = np.bincount(candidate[through], minlength=len(candidates)) >= SEE_THROUGH_BEAMS

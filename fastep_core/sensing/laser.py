@@ -6,7 +6,7 @@ a moving one placed where it is at the scan's time, another robot as a circle of
 wall of zero thickness). All beams against all obstacles are one numpy computation, no Python loop over
 either: a scan casts each obstacle only on the beams within the angle it subtends from the scanner (fan_hits:
 a few beams for a far one instead of all of them), with the same ranges, bit for bit, as casting all beams x
-all obstacles (cast without `increment`, hit_distances).
+all obstacles (cast, hit_distances).
 
 Beam placement (what `angle_min`, `angle_max`, `angle_increment` say, relative to the heading):
 
@@ -208,9 +208,9 @@ def _beam_windows(low: FloatArray, width: FloatArray, every: NDArray[np.bool_], 
     every = every | ~(width < turn - 6.0 * increment)      # the two turns' windows below could overlap
     rel = np.mod(np.where(every, first, low) - first, turn)  # the window's start after the first beam, [0, 2 pi)
     # Each window, and the same window one turn back (a beam's angle lies in [first, first + 2 pi]): (n, 2).
-    window = np.stack([rel, rel - turn], axis=1)
-    lows = np.maximum(np.floor(window / increment) - 1.0, 0.0)
-    highs = np.minimum(np.ceil((window + np.where(every, 0.0, width)[:, None]) / increment) + 1.0, beams - 1.0)
+    window = (rel[:, None] - _TURNS) / increment
+    lows = np.maximum(np.floor(window) - 1.0, 0.0)
+    highs = np.minimum(np.ceil(window + (np.where(every, 0.0, width) / increment)[:, None]) + 1.0, beams - 1.0)
     if every.any():
         lows[every] = 0.0
         highs[every] = (beams - 1.0, -1.0)
@@ -221,46 +221,48 @@ def _beam_windows(low: FloatArray, width: FloatArray, every: NDArray[np.bool_], 
     return beam_index, owners
 
 
-def fan_hits(origin: ArrayLike, angles: ArrayLike, increment: float, circles: ArrayLike | None = None,
-             radii: ArrayLike | None = None, starts: ArrayLike | None = None,
-             ends: ArrayLike | None = None) -> tuple[IntArray, IntArray, FloatArray]:
-    """hit_distances of a fan of beams as (beam, obstacle, distance) triples, only for the pairs where the beam
-    can reach the obstacle: every pair left out is a miss (+inf in hit_distances), and every distance given is
-    hit_distances' own, bit for bit (the same arithmetic on the same numbers).
+_TURNS = np.array([0.0, 2.0 * math.pi])
 
-    A uniform fan (angles[k] = angles[0] + increment k, increment > 0: a scan's beams) is windowed: a beam can
-    only meet an obstacle within the angle the obstacle subtends from the origin (a circle's centre direction
-    +- asin(r / distance), a segment's arc between its ends), so only the beams in that window, and one more on
-    each side for rounding, are cast. An obstacle within NEAR of the origin (a segment: of its line) is cast on
-    every beam, so is any other fan (all pairs, as hit_distances). Obstacles are numbered circles first.
+
+def fan_hits(origin: ArrayLike, heading: float, angle_min: float, increment: float, beams: int,
+             circles: ArrayLike | None = None, radii: ArrayLike | None = None, starts: ArrayLike | None = None,
+             ends: ArrayLike | None = None) -> tuple[IntArray, IntArray, FloatArray]:
+    """hit_distances of a scan's beams (at heading + angle_min + increment k, k < beams: Scan.angles() turned by
+    the heading) as (beam, obstacle, distance) triples, only for the pairs where the beam can meet the obstacle:
+    every pair left out is a miss (+inf in hit_distances), and every distance given is hit_distances' own for
+    those angles, bit for bit (the same arithmetic on the same numbers).
+
+    A beam can only meet an obstacle within the angle the obstacle subtends from the origin (a circle's centre
+    direction +- asin(r / distance), a segment's arc between its ends), so only the beams in that window, and one
+    more on each side for rounding, are cast. An obstacle within NEAR of the origin (a segment: of its line) is
+    cast on every beam, so are all obstacles when increment is not > 0. Obstacles are numbered circles first.
     """
+    angles = heading + (angle_min + increment * np.arange(beams, dtype=float))
     o, a, centres, r, a_ends, b_ends = _inputs(origin, angles, circles, radii, starts, ends)
     return _fan_hits(o, a, np.cos(a), np.sin(a), increment, centres, r, a_ends, b_ends)
 
 
 def _fan_hits(o: FloatArray, a: FloatArray, dx: FloatArray, dy: FloatArray, increment: float, centres: FloatArray,
               r: FloatArray, a_ends: FloatArray, b_ends: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
-    """fan_hits of checked inputs, with the beams' directions (dx, dy) = (cos a, sin a) given."""
+    """fan_hits of checked inputs: beams at angles a = a[0] + increment k (up to rounding), directions (dx, dy)."""
     n = len(a)
-    uniform = n > 0 and math.isfinite(increment) and increment > 0.0 and bool(
-        np.all(np.abs(a - (a[0] + increment * np.arange(n))) <= 0.25 * increment))
+    windowed = n > 0 and math.isfinite(increment) and increment > 0.0
     turn = 2.0 * math.pi
     # Angular windows: a circle's centre direction +- its half-angle, a segment's arc from its start to its end.
     cx, cy = centres[:, 0] - o[0], centres[:, 1] - o[1]
     distance = np.hypot(cx, cy)
     size = np.abs(r)                                                      # the arithmetic sees r^2 only
     half = np.arcsin(np.minimum(size / np.maximum(distance, NEAR), 1.0))
-    circle_every = ~((distance - size >= NEAR) & uniform)                 # nan-safe: a nan is cast on every beam
+    circle_every = ~((distance - size >= NEAR) & windowed)                # nan-safe: a nan is cast on every beam
     sx, sy, ex, ey = a_ends[:, 0] - o[0], a_ends[:, 1] - o[1], b_ends[:, 0] - o[0], b_ends[:, 1] - o[1]
     start_angle = np.arctan2(sy, sx)
     sweep = np.mod(np.arctan2(ey, ex) - start_angle + math.pi, turn) - math.pi
     line_distance = np.abs(sx * ey - sy * ex) / np.maximum(np.hypot(ex - sx, ey - sy), 1e-300)   # 0: a point
-    segment_every = ~((line_distance >= NEAR) & uniform)
-    first = float(a[0]) if n else 0.0
-    step = increment if uniform else 1.0
+    segment_every = ~((line_distance >= NEAR) & windowed)
     beam, owner = _beam_windows(np.concatenate([np.arctan2(cy, cx) - half, start_angle + np.minimum(sweep, 0.0)]),
                                 np.concatenate([2.0 * half, np.abs(sweep)]),
-                                np.concatenate([circle_every, segment_every]), first, step, n)
+                                np.concatenate([circle_every, segment_every]), float(a[0]) if n else 0.0,
+                                increment if windowed else 1.0, n)
     split = int(np.searchsorted(owner, len(r)))                          # circles' pairs first
     beam_c, circle, beam_s, segment = beam[:split], owner[:split], beam[split:], owner[split:] - len(r)
     fx, fy, c = _circle_terms(o, centres, r)
@@ -273,27 +275,29 @@ def _fan_hits(o: FloatArray, a: FloatArray, dx: FloatArray, dy: FloatArray, incr
 
 def cast(origin: ArrayLike, angles: ArrayLike, range_max: float, circles: ArrayLike | None = None,
          radii: ArrayLike | None = None, starts: ArrayLike | None = None,
-         ends: ArrayLike | None = None, increment: float | None = None) -> FloatArray:
+         ends: ArrayLike | None = None) -> FloatArray:
     """True ranges (no noise) of beams from `origin` at absolute `angles` (map frame): the nearest circle
-    (centres (C, 2), radii (C,)) or segment (starts, ends (S, 2)) surface along each, +inf beyond range_max.
-
-    `increment`: the angles are a uniform fan angles[0] + increment k (a scan's beams); then only the beams
-    that can reach each obstacle are cast (fan_hits), with the same ranges bit for bit.
-    """
+    (centres (C, 2), radii (C,)) or segment (starts, ends (S, 2)) surface along each, +inf beyond range_max."""
     o, a, centres, r, a_ends, b_ends = _inputs(origin, angles, circles, radii, starts, ends)
+    best = _nearest(o, np.cos(a), np.sin(a), centres, r, a_ends, b_ends)
+    return np.where(best <= range_max, best, np.inf)
+
+
+def _fan_cast(o: FloatArray, a: FloatArray, increment: float, range_max: float, centres: FloatArray,
+              r: FloatArray, a_ends: FloatArray, b_ends: FloatArray) -> FloatArray:
+    """cast of a scan's beams (angles a[0] + increment k): each obstacle on the beams that can meet it only
+    (fan_hits), the same ranges bit for bit."""
     dx, dy = np.cos(a), np.sin(a)
-    if increment is None:
-        best = _nearest(o, dx, dy, centres, r, a_ends, b_ends)
-    else:
-        best = np.full(len(a), np.inf)
-        beam, _, distance = _fan_hits(o, a, dx, dy, increment, centres, r, a_ends, b_ends)
-        np.minimum.at(best, beam, distance)
-        # A beam that reads 0 (the scanner touches an obstacle) may have several zeros, +0.0 and -0.0, whose
-        # minimum's sign depends on the order they are met in: those beams are cast on all obstacles as without
-        # `increment`, so even the sign of a zero reading is the same.
-        touching = np.flatnonzero(best == 0.0)
-        if len(touching):
-            best[touching] = _nearest(o, dx[touching], dy[touching], centres, r, a_ends, b_ends)
+    best = np.full(len(a), np.inf)
+    beam, _, distance = _fan_hits(o, a, dx, dy, increment, centres, r, a_ends, b_ends)
+    np.minimum.at(best, beam, distance)
+    # A beam on which several obstacles read 0 (the scanner touches them) may have +0.0 and -0.0, whose minimum's
+    # sign depends on the order they are met in: those beams are cast on all obstacles as cast does, so even the
+    # sign of a zero reading is the same.
+    zero = distance == 0.0
+    if zero.any():
+        touching = np.flatnonzero(np.bincount(beam[zero], minlength=len(a)) > 1)
+        best[touching] = _nearest(o, dx[touching], dy[touching], centres, r, a_ends, b_ends)
     return np.where(best <= range_max, best, np.inf)
 
 
@@ -328,7 +332,8 @@ def scan(spec: LaserSpec, pose: Sequence[float], rng: np.random.Generator | None
     """
     x, y, heading = float(pose[0]), float(pose[1]), float(pose[2])
     angle_min, increment, relative = beam_angles(spec)
-    ranges = cast((x, y), heading + relative, spec.range, circles, radii, starts, ends, increment)
+    o, a, centres, r, a_ends, b_ends = _inputs((x, y), heading + relative, circles, radii, starts, ends)
+    ranges = _fan_cast(o, a, increment, spec.range, centres, r, a_ends, b_ends)
     if spec.noise > 0.0:
         if rng is None:
             raise ValueError('a scanner with noise needs a Generator')
