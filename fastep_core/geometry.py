@@ -153,11 +153,14 @@ class Obstacles:
             self._box_cache = cached
         return cached
 
-    def near(self, points: ArrayLike, within: float) -> NDArray[np.bool_]:
+    def near(self, points: ArrayLike, within: float, end_slack: float | None = None) -> NDArray[np.bool_]:
         """clearance(points) < within for points (m, 2), the same answer bit for bit, without the m x n matrix of
         distances: only the (point, obstacle) pairs where the point lies in the obstacle's bounding box grown by
         `within` (and a rounding margin) can be that close, and only their distances are computed, each with the
-        same arithmetic as distances(). Points sorted by x find each obstacle's candidates by binary search."""
+        same arithmetic as distances(). Points sorted by x find each obstacle's candidates by binary search.
+
+        end_slack: a segment counts only for the points whose foot on its line lies within the segment or at most
+        this far beyond an end (None: any, as clearance counts them)."""
         p = np.asarray(points, dtype=float).reshape(-1, 2)
         out = np.zeros(len(p), dtype=bool)
         if not len(p) or not len(self):
@@ -183,8 +186,12 @@ class Obstacles:
         ps, k = p[point[split:]], owner[split:] - self.n_circles
         ax, ay = ps[:, 0] - self.starts[k, 0], ps[:, 1] - self.starts[k, 1]
         abx, aby = self._ab[k, 0], self._ab[k, 1]
-        t = np.minimum(np.maximum((ax * abx + ay * aby) * self._inv_length2[k], 0.0), 1.0)
+        along = (ax * abx + ay * aby) * self._inv_length2[k]
+        t = np.minimum(np.maximum(along, 0.0), 1.0)
         segment = norm(ax - t * abx, ay - t * aby)
+        if end_slack is not None:   # beyond an end by more than the slack: not this segment's point
+            slack = end_slack * np.sqrt(self._inv_length2[k])
+            segment = np.where((along < -slack) | (along > 1.0 + slack), np.inf, segment)
         out[point[np.concatenate([circle, segment]) < within]] = True
         return out
 

@@ -99,6 +99,7 @@ class Perception:
         self.seen_items: list[Obstacle] = []
         self.dropped: list[Obstacle] = []
         self.tracker = Tracker(track_params)
+        self._obstacle_cache: dict[str, tuple[tuple[int, ...], Obstacles]] = {}
         self.slow_since: dict[int, float] = {}   # track id -> since when it has been slower than STILL_SPEED
         self.world = map_world
         self.belief = Belief(0.0, map_world, tuple(self.map_items), (), (), (), np.zeros((0, 2)))
@@ -120,7 +121,7 @@ class Perception:
         points, beams = scan_points(scan, pose_array)
         centres = np.array([o.position for o in others], dtype=float).reshape(-1, 2)
         radii = np.array([o.radius for o in others], dtype=float)
-        new = ~explained(points, believed, centres, radii)
+        new = ~explained(points, self._obstacles('seen'), centres, radii, map_obstacles=self._obstacles('map'))
         points, beams = points[new], beams[new]
         labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
         found = shapes(points, beams, labels, pose_array[:2], self.spec.noise, WALL_RANGE * self.spec.range,
@@ -156,6 +157,16 @@ class Perception:
         self.belief = Belief(t, self.world, tuple(self.map_items), tuple(self.seen_items), tuple(self.dropped),
                              movers, points)
         return self.belief
+
+    def _obstacles(self, which: str) -> Obstacles:
+        """The believed obstacles from the map ('map') or from the scans ('seen'), as Obstacles, made again only
+        when they changed."""
+        items = self.map_items if which == 'map' else self.seen_items
+        key = tuple(map(id, items))
+        cached = self._obstacle_cache.get(which)
+        if cached is None or cached[0] != key:
+            cached = self._obstacle_cache[which] = (key, Obstacles(items))
+        return cached[1]
 
     def _merged_movers(self, t: float, points: FloatArray, starts: FloatArray,
                        ends: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:

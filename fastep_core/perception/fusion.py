@@ -21,10 +21,15 @@ from numpy.typing import NDArray
 from fastep_core.geometry import Obstacles
 from fastep_core.sensing.laser import Scan, fan_hits
 
-__all__ = ['EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'explained', 'seen_through']
+__all__ = ['END_SLACK', 'EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'explained', 'seen_through']
 
 FloatArray = NDArray[np.float64]
 
+END_SLACK = 0.03
+"""Metres beyond a believed wall's end within which a scan point is still that wall (the range noise along a
+grazing beam): farther out it is not, though within EXPLAINED of the end. A misplaced wall that stops short of the
+true one hid the true end's points, and FAStep-Route clipped the true end rounding the ghost's
+(misplaced_obstacles:1000025, 17.8 mm, docs/dynamic_world.md)."""
 EXPLAINED = 0.12
 """Metres from a believed surface within which a scan point is that surface: the noise (1 cm, 3 sigma), a fit's
 error, a polyline's tolerance (0.1 m). No more: a misplaced obstacle's surface would hide the true one's points
@@ -37,14 +42,17 @@ SEE_THROUGH_BEAMS = 3
 
 
 def explained(points: FloatArray, obstacles: Obstacles, centres: FloatArray, radii: FloatArray,
-              tolerance: float = EXPLAINED) -> NDArray[np.bool_]:
+              tolerance: float = EXPLAINED, map_obstacles: Obstacles | None = None) -> NDArray[np.bool_]:
     """Which points (n, 2) a believed obstacle or a circle (centres (k, 2), radii (k,): other robots, known
-    movers) explains."""
+    movers) explains. `map_obstacles`: believed obstacles that come from the map, whose walls explain no point
+    beyond their ends (END_SLACK): a map may misplace a wall, a scan's own walls end where the points did."""
     out = np.zeros(len(points), dtype=bool)
     if not len(points):
         return out
     if len(obstacles):
         out |= obstacles.near(points, tolerance)
+    if map_obstacles is not None and len(map_obstacles):
+        out |= map_obstacles.near(points, tolerance, END_SLACK)
     if len(centres):
         gap = np.hypot(points[:, None, 0] - centres[:, 0], points[:, None, 1] - centres[:, 1]) - radii
         out |= (gap < tolerance).any(axis=1)
