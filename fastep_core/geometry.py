@@ -8,6 +8,7 @@ r at that point touches the obstacle".
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Iterable
 
@@ -137,6 +138,62 @@ class Obstacles:
             return np.full(d.shape[:-1], np.inf)
         nearest: FloatArray = d.min(axis=-1)
         return nearest
+
+    def _boxes(self) -> tuple[FloatArray, FloatArray, float, bool]:
+        """Each obstacle's bounding box (lows (n, 2), highs (n, 2), circles first), a rounding margin for tests
+        against them (metres, relative to the coordinates' size) and whether every obstacle is finite; cached."""
+        cached: tuple[FloatArray, FloatArray, float, bool] | None = getattr(self, '_box_cache', None)
+        if cached is None:
+            size = np.abs(self.radii)[:, None]
+            lows = np.concatenate([self.centers - size, np.minimum(self.starts, self.ends)])
+            highs = np.concatenate([self.centers + size, np.maximum(self.starts, self.ends)])
+            finite = bool(np.isfinite(lows).all() and np.isfinite(highs).all())
+            scale = float(np.abs(np.concatenate([lows, highs])).max(initial=0.0)) if finite else 0.0
+            cached = lows, highs, 1e-6 * (1.0 + scale), finite
+            self._box_cache = cached
+        return cached
+
+    def near(self, points: ArrayLike, within: float, end_slack: float | None = None) -> NDArray[np.bool_]:
+        """clearance(points) < within for points (m, 2), the same answer bit for bit, without the m x n matrix of
+        distances: only the (point, obstacle) pairs where the point lies in the obstacle's bounding box grown by
+        `within` (and a rounding margin) can be that close, and only their distances are computed, each with the
+        same arithmetic as distances(). Points sorted by x find each obstacle's candidates by binary search.
+
+        end_slack: a segment counts only for the points whose foot on its line lies within the segment or at most
+        this far beyond an end (None: any, as clearance counts them)."""
+        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        out = np.zeros(len(p), dtype=bool)
+        if not len(p) or not len(self):
+            return out
+        lows, highs, margin, finite = self._boxes()
+        if not (finite and math.isfinite(within)):
+            near: NDArray[np.bool_] = self.clearance(p) < within
+            return near
+        grow = max(within, 0.0) + margin
+        order = np.argsort(p[:, 0], kind='stable')
+        xs = p[order, 0]
+        first = np.searchsorted(xs, lows[:, 0] - grow, 'left')
+        counts = np.searchsorted(xs, highs[:, 0] + grow, 'right') - first
+        owner = np.repeat(np.arange(len(self)), counts)
+        offsets = np.cumsum(counts) - counts
+        point = order[np.arange(len(owner)) + np.repeat(first - offsets, counts)]
+        y = p[point, 1]
+        keep = (y >= lows[owner, 1] - grow) & (y <= highs[owner, 1] + grow)
+        owner, point = owner[keep], point[keep]
+        split = int(np.searchsorted(owner, self.n_circles))                 # circles' pairs first
+        pc, c = p[point[:split]], owner[:split]
+        circle = norm(pc[:, 0] - self.centers[c, 0], pc[:, 1] - self.centers[c, 1]) - self.radii[c]
+        ps, k = p[point[split:]], owner[split:] - self.n_circles
+        ax, ay = ps[:, 0] - self.starts[k, 0], ps[:, 1] - self.starts[k, 1]
+        abx, aby = self._ab[k, 0], self._ab[k, 1]
+        along = (ax * abx + ay * aby) * self._inv_length2[k]
+        t = np.minimum(np.maximum(along, 0.0), 1.0)
+        segment = norm(ax - t * abx, ay - t * aby)
+        if end_slack is not None:   # beyond an end by more than the slack: not this segment's point
+            slack = end_slack * np.sqrt(self._inv_length2[k])
+            segment = np.where((along < -slack) | (along > 1.0 + slack), np.inf, segment)
+        out[point[np.concatenate([circle, segment]) < within]] = True
+        return out
 
     def path_distances(self, a: ArrayLike, b: ArrayLike) -> FloatArray:
         """Minimum distance from straight runs a-b to each obstacle surface: shape (..., n_obstacles)."""

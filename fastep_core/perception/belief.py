@@ -56,6 +56,8 @@ MERGE_GAP = 0.5
 """Metres: a new wall piece this close to a collinear believed wall extends it instead of adding a segment."""
 MERGE_REACH = 0.3
 """Metres beyond a moving track's radius within which a wall piece is that mover seen merged (Perception)."""
+MERGE_MARGIN = 1e-6
+"""Metres: rounding margin of Perception._wall_candidates, far above the 1e-15 m its arithmetic may differ by."""
 SENSOR_STREAM = 0x736E73   # 'sns': spawn key of the scanners' noise streams, far above any robot's index
 
 
@@ -97,6 +99,7 @@ class Perception:
         self.seen_items: list[Obstacle] = []
         self.dropped: list[Obstacle] = []
         self.tracker = Tracker(track_params)
+        self._obstacle_cache: dict[str, tuple[tuple[int, ...], Obstacles]] = {}
         self.slow_since: dict[int, float] = {}   # track id -> since when it has been slower than STILL_SPEED
         self.world = map_world
         self.belief = Belief(0.0, map_world, tuple(self.map_items), (), (), (), np.zeros((0, 2)))
@@ -118,7 +121,7 @@ class Perception:
         points, beams = scan_points(scan, pose_array)
         centres = np.array([o.position for o in others], dtype=float).reshape(-1, 2)
         radii = np.array([o.radius for o in others], dtype=float)
-        new = ~explained(points, believed, centres, radii)
+        new = ~explained(points, self._obstacles('seen'), centres, radii, map_obstacles=self._obstacles('map'))
         points, beams = points[new], beams[new]
         labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
         found = shapes(points, beams, labels, pose_array[:2], self.spec.noise, WALL_RANGE * self.spec.range,
@@ -129,7 +132,7 @@ class Perception:
         # Tracks that stood still long enough become still obstacles: slow for STILL_TIME without a break, so a
         # mover whose velocity estimate dipped for a few scans (two movers merged into one detection) stays one.
         speed = np.hypot(tracker.states[:, 2], tracker.states[:, 3])
-        slow = (speed < STILL_SPEED) & ~np.isin(tracker.ids, merged)
+        slow = (speed < STILL_SPEED) & ~np.isin(tracker.ids, merged) if len(merged) else speed < STILL_SPEED
         self.slow_since = {int(i): self.slow_since.get(int(i), t) for i in tracker.ids[slow]}
         since = np.array([self.slow_since.get(int(i), math.inf) for i in tracker.ids])
         still = tracker.confirmed & slow & (t - since >= STILL_TIME) & (tracker.seen == t)
@@ -154,6 +157,16 @@ class Perception:
         self.belief = Belief(t, self.world, tuple(self.map_items), tuple(self.seen_items), tuple(self.dropped),
                              movers, points)
         return self.belief
+
+    def _obstacles(self, which: str) -> Obstacles:
+        """The believed obstacles from the map ('map') or from the scans ('seen'), as Obstacles, made again only
+        when they changed."""
+        items = self.map_items if which == 'map' else self.seen_items
+        key = tuple(map(id, items))
+        cached = self._obstacle_cache.get(which)
+        if cached is None or cached[0] != key:
+            cached = self._obstacle_cache[which] = (key, Obstacles(items))
+        return cached[1]
 
     def _merged_movers(self, t: float, points: FloatArray, starts: FloatArray,
                        ends: FloatArray) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
@@ -183,7 +196,8 @@ class Perception:
             near_points = near_points | on_track.any(axis=0)
         merged = near_points & (tracker.seen[moving] < t)
         ids = tracker.ids[moving][merged]
-        tracker.seen[np.isin(tracker.ids, ids)] = t
+        if len(ids):
+            tracker.seen[np.isin(tracker.ids, ids)] = t
         return starts[walls], ends[walls], ids
 
     def _replace_map_circles(self, found: list[Circle]) -> None:
@@ -200,7 +214,8 @@ class Perception:
     def _add_wall(self, start: FloatArray, end: FloatArray) -> None:
         """Believe in a wall piece: extend a collinear believed wall it continues, else add it."""
         new = np.array([start, end])
-        for k, item in enumerate(self.seen_items):
+        for k in self._wall_candidates(new):
+            item = self.seen_items[k]
             if not isinstance(item, Segment):
                 continue
             a, b = np.array(item.start), np.array(item.end)
@@ -219,3 +234,24 @@ class Perception:
             self.seen_items[k] = Segment((float(p[0]), float(p[1])), (float(q[0]), float(q[1])))
             return
         self.seen_items.append(Segment((float(start[0]), float(start[1])), (float(end[0]), float(end[1]))))
+
+    def _wall_candidates(self, new: FloatArray) -> list[int]:
+        """Indices, in order, of the believed walls that the piece `new` (2, 2) may continue: _add_wall's test for
+        all walls at once, with a margin of MERGE_MARGIN that only lets more through, so that its exact test (one
+        wall at a time, as before) runs on these few and gives the same answer as on all of them."""
+        walls = [(k, item) for k, item in enumerate(self.seen_items) if isinstance(item, Segment)]
+        if not walls:
+            return []
+        ends = np.array([(item.start, item.end) for _, item in walls])                              # (w, 2, 2)
+        a = ends[:, 0]
+        run = ends[:, 1] - a
+        length = np.hypot(run[:, 0], run[:, 1])
+        unit = run / np.where(length > 0.0, length, 1.0)[:, None]
+        offset = new[None, :, :] - a[:, None, :]                                                    # (w, 2, 2)
+        off_line = np.abs(unit[:, None, 0] * offset[..., 1] - unit[:, None, 1] * offset[..., 0])
+        along = unit[:, None, 0] * offset[..., 0] + unit[:, None, 1] * offset[..., 1]
+        # Negated as _add_wall's test is, so that a nan lets a wall through here as it does there.
+        margin = MERGE_GAP + MERGE_MARGIN
+        maybe = ~((off_line.max(axis=1) > WALL_TOLERANCE + MERGE_MARGIN) | (along.max(axis=1) < -margin) |
+                  (along.min(axis=1) > length + margin))
+        return [walls[k][0] for k in np.flatnonzero(maybe)]

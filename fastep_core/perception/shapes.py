@@ -55,7 +55,7 @@ class Shapes:
 def fit_circles(points: FloatArray, labels: IntArray, n_clusters: int) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Kasa fits of every cluster: centres (k, 2), radii (k,) and RMS residuals (k,); nan where singular."""
     def total(w: FloatArray) -> FloatArray:
-        out: FloatArray = np.bincount(labels, weights=w, minlength=n_clusters).astype(float)
+        out: FloatArray = np.bincount(labels, weights=w, minlength=n_clusters).astype(float, copy=False)
         return out
 
     n: FloatArray = np.bincount(labels, minlength=n_clusters).astype(float)
@@ -67,7 +67,7 @@ def fit_circles(points: FloatArray, labels: IntArray, n_clusters: int) -> tuple[
     sx, sy, sxx, syy, sxy = total(x), total(y), total(x * x), total(y * y), total(x * y)
     sz, sxz, syz = total(z), total(x * z), total(y * z)
     # Normal equations of min sum (z + D x + E y + F)^2: A [D, E, F] = -[sxz, syz, sz].
-    a = np.stack([np.stack([sxx, sxy, sx], -1), np.stack([sxy, syy, sy], -1), np.stack([sx, sy, n], -1)], -2)
+    a = np.stack([sxx, sxy, sx, sxy, syy, sy, sx, sy, n], -1).reshape(-1, 3, 3)
     b = -np.stack([sxz, syz, sz], -1)
     ok = np.abs(np.linalg.det(a)) > 1e-12 * np.maximum(n, 1.0) ** 3
     solution = np.full((n_clusters, 3), np.nan)
@@ -76,7 +76,7 @@ def fit_circles(points: FloatArray, labels: IntArray, n_clusters: int) -> tuple[
     centres = -0.5 * solution[:, :2]
     radii = np.sqrt(np.maximum((centres ** 2).sum(axis=1) - solution[:, 2], 0.0))
     radial = np.hypot(x - centres[labels, 0], y - centres[labels, 1]) - radii[labels]
-    rms = np.sqrt(total(np.nan_to_num(radial, nan=np.inf) ** 2) / np.maximum(n, 1.0))
+    rms = np.sqrt(total(np.where(np.isnan(radial), np.inf, radial ** 2)) / np.maximum(n, 1.0))   # singular: inf
     return centres + mean, radii, rms
 
 

@@ -3,8 +3,10 @@
 One scan is a fan of `beams` rays from the scanner's position (a robot's reference point), centred on its
 heading. Each ray's true range is the distance to the nearest surface it meets: a circle (a still obstacle,
 a moving one placed where it is at the scan's time, another robot as a circle of its radius) or a segment (a
-wall of zero thickness). All beams against all obstacles are one numpy computation (beams x obstacles
-arrays), no Python loop over either.
+wall of zero thickness). All beams against all obstacles are one numpy computation, no Python loop over
+either: a scan casts each obstacle only on the beams within the angle it subtends from the scanner (fan_hits:
+a few beams for a far one instead of all of them), with the same ranges, bit for bit, as casting all beams x
+all obstacles (cast, hit_distances).
 
 Beam placement (what `angle_min`, `angle_max`, `angle_increment` say, relative to the heading):
 
@@ -36,9 +38,10 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ['DEFAULT_BEAMS', 'DEFAULT_FOV', 'DEFAULT_NOISE', 'DEFAULT_RANGE', 'FULL_TURN_TOLERANCE', 'MAX_BEAMS',
-           'LaserSpec', 'Scan', 'beam_angles', 'cast', 'hit_distances', 'main']
+           'NEAR', 'LaserSpec', 'Scan', 'beam_angles', 'cast', 'fan_hits', 'hit_distances', 'main']
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 DEFAULT_RANGE = 10.0
 """Metres: a typical indoor 2D lidar (e.g. a TurtleBot 4's RPLIDAR A1 reaches 12 m)."""
@@ -52,6 +55,9 @@ MAX_BEAMS = 10_000
 """The most beams a sensor may have: more than any planar lidar gives per scan (4 x a 0.1-degree scanner)."""
 FULL_TURN_TOLERANCE = 1e-3
 """Radians: a fov within this of 2 pi is a full turn (files write 6.2832 or 6.283 for 2 pi)."""
+NEAR = 0.01
+"""Metres: an obstacle whose surface (a segment: whose line) comes this close to the scanner is cast on every
+beam (fan_hits): seen from so near, its angle is too wide or too ill-conditioned to window."""
 
 
 @dataclass(frozen=True)
@@ -112,13 +118,19 @@ def _points(value: ArrayLike | None) -> FloatArray:
     return np.zeros((0, 2)) if value is None else np.asarray(value, dtype=float).reshape(-1, 2)
 
 
-def _circle_hits(origin: FloatArray, dx: FloatArray, dy: FloatArray, centres: FloatArray,
-                 radii: FloatArray) -> FloatArray:
-    """Distance along each beam (rows) to each circle (columns): the first crossing t >= 0 of
-    |origin + t d - c| = r, 0 from inside a circle, inf when the line misses or the circle is behind."""
-    fx, fy = origin[0] - centres[:, 0], origin[1] - centres[:, 1]          # (C,)
-    b = dx[:, None] * fx + dy[:, None] * fy                                 # (B, C): d . (o - c)
-    c = fx * fx + fy * fy - radii * radii                                   # (C,): |o - c|^2 - r^2
+def _circle_terms(origin: FloatArray, centres: FloatArray,
+                  radii: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """Each circle's terms of the beam-circle equation: o - c (x and y) and |o - c|^2 - r^2."""
+    fx, fy = origin[0] - centres[:, 0], origin[1] - centres[:, 1]
+    c = fx * fx + fy * fy - radii * radii
+    return fx, fy, c
+
+
+def _circle_distances(dx: FloatArray, dy: FloatArray, fx: FloatArray, fy: FloatArray,
+                      c: FloatArray) -> FloatArray:
+    """Distance along beams d to circles (their _circle_terms), elementwise with broadcasting: the first crossing
+    t >= 0 of |origin + t d - c| = r, 0 from inside a circle, inf when the line misses or the circle is behind."""
+    b = dx * fx + dy * fy                                                   # d . (o - c)
     disc = b * b - c
     root = np.sqrt(np.maximum(disc, 0.0))
     near = -b - root
@@ -127,19 +139,30 @@ def _circle_hits(origin: FloatArray, dx: FloatArray, dy: FloatArray, centres: Fl
     return np.where(c <= 0.0, 0.0, out)                                     # inside or on the circle
 
 
-def _segment_hits(origin: FloatArray, dx: FloatArray, dy: FloatArray, starts: FloatArray,
-                  ends: FloatArray) -> FloatArray:
-    """Distance along each beam (rows) to each segment (columns), inf for a miss.
+def _circle_hits(origin: FloatArray, dx: FloatArray, dy: FloatArray, centres: FloatArray,
+                 radii: FloatArray) -> FloatArray:
+    """Distance along each beam (rows) to each circle (columns), _circle_distances."""
+    return _circle_distances(dx[:, None], dy[:, None], *_circle_terms(origin, centres, radii))
+
+
+def _segment_terms(origin: FloatArray, starts: FloatArray,
+                   ends: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+    """Each segment's terms of the beam-segment equations: e = end - start, w = start - origin, w x e."""
+    ex, ey = ends[:, 0] - starts[:, 0], ends[:, 1] - starts[:, 1]
+    wx, wy = starts[:, 0] - origin[0], starts[:, 1] - origin[1]
+    return ex, ey, wx, wy, wx * ey - wy * ex
+
+
+def _segment_distances(dx: FloatArray, dy: FloatArray, ex: FloatArray, ey: FloatArray, wx: FloatArray,
+                       wy: FloatArray, w_cross_e: FloatArray) -> FloatArray:
+    """Distance along beams d to segments (their _segment_terms), elementwise with broadcasting, inf for a miss.
 
     Beam o + t d, segment p + u e: t = (w x e) / (d x e), u = (w x d) / (d x e) with w = p - o; a hit needs
     t >= 0 and 0 <= u <= 1. A beam along a segment (d x e = 0, w x d = 0) hits its nearer end ahead, or at 0
     when the scanner is on it.
     """
-    ex, ey = ends[:, 0] - starts[:, 0], ends[:, 1] - starts[:, 1]           # (S,)
-    wx, wy = starts[:, 0] - origin[0], starts[:, 1] - origin[1]             # (S,)
-    denom = dx[:, None] * ey - dy[:, None] * ex                             # (B, S): d x e
-    w_cross_d = wx * dy[:, None] - wy * dx[:, None]                         # (B, S): w x d
-    w_cross_e = wx * ey - wy * ex                                           # (S,)
+    denom = dx * ey - dy * ex                                               # d x e
+    w_cross_d = wx * dy - wy * dx                                           # w x d
     crossing = denom != 0.0
     safe = np.where(crossing, denom, 1.0)
     t = w_cross_e / safe
@@ -148,12 +171,106 @@ def _segment_hits(origin: FloatArray, dx: FloatArray, dy: FloatArray, starts: Fl
     # Collinear: the beam's line contains the segment; the distances to its ends along the beam.
     along = ~crossing & (w_cross_d == 0.0)
     if along.any():
-        t0 = dx[:, None] * wx + dy[:, None] * wy
-        t1 = t0 + dx[:, None] * ex + dy[:, None] * ey
+        t0 = dx * wx + dy * wy
+        t1 = t0 + dx * ex + dy * ey
         low, high = np.minimum(t0, t1), np.maximum(t0, t1)
         first = np.where(low >= 0.0, low, np.where(high >= 0.0, 0.0, np.inf))
         out = np.where(along, first, out)
     return out
+
+
+def _segment_hits(origin: FloatArray, dx: FloatArray, dy: FloatArray, starts: FloatArray,
+                  ends: FloatArray) -> FloatArray:
+    """Distance along each beam (rows) to each segment (columns), _segment_distances."""
+    return _segment_distances(dx[:, None], dy[:, None], *_segment_terms(origin, starts, ends))
+
+
+def _inputs(origin: ArrayLike, angles: ArrayLike, circles: ArrayLike | None, radii: ArrayLike | None,
+            starts: ArrayLike | None, ends: ArrayLike | None) -> tuple[FloatArray, ...]:
+    """origin (2,), angles (B,), centres (C, 2), radii (C,), starts and ends (S, 2) as float arrays, checked."""
+    o = np.asarray(origin, dtype=float).reshape(2)
+    a = np.asarray(angles, dtype=float).reshape(-1)
+    centres, r = _points(circles), np.asarray(radii if radii is not None else [], dtype=float).reshape(-1)
+    if len(centres) != len(r):
+        raise ValueError(f'{len(centres)} circle centres but {len(r)} radii')
+    a_ends, b_ends = _points(starts), _points(ends)
+    if len(a_ends) != len(b_ends):
+        raise ValueError(f'{len(a_ends)} segment starts but {len(b_ends)} ends')
+    return o, a, centres, r, a_ends, b_ends
+
+
+def _beam_windows(low: FloatArray, width: FloatArray, every: NDArray[np.bool_], first: float, increment: float,
+                  beams: int) -> tuple[IntArray, IntArray]:
+    """The (beam, obstacle) pairs of a uniform fan (beam k at first + increment k, increment > 0) whose beam
+    lies within its obstacle's angular window [low, low + width] (radians, any turn), one beam more on each
+    side; every beam for the obstacles marked `every`. Each pair once, grouped by obstacle in order."""
+    turn = 2.0 * math.pi
+    every = every | ~(width < turn - 6.0 * increment)      # the two turns' windows below could overlap
+    rel = np.mod(np.where(every, first, low) - first, turn)  # the window's start after the first beam, [0, 2 pi)
+    # Each window, and the same window one turn back (a beam's angle lies in [first, first + 2 pi]): (n, 2).
+    window = (rel[:, None] - _TURNS) / increment
+    lows = np.maximum(np.floor(window) - 1.0, 0.0)
+    highs = np.minimum(np.ceil(window + (np.where(every, 0.0, width) / increment)[:, None]) + 1.0, beams - 1.0)
+    if every.any():
+        lows[every] = 0.0
+        highs[every] = (beams - 1.0, -1.0)
+    counts = np.maximum(highs - lows + 1.0, 0.0).astype(np.int64).ravel()
+    owners = np.repeat(np.arange(len(every)).repeat(2), counts)
+    offsets = np.cumsum(counts) - counts
+    beam_index = np.arange(len(owners), dtype=np.int64) + np.repeat(lows.astype(np.int64).ravel() - offsets, counts)
+    return beam_index, owners
+
+
+_TURNS = np.array([0.0, 2.0 * math.pi])
+
+
+def fan_hits(origin: ArrayLike, heading: float, angle_min: float, increment: float, beams: int,
+             circles: ArrayLike | None = None, radii: ArrayLike | None = None, starts: ArrayLike | None = None,
+             ends: ArrayLike | None = None) -> tuple[IntArray, IntArray, FloatArray]:
+    """hit_distances of a scan's beams (at heading + angle_min + increment k, k < beams: Scan.angles() turned by
+    the heading) as (beam, obstacle, distance) triples, only for the pairs where the beam can meet the obstacle:
+    every pair left out is a miss (+inf in hit_distances), and every distance given is hit_distances' own for
+    those angles, bit for bit (the same arithmetic on the same numbers).
+
+    A beam can only meet an obstacle within the angle the obstacle subtends from the origin (a circle's centre
+    direction +- asin(r / distance), a segment's arc between its ends), so only the beams in that window, and one
+    more on each side for rounding, are cast. An obstacle within NEAR of the origin (a segment: of its line) is
+    cast on every beam, so are all obstacles when increment is not > 0. Obstacles are numbered circles first.
+    """
+    angles = heading + (angle_min + increment * np.arange(beams, dtype=float))
+    o, a, centres, r, a_ends, b_ends = _inputs(origin, angles, circles, radii, starts, ends)
+    return _fan_hits(o, a, np.cos(a), np.sin(a), increment, centres, r, a_ends, b_ends)
+
+
+def _fan_hits(o: FloatArray, a: FloatArray, dx: FloatArray, dy: FloatArray, increment: float, centres: FloatArray,
+              r: FloatArray, a_ends: FloatArray, b_ends: FloatArray) -> tuple[IntArray, IntArray, FloatArray]:
+    """fan_hits of checked inputs: beams at angles a = a[0] + increment k (up to rounding), directions (dx, dy)."""
+    n = len(a)
+    windowed = n > 0 and math.isfinite(increment) and increment > 0.0
+    turn = 2.0 * math.pi
+    # Angular windows: a circle's centre direction +- its half-angle, a segment's arc from its start to its end.
+    cx, cy = centres[:, 0] - o[0], centres[:, 1] - o[1]
+    distance = np.hypot(cx, cy)
+    size = np.abs(r)                                                      # the arithmetic sees r^2 only
+    half = np.arcsin(np.minimum(size / np.maximum(distance, NEAR), 1.0))
+    circle_every = ~((distance - size >= NEAR) & windowed)                # nan-safe: a nan is cast on every beam
+    sx, sy, ex, ey = a_ends[:, 0] - o[0], a_ends[:, 1] - o[1], b_ends[:, 0] - o[0], b_ends[:, 1] - o[1]
+    start_angle = np.arctan2(sy, sx)
+    sweep = np.mod(np.arctan2(ey, ex) - start_angle + math.pi, turn) - math.pi
+    line_distance = np.abs(sx * ey - sy * ex) / np.maximum(np.hypot(ex - sx, ey - sy), 1e-300)   # 0: a point
+    segment_every = ~((line_distance >= NEAR) & windowed)
+    beam, owner = _beam_windows(np.concatenate([np.arctan2(cy, cx) - half, start_angle + np.minimum(sweep, 0.0)]),
+                                np.concatenate([2.0 * half, np.abs(sweep)]),
+                                np.concatenate([circle_every, segment_every]), float(a[0]) if n else 0.0,
+                                increment if windowed else 1.0, n)
+    split = int(np.searchsorted(owner, len(r)))                          # circles' pairs first
+    beam_c, circle, beam_s, segment = beam[:split], owner[:split], beam[split:], owner[split:] - len(r)
+    fx, fy, c = _circle_terms(o, centres, r)
+    to_circles = _circle_distances(dx[beam_c], dy[beam_c], fx[circle], fy[circle], c[circle])
+    sex, sey, wx, wy, w_cross_e = _segment_terms(o, a_ends, b_ends)
+    to_segments = _segment_distances(dx[beam_s], dy[beam_s], sex[segment], sey[segment], wx[segment],
+                                     wy[segment], w_cross_e[segment])
+    return beam, owner, np.concatenate([to_circles, to_segments])
 
 
 def cast(origin: ArrayLike, angles: ArrayLike, range_max: float, circles: ArrayLike | None = None,
@@ -161,21 +278,38 @@ def cast(origin: ArrayLike, angles: ArrayLike, range_max: float, circles: ArrayL
          ends: ArrayLike | None = None) -> FloatArray:
     """True ranges (no noise) of beams from `origin` at absolute `angles` (map frame): the nearest circle
     (centres (C, 2), radii (C,)) or segment (starts, ends (S, 2)) surface along each, +inf beyond range_max."""
-    o = np.asarray(origin, dtype=float).reshape(2)
-    a = np.asarray(angles, dtype=float).reshape(-1)
+    o, a, centres, r, a_ends, b_ends = _inputs(origin, angles, circles, radii, starts, ends)
+    best = _nearest(o, np.cos(a), np.sin(a), centres, r, a_ends, b_ends)
+    return np.where(best <= range_max, best, np.inf)
+
+
+def _fan_cast(o: FloatArray, a: FloatArray, increment: float, range_max: float, centres: FloatArray,
+              r: FloatArray, a_ends: FloatArray, b_ends: FloatArray) -> FloatArray:
+    """cast of a scan's beams (angles a[0] + increment k): each obstacle on the beams that can meet it only
+    (fan_hits), the same ranges bit for bit."""
     dx, dy = np.cos(a), np.sin(a)
     best = np.full(len(a), np.inf)
-    centres, r = _points(circles), np.asarray(radii if radii is not None else [], dtype=float).reshape(-1)
-    if len(centres) != len(r):
-        raise ValueError(f'{len(centres)} circle centres but {len(r)} radii')
+    beam, _, distance = _fan_hits(o, a, dx, dy, increment, centres, r, a_ends, b_ends)
+    np.minimum.at(best, beam, distance)
+    # A beam on which several obstacles read 0 (the scanner touches them) may have +0.0 and -0.0, whose minimum's
+    # sign depends on the order they are met in: those beams are cast on all obstacles as cast does, so even the
+    # sign of a zero reading is the same.
+    zero = distance == 0.0
+    if zero.any():
+        touching = np.flatnonzero(np.bincount(beam[zero], minlength=len(a)) > 1)
+        best[touching] = _nearest(o, dx[touching], dy[touching], centres, r, a_ends, b_ends)
+    return np.where(best <= range_max, best, np.inf)
+
+
+def _nearest(o: FloatArray, dx: FloatArray, dy: FloatArray, centres: FloatArray, r: FloatArray, a_ends: FloatArray,
+             b_ends: FloatArray) -> FloatArray:
+    """The nearest surface along each beam (direction dx, dy), every beam against every obstacle."""
+    best = np.full(len(dx), np.inf)
     if len(centres):
         best = np.minimum(best, _circle_hits(o, dx, dy, centres, r).min(axis=1))
-    a_ends, b_ends = _points(starts), _points(ends)
-    if len(a_ends) != len(b_ends):
-        raise ValueError(f'{len(a_ends)} segment starts but {len(b_ends)} ends')
     if len(a_ends):
         best = np.minimum(best, _segment_hits(o, dx, dy, a_ends, b_ends).min(axis=1))
-    return np.where(best <= range_max, best, np.inf)
+    return best
 
 
 def hit_distances(origin: ArrayLike, angles: ArrayLike, circles: ArrayLike | None = None,
@@ -183,11 +317,8 @@ def hit_distances(origin: ArrayLike, angles: ArrayLike, circles: ArrayLike | Non
                   ends: ArrayLike | None = None) -> FloatArray:
     """Distance along each beam (rows) to each obstacle (columns: the circles, then the segments) on its own,
     +inf where the beam misses it: what a scan would read if that obstacle were the only one."""
-    o = np.asarray(origin, dtype=float).reshape(2)
-    a = np.asarray(angles, dtype=float).reshape(-1)
+    o, a, centres, r, a_ends, b_ends = _inputs(origin, angles, circles, radii, starts, ends)
     dx, dy = np.cos(a), np.sin(a)
-    centres, r = _points(circles), np.asarray(radii if radii is not None else [], dtype=float).reshape(-1)
-    a_ends, b_ends = _points(starts), _points(ends)
     return np.concatenate([_circle_hits(o, dx, dy, centres, r), _segment_hits(o, dx, dy, a_ends, b_ends)], axis=1)
 
 
@@ -201,7 +332,8 @@ def scan(spec: LaserSpec, pose: Sequence[float], rng: np.random.Generator | None
     """
     x, y, heading = float(pose[0]), float(pose[1]), float(pose[2])
     angle_min, increment, relative = beam_angles(spec)
-    ranges = cast((x, y), heading + relative, spec.range, circles, radii, starts, ends)
+    o, a, centres, r, a_ends, b_ends = _inputs((x, y), heading + relative, circles, radii, starts, ends)
+    ranges = _fan_cast(o, a, increment, spec.range, centres, r, a_ends, b_ends)
     if spec.noise > 0.0:
         if rng is None:
             raise ValueError('a scanner with noise needs a Generator')

@@ -74,3 +74,30 @@ def test_distance_rows_is_distances_transposed():
     obs = Obstacles([Circle((3.0, 4.0), 1.0), Segment((0.0, 0.0), (5.0, 1.0)), Segment((2.0, 2.0), (2.0, 2.0))])
     pts = rng.uniform(-5, 10, (50, 2))
     assert obs.distance_rows(pts[:, 0], pts[:, 1]) == pytest.approx(obs.distances(pts).T)
+
+
+def test_near_is_clearance_below_a_distance():
+    # Obstacles.near tests only the (point, obstacle) pairs whose bounding boxes come close: the same answer as
+    # clearance < within, also on a grid where points lie exactly at the distance, and with a nan point.
+    rng = np.random.default_rng(5)
+    for trial in range(300):
+        grid = trial % 2 == 1
+        n_c, n_s, m = rng.integers(0, 15), rng.integers(0, 30), rng.integers(0, 200)
+        if grid:
+            items = [Circle(tuple(map(float, c)), float(r)) for c, r in zip(rng.integers(-5, 5, (n_c, 2)),
+                                                                            rng.integers(0, 3, n_c))]
+            items += [Segment(tuple(map(float, s)), tuple(map(float, s + d)))
+                      for s, d in zip(rng.integers(-5, 5, (n_s, 2)), rng.integers(-2, 3, (n_s, 2)))]
+            pts = rng.integers(-6, 6, (m, 2)) + rng.choice([0.0, 0.12, -0.12, 0.5], (m, 2))
+        else:
+            items = [Circle(tuple(map(float, c)), float(r)) for c, r in zip(rng.uniform(-10, 10, (n_c, 2)),
+                                                                            rng.uniform(0, 2, n_c))]
+            items += [Segment(tuple(map(float, s)), tuple(map(float, s + d)))
+                      for s, d in zip(rng.uniform(-10, 10, (n_s, 2)), rng.uniform(-1, 1, (n_s, 2)))]
+            pts = rng.uniform(-11, 11, (m, 2))
+            if m:
+                pts[0] = np.nan
+        obs = Obstacles(items)
+        within = float(rng.choice([0.12, 0.0, -0.1, 0.5, 3.0]))
+        want = obs.clearance(pts) < within if len(obs) else np.zeros(m, dtype=bool)
+        np.testing.assert_array_equal(obs.near(pts, within), want)

@@ -128,3 +128,13 @@ def test_two_unknown_movers_crossing_stay_two_tracked_movers_and_never_a_wall() 
     assert len(crossing) > 20
     assert all(len(tick.belief.movers) == 2 for tick in crossing if tick.belief is not None)
     assert all(not tick.belief.seen_obstacles for tick in ticks if tick.belief is not None)
+
+
+def test_a_misplaced_map_wall_does_not_hide_the_true_wall_s_end() -> None:
+    """misplaced_obstacles:1000025: the map's wall stops 0.14 m short of the true one and overlaps it, so no scan
+    sees through it, and the true end's scan points within EXPLAINED of the map wall's end counted as that wall:
+    FAStep-Route rounded the map's end and clipped the true one by 17.8 mm. A map wall now explains no point
+    beyond its ends (fusion.END_SLACK), and the run is clean."""
+    from fastep_core.experiments import cached_scenario
+    robot = simulate(cached_scenario('misplaced_obstacles:1000025'), 'fastep_route', 0).robots[0]
+    assert robot.reached and not robot.collided and robot.min_clearance > 0.0

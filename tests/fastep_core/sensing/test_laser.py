@@ -8,7 +8,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from fastep_core.sensing.laser import LaserSpec, beam_angles, cast, main, scan
+from fastep_core.sensing.laser import LaserSpec, beam_angles, cast, fan_hits, hit_distances, main, scan
 
 
 def test_circle_straight_ahead() -> None:
@@ -124,3 +124,51 @@ def test_main_prints_one_scan(capsys: pytest.CaptureFixture[str]) -> None:
     lines = capsys.readouterr().out.splitlines()
     assert lines[0].startswith('angle_min') and len(lines) == 9
     assert lines[5].split() == ['0.00', 'deg', '4.000']
+
+
+def _random_world(rng: np.random.Generator, grid: bool) -> dict[str, Any]:
+    """Circles and segments; on a grid (integer coordinates, axis-aligned walls) scanners sit on their lines."""
+    n_c, n_s = int(rng.integers(0, 20)), int(rng.integers(0, 20))
+    if grid:
+        starts = rng.integers(-5, 5, (n_s, 2)).astype(float)
+        ends = starts.copy()
+        ends[np.arange(n_s), rng.integers(0, 2, n_s)] += rng.integers(-3, 4, n_s)
+        return {'circles': rng.integers(-5, 5, (n_c, 2)).astype(float), 'radii': rng.integers(0, 3, n_c) * 1.0,
+                'starts': starts, 'ends': ends}
+    starts = rng.uniform(-10, 10, (n_s, 2))
+    return {'circles': rng.uniform(-10, 10, (n_c, 2)), 'radii': rng.uniform(-0.5, 2.0, n_c), 'starts': starts,
+            'ends': starts + rng.uniform(-4, 4, (n_s, 2))}
+
+
+def test_a_scan_reads_what_casting_every_beam_on_every_obstacle_reads_bit_for_bit() -> None:
+    # scan() casts each obstacle on the beams within its angle only (fan_hits): the ranges must be cast()'s own,
+    # bit for bit (even a zero's sign), from anywhere: on a wall's line, on a wall, in or on a circle.
+    rng = np.random.default_rng(3)
+    for trial in range(300):
+        world = _random_world(rng, grid=trial % 2 == 1)
+        origin = rng.integers(-5, 5, 2) * 1.0 if trial % 2 else rng.uniform(-6, 6, 2)
+        if trial % 3 == 0 and len(world['starts']):
+            origin = world['starts'][0] + rng.uniform(0, 1) * (world['ends'][0] - world['starts'][0])
+        spec = LaserSpec(range=float(rng.choice([3.0, 10.0])), fov=float(rng.choice([math.tau, math.pi, 0.5])),
+                         beams=int(rng.choice([1, 7, 90, 360])), noise=0.0)
+        heading = float(rng.choice([0.0, math.pi / 2, rng.uniform(-7, 7)]))
+        _, _, relative = beam_angles(spec)
+        want = cast(origin, heading + relative, spec.range, **world)
+        got = scan(spec, (origin[0], origin[1], heading), **world).ranges
+        assert got.tobytes() == want.tobytes()
+
+
+def test_fan_hits_are_hit_distances_where_a_beam_can_meet_the_obstacle() -> None:
+    rng = np.random.default_rng(4)
+    for trial in range(200):
+        world = _random_world(rng, grid=trial % 2 == 1)
+        origin = rng.uniform(-6, 6, 2)
+        heading, angle_min, increment, beams = rng.uniform(-4, 4), -math.pi, math.tau / 360, 360
+        full = hit_distances(origin, heading + (angle_min + increment * np.arange(beams, dtype=float)), **world)
+        beam, obstacle, distance = fan_hits(origin, heading, angle_min, increment, beams, **world)
+        assert len(set(zip(beam.tolist(), obstacle.tolist()))) == len(beam)           # each pair once
+        rebuilt = np.full_like(full, np.inf)
+        rebuilt[beam, obstacle] = distance
+        assert rebuilt.tobytes() == full.tobytes()
+        if full.size:
+            assert len(beam) < 0.5 * full.size or len(full[0]) < 3                    # and far fewer pairs
