@@ -21,7 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 from sensor_msgs.msg import LaserScan
 
-from fastep_core.perception.belief import Belief, Perception
+from fastep_core.perception.belief import Belief, Perception, perception_margin
 from fastep_core.planning.others import OtherRobot
 from fastep_core.world import World
 from msg_tools import convert
@@ -42,6 +42,7 @@ class ScanPerception:
         self.map_world: World | None = None
         self.last_scan = -np.inf
         self.scans = 0
+        self.margin = 0.0   # the guard's margin beyond the radius once the robot plans in its scans
 
     def reset(self) -> None:
         """A new map: start believing it afresh at the next scan."""
@@ -59,6 +60,7 @@ class ScanPerception:
         scan = convert.laser_scan_to_scan(msg, t)
         spec = convert.laser_spec(msg, self.noise)
         key = (spec.range, spec.fov, spec.beams)
+        self.margin = perception_margin(spec)
         if self.perception is None or self.map_world is not map_world or key != self.spec_key:
             self.perception, self.map_world, self.spec_key = Perception(spec, map_world), map_world, key
         belief = self.perception.update(t, pose, scan, others)

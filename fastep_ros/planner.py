@@ -540,6 +540,7 @@ class PlannerNode(ManagedNode):
             self.get_logger().warning(self.scan_problem, throttle_duration_sec=5.0)
             return
         self.scan_problem = ''
+        nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
         if belief.world is not nav.world:
             nav.world = belief.world
         self.tracked_pub.publish(convert.belief_to_marker_array(belief, self.stamp(), self.frame_id))

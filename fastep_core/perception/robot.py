@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.dynamic_world import DynamicWorld
-from fastep_core.perception.belief import Belief, Perception, heading, sensor_generator
+from fastep_core.perception.belief import Belief, Perception, heading, perception_margin, sensor_generator
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.sensing.laser import LaserSpec
@@ -33,6 +33,7 @@ class SensingRobot:
         self.spec, self.model, self.index, self.truth = spec, model, index, truth
         self.rng = sensor_generator(seed, index)
         self.perception = Perception(spec, navigator.world)
+        navigator.guard_check.obstacle_margin = perception_margin(spec)
 
     @property
     def belief(self) -> Belief:

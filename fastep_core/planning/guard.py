@@ -2,8 +2,9 @@
 
 Whatever chose the command (the kinematic controller, a manoeuvre, a recovery), the guard predicts where one
 control tick of it takes the robot and stops the robot instead when that point is
-- within the robot's radius of an obstacle surface and nearer than where the robot is now (a robot already
-  that near may still move away), or
+- within the robot's radius (plus `obstacle_margin`: a robot planning in what its scans show keeps a little more)
+  of an obstacle surface and nearer than where the robot is now (a robot already that near may still move
+  away), or
 - within the sum of both radii of another robot, plus the other robot's travel in one tick (at max_speed, or
   at its own speed when it reports more: a mover) and a quarter of the clearance margin (odometry a tick old,
   a command a tick late on a real graph), and nearer than now.
@@ -42,6 +43,9 @@ class Guard:
 
     def __init__(self, model: RobotModel, radius: float, params: PlannerParams) -> None:
         self.model, self.radius, self.params = model, radius, params
+        # Kept beyond the radius from obstacle surfaces: 0 on a map that is the truth; a robot that plans in what
+        # its scans show (fastep_core/perception) keeps PERCEPTION_MARGIN, as its surfaces are known only that well.
+        self.obstacle_margin = 0.0
         self.stop: Stop | None = None   # why the last refused command was refused ...
         self.reason = ''                # ... in words, for the status
         # A disc of the world known to be obstacle-free: any point within (clearance - radius) of a point whose
@@ -59,9 +63,10 @@ class Guard:
         if len(obstacles) and (free is None or free[0] is not world or
                                math.hypot(after[0] - free[1][0], after[1] - free[1][1]) >= free[2]):
             then = float(obstacles.clearance(after))
-            if then < self.radius and then < float(obstacles.clearance(position)):
+            keep = self.radius + self.obstacle_margin
+            if then < keep and then < float(obstacles.clearance(position)):
                 return self._refuse(command, Stop.OBSTACLE, 'stopped: an obstacle is within the robot radius ahead')
-            self._free = (world, after, then - self.radius)
+            self._free = (world, after, then - keep)
         if len(others):
             # All the others at once (one by one, this loop was a tenth of a 40-robot run); the same numbers.
             centres, velocities, radii = other_arrays(others)
