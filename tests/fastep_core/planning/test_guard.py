@@ -27,6 +27,17 @@ def test_the_guard_stops_a_tick_into_the_radius_and_lets_a_robot_inside_move_awa
     assert guard.check(AHEAD, inside, away, 0.05, []) is away
 
 
+def test_a_robot_planning_in_its_scans_keeps_the_perception_margin_too():
+    """A step ending 1 cm beyond the radius from a surface is let through on a map that is the truth and refused
+    for a robot whose surfaces come from its scans (obstacle_margin, belief.PERCEPTION_MARGIN)."""
+    state, step = np.array([5.0, 5.0]), np.array([1.8, 0.0])   # 0.09 m in one tick: ends 0.51 m from the surface
+    exact = Guard(PointMass(), 0.5, PlannerParams())
+    assert exact.check(AHEAD, state, step, 0.05, []) is step
+    sensing = Guard(PointMass(), 0.5, PlannerParams())
+    sensing.obstacle_margin = 0.02
+    assert np.all(sensing.check(AHEAD, state, step, 0.05, []) == 0.0) and sensing.stop is Stop.OBSTACLE
+
+
 def test_a_free_disc_learnt_in_one_world_is_not_trusted_in_a_new_one():
     """The planner node swaps the navigator's world when the map changes (a new obstacle): what the guard
     learnt was free in the old world (here 11 m round the robot) must be checked again in the new one."""
