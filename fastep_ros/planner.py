@@ -508,9 +508,10 @@ class PlannerNode(ManagedNode):
         except ValueError as exc:
             self.get_logger().warning(f'ignoring /movers: {exc}', throttle_duration_sec=5.0)
             return
-        stamps = [convert.stamp_to_seconds(m.header.stamp) for m in msg.markers[1:2]]
+        # Every marker after the leading DELETEALL carries the map node's stamp; unset: when it came.
+        stamp = convert.stamp_to_seconds(msg.markers[1].header.stamp) if len(msg.markers) > 1 else 0.0
         self.known_movers = movers
-        self.movers_stamp = stamps[0] if stamps and stamps[0] > 0.0 else self.now()
+        self.movers_stamp = stamp if stamp > 0.0 else self.now()
 
     def movers_at(self, t: float) -> list[OtherRobot]:
         """The known movers predicted from their stamp to t (at most max_extrapolation); none once older than

@@ -40,7 +40,7 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
 from fastep_core.planning.recovery import BackUp, StopTimer, free_room
 from fastep_core.planning.step import StepProblem, plan_step_passing_right
-from fastep_core.planning.yielding import Yielding
+from fastep_core.planning.yielding import Yield, Yielding
 from fastep_core.world import World
 
 __all__ = ['FAStepKinematic', 'FAStepPaper', 'Mode', 'Navigator', 'OtherRobot']
@@ -210,9 +210,7 @@ class Navigator:
         state = np.asarray(state, dtype=float)
         if not np.isfinite(state).all():
             return stop
-        dt = self.params.dt
-        yielded = self.yielding.check(state, stop, others,
-                                      lambda c: self.guard_check.check(self.world, state, c, dt, others) is c)
+        yielded = self.yield_to_movers(state, stop, self.params.dt, others)
         if yielded.kind != 'evading':
             return stop
         self.yield_kind, self.reason = yielded.kind, yielded.reason
@@ -280,8 +278,7 @@ class Navigator:
             self._target = target
         command = self.controller.command(state, target, dt)
         # Movers: slow down, wait or get out of the way over the time ahead (planning/yielding.py).
-        yielded = self.yielding.check(state, command, others,
-                                      lambda c: self.guard_check.check(self.world, state, c, dt, others) is c)
+        yielded = self.yield_to_movers(state, command, dt, others)
         self.yield_kind = yielded.kind
         if yielded.kind:
             command, self.reason = yielded.command, yielded.reason
@@ -294,6 +291,12 @@ class Navigator:
             if not (self.manoeuvring is not None and self.start_manoeuvre(state, t, others)):
                 self.backup.start(t)
         return guarded
+
+    def yield_to_movers(self, state: FloatArray, command: FloatArray, dt: float,
+                        others: Sequence[OtherRobot]) -> Yield:
+        """planning/yielding.py on this tick's command; a move out of a mover's way must pass the guard."""
+        return self.yielding.check(state, command, others,
+                                   lambda c: self.guard_check.check(self.world, state, c, dt, others) is c)
 
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         """The algorithm: the point to drive to this tick (goal or waypoint), None to stand still."""
