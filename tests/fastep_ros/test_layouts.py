@@ -112,9 +112,13 @@ def test_every_layout_runs_the_same_graph_and_the_same_run(tmp_path: Path) -> No
         assert 'Traceback' not in run['stderr'], (layout, run['stderr'])
         for robot, sim in zip(run['json']['runs'][0]['robots'], reference.robots):
             assert robot['reached'] and not robot['collided'], (layout, robot['status'])
-            # lock step: the same steps as fastep-sim, within what the live loop's odometry timing allows
+            # lock step: the same steps as fastep-sim, within what the live loop's odometry timing allows. Where
+            # the two robots meet, which odometry each planner has seen decides how long one waits for the other:
+            # under load (4 launches at once, 2026-11-26) r2 arrived at 13.4-13.6 s in 7 runs of 8 and at 17.6 s
+            # in one (main 59bb812; at 869f5fa 19.2-20.8 s in 3 of 4), against fastep-sim's 13.4 s, and CI once
+            # failed at 18.05 s against 15.2 s. The time may only come out later, and by one such wait at most.
             assert robot['path_length'] == pytest.approx(sim.path_length, rel=0.05), layout
-            assert robot['sim_time'] == pytest.approx(sim.sim_time, rel=0.15), layout
+            assert sim.sim_time * 0.85 <= robot['sim_time'] <= sim.sim_time * 1.6, layout
     # map, 2 plants, 2 planners, clock: one process each, one per robot (+ map and clock), or one
     assert {layout: run['processes'] for layout, run in runs.items()} == {'node': 6, 'robot': 4, 'graph': 1}
     expected = {'/map', '/clock', '/r1/plant', '/r1/planner', '/r2/plant', '/r2/planner'}
