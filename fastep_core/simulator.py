@@ -133,6 +133,8 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     pending: list[list[float] | None] = [None] * len(specs)
     dt = params.dt
     n_ticks = int(math.ceil(params.max_sim_time / dt))
+    by_name = sorted(range(len(specs)), key=lambda k: specs[k].name)   # robot indices in the order of their names
+    name_rank = [by_name.index(k) for k in range(len(specs))]          # each robot's place in that order
     step_times: list[float] = []               # every robot's position after each step, for the margins
     step_positions: list[FloatArray] = []
 
@@ -145,9 +147,14 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
         # Every robot sees the others as they are at the start of the tick: made once, viewed by each robot.
         robots = [OtherRobot(spec.name, (state[0], state[1]), (velocity[0], velocity[1]), spec.radius)
                   for spec, state, velocity in zip(specs, states, velocities)]
+        # In the order of their names, as a planner node lists the robots it follows (it hears of them in
+        # whatever order DDS discovers them): the order of a sum decides its last bits, and so a near tie.
+        seen_robots = [robots[k] for k in by_name]
         if planner_map is not None:   # known movers where the map reports them now, seen by every robot
             robots += planner_map.others(t)
-        views = OtherRobots.views(robots, len(specs))
+            seen_robots += robots[len(specs):]
+        named_views = OtherRobots.views(seen_robots, len(specs))
+        views = [named_views[rank] for rank in name_rank]
         for i, nav in enumerate(navigators):
             if not active[i]:
                 commands.append(np.zeros(2))
@@ -169,8 +176,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 continue
             start = time.perf_counter()
             model = nav.model
-            velocities[i] = model.velocity(states[i], commands[i])
             new_state = model.integrate(states[i], commands[i], dt)
+            # The others see it as its odometry tells on the graph: the twist it drives at, along its new heading.
+            velocities[i] = model.velocity(new_state, commands[i])
             runs[i].compute_time += time.perf_counter() - start
             runs[i].path_length += float(np.hypot(*(new_state[:2] - states[i][:2])))
             states[i] = new_state

@@ -19,17 +19,21 @@ no node misses the beginning of the run because DDS discovery took a while. DDS 
 connection each on its own (under load, seconds apart), so a subscriber may still miss the first ticks: see
 lock step.
 
-Lock step (sync_topics: fastep-launch lists every plant's odom and every planner's cmd_vel, with step = the
-planners' control period, so each of them publishes once per tick): each tick waits, up to sync_timeout wall
-seconds (default 5), until every listed topic has delivered a message since the previous tick, i.e. every
-plant has integrated and every planner has acted on the last tick. Simulated time then never runs ahead of a
-busy node, so the live loop behaves like the in-process simulator whatever the machine's load, and rtf is an
-upper bound. A topic that timed out (its node died) is not waited for again until it publishes again. The
-timeout is long because a loaded machine starves a node for a second or two at times, and with 1 s the clock
-then ran on without it (a planner stopped for 2.5 s let 6 s of simulated time pass); a dead node costs those
-5 s once. A topic that has not answered once since the run started is waited for up to wait_timeout: a node
-still being matched is late, not dead. /clock is best effort, so while the clock waits it says the current time
-again every HOLD_PERIOD: a node that lost a tick's message, or was matched after it, still gets it.
+Lock step (sync_topics, with step = the planners' control period): each tick waits, up to sync_timeout wall
+seconds (default 5), until every listed topic has delivered a message that answers it since the previous tick: a
+message with a stamp (a header's, or a rosgraph_msgs/Clock's time) answers it if stamped after the tick before,
+one without a stamp whatever tick is current. fastep-launch lists every planner's cmd_vel (TwistStamped, stamped
+with the tick it was decided for: a planner in lock step acts on its plant's odometry of the tick, so its command
+also says that the plant has integrated) and the `clock_ack` of its observers (its own monitor, fastep-record: each
+says the /clock time it has taken, so neither falls behind the graph and loses messages), and runs plants and
+planners in lock step (fastep_ros.lock_step): the live graph then steps exactly like fastep-sim, whatever the
+machine's load and the order DDS delivers messages in, and rtf is an upper bound. A topic that timed out (its
+node died) is not waited for again until it publishes again. The timeout is long because a loaded machine starves
+a node for a second or two at times, and with 1 s the clock then ran on without it (a planner stopped for 2.5 s
+let 6 s of simulated time pass); a dead node costs those 5 s once. A topic that has not answered once since the
+run started is waited for up to wait_timeout: a node still being matched is late, not dead. /clock is best
+effort, so while the clock waits it says the current time again every HOLD_PERIOD: a node that lost a tick's
+message, or was matched after it, still gets it.
 """
 
 from __future__ import annotations
@@ -45,6 +49,7 @@ from rosgraph_msgs.msg import Clock as ClockMsg
 
 from fastep_ros.common import CLOCK_JUMP_LIMIT, RATE_RANGE, StartupError, check_range, declare, node_main
 from fastep_ros.limits import RTF_RANGE, STEP_RANGE
+from fastep_ros.lock_step import STAMP_EPS
 from msg_tools import convert, interface
 
 __all__ = ['ClockNode', 'main', 'tick_plan']
@@ -69,6 +74,17 @@ def _message_type(type_name: str) -> Any:
         return getattr(importlib.import_module(f'{package}.{kind}'), name)
     except (ValueError, ImportError, AttributeError):
         return None
+
+
+def _stamp(msg: Any) -> float | None:
+    """The time a sync message answers: its header's stamp, a rosgraph_msgs/Clock's time (an observer's
+    acknowledgement of a tick: fastep-record's and fastep-launch's `clock_ack`); None if it carries none."""
+    header = getattr(msg, 'header', None)
+    if header is not None:
+        return convert.stamp_to_seconds(header.stamp)
+    if isinstance(msg, ClockMsg):
+        return convert.stamp_to_seconds(msg.clock)
+    return None
 
 
 def tick_plan(rtf: float, step: float, max_rate_hz: float) -> tuple[float, float]:
@@ -118,6 +134,7 @@ class ClockNode(Node):
             # beyond max_rate_hz the clock runs slower than rtf instead (rtf is an upper bound here anyway).
             self.increment = self.step
         self.ticks = 0
+        self.left = -math.inf   # the time before the current tick (what a stamped answer must be later than)
         self.steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.created = self.steady.now()
         self.matched_at: float | None = None  # steady seconds when the subscribers were all there
@@ -148,13 +165,18 @@ class ClockNode(Node):
                 for type_name in types.get(topic, []):
                     msg_type = _message_type(type_name)
                     if msg_type is not None:
-                        def on_message(_msg: object, t: str = topic) -> None:   # a def: mypy cannot type a lambda
-                            self.on_sync(t)
+                        def on_message(msg: Any, t: str = topic) -> None:   # a def: mypy cannot type a lambda
+                            self.on_sync(t, _stamp(msg))
                         self.sync[topic].sub = self.create_subscription(msg_type, topic, on_message, 10)
                         break
         return all(s.sub is not None and self.count_publishers(t) > 0 for t, s in self.sync.items())
 
-    def on_sync(self, topic: str) -> None:
+    def on_sync(self, topic: str, stamp: float | None = None) -> None:
+        """A message on a sync topic. One with a stamp answers the current tick if it is stamped after the tick
+        before (a planner's cmd_vel decided for the current time; a 50 Hz plant's odometry of its last step), one
+        without answers whatever tick is current."""
+        if stamp is not None and stamp <= self.left + STAMP_EPS:
+            return   # an answer to an earlier tick (in lock step a planner's first command is stamped 0)
         self.sync[topic].fresh = True
         self.sync[topic].absent = False
         self.sync[topic].answered = self.ticks > 0
@@ -218,6 +240,7 @@ class ClockNode(Node):
         self.pub.publish(convert.seconds_to_clock(self.time))
 
     def advance(self) -> None:
+        self.left = self.time
         for sync in self.sync.values():
             sync.fresh = False
         self.last_tick = self.seconds()

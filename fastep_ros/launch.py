@@ -48,7 +48,7 @@ from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import EXECUTOR_ENV, EXECUTORS
 from fastep_ros.layouts import DEFAULT_LAYOUT, LAYOUTS, Member, group
 from fastep_ros.layouts import command as layout_command
-from fastep_ros.limits import RTF_RANGE, graph_problem, robot_name_problem
+from fastep_ros.limits import RATE_RANGE, RTF_RANGE, graph_problem, robot_name_problem
 from fastep_ros.progress import Progress
 
 __all__ = ['main']
@@ -57,6 +57,7 @@ PROG = 'fastep-launch'
 GRACE = 5.0             # wall seconds a process gets to stop after SIGINT
 STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the world and the other robots
 SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
+END_WAIT = 5.0          # wall seconds the report waits at most for odometry up to the end of each robot's run
 STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
 DISCOVERY_WAIT = 1.0    # wall seconds the launcher looks for another graph on its domain before it starts any node
 # (DDS took 0 to 3.2 s to show an existing publisher to a new process here: one seen later stops the launch, by the
@@ -126,6 +127,10 @@ def plant_params(spec: RobotSpec, sim_time: bool, params: PlannerParams | None =
     the scenario's planner parameters), as fastep-sim's model does. A robot with a `sensor` scans the true world
     of `scenario` (the file or built-in name), its noise from the run's `seed` stream `index`, as in fastep-sim."""
     out: dict[str, Any] = {'model': spec.model, 'start': [float(v) for v in spec.start], 'use_sim_time': sim_time}
+    if sim_time:
+        # Exact lock step (fastep_ros.lock_step): one integration step per control period, each with the command
+        # its planner stamped at the step's start.
+        out.update(lock_step=True, use_stamped_cmd_vel=True, rate_hz=1.0 / (params or PlannerParams()).dt)
     if spec.sensor is not None:
         out.update(sensor=[float(spec.sensor.range), float(spec.sensor.fov), float(spec.sensor.beams),
                            float(spec.sensor.noise)], scenario=scenario, seed=int(seed), robot_index=int(index),
@@ -144,6 +149,8 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
     out: dict[str, Any] = {'algorithm': algorithm, 'model': spec.model, 'robot_radius': float(spec.radius),
                            'seed': int(seed), 'seed_stream': index,
                            'control_rate_hz': 1.0 / scenario.planner.dt, 'use_sim_time': sim_time}
+    if sim_time:
+        out.update(lock_step=True, use_stamped_cmd_vel=True)   # exact lock step (fastep_ros.lock_step)
     if spec.model == 'tractor_trailer':
         out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
                    hitch_offset=float(spec.hitch_offset))
@@ -275,10 +282,14 @@ class Monitor:
         from nav_msgs.msg import Odometry
         from nav_msgs.msg import Path as PathMsg
         from rclpy.qos import QoSProfile, ReliabilityPolicy
+        from rosgraph_msgs.msg import Clock
 
         from msg_tools import interface
         from msg_tools.interface import LATCHED, RELIABLE, offered_qos, robot_topic
 
+        # In lock step the clock waits for this monitor's acknowledgement of each tick, or at a high rtf its odometry
+        # queue fell behind the graph and messages were lost (a shorter path, a late arrival).
+        self.ack_pub = self.node.create_publisher(Clock, interface.CLOCK_ACK, RELIABLE)
         # What fastep-record (started as /recorder) has received: topic -> message count.
         self.node.create_subscription(DiagnosticStatus, '/recorder/' + interface.RECORDING.removeprefix('~/'),
                                       self.on_recording, interface.STATUS_QOS)
@@ -333,6 +344,7 @@ class Monitor:
 
         def on_clock(msg: Any) -> None:
             self.sim_now = max(self.sim_now or 0.0, self.convert.stamp_to_seconds(msg.clock))
+            self.ack_pub.publish(msg)   # lock step: the clock waits for this monitor too (it must see every tick)
         self.node.create_subscription(Clock, CLOCK, on_clock,
                                       QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
 
@@ -361,7 +373,7 @@ class Monitor:
         robot.status = self.convert.diagnostic_to_dict(msg)
         if robot.started_at is None and robot.status.get('message') in ('kinematic', 'avoiding'):
             try:
-                robot.started_at = float(robot.status['t'])
+                robot.started_at = float(robot.status.get('since', robot.status['t']))
             except (KeyError, ValueError):
                 pass
         for key in ('activations', 'escapes', 'manoeuvres'):
@@ -476,17 +488,20 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             # Started before the goals and the clock, so the recording holds the whole run.
             procs.start('fastep-record', 'recorder', '/', {'output': str(args.record.resolve()),
                                                            'scenario': _scenario_arg(args.scenario),
-                                                           'use_sim_time': sim_time})
+                                                           'use_sim_time': sim_time, 'clock_ack': sim_time})
         if sim_time:
             # The clock holds time 0 until the map, every plant and planner and, last, the monitor follow it.
-            # Lock step: each tick of one control period waits for every plant's odometry and every planner's
-            # command, so simulated time never runs ahead of a busy node.
+            # Lock step: each tick of one control period waits for every planner's command stamped with it (each
+            # planner acts on its plant's odometry of that tick), so simulated time never runs ahead of a busy node;
+            # ticks as fast as --rtf asks (max_rate_hz not below it).
             procs.start('fastep-clock', 'clock', '/', {
                 'rtf': float(args.rtf), 'step': scenario.planner.dt,
+                'max_rate_hz': min(RATE_RANGE[1], max(400.0, float(args.rtf) / scenario.planner.dt)),
                 # The recorder subscribes to /clock twice: for its own time, and to record it.
                 'wait_for_subscribers': 2 + 2 * len(scenario.robots) + 2 * (args.record is not None),
-                'sync_topics': [robot_topic(spec.name, topic)
-                                for spec in scenario.robots for topic in (CMD_VEL, ODOM)]})
+                # ... and for the observers (this monitor, the recorder) to have taken the tick before.
+                'sync_topics': [robot_topic(spec.name, CMD_VEL) for spec in scenario.robots] +
+                               ['/fastep_launch/clock_ack'] + ['/recorder/clock_ack'] * (args.record is not None)})
         procs.launch()   # the nodes above, in the processes of --layout
         robots = monitor.robots
         names = set(robots)
@@ -554,8 +569,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                     # The planner stamps its status with its own clock: that is when it happened, however late
                     # this monitor gets to the message.
                     try:
-                        stamped = float(robot.status['t']) - (robot.started_at if robot.started_at is not None
-                                                              else t0)
+                        began = robot.started_at if robot.started_at is not None else t0
+                        stamped = float(robot.status.get('since', robot.status['t'])) - began
                     except (KeyError, ValueError):
                         stamped = now
                     robot.outcome, robot.end_time = message, stamped
@@ -577,9 +592,16 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             progress.update(outcomes.count('arrived'), len(outcomes) - outcomes.count('') - outcomes.count('arrived'),
                             now)
         progress.close()
-        # Let the last odometry in before reporting.
-        end = time.monotonic() + 0.2
-        while time.monotonic() < end:
+        # Let the last odometry in before reporting: at least 0.2 s, and until every robot's reaches the time its
+        # run ended (at a high --rtf this monitor's odometry queue lags its status messages by seconds of
+        # simulated time), for END_WAIT wall seconds at most.
+        short, end = time.monotonic() + 0.2, time.monotonic() + END_WAIT
+
+        def odometry_behind() -> bool:
+            return any(r.end_time is not None and (not r.rows or r.rows[-1][0] < r.end_time - 1e-6 +
+                                                   (r.started_at if r.started_at is not None else t0))
+                       for r in robots.values())
+        while time.monotonic() < short or (odometry_behind() and time.monotonic() < end):
             monitor.spin(0.02)
         collided, written = report(args, scenario, monitor, t0, sim_time)
         code = 0 if all(r.outcome == 'arrived' for r in robots.values()) and not collided else 1

@@ -47,6 +47,11 @@ Goals: one subscription that volatile and latched publishers both reach (fastep_
 On simulated time with no /clock for clock_timeout wall seconds: WARN, reason "no /clock ...", `stale` for a robot
 under way (a zero cmd_vel is sent). Not active (lifecycle, fastep_ros.lifecycle): OK, `inactive`.
 Also `/diagnostics` (fastep_ros.diagnostics); the tunable parameters change at runtime (docs/parameters.md).
+Lock step (`lock_step`, on simulated time; fastep-launch sets it): instead of on the control timer, the planner
+acts once on each odometry stamp t of its robot, when every other robot's odometry stamped t (and its laser's scan
+stamped t) is in, as of the node time t, and stamps cmd_vel t: the live graph then steps exactly like fastep-sim
+(fastep_ros.lock_step). Should its own odometry fall a whole control period behind the clock (its plant died),
+it acts on the control timer as without lock step.
 """
 
 from __future__ import annotations
@@ -87,6 +92,7 @@ from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.frames import LOCALIZATION_QOS
 from fastep_ros.goals import GoalSubscription
 from fastep_ros.lifecycle import ManagedNode
+from fastep_ros.lock_step import STAMP_EPS, LockStep
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.perception import ScanPerception
 from fastep_ros.robots import RobotFollower
@@ -183,7 +189,14 @@ class PlannerNode(ManagedNode):
                                           '(geometry_msgs/PoseWithCovarianceStamped, the map pose of base_link, e.g. '
                                           'amcl_pose) giving map -> odom; empty: map -> odom is the identity '
                                           '(simulation)')
+        lock_step = declare(self, 'lock_step', False, 'on simulated time: act once per own odometry stamp, when '
+                            'the other robots\' odometry (and the scan) of that time are in, and stamp cmd_vel with '
+                            'it, so a graph steps like fastep-sim (fastep-launch sets it; needs use_stamped_cmd_vel '
+                            'and plants in lock step)')
         self._check(length, trailer_length, hitch_offset, other_radius, workspace)
+        self.lock_step = bool(lock_step)
+        self.lock = LockStep()
+        self.pending_scan: LaserScan | None = None   # lock step: the newest scan, perceived when acted on
         self.body = _Body(self.model, length, trailer_length, hitch_offset)
         self.stamped = stamped
         self.workspace_param: tuple[float, float, float, float] | None = (
@@ -208,6 +221,7 @@ class PlannerNode(ManagedNode):
         self.odom_problem = ''
         self.odom_heard = 0            # own odometry messages taken
         self.trailer: float | None = None
+        self.trailer_stamp = -math.inf
         self.fault_logged = False
         self.hold = ''  # why the robot is held still although it has a goal ('' when it is not)
         self.goal_refused = ''  # why the last goal was refused, while the goal before it is driven to
@@ -215,6 +229,7 @@ class PlannerNode(ManagedNode):
         self.odom_lag = 0.0
         # What was last published.
         self._status_key: tuple[Any, ...] | None = None
+        self._status_since = 0.0
         self._plan_key: tuple[Any, ...] | None = None
         self._target_key: tuple[float, ...] | None = None
 
@@ -238,7 +253,8 @@ class PlannerNode(ManagedNode):
         self.own_odom_topic = self.odom_sub.topic_name
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
         self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
-                                    lambda: self.publish_status(force=True))
+                                    lambda: self.publish_status(force=True),
+                                    on_odometry=self.lock_try if self.lock_step else None)
         if self.localization_topic:
             # Best available durability: AMCL offers amcl_pose transient-local (then its last pose comes at once);
             # a volatile publisher matches too, without incompatible-QoS warnings.
@@ -252,11 +268,11 @@ class PlannerNode(ManagedNode):
         self.known_movers: list[OtherRobot] = []
         self.movers_stamp = -math.inf
         self.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
-        self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
+        self.scan_sub = self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
         self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
         self.scan_problem = ''
-        self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control)
-        steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control_tick)
+        steady = self.wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
         self.wall_ticks = 0
         self.wall_timer = self.create_timer(DISCOVERY_PERIOD, self.on_wall_tick, clock=steady)
         self.discover()
@@ -417,14 +433,17 @@ class PlannerNode(ManagedNode):
             self.odom_problem = f'odometry rejected: {exc}'
             self.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
             return
-        self.odom, self.odom_received, self.odom_problem = msg, self.now(), ''
         stamp = convert.stamp_to_seconds(msg.header.stamp)
+        now = self.now()
+        # In lock step odometry is of its stamp's time: the start state (stamped 0) is heard again once time runs.
+        self.odom, self.odom_received, self.odom_problem = msg, min(now, stamp) if self.locked() else now, ''
         self.odom_stamp = stamp if stamp > 0.0 else self.odom_received
         if frame == self.odom_frame_id:
             self.map_from_odom.add_odometry(self.odom_stamp, pose)
         self.odom_heard += 1
         if self.odom_heard == 1:
             self.publish_status(force=True)   # a launcher waits for the odometry path to be up
+        self.lock_try()
 
     def on_localization(self, msg: PoseWithCovarianceStamped) -> None:
         """A map pose of base_link: map -> odom = it o inverse(the odometry at its stamp)."""
@@ -450,6 +469,9 @@ class PlannerNode(ManagedNode):
         except ValueError as exc:
             self.odom_problem = f'trailer pose rejected: {exc}'
             self.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
+            return
+        self.trailer_stamp = convert.stamp_to_seconds(msg.header.stamp)
+        self.lock_try()
 
     def on_goal(self, msg: PoseStamped) -> None:
         point = convert.pose_stamped_to_point(msg)
@@ -519,13 +541,22 @@ class PlannerNode(ManagedNode):
         age = t - self.movers_stamp
         if not self.known_movers or not -self.odom_timeout <= age <= self.odom_timeout:
             return []
-        ahead = min(max(age, 0.0), self.max_extrapolation)
+        ahead = self.lag(t, self.movers_stamp)
         return [OtherRobot(m.name, (m.position[0] + m.velocity[0] * ahead, m.position[1] + m.velocity[1] * ahead),
                            m.velocity, m.radius, mover=True) for m in self.known_movers]
 
     def on_scan(self, msg: LaserScan) -> None:
-        """Fold a scan into what the robot believes; the navigator plans in the belief from then on."""
-        nav, t = self.navigator, self.now()
+        """Fold a scan into what the robot believes (in lock step: when the planner acts on its time)."""
+        if self.locked():
+            self.pending_scan = msg
+            self.lock_try()
+        else:
+            self.perceive(msg, self.now())
+
+    def perceive(self, msg: LaserScan, t: float, at: float | None = None) -> None:
+        """Fold a scan into what the robot believes at node time t; the navigator plans in the belief from then on.
+        `at`: the time it was taken (lock step: the tick's), else its stamp."""
+        nav = self.navigator
         if nav is None or self.world is None:
             return   # no map yet: nothing to fuse the scan with
         state, _ = self.state(t)
@@ -535,7 +566,8 @@ class PlannerNode(ManagedNode):
         pose = (float(state[0]), float(state[1]), heading(self.model, state))
         told = [*self.robots.fleet.obstacles(t, self.robots.radius, lambda s: self.lag(t, s)), *self.movers_at(t)]
         try:
-            belief = self.scan_perception.update(msg, stamp if stamp > 0.0 else t, pose, self.world, told)
+            taken = at if at is not None else stamp if stamp > 0.0 else t
+            belief = self.scan_perception.update(msg, taken, pose, self.world, told)
         except ValueError as exc:
             self.scan_problem = f'scan ignored: {exc}'
             self.get_logger().warning(self.scan_problem, throttle_duration_sec=5.0)
@@ -556,7 +588,7 @@ class PlannerNode(ManagedNode):
         if t - self.odom_received > self.odom_timeout:
             return None, f'odometry stale: none for {t - self.odom_received:.2f} s (odom_timeout ' \
                          f'{self.odom_timeout:g} s)'
-        if t < self.odom_received:
+        if t < self.odom_received - STAMP_EPS:
             # The clock went back since it came (a restarted clock): how old it is is not known.
             return None, f'odometry stale: received at {self.odom_received:.2f} s, after this node\'s clock ' \
                          f'({t:.2f} s): the clock went back'
@@ -588,13 +620,65 @@ class PlannerNode(ManagedNode):
         return state, ''
 
     def lag(self, t: float, stamp: float) -> float:
-        """How far to predict a message stamped `stamp` forward to the control time t."""
-        return min(max(t - stamp, 0.0), self.max_extrapolation)
+        """How far to predict a message stamped `stamp` forward to the control time t (not at all within STAMP_EPS:
+        a stamp is whole nanoseconds, a tick's time k * dt is not, and a prediction over 1e-15 s moves a position by
+        its last bit)."""
+        ahead = t - stamp
+        return 0.0 if ahead < STAMP_EPS else min(ahead, self.max_extrapolation)
 
-    def on_control(self) -> None:
+    # ------------------------------------------------------------------------------------------- lock step
+    def locked(self) -> bool:
+        """Lock step is on: asked for, and the node runs on simulated time."""
+        return self.lock_step and self.sim_time.active
+
+    def lock_try(self) -> None:
+        """Lock step: act on the newest own odometry stamp once every input of its time is in (fastep_ros.lock_step).
+        Called whenever one of them comes, on the control timer, and on the wall timer (inputs given up on)."""
+        if not self.locked() or self.odom is None or not self.is_active:
+            return
+        stamp, lock = self.odom_stamp, self.lock
+        if not lock.due(stamp, self.now()):
+            return
+        inputs = {robot.name: robot.stamp for robot in self.robots.fleet.followed(self.now())}
+        if self.model == 'tractor_trailer':
+            inputs['trailer_pose'] = self.trailer_stamp   # the state of its time is odometry and trailer pose
+        if self.scan_sub.get_publisher_count() > 0:
+            inputs['scan'] = -math.inf if self.pending_scan is None else \
+                convert.stamp_to_seconds(self.pending_scan.header.stamp)
+        wall = self.wall_clock.now().nanoseconds * 1e-9
+        if lock.late(stamp, inputs, wall):
+            return
+        if lock.abandoned:
+            self.get_logger().warning(f'lock step: nothing stamped {stamp:g} s from {", ".join(lock.abandoned)} '
+                                      f'after {lock.wait:g} s of wall time; acting without (until it comes again)')
+        lock.acted = stamp
+        # The tick's time as fastep-sim counts it, k * dt: the stamp holds it to the nanosecond, and a time that
+        # differs in its last bit decides a timer that runs out exactly on a tick differently.
+        period = 1.0 / self.control_rate_hz
+        t = round(stamp / period) * period
+        scan, self.pending_scan = self.pending_scan, None
+        if scan is not None:
+            self.perceive(scan, t, at=t)
+        self.on_control(t)
+
+    def on_control_tick(self) -> None:
+        """The control timer: act (without lock step), or in lock step act on the control timer only while the own
+        odometry is a whole period behind the clock (the plant died or starves: the robot is held, `stale`)."""
+        if not self.locked():
+            self.on_control()
+            return
+        now, period = self.now(), 1.0 / self.control_rate_hz
+        if self.odom_stamp < now - 1.5 * period and self.lock.acted < now - 0.5 * period:
+            self.lock.acted = now
+            self.on_control()
+        else:
+            self.lock_try()
+
+    def on_control(self, at: float | None = None) -> None:
+        """Decide and publish cmd_vel at node time `at` (lock step: the odometry stamp acted on), else now."""
         if self.sim_time.switched():
             self.on_clock_switched()
-        t = self.now()
+        t = self.now() if at is None else at
         self.take_others()
         nav = self.navigator
         command = np.zeros(2)
@@ -614,23 +698,24 @@ class PlannerNode(ManagedNode):
                         self.get_logger().error(f'planner fault: {exc}\n{traceback.format_exc()}')
                         self.fault_logged = True
                     nav.fail(f'planner fault: {exc}')
-        self.publish_command(command)
+        self.publish_command(command, at)
         self.last_command = command
         if nav is not None:
             self.cost_pub.publish(Float64(data=float(nav.cost)))
             self.publish_target()
             self.publish_plan()
-        self.publish_status()
+        self.publish_status(at=t)
 
-    def publish_command(self, command: np.ndarray) -> None:
+    def publish_command(self, command: np.ndarray, at: float | None = None) -> None:
         """cmd_vel in the body frame: a point mass's map-frame velocity turned by its heading (the identity while
-        map -> odom and the odometry's yaw are 0, as in simulation); (v, omega) are body-frame already."""
+        map -> odom and the odometry's yaw are 0, as in simulation); (v, omega) are body-frame already. Stamped
+        `at` (lock step: the time it was decided for), else now."""
         if self.model == 'point_mass':
             command = np.asarray(frames.body_velocity(command, self.body_yaw), dtype=float)
         twist = convert.command_to_twist(command, self.model)
         if self.stamped:
             msg = TwistStamped()
-            msg.header.stamp = self.stamp()
+            msg.header.stamp = self.stamp() if at is None else convert.seconds_to_stamp(at)
             msg.header.frame_id = self.base_frame_id
             msg.twist = twist
             self.cmd_pub.publish(msg)
@@ -693,11 +778,14 @@ class PlannerNode(ManagedNode):
                                                      f'({self.goal[0]:g}, {self.goal[1]:g})'
         return DiagnosticStatus.OK, mode.value, nav.reason
 
-    def publish_status(self, force: bool = False) -> None:
+    def publish_status(self, force: bool = False, at: float | None = None) -> None:
+        """Status when it changed (or `force`); `at` is the node time of the decision it reports (default now)."""
         level, message, reason = self.status()
         key = (level, message, reason)
         if key == self._status_key and not force:
             return
+        if self._status_key is None or key[1] != self._status_key[1]:
+            self._status_since = self.now() if at is None else at
         self._status_key = key
         nav = self.navigator
         waypoint = None if nav is None or nav.waypoint is None else nav.waypoint
@@ -712,6 +800,9 @@ class PlannerNode(ManagedNode):
             'others': ' '.join(self.robots.fleet.names(self.now())),
             'algorithm': self.algorithm,
             't': self.now(),
+            # When the message (mode) began: a monitor that missed that status (keep-last at a high rtf) and
+            # hears a later one, re-published, still knows when the robot arrived.
+            'since': self._status_since,
             'odom_lag': self.odom_lag,
             'obstacles': -1 if self.obstacles is None else len(self.obstacles),
             # Who hears cmd_vel (the plant; the clock's lock step): the readers this writer has matched. DDS
@@ -735,6 +826,7 @@ class PlannerNode(ManagedNode):
         found = self.discover()
         self.goal_sub.look()
         self.take_others()   # while simulated time holds (no control ticks), `others` in the status still fills
+        self.lock_try()      # an input waited for too long is given up on
         if found or self.wall_ticks % HEARTBEAT_TICKS == 0:
             self.publish_status(force=True)
         else:

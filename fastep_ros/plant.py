@@ -36,6 +36,12 @@ the integrated time) scan_rate_hz times a second of integrated time, and publish
 (sensor_msgs/LaserScan in base_link, stamped with the integrated time, sensor-data QoS), its noise drawn from
 the run's `seed` stream `robot_index`, as fastep-sim draws it. Other robots are not in the scan (their
 planners know them from their odometry).
+Lock step (`lock_step`, on simulated time; fastep-launch sets it with rate_hz = the planners' control rate): the
+step from t to t + 1/rate_hz is integrated with the command stamped t, the one its planner computed from the
+odometry stamped t, and waits for it if it has not come (up to LOCK_WAIT wall seconds; then, and until a command
+comes again, the planner is taken for gone and the held command acts as above). The first step starts at time 0,
+from the start state, once simulated time runs: so the robot moves exactly as fastep-sim moves it, whatever order
+DDS delivers /clock and the commands in (docs/benchmarks.md, "Exact lock step").
 """
 
 from __future__ import annotations
@@ -64,6 +70,7 @@ from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.executors import MessageInfoCallback
 from fastep_ros.frames import TfBroadcaster
 from fastep_ros.lifecycle import ManagedNode
+from fastep_ros.lock_step import LOCK_WAIT, STAMP_EPS
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import convert, frames, interface
@@ -74,6 +81,7 @@ __all__ = ['PlantNode', 'main']
 MAX_CATCH_UP = 100_000  # integration steps done in one go at most (a clock jump beyond that is skipped)
 DIAGNOSTICS_PERIOD = 1.0  # wall seconds between /diagnostics arrays
 AT_REST_PERIOD = 0.25   # wall seconds between start-state odometry messages before simulated time starts
+LOCK_CHECK_PERIOD = 0.25  # lock step: wall seconds between looks at a step waiting for its command
 
 
 @dataclass
@@ -113,6 +121,9 @@ class PlantNode(ManagedNode):
                                    '(zero velocity) when no newer one came (s, node clock)', constraints='> 0',
                                    read_only=False)
         stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist')
+        lock_step = declare(self, 'lock_step', False, 'on simulated time: integrate each step with the command '
+                            'stamped at its start, waiting for it (rate_hz must be the planner\'s control rate; '
+                            'fastep-launch sets it)')
         frame_id = declare(self, 'frame_id', '', 'frame of the odometry pose; empty: <ns>/odom (REP-105; root '
                            'namespace: odom)')
         self.publish_map_to_odom = declare(self, 'publish_map_to_odom', True, 'publish map -> odom as the identity on '
@@ -167,6 +178,10 @@ class PlantNode(ManagedNode):
         self.command = np.zeros(2)
         self.command_time: float | None = None  # node-clock time the current command was sent
         self.applied = np.zeros(2)              # command used in the last step (for the odometry twist)
+        self.lock_step = bool(lock_step)
+        self.command_stamp: float | None = None  # lock step: the stamp of the command held, taken while time ran
+        self.waiting_since: float | None = None  # lock step: steady seconds the next step began waiting
+        self.planner_gone = False                 # lock step: a step waited LOCK_WAIT for its command in vain
 
         self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
         self.scan_pub = (self.create_publisher(LaserScan, interface.SCAN, qos_profile_sensor_data)
@@ -182,8 +197,11 @@ class PlantNode(ManagedNode):
         if self.publish_map_to_odom and self.frame_id != interface.MAP_FRAME:
             self.tf.send_static([frames.static_map_to_odom(interface.MAP_FRAME, self.frame_id)])
         self.timer = self.create_timer(self.step, self.on_timer)
-        self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick,
-                                               clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.steady = Clock(clock_type=ClockType.STEADY_TIME)
+        self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick, clock=self.steady)
+        # Lock step: a step that waits for its command is looked at again on wall time (simulated time may hold).
+        self.lock_timer = self.create_timer(LOCK_CHECK_PERIOD, self.on_lock_check, clock=self.steady) \
+            if self.lock_step else None
         self.sim_time = SimTimeWatch(self, clock_guard, clock_timeout)
         self.diagnostics = Diagnostics(self)
         self.diagnostics_timer = self.create_timer(DIAGNOSTICS_PERIOD, self.publish_diagnostics,
@@ -249,14 +267,38 @@ class PlantNode(ManagedNode):
     def now(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 
+    def locked(self) -> bool:
+        """Lock step is on: asked for, and the node runs on simulated time."""
+        return self.lock_step and self.sim_time.active
+
+    def command_for(self, t: float) -> bool:
+        """Lock step: may the step starting at t be integrated? Yes with the command stamped t (or later), or when
+        no command will come: no planner publishes cmd_vel, or one waited LOCK_WAIT wall seconds in vain."""
+        if self.command_stamp is not None and self.command_stamp >= t - STAMP_EPS:
+            self.waiting_since = None
+            return True
+        if self.planner_gone or self.cmd_sub.get_publisher_count() == 0:
+            return True
+        wall = self.steady.now().nanoseconds * 1e-9
+        if self.waiting_since is None:
+            self.waiting_since = wall
+        if wall - self.waiting_since <= LOCK_WAIT:
+            return False
+        self.get_logger().warning(f'lock step: no cmd_vel stamped {t:g} s after {LOCK_WAIT:g} s of wall time; '
+                                  'integrating with the command held until a command comes again')
+        self.planner_gone, self.waiting_since = True, None
+        return True
+
     def advance(self, now: float) -> bool:
         """Integrate in fixed steps up to `now`; True if the state moved on."""
         target = int(math.floor(now / self.step + 1e-9))
         if self.tick is None:
             if now <= 0.0:
                 return False  # simulated time has not started yet
-            self.tick = target
-            return True
+            # In lock step the first step starts at 0, as in fastep-sim (its command is the planner's first, at 0).
+            self.tick = 0 if self.locked() else target
+            if self.tick == target:
+                return True
         steps = target - self.tick
         if steps < 0:
             # The clock went back (restarted; fastep_ros.common's guard lets through only a confirmed one): go on
@@ -272,7 +314,11 @@ class PlantNode(ManagedNode):
                                       throttle_duration_sec=5.0)
             self.tick = target - 1
             steps = 1
+        moved = False
         for _ in range(steps):
+            if self.locked() and not self.command_for(self.tick * self.step):
+                return moved   # the step waits for the command its planner computes at its start
+            moved = True
             self.tick += 1
             t = self.tick * self.step
             command = self.command
@@ -280,7 +326,7 @@ class PlantNode(ManagedNode):
                 command = np.zeros(2)
             self.state = self.model.integrate(self.state, command, self.step)
             self.applied = command
-        return True
+        return moved
 
     def sent_time(self, msg: Twist | TwistStamped, source_timestamp_ns: int) -> float | None:
         """When a command was sent, on this node's clock; None when that is not known (then: when it is taken).
@@ -308,7 +354,8 @@ class PlantNode(ManagedNode):
             return   # an inactive robot takes no commands
         self.check_clock()
         now = self.now()
-        self.advance(now)  # the old command holds until now
+        if not self.locked():
+            self.advance(now)  # the old command holds until now
         try:
             command = convert.twist_to_command(msg, self.model_name)
         except ValueError as exc:
@@ -319,14 +366,24 @@ class PlantNode(ManagedNode):
                                       f'{self.cmd_timeout:g} s: treated as zero (a late node, or clocks apart)',
                                       throttle_duration_sec=5.0)
         self.command, self.command_time = command, now if sent is None else min(sent, now)
+        if self.locked():
+            # The command for the step starting at its stamp; one sent while time held answers no step.
+            self.command_stamp = (now if sent is None else sent) if now > 0.0 else None
+            self.planner_gone = False
+            self.on_timer()   # the step it was waiting for
 
     def on_timer(self) -> None:
         self.check_clock()
         self.advance(self.now())
-        # Publish when the state moved on since the last odometry, here or in on_cmd_vel.
+        # Publish when the state moved on since the last odometry, here, in on_cmd_vel or on the lock timer.
         if self.tick is not None and self.tick != self.published_tick:
             self.published_tick = self.tick
             self.publish()
+
+    def on_lock_check(self) -> None:
+        """Lock step, on wall time: a step still waiting for its command is integrated once LOCK_WAIT is over."""
+        if self.is_active and self.waiting_since is not None:
+            self.on_timer()
 
     def on_at_rest_tick(self) -> None:
         """Before the first integration step (simulated time at 0), once this plant can hear commands: publish

@@ -48,11 +48,13 @@ Parameters are read-only; a bad one (or an output that cannot be created) is one
 from __future__ import annotations
 
 import functools
+import struct
 import sys
 import time
 from pathlib import Path
 from typing import Any, Sequence
 
+from builtin_interfaces.msg import Time as TimeMsg
 from diagnostic_msgs.msg import DiagnosticStatus
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
@@ -61,6 +63,7 @@ from rclpy.logging import LoggingSeverity
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rosgraph_msgs.msg import Clock as ClockMsg
 
 from fastep_core.cli import fail
 from fastep_core.errors import FastepError
@@ -117,6 +120,9 @@ class RecorderNode(Node):
                           constraints='derive | graph | none')
         self.depth = declare(self, 'queue_depth', 1000, 'subscription queue depth (messages kept while the '
                              'recorder is busy)', constraints='>= 1')
+        clock_ack = declare(self, 'clock_ack', False, 'lock step: say on ~/clock_ack each /clock time recorded, so '
+                            'that the clock (sync_topics) never runs further ahead of the recording than a tick '
+                            '(fastep-launch sets it; at a high rtf the recorder fell behind and messages were lost)')
         if chunk_size < 1024:
             raise StartupError(f'parameter chunk_size must be >= 1024, got {chunk_size}')
         for name, value in (('flush_period', flush_period), ('discovery_period', discovery_period)):
@@ -146,6 +152,7 @@ class RecorderNode(Node):
         self.channels: dict[str, int] = {}
         self.counts: dict[str, int] = {}
         self.status_pub = self.create_publisher(DiagnosticStatus, interface.RECORDING, interface.STATUS_QOS)
+        self.ack_pub = self.create_publisher(ClockMsg, interface.CLOCK_ACK, interface.RELIABLE) if clock_ack else None
         steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.discovery_timer = self.create_timer(discovery_period, self.discover, clock=steady)
         self.flush_timer = self.create_timer(flush_period, self.flush, clock=steady)
@@ -244,6 +251,10 @@ class RecorderNode(Node):
             if channel is None:  # registered at the first message, when the publishers' QoS is known
                 channel = self.channels[topic] = writer.add_channel(topic, self.types[topic], self.offered(topic))
             writer.write_raw(channel, data, now, now)
+            if topic == interface.CLOCK and self.ack_pub is not None and len(data) >= 12:
+                # A CDR Clock: 4 bytes of encapsulation, then int32 sec, uint32 nanosec.
+                sec, nanosec = struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
+                self.ack_pub.publish(ClockMsg(clock=TimeMsg(sec=sec, nanosec=nanosec)))
             if self.tf_from_odometry is not None:
                 for tf_topic, tf_data in self.tf_from_odometry.take(topic, data):
                     writer.write(tf_topic, tf_data, now, now, type_name=frames.TF_TYPE,

@@ -151,10 +151,12 @@ class Fleet:
 
     def obstacles(self, now: float, radius: Callable[[Robot], float], lag: Callable[[float], float]) \
             -> list[OtherRobot]:
-        """The robots followed, as the navigator's OtherRobot: each predicted forward by lag(its stamp) at its
-        velocity (zero once its odometry is older than still_after: still there, no longer known to move)."""
+        """The robots followed, as the navigator's OtherRobot, in the order of their names (not of discovery, which
+        DDS decides: fastep-sim lists them so too, and the order of a sum decides its last bits): each predicted
+        forward by lag(its stamp) at its velocity (zero once its odometry is older than still_after: still there,
+        no longer known to move)."""
         out = []
-        for robot in self.followed(now):
+        for robot in sorted(self.followed(now), key=lambda r: r.name):
             assert robot.position is not None
             velocity = robot.velocity if now - robot.received <= self.still_after else (0.0, 0.0)
             ahead = lag(robot.stamp)
@@ -167,13 +169,17 @@ class RobotFollower:
     """The planner's side of the graph: announces its robot, finds and follows the others (Fleet's ROS side)."""
 
     def __init__(self, node: Node, own_radius: float, override_radius: float, timeout: float,
-                 still_after: float, now: Callable[[], float], on_change: Callable[[], None]) -> None:
+                 still_after: float, now: Callable[[], float], on_change: Callable[[], None],
+                 on_odometry: Callable[[], None] | None = None) -> None:
+        """on_odometry: called after each odometry message taken, which then comes in a callback (lock step: a
+        planner waits for the others' odometry of a time), not polled."""
         self.node = node
         self.own_radius = own_radius
         self.override_radius = override_radius
         self.now = now
         self.fleet = Fleet(node.get_namespace(), timeout, still_after)
         self.on_change = on_change
+        self.on_odometry = on_odometry
         self.looks = 0
         self.last_names: list[str] = []
         # Per namespace: how many publishers its footprint had at the last check, and which nodes they were.
@@ -232,10 +238,10 @@ class RobotFollower:
         if verdict and len(self.subscriptions[namespace]) == 1:
             # Taken when used (take: each control tick, each wall tick), not on every 50 Hz message: the N^2
             # fan-in of a graph (fastep_ros.polled). A callback subscription if rclpy cannot make one.
-            self.subscriptions[namespace].append(polled(node, Odometry, robot.odom_topic, LATEST) or
-                                                 node.create_subscription(Odometry, robot.odom_topic,
-                                                                          functools.partial(self.on_odom, namespace),
-                                                                          LATEST))
+            # In lock step every message is awaited: a callback subscription.
+            taken = polled(node, Odometry, robot.odom_topic, LATEST) if self.on_odometry is None else None
+            self.subscriptions[namespace].append(taken or node.create_subscription(
+                Odometry, robot.odom_topic, functools.partial(self.on_odom, namespace), LATEST))
         node.get_logger().info(f'{"following" if verdict else "no longer following"} robot {robot.name}: '
                                f'{robot.footprint_topic} (from a node of {namespace}) and {robot.odom_topic} '
                                f'{"have" if verdict else "lack"} publishers')
@@ -260,6 +266,8 @@ class RobotFollower:
                                      self.now()):
             self.last_names = self.fleet.names(self.now())
             self.on_change()
+        if self.on_odometry is not None:
+            self.on_odometry()
 
     def take(self) -> None:
         """The newest odometry of every robot whose odometry is polled (fastep_ros.polled), handled as on_odom."""

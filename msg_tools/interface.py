@@ -32,8 +32,8 @@ if TYPE_CHECKING:
     from fastep_core.scenario import Scenario
 
 __all__ = [
-    'CLOCK', 'CMD_VEL', 'COST', 'FOOTPRINT', 'GOAL_POSE', 'LATCHED', 'LATEST', 'MAP', 'MAP_FRAME', 'METADATA_NAME',
-    'MOVERS', 'OBSTACLES', 'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS',
+    'CLOCK', 'CLOCK_ACK', 'CMD_VEL', 'COST', 'FOOTPRINT', 'GOAL_POSE', 'LATCHED', 'LATEST', 'MAP', 'MAP_FRAME',
+    'METADATA_NAME', 'MOVERS', 'OBSTACLES', 'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS',
     'ROBOT_TOPIC_PATTERN', 'SCAN', 'SCENARIO_DATA', 'SHARED_TOPICS', 'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS',
     'TRACKED_OBSTACLES', 'TRAILER_POSE', 'TYPES', 'WAYPOINT', 'is_interface_topic', 'message_type', 'metadata_key',
     'offered_qos', 'offered_qos_profiles', 'robot_topic', 'scenario_metadata', 'split_robot_topic',
@@ -64,6 +64,7 @@ MOVERS = '/movers'
 OBSTACLES = '/obstacles'   # map node: circles and walls
 MAP = '/map'               # map node: occupancy grid of the workspace
 CLOCK = '/clock'           # fastep-clock (or a replay): simulated time
+CLOCK_ACK = '~/clock_ack'  # an observer in lock step (fastep-record, fastep-launch): the /clock time it has taken
 SHARED_TOPICS = (OBSTACLES, MAP, CLOCK)
 
 # fastep-record's own status, in its node's namespace (`/recorder/recording`; not recorded by default): a

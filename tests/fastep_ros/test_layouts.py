@@ -67,17 +67,17 @@ def _children(pid: int) -> list[int]:
     return [int(p) for p in out.split()]
 
 
-def _launch(tmp_path: Path, layout: str) -> dict[str, Any]:
+def _launch(tmp_path: Path, layout: str, executor: str = 'single') -> dict[str, Any]:
     """fastep-launch CROSSING --layout `layout`, watched from a helper node on its domain: the graph's node names
     and topics (with types) while the robots drive, its node processes, its output and --json."""
     scenario = write(tmp_path / 'crossing.yaml', CROSSING)
-    out = tmp_path / f'{layout}.json'
+    out = tmp_path / f'{layout}_{executor}.json'
     domain = free_domain()
     helper = Helper(domain)
-    env = isolated_env(domain, tmp_path / f'roslog_{layout}')
+    env = isolated_env(domain, tmp_path / f'roslog_{layout}_{executor}')
     proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '5', '--seed', '0',
-                             '--layout', layout, '--json', str(out)], env=env, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+                             '--layout', layout, '--executor', executor, '--json', str(out)], env=env,
+                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     lines: list[str] = []
     assert proc.stdout is not None
     reader = threading.Thread(target=lambda: lines.extend(proc.stdout or []), daemon=True)
@@ -104,27 +104,39 @@ def _launch(tmp_path: Path, layout: str) -> dict[str, Any]:
             'json': json.loads(out.read_text()) if out.is_file() else None}
 
 
-def test_every_layout_runs_the_same_graph_and_the_same_run(tmp_path: Path) -> None:
-    reference = simulate(load_scenario(str(write(tmp_path / 'c.yaml', CROSSING))), DEFAULT_ALGORITHM, 0)
+def _rows(trajectory: list[list[float]]) -> dict[float, list[float]]:
+    return {round(row[0], 3): row[1:] for row in trajectory}
+
+
+def test_every_layout_runs_the_same_graph_and_exactly_the_run_of_fastep_sim(tmp_path: Path) -> None:
+    reference = simulate(load_scenario(str(write(tmp_path / 'c.yaml', CROSSING))), DEFAULT_ALGORITHM, 0).to_json()
     runs = {layout: _launch(tmp_path, layout) for layout in ('node', 'robot', 'graph')}
+    # The EventsExecutor calls back in another order: exact lock step does not depend on it (fastep_ros.lock_step).
+    runs['graph events'] = _launch(tmp_path, 'graph', 'events')
     for layout, run in runs.items():
         assert run['code'] == 0, (layout, run['stdout'], run['stderr'])
         assert 'Traceback' not in run['stderr'], (layout, run['stderr'])
-        for robot, sim in zip(run['json']['runs'][0]['robots'], reference.robots):
+        for robot, sim in zip(run['json']['runs'][0]['robots'], reference['robots']):
             assert robot['reached'] and not robot['collided'], (layout, robot['status'])
-            # lock step: the same steps as fastep-sim, within what the live loop's odometry timing allows. Where
-            # the two robots meet, which odometry each planner has seen decides how long one waits for the other:
-            # under load (4 launches at once, 2026-11-26) r2 arrived at 13.4-13.6 s in 7 runs of 8 and at 17.6 s
-            # in one (main 59bb812; at 869f5fa 19.2-20.8 s in 3 of 4), against fastep-sim's 13.4 s, and CI once
-            # failed at 18.05 s against 15.2 s. The time may only come out later, and by one such wait at most.
-            assert robot['path_length'] == pytest.approx(sim.path_length, rel=0.05), layout
-            assert sim.sim_time * 0.85 <= robot['sim_time'] <= sim.sim_time * 1.6, layout
+            # Exact lock step: every tick as fastep-sim's, so the same arrival tick, the same path and clearance
+            # (--json rounds to 1e-6), and the same position wherever both trajectories have a row. Before it,
+            # which odometry each planner had seen where the robots met decided how long one waited for the
+            # other: r2 arrived at 13.4-20.8 s against fastep-sim's 13.4 s.
+            assert robot['sim_time'] == pytest.approx(sim['sim_time'], abs=1e-6), layout
+            assert robot['path_length'] == pytest.approx(sim['path_length'], abs=2e-6), layout
+            assert robot['min_clearance'] == pytest.approx(sim['min_clearance'], abs=2e-6), layout
+            live, expected = _rows(robot['trajectory']), _rows(sim['trajectory'])
+            common = sorted(set(live) & set(expected))
+            assert len(common) > 10, layout
+            for t in common:
+                assert live[t] == pytest.approx(expected[t], abs=2e-6), (layout, robot['name'], t)
     # map, 2 plants, 2 planners, clock: one process each, one per robot (+ map and clock), or one
-    assert {layout: run['processes'] for layout, run in runs.items()} == {'node': 6, 'robot': 4, 'graph': 1}
+    assert {layout: run['processes'] for layout, run in runs.items()} == {'node': 6, 'robot': 4, 'graph': 1,
+                                                                          'graph events': 1}
     expected = {'/map', '/clock', '/r1/plant', '/r1/planner', '/r2/plant', '/r2/planner'}
     for layout, run in runs.items():
         assert run['nodes'] == expected, layout
         assert run['topics'] == runs['node']['topics'], (layout, run['topics'] ^ runs['node']['topics'])
-    assert {('/r1/odom', 'nav_msgs/msg/Odometry'), ('/r2/cmd_vel', 'geometry_msgs/msg/Twist'),
+    assert {('/r1/odom', 'nav_msgs/msg/Odometry'), ('/r2/cmd_vel', 'geometry_msgs/msg/TwistStamped'),
             ('/clock', 'rosgraph_msgs/msg/Clock'), ('/obstacles', 'visualization_msgs/msg/MarkerArray')} <= \
         runs['graph']['topics']

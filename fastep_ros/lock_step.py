@@ -1,0 +1,66 @@
+"""Exact lock step: when a planner acts, so that a live graph steps exactly like fastep-sim.
+
+fastep-sim's tick at time t: every planner decides from every robot's state at t (its own and the others'), then
+every robot moves for one control period with its planner's command. On the graph the same three hops make a
+tick, whatever order DDS delivers messages in:
+
+1. the clock says t (fastep-clock, which waits for every planner's cmd_vel stamped t - dt before it does);
+2. each plant integrates the step from t - dt to t with the command stamped t - dt (it waits for it if that
+   command has not come: `fastep_ros.plant`, `lock_step`) and publishes its odometry stamped t;
+3. each planner acts once on its own odometry stamped t, when the odometry stamped t of every other robot it
+   follows (and, if its robot has a laser, the scan stamped t) is in too, and stamps its cmd_vel t.
+
+The first tick starts at time 0, once time runs: the plant's start state, stamped 0, is acted on when the clock
+first says a later time (while the clock holds 0 before the run, goals are still coming). An input that does not
+come within `wait` wall seconds (its node died or starves) is given up on, and not waited for again until a
+newer stamp of it comes, so a dead robot costs the wait once, not every tick.
+
+LockStep is the bookkeeping, without ROS (unit-tested alone); the planner node feeds it.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Mapping
+
+__all__ = ['LOCK_WAIT', 'STAMP_EPS', 'LockStep']
+
+LOCK_WAIT = 5.0     # wall seconds an input is waited for (the clock's sync_timeout: a loaded machine starves a node)
+STAMP_EPS = 1e-6    # seconds: stamps this close are the same time (float times through nanosecond stamps)
+
+
+@dataclass
+class LockStep:
+    """Which odometry stamp a planner acts on next, and whether every input of that time is in."""
+
+    wait: float = LOCK_WAIT
+    acted: float = -math.inf              # the stamp last acted on
+    waiting_since: float | None = None    # wall seconds the stamp due began waiting for an input
+    gone: dict[str, float] = field(default_factory=dict)   # input given up on -> its stamp then
+    abandoned: list[str] = field(default_factory=list)     # the inputs the last call of late() gave up on
+
+    def due(self, stamp: float, now: float) -> bool:
+        """Odometry stamped `stamp` is to be acted on at node time `now`: newer than the last acted on, not ahead
+        of the clock, and time runs (before the run the clock holds 0 while goals come)."""
+        return now > 0.0 and self.acted + STAMP_EPS < stamp <= now + STAMP_EPS
+
+    def late(self, stamp: float, inputs: Mapping[str, float], wall: float) -> list[str]:
+        """The inputs (name -> newest stamp) still to wait for before acting on `stamp`; [] to act now. Those
+        waited for longer than `wait` wall seconds are given up on (until a newer stamp of theirs comes)."""
+        self.abandoned = []
+        for name, heard in list(self.gone.items()):
+            if inputs.get(name, heard) > heard + STAMP_EPS:
+                del self.gone[name]   # it came back
+        late = [name for name, heard in inputs.items() if heard < stamp - STAMP_EPS and name not in self.gone]
+        if not late:
+            self.waiting_since = None
+            return []
+        if self.waiting_since is None:
+            self.waiting_since = wall
+        if wall - self.waiting_since <= self.wait:
+            return late
+        for name in late:
+            self.gone[name] = inputs[name]
+        self.abandoned, self.waiting_since = late, None
+        return []
