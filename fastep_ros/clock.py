@@ -205,7 +205,7 @@ class ClockNode(Node):
 
     def waiting(self) -> bool:
         """Hold the start time until the expected subscribers are matched, plus a short settling time."""
-        if self.sync and not self.subscribe_sync_topics() and self.matched_at is None:
+        if self.sync and self.matched_at is None and not self.subscribe_sync_topics():   # (not asked once running)
             if (self.steady.now() - self.created).nanoseconds * 1e-9 <= self.wait_timeout:
                 return True
         if self.matched_at is not None:

@@ -6,6 +6,7 @@ Topic names and QoS profiles are in msg_tools.interface.
 from __future__ import annotations
 
 import copy
+import functools
 import math
 import os
 import signal
@@ -28,7 +29,7 @@ from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-e
 from fastep_ros.parameters import warn_unknown_overrides
 
 __all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'StartupError', 'check_range', 'declare',
-           'declare_empty_array', 'guard_clock', 'node_main']
+           'declare_empty_array', 'guard_clock', 'node_main', 'quiet_at_stop']
 
 
 INT64_MAX = 2**63 - 1
@@ -166,6 +167,21 @@ class ClockGuard:
 
     def warn(self, text: str) -> None:
         self.node.get_logger().warning(text, throttle_duration_sec=5.0)
+
+
+def quiet_at_stop(callback: Callable[..., None]) -> Callable[..., None]:
+    """A node method called back by the executor that publishes: an error raised because a stop (SIGINT) shut the
+    context down while it ran is the stop, not a fault. The EventsExecutor logged it as a FATAL line with a
+    traceback at the end of every fastep-launch --executor events run (a planner publishing the command of the
+    odometry that came last)."""
+    @functools.wraps(callback)
+    def called(self: Node, *args: Any, **kwargs: Any) -> None:
+        try:
+            callback(self, *args, **kwargs)
+        except Exception:
+            if self.context.ok():
+                raise
+    return called
 
 
 def guard_clock(node: Node) -> ClockGuard | None:

@@ -8,9 +8,10 @@ project's machine (docs/benchmarks.md). `events` is rclpy.experimental.EventsExe
 wheels): a C++ event queue fed by the middleware's listener callbacks and a timer manager of its own, so a
 message costs the callback and the conversion, not a wait-set rebuild. docs/benchmarks.md ("Executors and
 process layouts") measures both for every node and in each fastep-launch layout. The EventsExecutor costs less
-everywhere, but lock-step runs on it did not always step like fastep-sim (5 of 10 runs of case_study_1, in the
-graph and node layouts: a robot 6-32 s of simulated time late), none of 7 on the SingleThreadedExecutor: so
-DEFAULT_EXECUTOR stays `single`, and `events` is an option.
+everywhere (40-75 % less CPU per robot; `make demo` in half the wall time), so it is DEFAULT_EXECUTOR. Lock-step
+runs on it once did not always step like fastep-sim (a robot 6-32 s of simulated time late in 5 of 10 runs of
+case_study_1): lock step depended on the order callbacks ran in. Exact lock step (fastep_ros.lock_step) does
+not, and runs equal fastep-sim's on both executors (tests/fastep_ros/test_layouts.py).
 
 Both are driven by fastep_ros.common's spin loop (spin_once with its stop-race handling); timers on simulated
 time (use_sim_time) and the /clock guard (common.guard_clock) work on both (tests/fastep_ros/test_executors.py).
@@ -30,7 +31,7 @@ __all__ = ['DEFAULT_EXECUTOR', 'EXECUTORS', 'EXECUTOR_ENV', 'MessageInfoCallback
 
 EXECUTOR_ENV = 'FASTEP_EXECUTOR'
 EXECUTORS = ('events', 'single')
-DEFAULT_EXECUTOR = 'single'
+DEFAULT_EXECUTOR = 'events'
 
 
 class _SingleThreaded(SingleThreadedExecutor):

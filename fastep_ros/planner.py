@@ -87,7 +87,16 @@ from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
-from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.common import (
+    PERIOD_RANGE,
+    RATE_RANGE,
+    StartupError,
+    check_range,
+    declare,
+    guard_clock,
+    node_main,
+    quiet_at_stop,
+)
 from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.frames import LOCALIZATION_QOS
 from fastep_ros.goals import GoalSubscription
@@ -631,6 +640,7 @@ class PlannerNode(ManagedNode):
         """Lock step is on: asked for, and the node runs on simulated time."""
         return self.lock_step and self.sim_time.active
 
+    @quiet_at_stop
     def lock_try(self) -> None:
         """Lock step: act on the newest own odometry stamp once every input of its time is in (fastep_ros.lock_step).
         Called whenever one of them comes, on the control timer, and on the wall timer (inputs given up on)."""
@@ -661,6 +671,7 @@ class PlannerNode(ManagedNode):
             self.perceive(scan, t, at=t)
         self.on_control(t)
 
+    @quiet_at_stop
     def on_control_tick(self) -> None:
         """The control timer: act (without lock step), or in lock step act on the control timer only while the own
         odometry is a whole period behind the clock (the plant died or starves: the robot is held, `stale`)."""

@@ -65,7 +65,16 @@ from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS, load_scenario
 from fastep_core.sensing.laser import LaserSpec
-from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, StartupError, check_range, declare, guard_clock, node_main
+from fastep_ros.common import (
+    PERIOD_RANGE,
+    RATE_RANGE,
+    StartupError,
+    check_range,
+    declare,
+    guard_clock,
+    node_main,
+    quiet_at_stop,
+)
 from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.executors import MessageInfoCallback
 from fastep_ros.frames import TfBroadcaster
@@ -372,6 +381,7 @@ class PlantNode(ManagedNode):
             self.planner_gone = False
             self.on_timer()   # the step it was waiting for
 
+    @quiet_at_stop
     def on_timer(self) -> None:
         self.check_clock()
         self.advance(self.now())

@@ -25,33 +25,41 @@ __all__ = ['PolledSubscription', 'polled']
 class PolledSubscription:
     """The newest message of a topic, taken on demand (take_latest); destroy() before the node is destroyed."""
 
-    def __init__(self, node: Node, msg_type: Any, topic: str, qos: QoSProfile) -> None:
+    def __init__(self, node: Node, msg_type: Any, topic: str, qos: QoSProfile, raw: bool = False) -> None:
         from rclpy.impl.implementation_singleton import rclpy_implementation
         from rclpy.type_support import check_is_valid_msg_type
 
         check_is_valid_msg_type(msg_type)
         self.msg_type = msg_type
         self.topic = topic
+        self.raw = raw   # take the serialised bytes (msg_tools.cdr reads them), not a message
         with node.handle:
             self.handle: Any = rclpy_implementation.Subscription(node.handle, msg_type, topic,
                                                                  qos.get_c_qos_profile())
 
     def take_latest(self) -> Any:
-        """The newest message received since the last call, or None."""
+        """The newest message received since the last call (its bytes if raw), or None."""
         latest = None
         while True:
-            taken = self.handle.take_message(self.msg_type, False)
+            taken = self.handle.take_message(self.msg_type, self.raw)
             if taken is None:
                 return latest
             latest = taken[0]
+
+    def take_all(self) -> list[Any]:
+        """Every message received since the last call, oldest first (their bytes if raw)."""
+        out = []
+        while (taken := self.handle.take_message(self.msg_type, self.raw)) is not None:
+            out.append(taken[0])
+        return out
 
     def destroy(self) -> None:
         self.handle.destroy_when_not_in_use()
 
 
-def polled(node: Node, msg_type: Any, topic: str, qos: QoSProfile) -> PolledSubscription | None:
+def polled(node: Node, msg_type: Any, topic: str, qos: QoSProfile, raw: bool = False) -> PolledSubscription | None:
     """A PolledSubscription, or None if rclpy cannot make one (the caller then subscribes with a callback)."""
     try:
-        return PolledSubscription(node, msg_type, topic, qos)
+        return PolledSubscription(node, msg_type, topic, qos, raw)
     except (ImportError, AttributeError, TypeError):
         return None

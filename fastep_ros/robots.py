@@ -31,17 +31,18 @@ from typing import TYPE_CHECKING, Any, Callable, Iterable, Sequence
 
 from geometry_msgs.msg import PolygonStamped
 from nav_msgs.msg import Odometry
+from rclpy.serialization import deserialize_message
 
 from fastep_core.planning.others import OtherRobot
 from fastep_ros.polled import PolledSubscription, polled
-from msg_tools import convert, interface
+from msg_tools import cdr, convert, interface
 from msg_tools.footprint import base_frame, circle_footprint, footprint_radius
 from msg_tools.interface import LATEST, offered_qos
 
 if TYPE_CHECKING:
     from rclpy.node import Node
 
-__all__ = ['GRAPH_CHECK_TICKS', 'Fleet', 'Robot', 'RobotFollower', 'announced', 'namespace_of']
+__all__ = ['GRAPH_CHECK_TICKS', 'Fleet', 'Robot', 'RobotFollower', 'announced', 'namespace_of', 'odometry_reading']
 
 GRAPH_CHECK_TICKS = 8   # the footprint publishers of every known robot are checked every 8th look (2 s)
 
@@ -165,6 +166,25 @@ class Fleet:
         return out
 
 
+def odometry_reading(msg: Odometry | bytes) -> tuple[tuple[float, float], tuple[float, float], float]:
+    """(position, map-frame velocity, stamp in seconds) of odometry, a message or its CDR bytes; ValueError if not
+    finite (CdrError if the bytes are cut off). The bytes are read with struct (msg_tools.cdr), to the same floats."""
+    if isinstance(msg, bytes):
+        fields = cdr.odometry_fields(msg)
+        if fields is None:   # not little-endian CDR: rclpy reads it
+            msg = deserialize_message(msg, Odometry)
+        else:
+            x, y, qx, qy, qz, qw, vx, vy, _ = fields
+            position = (x, y)
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise ValueError('odometry position is not finite')
+            sec, nanosec = cdr.header_stamp(msg)
+            return position, convert.twist_in_map(vx, vy, (qx, qy, qz, qw)), sec + nanosec * 1e-9
+    assert not isinstance(msg, bytes)
+    return (convert.odometry_position(msg), convert.odometry_velocity(msg),
+            convert.stamp_to_seconds(msg.header.stamp))
+
+
 class RobotFollower:
     """The planner's side of the graph: announces its robot, finds and follows the others (Fleet's ROS side)."""
 
@@ -239,9 +259,10 @@ class RobotFollower:
             # Taken when used (take: each control tick, each wall tick), not on every 50 Hz message: the N^2
             # fan-in of a graph (fastep_ros.polled). A callback subscription if rclpy cannot make one.
             # In lock step every message is awaited: a callback subscription.
-            taken = polled(node, Odometry, robot.odom_topic, LATEST) if self.on_odometry is None else None
+            # Raw: only the pose, twist and stamp are read from the bytes (msg_tools.cdr), N - 1 times a tick.
+            taken = polled(node, Odometry, robot.odom_topic, LATEST, raw=True) if self.on_odometry is None else None
             self.subscriptions[namespace].append(taken or node.create_subscription(
-                Odometry, robot.odom_topic, functools.partial(self.on_odom, namespace), LATEST))
+                Odometry, robot.odom_topic, functools.partial(self.on_odom, namespace), LATEST, raw=True))
         node.get_logger().info(f'{"following" if verdict else "no longer following"} robot {robot.name}: '
                                f'{robot.footprint_topic} (from a node of {namespace}) and {robot.odom_topic} '
                                f'{"have" if verdict else "lack"} publishers')
@@ -253,17 +274,16 @@ class RobotFollower:
             self.node.get_logger().warning(f'ignoring the footprint of {robot_name(namespace)}: {exc}',
                                            throttle_duration_sec=5.0)
 
-    def on_odom(self, namespace: str, msg: Odometry) -> None:
-        """Take another robot's odometry; on_change() if that made it followed (status lists it at once)."""
+    def on_odom(self, namespace: str, msg: Odometry | bytes) -> None:
+        """Take another robot's odometry (a message, or its CDR bytes); on_change() if that made it followed
+        (status lists it at once)."""
         try:
-            position = convert.odometry_position(msg)
-            velocity = convert.odometry_velocity(msg)
-        except ValueError as exc:
+            position, velocity, stamp = odometry_reading(msg)
+        except ValueError as exc:   # msg_tools.cdr.CdrError too
             self.node.get_logger().warning(f'ignoring odometry of {robot_name(namespace)}: {exc}',
                                            throttle_duration_sec=5.0)
             return
-        if self.fleet.heard_odometry(namespace, position, velocity, convert.stamp_to_seconds(msg.header.stamp),
-                                     self.now()):
+        if self.fleet.heard_odometry(namespace, position, velocity, stamp, self.now()):
             self.last_names = self.fleet.names(self.now())
             self.on_change()
         if self.on_odometry is not None:

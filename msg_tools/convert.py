@@ -47,8 +47,8 @@ __all__ = [
     'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
     'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point', 'quaternion_to_yaw',
     'scan_to_laser_scan', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds', 'state_to_odometry',
-    'trailer_pose', 'trailer_yaw', 'twist_to_command', 'waypoints_to_path', 'world_to_occupancy_grid',
-    'yaw_to_quaternion',
+    'trailer_pose', 'trailer_yaw', 'twist_in_map', 'twist_to_command', 'waypoints_to_path', 'world_to_occupancy_grid',
+    'yaw_of', 'yaw_to_quaternion',
 ]
 
 CIRCLES_NS = 'circles'
@@ -97,11 +97,16 @@ def yaw_to_quaternion(yaw: float) -> Quaternion:
 
 def quaternion_to_yaw(q: Quaternion) -> float:
     """Yaw in (-pi, pi] of a quaternion (normalised first); ValueError if not finite or of zero length."""
-    _finite((q.x, q.y, q.z, q.w), 'orientation')
-    norm = math.sqrt(q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w)
+    return yaw_of(q.x, q.y, q.z, q.w)
+
+
+def yaw_of(qx: float, qy: float, qz: float, qw: float) -> float:
+    """quaternion_to_yaw of the quaternion (qx, qy, qz, qw)."""
+    _finite((qx, qy, qz, qw), 'orientation')
+    norm = math.sqrt(qx * qx + qy * qy + qz * qz + qw * qw)
     if norm < 1e-9:
         raise ValueError('orientation quaternion has zero length')
-    x, y, z, w = q.x / norm, q.y / norm, q.z / norm, q.w / norm
+    x, y, z, w = qx / norm, qy / norm, qz / norm, qw / norm
     return math.atan2(2.0 * (w * z + x * y), 1.0 - 2.0 * (y * y + z * z))
 
 
@@ -194,9 +199,14 @@ def odometry_to_state(msg: Odometry, model: str = 'point_mass', trailer: float |
 
 def odometry_velocity(msg: Odometry) -> tuple[float, float]:
     """Map-frame velocity (vx, vy) of the reference point: the child-frame twist rotated by the yaw."""
-    vx, vy = float(msg.twist.twist.linear.x), float(msg.twist.twist.linear.y)
+    q = msg.pose.pose.orientation
+    return twist_in_map(float(msg.twist.twist.linear.x), float(msg.twist.twist.linear.y), (q.x, q.y, q.z, q.w))
+
+
+def twist_in_map(vx: float, vy: float, orientation: tuple[float, float, float, float]) -> tuple[float, float]:
+    """A child-frame velocity (vx, vy) rotated by the yaw of the orientation quaternion (x, y, z, w)."""
     _finite((vx, vy), 'odometry twist')
-    yaw = quaternion_to_yaw(msg.pose.pose.orientation)
+    yaw = yaw_of(*orientation)
     c, s = math.cos(yaw), math.sin(yaw)
     return c * vx - s * vy, s * vx + c * vy
 

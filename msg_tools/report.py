@@ -32,7 +32,6 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import struct
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -46,6 +45,7 @@ from fastep_core.errors import FastepError
 from fastep_core.geometry import Circle, Obstacle, Obstacles
 from fastep_core.metrics import trajectory_margins
 from fastep_core.scenario import Scenario, parse_scenario
+from msg_tools.cdr import float64_field, header_stamp, odometry_fields, twist_fields
 from msg_tools.interface import (
     CMD_VEL,
     COST,
@@ -128,71 +128,6 @@ def _robot(robots: dict[str, RobotRecord], name: str) -> RobotRecord:
     if name not in robots:
         robots[name] = RobotRecord(name)
     return robots[name]
-
-
-# Fast paths for the three high-rate types. rclpy's deserialize_message builds a full Python message (an
-# Odometry is ~15 objects and two numpy covariance arrays), which made reading a 10-minute recording take half
-# a minute; these read only the needed float64 fields of little-endian CDR (encapsulation 00 01) with struct.
-# Alignment is relative to the payload after the 4-byte encapsulation header. Tests compare them with rclpy.
-# A message shorter than the whole type (cut off) raises CdrError, as rclpy's decoder refuses it.
-_CDR_LE = b'\x00\x01'
-_U32 = struct.Struct('<I')
-_ODOM = struct.Struct('<3d4d288x3d3d')  # position, orientation, (pose covariance), twist linear, angular
-_ODOM_TAIL = 85 * 8                     # pose (7), its covariance (36), twist (6), its covariance (36)
-_TWIST = struct.Struct('<3d3d')
-_F64 = struct.Struct('<d')
-_STAMP = struct.Struct('<iI')   # a header's stamp: sec, nanosec (right after the 4-byte CDR header)
-
-
-class CdrError(ValueError):
-    """CDR bytes that do not hold a whole message of the type (cut off, or a string running past the end)."""
-
-
-def _string_end(data: bytes, offset: int) -> int:
-    """Offset after a CDR string starting at `offset` (payload offsets; data includes the 4-byte header);
-    struct.error if its length field lies past the end (a string running past the end is caught by the
-    caller's length check)."""
-    offset = (offset + 3) & ~3
-    return offset + 4 + _U32.unpack_from(data, 4 + offset)[0]
-
-
-def odometry_fields(data: bytes) -> tuple[float, ...] | None:
-    """(x, y, qx, qy, qz, qw, linear.x, linear.y, angular.z) of a CDR Odometry, None if not little-endian CDR;
-    CdrError if the bytes are not a whole Odometry."""
-    if data[:2] != _CDR_LE:
-        return None
-    try:
-        offset = _string_end(data, 8)           # header.stamp (8 bytes), header.frame_id
-        offset = _string_end(data, offset)      # child_frame_id
-    except struct.error:
-        raise CdrError(f'cut off: {len(data)} bytes end inside a frame name') from None
-    offset = (offset + 7) & ~7
-    if 4 + offset + _ODOM_TAIL > len(data):
-        raise CdrError(f'cut off: {len(data)} bytes, an Odometry with these frame names needs '
-                       f'{4 + offset + _ODOM_TAIL}')
-    v = _ODOM.unpack_from(data, 4 + offset)
-    return v[0], v[1], v[3], v[4], v[5], v[6], v[7], v[8], v[12]
-
-
-def twist_fields(data: bytes) -> tuple[float, float, float] | None:
-    """(linear.x, linear.y, angular.z) of a CDR Twist (CdrError if cut off)."""
-    if data[:2] != _CDR_LE:
-        return None
-    try:
-        v = _TWIST.unpack_from(data, 4)
-    except struct.error:
-        raise CdrError(f'cut off: {len(data)} bytes, a Twist needs {4 + _TWIST.size}') from None
-    return v[0], v[1], v[5]
-
-
-def float64_field(data: bytes) -> float | None:
-    """The value of a CDR Float64 (CdrError if cut off)."""
-    if data[:2] != _CDR_LE:
-        return None
-    try:
-        return _F64.unpack_from(data, 4)[0]
-    except struct.error:
-        raise CdrError(f'cut off: {len(data)} bytes, a Float64 needs {4 + _F64.size}') from None
 
 
 # What each topic may carry; anything else (another type, another encoding) is left out with a warning.
@@ -308,7 +243,7 @@ def load_run(recording: Recording) -> RecordedRun:
                     v = (p.x, p.y, q.x, q.y, q.z, q.w, tw.linear.x, tw.linear.y, tw.angular.z)
                     sec, nanosec = m.header.stamp.sec, m.header.stamp.nanosec
                 else:
-                    sec, nanosec = _STAMP.unpack_from(data, 4)
+                    sec, nanosec = header_stamp(data)
                 # Chained comparisons: False for NaN and inf too, and 30 times faster than math.isfinite + abs.
                 if not (-LIMIT <= v[0] <= LIMIT and -LIMIT <= v[1] <= LIMIT and -LIMIT <= v[6] <= LIMIT
                         and -LIMIT <= v[7] <= LIMIT and -LIMIT <= v[8] <= LIMIT):

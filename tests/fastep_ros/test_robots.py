@@ -237,7 +237,7 @@ class _GraphStub:
     def create_publisher(self, *args: Any) -> Any:
         return self.ns(publish=lambda msg: None)
 
-    def create_subscription(self, msg_type: Any, topic: str, *args: Any) -> Any:
+    def create_subscription(self, msg_type: Any, topic: str, *args: Any, **kwargs: Any) -> Any:
         self.subscribed.append(topic)
         return topic
 

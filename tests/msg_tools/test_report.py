@@ -136,23 +136,3 @@ def test_example_bags(name: str) -> None:
     assert name in (BAGS / 'README.md').read_text()
 
 
-@pytest.mark.parametrize('frame', ['', 'm', 'map', 'odom', 'world_frame'])
-@pytest.mark.parametrize('child', ['', 'r1/base_link', 'ab'])
-def test_fast_cdr_readers_agree_with_rclpy(frame: str, child: str) -> None:
-    """The report's struct readers of Odometry / Twist / Float64 give rclpy's values (alignment after strings
-    of every length)."""
-    from rclpy.serialization import serialize_message
-    from std_msgs.msg import Float64
-
-    from msg_tools import convert
-    odom = convert.state_to_odometry((1.25, -3.5, 0.7, 0.1), convert.seconds_to_stamp(12.5), frame_id=frame,
-                                     child_frame_id=child, linear=(0.3, -0.2), angular=0.9)
-    odom.pose.covariance[0] = 7.0
-    odom.twist.covariance[35] = -1.0
-    q = odom.pose.pose.orientation
-    assert report.odometry_fields(serialize_message(odom)) == (1.25, -3.5, q.x, q.y, q.z, q.w, 0.3, -0.2, 0.9)
-    twist = convert.command_to_twist((0.5, -0.25))
-    twist.angular.z = 0.125
-    assert report.twist_fields(serialize_message(twist)) == (0.5, -0.25, 0.125)
-    assert report.float64_field(serialize_message(Float64(data=-2.75))) == -2.75
-    assert report.twist_fields(b'\x00\x00\x00\x00' + bytes(48)) is None  # big-endian CDR: left to rclpy

@@ -1,0 +1,112 @@
+"""Lock-step runs of fastep-launch: wall time of the whole command, and whether the run is fastep-sim's.
+
+    python -m benchmarks.lock_step                                   # make demo's run, each executor x layout
+    python -m benchmarks.lock_step --robots 16 --layouts graph robot --executors events
+    python -m benchmarks.lock_step --scenario case_study_1 --algorithm fastep --record
+
+Each row runs `python -m fastep_ros.launch SCENARIO --rtf RTF --seed 0 --json ...` with the interpreter and
+PYTHONPATH of this process (so the code under test is the one PYTHONPATH points at: run it with another
+checkout's path to measure that one) and times it from outside: the whole command (what a user waits for),
+start-up (until the launcher says the robots are on their way) and the run (until it reports the last robot).
+RTF is simulated time (the last arrival) over each. `exact` compares every robot with `fastep-sim` of the same
+scenario, algorithm and seed: the arrival time, path length and clearance as --json rounds them, and the
+position at every time both trajectories hold a row (`max |d|`). The load average is read before each row.
+--robots N runs benchmarks.graph_scaling's circle of N robots swapping places instead of a scenario.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+from fastep_core.scenario import load_scenario
+from fastep_core.simulator import simulate
+
+
+def compare(live: list[dict[str, Any]], sim: list[dict[str, Any]]) -> tuple[bool, float]:
+    """(same outcome to the rounding of --json, largest position difference at common trajectory times)."""
+    same, worst = True, 0.0
+    for a, b in zip(live, sim):
+        same &= a['reached'] == b['reached'] and a['sim_time'] == b['sim_time'] and \
+            abs(a['path_length'] - b['path_length']) <= 2e-6 and abs(a['min_clearance'] - b['min_clearance']) <= 2e-6
+        rows = {round(r[0], 3): r[1:3] for r in b['trajectory']}
+        for r in a['trajectory']:
+            other = rows.get(round(r[0], 3))
+            if other is not None:
+                worst = max(worst, abs(r[1] - other[0]), abs(r[2] - other[1]))
+    return same and worst <= 2e-6, worst
+
+
+def run(scenario: str, algorithm: str, layout: str, executor: str, rtf: float, record: bool,
+        out: Path) -> dict[str, Any]:
+    result = out / f'{layout}_{executor}.json'
+    cmd = [sys.executable, '-m', 'fastep_ros.launch', scenario, '--algorithm', algorithm, '--rtf', str(rtf),
+           '--seed', '0', '--layout', layout, '--executor', executor, '--no-progress', '--json', str(result)]
+    if record:
+        cmd += ['--record', str(out / f'{layout}_{executor}.mcap')]
+    load = os.getloadavg()[0]
+    start = time.perf_counter()
+    started = finished = None
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
+                            stdin=subprocess.DEVNULL)
+    assert proc.stdout is not None
+    for line in proc.stdout:
+        if 'on their way' in line:
+            started = time.perf_counter() - start
+        elif ': arrived' in line or ': failed' in line or ': timeout' in line:
+            finished = time.perf_counter() - start if finished is None else finished
+    code = proc.wait()
+    whole = time.perf_counter() - start
+    row: dict[str, Any] = {'layout': layout, 'executor': executor, 'code': code, 'load': round(load, 2),
+                           'whole_s': round(whole, 2)}
+    if started is not None and finished is not None and result.is_file():
+        robots = json.loads(result.read_text())['runs'][0]['robots']
+        simulated = max(r['sim_time'] or 0.0 for r in robots)
+        row.update(simulated_s=simulated, startup_s=round(started, 2), run_s=round(finished - started, 2),
+                   rtf_whole=round(simulated / whole, 2), rtf_run=round(simulated / (finished - started), 2),
+                   arrived=sum(r['reached'] for r in robots), robots=len(robots))
+    return row
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = argparse.ArgumentParser(prog='python -m benchmarks.lock_step', description=__doc__.split('\n')[0])
+    p.add_argument('--scenario', default='case_study_1')
+    p.add_argument('--robots', type=int, default=0, help='the circle of N robots of benchmarks.graph_scaling')
+    p.add_argument('--algorithm', default='fastep')
+    p.add_argument('--rtf', type=float, default=50.0)
+    p.add_argument('--layouts', nargs='+', default=['robot', 'graph', 'node'])
+    p.add_argument('--executors', nargs='+', default=['events', 'single'])
+    p.add_argument('--record', action='store_true', help='record each run, as make demo does')
+    p.add_argument('--json', type=Path, help='write the rows here')
+    args = p.parse_args(argv)
+    out = Path(tempfile.mkdtemp(prefix='lock_step_'))
+    scenario = args.scenario
+    if args.robots:
+        from benchmarks.graph_scaling import scenario_yaml
+        scenario = str(out / f'circle_{args.robots}.yaml')
+        Path(scenario).write_text(scenario_yaml(args.robots, 20.0, 2.0))
+    reference = simulate(load_scenario(scenario), args.algorithm, 0).to_json()['robots']
+    rows = []
+    for executor in args.executors:
+        for layout in args.layouts:
+            row = run(scenario, args.algorithm, layout, executor, args.rtf, args.record, out)
+            result = out / f'{layout}_{executor}.json'
+            if result.is_file():
+                row['exact'], row['max_d'] = compare(json.loads(result.read_text())['runs'][0]['robots'], reference)
+            rows.append(row)
+            print(json.dumps(row), flush=True)
+    if args.json is not None:
+        args.json.write_text(json.dumps({'scenario': scenario, 'algorithm': args.algorithm, 'rtf': args.rtf,
+                                         'rows': rows}, indent=1))
+    return 0
+
+
+if __name__ == '__main__':
+    raise SystemExit(main())
