@@ -153,6 +153,17 @@ class Obstacles:
             self._box_cache = cached
         return cached
 
+    @property
+    def scale(self) -> float:
+        """The largest absolute coordinate of any obstacle's bounding box (0 with none, inf when one is not
+        finite): what rounding margins of distances to them are relative to."""
+        scale: float | None = getattr(self, '_scale', None)
+        if scale is None:
+            lows, highs, _, finite = self._boxes()
+            scale = float(np.abs(np.concatenate([lows, highs])).max(initial=0.0)) if finite else math.inf
+            self._scale = scale
+        return scale
+
     def near(self, points: ArrayLike, within: float, end_slack: float | None = None) -> NDArray[np.bool_]:
         """clearance(points) < within for points (m, 2), the same answer bit for bit, without the m x n matrix of
         distances: only the (point, obstacle) pairs where the point lies in the obstacle's bounding box grown by
