@@ -36,6 +36,9 @@ __all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step', 'plan_step_pass
 
 FloatArray = NDArray[np.float64]
 INFEASIBLE = 1e6
+FEASIBLE_ONLY_FROM = 128
+"""StepProblem.fitness computes eq. 10 for the feasible candidates only from this many candidates on (an
+attraction call); for fewer (the initial swarm, stepping ahead) one pass over every row costs less."""
 
 
 @dataclass
@@ -283,6 +286,9 @@ class StepProblem:
         computed by the expressions of terms(), in the same order.
         """
         X = np.asarray(X, dtype=float)
+        if len(X) < FEASIBLE_ONLY_FROM:
+            f, viol = self.terms(X)
+            return np.where(viol > 0.0, INFEASIBLE + viol, f)
         x, y = X[:, 0], X[:, 1]
         near, dx, dy, run2 = self._near_rows(x, y)   # row 0: the run origin -> X; then the local obstacles
         reach = near[0]
@@ -317,8 +323,8 @@ class StepProblem:
         feasible = np.flatnonzero(~(viol > 0.0))
         if len(feasible):
             # numpy sums the rows of a one-column array pairwise, of a wider one one row after another: a lone
-            # feasible candidate among several is evaluated twice, so its f1 is summed as terms() sums it.
-            take = feasible if len(feasible) > 1 or len(x) == 1 else np.repeat(feasible, 2)
+            # feasible candidate (among many, here) is evaluated twice, so its f1 is summed as terms() sums it.
+            take = feasible if len(feasible) > 1 else np.repeat(feasible, 2)
             rows = self._all_rows(x[take], y[take])[0]
             f = np.multiply(rows[1], self.c)
             if len(self.world.obstacles):
@@ -358,6 +364,7 @@ class _DistanceRows:
         self.seg_inv_length2 = obstacles._inv_length2[walls][:, None]
         self._capacity = 0
         self._flat: tuple[FloatArray, ...] = ()
+        self._views: dict[int, tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]] = {}
 
     def __call__(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """(rows (n_points + len(which), m), x - px0, y - py0, their squared length): views valid until the next
@@ -391,13 +398,17 @@ class _DistanceRows:
 
     def _scratch(self, m: int) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
         """DX, DY (n, m), the squares (norms, m), the rows (n, m) and the walls' temporary (n - norms, m)."""
-        n, k = len(self.px), self.norms
-        if m > self._capacity or not self._flat:
-            self._capacity = m
-            self._flat = tuple(np.empty(rows * m) for rows in (n, n, k, n, n - k))
-        DX, DY, square, rows, t = (flat[:rows * m].reshape(rows, m)
-                                   for flat, rows in zip(self._flat, (n, n, k, n, n - k)))
-        return DX, DY, square, rows, t
+        views = self._views.get(m)
+        if views is None:
+            n, k = len(self.px), self.norms
+            if m > self._capacity or not self._flat:
+                self._capacity = m
+                self._flat = tuple(np.empty(rows * m) for rows in (n, n, k, n, n - k))
+                self._views.clear()
+            DX, DY, square, rows, t = (flat[:rows * m].reshape(rows, m)
+                                       for flat, rows in zip(self._flat, (n, n, k, n, n - k)))
+            views = self._views[m] = DX, DY, square, rows, t
+        return views
 
 
 def sparse_row_sum(columns: dict[int, FloatArray], n: int) -> FloatArray | None:

@@ -42,7 +42,7 @@ def random_problem(rng, world, n_others, n_ahead):
 
 def assert_same_bits(problem, rng):
     low, high = problem.bounds().T
-    for m in (0, 1, 2, 3, 8, 9, 50, 301):
+    for m in (0, 1, 2, 3, 8, 9, 50, 128, 301):
         X = rng.uniform(low - 0.3, high + 0.3, (m, 2))        # a few outside the box, as a test may ask
         for batch in (X, np.asfortranarray(X)):
             f, viol = problem.terms(batch)
@@ -103,7 +103,7 @@ def test_fitness_of_a_lone_feasible_candidate_among_many():
         feasible = np.flatnonzero(viol_ref == 0.0)
         for keep in feasible[:3]:
             outside = problem.origin + 10.0 * problem.step_radius        # infeasible: beyond the step radius
-            for m in (1, 2, 5, 50):
+            for m in (1, 2, 5, 128, 300):   # fitness() evaluates the feasible ones alone from 128 on
                 batch = np.vstack([X[keep], np.tile(outside, (m - 1, 1))])
                 f_ref, viol_ref = reference_terms(problem, batch)
                 assert viol_ref[0] == 0.0 and (viol_ref[1:] > 0.0).all()
