@@ -94,6 +94,7 @@ class Obstacles:
         self._inv_length2 = np.where(length2 > 0.0, 1.0 / np.where(length2 > 0.0, length2, 1.0), 0.0)
         # fan_clearance's points: the circles' centres, the walls' starts, the walls' ends.
         self._fan_points = np.concatenate([self.centers, self.starts, self.ends])
+        self._walls_of_point: tuple[FloatArray, ...] | None = None   # made by _from_point when first needed
 
     def __len__(self) -> int:
         return len(self.items)
@@ -129,6 +130,21 @@ class Obstacles:
         if not len(self.starts):
             return circ
         return np.concatenate([circ, self._wall_rows(x, y)], axis=0)
+
+    def _from_point(self, p: FloatArray) -> FloatArray:
+        """point_segment_distance(p, starts, ends) for one point p: the same operations, with what depends on
+        the walls alone computed once."""
+        walls = self._walls_of_point
+        if walls is None:
+            sx, sy = self.starts[..., 0], self.starts[..., 1]
+            abx, aby = self.ends[..., 0] - sx, self.ends[..., 1] - sy
+            denom = abx * abx + aby * aby
+            walls = self._walls_of_point = (sx, sy, abx, aby, np.where(denom > 0.0, denom, 1.0))
+        sx, sy, abx, aby, denom = walls
+        qx, qy = p[..., 0] - sx, p[..., 1] - sy
+        t = (qx * abx + qy * aby) / denom
+        t = np.minimum(np.maximum(t, 0.0), 1.0)
+        return norm(qx - t * abx, qy - t * aby)
 
     def _wall_rows(self, x: FloatArray, y: FloatArray) -> FloatArray:
         """The walls' rows of distance_rows: shape (n_segments, m)."""
@@ -254,7 +270,7 @@ class Obstacles:
         if nw:
             sx, sy, ex, ey = qx[nc:nc + nw], qy[nc:nc + nw], qx[nc + nw:], qy[nc + nw:]
             wall = self._wall_rows(X[:, 0], X[:, 1])                                 # run ends to each wall
-            from_origin = point_segment_distance(o, self.starts, self.ends)[:, None]
+            from_origin = self._from_point(o)[:, None]
             d = np.minimum(np.minimum(wall, from_origin), np.minimum(to_run[nc:nc + nw], to_run[nc + nw:]))
             wx, wy = ex - sx, ey - sy
             crossing = ((dx * sy - dy * sx) * (dx * ey - dy * ex) < 0.0) & \
