@@ -92,6 +92,9 @@ class Obstacles:
         self._ab = self.ends - self.starts
         length2 = np.einsum('ij,ij->i', self._ab, self._ab)
         self._inv_length2 = np.where(length2 > 0.0, 1.0 / np.where(length2 > 0.0, length2, 1.0), 0.0)
+        # fan_clearance's points: the circles' centres, the walls' starts, the walls' ends.
+        self._fan_points = np.concatenate([self.centers, self.starts, self.ends])
+        self._walls_of_point: tuple[FloatArray, ...] | None = None   # made by _from_point when first needed
 
     def __len__(self) -> int:
         return len(self.items)
@@ -126,10 +129,30 @@ class Obstacles:
         circ = norm(x - cx, y - cy) - self.radii[:, None]
         if not len(self.starts):
             return circ
+        return np.concatenate([circ, self._wall_rows(x, y)], axis=0)
+
+    def _from_point(self, p: FloatArray) -> FloatArray:
+        """point_segment_distance(p, starts, ends) for one point p: the same operations, with what depends on
+        the walls alone computed once."""
+        walls = self._walls_of_point
+        if walls is None:
+            sx, sy = self.starts[..., 0], self.starts[..., 1]
+            abx, aby = self.ends[..., 0] - sx, self.ends[..., 1] - sy
+            denom = abx * abx + aby * aby
+            walls = self._walls_of_point = (sx, sy, abx, aby, np.where(denom > 0.0, denom, 1.0))
+        sx, sy, abx, aby, denom = walls
+        qx, qy = p[..., 0] - sx, p[..., 1] - sy
+        t = (qx * abx + qy * aby) / denom
+        t = np.minimum(np.maximum(t, 0.0), 1.0)
+        return norm(qx - t * abx, qy - t * aby)
+
+    def _wall_rows(self, x: FloatArray, y: FloatArray) -> FloatArray:
+        """The walls' rows of distance_rows: shape (n_segments, m)."""
         ax, ay = x - self.starts[:, 0, None], y - self.starts[:, 1, None]
         abx, aby = self._ab[:, 0, None], self._ab[:, 1, None]
         t = np.minimum(np.maximum((ax * abx + ay * aby) * self._inv_length2[:, None], 0.0), 1.0)
-        return np.concatenate([circ, norm(ax - t * abx, ay - t * aby)], axis=0)
+        rows: FloatArray = norm(ax - t * abx, ay - t * aby)
+        return rows
 
     def clearance(self, points: ArrayLike) -> FloatArray:
         """Distance from each point to the nearest obstacle surface (inf when there are none)."""
@@ -152,6 +175,17 @@ class Obstacles:
             cached = lows, highs, 1e-6 * (1.0 + scale), finite
             self._box_cache = cached
         return cached
+
+    @property
+    def scale(self) -> float:
+        """The largest absolute coordinate of any obstacle's bounding box (0 with none, inf when one is not
+        finite): what rounding margins of distances to them are relative to."""
+        scale: float | None = getattr(self, '_scale', None)
+        if scale is None:
+            lows, highs, _, finite = self._boxes()
+            scale = float(np.abs(np.concatenate([lows, highs])).max(initial=0.0)) if finite else math.inf
+            self._scale = scale
+        return scale
 
     def near(self, points: ArrayLike, within: float, end_slack: float | None = None) -> NDArray[np.bool_]:
         """clearance(points) < within for points (m, 2), the same answer bit for bit, without the m x n matrix of
@@ -217,28 +251,27 @@ class Obstacles:
         """path_clearance(origin, ends) for one origin and many ends (m, 2): the swarm's hot path.
 
         Same result as path_clearance, computed in the (n_obstacles, m) layout of distance_rows with the
-        origin's own distance to each segment computed once.
+        origin's own distance to each segment computed once, and the distances of the circles' centres and
+        the walls' ends to every run in one array.
         """
         o = np.asarray(origin, dtype=float)
         X = np.asarray(ends, dtype=float)
         dx, dy = X[:, 0] - o[0], X[:, 1] - o[1]
         inv_length2 = 1.0 / np.maximum(dx * dx + dy * dy, 1e-300)
-
-        def to_run(qx: FloatArray, qy: FloatArray) -> FloatArray:
-            """Distance from points q (relative to the origin, shape (k, 1)) to each run: (k, m)."""
-            t = np.minimum(np.maximum((qx * dx + qy * dy) * inv_length2, 0.0), 1.0)
-            return norm(qx - t * dx, qy - t * dy)
-
-        out = np.full(len(X), np.inf)
-        if len(self.radii):
-            rel = self.centers - o
-            out = (to_run(rel[:, 0, None], rel[:, 1, None]) - self.radii[:, None]).min(axis=0)
-        if len(self.starts):
-            s, e = self.starts - o, self.ends - o
-            sx, sy, ex, ey = s[:, 0, None], s[:, 1, None], e[:, 0, None], e[:, 1, None]
-            wall = self.distance_rows(X[:, 0], X[:, 1])[self.n_circles:]          # run ends to each wall
-            from_origin = point_segment_distance(o, self.starts, self.ends)[:, None]
-            d = np.minimum(np.minimum(wall, from_origin), np.minimum(to_run(sx, sy), to_run(ex, ey)))
+        if not len(self):
+            return np.full(len(X), np.inf)
+        # Distance from each point (circle centres, wall starts, wall ends; relative to the origin) to each run.
+        rel = self._fan_points - o
+        qx, qy = rel[:, 0, None], rel[:, 1, None]
+        t = np.minimum(np.maximum((qx * dx + qy * dy) * inv_length2, 0.0), 1.0)
+        to_run = norm(qx - t * dx, qy - t * dy)
+        nc, nw = self.n_circles, len(self.starts)
+        out: FloatArray = (to_run[:nc] - self.radii[:, None]).min(axis=0) if nc else np.full(len(X), np.inf)
+        if nw:
+            sx, sy, ex, ey = qx[nc:nc + nw], qy[nc:nc + nw], qx[nc + nw:], qy[nc + nw:]
+            wall = self._wall_rows(X[:, 0], X[:, 1])                                 # run ends to each wall
+            from_origin = self._from_point(o)[:, None]
+            d = np.minimum(np.minimum(wall, from_origin), np.minimum(to_run[nc:nc + nw], to_run[nc + nw:]))
             wx, wy = ex - sx, ey - sy
             crossing = ((dx * sy - dy * sx) * (dx * ey - dy * ex) < 0.0) & \
                 ((wy * sx - wx * sy) * (wx * (dy - sy) - wy * (dx - sx)) < 0.0)

@@ -71,7 +71,16 @@ def densify(points: FloatArray, spacing: float = 0.5) -> list[FloatArray]:
 
 @dataclass
 class EscapePath:
-    """An exact path being followed: its vertices after the start, what they keep, and how far along we are."""
+    """An exact path being followed: its vertices after the start, what they keep, and how far along we are.
+
+    What `target` measures each tick (the clearance of the runs from the robot to the vertices ahead, and to
+    the carrot; the robot's own clearance) is kept, with the position it was measured from, and reused while
+    it still decides the same: a run's clearance changes by at most the distance its ends moved, a point's by
+    at most the distance it moved. So a run that kept `within` with more room than the robot has moved since
+    still keeps it, one that missed it by more still misses it, and only the runs in between are measured
+    again. Every decision is the one measuring all of them gives (with a rounding margin, 1e-6 m relative to
+    the coordinates' size, far beyond the floats' own error).
+    """
 
     vertices: list[FloatArray]   # after the start, the goal last
     rest: FloatArray             # path length from each vertex to the goal
@@ -79,9 +88,17 @@ class EscapePath:
     world: World                 # ... from the obstacles of this world (parked robots included)
     index: int = 0               # the vertex aimed at
     stacked: FloatArray = field(init=False, repr=False)   # the vertices as one (n, 2) array, made once
+    # The clearance of the run to each vertex (nan: not measured yet) and where the robot was then.
+    fan: FloatArray = field(init=False, repr=False)
+    fan_from: FloatArray = field(init=False, repr=False)
+    # The last carrot's run (start x, y, end x, y, clearance) and the robot's clearance (x, y, clearance).
+    carrot_run: tuple[float, float, float, float, float] | None = field(init=False, repr=False, default=None)
+    room: tuple[float, float, float] | None = field(init=False, repr=False, default=None)
 
     def __post_init__(self) -> None:
         self.stacked = np.array(self.vertices, dtype=float).reshape(-1, 2)
+        self.fan = np.full(len(self.stacked), np.nan)
+        self.fan_from = np.zeros((2, len(self.stacked)))
 
     @classmethod
     def from_path(cls, path: OptimalPath, world: World) -> EscapePath:
@@ -105,17 +122,18 @@ class EscapePath:
         gaps = np.hypot(*(self.stacked[self.index:] - position).T)
         beyond = gaps > step_radius
         reach = max(1, int(np.argmax(beyond)) if beyond.any() else len(gaps))
-        candidates = self.stacked[self.index:self.index + reach]
         obstacles = self.world.obstacles
         # A path vertex sits exactly at the path's clearance, so "visible" allows a little less: half the margin,
         # what the path keeps (in a narrow gap), or what the robot has now, whichever is smallest (the guard
         # still keeps the radius).
         within = min(radius + 0.5 * margin, self.keep - 1e-3)
+        x, y = float(position[0]), float(position[1])
+        slack = 1e-6 * (1.0 + max(abs(x), abs(y), obstacles.scale))
         if len(obstacles):
-            within = min(within, float(obstacles.clearance(position)) - 1e-6)
-            seen = obstacles.fan_clearance(position, candidates) >= within
+            within = self._within(x, y, within, slack)
+            seen = self._seen(position, self.index, self.index + reach, within, slack)
         else:
-            seen = np.ones(len(candidates), dtype=bool)
+            seen = np.ones(reach, dtype=bool)
         if not seen.any():
             if not fresh:
                 return None
@@ -132,9 +150,45 @@ class EscapePath:
             return aim
         carrot = position + (aim - position) * (step_radius / gap)
         if float(self.world.wall_distance(carrot)) < clearance or \
-                (len(obstacles) and float(obstacles.fan_clearance(position, carrot[None])[0]) < within):
+                (len(obstacles) and self._carrot_clearance(position, carrot, within, slack) < within):
             return aim
         return carrot   # a new array each tick: the controller is reset, as pure pursuit needs
+
+    def _within(self, x: float, y: float, within: float, slack: float) -> float:
+        """min(within, the robot's clearance - 1e-6), measuring the clearance only when it may be the smaller."""
+        room = self.room
+        if room is not None and room[2] - math.hypot(x - room[0], y - room[1]) - slack - 1e-6 > within:
+            return within
+        here = float(self.world.obstacles.clearance(np.array([x, y])))
+        self.room = (x, y, here)
+        return min(within, here - 1e-6)
+
+    def _seen(self, position: FloatArray, first: int, stop: int, within: float, slack: float) -> NDArray[np.bool_]:
+        """fan_clearance(position, vertices first..stop-1) >= within, measuring only the runs still in doubt."""
+        fan, origin = self.fan[first:stop], self.fan_from[:, first:stop]
+        moved = np.hypot(position[0] - origin[0], position[1] - origin[1])
+        moved += slack
+        seen: NDArray[np.bool_] = fan - moved >= within
+        doubt = ~(seen | (fan + moved < within))      # nan (never measured) is in doubt
+        if doubt.any():
+            at = np.flatnonzero(doubt)
+            measured = self.world.obstacles.fan_clearance(position, self.stacked[first + at])
+            fan[at] = measured
+            origin[0, at], origin[1, at] = position[0], position[1]
+            seen[at] = measured >= within
+        return seen
+
+    def _carrot_clearance(self, position: FloatArray, carrot: FloatArray, within: float, slack: float) -> float:
+        """fan_clearance(position, [carrot]) where it decides `< within`; the last carrot's when that proves it."""
+        x, y, cx, cy = float(position[0]), float(position[1]), float(carrot[0]), float(carrot[1])
+        last = self.carrot_run
+        if last is not None:
+            moved = max(math.hypot(x - last[0], y - last[1]), math.hypot(cx - last[2], cy - last[3])) + slack
+            if last[4] - moved >= within or last[4] + moved < within:
+                return last[4]
+        clear = float(self.world.obstacles.fan_clearance(position, carrot[None])[0])
+        self.carrot_run = (x, y, cx, cy, clear)
+        return clear
 
 
 class TrapEscape:

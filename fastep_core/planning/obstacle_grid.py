@@ -20,6 +20,9 @@ FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
 PAIRS_PER_BLOCK = 1 << 19
 """Edge-obstacle pairs measured at once: the blocks' arrays stay within some tens of MB, whatever the world."""
+DIRECT_PAIRS = 4096
+"""Up to this many edge-obstacle pairs, `free` measures every pair at once instead of looking them up: the
+lookup's few dozen numpy calls cost more than measuring them all (a typical call: 2 edges, 5-30 obstacles)."""
 
 
 class ObstacleGrid:
@@ -93,8 +96,9 @@ class ObstacleGrid:
     def free(self, P: FloatArray, Q: FloatArray) -> NDArray[np.bool_]:
         """Which edges P[i]-Q[i] keep at least the threshold from every obstacle."""
         blocked = np.zeros(len(P), dtype=bool)
-        if not self.usable:
-            # Rounding or overflow makes the grid useless (absurd coordinates): every pair, in blocks.
+        if not self.usable or len(P) * len(self.obstacles) <= DIRECT_PAIRS:
+            # Rounding or overflow makes the grid useless (absurd coordinates), or there are few pairs: every
+            # pair, in blocks. The pairs the grid leaves out are farther than the threshold: same decisions.
             n = len(self.obstacles)
             step = max(1, PAIRS_PER_BLOCK // max(n, 1))
             for a in range(0, len(P), step):

@@ -26,7 +26,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.errors import ParameterError
-from fastep_core.geometry import point_segment_distance
+from fastep_core.geometry import Obstacles, point_segment_distance
 from fastep_core.optimize import OptimizeResult, aco_r, fastep
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
@@ -36,6 +36,9 @@ __all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'plan_step', 'plan_step_pass
 
 FloatArray = NDArray[np.float64]
 INFEASIBLE = 1e6
+FEASIBLE_ONLY_FROM = 128
+"""StepProblem.fitness computes eq. 10 for the feasible candidates only from this many candidates on (an
+attraction call); for fewer (the initial swarm, stepping ahead) one pass over every row costs less."""
 
 
 @dataclass
@@ -85,17 +88,14 @@ class StepProblem:
         # the target (eq. 5), the circles' centres (eq. 6-7), then the walls' starts (the minimum distance
         # technique); the distance itself is taken for all but the walls' starts.
         nc = obstacles.n_circles
-        points = np.concatenate([self.origin[None], self.target[None], obstacles.centers, obstacles.starts])
-        self._px, self._py = points[:, 0, None], points[:, 1, None]
-        self._n_norms = 2 + nc
-        self._circle_r = obstacles.radii[:, None]
-        # The very constants Obstacles.distance_rows uses (the same floats give the same distances).
-        self._seg_dx, self._seg_dy = obstacles._ab[:, 0, None], obstacles._ab[:, 1, None]
-        self._seg_inv_length2 = obstacles._inv_length2[:, None]
-        # The local obstacles (the clearance rule), relative to the origin, as Obstacles.fan_clearance has them:
-        # the points whose distance to each run is measured (circle centres, then wall starts, then wall ends).
+        self._all_rows = _DistanceRows(np.concatenate([self.origin[None], self.target[None]]), obstacles,
+                                       np.arange(len(obstacles)))
+        # The local obstacles (the clearance rule): their rows alone, after the origin's, for fitness().
         local = np.flatnonzero(self._local)
         self._local_rows = local
+        self._near_rows = _DistanceRows(self.origin[None], obstacles, local)
+        # The local obstacles relative to the origin, as Obstacles.fan_clearance has them: the points whose
+        # distance to each run is measured (circle centres, then wall starts, then wall ends).
         lc, ls = local[local < nc], local[local >= nc]
         self._run_circles, self._run_walls = len(lc), ls
         centres, starts, ends = (obstacles.centers[lc] - self.origin, obstacles.starts[ls - nc] - self.origin,
@@ -150,7 +150,7 @@ class StepProblem:
                 local = self._local_rows
                 nearest = dist[local[0]] if len(local) == 1 else dist[local].min(axis=0)
                 viol += np.maximum(np.subtract(self.clearance, nearest), 0.0)
-                run = self._run_clearance(dx, dy, run2, dist)
+                run = self._run_clearance(dx, dy, run2, dist[self._run_walls])
                 np.subtract(self._path_clearance, run, out=run)
                 viol += np.maximum(run, 0.0, out=run)
         if len(self.others):
@@ -172,39 +172,14 @@ class StepProblem:
 
     def _distance_rows(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
         """Distance of each candidate to the origin, the target and each obstacle surface: (2 + n_obstacles, m);
-        and the run vectors x - ox, y - oy and their squared length.
+        and the run vectors x - ox, y - oy and their squared length (views valid until the next call)."""
+        return self._all_rows(x, y)
 
-        Each row is computed with the very operations of geometry.norm and Obstacles.distance_rows, so to the
-        same floats, but all rows at once.
-        """
-        k = self._n_norms
-        DX, DY = x - self._px, y - self._py
-        square = DX[:k] * DX[:k]
-        square += DY[:k] * DY[:k]
-        rows = np.empty((len(DX), len(x)))
-        np.sqrt(square, out=rows[:k])
-        rows[2:k] -= self._circle_r
-        if k < len(rows):
-            ax, ay = DX[k:], DY[k:]
-            t = ax * self._seg_dx
-            t += ay * self._seg_dy
-            t *= self._seg_inv_length2
-            np.maximum(t, 0.0, out=t)
-            np.minimum(t, 1.0, out=t)
-            ax -= t * self._seg_dx
-            t *= self._seg_dy
-            ay -= t
-            ax *= ax
-            ay *= ay
-            ax += ay
-            np.sqrt(ax, out=rows[k:])
-        return rows, DX[0], DY[0], square[0]
-
-    def _run_clearance(self, dx: FloatArray, dy: FloatArray, run2: FloatArray, dist: FloatArray) -> FloatArray:
+    def _run_clearance(self, dx: FloatArray, dy: FloatArray, run2: FloatArray, walls_rows: FloatArray) -> FloatArray:
         """Closest approach of each run origin -> X to a local obstacle surface: Obstacles.fan_clearance.
 
         The minimum is taken in another order (minima are exact in any order); the distances from the run
-        ends to the walls are the rows of `dist`.
+        ends to the local walls are `walls_rows` (one row per local wall, in order).
         """
         inv_length2 = np.maximum(run2, 1e-300)
         np.divide(1.0, inv_length2, out=inv_length2)
@@ -231,7 +206,7 @@ class StepProblem:
                 return run
         ns = len(walls)
         d = np.minimum(to_run[nc:nc + ns], to_run[nc + ns:])
-        np.minimum(d, dist[walls], out=d)
+        np.minimum(d, walls_rows, out=d)
         np.minimum(d, self._run_from_origin, out=d)
         # A run that properly crosses a wall: the wall's ends lie strictly on either side of the run and the
         # run's ends strictly on either side of the wall.
@@ -302,9 +277,138 @@ class StepProblem:
             viol += total
 
     def fitness(self, X: FloatArray) -> FloatArray:
-        """What the swarm minimises: eq. 10 where feasible, INFEASIBLE + violation elsewhere."""
-        f, viol = self.terms(X)
-        return np.where(viol > 0.0, INFEASIBLE + viol, f)
+        """What the swarm minimises: eq. 10 where feasible, INFEASIBLE + violation elsewhere.
+
+        np.where(viol > 0, INFEASIBLE + viol, f) of terms(), the same floats, but eq. 10 is computed for the
+        feasible candidates only: its sum over every obstacle (f1) is most of the work, and most candidates
+        of an attraction move are infeasible (on the families' worlds ~80 %: pulled past the brighter
+        firefly, out of the step disk). The violation needs the local obstacles' rows alone. Every value is
+        computed by the expressions of terms(), in the same order.
+        """
+        X = np.asarray(X, dtype=float)
+        if len(X) < FEASIBLE_ONLY_FROM:
+            f, viol = self.terms(X)
+            return np.where(viol > 0.0, INFEASIBLE + viol, f)
+        x, y = X[:, 0], X[:, 1]
+        near, dx, dy, run2 = self._near_rows(x, y)   # row 0: the run origin -> X; then the local obstacles
+        reach = near[0]
+        viol = reach - self.step_radius
+        np.maximum(viol, 0.0, out=viol)
+        reach_max = float(reach.max(initial=0.0))
+        if reach_max > self._border_free_reach:
+            viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
+        if len(self.world.obstacles) and len(self._local_rows):
+            dist = near[1:]
+            nearest = dist[0] if len(dist) == 1 else dist.min(axis=0)
+            viol += np.maximum(np.subtract(self.clearance, nearest), 0.0)
+            run = self._run_clearance(dx, dy, run2, dist[self._run_circles:])
+            np.subtract(self._path_clearance, run, out=run)
+            viol += np.maximum(run, 0.0, out=run)
+        robots = None
+        if len(self.others):
+            gap = x[:, None] - self._other_x
+            gap *= gap
+            gy = y[:, None] - self._other_y
+            gy *= gy
+            gap += gy
+            np.sqrt(gap, out=gap)
+            total = gap.sum(axis=1)
+            np.maximum(total, 1e-9, out=total)
+            robots = np.divide(self.b, total, out=total)
+            self._add_robot_gap_violation(viol, gap, reach_max)
+            self._add_robot_run_violation(viol, dx, dy, run2, reach_max)
+        for ox, oy in self.pass_on_right:
+            viol += np.maximum(ox * dy - oy * dx, 0.0)
+        out: FloatArray = np.add(INFEASIBLE, viol)
+        feasible = np.flatnonzero(~(viol > 0.0))
+        if len(feasible):
+            # numpy sums the rows of a one-column array pairwise, of a wider one one row after another: a lone
+            # feasible candidate (among many, here) is evaluated twice, so its f1 is summed as terms() sums it.
+            take = feasible if len(feasible) > 1 else np.repeat(feasible, 2)
+            rows = self._all_rows(x[take], y[take])[0]
+            f = np.multiply(rows[1], self.c)
+            if len(self.world.obstacles):
+                total = rows[2:].sum(axis=0)
+                np.maximum(total, 1e-9, out=total)
+                f += np.divide(self.a, total, out=total)
+            if robots is not None:
+                f += robots[take]
+            out[feasible] = f[:len(feasible)]
+        return out
+
+
+class _DistanceRows:
+    """Distances of candidates to some points and to some of the obstacles, one row each, into scratch arrays.
+
+    Rows: the plain distances to `points` (StepProblem: the origin, the target), then the surface distances to
+    the obstacles `which` (indices, ascending: circles, then walls), each computed with the very operations of
+    geometry.norm and Obstacles.distance_rows (the same floats) but all rows at once. The arrays are made once
+    and reused (views of the first n * m elements, contiguous like a fresh array): with many obstacles they are
+    a few hundred kB each, and allocated afresh on every call the allocator handed them back to the system and
+    took them again, the page faults costing as much as the arithmetic (circle fields: ~340 against ~160 us
+    per call of 1,226 candidates).
+    """
+
+    def __init__(self, points: FloatArray, obstacles: Obstacles, which: NDArray[np.int64]) -> None:
+        nc = obstacles.n_circles
+        circles, walls = which[which < nc], which[which >= nc] - nc
+        # The points each candidate's offset (x - px, y - py) is taken from: `points`, the circles' centres
+        # and the walls' starts (the minimum distance technique); the distance itself for all but the last.
+        offsets = np.concatenate([points, obstacles.centers[circles], obstacles.starts[walls]])
+        self.px, self.py = offsets[:, 0, None], offsets[:, 1, None]
+        self.first_circle = len(points)
+        self.norms = len(points) + len(circles)
+        self.circle_r = obstacles.radii[circles][:, None]
+        # The very constants Obstacles.distance_rows uses (the same floats give the same distances).
+        self.seg_dx, self.seg_dy = obstacles._ab[walls, 0, None], obstacles._ab[walls, 1, None]
+        self.seg_inv_length2 = obstacles._inv_length2[walls][:, None]
+        self._capacity = 0
+        self._flat: tuple[FloatArray, ...] = ()
+        self._views: dict[int, tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]] = {}
+
+    def __call__(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray]:
+        """(rows (n_points + len(which), m), x - px0, y - py0, their squared length): views valid until the next
+        call."""
+        k, m = self.norms, len(x)
+        DX, DY, square, rows, t = self._scratch(m)
+        np.subtract(x, self.px, out=DX)
+        np.subtract(y, self.py, out=DY)
+        np.multiply(DX[:k], DX[:k], out=square)
+        np.multiply(DY[:k], DY[:k], out=rows[:k])      # rows[:k] as a temporary: DY^2
+        square += rows[:k]
+        np.sqrt(square, out=rows[:k])
+        rows[self.first_circle:k] -= self.circle_r
+        if k < len(rows):
+            ax, ay, temp = DX[k:], DY[k:], rows[k:]    # rows[k:] as a temporary until the walls' distances
+            np.multiply(ax, self.seg_dx, out=t)
+            np.multiply(ay, self.seg_dy, out=temp)
+            t += temp
+            t *= self.seg_inv_length2
+            np.maximum(t, 0.0, out=t)
+            np.minimum(t, 1.0, out=t)
+            np.multiply(t, self.seg_dx, out=temp)
+            ax -= temp
+            t *= self.seg_dy
+            ay -= t
+            ax *= ax
+            ay *= ay
+            ax += ay
+            np.sqrt(ax, out=temp)
+        return rows, DX[0], DY[0], square[0]
+
+    def _scratch(self, m: int) -> tuple[FloatArray, FloatArray, FloatArray, FloatArray, FloatArray]:
+        """DX, DY (n, m), the squares (norms, m), the rows (n, m) and the walls' temporary (n - norms, m)."""
+        views = self._views.get(m)
+        if views is None:
+            n, k = len(self.px), self.norms
+            if m > self._capacity or not self._flat:
+                self._capacity = m
+                self._flat = tuple(np.empty(rows * m) for rows in (n, n, k, n, n - k))
+                self._views.clear()
+            DX, DY, square, rows, t = (flat[:rows * m].reshape(rows, m)
+                                       for flat, rows in zip(self._flat, (n, n, k, n, n - k)))
+            views = self._views[m] = DX, DY, square, rows, t
+        return views
 
 
 def sparse_row_sum(columns: dict[int, FloatArray], n: int) -> FloatArray | None:

@@ -1,15 +1,18 @@
-"""StepProblem.terms, the fast eq. 10, returns the same floats bit for bit as the plain formulation.
+"""StepProblem.terms, the fast eq. 10, returns the same floats bit for bit as the plain formulation; so does
+StepProblem.fitness, which computes eq. 10 for the feasible candidates only.
 
 The swarm compares fitness values, so one different last bit can change a move and with it a trajectory;
 fastep_testing/step_reference.py is eq. 10 and the clearance rule written one numpy expression per term.
 """
+
+import dataclasses
 
 import numpy as np
 import pytest
 
 from fastep_core.geometry import Circle, Segment
 from fastep_core.planning import StepProblem
-from fastep_core.planning.step import sparse_row_sum
+from fastep_core.planning.step import INFEASIBLE, sparse_row_sum
 from fastep_core.world import World
 from fastep_testing.step_reference import reference_terms
 
@@ -39,13 +42,20 @@ def random_problem(rng, world, n_others, n_ahead):
 
 def assert_same_bits(problem, rng):
     low, high = problem.bounds().T
-    for m in (0, 1, 2, 3, 8, 9, 50, 301):
+    for m in (0, 1, 2, 3, 8, 9, 50, 128, 301):
         X = rng.uniform(low - 0.3, high + 0.3, (m, 2))        # a few outside the box, as a test may ask
         for batch in (X, np.asfortranarray(X)):
             f, viol = problem.terms(batch)
             f_ref, viol_ref = reference_terms(problem, batch)
             assert np.array_equal(f, f_ref) and np.array_equal(viol, viol_ref)
             assert f.dtype == viol.dtype == np.float64 and f.shape == viol.shape == (m,)
+            assert_same_fitness(problem, batch, f_ref, viol_ref)
+
+
+def assert_same_fitness(problem, batch, f_ref, viol_ref):
+    fitness = problem.fitness(batch)
+    expected = np.where(viol_ref > 0.0, INFEASIBLE + viol_ref, f_ref)
+    assert fitness.dtype == np.float64 and fitness.tobytes() == expected.tobytes()
 
 
 @pytest.mark.parametrize('n_circles, n_segments', [(0, 0), (6, 0), (0, 5), (12, 8)])
@@ -77,6 +87,28 @@ def test_a_robot_that_gets_pass_on_right_later_is_scored_with_it():
     assert_same_bits(problem, rng)
     problem.pass_on_right = np.zeros((0, 2))
     assert_same_bits(problem, rng)
+
+
+def test_fitness_of_a_lone_feasible_candidate_among_many():
+    # numpy sums one column of obstacle distances pairwise and several one row after another: a lone feasible
+    # candidate must get the sum it gets among the others (terms), not the one it would get alone.
+    rng = np.random.default_rng(11)
+    world = random_world(rng, 30, 6)
+    for _ in range(20):
+        # f = 1 / f1 alone (c = 0): a last bit of the sum shows in f (with c * d it is mostly rounded away).
+        problem = dataclasses.replace(random_problem(rng, world, 0, 0), a=1.0, c=0.0)
+        low, high = problem.bounds().T
+        X = rng.uniform(low, high, (200, 2))
+        f_ref, viol_ref = reference_terms(problem, X)
+        feasible = np.flatnonzero(viol_ref == 0.0)
+        for keep in feasible[:3]:
+            outside = problem.origin + 10.0 * problem.step_radius        # infeasible: beyond the step radius
+            for m in (1, 2, 5, 128, 300):   # fitness() evaluates the feasible ones alone from 128 on
+                batch = np.vstack([X[keep], np.tile(outside, (m - 1, 1))])
+                f_ref, viol_ref = reference_terms(problem, batch)
+                assert viol_ref[0] == 0.0 and (viol_ref[1:] > 0.0).all()
+                assert_same_fitness(problem, batch, f_ref, viol_ref)
+                assert_same_fitness(problem, batch[::-1].copy(), f_ref[::-1], viol_ref[::-1])
 
 
 @pytest.mark.parametrize('n', [1, 2, 5, 7, 8, 9, 15, 16, 17, 39, 64, 100, 128, 129, 200, 300])
