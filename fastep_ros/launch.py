@@ -46,7 +46,7 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import DEFAULT_EXECUTOR, EXECUTOR_ENV, EXECUTORS
-from fastep_ros.layouts import DEFAULT_LAYOUT, LAYOUTS, Member, group
+from fastep_ros.layouts import LAYOUTS, Member, default_layout, group
 from fastep_ros.layouts import command as layout_command
 from fastep_ros.limits import RATE_RANGE, RTF_RANGE, graph_problem, robot_name_problem
 from fastep_ros.progress import Progress
@@ -85,9 +85,10 @@ def _parser() -> argparse.ArgumentParser:
                    'on ws://localhost:PORT while the run goes')
     p.add_argument('--no-progress', action='store_true', help='no progress on stderr (robots arrived, simulated '
                    'time, real-time factor: a bar on a terminal, a line every 10 s otherwise)')
-    p.add_argument('--layout', choices=LAYOUTS, default=DEFAULT_LAYOUT,
-                   help=f'which nodes share a process (default {DEFAULT_LAYOUT}): node (one process each), robot (a '
-                   'robot\'s plant and planner together), graph (all in one); the topics are the same')
+    p.add_argument('--layout', choices=LAYOUTS, default=None,
+                   help=f'which nodes share a process (default {default_layout(True)}, with --no-clock '
+                   f'{default_layout(False)}): node (one process each), robot (a robot\'s plant and planner together), '
+                   'graph (all in one); the topics are the same')
     p.add_argument('--executor', choices=EXECUTORS, default=None,
                    help=f'rclpy executor of every node (default: ${EXECUTOR_ENV}, else {DEFAULT_EXECUTOR}): events '
                    '(rclpy.experimental.EventsExecutor) or single (SingleThreadedExecutor)')
@@ -504,7 +505,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
 
     sim_time = not args.no_clock
     timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
-    procs = Processes(args.verbose, args.layout, args.executor)
+    procs = Processes(args.verbose, args.layout or default_layout(sim_time), args.executor)
     monitor: Monitor | None = None
     code = 1
     try:

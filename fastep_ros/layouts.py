@@ -4,16 +4,19 @@
     robot  one process per robot (its plant and planner, fastep_ros.container), and the map, clock and recorder
            each in its own
     graph  every node of the simulated graph (map, plants, planners, clock) in one process, on one executor; the
-           recorder, an observer writing a file with an exit code of its own (1: the file is incomplete), keeps its
-           own process, so its writes never hold up the lock step
+           observers keep their own: the recorder, writing a file with an exit code of its own (1: the file is
+           incomplete), and the Foxglove bridge
 
 The nodes, their names, namespaces, parameters and topics are the same in every layout: a container builds each
 node from the very arguments its own process would get (fastep_ros.container). What changes is what it costs:
 each rclpy process pays its executor's work per wake-up and its own DDS participant (discovery traffic grows
 with the square of the participants), so fewer processes cost less CPU, while one process uses one core at most.
-docs/benchmarks.md ("Executors and process layouts") measures the three: on the default SingleThreadedExecutor
-`robot` scaled best (one process for the whole graph rebuilds a wait set of every node's entities at each
-wake-up: its latency grows with the robots); `graph` on the EventsExecutor costs least.
+docs/benchmarks.md ("Executors and process layouts", "Exact lock step") measures the three. On the
+EventsExecutor (the default) `graph` costs least, and in lock step (simulated time) it is also the fastest: a tick
+is a chain of messages through every node, cheapest inside one process (16 robots: 1.3x real time, where `robot`,
+19 processes on 2 cores, ran at 0.6x and starved nodes past the lock step's 5 s waits). On wall time, beside other
+heavy work, several processes get more of the machine than one (and one process uses one core at most): there
+`robot` kept its control periods best. So DEFAULT_LAYOUT is `graph` on simulated time and `robot` on wall time.
 """
 
 from __future__ import annotations
@@ -22,10 +25,17 @@ import sys
 from dataclasses import dataclass
 from typing import Any, Sequence
 
-__all__ = ['DEFAULT_LAYOUT', 'LAYOUTS', 'Member', 'command', 'group']
+__all__ = ['DEFAULT_LAYOUT', 'LAYOUTS', 'Member', 'command', 'default_layout', 'group']
 
 LAYOUTS = ('node', 'robot', 'graph')
-DEFAULT_LAYOUT = 'robot'
+# Nodes that watch the graph on wall time and keep a process of their own in every layout: the recorder (its exit
+# code says whether its file is complete), the Foxglove bridge (a WebSocket server, whose clients' pace is theirs).
+OBSERVERS = ('recorder', 'foxglove_bridge')
+DEFAULT_LAYOUT = {True: 'graph', False: 'robot'}   # on simulated time (lock step), on wall time
+
+
+def default_layout(sim_time: bool) -> str:
+    return DEFAULT_LAYOUT[sim_time]
 
 
 @dataclass(frozen=True)
@@ -46,9 +56,9 @@ def group(layout: str, members: Sequence[Member]) -> list[tuple[str, list[Member
     if layout == 'node':
         return [(m.label, [m]) for m in members]
     if layout == 'graph':
-        simulated = [m for m in members if m.module != 'recorder']
+        simulated = [m for m in members if m.module not in OBSERVERS]
         return ([('fastep-graph', simulated)] if simulated else []) + \
-            [(m.label, [m]) for m in members if m.module == 'recorder']
+            [(m.label, [m]) for m in members if m.module in OBSERVERS]
     out: list[tuple[str, list[Member]]] = []
     robots: dict[str, list[Member]] = {}
     for m in members:
