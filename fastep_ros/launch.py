@@ -8,10 +8,12 @@ Starts, in the processes --layout says (fastep_ros.layouts: each node in its own
 --ros-args ...`; a robot's plant and planner in one fastep-container; or every node in one): the map, then a plant
 and a planner per robot in the robot's namespace with its parameters from the scenario (the scenario's planner
 overrides included), and waits until every planner knows the world and the other robots. It then sends each
-goal on `/<name>/goal_pose`, starts the clock (simulated time at --rtf; --no-clock runs every node on wall
-time instead), follows every `status` and `odom`, and prints one line per robot: arrived or not, the path
-length measured from its odometry, the time taken. Every process it started is stopped at the end (SIGINT,
-then SIGKILL after a grace period), also on Ctrl-C.
+goal on `/<name>/goal_pose`, starts the clock (simulated time at --rtf, in exact lock step: the run is the run
+fastep-sim makes, tick for tick, fastep_ros.lock_step; --no-clock runs every node on wall time instead), follows
+every `status` and `odom`, and prints one line per robot: arrived or not, the path length measured from its
+odometry, the time taken. The default layout is `graph` with the clock and `robot` on wall time
+(fastep_ros.layouts). Every process it started is stopped at the end (SIGINT, then SIGKILL after a grace period),
+also on Ctrl-C.
 
 Exit 0 if every robot arrived (without colliding, as measured from the odometry), 1 otherwise, 2 with one
 line on stderr for bad input, checked before anything starts: --rtf outside [0.001, 10000], a robot name ROS
