@@ -134,6 +134,9 @@ def plant_params(spec: RobotSpec, sim_time: bool, params: PlannerParams | None =
         # Exact lock step (fastep_ros.lock_step): one integration step per control period, each with the command
         # its planner stamped at the step's start.
         out.update(lock_step=True, use_stamped_cmd_vel=True, rate_hz=1.0 / (params or PlannerParams()).dt)
+    else:
+        # Integrated at 50 Hz, told at the planners' control rate: each planner takes every robot's odometry.
+        out.update(odom_rate_hz=1.0 / (params or PlannerParams()).dt)
     if spec.sensor is not None:
         out.update(sensor=[float(spec.sensor.range), float(spec.sensor.fov), float(spec.sensor.beams),
                            float(spec.sensor.noise)], scenario=scenario, seed=int(seed), robot_index=int(index),

@@ -125,6 +125,11 @@ class PlantNode(ManagedNode):
                                 'limit |omega| (rad/s); 0 means unlimited', constraints='>= 0')
         self.rate_hz = declare(self, 'rate_hz', 50.0, 'integration rate: fixed steps of 1/rate_hz s of the '
                                'node clock (simulated time with use_sim_time)', value_range=RATE_RANGE, unit=' Hz')
+        odom_rate = declare(self, 'odom_rate_hz', 0.0, 'odometry messages per second of the node clock, each of the '
+                            'step integrated last; 0: one per integration step. Every planner of a graph takes '
+                            'every robot\'s odometry: a rate of its own (the planners\' control rate) cuts that '
+                            'fan-in without coarsening the integration', value_range=(0.0, RATE_RANGE[1]),
+                            unit=' Hz')
         self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'a cmd_vel acts for at most this long after it '
                                    'was sent (its stamp; for a Twist on wall time its DDS source time): stop '
                                    '(zero velocity) when no newer one came (s, node clock)', constraints='> 0',
@@ -182,6 +187,7 @@ class PlantNode(ManagedNode):
         self.child_frame_id = frames.base_frame(self.get_namespace())
         self.trailer_frame_id = frames.trailer_frame(self.get_namespace())
         self.step = 1.0 / self.rate_hz
+        self.odom_period = 1.0 / odom_rate if odom_rate > 0.0 else 0.0
         self.tick: int | None = None           # integrated time = tick * step
         self.published_tick: int | None = None  # tick of the last odometry published
         self.command = np.zeros(2)
@@ -386,9 +392,18 @@ class PlantNode(ManagedNode):
         self.check_clock()
         self.advance(self.now())
         # Publish when the state moved on since the last odometry, here, in on_cmd_vel or on the lock timer.
-        if self.tick is not None and self.tick != self.published_tick:
+        if self.tick is not None and self.tick != self.published_tick and self.odometry_due():
             self.published_tick = self.tick
             self.publish()
+
+    def odometry_due(self) -> bool:
+        """With odom_rate_hz: the step integrated last is the first in a new odometry period (stamps stay on the
+        step grid, so the odometry of several plants lines up)."""
+        if not self.odom_period or self.published_tick is None or self.tick is None:
+            return True
+        period = self.odom_period
+        return math.floor(self.tick * self.step / period + 1e-9) > math.floor(self.published_tick * self.step / period
+                                                                               + 1e-9)
 
     def on_lock_check(self) -> None:
         """Lock step, on wall time: a step still waiting for its command is integrated once LOCK_WAIT is over."""

@@ -97,3 +97,23 @@ def test_a_planner_in_lock_step_acts_once_per_stamp_when_the_others_odometry_of_
         assert np.all(planner.last_command == [sent[-1].twist.linear.x, sent[-1].twist.linear.y])
     finally:
         planner.destroy_node()
+
+
+def test_a_plant_tells_its_odometry_at_a_rate_of_its_own_on_the_step_grid(context: Any) -> None:
+    """Issue 16 item 3: every planner takes every robot's odometry, so on wall time fastep-launch has plants tell it
+    at the planners' control rate while they integrate at 50 Hz; each message is the step integrated last."""
+    plant = make(PlantNode, context, start=[0.0, 0.0], rate_hz=50.0, odom_rate_hz=20.0)
+    stamps: list[float] = []
+    plant.publish = lambda: stamps.append(round(plant.tick * plant.step, 9))
+    now = [1.0]
+    plant.now = lambda: now[0]
+    try:
+        plant.on_timer()    # the first integration step: told at once
+        for k in range(1, 51):   # one second of 50 Hz steps
+            now[0] = 1.0 + k * 0.02
+            plant.on_timer()
+        assert len(stamps) == 21 and stamps[0] == 1.0 and stamps[-1] == 2.0
+        assert all(round(s / 0.02, 6).is_integer() for s in stamps)   # whole steps
+        assert max(b - a for a, b in zip(stamps, stamps[1:])) <= 0.06 + 1e-9
+    finally:
+        plant.destroy_node()
