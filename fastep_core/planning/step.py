@@ -154,14 +154,7 @@ class StepProblem:
                 np.subtract(self._path_clearance, run, out=run)
                 viol += np.maximum(run, 0.0, out=run)
         if len(self.others):
-            gap = x[:, None] - self._other_x
-            gap *= gap
-            gy = y[:, None] - self._other_y
-            gy *= gy
-            gap += gy
-            np.sqrt(gap, out=gap)
-            total = gap.sum(axis=1)
-            np.maximum(total, 1e-9, out=total)
+            gap, total = self._robot_distances(x, y)
             f += np.divide(self.b, total, out=total)
             self._add_robot_gap_violation(viol, gap, reach_max)
             self._add_robot_run_violation(viol, dx, dy, run2, reach_max)
@@ -229,6 +222,19 @@ class StepProblem:
         if nc:
             np.minimum(run, nearest, out=nearest)
         return nearest
+
+    def _robot_distances(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Each candidate's distance to each other robot (m, n_others), and their sums (at least 1e-9: f2's
+        denominator, eq. 9), computed in place in this order so the floats are those of the plain formulation."""
+        gap = x[:, None] - self._other_x
+        gap *= gap
+        gy = y[:, None] - self._other_y
+        gy *= gy
+        gap += gy
+        np.sqrt(gap, out=gap)
+        total = gap.sum(axis=1)
+        np.maximum(total, 1e-9, out=total)
+        return gap, total
 
     def _add_robot_gap_violation(self, viol: FloatArray, gap: FloatArray, reach: float) -> None:
         """viol += sum over the other robots of how far each candidate comes inside the robot's clearance.
@@ -306,14 +312,7 @@ class StepProblem:
             viol += np.maximum(run, 0.0, out=run)
         robots = None
         if len(self.others):
-            gap = x[:, None] - self._other_x
-            gap *= gap
-            gy = y[:, None] - self._other_y
-            gy *= gy
-            gap += gy
-            np.sqrt(gap, out=gap)
-            total = gap.sum(axis=1)
-            np.maximum(total, 1e-9, out=total)
+            gap, total = self._robot_distances(x, y)
             robots = np.divide(self.b, total, out=total)
             self._add_robot_gap_violation(viol, gap, reach_max)
             self._add_robot_run_violation(viol, dx, dy, run2, reach_max)
