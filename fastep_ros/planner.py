@@ -646,10 +646,10 @@ class PlannerNode(ManagedNode):
         Called whenever one of them comes, on the control timer, and on the wall timer (inputs given up on)."""
         if not self.locked() or self.odom is None or not self.is_active:
             return
-        stamp, lock = self.odom_stamp, self.lock
-        if not lock.due(stamp, self.now()):
+        stamp, lock, now = self.odom_stamp, self.lock, self.now()
+        if not lock.due(stamp, now):
             return
-        inputs = {robot.name: robot.stamp for robot in self.robots.fleet.followed(self.now())}
+        inputs = {robot.name: robot.stamp for robot in self.robots.fleet.followed(now)}
         if self.model == 'tractor_trailer':
             inputs['trailer_pose'] = self.trailer_stamp   # the state of its time is odometry and trailer pose
         if self.scan_sub.get_publisher_count() > 0:

@@ -134,12 +134,7 @@ class StepProblem:
         # Row 0: the run origin -> X (the step radius, the runs' clearance, the traffic rule); row 1: the
         # target; rows 2...: the obstacles (circles, then walls), as Obstacles.distance_rows.
         rows, dx, dy, run2 = self._distance_rows(x, y)
-        reach = rows[0]
-        viol = reach - self.step_radius
-        np.maximum(viol, 0.0, out=viol)
-        reach_max = float(reach.max(initial=0.0))
-        if reach_max > self._border_free_reach:
-            viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
+        viol, reach_max = self._reach_violation(X, rows[0])
         f = np.multiply(rows[1], self.c)
         if len(self.world.obstacles):
             dist = rows[2:]
@@ -223,6 +218,17 @@ class StepProblem:
             np.minimum(run, nearest, out=nearest)
         return nearest
 
+    def _reach_violation(self, X: FloatArray, reach: FloatArray) -> tuple[FloatArray, float]:
+        """The violation of the step radius (reach: origin -> each candidate) and of the clearance from the
+        workspace border (measured only when some candidate reaches past where it is proven kept), and the
+        farthest reach."""
+        viol = reach - self.step_radius
+        np.maximum(viol, 0.0, out=viol)
+        reach_max = float(reach.max(initial=0.0))
+        if reach_max > self._border_free_reach:
+            viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
+        return viol, reach_max
+
     def _robot_distances(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Each candidate's distance to each other robot (m, n_others), and their sums (at least 1e-9: f2's
         denominator, eq. 9), computed in place in this order so the floats are those of the plain formulation."""
@@ -297,12 +303,7 @@ class StepProblem:
             return np.where(viol > 0.0, INFEASIBLE + viol, f)
         x, y = X[:, 0], X[:, 1]
         near, dx, dy, run2 = self._near_rows(x, y)   # row 0: the run origin -> X; then the local obstacles
-        reach = near[0]
-        viol = reach - self.step_radius
-        np.maximum(viol, 0.0, out=viol)
-        reach_max = float(reach.max(initial=0.0))
-        if reach_max > self._border_free_reach:
-            viol += np.maximum(self.clearance - self.world.wall_distance(X), 0.0)
+        viol, reach_max = self._reach_violation(X, near[0])
         if len(self.world.obstacles) and len(self._local_rows):
             dist = near[1:]
             nearest = dist[0] if len(dist) == 1 else dist.min(axis=0)
