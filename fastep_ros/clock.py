@@ -40,17 +40,19 @@ from __future__ import annotations
 
 import importlib
 import math
+import struct
 from dataclasses import dataclass
 from typing import Any, Sequence
 
 from rclpy.clock import Clock, ClockType
 from rclpy.node import Node
+from rclpy.serialization import deserialize_message
 from rosgraph_msgs.msg import Clock as ClockMsg
 
 from fastep_ros.common import CLOCK_JUMP_LIMIT, RATE_RANGE, StartupError, check_range, declare, node_main
 from fastep_ros.limits import RTF_RANGE, STEP_RANGE
 from fastep_ros.lock_step import STAMP_EPS
-from msg_tools import convert, interface
+from msg_tools import cdr, convert, interface
 
 __all__ = ['ClockNode', 'main', 'tick_plan']
 
@@ -85,6 +87,26 @@ def _stamp(msg: Any) -> float | None:
     if isinstance(msg, ClockMsg):
         return convert.stamp_to_seconds(msg.clock)
     return None
+
+
+def _stamped_first(msg_type: Any) -> bool:
+    """Does a message of this type start with its stamp (a std_msgs/Header, or a rosgraph_msgs/Clock's time)?
+    Then a sync message's stamp is read from its first CDR bytes (msg_tools.cdr.header_stamp)."""
+    fields = list(msg_type.get_fields_and_field_types().items())
+    return bool(fields) and fields[0][1] in ('std_msgs/Header', 'builtin_interfaces/Time')
+
+
+def _raw_stamp(data: bytes, msg_type: Any, stamped: bool) -> float | None:
+    """_stamp of a sync message's bytes: read with struct where they are little-endian CDR, else by rclpy."""
+    if data[:2] != b'\x00\x01':
+        return _stamp(deserialize_message(data, msg_type))
+    if not stamped:
+        return None
+    try:
+        sec, nanosec = cdr.header_stamp(data)
+    except struct.error:
+        return None   # cut off: answers whatever tick is current, as a message without a stamp does
+    return sec + nanosec * 1e-9
 
 
 def tick_plan(rtf: float, step: float, max_rate_hz: float) -> tuple[float, float]:
@@ -165,9 +187,11 @@ class ClockNode(Node):
                 for type_name in types.get(topic, []):
                     msg_type = _message_type(type_name)
                     if msg_type is not None:
-                        def on_message(msg: Any, t: str = topic) -> None:   # a def: mypy cannot type a lambda
-                            self.on_sync(t, _stamp(msg))
-                        self.sync[topic].sub = self.create_subscription(msg_type, topic, on_message, 10)
+                        # Taken as bytes: every planner's cmd_vel and every observer's acknowledgement, each tick.
+                        def on_message(data: bytes, t: str = topic, kind: Any = msg_type,
+                                       stamped: bool = _stamped_first(msg_type)) -> None:   # a def: mypy types it
+                            self.on_sync(t, _raw_stamp(data, kind, stamped))
+                        self.sync[topic].sub = self.create_subscription(msg_type, topic, on_message, 10, raw=True)
                         break
         return all(s.sub is not None and self.count_publishers(t) > 0 for t, s in self.sync.items())
 
@@ -237,7 +261,7 @@ class ClockNode(Node):
         if now - max(self.held_at, self.last_tick) < HOLD_PERIOD:
             return
         self.held_at = now
-        self.pub.publish(convert.seconds_to_clock(self.time))
+        self.pub.publish(cdr.clock_cdr(cdr.stamp_parts(self.time)))
 
     def advance(self) -> None:
         self.left = self.time
@@ -245,7 +269,7 @@ class ClockNode(Node):
             sync.fresh = False
         self.last_tick = self.seconds()
         self.ticks += 1
-        self.pub.publish(convert.seconds_to_clock(self.time))
+        self.pub.publish(cdr.clock_cdr(cdr.stamp_parts(self.time)))
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -67,6 +67,7 @@ from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, Twi
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from rclpy.clock import Clock, ClockType
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
@@ -106,7 +107,7 @@ from fastep_ros.parameters import DynamicParameters
 from fastep_ros.perception import ScanPerception
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
-from msg_tools import convert, frames, interface
+from msg_tools import cdr, convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlannerNode', 'main']
@@ -134,6 +135,32 @@ class _Body:
     length: float
     trailer_length: float
     hitch_offset: float
+
+
+@dataclass(frozen=True)
+class OwnOdometry:
+    """The robot's own odometry as the planner uses it: its frame, its stamp (s) and the planar pose."""
+
+    frame_id: str
+    stamp: float
+    pose: frames.Pose2D   # x, y, yaw
+
+
+def own_odometry(msg: Odometry | bytes) -> OwnOdometry:
+    """OwnOdometry of a message or of its bytes (read with struct where they are little-endian CDR, to the floats
+    rclpy's message has); ValueError if not finite or cut off."""
+    if isinstance(msg, bytes):
+        fields = cdr.odometry_fields(msg)
+        if fields is None:   # not little-endian CDR: rclpy reads it
+            msg = deserialize_message(msg, Odometry)
+        else:
+            x, y, qx, qy, qz, qw = fields[:6]
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise ValueError('position is not finite')   # frames.odometry_pose's checks and words
+            sec, nanosec = cdr.header_stamp(msg)
+            return OwnOdometry(cdr.header_frame_id(msg), sec + nanosec * 1e-9, (x, y, convert.yaw_of(qx, qy, qz, qw)))
+    assert not isinstance(msg, bytes)
+    return OwnOdometry(msg.header.frame_id, convert.stamp_to_seconds(msg.header.stamp), frames.odometry_pose(msg))
 
 
 class PlannerNode(ManagedNode):
@@ -224,7 +251,7 @@ class PlannerNode(ManagedNode):
         self.navigator: Navigator | None = None
         self.pending_goal: PoseStamped | None = None
         self.goal: tuple[float, float] | None = None
-        self.odom: Odometry | None = None
+        self.odom: OwnOdometry | None = None
         self.odom_received = -math.inf
         self.odom_stamp = -math.inf   # its header stamp; when it arrived if that is unset (zero)
         self.odom_problem = ''
@@ -248,7 +275,8 @@ class PlannerNode(ManagedNode):
         self.plan_pub = self.create_publisher(Path, interface.PLAN, offered_qos(interface.PLAN))
         self.cost_pub = self.create_publisher(Float64, interface.COST, offered_qos(interface.COST))
         self.status_pub = self.create_publisher(DiagnosticStatus, interface.STATUS, offered_qos(interface.STATUS))
-        self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST)
+        # Taken as bytes (own_odometry): once a tick, and an Odometry message costs ~50 us to build.
+        self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST, raw=True)
         if self.model == 'tractor_trailer':
             self.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
         # Goals from anyone (volatile, as RViz and `ros2 topic pub` send them) and from latched publishers
@@ -431,10 +459,11 @@ class PlannerNode(ManagedNode):
         self.publish_status()
 
     # ------------------------------------------------------------------------------------------- inputs
-    def on_odom(self, msg: Odometry) -> None:
+    def on_odom(self, msg: Odometry | bytes) -> None:
+        """The robot's own odometry: a message, or its bytes (the subscription's: read with msg_tools.cdr)."""
         try:
-            pose = frames.odometry_pose(msg)
-            frame = msg.header.frame_id
+            odom = own_odometry(msg)
+            frame, pose, stamp = odom.frame_id, odom.pose, odom.stamp
             if frame not in (self.frame_id, self.odom_frame_id):
                 raise ValueError(f'frame {frame!r} is neither the map frame {self.frame_id!r} nor this robot\'s odom '
                                  f'frame {self.odom_frame_id!r} (parameters frame_id, odom_frame_id)')
@@ -442,10 +471,9 @@ class PlannerNode(ManagedNode):
             self.odom_problem = f'odometry rejected: {exc}'
             self.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
             return
-        stamp = convert.stamp_to_seconds(msg.header.stamp)
         now = self.now()
         # In lock step odometry is of its stamp's time: the start state (stamped 0) is heard again once time runs.
-        self.odom, self.odom_received, self.odom_problem = msg, min(now, stamp) if self.locked() else now, ''
+        self.odom, self.odom_received, self.odom_problem = odom, min(now, stamp) if self.locked() else now, ''
         self.odom_stamp = stamp if stamp > 0.0 else self.odom_received
         if frame == self.odom_frame_id:
             self.map_from_odom.add_odometry(self.odom_stamp, pose)
@@ -468,7 +496,7 @@ class PlannerNode(ManagedNode):
 
     def map_to_odom(self) -> frames.Pose2D | None:
         """map -> odom of the odometry last taken (None: not known yet, the robot holds still)."""
-        if self.odom is None or self.odom.header.frame_id == self.frame_id or not self.localization_topic:
+        if self.odom is None or self.odom.frame_id == self.frame_id or not self.localization_topic:
             return frames.IDENTITY
         return self.map_from_odom.transform
 
@@ -607,8 +635,8 @@ class PlannerNode(ManagedNode):
         if transform is None:
             return None, f'waiting for localization on {self.localization_topic} (map -> {self.odom_frame_id})'
         try:
-            state = frames.state_in_frame(transform, convert.odometry_to_state(self.odom, self.model, self.trailer))
-            self.body_yaw = frames.compose(transform, frames.odometry_pose(self.odom))[2]
+            state = frames.state_in_frame(transform, convert.pose_to_state(self.odom.pose, self.model, self.trailer))
+            self.body_yaw = frames.compose(transform, self.odom.pose)[2]
         except ValueError as exc:
             return None, f'odometry rejected: {exc}'
         self.odom_lag = t - self.odom_stamp
@@ -712,7 +740,7 @@ class PlannerNode(ManagedNode):
         self.publish_command(command, at)
         self.last_command = command
         if nav is not None:
-            self.cost_pub.publish(Float64(data=float(nav.cost)))
+            self.cost_pub.publish(cdr.float64_cdr(float(nav.cost)))
             self.publish_target()
             self.publish_plan()
         self.publish_status(at=t)
@@ -723,15 +751,18 @@ class PlannerNode(ManagedNode):
         `at` (lock step: the time it was decided for), else now."""
         if self.model == 'point_mass':
             command = np.asarray(frames.body_velocity(command, self.body_yaw), dtype=float)
-        twist = convert.command_to_twist(command, self.model)
+        # Sent as its bytes (msg_tools.cdr), once a tick: convert.command_to_twist's message, not built.
+        a, b = float(command[0]), float(command[1])
+        linear, angular = ((a, 0.0), b) if self.model in convert.STEERED_MODELS else ((a, b), 0.0)
         if self.stamped:
-            msg = TwistStamped()
-            msg.header.stamp = self.stamp() if at is None else convert.seconds_to_stamp(at)
-            msg.header.frame_id = self.base_frame_id
-            msg.twist = twist
-            self.cmd_pub.publish(msg)
+            if at is None:
+                ns = self.get_clock().now().nanoseconds
+                stamp = (ns // 1_000_000_000, ns % 1_000_000_000)
+            else:
+                stamp = cdr.stamp_parts(at)
+            self.cmd_pub.publish(cdr.twist_stamped_cdr(stamp, self.base_frame_id, linear, angular))
         else:
-            self.cmd_pub.publish(twist)
+            self.cmd_pub.publish(cdr.twist_cdr(linear, angular))
 
     def publish_target(self, force: bool = False) -> None:
         nav = self.navigator

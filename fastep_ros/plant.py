@@ -56,6 +56,7 @@ from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.qos import qos_profile_sensor_data
+from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import LaserScan
 
 from fastep_core.dynamic_world import DynamicWorld
@@ -82,7 +83,7 @@ from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.lock_step import LOCK_WAIT, STAMP_EPS
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.sim_time import SimTimeWatch
-from msg_tools import convert, frames, interface
+from msg_tools import cdr, convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlantNode', 'main']
@@ -205,9 +206,10 @@ class PlantNode(ManagedNode):
                                                   offered_qos(interface.TRAILER_POSE))
                             if self.model_name == 'tractor_trailer' else None)
         # rclpy passes (message, MessageInfo) to a callback of two parameters (on either executor: MessageInfoCallback).
+        # Taken as bytes (msg_tools.cdr): a command a lock-step tick, and a TwistStamped costs ~20 us to build.
         take_cmd_vel: Any = MessageInfoCallback(self._take_cmd_vel)
-        self.cmd_sub = self.create_subscription(TwistStamped if stamped else Twist, interface.CMD_VEL, take_cmd_vel,
-                                                LATEST)
+        self.cmd_type = TwistStamped if stamped else Twist
+        self.cmd_sub = self.create_subscription(self.cmd_type, interface.CMD_VEL, take_cmd_vel, LATEST, raw=True)
         self.tf = TfBroadcaster(self)
         if self.publish_map_to_odom and self.frame_id != interface.MAP_FRAME:
             self.tf.send_static([frames.static_map_to_odom(interface.MAP_FRAME, self.frame_id)])
@@ -352,6 +354,10 @@ class PlantNode(ManagedNode):
         if isinstance(msg, TwistStamped):
             stamp = convert.stamp_to_seconds(msg.header.stamp)
             return stamp if stamp > 0.0 else None
+        return self.source_time(source_timestamp_ns)
+
+    def source_time(self, source_timestamp_ns: int) -> float | None:
+        """sent_time of a Twist: its DDS source timestamp where that is this node's clock."""
         clock = self.get_clock()
         on_simulated_time = isinstance(clock, ROSClock) and clock.ros_time_is_active
         if source_timestamp_ns > 0 and not on_simulated_time:
@@ -359,12 +365,27 @@ class PlantNode(ManagedNode):
         return None
 
     # ------------------------------------------------------------------------------------------- callbacks
-    def _take_cmd_vel(self, msg: Twist | TwistStamped, info: dict[str, Any]) -> None:
-        """The subscription's callback: rclpy passes the message info (with its DDS source timestamp) too."""
-        self.on_cmd_vel(msg, self.sent_time(msg, int(info.get('source_timestamp', 0))))
+    def _take_cmd_vel(self, data: bytes, info: dict[str, Any]) -> None:
+        """The subscription's callback: the message's bytes, and its info (with its DDS source timestamp)."""
+        stamped = self.cmd_type is TwistStamped
+        try:
+            fields = cdr.twist_stamped_fields(data) if stamped else cdr.twist_fields(data)
+        except cdr.CdrError as exc:
+            self.get_logger().warning(f'ignoring cmd_vel: {exc}', throttle_duration_sec=5.0)
+            return
+        if fields is None:   # not little-endian CDR: rclpy reads it
+            msg = deserialize_message(data, self.cmd_type)
+            self.on_cmd_vel(msg, self.sent_time(msg, int(info.get('source_timestamp', 0))))
+        elif stamped:
+            sec, nanosec = cdr.header_stamp(data)
+            stamp = sec + nanosec * 1e-9
+            self.on_cmd_vel(fields, stamp if stamp > 0.0 else None)
+        else:
+            self.on_cmd_vel(fields, self.source_time(int(info.get('source_timestamp', 0))))
 
-    def on_cmd_vel(self, msg: Twist | TwistStamped, sent: float | None = None) -> None:
-        """Take a command sent at `sent` (node clock; None: now). It acts until cmd_timeout after it was sent."""
+    def on_cmd_vel(self, msg: Twist | TwistStamped | tuple[float, float, float], sent: float | None = None) -> None:
+        """Take a command sent at `sent` (node clock; None: now). It acts until cmd_timeout after it was sent.
+        `msg` is a message or its (linear.x, linear.y, angular.z) as msg_tools.cdr reads them."""
         if not self.is_active:
             return   # an inactive robot takes no commands
         self.check_clock()
@@ -372,7 +393,10 @@ class PlantNode(ManagedNode):
         if not self.locked():
             self.advance(now)  # the old command holds until now
         try:
-            command = convert.twist_to_command(msg, self.model_name)
+            if isinstance(msg, tuple):
+                command = convert.twist_values_to_command(msg[0], msg[1], msg[2], self.model_name)
+            else:
+                command = convert.twist_to_command(msg, self.model_name)
         except ValueError as exc:
             self.get_logger().warning(f'ignoring cmd_vel: {exc}; treating it as zero', once=True)
             command = np.zeros(2)
@@ -452,13 +476,18 @@ class PlantNode(ManagedNode):
             linear = (v, 0.0)
         else:
             linear, angular = (float(self.applied[0]), float(self.applied[1])), 0.0
-        try:
-            odom = convert.state_to_odometry(self.state, stamp, child_frame_id=self.child_frame_id,
-                                             frame_id=self.frame_id, linear=linear, angular=angular)
-        except ValueError as exc:  # cannot happen with finite commands, but never crash a plant
-            self.get_logger().error(f'not publishing odometry: {exc}', throttle_duration_sec=5.0)
+        state = [float(v) for v in self.state]
+        yaw = state[2] if len(state) > 2 else 0.0
+        if not all(math.isfinite(v) for v in (*state, *linear, angular)):
+            # Cannot happen with finite commands, but never crash a plant.
+            self.get_logger().error(f'not publishing odometry: state {state} or velocity {linear}, {angular} is '
+                                    f'not finite', throttle_duration_sec=5.0)
             return
-        self.odom_pub.publish(odom)
+        # Sent as its bytes (msg_tools.cdr): the message convert.state_to_odometry makes, without building it.
+        self.odom_pub.publish(cdr.odometry_cdr(
+            (stamp.sec, stamp.nanosec), self.frame_id, self.child_frame_id, (state[0], state[1]),
+            (0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)), (float(linear[0]), float(linear[1])),
+            float(angular)))
         trailer = None
         if self.trailer_pub is not None:
             assert isinstance(self.model, TractorTrailer)
@@ -466,6 +495,8 @@ class PlantNode(ManagedNode):
                                            self.frame_id)
             self.trailer_pub.publish(trailer)
         if self.tf.available:
+            odom = convert.state_to_odometry(state, stamp, child_frame_id=self.child_frame_id,
+                                             frame_id=self.frame_id, linear=linear, angular=angular)
             self.tf.send(frames.odometry_transforms(odom, trailer, self.trailer_frame_id))
         scanner = self.scanner
         if scanner is not None and self.scan_pub is not None and self.tick is not None:

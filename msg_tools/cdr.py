@@ -1,4 +1,4 @@
-"""Fast reads of the high-rate message types from their CDR bytes, without building rclpy messages.
+"""Fast reads and writes of the high-rate message types as CDR bytes, without building rclpy messages.
 
 rclpy's deserialize_message builds a full Python message (an Odometry is ~15 objects, each importing its field
 types in __init__, and two covariance arrays: ~50 us here), which made reading a 10-minute recording take half a
@@ -7,17 +7,27 @@ read only the needed float64 fields of little-endian CDR (encapsulation 00 01) w
 to the payload after the 4-byte encapsulation header. Tests compare them with rclpy (tests/msg_tools/test_cdr.py).
 A message shorter than the whole type (cut off) raises CdrError, as rclpy's decoder refuses it; bytes that are
 not little-endian CDR give None (left to rclpy).
+
+The writers make the bytes of the message (little-endian CDR with zero padding, where rclpy's serializer leaves
+padding bytes as it finds them; the tests decode them with rclpy), which a publisher sends as they are: rclpy
+publishes bytes without building a message. A
+plant's odometry and a planner's cmd_vel, once per robot and lock-step tick, cost ~35 us each as messages
+(building one, then converting it for the middleware) and a few us as bytes.
 """
 
 from __future__ import annotations
 
+import functools
 import struct
 
-__all__ = ['CdrError', 'float64_field', 'header_stamp', 'odometry_fields', 'twist_fields']
+__all__ = ['CdrError', 'clock_cdr', 'float64_cdr', 'float64_field', 'header_frame_id', 'header_stamp', 'odometry_cdr',
+           'odometry_fields', 'stamp_parts', 'twist_cdr', 'twist_fields', 'twist_stamped_cdr', 'twist_stamped_fields']
 
 _CDR_LE = b'\x00\x01'
+_ENCAPSULATION = b'\x00\x01\x00\x00'    # little-endian CDR, no options
 _U32 = struct.Struct('<I')
 _ODOM = struct.Struct('<3d4d288x3d3d')  # position, orientation, (pose covariance), twist linear, angular
+_ODOM_WRITE = struct.Struct('<3d4d288x3d3d288x')   # ... and the twist covariance (zeros)
 _ODOM_TAIL = 85 * 8                     # pose (7), its covariance (36), twist (6), its covariance (36)
 _TWIST = struct.Struct('<3d3d')
 _F64 = struct.Struct('<d')
@@ -40,6 +50,20 @@ def header_stamp(data: bytes) -> tuple[int, int]:
     """(sec, nanosec) of the header of a CDR message that starts with one (struct.error if cut off)."""
     sec, nanosec = _STAMP.unpack_from(data, 4)
     return int(sec), int(nanosec)
+
+
+def header_frame_id(data: bytes) -> str:
+    """header.frame_id of a little-endian CDR message that starts with a std_msgs/Header (CdrError if cut off)."""
+    try:
+        (length,) = _U32.unpack_from(data, 12)   # payload offset 8, after the stamp
+    except struct.error:
+        raise CdrError(f'cut off: {len(data)} bytes end inside a header') from None
+    if length == 0 or 16 + length > len(data):
+        raise CdrError(f'cut off: {len(data)} bytes end inside a frame name')
+    try:
+        return data[16:15 + length].decode()
+    except UnicodeDecodeError as exc:
+        raise CdrError(f'frame name is not UTF-8: {exc}') from None
 
 
 def odometry_fields(data: bytes) -> tuple[float, ...] | None:
@@ -79,3 +103,70 @@ def float64_field(data: bytes) -> float | None:
         return _F64.unpack_from(data, 4)[0]
     except struct.error:
         raise CdrError(f'cut off: {len(data)} bytes, a Float64 needs {4 + _F64.size}') from None
+
+
+def twist_stamped_fields(data: bytes) -> tuple[float, float, float] | None:
+    """(linear.x, linear.y, angular.z) of a CDR TwistStamped (CdrError if cut off)."""
+    if data[:2] != _CDR_LE:
+        return None
+    try:
+        offset = (_string_end(data, 8) + 7) & ~7     # header.stamp, header.frame_id, then 8-byte aligned
+        v = _TWIST.unpack_from(data, 4 + offset)
+    except struct.error:
+        raise CdrError(f'cut off: {len(data)} bytes end inside a TwistStamped') from None
+    return v[0], v[1], v[5]
+
+
+# ------------------------------------------------------------------------------------------------- writers
+
+def stamp_parts(t: float) -> tuple[int, int]:
+    """(sec, nanosec) of seconds t >= 0, nanoseconds rounded (msg_tools.convert.seconds_to_stamp's)."""
+    total = int(round(t * 1e9))
+    return total // 1_000_000_000, total % 1_000_000_000
+
+
+def _string(text: str, offset: int) -> bytes:
+    """A CDR string written at payload offset `offset`: padding to 4, length (with the NUL), text, NUL."""
+    raw = text.encode() + b'\x00'
+    return bytes(-offset % 4) + _U32.pack(len(raw)) + raw
+
+
+@functools.lru_cache(maxsize=64)
+def _header_tail(*frames: str) -> bytes:
+    """The frame names after a header's stamp (payload offset 8), padded to the 8-byte alignment of the doubles
+    after them. A robot's frames are few and fixed: made once."""
+    out = b''
+    for frame in frames:
+        out += _string(frame, 8 + len(out))
+    return out + bytes(-(8 + len(out)) % 8)
+
+
+def odometry_cdr(stamp: tuple[int, int], frame_id: str, child_frame_id: str, position: tuple[float, float],
+                 orientation: tuple[float, float, float, float], linear: tuple[float, float],
+                 angular: float) -> bytes:
+    """nav_msgs/Odometry: a planar pose (z 0), the twist (linear x, y; angular z) in the child frame, zero
+    covariances."""
+    qx, qy, qz, qw = orientation
+    return _ENCAPSULATION + _STAMP.pack(*stamp) + _header_tail(frame_id, child_frame_id) + _ODOM_WRITE.pack(
+        position[0], position[1], 0.0, qx, qy, qz, qw, linear[0], linear[1], 0.0, 0.0, 0.0, angular)
+
+
+def twist_cdr(linear: tuple[float, float], angular: float) -> bytes:
+    """geometry_msgs/Twist with linear x, y and angular z."""
+    return _ENCAPSULATION + _TWIST.pack(linear[0], linear[1], 0.0, 0.0, 0.0, angular)
+
+
+def twist_stamped_cdr(stamp: tuple[int, int], frame_id: str, linear: tuple[float, float], angular: float) -> bytes:
+    """geometry_msgs/TwistStamped."""
+    return _ENCAPSULATION + _STAMP.pack(*stamp) + _header_tail(frame_id) + \
+        _TWIST.pack(linear[0], linear[1], 0.0, 0.0, 0.0, angular)
+
+
+def float64_cdr(value: float) -> bytes:
+    """std_msgs/Float64."""
+    return _ENCAPSULATION + _F64.pack(value)
+
+
+def clock_cdr(stamp: tuple[int, int]) -> bytes:
+    """rosgraph_msgs/Clock."""
+    return _ENCAPSULATION + _STAMP.pack(*stamp)

@@ -45,10 +45,10 @@ __all__ = [
     'grid_resolution', 'grid_shape', 'laser_scan_to_scan', 'laser_spec', 'make_status', 'marker_array_to_movers',
     'marker_array_to_obstacles', 'movers_to_marker_array', 'obstacles_to_marker_array', 'occupancy_grid_lookup',
     'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
-    'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point', 'quaternion_to_yaw',
-    'scan_to_laser_scan', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds', 'state_to_odometry',
-    'trailer_pose', 'trailer_yaw', 'twist_in_map', 'twist_to_command', 'waypoints_to_path', 'world_to_occupancy_grid',
-    'yaw_of', 'yaw_to_quaternion',
+    'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point', 'pose_to_state',
+    'quaternion_to_yaw', 'scan_to_laser_scan', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds',
+    'state_to_odometry', 'trailer_pose', 'trailer_yaw', 'twist_in_map', 'twist_to_command', 'twist_values_to_command',
+    'waypoints_to_path', 'world_to_occupancy_grid', 'yaw_of', 'yaw_to_quaternion',
 ]
 
 CIRCLES_NS = 'circles'
@@ -187,13 +187,22 @@ def odometry_to_state(msg: Odometry, model: str = 'point_mass', trailer: float |
     x, y = odometry_position(msg)
     if model == 'point_mass':
         return np.array([x, y])
+    return pose_to_state((x, y, quaternion_to_yaw(msg.pose.pose.orientation)), model, trailer)
+
+
+def pose_to_state(pose: tuple[float, float, float], model: str = 'point_mass',
+                  trailer: float | None = None) -> np.ndarray:
+    """odometry_to_state of a planar pose (x, y, yaw) read from odometry."""
+    x, y, yaw = pose
+    if model == 'point_mass':
+        return np.array([x, y])
     if model == 'diff_drive':
-        return np.array([x, y, quaternion_to_yaw(msg.pose.pose.orientation)])
+        return np.array([x, y, yaw])
     if model == 'tractor_trailer':
         if trailer is None:
             raise ValueError('tractor-trailer state needs the trailer heading (trailer_pose)')
         _finite((trailer,), 'trailer heading')
-        return np.array([x, y, quaternion_to_yaw(msg.pose.pose.orientation), float(trailer)])
+        return np.array([x, y, yaw, float(trailer)])
     raise ValueError(f'unknown robot model {model!r}')
 
 
@@ -250,10 +259,13 @@ def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
 def twist_to_command(msg: Twist | TwistStamped, model: str = 'point_mass') -> np.ndarray:
     """Inverse of command_to_twist (TwistStamped accepted); ValueError if the used fields are not finite."""
     twist = msg.twist if isinstance(msg, TwistStamped) else msg
-    if model in STEERED_MODELS:
-        cmd = (float(twist.linear.x), float(twist.angular.z))
-    else:
-        cmd = (float(twist.linear.x), float(twist.linear.y))
+    return twist_values_to_command(float(twist.linear.x), float(twist.linear.y), float(twist.angular.z), model)
+
+
+def twist_values_to_command(linear_x: float, linear_y: float, angular_z: float,
+                            model: str = 'point_mass') -> np.ndarray:
+    """twist_to_command of a twist's (linear.x, linear.y, angular.z), as msg_tools.cdr reads them."""
+    cmd = (linear_x, angular_z) if model in STEERED_MODELS else (linear_x, linear_y)
     _finite(cmd, 'velocity command')
     return np.array(cmd)
 

@@ -24,6 +24,7 @@ from fastep_ros.common import StartupError
 from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
 from fastep_testing.graph import free_domain, isolated_env, stop_process, write
+from fastep_testing.published import keep_published
 from msg_tools import convert, report
 
 # Two bases swap sides past a circle, each starting turned away from its goal (they turn on the spot first).
@@ -56,7 +57,7 @@ def test_plant_drives_a_diff_drive_base_and_reports_what_it_executed(context: An
     node = make(PlantNode, context, '/d1', model='diff_drive', start=[1.0, 2.0, 0.5], max_speed=1.0,
                 max_turn_rate=2.0)
     seen: list[Odometry] = []
-    node.odom_pub.publish = seen.append  # type: ignore[method-assign]  # keep what the node publishes
+    keep_published(node.odom_pub, seen.append)
     try:
         assert isinstance(node.model, DiffDrive) and node.trailer_pub is None
         node.advance(1.0)
@@ -83,7 +84,7 @@ def test_plant_drives_a_diff_drive_base_and_reports_what_it_executed(context: An
 def test_planner_drives_a_diff_drive_base_with_speed_and_turn_rate(context: Any) -> None:
     node = make(PlannerNode, context, '/d1', model='diff_drive', robot_radius=0.35, workspace=[0.0, 0.0, 20.0, 20.0])
     sent: list[Twist] = []
-    node.cmd_pub.publish = sent.append  # type: ignore[method-assign]  # keep what the node publishes
+    keep_published(node.cmd_pub, sent.append)
     try:
         assert 'diff_drive' in node.describe_parameter('model').additional_constraints
         node.on_obstacles(convert.obstacles_to_marker_array([]))

@@ -17,6 +17,7 @@ from rclpy.parameter import Parameter
 from fastep_ros.frames import TfBroadcaster
 from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
+from fastep_testing.published import keep_published
 from msg_tools import convert, frames
 
 
@@ -33,7 +34,7 @@ def odometry(x: float, y: float, yaw: float = 0.0, frame: str = 'r1/odom') -> Od
 def test_plant_odometry_is_odom_to_base_link_in_its_namespace(context: Any) -> None:
     node = make(PlantNode, context, '/r1', start=[1.0, 2.0])
     seen: list[Odometry] = []
-    node.odom_pub.publish = seen.append  # type: ignore[method-assign]  # keep what the node publishes
+    keep_published(node.odom_pub, seen.append)
     try:
         node.advance(1.0)
         node.publish()
@@ -114,14 +115,14 @@ def test_stamped_cmd_vel_of_a_root_namespace_tractor_trailer_is_in_base_link_wit
     """Finding: a tractor-trailer in the root namespace stamped its TwistStamped `/base_link`."""
     planner = make(PlannerNode, context, use_stamped_cmd_vel=True, model='tractor_trailer', robot_radius=0.6)
     sent: list[TwistStamped] = []
-    planner.cmd_pub.publish = sent.append  # type: ignore[method-assign]  # keep what the node publishes
+    keep_published(planner.cmd_pub, sent.append)
     try:
         planner.publish_command(np.array([0.5, -0.25]))
         assert sent[-1].header.frame_id == 'base_link'
     finally:
         planner.destroy_node()
     planner = make(PlannerNode, context, '/r1', use_stamped_cmd_vel=True)   # a point mass: body frame too
-    planner.cmd_pub.publish = sent.append  # type: ignore[method-assign]  # keep what the node publishes
+    keep_published(planner.cmd_pub, sent.append)
     try:
         planner.publish_command(np.array([0.5, -0.25]))
         assert sent[-1].header.frame_id == 'r1/base_link'
@@ -162,7 +163,7 @@ def test_planner_composes_odometry_with_map_to_odom_from_the_localization_pose(c
     waits still until the first localization pose; a point mass's map-frame command is turned into base_link."""
     node = _planner(context, localization_topic='amcl_pose')
     sent: list[Any] = []
-    node.cmd_pub.publish = sent.append  # type: ignore[method-assign]  # keep what the node publishes
+    keep_published(node.cmd_pub, sent.append)
     try:
         assert node.localization_topic == '/r1/amcl_pose'
         node.on_odom(odometry(1.0, 1.0))
@@ -221,3 +222,21 @@ def test_recorder_tf_parameter_derives_records_the_graphs_or_leaves_tf_out(conte
             node.destroy_node()
     with pytest.raises(StartupError, match='parameter tf must be derive, graph or none'):
         make(RecorderNode, context, output=str(tmp_path / 'bad.mcap'), tf='tf2')
+
+
+@pytest.mark.parametrize('yaw', [0.0, 0.3, -2.9, 3.141592653589793])
+def test_own_odometry_from_bytes_is_what_the_message_gives(yaw: float) -> None:
+    """A planner takes its own odometry as bytes: the same frame, stamp and pose to the last bit as the message;
+    a position that is not finite, or bytes cut off, is one ValueError."""
+    from rclpy.serialization import serialize_message
+
+    from fastep_ros.planner import own_odometry
+    odom = convert.state_to_odometry((1.25, -3.5, yaw), convert.seconds_to_stamp(16.45), frame_id='r2/odom',
+                                     child_frame_id='r2/base_link', linear=(0.3, 0.0), angular=0.2)
+    assert own_odometry(serialize_message(odom)) == own_odometry(odom)
+    assert own_odometry(odom).frame_id == 'r2/odom' and own_odometry(odom).stamp == 16.45
+    odom.pose.pose.position.y = float('inf')
+    with pytest.raises(ValueError, match='position is not finite'):
+        own_odometry(serialize_message(odom))
+    with pytest.raises(ValueError, match='cut off'):
+        own_odometry(serialize_message(odom)[:100])

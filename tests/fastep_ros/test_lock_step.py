@@ -34,3 +34,18 @@ def test_an_input_that_does_not_come_is_given_up_on_once_until_it_comes_again() 
     assert lock.abandoned == []
     assert lock.late(1.1, {'r2': 0.7}, wall=16.0) == ['r2']          # it published again: waited for again
     assert lock.gone == {}
+
+
+def test_the_clock_reads_an_answers_stamp_from_its_bytes() -> None:
+    """The clock takes every planner's cmd_vel and every observer's acknowledgement as bytes: a TwistStamped's
+    header stamp, a Clock's time, none for a Twist (it answers whatever tick is current)."""
+    from geometry_msgs.msg import Twist, TwistStamped
+    from rosgraph_msgs.msg import Clock
+
+    from fastep_ros.clock import _raw_stamp, _stamped_first
+    from msg_tools import cdr
+    assert _stamped_first(TwistStamped) and _stamped_first(Clock) and not _stamped_first(Twist)
+    assert _raw_stamp(cdr.twist_stamped_cdr(cdr.stamp_parts(16.45), 'r1/base_link', (1.0, 0.0), 0.0),
+                      TwistStamped, True) == 16.45
+    assert _raw_stamp(cdr.clock_cdr(cdr.stamp_parts(0.05)), Clock, True) == 0.05
+    assert _raw_stamp(cdr.twist_cdr((1.0, 0.0), 0.0), Twist, False) is None

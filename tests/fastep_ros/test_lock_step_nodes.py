@@ -13,6 +13,7 @@ from rclpy.parameter import Parameter
 
 from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
+from fastep_testing.published import keep_published
 from msg_tools import convert
 
 
@@ -73,7 +74,7 @@ def test_a_planner_in_lock_step_acts_once_per_stamp_when_the_others_odometry_of_
     planner = make(PlannerNode, context, workspace=[0.0, 0.0, 20.0, 20.0], use_sim_time=True, lock_step=True,
                    use_stamped_cmd_vel=True)
     sent: list[TwistStamped] = []
-    planner.cmd_pub.publish = sent.append
+    keep_published(planner.cmd_pub, sent.append)
     now = [0.0]
     planner.now = lambda: now[0]
     try:

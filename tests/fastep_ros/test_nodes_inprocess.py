@@ -24,6 +24,7 @@ from fastep_ros.clock import tick_plan
 from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
 from fastep_testing.graph import free_domain
+from fastep_testing.published import keep_published
 from msg_tools import convert
 
 
@@ -211,8 +212,8 @@ def test_before_time_starts_the_plant_publishes_its_start_once_it_hears_commands
             executor.spin_once(timeout_sec=0.1)
         assert planner.odom_heard >= 2 and planner.cmd_pub.get_subscription_count() == 1
         assert planner.odom is not None and plant.tick is None   # simulated time has not started
-        assert convert.odometry_position(planner.odom) == (2.0, 3.0)
-        assert convert.stamp_to_seconds(planner.odom.header.stamp) == 0.0
+        assert planner.odom.pose[:2] == (2.0, 3.0)
+        assert planner.odom.stamp == 0.0
         # Once time runs, the plant publishes integrated steps only.
         plant.get_clock().set_ros_time_override(Time(nanoseconds=50_000_000, clock_type=plant.get_clock().clock_type))
         plant.on_timer()
@@ -228,7 +229,7 @@ def test_before_time_starts_the_plant_publishes_its_start_once_it_hears_commands
 def test_plant_tractor_trailer_publishes_consistent_odometry(context: Any) -> None:
     node = make(PlantNode, context, model='tractor_trailer', start=[0.0, 0.0, 0.5, 0.5], length=1.2)
     seen: list[Odometry] = []
-    node.odom_pub.publish = seen.append  # type: ignore[method-assign]  # keep what the node publishes
+    keep_published(node.odom_pub, seen.append)
     try:
         node.advance(1.0)
         node.command, node.command_time = np.array([1.0, 0.2]), 1.0
@@ -260,7 +261,7 @@ def test_clock_lock_step_waits_longer_for_a_first_answer_and_says_the_time_again
     clock = make(ClockNode, context, rtf=1.0, step=0.05, sync_topics=['/r1/cmd_vel'], sync_timeout=0.2,
                  wait_timeout=30.0)
     sent: list[float] = []
-    clock.pub.publish = lambda msg: sent.append(convert.stamp_to_seconds(msg.clock))  # type: ignore[method-assign]  # keep what it says
+    keep_published(clock.pub, lambda msg: sent.append(convert.stamp_to_seconds(msg.clock)))
     wall = [0.0]
     clock.seconds = lambda: wall[0]  # type: ignore[method-assign]  # the test's wall clock
     commands = clock.create_publisher(Twist, '/r1/cmd_vel', 10)   # a planner on the graph
@@ -327,7 +328,7 @@ def test_stamped_cmd_vel_between_planner_and_plant(context: Any) -> None:
     planner = make(PlannerNode, context, use_stamped_cmd_vel=True, model='tractor_trailer', robot_radius=0.6)
     plant = make(PlantNode, context, use_stamped_cmd_vel=True, model='tractor_trailer', start=[0, 0, 0, 0])
     sent: list[Any] = []
-    planner.cmd_pub.publish = sent.append  # type: ignore[method-assign]  # keep what the node publishes
+    keep_published(planner.cmd_pub, sent.append)
     try:
         planner.publish_command(np.array([0.5, -0.25]))
         assert isinstance(sent[0], TwistStamped)

@@ -112,6 +112,7 @@ class Bench:
         self.ticks: list[Tick] = []
         self.nodes = {'plant': _Scheduled(self.plant, 20, 'cmd_vel', self.plant.on_timer),
                       'planner': _Scheduled(self.planner, 50, 'odom', self._control)}
+        # The bench delivers what they publish (bytes, as their subscriptions take them).
         self.planner.cmd_pub.publish = self._sender('plant')   # type: ignore[method-assign]  # the bench delivers
         self.plant.odom_pub.publish = self._sender('planner')  # type: ignore[method-assign]  # the bench delivers
         world = World.from_obstacles((0.0, 0.0, 20.0, 20.0), CIRCLES)
@@ -128,7 +129,7 @@ class Bench:
     def _control(self) -> None:
         self.planner.on_control()
         odom = self.planner.odom
-        age = np.inf if odom is None else self.now() - convert.stamp_to_seconds(odom.header.stamp)
+        age = np.inf if odom is None else self.now() - odom.stamp
         command = self.planner.last_command
         self.ticks.append(Tick(self.now(), age, (float(command[0]), float(command[1])), self.planner.status()[1]))
 

@@ -56,3 +56,46 @@ def test_odometry_bytes_read_as_the_message_would_be(yaw: float) -> None:
         odometry_reading(serialize_message(odom))
     with pytest.raises(cdr.CdrError):
         odometry_reading(serialize_message(odom)[:40])
+
+
+@pytest.mark.parametrize('frame', ['', 'm', 'map', 'r12/odom'])
+@pytest.mark.parametrize('child', ['', 'r1/base_link', 'ab'])
+def test_the_writers_make_the_message_rclpy_reads(frame: str, child: str) -> None:
+    """Bytes a node publishes as they are decode with rclpy to the message convert builds (padding after frame
+    names of every length), and the readers give them back."""
+    from geometry_msgs.msg import Twist, TwistStamped
+    from nav_msgs.msg import Odometry
+    from rclpy.serialization import deserialize_message
+    from rosgraph_msgs.msg import Clock
+    from std_msgs.msg import Float64
+
+    from msg_tools import convert
+    stamp = convert.seconds_to_stamp(16.45)
+    assert cdr.stamp_parts(16.45) == (stamp.sec, stamp.nanosec)
+    odom = convert.state_to_odometry((1.25, -3.5, 0.7), stamp, frame_id=frame, child_frame_id=child,
+                                     linear=(0.3, -0.2), angular=0.9)
+    q = odom.pose.pose.orientation
+    data = cdr.odometry_cdr((stamp.sec, stamp.nanosec), frame, child, (1.25, -3.5), (q.x, q.y, q.z, q.w),
+                            (0.3, -0.2), 0.9)
+    assert deserialize_message(data, Odometry) == odom
+    assert cdr.header_frame_id(data) == frame
+    twist = convert.command_to_twist((0.5, -0.25))
+    twist.angular.z = 0.125
+    assert deserialize_message(cdr.twist_cdr((0.5, -0.25), 0.125), Twist) == twist
+    stamped = TwistStamped(twist=twist)
+    stamped.header.stamp, stamped.header.frame_id = stamp, frame
+    data = cdr.twist_stamped_cdr((stamp.sec, stamp.nanosec), frame, (0.5, -0.25), 0.125)
+    assert deserialize_message(data, TwistStamped) == stamped
+    assert cdr.twist_stamped_fields(data) == (0.5, -0.25, 0.125)
+    assert cdr.header_stamp(data) == (16, 450_000_000)
+    assert deserialize_message(cdr.float64_cdr(-2.75), Float64) == Float64(data=-2.75)
+    assert deserialize_message(cdr.clock_cdr((3, 5)), Clock) == Clock(clock=convert.seconds_to_stamp(3.000000005))
+
+
+def test_cut_off_headers_are_cdr_errors() -> None:
+    data = cdr.twist_stamped_cdr((1, 0), 'r1/base_link', (1.0, 0.0), 0.0)
+    for cut in (10, 20):
+        with pytest.raises(cdr.CdrError, match='cut off'):
+            cdr.header_frame_id(data[:cut])
+    with pytest.raises(cdr.CdrError, match='cut off'):
+        cdr.twist_stamped_fields(data[:-8])
