@@ -21,7 +21,8 @@ import functools
 import struct
 
 __all__ = ['CdrError', 'clock_cdr', 'float64_cdr', 'float64_field', 'header_frame_id', 'header_stamp', 'odometry_cdr',
-           'odometry_fields', 'stamp_parts', 'twist_cdr', 'twist_fields', 'twist_stamped_cdr', 'twist_stamped_fields']
+           'odometry_fields', 'odometry_transform', 'stamp_parts', 'tf_message_cdr', 'twist_cdr', 'twist_fields',
+           'twist_stamped_cdr', 'twist_stamped_fields']
 
 _CDR_LE = b'\x00\x01'
 _ENCAPSULATION = b'\x00\x01\x00\x00'    # little-endian CDR, no options
@@ -30,6 +31,7 @@ _ODOM = struct.Struct('<3d4d288x3d3d')  # position, orientation, (pose covarianc
 _ODOM_WRITE = struct.Struct('<3d4d288x3d3d288x')   # ... and the twist covariance (zeros)
 _ODOM_TAIL = 85 * 8                     # pose (7), its covariance (36), twist (6), its covariance (36)
 _TWIST = struct.Struct('<3d3d')
+_POSE = struct.Struct('<3d4d')
 _F64 = struct.Struct('<d')
 _STAMP = struct.Struct('<iI')   # a header's stamp: sec, nanosec (right after the 4-byte CDR header)
 
@@ -82,6 +84,28 @@ def odometry_fields(data: bytes) -> tuple[float, ...] | None:
                        f'{4 + offset + _ODOM_TAIL}')
     v = _ODOM.unpack_from(data, 4 + offset)
     return v[0], v[1], v[3], v[4], v[5], v[6], v[7], v[8], v[12]
+
+
+Transform = tuple[tuple[int, int], str, str, tuple[float, float, float], tuple[float, float, float, float]]
+"""A TF transform: (stamp (sec, nanosec), parent frame, child frame, translation, rotation (x, y, z, w))."""
+
+
+def odometry_transform(data: bytes) -> Transform | None:
+    """The TF a CDR Odometry stands for (header.frame_id -> child_frame_id, its pose's numbers), None if not
+    little-endian CDR; CdrError if cut off."""
+    if data[:2] != _CDR_LE:
+        return None
+    try:
+        frame_end = _string_end(data, 8)
+        child_end = _string_end(data, frame_end)
+        offset = (child_end + 7) & ~7
+        v = _POSE.unpack_from(data, 4 + offset)
+        frame = data[16:4 + frame_end - 1].decode()
+        child_start = (frame_end + 3) & ~3
+        child = data[4 + child_start + 4:4 + child_end - 1].decode()
+    except (struct.error, UnicodeDecodeError):
+        raise CdrError(f'cut off: {len(data)} bytes end inside an Odometry') from None
+    return header_stamp(data), frame, child, (v[0], v[1], v[2]), (v[3], v[4], v[5], v[6])
 
 
 def twist_fields(data: bytes) -> tuple[float, float, float] | None:
@@ -170,3 +194,15 @@ def float64_cdr(value: float) -> bytes:
 def clock_cdr(stamp: tuple[int, int]) -> bytes:
     """rosgraph_msgs/Clock."""
     return _ENCAPSULATION + _STAMP.pack(*stamp)
+
+
+def tf_message_cdr(transforms: list[Transform]) -> bytes:
+    """tf2_msgs/TFMessage: a sequence of geometry_msgs/TransformStamped (msg_tools.frames writes it from messages
+    with rosbags; a recorder writes one per odometry message, from the odometry's bytes)."""
+    out = bytearray(_U32.pack(len(transforms)))
+    for stamp, frame, child, translation, rotation in transforms:
+        out += bytes(-len(out) % 4) + _STAMP.pack(*stamp)
+        out += _string(frame, len(out))
+        out += _string(child, len(out))
+        out += bytes(-len(out) % 8) + _POSE.pack(*translation, *rotation)
+    return _ENCAPSULATION + bytes(out)

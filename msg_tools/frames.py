@@ -35,7 +35,7 @@ import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import TransformStamped
 
-from msg_tools import convert
+from msg_tools import cdr, convert
 from msg_tools.ros2_profile import qos_dict
 
 __all__ = [
@@ -271,6 +271,11 @@ class TfFromOdometry:
         out = []
         try:
             if parts[1] == ODOM:
+                # From the bytes (msg_tools.cdr): one message a robot and tick, and an Odometry took ~150 us to
+                # decode and turn into TF here, a third of a recorder's CPU.
+                fast = cdr.odometry_transform(data)
+                if fast is not None:
+                    return self._odometry_tf(*fast)
                 msg = deserialize_message(data, Odometry)
                 transforms = odometry_transforms(msg)
                 frame = msg.header.frame_id
@@ -287,4 +292,21 @@ class TfFromOdometry:
         except Exception:  # noqa: BLE001  (a message that does not decode or is not finite: no TF from it)
             return []
         out.append((TF, tf_message_cdr(transforms)))
+        return out
+
+    def _odometry_tf(self, stamp: tuple[int, int], frame: str, child: str, translation: tuple[float, float, float],
+                     rotation: tuple[float, float, float, float]) -> list[tuple[str, bytes]]:
+        """take() of an odometry message read from its bytes: what odometry_transforms gives of the message."""
+        if not (math.isfinite(translation[0]) and math.isfinite(translation[1])):
+            return []
+        try:
+            convert.yaw_of(*rotation)   # odometry_pose's checks: finite, not of zero length
+        except ValueError:
+            return []
+        out = []
+        if frame and frame != self.map_frame and frame not in self.static_frames:
+            self.static_frames.add(frame)
+            self.static.append(static_map_to_odom(self.map_frame, frame, Time(sec=stamp[0], nanosec=stamp[1])))
+            out.append((TF_STATIC, tf_message_cdr(self.static)))
+        out.append((TF, cdr.tf_message_cdr([(stamp, frame, child, translation, rotation)])))
         return out

@@ -150,3 +150,36 @@ def test_the_live_diff_drive_bag_is_foxglove_ready() -> None:
     assert recording.metadata['fastep']['model/r1'] == recording.metadata['fastep']['model/r2'] == 'diff_drive'
     statuses = {m.topic: m.message.message for m in recording.messages(['/r1/status', '/r2/status'])}
     assert statuses == {'/r1/status': 'arrived', '/r2/status': 'arrived'}
+
+
+@pytest.mark.parametrize('frame, child', [('map', 'r1/base_link'), ('r2/odom', 'r2/base_link'), ('', ''),
+                                          ('odom', 'abc')])
+def test_tf_from_odometry_bytes_is_the_messages_tf(frame: str, child: str) -> None:
+    """A recorder turns odometry into TF from its bytes (msg_tools.cdr): the transforms odometry_transforms gives of
+    the message, decoded by rosbags; a static map -> odom once per odom frame; none of a position that is not
+    finite or a quaternion of zero length."""
+    from rclpy.serialization import serialize_message
+    from rosbags.typesys import Stores, get_typestore
+
+    store = get_typestore(Stores.ROS2_JAZZY)
+    odom = convert.state_to_odometry((1.25, -3.5, 0.7), convert.seconds_to_stamp(16.45), frame_id=frame,
+                                     child_frame_id=child, linear=(0.3, 0.0), angular=0.2)
+    odom.pose.pose.position.z = 0.25
+    data = serialize_message(odom)
+    fast = frames.TfFromOdometry()
+    got = fast.take('/r1/odom', data)
+    want = [(frames.TF, frames.tf_message_cdr(frames.odometry_transforms(odom)))]
+    if frame and frame != 'map':
+        want.insert(0, (frames.TF_STATIC, frames.tf_message_cdr(
+            [frames.static_map_to_odom('map', frame, odom.header.stamp)])))
+    assert [topic for topic, _ in got] == [topic for topic, _ in want]
+    for (_, a), (_, b) in zip(got, want):
+        assert str(store.deserialize_cdr(a, frames.TF_TYPE)) == str(store.deserialize_cdr(b, frames.TF_TYPE))
+    assert [topic for topic, _ in fast.take('/r1/odom', data)] == [frames.TF]   # the static one once
+    odom.pose.pose.position.x = float('nan')
+    assert fast.take('/r1/odom', serialize_message(odom)) == []
+    odom.pose.pose.position.x = 1.0
+    odom.pose.pose.orientation.w = 0.0
+    odom.pose.pose.orientation.z = 0.0
+    assert fast.take('/r1/odom', serialize_message(odom)) == []
+    assert fast.take('/r1/odom', data[:30]) == []   # cut off: nothing (the recording keeps the message)
