@@ -46,6 +46,7 @@ from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
+from fastep_ros.dds_profile import PROFILE_ENV, use_discovery_profile
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import DEFAULT_EXECUTOR, EXECUTOR_ENV, EXECUTORS
 from fastep_ros.layouts import LAYOUTS, Member, default_layout, group
@@ -512,6 +513,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
 
     sim_time = not args.no_clock
     timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
+    # Before any participant of this launch exists: the launcher's own (the monitor's) and its processes'.
+    profile = use_discovery_profile()
     procs = Processes(args.verbose, args.layout or default_layout(sim_time), args.executor)
     monitor: Monitor | None = None
     code = 1
@@ -669,6 +672,9 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         if monitor is not None:
             monitor.close()
         procs.stop()
+        if profile is not None:
+            os.environ.pop(PROFILE_ENV[0], None)
+            profile.unlink(missing_ok=True)
     if any(label == 'fastep-record' for label, _ in procs.items):   # not when another graph stopped it first
         assert args.record is not None
         # "wrote" only when the recorder finished the file itself (exit 0); a recorder that failed (a full disk:

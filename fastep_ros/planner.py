@@ -256,6 +256,7 @@ class PlannerNode(ManagedNode):
         self.odom_stamp = -math.inf   # its header stamp; when it arrived if that is unset (zero)
         self.odom_problem = ''
         self.odom_heard = 0            # own odometry messages taken
+        self.cmd_vel_readers = 0       # cmd_vel's matched readers when status last told them
         self.trailer: float | None = None
         self.trailer_stamp = -math.inf
         self.fault_logged = False
@@ -869,7 +870,10 @@ class PlannerNode(ManagedNode):
         self.goal_sub.look()
         self.take_others()   # while simulated time holds (no control ticks), `others` in the status still fills
         self.lock_try()      # an input waited for too long is given up on
-        if found or self.wall_ticks % HEARTBEAT_TICKS == 0:
+        # A launcher waits for cmd_vel's readers (the plant, the clock) before it starts the run: told at once.
+        readers = self.cmd_pub.get_subscription_count()
+        if found or readers != self.cmd_vel_readers or self.wall_ticks % HEARTBEAT_TICKS == 0:
+            self.cmd_vel_readers = readers
             self.publish_status(force=True)
         else:
             self.publish_status()

@@ -90,7 +90,8 @@ __all__ = ['PlantNode', 'main']
 
 MAX_CATCH_UP = 100_000  # integration steps done in one go at most (a clock jump beyond that is skipped)
 DIAGNOSTICS_PERIOD = 1.0  # wall seconds between /diagnostics arrays
-AT_REST_PERIOD = 0.25   # wall seconds between start-state odometry messages before simulated time starts
+AT_REST_PERIOD = 0.05   # wall seconds between start-state odometry messages before simulated time starts (a launch
+                        # waits for them: the recorder and the planner have matched the odometry)
 LOCK_CHECK_PERIOD = 0.25  # lock step: wall seconds between looks at a step waiting for its command
 
 

@@ -54,7 +54,6 @@ import time
 from pathlib import Path
 from typing import Any, Sequence
 
-from builtin_interfaces.msg import Time as TimeMsg
 from diagnostic_msgs.msg import DiagnosticStatus
 from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
@@ -76,7 +75,7 @@ from fastep_ros.common import (
     guard_clock,
     node_main,
 )
-from msg_tools import convert, frames, interface
+from msg_tools import cdr, convert, frames, interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError
 from msg_tools.ros2_profile import message_class, qos_profile_to_dict
 
@@ -89,6 +88,9 @@ class RecordingStopped(FastepError):
 
 _write_failures: list[str] = []   # what stopped a recorder of this process: main() exits 1 instead of 0 or 2
 _stopped: list[str] = []          # ... of which the ones not printed yet (stop_writing): exit_code() prints them
+
+FAST_DISCOVERY_PERIOD = 0.1   # wall seconds between the first looks at the graph for topics ...
+FAST_LOOKS = 30               # ... so many (3 s), then every discovery_period
 
 # What an empty `topics` parameter records.
 _DEFAULT_TOPICS = (', '.join(interface.SHARED_TOPICS) + ' and /<robot>/{' + ', '.join(interface.ROBOT_TOPICS) +
@@ -154,7 +156,11 @@ class RecorderNode(Node):
         self.status_pub = self.create_publisher(DiagnosticStatus, interface.RECORDING, interface.STATUS_QOS)
         self.ack_pub = self.create_publisher(ClockMsg, interface.CLOCK_ACK, interface.RELIABLE) if clock_ack else None
         steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self.discovery_timer = self.create_timer(discovery_period, self.discover, clock=steady)
+        # A launch starts its nodes and the recorder at once, and waits for the recording to hold odometry before
+        # the run begins: the first FAST_LOOKS looks come every FAST_DISCOVERY_PERIOD, then every discovery_period.
+        self.discovery_period, self.looks = discovery_period, 0
+        self.discovery_timer = self.create_timer(min(discovery_period, FAST_DISCOVERY_PERIOD), self.discover,
+                                                 clock=steady)
         self.flush_timer = self.create_timer(flush_period, self.flush, clock=steady)
         self.discover()
         what = ', '.join(sorted(self.wanted)) if self.wanted else 'the fastep topics'
@@ -198,6 +204,9 @@ class RecorderNode(Node):
         """Subscribe to every wanted topic now on the graph that is not recorded yet."""
         if self.writer is None:
             return
+        self.looks += 1
+        if self.looks == FAST_LOOKS:
+            self.discovery_timer.timer_period_ns = round(self.discovery_period * 1e9)
         for topic, types in self.get_topic_names_and_types():
             if topic in self.subscriptions_by_topic or not self.wants(topic) or not types:
                 continue
@@ -254,7 +263,7 @@ class RecorderNode(Node):
             if topic == interface.CLOCK and self.ack_pub is not None and len(data) >= 12:
                 # A CDR Clock: 4 bytes of encapsulation, then int32 sec, uint32 nanosec.
                 sec, nanosec = struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
-                self.ack_pub.publish(ClockMsg(clock=TimeMsg(sec=sec, nanosec=nanosec)))
+                self.ack_pub.publish(cdr.clock_cdr((sec, nanosec)))
             if self.tf_from_odometry is not None:
                 for tf_topic, tf_data in self.tf_from_odometry.take(topic, data):
                     writer.write(tf_topic, tf_data, now, now, type_name=frames.TF_TYPE,
