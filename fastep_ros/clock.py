@@ -49,7 +49,15 @@ from rclpy.node import Node
 from rclpy.serialization import deserialize_message
 from rosgraph_msgs.msg import Clock as ClockMsg
 
-from fastep_ros.common import CLOCK_JUMP_LIMIT, RATE_RANGE, StartupError, check_range, declare, node_main
+from fastep_ros.common import (
+    CLOCK_JUMP_LIMIT,
+    RATE_RANGE,
+    StartupError,
+    check_range,
+    declare,
+    node_main,
+    quiet_at_stop,
+)
 from fastep_ros.limits import RTF_RANGE, STEP_RANGE
 from fastep_ros.lock_step import STAMP_EPS
 from msg_tools import cdr, convert, interface
@@ -195,6 +203,7 @@ class ClockNode(Node):
                         break
         return all(s.sub is not None and self.count_publishers(t) > 0 for t, s in self.sync.items())
 
+    @quiet_at_stop
     def on_sync(self, topic: str, stamp: float | None = None) -> None:
         """A message on a sync topic. One with a stamp answers the current tick if it is stamped after the tick
         before (a planner's cmd_vel decided for the current time; a 50 Hz plant's odometry of its last step), one
@@ -245,6 +254,7 @@ class ClockNode(Node):
             return False
         return True
 
+    @quiet_at_stop
     def on_tick(self) -> None:
         if self.waiting():
             self.repeat()   # holding the start time

@@ -28,8 +28,8 @@ from fastep_ros.executors import make_executor
 from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-exported for the nodes
 from fastep_ros.parameters import warn_unknown_overrides
 
-__all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'StartupError', 'check_range', 'declare',
-           'declare_empty_array', 'guard_clock', 'node_main', 'quiet_at_stop']
+__all__ = ['CLOCK_JUMP_LIMIT', 'GATE_ENV', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'StartupError', 'check_range',
+           'declare', 'declare_empty_array', 'guard_clock', 'node_main', 'quiet_at_stop']
 
 
 INT64_MAX = 2**63 - 1
@@ -206,6 +206,7 @@ def guard_clock(node: Node) -> ClockGuard | None:
 
 
 PARENT_ENV = 'FASTEP_PARENT_PID'
+GATE_ENV = 'FASTEP_LAUNCH_GATE'   # '1': wait for the launcher's line on stdin before joining DDS (_gate_opened)
 
 
 def _die_with_parent() -> None:
@@ -270,9 +271,23 @@ def node_main(prog: str, factory: Callable[[], Node | Sequence[Node]], args: Seq
     return guard(prog, lambda: _run_node(factory, args))
 
 
+def _gate_opened() -> bool:
+    """Started by fastep-launch with GATE_ENV: wait, imports done, until the launcher opens the gate (a line on
+    stdin), so that the process joins DDS only once the launcher has seen that no other graph shares the domain
+    (and the imports overlap that look). False if the launcher closed it instead (it refused to run)."""
+    if os.environ.get(GATE_ENV) != '1':
+        return True
+    try:
+        return bool(sys.stdin.readline())
+    except (OSError, ValueError):   # no stdin
+        return False
+
+
 def _run_node(factory: Callable[[], Node | Sequence[Node]], args: Sequence[str] | None) -> int:
     """node_main's body: 0 after a stop (Ctrl-C is a normal stop for a node); a FastepError propagates,
     after the node is destroyed and ROS shut down."""
+    if not _gate_opened():
+        return 0
     try:
         rclpy.init(args=None if args is None else list(args))
     except Exception as exc:   # e.g. UnknownROSArgsError for a mistyped --ros-args

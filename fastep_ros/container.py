@@ -115,6 +115,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         head, nodes = split_args(sys.argv[1:] if argv is None else argv)
     except StartupError as exc:
         return fail(PROG, exc)
+    for kind, _ in nodes:
+        _node_class(kind)   # imported now: before a launcher's gate opens (fastep_ros.common.GATE_ENV), not after
     code = node_main(PROG, lambda: _build(nodes), ['container', *head])
     if any(kind == 'recorder' for kind, _ in nodes):
         from fastep_ros.recorder import exit_code

@@ -46,6 +46,7 @@ from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
+from fastep_ros.common import GATE_ENV
 from fastep_ros.dds_profile import PROFILE_ENV, use_discovery_profile
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import DEFAULT_EXECUTOR, EXECUTOR_ENV, EXECUTORS
@@ -177,12 +178,17 @@ class Processes:
         self.layout = layout
         self.items: list[tuple[str, subprocess.Popen[bytes]]] = []
         self.pending: list[Member] = []
+        self.opened = False   # open_gates() was called
         self.labels: dict[int, str] = {}   # process id -> its label (a container's: fastep-robot /r1, fastep-graph)
         self.env = dict(os.environ)
         root = str(Path(__file__).resolve().parent.parent)
         self.env['PYTHONPATH'] = os.pathsep.join(p for p in (root, self.env.get('PYTHONPATH', '')) if p)
         self.env['FASTEP_PARENT_PID'] = str(os.getpid())
+        self.env[GATE_ENV] = '1'   # each process imports, then waits for open_gates() before it joins DDS
         self.env.setdefault('PYTHONUNBUFFERED', '1')
+        # A process's numpy would start a BLAS thread per core that spins after each call (5 % of the CPU of a
+        # lock-step run in perf); the nodes' arrays are small.
+        self.env.setdefault('OPENBLAS_NUM_THREADS', '1')
         if executor is not None:
             self.env[EXECUTOR_ENV] = executor
 
@@ -197,9 +203,29 @@ class Processes:
         for label, members in group(self.layout, pending):
             cmd = layout_command(members, 'info' if self.verbose else 'warn', _ros_value)
             # A new session: Ctrl-C in a terminal reaches only the launcher, which then stops the nodes in order.
-            proc = subprocess.Popen(cmd, env=self.env, stdin=subprocess.DEVNULL, start_new_session=True)
+            proc = subprocess.Popen(cmd, env=self.env, stdin=subprocess.PIPE, start_new_session=True)
             self.labels[proc.pid] = label
             self.items += [(m.label, proc) for m in members]
+            if self.opened:
+                self._open(proc)
+
+    def open_gates(self) -> None:
+        """Let every process started so far (and from now on at once) join DDS (fastep_ros.common.GATE_ENV)."""
+        self.opened = True
+        for proc in self.processes():
+            self._open(proc)
+
+    @staticmethod
+    def _open(proc: subprocess.Popen[bytes], go: bool = True) -> None:
+        """Write the process its line (or, not `go`, just end its stdin: it exits without starting)."""
+        if proc.stdin is None or proc.stdin.closed:
+            return
+        try:
+            if go:
+                proc.stdin.write(b'\n')
+            proc.stdin.close()
+        except OSError:   # it is gone already
+            pass
 
     def processes(self) -> list[subprocess.Popen[bytes]]:
         return list({proc.pid: proc for _, proc in self.items}.values())
@@ -208,7 +234,10 @@ class Processes:
         return [(self.labels[proc.pid], proc.returncode) for proc in self.processes() if proc.poll() is not None]
 
     def stop(self) -> None:
-        """SIGINT every process (the clock first, so time stops before the nodes do), SIGKILL after GRACE."""
+        """SIGINT every process (the clock first, so time stops before the nodes do), SIGKILL after GRACE; a process
+        still at its gate is let go without starting."""
+        for proc in self.processes():
+            self._open(proc, go=False)
         clocks = [proc for proc in self.processes() if self.labels[proc.pid] == 'fastep-clock']
         others = [proc for proc in reversed(self.processes()) if self.labels[proc.pid] != 'fastep-clock']
         self._interrupt(clocks, GRACE / 2)
@@ -517,14 +546,9 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     profile = use_discovery_profile()
     procs = Processes(args.verbose, args.layout or default_layout(sim_time), args.executor)
     monitor: Monitor | None = None
+    stopping: threading.Thread | None = None
     code = 1
     try:
-        # Two launches on one domain drove each other's robots and clocks (one reported a 498 m path in a 50 m
-        # map): look for another graph before starting anything, and keep looking (run's loop, _wait).
-        monitor = Monitor(scenario)
-        _alone(monitor)
-        monitor.connect()
-        monitor.expected = watched_topics(scenario, sim_time)
         procs.start('fastep-map', 'map_server', '/', {'scenario': _scenario_arg(args.scenario),
                                                        'use_sim_time': sim_time, 'seed': int(args.seed)})
         for i, spec in enumerate(scenario.robots):
@@ -555,7 +579,15 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 # ... and for the observers (this monitor, the recorder) to have taken the tick before.
                 'sync_topics': [robot_topic(spec.name, CMD_VEL) for spec in scenario.robots] +
                                ['/fastep_launch/clock_ack'] + ['/recorder/clock_ack'] * (args.record is not None)})
-        procs.launch()   # the nodes above, in the processes of --layout
+        procs.launch()   # the nodes above, in the processes of --layout: they import, then wait at their gates
+        # Two launches on one domain drove each other's robots and clocks (one reported a 498 m path in a 50 m
+        # map): look for another graph before any node of this launch joins DDS, and keep looking (run's loop,
+        # _wait). The processes import meanwhile.
+        monitor = Monitor(scenario)
+        _alone(monitor)
+        monitor.connect()
+        monitor.expected = watched_topics(scenario, sim_time)
+        procs.open_gates()
         robots = monitor.robots
         names = set(robots)
         deadline = time.monotonic() + args.startup_timeout
@@ -656,6 +688,9 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                        for r in robots.values())
         while time.monotonic() < short or (odometry_behind() and time.monotonic() < end):
             monitor.spin(0.02)
+        # The nodes stop (the recorder finishes its file) while the report is written and drawn.
+        stopping = threading.Thread(target=procs.stop, name='stop-nodes')
+        stopping.start()
         collided, written = report(args, scenario, monitor, t0, sim_time)
         code = 0 if all(r.outcome == 'arrived' for r in robots.values()) and not collided else 1
         if not written:
@@ -669,13 +704,16 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         print(f'{PROG}: interrupted; stopping every node', file=sys.stderr)
         code = 1
     finally:
+        if stopping is not None:
+            stopping.join()
         if monitor is not None:
             monitor.close()
-        procs.stop()
+        procs.stop()   # (nothing left to stop after `stopping`)
         if profile is not None:
             os.environ.pop(PROFILE_ENV[0], None)
             profile.unlink(missing_ok=True)
-    if any(label == 'fastep-record' for label, _ in procs.items):   # not when another graph stopped it first
+    # Not when another graph was seen first: the recorder then exited at its gate, before it began.
+    if procs.opened and any(label == 'fastep-record' for label, _ in procs.items):
         assert args.record is not None
         # "wrote" only when the recorder finished the file itself (exit 0); a recorder that failed (a full disk:
         # exit 1) or was killed left at most its complete chunks.
@@ -692,11 +730,16 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     return code
 
 
+# Formats matplotlib draws with the backends it always has (Agg, PDF, PS, SVG): --plot's usual suffixes are checked
+# without importing it (0.25 s before any node starts); any other suffix is asked of matplotlib.
+DRAWN_FORMATS = frozenset({'eps', 'jpeg', 'jpg', 'pdf', 'png', 'ps', 'svg', 'svgz', 'tif', 'tiff', 'webp'})
+
+
 def _output_problem(path: Path, plot: bool = False) -> str:
     """Why `path` cannot be written as an output file ('' if it can). Tried, not guessed from permissions (root
     passes every check of those): missing folders are created, as the run would, and the file is opened for
     appending (an existing one is left as it is, a new one removed again)."""
-    if plot and path.suffix:
+    if plot and path.suffix and path.suffix[1:].lower() not in DRAWN_FORMATS:
         from matplotlib.backend_bases import FigureCanvasBase
         formats = FigureCanvasBase.get_supported_filetypes()
         if path.suffix[1:].lower() not in formats:

@@ -23,7 +23,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.optimize import linear_sum_assignment
 
 __all__ = ['CONFIRM_HITS', 'GATE', 'GATE_DISTANCE', 'MAX_COAST', 'TrackParams', 'Tracker']
 
@@ -94,6 +93,9 @@ class Tracker:
             y = centres[None, :, :] - self.states[:, None, :2]                       # (n, m, 2)
             cost = np.einsum('nmi,nij,nmj->nm', y, inverse, y)
             allowed = (cost <= GATE) & (np.hypot(y[..., 0], y[..., 1]) <= GATE_DISTANCE)
+            # Imported here: scipy.optimize costs ~0.2 s of import in every planner process, and only a planner
+            # with a laser tracks.
+            from scipy.optimize import linear_sum_assignment
             rows, cols = linear_sum_assignment(np.where(allowed, cost, 1e6))
             good = allowed[rows, cols]
             paired_tracks, paired_detections = rows[good], cols[good]

@@ -36,8 +36,6 @@ from typing import Sequence
 
 import numpy as np
 from numpy.typing import NDArray
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from fastep_core.kinematics.tractor_trailer import MAX_STEER, TractorTrailer, hitch_angle, wrap_angle
 from fastep_core.world import World
@@ -104,6 +102,10 @@ class DistanceField:
             rows.append(a[both])
             cols.append(b[both])
             weights.append(np.full(int(both.sum()), cell * math.hypot(dx, dy)))
+        # Imported here: scipy.sparse costs ~0.15 s of import, and every planner process imports this module
+        # while only a tractor-trailer's manoeuvre (a reverse out of a trap) ever builds the field.
+        from scipy.sparse import coo_matrix
+        from scipy.sparse.csgraph import dijkstra
         graph = coo_matrix((np.concatenate(weights), (np.concatenate(rows), np.concatenate(cols))),
                            shape=(ny * nx, ny * nx)).tocsr()
         self.distance = dijkstra(graph, directed=False, indices=goal_index)

@@ -396,3 +396,42 @@ def test_a_full_disk_under_fastep_launch_is_not_reported_as_written(tmp_path: Pa
     assert f'wrote {recorded}' not in out, out
     assert 'fastep-record: error: cannot write' in err and 'File too large' in err, err
     assert f'fastep-launch: error: the recorder failed (exit code 1): {recorded} is incomplete' in err, err
+
+
+def test_the_plot_formats_known_without_matplotlib_are_matplotlibs() -> None:
+    """--plot's usual suffixes are checked without importing matplotlib (before any node starts): each is one it
+    draws."""
+    from matplotlib.backend_bases import FigureCanvasBase
+
+    from fastep_ros.launch import DRAWN_FORMATS
+    assert DRAWN_FORMATS <= set(FigureCanvasBase.get_supported_filetypes())
+
+
+def test_a_process_joins_dds_only_when_its_gate_opens(context: Any, tmp_path: Path) -> None:
+    """fastep-launch starts its processes before it has looked for another graph (they import meanwhile): a node
+    with FASTEP_LAUNCH_GATE=1 joins DDS only after a line on stdin, and exits 0 without starting on end of input."""
+    import rclpy
+
+    from fastep_ros.common import GATE_ENV
+    env = {**isolated_env(context.get_domain_id(), tmp_path / 'roslog'), GATE_ENV: '1'}
+    node = rclpy.create_node('gate_watcher', context=context)
+    cmd = [sys.executable, '-m', 'fastep_ros.clock', '--ros-args', '-r', '__node:=gated_clock']
+
+    def on_graph() -> bool:
+        return 'gated_clock' in [name for name, _ in node.get_node_names_and_namespaces()]
+    proc = subprocess.Popen(cmd, env=env, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    try:
+        time.sleep(3.0)   # imported by now (0.3 s), and DDS would have shown it (0.1 s)
+        assert proc.poll() is None and not on_graph()
+        assert proc.stdin is not None
+        proc.stdin.write(b'\n')
+        proc.stdin.close()
+        deadline = time.monotonic() + 20.0
+        while not on_graph() and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert on_graph()
+    finally:
+        stop_process(proc)
+        node.destroy_node()
+    closed = subprocess.run(cmd, env=env, input=b'', capture_output=True, timeout=30)
+    assert closed.returncode == 0 and closed.stdout == b'' and closed.stderr == b''
