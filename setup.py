@@ -67,7 +67,7 @@ setup(
             'fastep-planner = fastep_ros.planner:main',
             'fastep-clock = fastep_ros.clock:main',
             'fastep-container = fastep_ros.container:main',
-            'fastep-launch = fastep_ros.launch:main',
+            'fastep-launch = fastep_ros.launch:cli',
             'fastep-bench = msg_tools.bench_cli:main',
             'fastep-tune = fastep_core.tuning:main',
             'fastep-record = fastep_ros.recorder:main',

@@ -64,7 +64,8 @@ from msg_tools import cdr, convert, interface
 
 __all__ = ['ClockNode', 'main', 'tick_plan']
 
-SETTLE = 0.3        # wall seconds the start time is held after the expected subscribers matched
+SETTLE = 0.05       # wall seconds the start time is held after the expected subscribers matched (a subscriber
+                    # whose end matched later misses the first tick: it gets it again after HOLD_PERIOD)
 HOLD_PERIOD = 0.1   # wall seconds between repeated /clock messages while the time is held
 START_MAX = 1e9     # simulated seconds: far from the int32 seconds of a /clock message (2^31 - 1)
 

@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import argparse
 import functools
+import importlib
 import json
 import math
 import os
@@ -35,7 +36,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, NoReturn, Sequence
 
 import numpy as np
 
@@ -63,8 +64,9 @@ STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the wor
 SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
 END_WAIT = 5.0          # wall seconds the report waits at most for odometry up to the end of each robot's run
 STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
-DISCOVERY_WAIT = 1.0    # wall seconds the launcher looks for another graph on its domain before it starts any node
-# (DDS took 0 to 3.2 s to show an existing publisher to a new process here: one seen later stops the launch, by the
+DISCOVERY_WAIT = 0.6    # wall seconds the launcher looks for another graph on its domain before its nodes join DDS
+# (DDS showed an existing publisher to a new process after 0.3-0.45 s in most starts, up to 3.2 s in some (a
+# participant that missed the others' endpoints, fastep_ros.dds_profile): one seen later stops the launch, by the
 # checks every CONFLICT_CHECK while the nodes come up and the run goes on, and one just before the goals go out)
 CONFLICT_CHECK = 1.0    # wall seconds between looks for a graph that joined later
 
@@ -636,6 +638,10 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         pace = f'simulated time at rtf {args.rtf:g} at most' if sim_time else 'wall time'
         print(f'{scenario.name}: {len(robots)} robot(s) on their way ({args.algorithm}, seed {args.seed}, {pace})',
               flush=True)
+        if args.plot is not None:
+            # matplotlib's import (0.25 s) while the run goes, not after it: the graph's process has a core of its own.
+            threading.Thread(target=importlib.import_module, args=('msg_tools.plots',), name='import-plots',
+                             daemon=True).start()
         progress = Progress(PROG, len(robots), enabled=not args.no_progress)
         progress.start()
         last_now, last_change = monitor.now(), time.monotonic()
@@ -677,10 +683,11 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             progress.update(outcomes.count('arrived'), len(outcomes) - outcomes.count('') - outcomes.count('arrived'),
                             now)
         progress.close()
-        # Let the last odometry in before reporting: at least 0.2 s, and until every robot's reaches the time its
-        # run ended (at a high --rtf this monitor's odometry queue lags its status messages by seconds of
-        # simulated time), for END_WAIT wall seconds at most.
-        short, end = time.monotonic() + 0.2, time.monotonic() + END_WAIT
+        # Let the last odometry in before reporting: at least 0.2 s (in lock step, where this monitor takes every
+        # tick's odometry before the next, 0.05 s), and until every robot's reaches the time its run ended (at a high
+        # --rtf this monitor's odometry queue lagged its status messages by seconds of simulated time), for END_WAIT
+        # wall seconds at most.
+        short, end = time.monotonic() + (0.05 if sim_time else 0.2), time.monotonic() + END_WAIT
 
         def odometry_behind() -> bool:
             return any(r.end_time is not None and (not r.rows or r.rows[-1][0] < r.end_time - 1e-6 +
@@ -877,5 +884,19 @@ def _main(argv: Sequence[str] | None) -> int:
             signal.signal(sig, handler)
 
 
+def cli() -> NoReturn:
+    """The console script (and `python -m fastep_ros.launch`): main(), then the process ends at once. Python's
+    teardown of a process that held a DDS participant took 0.17-0.25 s here, a twentieth of make demo's whole
+    command, for nothing a run needs: the nodes' processes have finished their files, the launcher's files are
+    closed, and stdout and stderr are flushed first."""
+    code = main()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):   # a closed pipe: nothing more can be said
+            pass
+    os._exit(code)
+
+
 if __name__ == '__main__':
-    sys.exit(main())
+    cli()

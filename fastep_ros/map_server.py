@@ -30,7 +30,7 @@ from visualization_msgs.msg import MarkerArray
 from fastep_core.dynamic_world import DynamicWorld, map_generator
 from fastep_core.errors import FastepError
 from fastep_core.scenario import load_scenario
-from fastep_ros.common import StartupError, declare, guard_clock, node_main
+from fastep_ros.common import StartupError, declare, guard_clock, node_main, quiet_at_stop
 from fastep_ros.limits import graph_problem
 from msg_tools import convert, interface
 from msg_tools.interface import offered_qos
@@ -100,6 +100,7 @@ class MapNode(Node):
                                f'map {info.width}x{info.height} cells of {info.resolution:g} m')
 
 
+    @quiet_at_stop
     def publish_movers(self) -> None:
         """The known movers where the map puts them at this node clock's time."""
         assert self.movers_pub is not None

@@ -861,6 +861,7 @@ class PlannerNode(ManagedNode):
         }
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 
+    @quiet_at_stop
     def on_wall_tick(self) -> None:
         """Every DISCOVERY_PERIOD wall seconds: look at the clock, discover robots; once a wall second, re-publish
         status, target and plan (for late listeners) and publish /diagnostics."""

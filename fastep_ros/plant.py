@@ -430,11 +430,13 @@ class PlantNode(ManagedNode):
         return math.floor(self.tick * self.step / period + 1e-9) > math.floor(self.published_tick * self.step / period
                                                                                + 1e-9)
 
+    @quiet_at_stop
     def on_lock_check(self) -> None:
         """Lock step, on wall time: a step still waiting for its command is integrated once LOCK_WAIT is over."""
         if self.is_active and self.waiting_since is not None:
             self.on_timer()
 
+    @quiet_at_stop
     def on_at_rest_tick(self) -> None:
         """Before the first integration step (simulated time at 0), once this plant can hear commands: publish
         the start state, stamped 0."""
@@ -443,6 +445,7 @@ class PlantNode(ManagedNode):
         elif self.now() <= 0.0 and self.cmd_sub.get_publisher_count() > 0:
             self.publish()
 
+    @quiet_at_stop
     def publish_diagnostics(self) -> None:
         """/diagnostics once a wall second: the integration (odometry published), the command, the clock."""
         self.check_clock()

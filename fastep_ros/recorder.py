@@ -74,6 +74,7 @@ from fastep_ros.common import (
     declare_empty_array,
     guard_clock,
     node_main,
+    quiet_at_stop,
 )
 from msg_tools import cdr, convert, frames, interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError
@@ -200,6 +201,7 @@ class RecorderNode(Node):
             return True
         return topic in self.wanted if self.wanted else interface.is_interface_topic(topic)
 
+    @quiet_at_stop
     def discover(self) -> None:
         """Subscribe to every wanted topic now on the graph that is not recorded yet."""
         if self.writer is None:
@@ -275,6 +277,7 @@ class RecorderNode(Node):
         if self.counts[topic] == 1:
             self.publish_status()
 
+    @quiet_at_stop
     def flush(self) -> None:
         if self.writer is not None:
             try:
