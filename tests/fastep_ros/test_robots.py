@@ -214,6 +214,10 @@ def test_an_announced_robot_is_followed_dropped_when_its_odometry_stops_and_back
     assert other.radius == pytest.approx(0.8, abs=1e-6) and other.velocity == (0.5, 0.0)
 
 
+class _Context:
+    """A stand-in for an rclpy Context: an object of its own."""
+
+
 class _GraphStub:
     """The few node calls RobotFollower makes, over a graph the test writes."""
 
@@ -223,6 +227,7 @@ class _GraphStub:
         self.topics: list[tuple[str, list[str]]] = []
         self.publishers: dict[str, list[tuple[str, str]]] = {}
         self.subscribed: list[str] = []
+        self.context = _Context()   # a process of its own: its look at the graph is its own (graph_topics)
 
     def get_namespace(self) -> str:
         return '/d1'
@@ -266,3 +271,29 @@ def test_a_footprint_publisher_listed_before_its_node_is_known_is_asked_about_ag
     graph.publishers['/r2/footprint'] = [('planner', '/r2')]   # the same one publisher, its node now known
     follower.discover()
     assert follower.fleet.robots['/r2'].announced and '/r2/odom' in graph.subscribed
+
+
+def test_one_look_at_the_graph_serves_the_planners_of_a_process(context: Any) -> None:
+    """Planners in one process (a graph layout) share a look at the graph's topics for GRAPH_SHARED_FOR, and see a
+    topic that appeared once it is over."""
+    import rclpy
+    from std_msgs.msg import Float64
+
+    from fastep_ros.robots import GRAPH_SHARED_FOR, graph_topics
+    a = rclpy.create_node('graph_a', context=context)
+    b = rclpy.create_node('graph_b', context=context)
+    asked: list[str] = []
+    for node in (a, b):
+        def counted(ask: Any = node.get_topic_names_and_types, name: str = node.get_name()) -> Any:
+            asked.append(name)
+            return ask()
+        node.get_topic_names_and_types = counted  # type: ignore[method-assign]  # counts the looks
+    try:
+        first = graph_topics(a)
+        assert graph_topics(b) is first and asked == ['graph_a']
+        a.create_publisher(Float64, '/shared_look_topic', 1)
+        time.sleep(GRAPH_SHARED_FOR + 0.05)
+        assert '/shared_look_topic' in dict(graph_topics(b)) and asked == ['graph_a', 'graph_b']
+    finally:
+        a.destroy_node()
+        b.destroy_node()
