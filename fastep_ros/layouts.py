@@ -6,6 +6,8 @@
     graph  every node of the simulated graph (map, plants, planners, clock) in one process, on one executor; the
            observers keep their own: the recorder, writing a file with an exit code of its own (1: the file is
            incomplete), and the Foxglove bridge
+    cores  the simulated graph in one process per CPU core this process may use: the robots dealt in turn (a
+           robot's plant and planner together), the map and the clock in the first; the observers as in `graph`
 
 The nodes, their names, namespaces, parameters and topics are the same in every layout: a container builds each
 node from the very arguments its own process would get (fastep_ros.container). What changes is what it costs:
@@ -21,17 +23,26 @@ heavy work, several processes get more of the machine than one (and one process 
 
 from __future__ import annotations
 
+import os
 import sys
 from dataclasses import dataclass
 from typing import Any, Sequence
 
-__all__ = ['DEFAULT_LAYOUT', 'LAYOUTS', 'Member', 'command', 'default_layout', 'group']
+__all__ = ['DEFAULT_LAYOUT', 'LAYOUTS', 'Member', 'command', 'default_layout', 'group', 'usable_cores']
 
-LAYOUTS = ('node', 'robot', 'graph')
+LAYOUTS = ('node', 'robot', 'graph', 'cores')
 # Nodes that watch the graph on wall time and keep a process of their own in every layout: the recorder (its exit
 # code says whether its file is complete), the Foxglove bridge (a WebSocket server, whose clients' pace is theirs).
 OBSERVERS = ('recorder', 'foxglove_bridge')
 DEFAULT_LAYOUT = {True: 'graph', False: 'robot'}   # on simulated time (lock step), on wall time
+
+
+def usable_cores() -> int:
+    """The CPU cores this process may run on (its affinity where the platform tells it)."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:   # not on Linux
+        return os.cpu_count() or 1
 
 
 def default_layout(sim_time: bool) -> str:
@@ -58,6 +69,19 @@ def group(layout: str, members: Sequence[Member]) -> list[tuple[str, list[Member
     if layout == 'graph':
         simulated = [m for m in members if m.module not in OBSERVERS]
         return ([('fastep-graph', simulated)] if simulated else []) + \
+            [(m.label, [m]) for m in members if m.module in OBSERVERS]
+    if layout == 'cores':
+        robots_seen: list[str] = []
+        for m in members:
+            if m.module in ('plant', 'planner') and m.namespace not in robots_seen:
+                robots_seen.append(m.namespace)
+        parts = max(1, min(usable_cores(), len(robots_seen)))
+        shares: list[list[Member]] = [[] for _ in range(parts)]
+        for m in members:
+            if m.module not in OBSERVERS:
+                robot = robots_seen.index(m.namespace) if m.module in ('plant', 'planner') else 0
+                shares[robot % parts].append(m)
+        return [(f'fastep-graph {i + 1}/{parts}', share) for i, share in enumerate(shares) if share] + \
             [(m.label, [m]) for m in members if m.module in OBSERVERS]
     out: list[tuple[str, list[Member]]] = []
     robots: dict[str, list[Member]] = {}

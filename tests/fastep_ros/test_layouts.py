@@ -1,5 +1,5 @@
-"""fastep-launch --layout node|robot|graph: the same nodes and topics, and the same run, in one process per node,
-per robot or for the whole graph (fastep_ros.layouts, fastep_ros.container)."""
+"""fastep-launch --layout node|robot|graph|cores: the same nodes and topics, and the same run, in one process per
+node, per robot, for the whole graph or per core (fastep_ros.layouts, fastep_ros.container)."""
 
 from __future__ import annotations
 
@@ -16,9 +16,10 @@ import pytest
 from fastep_core.planning.algorithms import DEFAULT_ALGORITHM
 from fastep_core.scenario import load_scenario
 from fastep_core.simulator import simulate
+from fastep_ros import layouts
 from fastep_ros.container import split_args
 from fastep_ros.errors import StartupError
-from fastep_ros.layouts import Member, group
+from fastep_ros.layouts import Member, group, usable_cores
 from fastep_testing.graph import CROSSING, Helper, free_domain, isolated_env, stop_process, write
 
 
@@ -38,6 +39,19 @@ def test_layouts_group_the_nodes_into_processes() -> None:
         ('fastep-map', ['map_server']), ('fastep-robot /r1', ['plant', 'planner']),
         ('fastep-robot /r2', ['plant', 'planner']), ('fastep-clock', ['clock']), ('fastep-record', ['recorder'])]
     assert [(label, len(ms)) for label, ms in group('graph', members)] == [('fastep-graph', 6), ('fastep-record', 1)]
+
+
+def test_the_cores_layout_deals_the_robots_to_a_process_per_core(monkeypatch: pytest.MonkeyPatch) -> None:
+    members = _members()
+    monkeypatch.setattr(layouts, 'usable_cores', lambda: 2)
+    assert [(label, [m.label for m in ms]) for label, ms in group('cores', members)] == [
+        ('fastep-graph 1/2', ['fastep-map', 'fastep-plant /r1', 'fastep-planner /r1', 'fastep-clock']),
+        ('fastep-graph 2/2', ['fastep-plant /r2', 'fastep-planner /r2']), ('fastep-record', ['fastep-record'])]
+    monkeypatch.setattr(layouts, 'usable_cores', lambda: 8)   # no more processes than robots
+    assert [label for label, _ in group('cores', members)] == ['fastep-graph 1/2', 'fastep-graph 2/2', 'fastep-record']
+    monkeypatch.setattr(layouts, 'usable_cores', lambda: 1)   # one core: the graph layout
+    assert [(label, len(ms)) for label, ms in group('cores', members)] == [('fastep-graph 1/1', 6),
+                                                                           ('fastep-record', 1)]
 
 
 @pytest.mark.parametrize('argv,words', [
@@ -110,7 +124,7 @@ def _rows(trajectory: list[list[float]]) -> dict[float, list[float]]:
 
 def test_every_layout_runs_the_same_graph_and_exactly_the_run_of_fastep_sim(tmp_path: Path) -> None:
     reference = simulate(load_scenario(str(write(tmp_path / 'c.yaml', CROSSING))), DEFAULT_ALGORITHM, 0).to_json()
-    runs = {layout: _launch(tmp_path, layout) for layout in ('node', 'robot', 'graph')}
+    runs = {layout: _launch(tmp_path, layout) for layout in ('node', 'robot', 'graph', 'cores')}
     # The EventsExecutor calls back in another order: exact lock step does not depend on it (fastep_ros.lock_step).
     runs['graph events'] = _launch(tmp_path, 'graph', 'events')
     for layout, run in runs.items():
@@ -132,6 +146,7 @@ def test_every_layout_runs_the_same_graph_and_exactly_the_run_of_fastep_sim(tmp_
                 assert live[t] == pytest.approx(expected[t], abs=2e-6), (layout, robot['name'], t)
     # map, 2 plants, 2 planners, clock: one process each, one per robot (+ map and clock), or one
     assert {layout: run['processes'] for layout, run in runs.items()} == {'node': 6, 'robot': 4, 'graph': 1,
+                                                                          'cores': min(usable_cores(), 2),
                                                                           'graph events': 1}
     expected = {'/map', '/clock', '/r1/plant', '/r1/planner', '/r2/plant', '/r2/planner'}
     for layout, run in runs.items():
