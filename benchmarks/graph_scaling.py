@@ -202,6 +202,8 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
             entry['modes'] = sorted(modes[name])
             entry['final'] = f'{status.get("message")}: {status.get("reason")}'
             entry['activations'] = status.get('activations')
+            # The planner's control callback, wall time of its last 200 (10 s): "p50 / p99 / max" ms (status).
+            entry['control_ms'] = [float(v) for v in str(status.get('control_ms', '')).split(' / ') if v]
             robots[name] = entry
         cpu = {label: 100.0 * (cpu1[label] - cpu0[label]) / wall for label in pids}
         # Per node only where each node has a process of its own (--layout node).
@@ -224,6 +226,10 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
             'worst_rate_hz': worst_rate, 'worst_late_fraction': worst_late,
             'passed': worst_rate >= MIN_RATE and worst_late < MAX_LATE_FRACTION,
         }
+        timed = [r['control_ms'] for r in robots.values() if len(r['control_ms']) == 3]
+        if timed:
+            result['control_p99_ms_worst'] = max(t[1] for t in timed)
+            result['control_max_ms_worst'] = max(t[2] for t in timed)
         if stamped:
             result['worst_stamp_rate_hz'] = min(r['stamp']['rate_hz'] for r in robots.values())
             result['worst_stamp_late_fraction'] = max(r['stamp']['late_fraction'] for r in robots.values())
@@ -255,6 +261,9 @@ def print_result(r: dict[str, Any]) -> None:
           f'graph total {c["graph_total"]:.0f} % '
           f'(of {100 * (os.cpu_count() or 1)} %); machine busy {c["machine_busy_percent_of_all_cores"]:.0f} % '
           f'of all cores (incl. other users)')
+    if 'control_p99_ms_worst' in r:
+        print(f'    planner control callback (wall, last 10 s): worst p99 {r["control_p99_ms_worst"]:.2f} ms, '
+              f'worst max {r["control_max_ms_worst"]:.2f} ms')
     arrived = sum(1 for x in r['robots'].values() if x['final'].startswith('arrived'))
     print(f'    robots arrived by the end of the window: {arrived}/{r["n"]}', flush=True)
 

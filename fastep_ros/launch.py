@@ -94,7 +94,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--layout', choices=LAYOUTS, default=None,
                    help=f'which nodes share a process (default {default_layout(True)}, with --no-clock '
                    f'{default_layout(False)}): node (one process each), robot (a robot\'s plant and planner together), '
-                   'graph (all in one); the topics are the same')
+                   'graph (all in one), cores (one per CPU core, the robots dealt in turn); the topics are the same')
     p.add_argument('--executor', choices=EXECUTORS, default=None,
                    help=f'rclpy executor of every node (default: ${EXECUTOR_ENV}, else {DEFAULT_EXECUTOR}): events '
                    '(rclpy.experimental.EventsExecutor) or single (SingleThreadedExecutor)')

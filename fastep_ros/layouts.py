@@ -14,11 +14,13 @@ node from the very arguments its own process would get (fastep_ros.container). W
 each rclpy process pays its executor's work per wake-up and its own DDS participant (discovery traffic grows
 with the square of the participants), so fewer processes cost less CPU, while one process uses one core at most.
 docs/benchmarks.md ("Executors and process layouts", "Exact lock step") measures the three. On the
-EventsExecutor (the default) `graph` costs least, and in lock step (simulated time) it is also the fastest: a tick
-is a chain of messages through every node, cheapest inside one process (16 robots: 1.3x real time, where `robot`,
-19 processes on 2 cores, ran at 0.6x and starved nodes past the lock step's 5 s waits). On wall time, beside other
-heavy work, several processes get more of the machine than one (and one process uses one core at most): there
-`robot` kept its control periods best. So DEFAULT_LAYOUT is `graph` on simulated time and `robot` on wall time.
+EventsExecutor (the default) `graph` costs least, and in lock step (simulated time) it is also the fastest for a
+few robots: a tick is a chain of messages through every node, cheapest inside one process (make demo's 2 robots:
+24x real time against 20x with `cores`; 16 robots: 2.4x, where `robot`, 19 processes on 2 cores, ran at 0.6x and
+starved nodes past the lock step's 5 s waits, and `cores` 2.7x). On wall time one process is one core at most, and
+a control period in which several robots plan a step delays the others: 16 robots were late in 2.3 % of their
+periods in `graph`, 7.5 % in `robot` (2.5x the CPU), 0 % in `cores` (2026-11-26). So DEFAULT_LAYOUT is `graph` on
+simulated time and `cores` on wall time.
 """
 
 from __future__ import annotations
@@ -34,7 +36,7 @@ LAYOUTS = ('node', 'robot', 'graph', 'cores')
 # Nodes that watch the graph on wall time and keep a process of their own in every layout: the recorder (its exit
 # code says whether its file is complete), the Foxglove bridge (a WebSocket server, whose clients' pace is theirs).
 OBSERVERS = ('recorder', 'foxglove_bridge')
-DEFAULT_LAYOUT = {True: 'graph', False: 'robot'}   # on simulated time (lock step), on wall time
+DEFAULT_LAYOUT = {True: 'graph', False: 'cores'}   # on simulated time (lock step), on wall time
 
 
 def usable_cores() -> int:

@@ -34,7 +34,8 @@ they change (and once a wall second): `waypoint` (the point driven to now), `pla
 far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the namespace, message = mode, values
 reason / activations / escapes / manoeuvres / waypoint / goal / cost / algorithm / t / odom_lag / obstacles,
 and for a launcher: others (the robots followed now), cmd_vel_readers (subscriptions matched to
-cmd_vel) and odom_heard (own odometry messages taken)).
+cmd_vel) and odom_heard (own odometry messages taken); and control_ms: the wall time of the last CONTROL_TIMES
+control callbacks, "p50 / p99 / max" in milliseconds).
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
 run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry
@@ -56,7 +57,9 @@ it acts on the control timer as without lock step.
 
 from __future__ import annotations
 
+import collections
 import math
+import time
 import traceback
 from dataclasses import dataclass, fields
 from typing import Any, Callable, Sequence
@@ -116,6 +119,7 @@ TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radi
 """The node's own parameters that change while it runs, besides every PlannerParams field."""
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots
 HEARTBEAT_TICKS = 4      # status, waypoint and plan are re-published every 4 * 0.25 s = 1 s of wall time
+CONTROL_TIMES = 200      # control callbacks (10 s at 20 Hz) whose wall times status' control_ms sums up
 
 
 def stream_rng(seed: int, stream: int) -> np.random.Generator:
@@ -257,6 +261,7 @@ class PlannerNode(ManagedNode):
         self.odom_problem = ''
         self.odom_heard = 0            # own odometry messages taken
         self.cmd_vel_readers = 0       # cmd_vel's matched readers when status last told them
+        self.control_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
         self.trailer: float | None = None
         self.trailer_stamp = -math.inf
         self.fault_logged = False
@@ -715,7 +720,16 @@ class PlannerNode(ManagedNode):
             self.lock_try()
 
     def on_control(self, at: float | None = None) -> None:
-        """Decide and publish cmd_vel at node time `at` (lock step: the odometry stamp acted on), else now."""
+        """Decide and publish cmd_vel at node time `at` (lock step: the odometry stamp acted on), else now; its wall
+        time goes into status' control_ms."""
+        began = time.perf_counter()
+        try:
+            self.control(at)
+        finally:
+            self.control_times.append(time.perf_counter() - began)
+
+    def control(self, at: float | None = None) -> None:
+        """on_control's work."""
         if self.sim_time.switched():
             self.on_clock_switched()
         t = self.now() if at is None else at
@@ -821,6 +835,13 @@ class PlannerNode(ManagedNode):
                                                      f'({self.goal[0]:g}, {self.goal[1]:g})'
         return DiagnosticStatus.OK, mode.value, nav.reason
 
+    def control_ms(self) -> str:
+        """'p50 / p99 / max' of the recent control callbacks' wall times in ms ('' before the first)."""
+        if not self.control_times:
+            return ''
+        p50, p99, top = np.percentile(np.array(self.control_times) * 1e3, [50.0, 99.0, 100.0])
+        return f'{p50:.3f} / {p99:.3f} / {top:.3f}'
+
     def publish_status(self, force: bool = False, at: float | None = None) -> None:
         """Status when it changed (or `force`); `at` is the node time of the decision it reports (default now)."""
         level, message, reason = self.status()
@@ -858,6 +879,7 @@ class PlannerNode(ManagedNode):
             'scans': self.scan_perception.scans,
             'tracks': len(self.scan_perception.movers(self.now())),
             'scan_problem': self.scan_problem,
+            'control_ms': self.control_ms(),
         }
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 

@@ -382,3 +382,20 @@ def test_nodes_publish_the_interface_and_fastep_sim_records_their_qos(context: A
         assert recording.topics[topic].type == type_name, topic
         assert recording.topics[topic].qos == [qos], topic
     assert recording.topics[goal].qos == interface.offered_qos_profiles(goal)
+
+
+def test_status_tells_how_long_the_control_callback_takes(context: Any) -> None:
+    """status' control_ms: p50 / p99 / max wall milliseconds of the recent control callbacks (what benchmarks
+    read at 16 robots), '' before the first."""
+    from fastep_ros.planner import CONTROL_TIMES
+    node = make(PlannerNode, context)
+    try:
+        assert node.control_ms() == ''
+        for _ in range(CONTROL_TIMES + 5):
+            node.on_control()
+        assert len(node.control_times) == CONTROL_TIMES
+        p50, p99, top = (float(v) for v in node.control_ms().split(' / '))
+        assert 0.0 < p50 <= p99 <= top
+        node.publish_status(force=True)   # with it among the values (a status that fails to build raises here)
+    finally:
+        node.destroy_node()
