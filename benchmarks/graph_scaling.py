@@ -132,7 +132,7 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
         members = [Member('map', 'map_server', '/', {'scenario': str(path)})]
         for i, spec in enumerate(scenario.robots):
             plant = launch.plant_params(spec, False)
-            planner = launch.planner_params(scenario, i, 'fastep', args.seed, False)
+            planner = launch.planner_params(scenario, i, args.algorithm, args.seed, False)
             if stamped:
                 plant['use_stamped_cmd_vel'] = planner['use_stamped_cmd_vel'] = True
             members += [Member(f'plant/{spec.name}', 'plant', f'/{spec.name}', plant),
@@ -214,8 +214,8 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
         worst_rate = min(r['receipt']['rate_hz'] for r in robots.values())
         worst_late = max(r['receipt']['late_fraction'] for r in robots.values())
         result = {
-            'n': n, 'layout': args.layout, 'executor': args.executor, 'domain': graph.domain,
-        'processes': len(pids), 'startup_s': startup, 'window_s': wall,
+            'n': n, 'layout': args.layout, 'executor': args.executor, 'algorithm': args.algorithm,
+            'domain': graph.domain, 'processes': len(pids), 'startup_s': startup, 'window_s': wall,
             'load_before': load_before, 'load_after': load_after, 'robots': robots,
             'cpu_percent': {'planner_mean': float(np.mean(planners)), 'planner_max': float(np.max(planners)),
                             'plant_mean': float(np.mean(plants)), 'plant_max': float(np.max(plants)),
@@ -461,6 +461,8 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument('--radius', type=float, default=20.0)
     p.add_argument('--max-speed', type=float, default=2.0)
     p.add_argument('--seed', type=int, default=0)
+    p.add_argument('--algorithm', default='fastep', help='the planners\' algorithm (default fastep, as in the tables '
+                   'of docs/benchmarks.md; the planner node\'s own default is fastep_route)')
     p.add_argument('--layout', choices=LAYOUTS, default='node', help='processes as fastep-launch --layout '
                    '(default node: one per node)')
     p.add_argument('--executor', choices=EXECUTORS, default='single', help='FASTEP_EXECUTOR of every node '
