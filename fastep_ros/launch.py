@@ -51,7 +51,7 @@ from fastep_ros.common import GATE_ENV
 from fastep_ros.dds_profile import PROFILE_ENV, use_discovery_profile
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import DEFAULT_EXECUTOR, EXECUTOR_ENV, EXECUTORS
-from fastep_ros.layouts import LAYOUTS, Member, default_layout, group
+from fastep_ros.layouts import GRAPH_ROBOTS, LAYOUTS, Member, default_layout, group
 from fastep_ros.layouts import command as layout_command
 from fastep_ros.limits import RATE_RANGE, RTF_RANGE, graph_problem, robot_name_problem
 from fastep_ros.progress import Progress
@@ -92,8 +92,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--no-progress', action='store_true', help='no progress on stderr (robots arrived, simulated '
                    'time, real-time factor: a bar on a terminal, a line every 10 s otherwise)')
     p.add_argument('--layout', choices=LAYOUTS, default=None,
-                   help=f'which nodes share a process (default {default_layout(True)}, with --no-clock '
-                   f'{default_layout(False)}): node (one process each), robot (a robot\'s plant and planner together), '
+                   help=f'which nodes share a process (default: {default_layout(True)} for up to {GRAPH_ROBOTS} '
+                   f'robots with the clock, else {default_layout(False)}): node (one process each), robot (a robot\'s '
+                   'plant and planner together), '
                    'graph (all in one), cores (one per CPU core, the robots dealt in turn); the topics are the same')
     p.add_argument('--executor', choices=EXECUTORS, default=None,
                    help=f'rclpy executor of every node (default: ${EXECUTOR_ENV}, else {DEFAULT_EXECUTOR}): events '
@@ -546,7 +547,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
     # Before any participant of this launch exists: the launcher's own (the monitor's) and its processes'.
     profile = use_discovery_profile()
-    procs = Processes(args.verbose, args.layout or default_layout(sim_time), args.executor)
+    procs = Processes(args.verbose, args.layout or default_layout(sim_time, len(scenario.robots)), args.executor)
     monitor: Monitor | None = None
     stopping: threading.Thread | None = None
     code = 1

@@ -13,14 +13,21 @@ The nodes, their names, namespaces, parameters and topics are the same in every 
 node from the very arguments its own process would get (fastep_ros.container). What changes is what it costs:
 each rclpy process pays its executor's work per wake-up and its own DDS participant (discovery traffic grows
 with the square of the participants), so fewer processes cost less CPU, while one process uses one core at most.
-docs/benchmarks.md ("Executors and process layouts", "Exact lock step") measures the three. On the
+docs/benchmarks.md ("Executors and process layouts", "Exact lock step", "A cheaper tick, a quicker start") measures
+them. On the
 EventsExecutor (the default) `graph` costs least, and in lock step (simulated time) it is also the fastest for a
-few robots: a tick is a chain of messages through every node, cheapest inside one process (make demo's 2 robots:
-24x real time against 20x with `cores`; 16 robots: 2.4x, where `robot`, 19 processes on 2 cores, ran at 0.6x and
-starved nodes past the lock step's 5 s waits, and `cores` 2.7x). On wall time one process is one core at most, and
-a control period in which several robots plan a step delays the others: 16 robots were late in 2.3 % of their
-periods in `graph`, 7.5 % in `robot` (2.5x the CPU), 0 % in `cores` (2026-11-26). So DEFAULT_LAYOUT is `graph` on
-simulated time and `cores` on wall time.
+few robots: a tick is a chain of messages through every node, cheapest inside one process. With more robots the
+work of a tick is shared by the cores: the whole launch command, 2026-11-26 (benchmarks.lock_step, fastep_route):
+
+    robots   graph     cores
+    2        4.4 s     5.4 s      (make demo's case_study_1, fastep; 24x and 20x real time)
+    4        3.5 s     3.6 s
+    6        5.3 s     4.9 s
+    16       28.4 s    21.7 s     (2.6x and 3.3x real time; `robot`, 19 processes, ran at 0.6x and starved nodes)
+
+On wall time one process is one core at most, and a control period in which several robots plan a step delays the
+others: 16 robots were late in 0.7-2.3 % of their periods in `graph`, 7.5 % in `robot` (2.5x the CPU), 0-0.7 % in
+`cores`. So default_layout is `graph` in lock step up to GRAPH_ROBOTS robots, and `cores` otherwise.
 """
 
 from __future__ import annotations
@@ -30,13 +37,13 @@ import sys
 from dataclasses import dataclass
 from typing import Any, Sequence
 
-__all__ = ['DEFAULT_LAYOUT', 'LAYOUTS', 'Member', 'command', 'default_layout', 'group', 'usable_cores']
+__all__ = ['GRAPH_ROBOTS', 'LAYOUTS', 'Member', 'command', 'default_layout', 'group', 'usable_cores']
 
 LAYOUTS = ('node', 'robot', 'graph', 'cores')
 # Nodes that watch the graph on wall time and keep a process of their own in every layout: the recorder (its exit
 # code says whether its file is complete), the Foxglove bridge (a WebSocket server, whose clients' pace is theirs).
 OBSERVERS = ('recorder', 'foxglove_bridge')
-DEFAULT_LAYOUT = {True: 'graph', False: 'cores'}   # on simulated time (lock step), on wall time
+GRAPH_ROBOTS = 4   # robots up to which `graph` is the default in lock step (above: `cores`)
 
 
 def usable_cores() -> int:
@@ -47,8 +54,10 @@ def usable_cores() -> int:
         return os.cpu_count() or 1
 
 
-def default_layout(sim_time: bool) -> str:
-    return DEFAULT_LAYOUT[sim_time]
+def default_layout(sim_time: bool, robots: int = 1) -> str:
+    """The layout fastep-launch uses unless told: on simulated time (lock step) with `robots` robots, or wall time."""
+    return 'graph' if sim_time and robots <= GRAPH_ROBOTS else 'cores'
+
 
 
 @dataclass(frozen=True)

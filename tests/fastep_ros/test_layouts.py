@@ -41,6 +41,12 @@ def test_layouts_group_the_nodes_into_processes() -> None:
     assert [(label, len(ms)) for label, ms in group('graph', members)] == [('fastep-graph', 6), ('fastep-record', 1)]
 
 
+def test_the_default_layout_is_graph_for_a_few_robots_in_lock_step_else_cores() -> None:
+    from fastep_ros.layouts import GRAPH_ROBOTS, default_layout
+    assert default_layout(True, 2) == default_layout(True, GRAPH_ROBOTS) == 'graph'
+    assert default_layout(True, GRAPH_ROBOTS + 1) == default_layout(False, 1) == default_layout(False, 16) == 'cores'
+
+
 def test_the_cores_layout_deals_the_robots_to_a_process_per_core(monkeypatch: pytest.MonkeyPatch) -> None:
     members = _members()
     monkeypatch.setattr(layouts, 'usable_cores', lambda: 2)
