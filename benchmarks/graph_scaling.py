@@ -56,7 +56,8 @@ import numpy as np
 
 from fastep_ros.executors import EXECUTORS
 from fastep_ros.layouts import LAYOUTS, Member, command, group
-from fastep_testing.graph import Graph, Helper, free_domain, isolated_env, ros_value, stop_process
+from fastep_ros.processes import ros_value
+from fastep_testing.graph import Graph, Helper, free_domain, isolated_env, stop_process
 
 ROOT = Path(__file__).resolve().parents[1]
 PERIOD = 0.05            # control period of the planners (s)

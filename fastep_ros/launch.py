@@ -1,19 +1,21 @@
 """fastep-launch: run a scenario through the live ROS 2 graph and report what every robot did.
 
     fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco|optimal|dwa] [--seed N]
-                  [--json OUT] [--plot OUT.png] [--no-clock] [--layout node|robot|graph] [--executor events|single]
+                  [--json OUT] [--plot OUT.png] [--no-clock] [--layout node|robot|graph|cores]
+                  [--executor events|single]
                   [--foxglove PORT] [--no-progress] [--verbose]   (fastep_ros.foxglove_bridge, fastep_ros.progress)
 
 Starts, in the processes --layout says (fastep_ros.layouts: each node in its own, `python -m fastep_ros.<node>
---ros-args ...`; a robot's plant and planner in one fastep-container; or every node in one): the map, then a plant
+--ros-args ...`; a robot's plant and planner in one fastep-container; every node in one; or one per CPU core;
+fastep_ros.processes), gated until it has seen no other graph on the domain: the map, then a plant
 and a planner per robot in the robot's namespace with its parameters from the scenario (the scenario's planner
 overrides included), and waits until every planner knows the world and the other robots. It then sends each
 goal on `/<name>/goal_pose`, starts the clock (simulated time at --rtf, in exact lock step: the run is the run
 fastep-sim makes, tick for tick, fastep_ros.lock_step; --no-clock runs every node on wall time instead), follows
 every `status` and `odom`, and prints one line per robot: arrived or not, the path length measured from its
-odometry, the time taken. The default layout is `graph` with the clock and `robot` on wall time
-(fastep_ros.layouts). Every process it started is stopped at the end (SIGINT, then SIGKILL after a grace period),
-also on Ctrl-C.
+odometry, the time taken. The default layout is `graph` in lock step for up to 4 robots, `cores` otherwise
+(fastep_ros.layouts). Its view of the graph is fastep_ros.monitor. Every process it started is stopped at the end
+(SIGINT, then SIGKILL after a grace period), also on Ctrl-C.
 
 Exit 0 if every robot arrived (without colliding, as measured from the odometry), 1 otherwise, 2 with one
 line on stderr for bad input, checked before anything starts: --rtf outside [0.001, 10000], a robot name ROS
@@ -24,21 +26,16 @@ written (or --json / --plot failing after the run).
 from __future__ import annotations
 
 import argparse
-import functools
 import importlib
 import json
 import math
 import os
 import signal
-import subprocess
 import sys
 import threading
 import time
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, NoReturn, Sequence
-
-import numpy as np
 
 from fastep_core.cli import Parser, fail, guard, seed, tcp_port, tcp_port_problem
 from fastep_core.dynamic_world import DynamicWorld
@@ -47,19 +44,19 @@ from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
-from fastep_ros.common import GATE_ENV
 from fastep_ros.dds_profile import PROFILE_ENV, use_discovery_profile
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import DEFAULT_EXECUTOR, EXECUTOR_ENV, EXECUTORS
-from fastep_ros.layouts import GRAPH_ROBOTS, LAYOUTS, Member, default_layout, group
+from fastep_ros.layouts import GRAPH_ROBOTS, LAYOUTS, Member, default_layout
 from fastep_ros.layouts import command as layout_command
 from fastep_ros.limits import RATE_RANGE, RTF_RANGE, graph_problem, robot_name_problem
+from fastep_ros.monitor import STOP, Monitor, RobotLive, watched_topics
+from fastep_ros.processes import Processes, ros_value
 from fastep_ros.progress import Progress
 
 __all__ = ['main']
 
 PROG = 'fastep-launch'
-GRACE = 5.0             # wall seconds a process gets to stop after SIGINT
 STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the world and the other robots
 SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
 END_WAIT = 5.0          # wall seconds the report waits at most for odometry up to the end of each robot's run
@@ -68,7 +65,6 @@ DISCOVERY_WAIT = 0.6    # wall seconds the launcher looks for another graph on i
 # (DDS showed an existing publisher to a new process after 0.3-0.45 s in most starts, up to 3.2 s in some (a
 # participant that missed the others' endpoints, fastep_ros.dds_profile): one seen later stops the launch, by the
 # checks every CONFLICT_CHECK while the nodes come up and the run goes on, and one just before the goals go out)
-CONFLICT_CHECK = 1.0    # wall seconds between looks for a graph that joined later
 
 
 def _parser() -> argparse.ArgumentParser:
@@ -106,22 +102,8 @@ def _parser() -> argparse.ArgumentParser:
 
 # ----------------------------------------------------------------------------------------------- processes
 
-def _ros_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return 'true' if value else 'false'
-    if isinstance(value, int):
-        return str(value)
-    if isinstance(value, float):
-        return repr(float(value))
-    if isinstance(value, (list, tuple)):
-        if all(isinstance(v, str) for v in value):
-            return '[' + ', '.join(value) + ']'
-        return '[' + ', '.join(_ros_value(float(v)) for v in value) + ']'
-    return str(value)
-
-
 def _command(module: str, namespace: str, params: dict[str, Any], verbose: bool) -> list[str]:
-    return layout_command([Member(module, module, namespace, params)], 'info' if verbose else 'warn', _ros_value)
+    return layout_command([Member(module, module, namespace, params)], 'info' if verbose else 'warn', ros_value)
 
 
 def _planner_overrides(params: PlannerParams) -> dict[str, Any]:
@@ -169,354 +151,7 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
     return out
 
 
-class Processes:
-    """The child processes of one launch; stop() ends every one of them.
-
-    start() adds a node; with the `node` layout it starts at once in a process of its own, otherwise when launch()
-    starts every process of the layout (fastep_ros.layouts). `items` has one (label, process) per node, so a node
-    shares its container's process with the others in it."""
-
-    def __init__(self, verbose: bool, layout: str = 'node', executor: str | None = None) -> None:
-        self.verbose = verbose
-        self.layout = layout
-        self.items: list[tuple[str, subprocess.Popen[bytes]]] = []
-        self.pending: list[Member] = []
-        self.opened = False   # open_gates() was called
-        self.labels: dict[int, str] = {}   # process id -> its label (a container's: fastep-robot /r1, fastep-graph)
-        self.env = dict(os.environ)
-        root = str(Path(__file__).resolve().parent.parent)
-        self.env['PYTHONPATH'] = os.pathsep.join(p for p in (root, self.env.get('PYTHONPATH', '')) if p)
-        self.env['FASTEP_PARENT_PID'] = str(os.getpid())
-        self.env[GATE_ENV] = '1'   # each process imports, then waits for open_gates() before it joins DDS
-        self.env.setdefault('PYTHONUNBUFFERED', '1')
-        # A process's numpy would start a BLAS thread per core that spins after each call (5 % of the CPU of a
-        # lock-step run in perf); the nodes' arrays are small.
-        self.env.setdefault('OPENBLAS_NUM_THREADS', '1')
-        if executor is not None:
-            self.env[EXECUTOR_ENV] = executor
-
-    def start(self, label: str, module: str, namespace: str, params: dict[str, Any]) -> None:
-        self.pending.append(Member(label, module, namespace, params))
-        if self.layout == 'node':
-            self.launch()
-
-    def launch(self) -> None:
-        """Start the processes of the nodes added since the last call, grouped as the layout says."""
-        pending, self.pending = self.pending, []
-        for label, members in group(self.layout, pending):
-            cmd = layout_command(members, 'info' if self.verbose else 'warn', _ros_value)
-            # A new session: Ctrl-C in a terminal reaches only the launcher, which then stops the nodes in order.
-            proc = subprocess.Popen(cmd, env=self.env, stdin=subprocess.PIPE, start_new_session=True)
-            self.labels[proc.pid] = label
-            self.items += [(m.label, proc) for m in members]
-            if self.opened:
-                self._open(proc)
-
-    def open_gates(self) -> None:
-        """Let every process started so far (and from now on at once) join DDS (fastep_ros.common.GATE_ENV)."""
-        self.opened = True
-        for proc in self.processes():
-            self._open(proc)
-
-    @staticmethod
-    def _open(proc: subprocess.Popen[bytes], go: bool = True) -> None:
-        """Write the process its line (or, not `go`, just end its stdin: it exits without starting)."""
-        if proc.stdin is None or proc.stdin.closed:
-            return
-        try:
-            if go:
-                proc.stdin.write(b'\n')
-            proc.stdin.close()
-        except OSError:   # it is gone already
-            pass
-
-    def processes(self) -> list[subprocess.Popen[bytes]]:
-        return list({proc.pid: proc for _, proc in self.items}.values())
-
-    def dead(self) -> list[tuple[str, int]]:
-        return [(self.labels[proc.pid], proc.returncode) for proc in self.processes() if proc.poll() is not None]
-
-    def stop(self) -> None:
-        """SIGINT every process (the clock first, so time stops before the nodes do), SIGKILL after GRACE; a process
-        still at its gate is let go without starting."""
-        for proc in self.processes():
-            self._open(proc, go=False)
-        clocks = [proc for proc in self.processes() if self.labels[proc.pid] == 'fastep-clock']
-        others = [proc for proc in reversed(self.processes()) if self.labels[proc.pid] != 'fastep-clock']
-        self._interrupt(clocks, GRACE / 2)
-        self._interrupt(others, GRACE)
-
-    @staticmethod
-    def _interrupt(procs: list[subprocess.Popen[bytes]], grace: float) -> None:
-        for proc in procs:
-            if proc.poll() is None:
-                try:
-                    proc.send_signal(signal.SIGINT)
-                except ProcessLookupError:
-                    pass
-        deadline = time.monotonic() + grace
-        for proc in procs:
-            try:
-                proc.wait(timeout=max(0.05, deadline - time.monotonic()))
-            except subprocess.TimeoutExpired:
-                proc.kill()
-                proc.wait()
-
-
-# ----------------------------------------------------------------------------------------------- monitoring
-
-@dataclass
-class RobotLive:
-    spec: RobotSpec
-    status: dict[str, Any] = field(default_factory=dict)
-    rows: list[list[float]] = field(default_factory=list)   # [t, x, y] or [t, x, y, theta0, theta1]
-    trailer: float = 0.0
-    outcome: str = ''           # '' while running; 'arrived' / 'failed' / 'timeout'
-    reason: str = ''
-    end_time: float | None = None
-    started_at: float | None = None   # planner time of its first status after taking the goal
-    activations: int = 0
-    escapes: int = 0
-    manoeuvres: int = 0
-    waypoints: list[list[float]] = field(default_factory=list)
-
-    @property
-    def path_length(self) -> float:
-        if len(self.rows) < 2:
-            return 0.0
-        xy = np.array([r[1:3] for r in self.rows])
-        return float(np.hypot(*np.diff(xy, axis=0).T).sum())
-
-
-class Monitor:
-    """An rclpy node inside the launcher: sends goals, follows status and odometry of every robot."""
-
-    def __init__(self, scenario: Scenario) -> None:
-        import rclpy
-        from nav_msgs.msg import Odometry
-        from rclpy.serialization import deserialize_message
-        from rclpy.signals import SignalHandlerOptions
-
-        from fastep_ros.executors import make_executor
-        from msg_tools import cdr, convert
-
-        self.convert, self.cdr = convert, cdr
-        self.deserialize, self.odometry_type = deserialize_message, Odometry
-        self.odometry: list[tuple[RobotLive, Any]] = []   # (robot, its polled odometry subscription)
-        self.rclpy = rclpy
-        self.context = rclpy.Context()
-        rclpy.init(args=[], context=self.context, signal_handler_options=SignalHandlerOptions.NO)
-        # Wall time: simulated time is read from /clock by follow_clock(), once the goals are in.
-        self.node = rclpy.create_node('fastep_launch', context=self.context)
-        self.sim_now: float | None = None
-        # The node's executor (fastep_ros.executors): a SingleThreadedExecutor rebuilt its wait set of every robot's
-        # status, plan and goal endpoints in Python at each wake-up, one per lock-step tick (~0.5 ms of CPU each).
-        self.executor = make_executor(None, context=self.context)
-        self.executor.add_node(self.node)
-        self.robots = {spec.name: RobotLive(spec) for spec in scenario.robots}
-        self.goal_pubs: dict[str, Any] = {}
-        self.recorded: dict[str, str] = {}
-        # topic -> publishers this launch puts on it: more are another graph's.
-        self.expected: dict[str, int] = {topic: 0 for topic in watched_topics(scenario)}
-        self.checked = -math.inf   # monotonic time of the last look for another graph
-
-    def connect(self) -> None:
-        """The monitor's own endpoints: goal publishers, status / odometry / plan subscriptions."""
-        from diagnostic_msgs.msg import DiagnosticStatus
-        from geometry_msgs.msg import PoseStamped
-        from nav_msgs.msg import Odometry
-        from nav_msgs.msg import Path as PathMsg
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
-        from rosgraph_msgs.msg import Clock
-
-        from msg_tools import interface
-        from msg_tools.interface import LATCHED, RELIABLE, offered_qos, robot_topic
-
-        # In lock step the clock waits for this monitor's acknowledgement of each tick, or at a high rtf its odometry
-        # queue fell behind the graph and messages were lost (a shorter path, a late arrival).
-        self.ack_pub = self.node.create_publisher(Clock, interface.CLOCK_ACK, RELIABLE)
-        # What fastep-record (started as /recorder) has received: topic -> message count.
-        self.node.create_subscription(DiagnosticStatus, '/recorder/' + interface.RECORDING.removeprefix('~/'),
-                                      self.on_recording, interface.STATUS_QOS)
-        from fastep_ros.polled import polled
-
-        depth = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)  # every odometry message
-        for name, robot in self.robots.items():
-            # Latched, so a planner restarted mid-run gets its goal again (it subscribes to latched goals too).
-            self.goal_pubs[name] = self.node.create_publisher(PoseStamped, robot_topic(name, interface.GOAL_POSE),
-                                                              LATCHED)
-            self.node.create_subscription(DiagnosticStatus, robot_topic(name, interface.STATUS),
-                                          functools.partial(self.on_status, robot), offered_qos(interface.STATUS))
-            # Taken in bulk (drain: at each /clock before it is acknowledged, and at each spin), read from the
-            # bytes: an executor wake-up per message cost ~2 ms here and set the pace of a lock step it is part of.
-            topic = robot_topic(name, interface.ODOM)
-            taken = polled(self.node, Odometry, topic, depth, raw=True)
-            if taken is not None:
-                self.odometry.append((robot, taken))
-            else:
-                self.node.create_subscription(Odometry, topic, functools.partial(self.on_odom, robot), depth)
-            self.node.create_subscription(PathMsg, robot_topic(name, interface.PLAN),
-                                          functools.partial(self.on_plan, robot), RELIABLE)
-            if robot.spec.model == 'tractor_trailer':
-                self.node.create_subscription(PoseStamped, robot_topic(name, interface.TRAILER_POSE),
-                                              functools.partial(self.on_trailer, robot), depth)
-
-    def other_graph(self, launchers: bool = False) -> str:
-        """What shows another graph on this domain ('' if nothing): more publishers on /clock, /obstacles, /map or
-        a robot's topics than this launch puts there (self.expected), and with `launchers` another fastep-launch.
-        (Only before this launch starts its nodes: a second launch that looks and refuses must not stop a first
-        one that runs.)"""
-        found = []
-        if launchers and [n for n, ns in self.node.get_node_names_and_namespaces()
-                          if n == self.node.get_name() and ns == '/'][1:]:
-            found.append('another fastep-launch')
-        for topic, count in self.expected.items():
-            have = self.node.count_publishers(topic)
-            if have > count:
-                found.append(f'{topic} ({have} publishers{f", {count} of them this launch" if count else ""})')
-        return ', '.join(found)
-
-    def check_alone(self, launchers: bool = False, now: bool = False) -> None:
-        """Once every CONFLICT_CHECK wall seconds (or `now`): a GraphConflict if another graph shares the domain."""
-        if time.monotonic() - self.checked < CONFLICT_CHECK and not (launchers or now):
-            return
-        self.checked = time.monotonic()
-        found = self.other_graph(launchers)
-        if found:
-            domain = os.environ.get('ROS_DOMAIN_ID', '0')
-            raise GraphConflict(f'another ROS graph shares ROS_DOMAIN_ID {domain}: {found}; the runs would mix '
-                                f'their robots and clocks (stop it, or give each launch its own ROS_DOMAIN_ID)')
-
-    def follow_clock(self) -> None:
-        """Subscribe to /clock: the clock, holding the start time until all its subscribers are there,
-        starts when this last one joins."""
-        from rclpy.qos import QoSProfile, ReliabilityPolicy
-        from rosgraph_msgs.msg import Clock
-
-        from msg_tools.interface import CLOCK
-
-        def on_clock(msg: Any) -> None:
-            self.sim_now = max(self.sim_now or 0.0, self.convert.stamp_to_seconds(msg.clock))
-            self.drain()
-            self.ack_pub.publish(msg)   # lock step: the clock waits for this monitor too (it must see every tick)
-        self.node.create_subscription(Clock, CLOCK, on_clock,
-                                      QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
-
-    def now(self) -> float:
-        """Simulated time once /clock is followed (0 before its first message; the latest of /clock and the
-        odometry stamps), wall time otherwise."""
-        if self.sim_now is not None:
-            return self.sim_now
-        return self.node.get_clock().now().nanoseconds * 1e-9
-
-    def spin(self, seconds: float) -> None:
-        """Handle every callback that comes in for `seconds` (spin_once alone handles one, and falls behind)."""
-        end = time.monotonic() + seconds
-        self.executor.spin_once(timeout_sec=seconds)
-        while (left := end - time.monotonic()) > 0 and not STOP.is_set():
-            self.executor.spin_once(timeout_sec=left)
-        self.drain()
-        if STOP.is_set():
-            raise KeyboardInterrupt   # here, between spins: never from inside rclpy (see _request_stop)
-
-    def close(self) -> None:
-        for _, subscription in self.odometry:
-            subscription.destroy()
-        self.odometry.clear()
-        self.executor.shutdown(timeout_sec=1.0)
-        self.node.destroy_node()
-        self.rclpy.try_shutdown(context=self.context)
-
-    def on_status(self, robot: RobotLive, msg: Any) -> None:
-        robot.status = self.convert.diagnostic_to_dict(msg)
-        if robot.started_at is None and robot.status.get('message') in ('kinematic', 'avoiding'):
-            try:
-                robot.started_at = float(robot.status.get('since', robot.status['t']))
-            except (KeyError, ValueError):
-                pass
-        for key in ('activations', 'escapes', 'manoeuvres'):
-            try:
-                setattr(robot, key, int(robot.status.get(key, 0)))
-            except ValueError:
-                pass
-
-    def on_recording(self, msg: Any) -> None:
-        self.recorded = self.convert.diagnostic_to_dict(msg)
-
-    def drain(self) -> None:
-        """Take every odometry message received (polled subscriptions, no wake-up per message)."""
-        for robot, subscription in self.odometry:
-            for data in subscription.take_all():
-                self.on_odom(robot, data)
-
-    def on_odom(self, robot: RobotLive, msg: Any) -> None:
-        """Odometry (a message, or its CDR bytes) into the robot's rows."""
-        if isinstance(msg, bytes):
-            try:
-                fields = self.cdr.odometry_fields(msg)
-                sec, nanosec = self.cdr.header_stamp(msg)
-            except ValueError:   # cut off
-                return
-            if fields is None:   # not little-endian CDR
-                msg = self.deserialize(msg, self.odometry_type)
-            else:
-                x, y, qx, qy, qz, qw = fields[:6]
-                self.add_row(robot, sec + nanosec * 1e-9, x, y, (qx, qy, qz, qw))
-                return
-        q = msg.pose.pose.orientation
-        self.add_row(robot, self.convert.stamp_to_seconds(msg.header.stamp), msg.pose.pose.position.x,
-                     msg.pose.pose.position.y, (q.x, q.y, q.z, q.w))
-
-    def add_row(self, robot: RobotLive, t: float, x: float, y: float,
-                orientation: tuple[float, float, float, float]) -> None:
-        if not (math.isfinite(x) and math.isfinite(y)):
-            return
-        if self.sim_now is not None:
-            # Odometry is stamped with simulated time and comes reliably; /clock is best effort, and on a loaded
-            # machine this monitor has gone 30 s without a /clock message while the robots drove on (it then
-            # took the run for stalled). Either shows that time goes on.
-            self.sim_now = max(self.sim_now, t)
-        if robot.rows and t <= robot.rows[-1][0]:
-            return
-        if robot.spec.model in ('tractor_trailer', 'diff_drive'):
-            try:
-                yaw = self.convert.yaw_of(*orientation)
-            except ValueError:
-                return
-            # rows [t, x, y, theta] for a diff drive, as fastep-sim's, and [t, x, y, theta0, theta1]
-            robot.rows.append([t, x, y, yaw, robot.trailer] if robot.spec.model == 'tractor_trailer' else
-                              [t, x, y, yaw])
-        else:
-            robot.rows.append([t, x, y])
-
-    def on_trailer(self, robot: RobotLive, msg: Any) -> None:
-        try:
-            robot.trailer = self.convert.trailer_yaw(msg)
-        except ValueError:
-            pass
-
-    def on_plan(self, robot: RobotLive, msg: Any) -> None:
-        points = self.convert.path_to_waypoints(msg)
-        robot.waypoints = [list(p) for p in points[:-1]]  # the last pose is the goal
-
-    def send_goals(self) -> None:
-        for name, robot in self.robots.items():
-            goal = self.convert.point_to_pose_stamped(robot.spec.goal, self.node.get_clock().now().to_msg())
-            self.goal_pubs[name].publish(goal)
-
-
 # ----------------------------------------------------------------------------------------------- the run
-
-def watched_topics(scenario: Scenario, sim_time: bool = True) -> dict[str, int]:
-    """The topics another graph on the domain would be seen on, and how many publishers this launch puts there."""
-    from msg_tools.interface import CLOCK, CMD_VEL, GOAL_POSE, MAP, OBSTACLES, ODOM, STATUS, TRAILER_POSE, robot_topic
-
-    out = {CLOCK: int(sim_time), OBSTACLES: 1, MAP: 1}
-    for spec in scenario.robots:
-        topics = (ODOM, CMD_VEL, GOAL_POSE, STATUS) + ((TRAILER_POSE,) if spec.model == 'tractor_trailer' else ())
-        out.update((robot_topic(spec.name, topic), 1) for topic in topics)
-    return out
-
 
 def _alone(monitor: Monitor) -> None:
     """Refuse to start beside another graph: look for one for DISCOVERY_WAIT (DDS takes a moment to see it)."""
@@ -831,10 +466,6 @@ def report(args: argparse.Namespace, scenario: Scenario, monitor: Monitor, t0: f
         fail(PROG, f'cannot write output: {exc}')
         return any(r.collided for r in runs), False
     return any(r.collided for r in runs), True
-
-
-STOP = threading.Event()
-"""Set by Ctrl-C or SIGTERM: the run stops at the monitor's next spin and stops every node."""
 
 
 def _request_stop(signum: int, frame: Any) -> None:

@@ -22,6 +22,8 @@ import time
 from pathlib import Path
 from typing import Any, Callable
 
+from fastep_ros.processes import ros_value
+
 ROOT = Path(__file__).resolve().parents[1]  # the repository root
 _domains = itertools.count()
 
@@ -128,18 +130,6 @@ def isolated_env(domain: int, log_dir: Path) -> dict[str, str]:
     env['PYTHONPATH'] = os.pathsep.join(p for p in (str(ROOT), env.get('PYTHONPATH', '')) if p)
     env.pop('ROS_LOCALHOST_ONLY', None)
     return env
-
-
-def ros_value(value: Any) -> str:
-    if isinstance(value, bool):
-        return 'true' if value else 'false'
-    if isinstance(value, float):
-        return repr(value)
-    if isinstance(value, (list, tuple)):
-        if all(isinstance(v, str) for v in value):
-            return '[' + ', '.join(value) + ']'
-        return '[' + ', '.join(repr(float(v)) for v in value) + ']'
-    return str(value)
 
 
 class Graph:

@@ -21,8 +21,10 @@ from fastep_core.scenario import load_scenario
 from fastep_core.world import World
 from fastep_ros import launch
 from fastep_ros.clock import tick_plan
+from fastep_ros.monitor import Monitor
 from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
+from fastep_ros.processes import ros_value
 from fastep_testing.graph import free_domain
 from fastep_testing.published import keep_published
 from msg_tools import convert
@@ -300,7 +302,7 @@ def test_launch_passes_the_scenario_to_the_nodes() -> None:
     tiny = load_scenario('table2_s1')
     overrides = launch._planner_overrides(tiny.planner.with_overrides({'max_speed': 2.0, 'c': 1e-5}))
     assert overrides == {'max_speed': 2.0, 'c': 1e-5, 'min_approach_speed': 0.0}   # Table 2: the paper's gains
-    assert launch._ros_value(1e-5) == '1e-05' and launch._ros_value([5, 25]) == '[5.0, 25.0]'
+    assert ros_value(1e-5) == '1e-05' and ros_value([5, 25]) == '[5.0, 25.0]'
 
 
 def test_launch_monitor_keeps_time_from_odometry_when_clock_messages_are_lost(
@@ -309,7 +311,7 @@ def test_launch_monitor_keeps_time_from_odometry_when_clock_messages_are_lost(
     # and gave the run up as stalled. Odometry stamps (reliable) carry simulated time too.
     monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain()))
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monitor = launch.Monitor(load_scenario('table2_s1'))
+    monitor = Monitor(load_scenario('table2_s1'))
     try:
         monitor.follow_clock()
         monitor.sim_now = 0.0
