@@ -105,7 +105,9 @@ class Route:
 
     def remaining(self, position: FloatArray) -> float:
         """Route length left from position (via the vertex last in sight)."""
-        return math.hypot(*(self.stacked[self.index] - position)) + float(self.rest[self.index])
+        vertex = self.vertices[self.index]   # in floats: called every tick, numpy's per-call cost was most of it
+        return math.hypot(float(vertex[0]) - float(position[0]), float(vertex[1]) - float(position[1])) + \
+            float(self.rest[self.index])
 
     def in_sight(self, position: FloatArray, radius: float, margin: float) -> int | None:
         """The index of the farthest route vertex in sight from position (and `index` moves there); None when no
