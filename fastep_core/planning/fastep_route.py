@@ -235,8 +235,12 @@ class FAStepRoute(FAStepKinematic):
         """
         start = time.perf_counter()
         path = super().exact_path(position, others)
-        if path is not None and not self.model.turns_in_place and path.clearance > self.clearance:
-            assert self.goal is not None
+        assert self.goal is not None
+        # No path is shorter than the straight line: a roomy path within TURN_ROOM_SLACK of it (with a rounding
+        # margin far beyond the floats' error) is taken whatever the tight one would be, so that one is not searched.
+        straight = math.hypot(float(self.goal[0]) - float(position[0]), float(self.goal[1]) - float(position[1]))
+        if path is not None and not self.model.turns_in_place and path.clearance > self.clearance and \
+                path.length > (1.0 + TURN_ROOM_SLACK) * straight * (1.0 - 1e-9):
             roomy_world = self.path_world
             tight, tight_world = robot_path(self.world, others, position, self.goal, self.radius, self.params)
             if tight is not None and path.length > (1.0 + TURN_ROOM_SLACK) * tight.length:

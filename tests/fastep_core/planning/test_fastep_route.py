@@ -242,3 +242,35 @@ def test_in_sight_kept_while_proven_answers_as_measuring_every_time(seed):
             answers += 1
             position = position + rng.normal(0.0, 0.02, 2)
     assert 0 < proven < answers   # both paths taken
+
+
+@pytest.mark.parametrize('world_kind', ['open', 'one circle near the line', 'wall across'])
+def test_tractor_route_skips_the_tight_search_only_where_the_roomy_route_wins_anyway(world_kind, monkeypatch):
+    """A robot that cannot turn in place searches the route without turn room only when the roomy one is more than
+    TURN_ROOM_SLACK longer than the straight line: the route (and the world it was planned in) is the one that
+    searching both always gives."""
+    from fastep_core.planning import fastep_route as route_module
+    from fastep_core.planning.exact_path import robot_path
+    obstacles = {'open': [], 'one circle near the line': [Circle((25.0, 26.2), 1.0)],
+                 'wall across': [Segment((25.0, 10.0), (25.0, 40.0)), Circle((30.0, 22.0), 1.5)]}[world_kind]
+    world = World.from_obstacles([0, 0, 50, 50], obstacles)
+    spec = RobotSpec('r1', 'tractor_trailer', (5.0, 25.0, 0.0, 0.0), (45.0, 25.0), 0.6)
+    position = np.array([5.0, 25.0])
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs.get('turn_room', False))
+        return robot_path(*args, **kwargs)
+
+    monkeypatch.setattr(route_module, 'robot_path', counted)
+    nav = make_navigator('fastep_route', spec, 0.6, world, PlannerParams(), 0)
+    nav.set_goal((45.0, 25.0))
+    path = nav.exact_path(position)
+    roomy, roomy_world = robot_path(world, (), position, nav.goal, 0.6, nav.params, turn_room=True)
+    tight, tight_world = robot_path(world, (), position, nav.goal, 0.6, nav.params)
+    both = tight if tight is not None and roomy.length > (1.0 + route_module.TURN_ROOM_SLACK) * tight.length else roomy
+    assert path is not None and path.length == both.length and np.array_equal(path.points, both.points)
+    assert nav.path_world is (tight_world if both is tight else roomy_world)
+    searched_tight = len(calls) == 1
+    assert searched_tight == (roomy.length > (1.0 + route_module.TURN_ROOM_SLACK) * 40.0 * (1.0 - 1e-9))
+    assert searched_tight == (world_kind == 'wall across')
