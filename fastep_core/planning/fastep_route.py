@@ -49,6 +49,7 @@ from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
+from numpy.typing import NDArray
 
 from fastep_core.geometry import point_segment_distance
 from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason, robot_path
@@ -65,6 +66,9 @@ MOVED = 0.5             # m: a robot the route was planned round has moved away 
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
 TURN_ROOM_SLACK = 0.03  # a robot that cannot turn in place takes the route with turn room if at most 3 % longer
+SightProof = tuple[int, float, float, float, float, float, int | None]
+"""An answer of Route.in_sight proven: the index it was asked at, the position (x, y), radius and margin, how far
+the robot may move while it holds, and the answer."""
 
 
 @dataclass
@@ -79,11 +83,20 @@ class Route:
     index: int = 0               # the vertex in sight farthest along the route, last time it was looked for
     stacked: FloatArray = field(init=False, repr=False)   # the vertices as one (n, 2) array
     rest: FloatArray = field(init=False, repr=False)      # route length from each vertex to the goal
+    ahead: NDArray[np.intp] = field(init=False, repr=False)   # vertices tested for sight from each index
+    # What in_sight measured, kept while it is proven (see in_sight): its last answer that left `index` where it
+    # was, and the robot's clearance with where it was measured (x, y, clearance).
+    sight_proof: SightProof | None = field(default=None, init=False, repr=False)
+    clearance_at: tuple[float, float, float] | None = field(default=None, init=False, repr=False)
 
     def __post_init__(self) -> None:
         self.stacked = np.array(self.vertices, dtype=float).reshape(-1, 2)
         legs = np.hypot(*np.diff(self.stacked, axis=0).T)
         self.rest = np.concatenate([np.cumsum(legs[::-1])[::-1], [0.0]])
+        # The vertices within SIGHT metres of route from each one (SIGHT_VERTICES at most; 2 however far): rest
+        # never grows along the route (sums of legs), so one search over all of it counts those of each suffix.
+        within_sight = np.searchsorted(-self.rest, -(self.rest - SIGHT), side='right') - np.arange(len(self.rest))
+        self.ahead = np.maximum(2, np.minimum(SIGHT_VERTICES, within_sight))
 
     @classmethod
     def from_path(cls, path: OptimalPath, world: World, base: World, parked: FloatArray) -> Route:
@@ -92,7 +105,9 @@ class Route:
 
     def remaining(self, position: FloatArray) -> float:
         """Route length left from position (via the vertex last in sight)."""
-        return math.hypot(*(self.stacked[self.index] - position)) + float(self.rest[self.index])
+        vertex = self.vertices[self.index]   # in floats: called every tick, numpy's per-call cost was most of it
+        return math.hypot(float(vertex[0]) - float(position[0]), float(vertex[1]) - float(position[1])) + \
+            float(self.rest[self.index])
 
     def in_sight(self, position: FloatArray, radius: float, margin: float) -> int | None:
         """The index of the farthest route vertex in sight from position (and `index` moves there); None when no
@@ -107,30 +122,63 @@ class Route:
         Of the vertices ahead (within SIGHT metres of route, SIGHT_VERTICES at most) the first one in sight and
         the run of vertices in sight after it count; the last of that run is the farthest. The first of them is
         the one aimed at so far, which stays in sight down to a quarter margin less (hysteresis).
+
+        The answer is what measuring every run gives, but measurements are skipped while they are proven: a
+        point's distance to an obstacle surface, and a run's (its far end fixed), change by at most the distance
+        the robot moved. So the robot's clearance is measured only when it may have come below the usual
+        threshold, and an answer that left `index` where it was is kept while the robot has moved less than its
+        room: the clearance stays on the same side of the usual threshold (and `within` moves by less than the
+        robot did), and no run can cross its threshold while the robot moves less than half its distance from
+        it. The rooms are shortened by a rounding margin far beyond the floats' own error (1e-6 m, relative to
+        the coordinates' size), as in Navigator.obstacles_on_run.
         """
-        ahead = self.rest[self.index:]
-        count = min(SIGHT_VERTICES, int(np.searchsorted(-ahead, -(ahead[0] - SIGHT), side='right')))
-        candidates = self.stacked[self.index:self.index + max(2, count)]   # the next vertex, however far
+        x, y = float(position[0]), float(position[1])
+        proof = self.sight_proof
+        if proof is not None and proof[0] == self.index and proof[3] == radius and proof[4] == margin and \
+                math.hypot(x - proof[1], y - proof[2]) < proof[5]:
+            return proof[6]
+        self.sight_proof = None
+        candidates = self.stacked[self.index:self.index + int(self.ahead[self.index])]   # the next one, however far
         obstacles = self.world.obstacles
         within = max(self.keep - 0.5 * margin, min(radius + 0.5 * margin, self.keep - 1e-3))
-        if len(obstacles):
-            here = float(obstacles.clearance(position))
-            if here < within:
-                within = min(within - 0.25 * margin, here) - 1e-6
+        if not len(obstacles):
+            seen = np.ones(len(candidates), dtype=bool)
+        else:
+            slack = 1e-6 * (1.0 + max(abs(x), abs(y), float(np.abs(candidates).max()), obstacles.scale))
+            usual = within
+            # The branch below is decided by the robot's clearance; `margin_of_branch` is how far it is (at
+            # least) from the usual threshold, which is what the answer's room starts from.
+            known = self.clearance_at
+            least = -math.inf if known is None else known[2] - math.hypot(x - known[0], y - known[1])
+            if least - slack > usual:
+                margin_of_branch = least - usual
+            else:
+                here = float(obstacles.clearance(position))
+                self.clearance_at = (x, y, here)
+                margin_of_branch = abs(here - usual)
+                if here < within:
+                    within = min(within - 0.25 * margin, here) - 1e-6
             runs = obstacles.fan_clearance(position, candidates)
             seen = runs >= within
             # The vertex aimed at so far (the first candidate) stays in sight a quarter margin longer: the robot
             # drives the run to it, which keeps what it kept, give or take a rounding error or a trailer's curve.
-            seen[0] = runs[0] >= within - 0.25 * margin
-        else:
-            seen = np.ones(len(candidates), dtype=bool)
+            first_within = within - 0.25 * margin
+            seen[0] = runs[0] >= first_within
         if not seen.any():
-            return None
-        first = int(np.argmax(seen))
-        hidden = np.flatnonzero(~seen[first:])
-        last = first + (int(hidden[0]) - 1 if len(hidden) else len(seen) - first - 1)
-        self.index += last
-        return self.index
+            answer, last = None, 0
+        else:
+            first = int(np.argmax(seen))
+            hidden = np.flatnonzero(~seen[first:])
+            last = first + (int(hidden[0]) - 1 if len(hidden) else len(seen) - first - 1)
+            self.index += last
+            answer = self.index
+        if last == 0 and len(obstacles):
+            gaps = np.abs(runs - within)
+            gaps[0] = abs(float(runs[0]) - first_within)
+            room = min(margin_of_branch, 0.5 * float(gaps.min())) - slack
+            if room > 0.0 and math.isfinite(room):
+                self.sight_proof = (self.index, x, y, radius, margin, room, answer)
+        return answer
 
     def passing(self, position: FloatArray, tolerance: float) -> None:
         """Aim past the vertices within `tolerance` of position (a vertex counts as passed, as any waypoint):
@@ -187,8 +235,12 @@ class FAStepRoute(FAStepKinematic):
         """
         start = time.perf_counter()
         path = super().exact_path(position, others)
-        if path is not None and not self.model.turns_in_place and path.clearance > self.clearance:
-            assert self.goal is not None
+        assert self.goal is not None
+        # No path is shorter than the straight line: a roomy path within TURN_ROOM_SLACK of it (with a rounding
+        # margin far beyond the floats' error) is taken whatever the tight one would be, so that one is not searched.
+        straight = math.hypot(float(self.goal[0]) - float(position[0]), float(self.goal[1]) - float(position[1]))
+        if path is not None and not self.model.turns_in_place and path.clearance > self.clearance and \
+                path.length > (1.0 + TURN_ROOM_SLACK) * straight * (1.0 - 1e-9):
             roomy_world = self.path_world
             tight, tight_world = robot_path(self.world, others, position, self.goal, self.radius, self.params)
             if tight is not None and path.length > (1.0 + TURN_ROOM_SLACK) * tight.length:

@@ -29,6 +29,24 @@ class OtherRobot:
     mover: bool = False   # a moving obstacle that does not plan or give way (planning/yielding.py), not a robot
 
 
+class TickArrays:
+    """Positions (n, 2), velocities (n, 2) and radii (n,) of every robot of one tick, made once, when first asked."""
+
+    __slots__ = ('_robots', '_arrays')
+
+    def __init__(self, robots: Sequence[OtherRobot]) -> None:
+        self._robots = robots
+        self._arrays: tuple[FloatArray, FloatArray, FloatArray] | None = None
+
+    def get(self) -> tuple[FloatArray, FloatArray, FloatArray]:
+        if self._arrays is None:
+            robots = self._robots
+            self._arrays = (np.array([o.position for o in robots], dtype=float).reshape(-1, 2),
+                            np.array([o.velocity for o in robots], dtype=float).reshape(-1, 2),
+                            np.array([o.radius for o in robots], dtype=float))
+        return self._arrays
+
+
 class OtherRobots(Sequence[OtherRobot]):
     """Every robot of one tick but one, as a sequence of OtherRobot, sharing the tick's arrays.
 
@@ -38,7 +56,7 @@ class OtherRobots(Sequence[OtherRobot]):
     view leaves its own row out.
     """
 
-    def __init__(self, robots: Sequence[OtherRobot], skip: int, arrays: tuple[FloatArray, FloatArray, FloatArray],
+    def __init__(self, robots: Sequence[OtherRobot], skip: int, arrays: TickArrays,
                  movers: Sequence[OtherRobot] | None = None):
         self._robots, self._skip, self._all = robots, skip, arrays
         self._arrays: tuple[FloatArray, FloatArray, FloatArray] | None = None
@@ -47,11 +65,9 @@ class OtherRobots(Sequence[OtherRobot]):
     @classmethod
     def views(cls, robots: Sequence[OtherRobot], viewers: int | None = None) -> list[OtherRobots]:
         """For each of the first `viewers` entries (default: all), the others: views of one shared list and one
-        set of arrays. Entries after the viewers are seen by every viewer but see nothing themselves (moving
-        obstacles, fastep_core/dynamic_world.py)."""
-        arrays = (np.array([o.position for o in robots], dtype=float).reshape(-1, 2),
-                  np.array([o.velocity for o in robots], dtype=float).reshape(-1, 2),
-                  np.array([o.radius for o in robots], dtype=float))
+        set of arrays (made when a view first needs them: a robot alone never does). Entries after the viewers
+        are seen by every viewer but see nothing themselves (moving obstacles, fastep_core/dynamic_world.py)."""
+        arrays = TickArrays(robots)
         movers = [o for o in robots if o.mover]
         return [cls(robots, i, arrays, movers) for i in range(len(robots) if viewers is None else viewers)]
 
@@ -86,14 +102,14 @@ class OtherRobots(Sequence[OtherRobot]):
         """Positions (n, 2), velocities (n, 2) and radii (n,) of the others, made once."""
         if self._arrays is None:
             i = self._skip
-            positions, velocities, radii = (np.concatenate([a[:i], a[i + 1:]]) for a in self._all)
+            positions, velocities, radii = (np.concatenate([a[:i], a[i + 1:]]) for a in self._all.get())
             self._arrays = positions, velocities, radii
         return self._arrays
 
     @property
     def finite(self) -> bool:
-        """Are all the positions finite (the navigator drops the others)?"""
-        return bool(np.isfinite(self.arrays[0]).all())
+        """Are all the positions finite (the navigator drops the others)? True with no others (a robot alone)."""
+        return len(self._robots) <= 1 or bool(np.isfinite(self.arrays[0]).all())
 
 
 def other_arrays(others: Sequence[OtherRobot]) -> tuple[FloatArray, FloatArray, FloatArray]:

@@ -87,3 +87,30 @@ def test_minimum_speed_arrives_sooner_on_the_same_path(start, target):
         assert k_fast * 0.05 <= 6.0 < k_paper * 0.05
     assert np.degrees(np.abs([hitch_angle(s) for s in fast[200:k_fast + 1]])).max(initial=0.0) < 80.0
 
+
+
+def test_integrate_in_floats_is_the_array_form_bit_for_bit():
+    """integrate() and velocity() compute in floats what the array form of the RK4 step computes on each element,
+    in the same order: the same floats (wound-up headings, which are normalised first, included)."""
+    import fastep_core.kinematics.tractor_trailer as tt
+
+    def array_form(model, state, command, dt):
+        s = np.asarray(state, dtype=float)
+        if abs(s[2]) > tt.HEADING_LIMIT or abs(s[3]) > tt.HEADING_LIMIT:
+            s = np.array([s[0], s[1], tt.wrap_angle(float(s[2])), tt.wrap_angle(float(s[3]))])
+        k1 = model.derivative(s, command)
+        k2 = model.derivative(s + 0.5 * dt * k1, command)
+        k3 = model.derivative(s + 0.5 * dt * k2, command)
+        k4 = model.derivative(s + dt * k3, command)
+        return s + dt / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+    rng = np.random.default_rng(7)
+    for model in (tt.TractorTrailer(), tt.TractorTrailer(1.3, 0.7, 0.25)):
+        for k in range(3000):
+            state = rng.normal(size=4) * np.array([30.0, 30.0, 4.0, 4.0])
+            if k % 100 == 0:
+                state[2 + k % 2] = 1e6
+            command = rng.normal(size=2) * np.array([1.0, 1.5])
+            dt = (0.05, 0.1, 0.013)[k % 3]
+            assert np.array_equal(model.integrate(state, command, dt), array_form(model, state, command, dt))
+            assert np.array_equal(model.velocity(state, command), model.derivative(state, command)[:2])

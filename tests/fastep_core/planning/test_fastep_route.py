@@ -178,3 +178,99 @@ def test_fastep_sim_and_fastep_bench_accept_it(tmp_path):
     assert {r['algorithm'] for r in records} == {'fastep_route', 'optimal'}
     assert 'FAStep-Route' in (tmp_path / 'route.md').read_text()
     assert list((tmp_path / 'figures').glob('route_*.png'))
+
+
+def in_sight_measured(route, position, radius, margin):
+    """Route.in_sight measuring everything every time (what it was before its answers were kept while proven)."""
+    from fastep_core.planning.fastep_route import SIGHT, SIGHT_VERTICES
+    ahead = route.rest[route.index:]
+    count = min(SIGHT_VERTICES, int(np.searchsorted(-ahead, -(ahead[0] - SIGHT), side='right')))
+    candidates = route.stacked[route.index:route.index + max(2, count)]
+    obstacles = route.world.obstacles
+    within = max(route.keep - 0.5 * margin, min(radius + 0.5 * margin, route.keep - 1e-3))
+    if len(obstacles):
+        here = float(obstacles.clearance(position))
+        if here < within:
+            within = min(within - 0.25 * margin, here) - 1e-6
+        runs = obstacles.fan_clearance(position, candidates)
+        seen = runs >= within
+        seen[0] = runs[0] >= within - 0.25 * margin
+    else:
+        seen = np.ones(len(candidates), dtype=bool)
+    if not seen.any():
+        return None
+    first = int(np.argmax(seen))
+    hidden = np.flatnonzero(~seen[first:])
+    return route.index + first + (int(hidden[0]) - 1 if len(hidden) else len(seen) - first - 1)
+
+
+@pytest.mark.parametrize('seed', range(4))
+def test_in_sight_kept_while_proven_answers_as_measuring_every_time(seed):
+    """Route.in_sight keeps an answer (and the robot's clearance) while the robot moves less than its room: the
+    same index as measuring every run at every step, along the route and knocked off it, where the answer
+    changes (a vertex comes into sight, none is) and so the kept one must be dropped."""
+    from fastep_core.planning.fastep_route import Route
+    rng = np.random.default_rng(seed)
+    circles = [Circle((float(x), float(y)), float(r)) for x, y, r in
+               zip(rng.uniform(8, 42, 25), rng.uniform(8, 42, 25), rng.uniform(0.5, 2.5, 25))]
+    walls = [Segment((20.0, 2.0), (20.0, 12.0)), Segment((30.0, 38.0), (42.0, 38.0))]
+    world = World.from_obstacles([0, 0, 50, 50], circles + walls)
+    radius, margin = 0.5, 0.5
+    path = shortest_path(world, (3.0, 3.0), (47.0, 47.0), radius + margin)
+    assert path is not None
+    kept = Route.from_path(path, world, world, np.zeros((0, 2)))
+    fresh = Route.from_path(path, world, world, np.zeros((0, 2)))
+    from fastep_core.planning.fastep_route import SIGHT, SIGHT_VERTICES
+    for index in range(len(kept.rest)):   # the vertices tested from each index, counted once for all
+        ahead = kept.rest[index:]
+        count = min(SIGHT_VERTICES, int(np.searchsorted(-ahead, -(ahead[0] - SIGHT), side='right')))
+        assert kept.ahead[index] == max(2, count)
+    points = np.concatenate([np.linspace(a, b, 40, endpoint=False) for a, b in zip(path.points[:-1], path.points[1:])])
+    proven = answers = 0
+    for k, point in enumerate(points):
+        # Along the route, wobbling by up to a margin (a trailer's curve, a swarm step), some steps knocked far off.
+        position = point + rng.normal(0.0, 0.15 if k % 17 else 1.5, 2)
+        for _ in range(3):
+            proof = kept.sight_proof
+            reused = proof is not None and proof[0] == kept.index and \
+                math.hypot(position[0] - proof[1], position[1] - proof[2]) < proof[5]
+            expected = in_sight_measured(fresh, position, radius, margin)
+            assert kept.in_sight(position, radius, margin) == expected and kept.index == (
+                fresh.index if expected is None else expected)
+            fresh.index = kept.index
+            proven += reused
+            answers += 1
+            position = position + rng.normal(0.0, 0.02, 2)
+    assert 0 < proven < answers   # both paths taken
+
+
+@pytest.mark.parametrize('world_kind', ['open', 'one circle near the line', 'wall across'])
+def test_tractor_route_skips_the_tight_search_only_where_the_roomy_route_wins_anyway(world_kind, monkeypatch):
+    """A robot that cannot turn in place searches the route without turn room only when the roomy one is more than
+    TURN_ROOM_SLACK longer than the straight line: the route (and the world it was planned in) is the one that
+    searching both always gives."""
+    from fastep_core.planning import fastep_route as route_module
+    from fastep_core.planning.exact_path import robot_path
+    obstacles = {'open': [], 'one circle near the line': [Circle((25.0, 26.2), 1.0)],
+                 'wall across': [Segment((25.0, 10.0), (25.0, 40.0)), Circle((30.0, 22.0), 1.5)]}[world_kind]
+    world = World.from_obstacles([0, 0, 50, 50], obstacles)
+    spec = RobotSpec('r1', 'tractor_trailer', (5.0, 25.0, 0.0, 0.0), (45.0, 25.0), 0.6)
+    position = np.array([5.0, 25.0])
+    calls = []
+
+    def counted(*args, **kwargs):
+        calls.append(kwargs.get('turn_room', False))
+        return robot_path(*args, **kwargs)
+
+    monkeypatch.setattr(route_module, 'robot_path', counted)
+    nav = make_navigator('fastep_route', spec, 0.6, world, PlannerParams(), 0)
+    nav.set_goal((45.0, 25.0))
+    path = nav.exact_path(position)
+    roomy, roomy_world = robot_path(world, (), position, nav.goal, 0.6, nav.params, turn_room=True)
+    tight, tight_world = robot_path(world, (), position, nav.goal, 0.6, nav.params)
+    both = tight if tight is not None and roomy.length > (1.0 + route_module.TURN_ROOM_SLACK) * tight.length else roomy
+    assert path is not None and path.length == both.length and np.array_equal(path.points, both.points)
+    assert nav.path_world is (tight_world if both is tight else roomy_world)
+    searched_tight = len(calls) == 1
+    assert searched_tight == (roomy.length > (1.0 + route_module.TURN_ROOM_SLACK) * 40.0 * (1.0 - 1e-9))
+    assert searched_tight == (world_kind == 'wall across')
