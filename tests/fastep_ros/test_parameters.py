@@ -4,6 +4,7 @@ process on a free domain, a client node beside them calling get/set/describe_par
 from __future__ import annotations
 
 import math
+import os
 import select
 import subprocess
 import sys
@@ -149,23 +150,27 @@ def test_a_misspelled_parameter_is_warned_about_at_startup(tmp_path: Path) -> No
     # Main: `-p odom_timout:=2.0` was ignored without a word.
     env = isolated_env(free_domain(), tmp_path / 'roslog')
     proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.planner', '--ros-args', '-p', 'odom_timout:=2.0',
-                             '-p', 'a:=0.3'], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
-    lines = []
+                             '-p', 'a:=0.3'], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT)
+    text = b''
     try:
         assert proc.stdout is not None
+        fd = proc.stdout.fileno()
         end = time.monotonic() + 60.0
-        # The node logs that it is up, then checks the overrides: wait for the line after that one.
-        while time.monotonic() < end and not any('unknown parameter' in line for line in lines):
-            if not select.select([proc.stdout], [], [], max(0.0, end - time.monotonic()))[0]:
+        # The node logs that it is up, then checks the overrides: wait for the line after that one. Read from the
+        # pipe itself: select() on a buffered file said "nothing to read" while the lines after the one readline()
+        # returned sat in its buffer (the test failed under load, when the node wrote its last lines in one go).
+        while time.monotonic() < end and b'unknown parameter' not in text:
+            if not select.select([fd], [], [], max(0.0, end - time.monotonic()))[0]:
                 break
-            line = proc.stdout.readline()
-            if not line:
+            chunk = os.read(fd, 65536)
+            if not chunk:
                 break
-            lines.append(line)
-            if 'planner for a' in line:
+            text += chunk
+            if b'planner for a' in text:
                 end = min(end, time.monotonic() + 10.0)
     finally:
         stop_process(proc)
+    lines = text.decode(errors='replace').splitlines(keepends=True)
     warning = [line for line in lines if 'unknown parameter' in line]
     assert warning, ''.join(lines)
     assert 'odom_timout (did you mean odom_timeout?)' in warning[0] and 'a (' not in warning[0]
