@@ -185,10 +185,13 @@ def stop_process(proc: subprocess.Popen[Any], sig: int = signal.SIGINT, grace: f
 class Helper:
     """An rclpy node in the test process (own context, same domain): publishes goals, records topics."""
 
-    def __init__(self, domain: int) -> None:
+    def __init__(self, domain: int, executor: str = 'single') -> None:
+        """`executor` as fastep_ros.executors names them (a benchmark's helper follows every robot: `events` costs
+        it less of the machine it measures)."""
         import rclpy
-        from rclpy.executors import SingleThreadedExecutor
         from rclpy.signals import SignalHandlerOptions
+
+        from fastep_ros.executors import make_executor
 
         self.rclpy = rclpy
         self.context = rclpy.Context()
@@ -203,7 +206,7 @@ class Helper:
             else:
                 os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = saved
         self.node = rclpy.create_node('test_helper', context=self.context)
-        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor = make_executor(executor, context=self.context)
         self.executor.add_node(self.node)
         self.records: dict[str, list[Any]] = {}
         self.goal_pubs: dict[str, Any] = {}
