@@ -26,8 +26,9 @@ work of a tick is shared by the cores: the whole launch command, 2026-11-26 (ben
     16       28.4 s    21.7 s     (2.6x and 3.3x real time; `robot`, 19 processes, ran at 0.6x and starved nodes)
 
 On wall time one process is one core at most, and a control period in which several robots plan a step delays the
-others: 16 robots were late in 0.7-2.3 % of their periods in `graph`, 7.5 % in `robot` (2.5x the CPU), 0-0.7 % in
-`cores`. So default_layout is `graph` in lock step up to GRAPH_ROBOTS robots, and `cores` otherwise.
+others: 16 robots were late in 1.5 % of their periods in `graph` (median of 6 runs), 4.3-7.5 % in `robot` (2x the
+CPU), 0.67 % in `cores` (median of 11 runs, 0-2 % each). So default_layout is `graph` in lock step up to
+GRAPH_ROBOTS robots, and `cores` otherwise.
 """
 
 from __future__ import annotations
