@@ -70,7 +70,6 @@ from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, Twi
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from rclpy.clock import Clock, ClockType
 from rclpy.qos import qos_profile_sensor_data
-from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float64
 from visualization_msgs.msg import MarkerArray
@@ -139,32 +138,6 @@ class _Body:
     length: float
     trailer_length: float
     hitch_offset: float
-
-
-@dataclass(frozen=True)
-class OwnOdometry:
-    """The robot's own odometry as the planner uses it: its frame, its stamp (s) and the planar pose."""
-
-    frame_id: str
-    stamp: float
-    pose: frames.Pose2D   # x, y, yaw
-
-
-def own_odometry(msg: Odometry | bytes) -> OwnOdometry:
-    """OwnOdometry of a message or of its bytes (read with struct where they are little-endian CDR, to the floats
-    rclpy's message has); ValueError if not finite or cut off."""
-    if isinstance(msg, bytes):
-        fields = cdr.odometry_fields(msg)
-        if fields is None:   # not little-endian CDR: rclpy reads it
-            msg = deserialize_message(msg, Odometry)
-        else:
-            x, y, qx, qy, qz, qw = fields[:6]
-            if not (math.isfinite(x) and math.isfinite(y)):
-                raise ValueError('position is not finite')   # frames.odometry_pose's checks and words
-            sec, nanosec = cdr.header_stamp(msg)
-            return OwnOdometry(cdr.header_frame_id(msg), sec + nanosec * 1e-9, (x, y, convert.yaw_of(qx, qy, qz, qw)))
-    assert not isinstance(msg, bytes)
-    return OwnOdometry(msg.header.frame_id, convert.stamp_to_seconds(msg.header.stamp), frames.odometry_pose(msg))
 
 
 class PlannerNode(ManagedNode):
@@ -255,7 +228,7 @@ class PlannerNode(ManagedNode):
         self.navigator: Navigator | None = None
         self.pending_goal: PoseStamped | None = None
         self.goal: tuple[float, float] | None = None
-        self.odom: OwnOdometry | None = None
+        self.odom: frames.StampedPose | None = None
         self.odom_received = -math.inf
         self.odom_stamp = -math.inf   # its header stamp; when it arrived if that is unset (zero)
         self.odom_problem = ''
@@ -281,7 +254,7 @@ class PlannerNode(ManagedNode):
         self.plan_pub = self.create_publisher(Path, interface.PLAN, offered_qos(interface.PLAN))
         self.cost_pub = self.create_publisher(Float64, interface.COST, offered_qos(interface.COST))
         self.status_pub = self.create_publisher(DiagnosticStatus, interface.STATUS, offered_qos(interface.STATUS))
-        # Taken as bytes (own_odometry): once a tick, and an Odometry message costs ~50 us to build.
+        # Taken as bytes (frames.stamped_pose): once a tick, and an Odometry message costs ~50 us to build.
         self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST, raw=True)
         if self.model == 'tractor_trailer':
             self.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
@@ -468,7 +441,7 @@ class PlannerNode(ManagedNode):
     def on_odom(self, msg: Odometry | bytes) -> None:
         """The robot's own odometry: a message, or its bytes (the subscription's: read with msg_tools.cdr)."""
         try:
-            odom = own_odometry(msg)
+            odom = frames.stamped_pose(msg)
             frame, pose, stamp = odom.frame_id, odom.pose, odom.stamp
             if frame not in (self.frame_id, self.odom_frame_id):
                 raise ValueError(f'frame {frame!r} is neither the map frame {self.frame_id!r} nor this robot\'s odom '
@@ -767,8 +740,7 @@ class PlannerNode(ManagedNode):
         if self.model == 'point_mass':
             command = np.asarray(frames.body_velocity(command, self.body_yaw), dtype=float)
         # Sent as its bytes (msg_tools.cdr), once a tick: convert.command_to_twist's message, not built.
-        a, b = float(command[0]), float(command[1])
-        linear, angular = ((a, 0.0), b) if self.model in convert.STEERED_MODELS else ((a, b), 0.0)
+        linear, angular = convert.command_twist_values(command, self.model)
         if self.stamped:
             if at is None:
                 ns = self.get_clock().now().nanoseconds

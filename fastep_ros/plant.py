@@ -490,7 +490,7 @@ class PlantNode(ManagedNode):
         # Sent as its bytes (msg_tools.cdr): the message convert.state_to_odometry makes, without building it.
         self.odom_pub.publish(cdr.odometry_cdr(
             (stamp.sec, stamp.nanosec), self.frame_id, self.child_frame_id, (state[0], state[1]),
-            (0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)), (float(linear[0]), float(linear[1])),
+            convert.yaw_quaternion(yaw), (float(linear[0]), float(linear[1])),
             float(angular)))
         trailer = None
         if self.trailer_pub is not None:

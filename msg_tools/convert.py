@@ -41,14 +41,15 @@ if TYPE_CHECKING:   # perception (scipy) is imported only by nodes that perceive
 
 __all__ = [
     'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'MOVERS_NS', 'MOVER_VELOCITIES_NS', 'OCCUPIED_THRESHOLD',
-    'TRACKS_NS', 'TRACK_VELOCITIES_NS', 'belief_to_marker_array', 'command_to_twist', 'diagnostic_to_dict',
+    'TRACKS_NS', 'TRACK_VELOCITIES_NS', 'belief_to_marker_array', 'command_to_twist', 'command_twist_values',
+    'diagnostic_to_dict',
     'grid_resolution', 'grid_shape', 'laser_scan_to_scan', 'laser_spec', 'make_status', 'marker_array_to_movers',
     'marker_array_to_obstacles', 'movers_to_marker_array', 'obstacles_to_marker_array', 'occupancy_grid_lookup',
     'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
     'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point', 'pose_to_state',
     'quaternion_to_yaw', 'scan_to_laser_scan', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds',
     'state_to_odometry', 'trailer_pose', 'trailer_yaw', 'twist_in_map', 'twist_to_command', 'twist_values_to_command',
-    'waypoints_to_path', 'world_to_occupancy_grid', 'yaw_of', 'yaw_to_quaternion',
+    'waypoints_to_path', 'world_to_occupancy_grid', 'yaw_of', 'yaw_quaternion', 'yaw_to_quaternion',
 ]
 
 CIRCLES_NS = 'circles'
@@ -90,9 +91,15 @@ def seconds_to_clock(t: float) -> Clock:
 
 def yaw_to_quaternion(yaw: float) -> Quaternion:
     """Rotation about z by yaw (radians, counter-clockwise)."""
+    x, y, z, w = yaw_quaternion(yaw)
+    return Quaternion(x=x, y=y, z=z, w=w)
+
+
+def yaw_quaternion(yaw: float) -> tuple[float, float, float, float]:
+    """(x, y, z, w) of yaw_to_quaternion's message; ValueError if not finite."""
     if not math.isfinite(yaw):
         raise ValueError(f'yaw {yaw!r} is not finite')
-    return Quaternion(x=0.0, y=0.0, z=math.sin(0.5 * yaw), w=math.cos(0.5 * yaw))
+    return 0.0, 0.0, math.sin(0.5 * yaw), math.cos(0.5 * yaw)
 
 
 def quaternion_to_yaw(q: Quaternion) -> float:
@@ -247,13 +254,16 @@ STEERED_MODELS = ('tractor_trailer', 'diff_drive')
 def command_to_twist(command: Vector, model: str = 'point_mass') -> Twist:
     """Model command to Twist: point mass (vx, vy) -> linear.x/y; tractor-trailer and diff_drive (v, omega) ->
     linear.x, angular.z."""
-    a, b = float(command[0]), float(command[1])
+    (x, y), z = command_twist_values(command, model)
     msg = Twist()
-    if model in STEERED_MODELS:
-        msg.linear.x, msg.angular.z = a, b
-    else:
-        msg.linear.x, msg.linear.y = a, b
+    msg.linear.x, msg.linear.y, msg.angular.z = x, y, z
     return msg
+
+
+def command_twist_values(command: Vector, model: str = 'point_mass') -> tuple[tuple[float, float], float]:
+    """((linear.x, linear.y), angular.z) of command_to_twist's message (msg_tools.cdr writes them as bytes)."""
+    a, b = float(command[0]), float(command[1])
+    return ((a, 0.0), b) if model in STEERED_MODELS else ((a, b), 0.0)
 
 
 def twist_to_command(msg: Twist | TwistStamped, model: str = 'point_mass') -> np.ndarray:

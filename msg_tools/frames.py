@@ -29,6 +29,7 @@ from __future__ import annotations
 import bisect
 import functools
 import math
+from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
@@ -39,9 +40,10 @@ from msg_tools import cdr, convert
 from msg_tools.ros2_profile import qos_dict
 
 __all__ = [
-    'IDENTITY', 'TF', 'TF_QOS', 'TF_STATIC', 'TF_STATIC_QOS', 'TF_TYPE', 'MapFromOdom', 'Pose2D', 'base_frame',
+    'IDENTITY', 'TF', 'TF_QOS', 'TF_STATIC', 'TF_STATIC_QOS', 'TF_TYPE', 'MapFromOdom', 'Pose2D', 'StampedPose',
+    'base_frame',
     'body_velocity', 'compose', 'frame_name', 'inverse', 'odom_frame', 'odometry_pose', 'odometry_transforms',
-    'state_in_frame', 'static_map_to_odom', 'tf_message_cdr', 'tf_message_class', 'trailer_frame',
+    'stamped_pose', 'state_in_frame', 'static_map_to_odom', 'tf_message_cdr', 'tf_message_class', 'trailer_frame',
     'transform_stamped',
 ]
 
@@ -173,6 +175,33 @@ def odometry_pose(msg: Any) -> Pose2D:
     if not (math.isfinite(x) and math.isfinite(y)):
         raise ValueError('position is not finite')
     return x, y, convert.quaternion_to_yaw(pose.orientation)
+
+
+@dataclass(frozen=True)
+class StampedPose:
+    """A planar pose with its frame and stamp (s): what a planner takes of its own odometry."""
+
+    frame_id: str
+    stamp: float
+    pose: Pose2D   # x, y, yaw
+
+
+def stamped_pose(msg: Any) -> StampedPose:
+    """StampedPose of a nav_msgs/Odometry, or of its CDR bytes (read with struct where they are little-endian, to
+    the message's floats); ValueError if not finite or cut off."""
+    if isinstance(msg, bytes):
+        fields = cdr.odometry_fields(msg)
+        if fields is None:   # not little-endian CDR: rclpy reads it
+            from nav_msgs.msg import Odometry
+            from rclpy.serialization import deserialize_message
+            msg = deserialize_message(msg, Odometry)
+        else:
+            x, y, qx, qy, qz, qw = fields[:6]
+            if not (math.isfinite(x) and math.isfinite(y)):
+                raise ValueError('position is not finite')   # odometry_pose's checks and words
+            sec, nanosec = cdr.header_stamp(msg)
+            return StampedPose(cdr.header_frame_id(msg), sec + nanosec * 1e-9, (x, y, convert.yaw_of(qx, qy, qz, qw)))
+    return StampedPose(msg.header.frame_id, convert.stamp_to_seconds(msg.header.stamp), odometry_pose(msg))
 
 
 def transform_stamped(parent: str, child: str, pose: Pose2D, stamp: Time) -> TransformStamped:

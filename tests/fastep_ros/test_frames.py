@@ -230,13 +230,12 @@ def test_own_odometry_from_bytes_is_what_the_message_gives(yaw: float) -> None:
     a position that is not finite, or bytes cut off, is one ValueError."""
     from rclpy.serialization import serialize_message
 
-    from fastep_ros.planner import own_odometry
     odom = convert.state_to_odometry((1.25, -3.5, yaw), convert.seconds_to_stamp(16.45), frame_id='r2/odom',
                                      child_frame_id='r2/base_link', linear=(0.3, 0.0), angular=0.2)
-    assert own_odometry(serialize_message(odom)) == own_odometry(odom)
-    assert own_odometry(odom).frame_id == 'r2/odom' and own_odometry(odom).stamp == 16.45
+    assert frames.stamped_pose(serialize_message(odom)) == frames.stamped_pose(odom)
+    assert frames.stamped_pose(odom).frame_id == 'r2/odom' and frames.stamped_pose(odom).stamp == 16.45
     odom.pose.pose.position.y = float('inf')
     with pytest.raises(ValueError, match='position is not finite'):
-        own_odometry(serialize_message(odom))
+        frames.stamped_pose(serialize_message(odom))
     with pytest.raises(ValueError, match='cut off'):
-        own_odometry(serialize_message(odom)[:100])
+        frames.stamped_pose(serialize_message(odom)[:100])
