@@ -18,7 +18,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Mapping, Sequence
+from typing import TYPE_CHECKING, Iterable, Mapping, Sequence
 
 import matplotlib
 
@@ -44,7 +44,7 @@ if TYPE_CHECKING:
     from fastep_core.simulator import Run
 
 __all__ = ['HEADING_ARROWS', 'HEADING_MODELS', 'PLOT_POINTS', 'RobotPath', 'Velocities', 'bench_figures',
-           'box_plot_figure', 'cost_figure', 'draw_beliefs', 'draw_dynamic', 'draw_headings', 'draw_world',
+           'box_plot_figure', 'close_all', 'cost_figure', 'draw_beliefs', 'draw_dynamic', 'draw_headings', 'draw_world',
            'example_paths_figure', 'family_box_figure', 'family_figures', 'paths_figure', 'plot_paths',
            'run_paths_figure', 'save', 'title', 'velocity_figure', 'yield_figure']
 
@@ -83,6 +83,12 @@ def save(fig: Figure, out: str | Path, dpi: float | None = None) -> Path:
     finally:
         plt.close(fig)
     return path
+
+
+def close_all(figures: Iterable[Figure]) -> None:
+    """Close figures (pyplot keeps every figure it made until it is closed; closing one twice is harmless)."""
+    for fig in figures:
+        plt.close(fig)
 
 
 def _thin(rows: ArrayLike) -> FloatArray:

@@ -469,16 +469,26 @@ def figures(run: RecordedRun) -> dict[str, Any]:
         source, series = ('cmd_vel', robot.cmd) if robot.cmd else ('odom', robot.odom_twist)
         velocities.append(plots.Velocities(robot.name, source, robot.model,
                                            np.array(series, dtype=float).reshape(-1, 4) - [run.t0, 0.0, 0.0, 0.0]))
-    return {'paths.png': plots.paths_figure(run.obstacles, run.workspace, paths, text),
-            'cost.png': plots.cost_figure(costs, text),
-            'velocity.png': plots.velocity_figure(velocities, text)}
+    drawn: dict[str, Any] = {}
+    try:   # a figure that cannot be drawn (a hostile recording) must not leave the ones before it open
+        drawn['paths.png'] = plots.paths_figure(run.obstacles, run.workspace, paths, text)
+        drawn['cost.png'] = plots.cost_figure(costs, text)
+        drawn['velocity.png'] = plots.velocity_figure(velocities, text)
+    except BaseException:
+        plots.close_all(drawn.values())
+        raise
+    return drawn
 
 
 def write_figures(run: RecordedRun, out: Path) -> list[Path]:
     """paths.png, cost.png and velocity.png in out; returns their paths."""
-    from msg_tools.plots import save
+    from msg_tools.plots import close_all, save
 
-    return [save(fig, out / name) for name, fig in figures(run).items()]
+    drawn = figures(run)
+    try:
+        return [save(fig, out / name) for name, fig in drawn.items()]
+    finally:   # save closes what it wrote; a failed write (a full disk) leaves the rest to close here
+        close_all(drawn.values())
 
 
 def write_report(path: str | Path, out: str | Path | None = None, radius: float = DEFAULT_RADIUS,

@@ -136,3 +136,20 @@ def test_example_bags(name: str) -> None:
     assert name in (BAGS / 'README.md').read_text()
 
 
+
+
+def test_a_figure_that_cannot_be_drawn_leaves_no_figure_open(run: dict[str, Any], monkeypatch: pytest.MonkeyPatch,
+                                                             tmp_path: Path) -> None:
+    import matplotlib.pyplot as plt
+
+    from msg_tools import plots
+
+    def broken(*_: Any) -> None:
+        raise ValueError('cannot draw')
+
+    recorded = report.load_run(open_recording(run['mcap']))
+    plt.close('all')
+    monkeypatch.setattr(plots, 'velocity_figure', broken)
+    with pytest.raises(ValueError, match='cannot draw'):
+        report.write_figures(recorded, tmp_path)
+    assert plt.get_fignums() == []          # the paths and cost figures drawn before it were closed
