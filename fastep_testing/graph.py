@@ -240,8 +240,9 @@ class Helper:
     def wait_status(self, namespace: str, accept: Callable[[dict[str, Any]], bool], timeout: float,
                     what: str) -> dict[str, Any]:
         """Spin until the latest status of `namespace` satisfies `accept`; return it."""
+        # The last status when the wait timed out (formatted now, it would be the one it began with).
         self.spin_until(lambda: bool(self.status(namespace)) and accept(self.status(namespace)), timeout,
-                        f'{what} (last status of {namespace}: {self.status(namespace)})')
+                        lambda: f'{what} (last status of {namespace}: {self.status(namespace)})')
         return self.status(namespace)
 
     def status(self, namespace: str) -> dict[str, Any]:
@@ -261,11 +262,15 @@ class Helper:
                             f'a subscriber on {topic}')
         self.goal_pubs[topic].publish(point_to_pose_stamped(goal))
 
-    def spin_until(self, predicate: Callable[[], bool], timeout: float, what: str = 'condition') -> None:
+    def spin_until(self, predicate: Callable[[], bool], timeout: float,
+                   what: str | Callable[[], str] = 'condition') -> None:
+        """Spin until predicate() holds; after `timeout` s an AssertionError names `what` (a callable: what it
+        returns then, e.g. the state at the timeout)."""
         deadline = time.monotonic() + timeout
         while not predicate():
             if time.monotonic() > deadline:
-                raise AssertionError(f'timed out after {timeout:g} s waiting for {what}')
+                text = what() if callable(what) else what
+                raise AssertionError(f'timed out after {timeout:g} s waiting for {text}')
             self.executor.spin_once(timeout_sec=0.02)
 
     def spin_for(self, seconds: float) -> None:

@@ -87,9 +87,9 @@ def test_a_plant_with_a_sensor_scans_the_truth_as_fastep_sim_does(context: Any, 
         assert np.allclose(got.ranges, expected.ranges, atol=1e-5, equal_nan=True)   # float32 on the wire
         assert np.isfinite(got.ranges).sum() == np.isfinite(expected.ranges).sum()
         # The unknown circle at (12, 30) is in it: the scanner sees the truth, not the map.
-        angles = got.angles()
-        hits = np.column_stack([5.0 + got.ranges * np.cos(angles), 25.0 + got.ranges * np.sin(angles)])
-        hits = hits[np.isfinite(got.ranges)]
+        seen = np.isfinite(got.ranges)   # no return: inf (inf times a cosine of 0 would be nan)
+        angles, ranges = got.angles()[seen], got.ranges[seen]
+        hits = np.column_stack([5.0 + ranges * np.cos(angles), 25.0 + ranges * np.sin(angles)])
         assert (np.abs(np.hypot(*(hits - (12.0, 30.0)).T) - 1.5) < 0.05).any()
     finally:
         node.destroy_node()
