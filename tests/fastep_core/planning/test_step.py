@@ -147,3 +147,35 @@ def test_attraction_sample_plans_a_feasible_step_close_to_the_papers(seed):
     assert WORLD.obstacles.path_clearance(p.origin, w) >= 0.7 - 1e-9
     assert sampled.cost <= paper.cost + 2e-3                  # 2e-3 of fitness: 20 cm nearer the goal at c = 0.01
     assert sampled.result.nfev < paper.result.nfev / 2
+
+
+def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible_step():
+    """Robots ahead on both sides leave no step right of both: the rule's swarm stops after RULE_CALLS calls
+    (it used to shrink the violation until max_iter) and the step is planned without the rule."""
+    from fastep_core.planning.step import RULE_CALLS, plan_step_passing_right
+    p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
+    calls: list[int] = []
+    fitness = p.fitness
+
+    def counted(X: np.ndarray) -> np.ndarray:
+        calls.append(len(p.pass_on_right))
+        return fitness(X)
+
+    p.fitness = counted   # type: ignore[method-assign]
+    ahead = np.array([[3.0, 0.0], [-3.0, 0.0]])   # right of +x is -y, right of -x is +y
+    step = plan_step_passing_right(p, PlannerParams(), np.random.default_rng(0), 'fastep', ahead)
+    assert calls[:RULE_CALLS] == [2] * RULE_CALLS and 2 not in calls[RULE_CALLS:]
+    assert step is not None and len(calls) > RULE_CALLS
+    assert p.pass_on_right.shape == (0, 2)
+
+
+def test_a_budget_that_is_not_reached_changes_no_plan():
+    world = World.from_obstacles([0, 0, 30, 10], [])
+    p = StepProblem(world, np.array([13.0, 5.0]), np.array([27.0, 5.0]), clearance=0.7, step_radius=2.0,
+                    others=np.array([[16.0, 5.0]]), robot_clearance=np.array([1.2]),
+                    pass_on_right=np.array([[3.0, 0.0]]))
+    for seed in range(5):
+        free = plan_step(p, PlannerParams(), np.random.default_rng(seed))
+        bounded = plan_step(p, PlannerParams(), np.random.default_rng(seed), feasible_within=5)
+        assert free is not None and bounded is not None
+        assert np.array_equal(free.waypoint, bounded.waypoint) and free.cost == bounded.cost
