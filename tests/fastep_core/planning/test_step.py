@@ -161,7 +161,7 @@ def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible
         calls.append(len(p.pass_on_right))
         return fitness(X)
 
-    p.fitness = counted   # type: ignore[method-assign]
+    p.fitness = counted   # type: ignore[method-assign]  # counts the calls each plan makes
     ahead = np.array([[3.0, 0.0], [-3.0, 0.0]])   # right of +x is -y, right of -x is +y
     step = plan_step_passing_right(p, PlannerParams(), np.random.default_rng(0), 'fastep', ahead)
     assert calls[:RULE_CALLS] == [2] * RULE_CALLS and 2 not in calls[RULE_CALLS:]
