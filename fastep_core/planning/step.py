@@ -156,7 +156,7 @@ class StepProblem:
         if len(self.others):
             gap, total = self._robot_distances(x, y)
             f += np.divide(self.b, total, out=total)
-            self._add_robot_gap_violation(viol, gap, reach_max)
+            self._add_robot_gap_violation(viol, reach_max, x, y, gap)
             self._add_robot_run_violation(viol, dx, dy, run2, reach_max)
         for ox, oy in self.pass_on_right:
             # cross(other - origin, X - origin) > 0 means X is left of the line toward the other robot.
@@ -237,28 +237,44 @@ class StepProblem:
     def _robot_distances(self, x: FloatArray, y: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Each candidate's distance to each other robot (m, n_others), and their sums (at least 1e-9: f2's
         denominator, eq. 9), computed in place in this order so the floats are those of the plain formulation."""
-        gap = x[:, None] - self._other_x
-        gap *= gap
-        gy = y[:, None] - self._other_y
-        gy *= gy
-        gap += gy
-        np.sqrt(gap, out=gap)
+        gap = self._robot_gaps(x[:, None], y[:, None], self._other_x, self._other_y)
         total = gap.sum(axis=1)
         np.maximum(total, 1e-9, out=total)
         return gap, total
 
-    def _add_robot_gap_violation(self, viol: FloatArray, gap: FloatArray, reach: float) -> None:
+    @staticmethod
+    def _robot_gaps(x: FloatArray, y: FloatArray, other_x: FloatArray, other_y: FloatArray) -> FloatArray:
+        """hypot(x - other_x, y - other_y), broadcast, by the operations of the plain formulation (one element's
+        float does not depend on the array's layout)."""
+        gap = x - other_x
+        gap *= gap
+        gy = y - other_y
+        gy *= gy
+        gap += gy
+        np.sqrt(gap, out=gap)
+        return gap
+
+    def _add_robot_gap_violation(self, viol: FloatArray, reach: float, x: FloatArray, y: FloatArray,
+                                 gap: FloatArray | None = None) -> None:
         """viol += sum over the other robots of how far each candidate comes inside the robot's clearance.
 
         A robot whose centre is farther from the origin than `reach` plus its clearance is out of every
         candidate's way: its column of the (m, n_others) sum is 0.0 (in a crowd, most of them), and only the
         others are added, in the order numpy's row sum would add them (sparse_row_sum), to the same bits.
+        `gap`: the candidates' distances to every robot when the caller has them (terms: f2 needs them all);
+        otherwise only the robots in reach are measured.
         """
         near = np.flatnonzero(self._other_gap - reach < self.robot_clearance + self._slack)
         if len(near) == len(self.others):
+            if gap is None:
+                gap = self._robot_gaps(x[:, None], y[:, None], self._other_x, self._other_y)
             viol += np.maximum(self.robot_clearance - gap, 0.0).sum(axis=1)
             return
-        rows = np.maximum(np.subtract(self.robot_clearance[near][:, None], gap[:, near].T), 0.0)
+        if gap is None:   # (near, m): the rows near_row_sum takes
+            rows = self._robot_gaps(x, y, self._other_x[near][:, None], self._other_y[near][:, None])
+        else:
+            rows = gap[:, near].T
+        rows = np.maximum(np.subtract(self.robot_clearance[near][:, None], rows), 0.0)
         total = near_row_sum(near, rows, len(self.others))
         if total is not None:
             viol += total
@@ -299,8 +315,10 @@ class StepProblem:
         np.where(viol > 0, INFEASIBLE + viol, f) of terms(), the same floats, but eq. 10 is computed for the
         feasible candidates only: its sum over every obstacle (f1) is most of the work, and most candidates
         of an attraction move are infeasible (on the families' worlds ~80 %: pulled past the brighter
-        firefly, out of the step disk). The violation needs the local obstacles' rows alone. Every value is
-        computed by the expressions of terms(), in the same order.
+        firefly, out of the step disk; in a 16-robot crowd 92 %). The violation needs the local obstacles' rows
+        alone, and the distances to the robots in reach (~6 of 15 there); f2's distances to every robot are
+        taken for the feasible candidates. Every value is computed by the expressions of terms(), in the same
+        order.
         """
         X = np.asarray(X, dtype=float)
         if len(X) < FEASIBLE_ONLY_FROM:
@@ -316,11 +334,8 @@ class StepProblem:
             run = self._run_clearance(dx, dy, run2, dist[self._run_circles:])
             np.subtract(self._path_clearance, run, out=run)
             viol += np.maximum(run, 0.0, out=run)
-        robots = None
-        if len(self.others):
-            gap, total = self._robot_distances(x, y)
-            robots = np.divide(self.b, total, out=total)
-            self._add_robot_gap_violation(viol, gap, reach_max)
+        if len(self.others):   # the violation needs the robots in reach alone; f2 (below) every robot
+            self._add_robot_gap_violation(viol, reach_max, x, y)
             self._add_robot_run_violation(viol, dx, dy, run2, reach_max)
         for ox, oy in self.pass_on_right:
             viol += np.maximum(ox * dy - oy * dx, 0.0)
@@ -336,8 +351,9 @@ class StepProblem:
                 total = rows[2:].sum(axis=0)
                 np.maximum(total, 1e-9, out=total)
                 f += np.divide(self.a, total, out=total)
-            if robots is not None:
-                f += robots[take]
+            if len(self.others):
+                total = self._robot_distances(x[take], y[take])[1]
+                f += np.divide(self.b, total, out=total)
             out[feasible] = f[:len(feasible)]
         return out
 
