@@ -103,6 +103,7 @@ from fastep_ros.common import (
 from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.frames import LOCALIZATION_QOS
 from fastep_ros.goals import GoalSubscription
+from fastep_ros.latched import LatchedSubscription
 from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.lock_step import STAMP_EPS, LockStep
 from fastep_ros.parameters import DynamicParameters
@@ -261,11 +262,14 @@ class PlannerNode(ManagedNode):
         # Goals from anyone (volatile, as RViz and `ros2 topic pub` send them) and from latched publishers
         # (fastep-launch: a planner restarted mid-run gets the goal it was driving to again): fastep_ros.goals.
         self.goal_sub = GoalSubscription(self, self.on_goal)
+        # The latched world, subscribed again if a new publisher's message does not come (fastep_ros.latched).
+        self.world_subs: list[LatchedSubscription] = []
         if self.obstacle_source == 'markers':
-            self.create_subscription(MarkerArray, interface.OBSTACLES, self.on_obstacles,
-                                     offered_qos(interface.OBSTACLES))
+            self.world_subs.append(LatchedSubscription(self, MarkerArray, interface.OBSTACLES, self.on_obstacles,
+                                                       offered_qos(interface.OBSTACLES)))
         if self.workspace_param is None or self.obstacle_source == 'map':
-            self.create_subscription(OccupancyGrid, interface.MAP, self.on_map, offered_qos(interface.MAP))
+            self.world_subs.append(LatchedSubscription(self, OccupancyGrid, interface.MAP, self.on_map,
+                                                       offered_qos(interface.MAP)))
         self.own_odom_topic = self.odom_sub.topic_name
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
         self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
@@ -863,6 +867,8 @@ class PlannerNode(ManagedNode):
         self.check_clock()
         found = self.discover()
         self.goal_sub.look()
+        for sub in self.world_subs:
+            sub.look()
         self.take_others()   # while simulated time holds (no control ticks), `others` in the status still fills
         self.lock_try()      # an input waited for too long is given up on
         # A launcher waits for cmd_vel's readers (the plant, the clock) before it starts the run: told at once.

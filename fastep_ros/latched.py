@@ -1,0 +1,89 @@
+"""A subscription to a latched (transient-local) topic that subscribes again when a new publisher's history does
+not arrive.
+
+A latched publisher (fastep-map's /obstacles and /map, Nav2's map_server) publishes once: a subscription that
+matches it later gets that message from the writer's history. Fast DDS, the rmw of the PyPI wheels and ROS's
+default, sometimes never delivers that history to a reader (eProsima/Fast-DDS#3822, open: "intermittent failure to
+deliver messages to late-joining datareaders"). Seen here in tests/fastep_ros/test_faults.py, about one run in a
+hundred: a map server killed and started again, and its /obstacles never reached the planner in 30 s, so the
+planner would have driven through the new obstacle. A new reader is matched afresh and is sent the history again.
+
+So when the subscription's matched publishers grow (a publisher appeared) and no message comes within
+RESEND_AFTER wall seconds, the subscription is made anew (the new one first, then the old one destroyed; a message
+that both receive is taken twice, which a latched world's handler does not mind), once per appearance: a latched
+publisher that has published nothing yet costs one extra subscription, not one every few seconds. The publishers
+matched again by the new subscription are not new ones. Looking costs one matched count, no graph query.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any, Callable
+
+if TYPE_CHECKING:
+    from rclpy.node import Node
+    from rclpy.qos import QoSProfile
+
+__all__ = ['RESEND_AFTER', 'Arrivals', 'LatchedSubscription']
+
+RESEND_AFTER = 3.0   # wall seconds a newly matched latched publisher has to deliver its history
+
+
+@dataclass
+class Arrivals:
+    """Whether a subscription should be made anew, from its matched publisher count over time. No ROS."""
+
+    wait: float = RESEND_AFTER
+    matched: int = 0                     # publishers matched at the last look
+    waiting_since: float | None = None   # when a publisher appeared that has not been heard from since
+    rematching: tuple[int, float] | None = None   # after subscribing again: the old one's count, until when
+    heard_lately: bool = False           # a message came since the last look (it may come before the look that
+                                         # sees its publisher matched)
+
+    def look(self, matched: int, now: float) -> bool:
+        """The matched count now; True when the subscription is to be made anew (then assumed done)."""
+        if self.rematching is not None:   # the new subscription matching the old one's publishers again
+            count, until = self.rematching
+            if matched >= count or now >= until:   # all of them, or one is gone
+                self.rematching = None
+            self.matched, self.heard_lately = matched, False
+            return False
+        if matched > self.matched and self.waiting_since is None and not self.heard_lately:
+            self.waiting_since = now
+        self.matched, self.heard_lately = matched, False
+        if self.waiting_since is None or now - self.waiting_since < self.wait:
+            return False
+        self.waiting_since, self.rematching = None, (matched, now + self.wait)
+        return True
+
+    def heard(self) -> None:
+        """A message arrived: the publishers that appeared have been heard from."""
+        self.waiting_since, self.heard_lately = None, True
+
+
+class LatchedSubscription:
+    """node.create_subscription(msg_type, topic, callback, qos), made anew when Arrivals says so; call look()
+    periodically (the planner: every wall tick)."""
+
+    def __init__(self, node: Node, msg_type: Any, topic: str, callback: Callable[[Any], None], qos: QoSProfile,
+                 wait: float = RESEND_AFTER) -> None:
+        self.node, self.msg_type, self.callback, self.qos = node, msg_type, callback, qos
+        self.arrivals = Arrivals(wait)
+        self.subscription = node.create_subscription(msg_type, topic, self.on_message, qos)
+        self.topic = self.subscription.topic_name
+        self.renewed = 0   # subscriptions made anew
+
+    def look(self) -> None:
+        if not self.arrivals.look(self.subscription.get_publisher_count(), time.monotonic()):
+            return
+        old, self.subscription = self.subscription, self.node.create_subscription(
+            self.msg_type, self.topic, self.on_message, self.qos)
+        self.node.destroy_subscription(old)
+        self.renewed += 1
+        self.node.get_logger().warning(f'{self.topic}: a publisher matched {self.arrivals.wait:g} s ago has '
+                                       'delivered nothing; subscribing again to be sent its latched message')
+
+    def on_message(self, msg: Any) -> None:
+        self.arrivals.heard()
+        self.callback(msg)
