@@ -43,7 +43,10 @@ RULE_CALLS = 9
 """Objective calls (FAStep: the initial swarm and four iterations) a step plan keeping right of the robots ahead
 is given to find a feasible candidate before the step is planned without that rule (plan_step_passing_right)."""
 DENSE_FROM = 4
-"""near_row_sum builds the whole (candidates, robots) array from this many robots in reach on."""
+"""near_row_sum builds the whole (candidates, robots) array from this many robots in reach on ..."""
+DENSE_BELOW = 256
+"""... for fewer candidates than this: filling and summing the whole array grows with the candidates (15 robots:
+3 us for 50 candidates, 30-45 us for an attraction call's ~1 225), adding the robots in reach does not (4-15 us)."""
 
 
 @dataclass
@@ -473,12 +476,12 @@ def sparse_row_sum(columns: dict[int, FloatArray], n: int) -> FloatArray | None:
 
 def near_row_sum(near: NDArray[np.intp], rows: FloatArray, n: int) -> FloatArray | None:
     """A.sum(axis=1) of the (m, n) array A that holds rows[i] in column near[i] and +0.0 elsewhere; None when no
-    column is set. From DENSE_FROM columns on, A is built and numpy sums it (its own floats, by definition); below,
-    sparse_row_sum adds the columns alone to the same bits. In a crowd (15 robots in reach) adding them one by one
-    in Python cost more than the (m, n) array."""
+    column is set. From DENSE_FROM columns on and for fewer than DENSE_BELOW rows, A is built and numpy sums it (its
+    own floats, by definition); otherwise sparse_row_sum adds the columns alone to the same bits. A small A costs
+    less than adding 4-15 columns one by one in Python; a large one more."""
     if not len(near):
         return None
-    if len(near) >= DENSE_FROM:
+    if len(near) >= DENSE_FROM and rows.shape[1] < DENSE_BELOW:
         full = np.zeros((rows.shape[1], n))
         full[:, near] = rows.T
         total: FloatArray = full.sum(axis=1)
