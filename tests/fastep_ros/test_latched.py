@@ -11,7 +11,7 @@ from fastep_ros.latched import Arrivals, LatchedSubscription
 def test_a_publisher_heard_from_in_time_changes_nothing() -> None:
     a = Arrivals(wait=3.0)
     assert not a.look(1, 0.0)          # the map server appeared ...
-    a.heard()                          # ... and its latched message came
+    a.heard(0.1)                       # ... and its latched message came
     assert not any(a.look(1, t) for t in (1.0, 5.0, 60.0))
 
 
@@ -23,16 +23,24 @@ def test_a_publisher_that_delivers_nothing_gets_one_new_subscription() -> None:
     assert not any(a.look(n, t) for n, t in ((0, 3.1), (1, 3.5), (1, 10.0), (1, 100.0)))
 
 
-def test_a_message_taken_before_the_look_that_sees_its_publisher_counts() -> None:
+def test_a_message_taken_before_the_looks_that_see_its_publisher_counts() -> None:
+    """The matched count is updated on a DDS thread: the message can be taken first, a look or two before."""
     a = Arrivals(wait=3.0)
-    a.heard()
-    assert not a.look(1, 0.0) and not a.look(1, 10.0)
+    a.heard(0.0)
+    assert not a.look(0, 0.25) and not a.look(1, 0.5) and not a.look(1, 10.0)
+
+
+def test_a_message_heard_long_before_a_publisher_appeared_is_not_its_message() -> None:
+    a = Arrivals(wait=3.0)
+    a.heard(0.0)
+    assert not a.look(1, 5.0)
+    assert a.look(1, 8.0)
 
 
 def test_a_restarted_publisher_is_waited_for_again() -> None:
     a = Arrivals(wait=3.0)
     a.look(1, 0.0)
-    a.heard()
+    a.heard(0.1)
     assert not a.look(0, 10.0)         # killed
     assert not a.look(1, 11.0)         # started again: appeared
     assert a.look(1, 14.0)             # its message did not come
