@@ -9,13 +9,12 @@ hundred: a map server killed and started again, and its /obstacles never reached
 planner would have driven through the new obstacle. A new reader is matched afresh and is sent the history again.
 
 So when the subscription's matched publishers grow (a publisher appeared) and no message comes within
-RESEND_AFTER wall seconds (beyond the heartbeat that repairs an ordinary loss), the subscription is made anew (the new one first, then the old one destroyed; a message
-that both receive is taken twice, which a latched world's handler does not mind), once per appearance: a latched
-publisher that has published nothing yet costs one extra subscription, not one every few seconds. The publishers
-matched again by the new subscription are not new ones. A message taken up to RESEND_AFTER before the look that
-sees its publisher matched counts too: the count is updated on a DDS thread, and under load it came a look later
-than the message. Looking costs one
-matched count, no graph query.
+RESEND_AFTER wall seconds (beyond the heartbeat that repairs an ordinary loss), the subscription is made anew
+(the new one first, then the old one destroyed; a message that both receive is taken twice, which a latched
+world's handler does not mind), once per appearance: a latched publisher that has published nothing yet costs
+one extra subscription, not one every few seconds. The publishers matched again by the new subscription are not
+new ones. A message taken up to RESEND_AFTER before the look that sees its publisher matched counts too: the
+count is updated on a DDS thread. Looking costs one matched count, no graph query.
 """
 
 from __future__ import annotations
