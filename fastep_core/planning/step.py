@@ -498,6 +498,10 @@ class StepPlan:
     result: OptimizeResult
 
 
+class _GaveUp(Exception):
+    """A plan found no feasible candidate in the objective calls it was given (plan_step's feasible_within)."""
+
+
 def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Generator,
               method: str = 'fastep', feasible_within: int | None = None) -> StepPlan | None:
     """Minimise the step fitness with FAStep (or ACO_R); None when no feasible waypoint was found.
@@ -555,10 +559,6 @@ def recorded_step_problems() -> Iterator[list[StepProblem]]:
         yield problems
     finally:
         _recorders[:] = [r for r in _recorders if r is not problems]
-
-
-class _GaveUp(Exception):
-    """A plan found no feasible candidate in the objective calls it was given (plan_step's feasible_within)."""
 
 
 def plan_step_passing_right(problem: StepProblem, params: PlannerParams, rng: np.random.Generator, method: str,
