@@ -95,6 +95,8 @@ class Navigator:
         self._path_checked = False                # has the goal been checked for a path
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
         self._retry_at = -math.inf                # no step planning before this time (after a failed attempt)
+        self._ticks = 0                           # control ticks so far
+        self._rule_gave_up = -1                   # the tick whose plan could not keep right (plan_next_step)
         self._detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # last `blocked` answer
         self._near_detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # ... within plan_horizon
         # A run proven clear of obstacles or blocked by one, and how far its ends may move before it must be
@@ -228,6 +230,7 @@ class Navigator:
         """The command of one control tick (`update` without telling the controller)."""
         stop = np.zeros(2)
         self.yield_kind = ''   # what yielding to movers did this tick (planning/yielding.py), '' for nothing
+        self._ticks += 1
         dt = self.params.dt if self._last_t is None or t <= self._last_t else t - self._last_t
         self._last_t = t
         if self.goal is None or self.mode in (Mode.ARRIVED, Mode.FAILED):
@@ -274,6 +277,10 @@ class Navigator:
             if not self.escape.active:
                 target = self.choose_target(position, others)
         if target is None:
+            if self._rule_gave_up == self._ticks and self._target is not None:
+                # The plain step is planned next tick; meanwhile the robot drives on as it did, guarded,
+                # rather than stopping for one tick in the middle of a crowd.
+                return self.drive_to(state, self._target, t, dt, others)
             self._target = None
             return stop
         return self.drive_to(state, target, t, dt, others)
@@ -393,10 +400,16 @@ class Navigator:
         return blocked
 
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
-        """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists."""
+        """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists.
+
+        With robots ahead the step first keeps right of them (plan_step_passing_right). When that gives up, the
+        step without the rule is planned on the next tick, not in this one, and `tick` drives on meanwhile: two
+        swarm runs in one tick were the slowest control ticks of a crowd (docs/benchmarks.md).
+        """
         assert self.goal is not None
         if self._last_t is not None and self._last_t < self._retry_at:
             return None
+        plain = self._rule_gave_up == self._ticks - 1   # the rule gave up last tick: this plan continues it
         target = self.step_target()
         centres, sums = robot_arrays(others, self.radius)
         centres, sums = self.yielding.with_predictions(position, others, centres, sums,
@@ -404,12 +417,20 @@ class Navigator:
         problem = StepProblem(self.world, position, target, self.clearance, self.params.step_radius,
                               self.params.a, self.params.b, self.params.c, centres,
                               sums + self.params.clearance_margin)
-        self.activations += 1
+        if not plain:
+            self.activations += 1
         offset = centres - position
         ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (target - position) > 0)
+        if plain:
+            ahead[:] = False
         start = time.perf_counter()
-        step = plan_step_passing_right(problem, self.params, self.rng, self.step_method, offset[ahead])
+        step = plan_step_passing_right(problem, self.params, self.rng, self.step_method, offset[ahead],
+                                       plain_after=False)
         self.plan_time += time.perf_counter() - start
+        if step is None and ahead.any():
+            self._rule_gave_up = self._ticks
+            self.mode, self.reason = Mode.AVOIDING, 'cannot keep right; planning the step without it'
+            return None
         if step is None:
             # Nothing feasible now; other robots may move away. Retry later rather than every tick.
             self._retry_at = (self._last_t or 0.0) + RETRY_AFTER

@@ -164,3 +164,34 @@ def test_a_manoeuvre_that_did_not_help_is_followed_by_one_all_the_way_to_the_goa
     progress = nav.params.progress_distance
     assert nav.start_manoeuvre(state + [progress + 0.1, 0.0, 0.0, 0.0], 2.0, [])   # came nearer meanwhile
     assert np.isfinite(asked[0]) and asked[1] == np.inf and np.isfinite(asked[2])
+
+
+def test_a_tick_that_cannot_keep_right_drives_on_and_the_plain_step_is_planned_on_the_next(monkeypatch):
+    """One swarm run per tick: the rule's give-up and the plan without it used to share a tick (the slowest
+    ticks of a crowd); the robot drives on toward its last target in between instead of stopping."""
+    from fastep_core.planning import step as step_module
+    plans: list[str] = []
+    plan_step = step_module.plan_step
+
+    def rule_gives_up(problem, params, rng, method='fastep', feasible_within=None):
+        plans.append('plain' if feasible_within is None else 'rule')
+        if feasible_within is not None:
+            raise step_module._GaveUp
+        return plan_step(problem, params, rng, method)
+
+    monkeypatch.setattr(step_module, 'plan_step', rule_gives_up)
+    world = World.from_obstacles([0, 0, 50, 50], [])
+    nav = navigator(world)
+    nav.set_goal((30.0, 10.0))
+    state = np.array([10.0, 10.0])
+    first = nav.update(0.0, state)
+    assert first[0] > 0.0 and plans == []
+    ahead = [OtherRobot('r2', (11.8, 10.0), (0.0, 0.0), 0.5)]
+    on = nav.update(0.05, state, ahead)
+    assert plans == ['rule'] and 'keep right' in nav.reason and nav.waypoint is None
+    assert np.allclose(on, first)      # toward the goal it was driving to, not a stop
+    nav.update(0.1, state, ahead)
+    assert plans == ['rule', 'plain'] and nav.waypoint is not None and nav.activations == 1
+    nav.waypoint = None                # a later tick plans with the rule again
+    nav.update(0.15, state, ahead)
+    assert plans[2] == 'rule'

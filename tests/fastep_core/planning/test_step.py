@@ -169,6 +169,23 @@ def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible
     assert p.pass_on_right.shape == (0, 2)
 
 
+def test_a_rule_that_gives_up_returns_none_when_the_caller_plans_without_it_later():
+    from fastep_core.planning.step import RULE_CALLS, plan_step_passing_right
+    p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
+    calls: list[int] = []
+    fitness = p.fitness
+
+    def counted(X: np.ndarray) -> np.ndarray:
+        calls.append(len(p.pass_on_right))
+        return fitness(X)
+
+    p.fitness = counted   # type: ignore[method-assign]  # counts the calls each plan makes
+    ahead = np.array([[3.0, 0.0], [-3.0, 0.0]])
+    step = plan_step_passing_right(p, PlannerParams(), np.random.default_rng(0), 'fastep', ahead, plain_after=False)
+    assert step is None and calls == [2] * RULE_CALLS
+    assert p.pass_on_right.shape == (0, 2)
+
+
 def test_a_budget_that_is_not_reached_changes_no_plan():
     world = World.from_obstacles([0, 0, 30, 10], [])
     p = StepProblem(world, np.array([13.0, 5.0]), np.array([27.0, 5.0]), clearance=0.7, step_radius=2.0,
