@@ -123,6 +123,19 @@ _FIELDS = ('rank', 'other', 'here', 'there', 'there_circle', 'length')
 
 
 @dataclass
+class _Candidates:
+    """Candidate tangents P-Q: rank, which end is on the circle in question (0: P), the other end's circle (-1
+    for start or goal) and node (start or goal; None: the tangent's other end)."""
+
+    P: FloatArray
+    Q: FloatArray
+    candidate: IntArray
+    end: IntArray
+    other_circle: IntArray
+    other_node: int | None
+
+
+@dataclass
 class _Tangents:
     """Free candidate tangents: rank of the end on the circle in question, of the other end, both points."""
 
@@ -202,21 +215,39 @@ class TangentGraph:
         """The circles whose nodes are made: their tangents to other circles are not tested again."""
         self.pending: dict[int, list[_Tangents]] = {}
         """For a circle not yet made: its free tangents to circles already made, seen from its end."""
+        self._ends: dict[int, tuple[_Tangents, IntArray]] = {}
+        """START, GOAL: its free tangents to every circle and each one's circle (made at the first need)."""
 
     # ------------------------------------------------------------------ candidate tangents
-    def _end_tangents(self, point: FloatArray, base: int, ks: IntArray) -> _Tangents:
+    def _end_candidates(self, point: FloatArray, base: int, ks: IntArray) -> _Candidates:
         """The tangents from a point (start: base 1, goal: base 1 + 2 n) to circles ks, the point as P."""
         on1, _, first, second = pair_tangents(self.centers[ks], self.radii[ks], np.tile(point, (len(ks), 1)),
                                               np.zeros(len(ks)), False)
         keep = np.stack([first, second], axis=1).ravel()
         Q = on1.reshape(-1, 2)[keep]
         candidate = (base + 2 * np.repeat(ks, 2) + np.tile([0, 1], len(ks)))[keep]
-        P = np.tile(point, (len(Q), 1))
-        return self._free(P, Q, candidate, np.ones(len(Q), dtype=np.int64), np.full(len(Q), -1),
-                          START if base == 1 else GOAL)
+        return _Candidates(np.tile(point, (len(Q), 1)), Q, candidate, np.ones(len(Q), dtype=np.int64),
+                           np.full(len(Q), -1), START if base == 1 else GOAL)
 
-    def _pair_tangents_of(self, k: int) -> _Tangents:
-        """The free common tangents of circle k with every circle not made yet, seen from k.
+    def end_tangents(self, u: int, k: int | None = None) -> _Tangents:
+        """The free tangents from START or GOAL (node u) to circle k, or to every circle when k is None.
+
+        Made for every circle at once, the first time either is asked for: a circle's nodes need them, and
+        one vectorised batch costs less than one per circle (the same numbers: each tangent is its own).
+        """
+        if u not in self._ends:
+            base = 1 if u == START else 1 + 2 * self.n
+            ks = np.arange(self.n)
+            tangents = self._free(self._end_candidates(self.start if u == START else self.goal, base, ks))
+            self._ends[u] = tangents, ((tangents.rank - 2) // 2 - base) // 2   # candidate base + 2 k + slot
+        tangents, circle = self._ends[u]
+        if k is None:
+            return tangents
+        mine = circle == k
+        return _Tangents(*(getattr(tangents, f)[mine] for f in _FIELDS))
+
+    def _pair_candidates(self, k: int) -> _Candidates:
+        """The common tangents of circle k with every circle not made yet, seen from k.
 
         Made with the end on the lower circle as P (as the whole graph makes them), so the same numbers.
         """
@@ -224,8 +255,14 @@ class TangentGraph:
         others = np.flatnonzero(~self.tabled)
         others = others[others != k]
         lo, hi = np.minimum(others, k), np.maximum(others, k)
-        parts = [pair_tangents(self.centers[lo], self.radii[lo], self.centers[hi], self.radii[hi], inner)
-                 for inner in (False, True)]
+        # Outer and inner in one batch: an inner tangent is the outer one of the second circle's radius negated
+        # (pair_tangents' own definition), and every pair's numbers are its own.
+        m = len(lo)
+        on1, on2, first, second = pair_tangents(self.centers[np.concatenate([lo, lo])],
+                                                self.radii[np.concatenate([lo, lo])],
+                                                self.centers[np.concatenate([hi, hi])],
+                                                np.concatenate([self.radii[hi], -self.radii[hi]]), False)
+        parts = [(on1[:m], on2[:m], first[:m], second[:m]), (on1[m:], on2[m:], first[m:], second[m:])]
         # Per pair: outer first, outer second, inner first, inner second.
         keep = np.stack([parts[0][2], parts[0][3], parts[1][2], parts[1][3]], axis=1).ravel()
         P = np.stack([parts[0][0][:, 0], parts[0][0][:, 1], parts[1][0][:, 0], parts[1][0][:, 1]], axis=1)
@@ -233,27 +270,24 @@ class TangentGraph:
         candidate = (1 + 4 * n + 4 * np.repeat(pair_rank(lo, hi, n), 4) + np.tile(np.arange(4), len(lo)))[keep]
         end = np.repeat((hi == k).astype(np.int64), 4)[keep]          # k's end: 0 on the lower circle
         other_circle = np.repeat(np.where(hi == k, lo, hi), 4)[keep]
-        return self._free(P.reshape(-1, 2)[keep], Q.reshape(-1, 2)[keep], candidate, end, other_circle, None)
+        return _Candidates(P.reshape(-1, 2)[keep], Q.reshape(-1, 2)[keep], candidate, end, other_circle, None)
 
-    def _free(self, P: FloatArray, Q: FloatArray, candidate: IntArray, end: IntArray, other_circle: IntArray,
-              other_node: int | None) -> _Tangents:
+    def _free(self, c: _Candidates) -> _Tangents:
         """The free ones of the candidate tangents P-Q, seen from their end `end` (0: P, 1: Q) on a circle; the
         other end is node `other_node` (start or goal) or, when None, the tangent's other end."""
-        free = self.problem.edges_free(P, Q)
-        P, Q, candidate, end = P[free], Q[free], candidate[free], end[free]
+        free = self.problem.edges_free(c.P, c.Q)
+        P, Q, candidate, end = c.P[free], c.Q[free], c.candidate[free], c.end[free]
         rank = 2 + 2 * candidate + end
-        other = np.full(len(rank), other_node) if other_node is not None else 2 + 2 * candidate + (1 - end)
+        other = np.full(len(rank), c.other_node) if c.other_node is not None else 2 + 2 * candidate + (1 - end)
         at_q = end[:, None] == 1
-        return _Tangents(rank, other, np.where(at_q, Q, P), np.where(at_q, P, Q), other_circle[free],
+        return _Tangents(rank, other, np.where(at_q, Q, P), np.where(at_q, P, Q), c.other_circle[free],
                          np.hypot(Q[:, 0] - P[:, 0], Q[:, 1] - P[:, 1]))
 
     def nodes_on(self, k: int) -> _CircleNodes:
         """Circle k's nodes: the ends of its free tangents to the start, the goal and every other circle."""
         if k not in self.on_circle:
-            ks = np.array([k])
-            fresh = self._pair_tangents_of(k)
-            parts = [self._end_tangents(self.start, 1, ks), self._end_tangents(self.goal, 1 + 2 * self.n, ks),
-                     fresh, *self.pending.pop(k, [])]
+            fresh = self._free(self._pair_candidates(k))
+            parts = [self.end_tangents(START, k), self.end_tangents(GOAL, k), fresh, *self.pending.pop(k, [])]
             tangents = _Tangents(*(np.concatenate([getattr(p, f) for p in parts]) for f in _FIELDS))
             # The other circles will find these tangents here, seen from their end.
             order = np.argsort(fresh.there_circle, kind='stable')
@@ -280,11 +314,10 @@ class TangentGraph:
             (sx, sy), (gx, gy) = self.point[START], self.point[GOAL]
             yield GOAL if u == START else START, float(np.hypot(gx - sx, gy - sy)), None
         if self.n:
-            base = 1 if u == START else 1 + 2 * self.n
-            tangents = self._end_tangents(self.start if u == START else self.goal, base, np.arange(self.n))
-            for rank, point, length in zip(tangents.rank.tolist(), tangents.here.tolist(),
-                                           tangents.length.tolist()):
-                self._know(rank, point, ((rank - 2) // 2 - base) // 2)     # candidate base + 2 k + slot
+            tangents, circle = self.end_tangents(u), self._ends[u][1]
+            for rank, point, length, k in zip(tangents.rank.tolist(), tangents.here.tolist(),
+                                              tangents.length.tolist(), circle.tolist()):
+                self._know(rank, point, k)
                 yield rank, length, None
 
     def _circle_edges(self, u: int) -> Iterator[Edge]:
