@@ -258,8 +258,11 @@ def print_result(r: dict[str, Any]) -> None:
     print(line)
     worst = max(r['robots'].items(), key=lambda kv: kv[1]['receipt']['late_fraction'])
     print(f'    worst robot {worst[0]}: {worst[1]["receipt"]} modes {worst[1]["modes"]}')
-    print(f'    CPU % of one core over the window: planner mean {c["planner_mean"]:.1f} (max {c["planner_max"]:.1f}), '
-          f'plant mean {c["plant_mean"]:.1f} (max {c["plant_max"]:.1f}), map {c["map"]:.1f}, '
+    per_node = ''
+    if not math.isnan(c['planner_mean']):   # only where each node has a process of its own (--layout node)
+        per_node = (f'planner mean {c["planner_mean"]:.1f} (max {c["planner_max"]:.1f}), '
+                    f'plant mean {c["plant_mean"]:.1f} (max {c["plant_max"]:.1f}), map {c["map"]:.1f}, ')
+    print(f'    CPU % of one core over the window: {per_node}'
           f'monitor {c["monitor"]:.1f}; per robot (plant + planner) {c["per_robot"]:.1f} %; '
           f'graph total {c["graph_total"]:.0f} % '
           f'(of {100 * (os.cpu_count() or 1)} %); machine busy {c["machine_busy_percent_of_all_cores"]:.0f} % '
