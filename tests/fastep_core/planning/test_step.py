@@ -149,9 +149,11 @@ def test_attraction_sample_plans_a_feasible_step_close_to_the_papers(seed):
     assert sampled.result.nfev < paper.result.nfev / 2
 
 
-def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible_step():
+@pytest.mark.parametrize('plain_after', [True, False])
+def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible_step(plain_after):
     """Robots ahead on both sides leave no step right of both: the rule's swarm stops after RULE_CALLS calls
-    (it used to shrink the violation until max_iter) and the step is planned without the rule."""
+    (it used to shrink the violation until max_iter); the step is then planned without the rule, or, with
+    plain_after False, left to the caller (the navigator plans it on the next tick)."""
     from fastep_core.planning.step import RULE_CALLS, plan_step_passing_right
     p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
     calls: list[int] = []
@@ -163,26 +165,13 @@ def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible
 
     p.fitness = counted   # type: ignore[method-assign]  # counts the calls each plan makes
     ahead = np.array([[3.0, 0.0], [-3.0, 0.0]])   # right of +x is -y, right of -x is +y
-    step = plan_step_passing_right(p, PlannerParams(), np.random.default_rng(0), 'fastep', ahead)
+    step = plan_step_passing_right(p, PlannerParams(), np.random.default_rng(0), 'fastep', ahead,
+                                   plain_after=plain_after)
     assert calls[:RULE_CALLS] == [2] * RULE_CALLS and 2 not in calls[RULE_CALLS:]
-    assert step is not None and len(calls) > RULE_CALLS
-    assert p.pass_on_right.shape == (0, 2)
-
-
-def test_a_rule_that_gives_up_returns_none_when_the_caller_plans_without_it_later():
-    from fastep_core.planning.step import RULE_CALLS, plan_step_passing_right
-    p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
-    calls: list[int] = []
-    fitness = p.fitness
-
-    def counted(X: np.ndarray) -> np.ndarray:
-        calls.append(len(p.pass_on_right))
-        return fitness(X)
-
-    p.fitness = counted   # type: ignore[method-assign]  # counts the calls each plan makes
-    ahead = np.array([[3.0, 0.0], [-3.0, 0.0]])
-    step = plan_step_passing_right(p, PlannerParams(), np.random.default_rng(0), 'fastep', ahead, plain_after=False)
-    assert step is None and calls == [2] * RULE_CALLS
+    if plain_after:
+        assert step is not None and len(calls) > RULE_CALLS
+    else:
+        assert step is None and len(calls) == RULE_CALLS
     assert p.pass_on_right.shape == (0, 2)
 
 
