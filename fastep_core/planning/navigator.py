@@ -207,7 +207,10 @@ class Navigator:
         (the controller, the guard's stop, a recovery): its next command starts from there.
         """
         command = self.tick(t, state, others)
-        if not self.yield_kind and self.mode in (Mode.KINEMATIC, Mode.AVOIDING) and not np.any(command):
+        # Standing still: every component 0 (NaN counts as moving, as for np.any; this runs every tick, where
+        # np.any on two numbers cost as much as the guard's obstacle test).
+        if not self.yield_kind and self.mode in (Mode.KINEMATIC, Mode.AVOIDING) and \
+                not any(c != 0.0 for c in command.tolist()):
             command = self.stand_clear(state, others)
         if self._applied is not None:
             self._applied(command)
