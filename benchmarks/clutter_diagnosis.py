@@ -113,9 +113,10 @@ class Tracing:
         t = self._tick_t
         if self._open_step is not None:   # replanned while a waypoint was still in use
             self._close_step('replanned', position)
-        before = nav.activations
+        before = nav.plan_time
         waypoint = Navigator.plan_next_step(nav, position, others)
-        if nav.activations == before:
+        # No swarm ran (waiting to retry), or keeping right gave up and the step comes next tick: nothing yet.
+        if nav.plan_time == before or nav.step_deferred:
             return waypoint
         goal = nav.goal
         obstacles = nav.world.obstacles

@@ -97,6 +97,7 @@ class Navigator:
         self._retry_at = -math.inf                # no step planning before this time (after a failed attempt)
         self._ticks = 0                           # control ticks so far
         self._rule_gave_up = -1                   # the tick whose plan could not keep right (plan_next_step)
+        self._hold_broken = -1                    # the tick whose hold breaker's plan could not keep right
         self._detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # last `blocked` answer
         self._near_detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # ... within plan_horizon
         # A run proven clear of obstacles or blocked by one, and how far its ends may move before it must be
@@ -145,7 +146,7 @@ class Navigator:
         self.mode, self.reason = Mode.KINEMATIC, 'goal accepted'
         self.waypoint, self.plan, self.cost, self._target = None, [], 0.0, None
         self.reference, self._path_checked, self._committed = None, False, False
-        self._stuck = 0
+        self._stuck, self._rule_gave_up, self._hold_broken = 0, -1, -1
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -190,6 +191,7 @@ class Navigator:
         """
         self._last_t = None
         self._retry_at = -math.inf
+        self._rule_gave_up = self._hold_broken = -1
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -270,9 +272,11 @@ class Navigator:
                 return command
         if self.backup.active(t):
             return self.back_up(state, dt, others)
-        if self.stops.hold_breaker_due(t):
+        if self.stops.hold_breaker_due(t) or self._hold_broken == self._ticks - 1:
+            # The hold breaker comes once; a step of it that could not keep right is planned plainly next tick.
             target = self.plan_next_step(position, others)
             self._committed = target is not None
+            self._hold_broken = self._ticks if self.step_deferred else -1
         else:
             target = self.follow_escape(position, distance, t, others) if self.escape.active else None
             if self.failed:   # no way out of the trap
@@ -280,7 +284,7 @@ class Navigator:
             if not self.escape.active:
                 target = self.choose_target(position, others)
         if target is None:
-            if self._rule_gave_up == self._ticks and self._target is not None:
+            if self.step_deferred and self._target is not None:
                 # The plain step is planned next tick; meanwhile the robot drives on as it did, guarded,
                 # rather than stopping for one tick in the middle of a crowd.
                 return self.drive_to(state, self._target, t, dt, others)
@@ -406,8 +410,8 @@ class Navigator:
         """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists.
 
         With robots ahead the step first keeps right of them (plan_step_passing_right). When that gives up, the
-        step without the rule is planned on the next tick, not in this one, and `tick` drives on meanwhile: two
-        swarm runs in one tick were the slowest control ticks of a crowd (docs/benchmarks.md).
+        step without the rule is planned on the next tick, not in this one (`step_deferred`), and `tick` drives
+        on meanwhile: two swarm runs in one tick were the slowest control ticks of a crowd (docs/benchmarks.md).
         """
         assert self.goal is not None
         if self._last_t is not None and self._last_t < self._retry_at:
@@ -443,6 +447,11 @@ class Navigator:
         self.waypoint, self.cost = step.waypoint, step.cost
         self.plan.append(step.waypoint)
         return step.waypoint
+
+    @property
+    def step_deferred(self) -> bool:
+        """This tick's step could not keep right of the robots ahead: the step without that rule comes next tick."""
+        return self._rule_gave_up == self._ticks
 
     def step_target(self) -> FloatArray:
         """The point d in eq. 10 is measured to: the goal (FAStep-Route: the route vertex it aims at)."""

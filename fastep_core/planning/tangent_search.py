@@ -273,8 +273,7 @@ class TangentGraph:
         return _Candidates(P.reshape(-1, 2)[keep], Q.reshape(-1, 2)[keep], candidate, end, other_circle, None)
 
     def _free(self, c: _Candidates) -> _Tangents:
-        """The free ones of the candidate tangents P-Q, seen from their end `end` (0: P, 1: Q) on a circle; the
-        other end is node `other_node` (start or goal) or, when None, the tangent's other end."""
+        """The free ones of candidate tangents, seen from their end on the circle in question."""
         free = self.problem.edges_free(c.P, c.Q)
         P, Q, candidate, end = c.P[free], c.Q[free], c.candidate[free], c.end[free]
         rank = 2 + 2 * candidate + end

@@ -166,20 +166,27 @@ def test_a_manoeuvre_that_did_not_help_is_followed_by_one_all_the_way_to_the_goa
     assert np.isfinite(asked[0]) and asked[1] == np.inf and np.isfinite(asked[2])
 
 
-def test_a_tick_that_cannot_keep_right_drives_on_and_the_plain_step_is_planned_on_the_next(monkeypatch):
-    """One swarm run per tick: the rule's give-up and the plan without it used to share a tick (the slowest
-    ticks of a crowd); the robot drives on toward its last target in between instead of stopping."""
+@pytest.fixture
+def rule_gives_up(monkeypatch):
+    """Every step plan that keeps right gives up (step.RULE_CALLS spent); the plans made, in order."""
     from fastep_core.planning import step as step_module
     plans: list[str] = []
     plan_step = step_module.plan_step
 
-    def rule_gives_up(problem, params, rng, method='fastep', feasible_within=None):
+    def planned(problem, params, rng, method='fastep', feasible_within=None):
         plans.append('plain' if feasible_within is None else 'rule')
         if feasible_within is not None:
             raise step_module._GaveUp
         return plan_step(problem, params, rng, method)
 
-    monkeypatch.setattr(step_module, 'plan_step', rule_gives_up)
+    monkeypatch.setattr(step_module, 'plan_step', planned)
+    return plans
+
+
+def test_a_tick_that_cannot_keep_right_drives_on_and_the_plain_step_is_planned_on_the_next(rule_gives_up):
+    """One swarm run per tick: the rule's give-up and the plan without it used to share a tick (the slowest
+    ticks of a crowd); the robot drives on toward its last target in between instead of stopping."""
+    plans = rule_gives_up
     world = World.from_obstacles([0, 0, 50, 50], [])
     nav = navigator(world)
     nav.set_goal((30.0, 10.0))
@@ -188,10 +195,50 @@ def test_a_tick_that_cannot_keep_right_drives_on_and_the_plain_step_is_planned_o
     assert first[0] > 0.0 and plans == []
     ahead = [OtherRobot('r2', (11.8, 10.0), (0.0, 0.0), 0.5)]
     on = nav.update(0.05, state, ahead)
-    assert plans == ['rule'] and 'keep right' in nav.reason and nav.waypoint is None
+    assert plans == ['rule'] and 'keep right' in nav.reason and nav.waypoint is None and nav.step_deferred
     assert np.allclose(on, first)      # toward the goal it was driving to, not a stop
     nav.update(0.1, state, ahead)
     assert plans == ['rule', 'plain'] and nav.waypoint is not None and nav.activations == 1
     nav.waypoint = None                # a later tick plans with the rule again
     nav.update(0.15, state, ahead)
     assert plans[2] == 'rule'
+
+
+def test_a_new_goal_after_a_give_up_plans_its_first_step_with_the_rule_again(rule_gives_up):
+    plans = rule_gives_up
+    nav = navigator(World.from_obstacles([0, 0, 50, 50], []))
+    nav.set_goal((30.0, 10.0))
+    state, ahead = np.array([10.0, 10.0]), [OtherRobot('r2', (11.8, 10.0), (0.0, 0.0), 0.5)]
+    nav.update(0.0, state)
+    nav.update(0.05, state, ahead)
+    nav.set_goal((30.0, 10.5), 0.05)
+    nav.update(0.1, state, ahead)
+    assert plans == ['rule', 'rule'] and nav.activations == 2   # the new goal's first step, counted
+
+
+@pytest.mark.parametrize('algorithm', ['fastep', 'optimal'])
+def test_a_hold_breaker_step_that_cannot_keep_right_is_planned_plainly_on_the_next_tick(rule_gives_up, monkeypatch,
+                                                                                        algorithm):
+    """The hold breaker comes once: when its step cannot keep right, the next tick plans the plain step as the
+    hold breaker's, committed (left to choose_target, a planner that follows a path never planned it and the
+    robot stayed held)."""
+    plans = rule_gives_up
+    nav = make_navigator(algorithm, SPEC, 0.5, World.from_obstacles([0, 0, 50, 50], []), PlannerParams(), 0)
+    nav.set_goal((30.0, 10.0))
+    # Pretend detection misses the robot in the way, so only the guard and its hold breaker act.
+    monkeypatch.setattr(type(nav), 'blocked', lambda self, *a, **k: False)
+    other = [OtherRobot('r2', (11.7, 10.0), (0.0, 0.0), 0.5)]
+    state, t = np.array([10.6, 10.0]), 0.0
+    while t < 1.2 and not plans:
+        nav.update(t, state, other)
+        t += 0.05
+    assert plans == ['rule'] and nav.step_deferred
+    activations = nav.activations
+    command = nav.update(t, state, other)
+    assert plans == ['rule', 'plain'] and nav.waypoint is not None and nav.activations == activations
+    assert np.any(command != 0.0)
+    for _ in range(5):   # committed: driven to, not planned again
+        t += 0.05
+        state = state + 0.05 * command
+        command = nav.update(t, state, other)
+    assert plans == ['rule', 'plain'] and np.any(command != 0.0)
