@@ -12,6 +12,8 @@ The graph is the one optimal.py's docstring describes, with the same nodes and e
   nodes in angle order, where the arc is free. The neighbours need every free tangent touching that circle:
   they are made and tested for the whole circle at once (vectorised), the first time a node on it is
   expanded, and kept for the query. The start's edges are its tangents to every circle and the straight run.
+  The start's and the goal's tangents to every circle are made and tested in one batch each, at the first need
+  (every circle's nodes include its tangents to both: one batch per circle cost more in small calls).
 - A* explores, with the straight-line distance to the goal as the heuristic, lowered by a rounding slack so
   that it stays below the rest of any path as floating point adds it up (nodes are reopened when a shorter
   way to them turns up). When the goal leaves the heap, every node of every shortest path has been expanded.
