@@ -72,11 +72,16 @@ def test_aco_plans_feasible_steps_too():
     assert step is not None and WORLD.obstacles.clearance(step.waypoint) >= 0.7 - 1e-9
 
 
-def test_pass_on_right_keeps_the_waypoint_right_of_the_oncoming_robot():
+def oncoming_robot_problem() -> StepProblem:
+    """A robot heading +x in a corridor with another robot 3 m ahead, to be kept right of (its position)."""
     world = World.from_obstacles([0, 0, 30, 10], [])
-    p = StepProblem(world, np.array([13.0, 5.0]), np.array([27.0, 5.0]), clearance=0.7, step_radius=2.0,
-                    others=np.array([[16.0, 5.0]]), robot_clearance=np.array([1.2]),
-                    pass_on_right=np.array([[16.0, 5.0]]))
+    return StepProblem(world, np.array([13.0, 5.0]), np.array([27.0, 5.0]), clearance=0.7, step_radius=2.0,
+                       others=np.array([[16.0, 5.0]]), robot_clearance=np.array([1.2]),
+                       pass_on_right=np.array([[16.0, 5.0]]))
+
+
+def test_pass_on_right_keeps_the_waypoint_right_of_the_oncoming_robot():
+    p = oncoming_robot_problem()
     for seed in range(5):
         step = plan_step(p, PlannerParams(), np.random.default_rng(seed))
         assert step is not None and step.waypoint[1] <= 5.0 + 1e-9   # heading +x, right is -y
@@ -176,10 +181,7 @@ def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible
 
 
 def test_a_budget_that_is_not_reached_changes_no_plan():
-    world = World.from_obstacles([0, 0, 30, 10], [])
-    p = StepProblem(world, np.array([13.0, 5.0]), np.array([27.0, 5.0]), clearance=0.7, step_radius=2.0,
-                    others=np.array([[16.0, 5.0]]), robot_clearance=np.array([1.2]),
-                    pass_on_right=np.array([[3.0, 0.0]]))
+    p = oncoming_robot_problem()
     for seed in range(5):
         free = plan_step(p, PlannerParams(), np.random.default_rng(seed))
         bounded = plan_step(p, PlannerParams(), np.random.default_rng(seed), feasible_within=5)
