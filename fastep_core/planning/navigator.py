@@ -424,12 +424,12 @@ class Navigator:
         problem = StepProblem(self.world, position, target, self.clearance, self.params.step_radius,
                               self.params.a, self.params.b, self.params.c, centres,
                               sums + self.params.clearance_margin)
-        if not plain:
-            self.activations += 1
         offset = centres - position
         ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (target - position) > 0)
         if plain:
             ahead[:] = False
+        else:
+            self.activations += 1
         start = time.perf_counter()
         step = plan_step_passing_right(problem, self.params, self.rng, self.step_method, offset[ahead],
                                        plain_after=False)

@@ -237,16 +237,20 @@ class TangentGraph:
         Made for every circle at once, the first time either is asked for: a circle's nodes need them, and
         one vectorised batch costs less than one per circle (the same numbers: each tangent is its own).
         """
+        tangents, circle = self._all_end_tangents(u)
+        if k is None:
+            return tangents
+        mine = circle == k
+        return _Tangents(*(getattr(tangents, f)[mine] for f in _FIELDS))
+
+    def _all_end_tangents(self, u: int) -> tuple[_Tangents, IntArray]:
+        """end_tangents(u) and each one's circle, made once."""
         if u not in self._ends:
             base = 1 if u == START else 1 + 2 * self.n
             ks = np.arange(self.n)
             tangents = self._free(self._end_candidates(self.start if u == START else self.goal, base, ks))
             self._ends[u] = tangents, ((tangents.rank - 2) // 2 - base) // 2   # candidate base + 2 k + slot
-        tangents, circle = self._ends[u]
-        if k is None:
-            return tangents
-        mine = circle == k
-        return _Tangents(*(getattr(tangents, f)[mine] for f in _FIELDS))
+        return self._ends[u]
 
     def _pair_candidates(self, k: int) -> _Candidates:
         """The common tangents of circle k with every circle not made yet, seen from k.
@@ -315,7 +319,7 @@ class TangentGraph:
             (sx, sy), (gx, gy) = self.point[START], self.point[GOAL]
             yield GOAL if u == START else START, float(np.hypot(gx - sx, gy - sy)), None
         if self.n:
-            tangents, circle = self.end_tangents(u), self._ends[u][1]
+            tangents, circle = self._all_end_tangents(u)
             for rank, point, length, k in zip(tangents.rank.tolist(), tangents.here.tolist(),
                                               tangents.length.tolist(), circle.tolist()):
                 self._know(rank, point, k)
