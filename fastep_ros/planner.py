@@ -34,8 +34,10 @@ they change (and once a wall second): `waypoint` (the point driven to now), `pla
 far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the namespace, message = mode, values
 reason / activations / escapes / manoeuvres / waypoint / goal / cost / algorithm / t / odom_lag / obstacles,
 and for a launcher: others (the robots followed now), cmd_vel_readers (subscriptions matched to
-cmd_vel) and odom_heard (own odometry messages taken); and control_ms: the wall time of the last CONTROL_TIMES
-control callbacks, "p50 / p99 / max" in milliseconds).
+cmd_vel) and odom_heard (own odometry messages taken); and control_ms and control_cpu_ms: the wall time and the
+CPU time of this node's thread over the last CONTROL_TIMES control callbacks, "p50 / p99 / max" in milliseconds
+(wall time also counts the moments the operating system ran another process instead: on a loaded machine the
+difference is the wait, the CPU time is the planner's own work).
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
 run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry
@@ -236,6 +238,7 @@ class PlannerNode(ManagedNode):
         self.odom_heard = 0            # own odometry messages taken
         self.cmd_vel_readers = 0       # cmd_vel's matched readers when status last told them
         self.control_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
+        self.control_cpu_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
         self.trailer: float | None = None
         self.trailer_stamp = -math.inf
         self.fault_logged = False
@@ -698,12 +701,13 @@ class PlannerNode(ManagedNode):
 
     def on_control(self, at: float | None = None) -> None:
         """Decide and publish cmd_vel at node time `at` (lock step: the odometry stamp acted on), else now; its wall
-        time goes into status' control_ms."""
-        began = time.perf_counter()
+        time goes into status' control_ms, its thread's CPU time into control_cpu_ms."""
+        began, began_cpu = time.perf_counter(), time.thread_time()
         try:
             self.control(at)
         finally:
             self.control_times.append(time.perf_counter() - began)
+            self.control_cpu_times.append(time.thread_time() - began_cpu)
 
     def control(self, at: float | None = None) -> None:
         """on_control's work."""
@@ -811,11 +815,13 @@ class PlannerNode(ManagedNode):
                                                      f'({self.goal[0]:g}, {self.goal[1]:g})'
         return DiagnosticStatus.OK, mode.value, nav.reason
 
-    def control_ms(self) -> str:
-        """'p50 / p99 / max' of the recent control callbacks' wall times in ms ('' before the first)."""
-        if not self.control_times:
+    def control_ms(self, cpu: bool = False) -> str:
+        """'p50 / p99 / max' of the recent control callbacks' wall times (cpu: CPU times) in ms ('' before the
+        first)."""
+        times = self.control_cpu_times if cpu else self.control_times
+        if not times:
             return ''
-        p50, p99, top = np.percentile(np.array(self.control_times) * 1e3, [50.0, 99.0, 100.0])
+        p50, p99, top = np.percentile(np.array(times) * 1e3, [50.0, 99.0, 100.0])
         return f'{p50:.3f} / {p99:.3f} / {top:.3f}'
 
     def publish_status(self, force: bool = False, at: float | None = None) -> None:
@@ -856,6 +862,7 @@ class PlannerNode(ManagedNode):
             'tracks': len(self.scan_perception.movers(self.now())),
             'scan_problem': self.scan_problem,
             'control_ms': self.control_ms(),
+            'control_cpu_ms': self.control_ms(cpu=True),
         }
         self.status_pub.publish(convert.make_status(self.get_namespace(), message, level, values))
 

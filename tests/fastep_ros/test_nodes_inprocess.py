@@ -387,17 +387,21 @@ def test_nodes_publish_the_interface_and_fastep_sim_records_their_qos(context: A
 
 
 def test_status_tells_how_long_the_control_callback_takes(context: Any) -> None:
-    """status' control_ms: p50 / p99 / max wall milliseconds of the recent control callbacks (what benchmarks
-    read at 16 robots), '' before the first."""
+    """status' control_ms and control_cpu_ms: p50 / p99 / max wall and thread-CPU milliseconds of the recent control
+    callbacks (what benchmarks read at 16 robots), '' before the first."""
     from fastep_ros.planner import CONTROL_TIMES
     node = make(PlannerNode, context)
     try:
-        assert node.control_ms() == ''
+        assert node.control_ms() == '' and node.control_ms(cpu=True) == ''
         for _ in range(CONTROL_TIMES + 5):
             node.on_control()
-        assert len(node.control_times) == CONTROL_TIMES
+        assert len(node.control_times) == len(node.control_cpu_times) == CONTROL_TIMES
         p50, p99, top = (float(v) for v in node.control_ms().split(' / '))
         assert 0.0 < p50 <= p99 <= top
+        cpu = [float(v) for v in node.control_ms(cpu=True).split(' / ')]
+        assert cpu == sorted(cpu) and cpu[0] >= 0.0
+        # A callback's thread cannot spend more CPU than the wall time it took (the clocks' resolution aside).
+        assert all(c <= w + 1e-4 for c, w in zip(node.control_cpu_times, node.control_times))
         node.publish_status(force=True)   # with it among the values (a status that fails to build raises here)
     finally:
         node.destroy_node()
