@@ -74,8 +74,9 @@ def make_up(tick: Tick) -> str:
     return 'both' if plan and route else 'step plan' if plan else 'route' if route else 'neither'
 
 
-def run(robots: int, algorithm: str, seed: int, window: tuple[float, float]) -> dict[str, Any]:
-    scenario = parse_scenario(yaml.safe_load(scenario_yaml(robots, 20.0, 2.0)))
+def run(robots: int, algorithm: str, seed: int, window: tuple[float, float],
+        step_iterations: int = 0) -> dict[str, Any]:
+    scenario = parse_scenario(yaml.safe_load(scenario_yaml(robots, 20.0, 2.0, step_iterations)))
     cpu = time.process_time()
     with timed_updates() as timing:
         result = simulate(scenario, algorithm, seed)
@@ -101,12 +102,15 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument('--robots', type=int, default=16)
     parser.add_argument('--algorithm', default='fastep_route')
     parser.add_argument('--seeds', type=int, nargs='+', default=[0, 1])
+    parser.add_argument('--step-iterations', type=int, default=0, metavar='K',
+                        help='PlannerParams.step_iterations (default 0: a step plan in one tick)')
     parser.add_argument('--window', type=float, nargs=2, default=(5.0, 15.0), metavar=('FROM', 'TO'))
     args = parser.parse_args(argv)
-    print(f'crowd_ticks: {args.robots} robots, {args.algorithm}, window {args.window[0]:g}-{args.window[1]:g} s; '
+    print(f'crowd_ticks: {args.robots} robots, {args.algorithm}, step_iterations {args.step_iterations}, '
+          f'window {args.window[0]:g}-{args.window[1]:g} s; '
           f'load average {", ".join(f"{x:.2f}" for x in os.getloadavg())}', flush=True)
     for seed in args.seeds:
-        r = run(args.robots, args.algorithm, seed, tuple(args.window))
+        r = run(args.robots, args.algorithm, seed, tuple(args.window), args.step_iterations)
         worst = r['p99_ms'][-1] if r['p99_ms'] else float('nan')
         median = float(np.median(r['p99_ms'])) if r['p99_ms'] else float('nan')
         third = r['third_ms'][-1] if r['third_ms'] else float('nan')

@@ -93,7 +93,8 @@ def machine_cpu() -> tuple[float, float]:
     return sum(values) - idle, sum(values)
 
 
-def scenario_yaml(n: int, radius: float, max_speed: float) -> str:
+def scenario_yaml(n: int, radius: float, max_speed: float, step_iterations: int = 0) -> str:
+    """n point-mass robots on a circle swapping sides; step_iterations: PlannerParams' (0, the default, left out)."""
     lines = [f'name: circle_swap_{n}',
              f'description: {n} point-mass robots on a circle of radius {radius:g} m swapping to the opposite side',
              'workspace: [0, 0, 50, 50]', 'robots:']
@@ -103,7 +104,8 @@ def scenario_yaml(n: int, radius: float, max_speed: float) -> str:
         lines += [f'  - name: r{k + 1}', '    model: point_mass',
                   f'    start: [{25 + dx:.4f}, {25 + dy:.4f}]', f'    goal: [{25 - dx:.4f}, {25 - dy:.4f}]',
                   '    radius: 0.5']
-    lines += [f'planner: {{max_speed: {max_speed!r}}}']
+    budget = f', step_iterations: {step_iterations}' if step_iterations else ''
+    lines += [f'planner: {{max_speed: {max_speed!r}{budget}}}']
     return '\n'.join(lines) + '\n'
 
 
@@ -124,7 +126,7 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
     from fastep_ros import launch
 
     path = tmp / f'circle_{n}.yaml'
-    path.write_text(scenario_yaml(n, args.radius, args.max_speed))
+    path.write_text(scenario_yaml(n, args.radius, args.max_speed, args.step_iterations))
     scenario = load_scenario(str(path))
     stamped = not args.unstamped
     graph = Graph(tmp)
@@ -479,6 +481,8 @@ def main(argv: list[str] | None = None) -> None:
     p.add_argument('--seed', type=int, default=0)
     p.add_argument('--algorithm', default='fastep', help='the planners\' algorithm (default fastep, as in the tables '
                    'of docs/benchmarks.md; the planner node\'s own default is fastep_route)')
+    p.add_argument('--step-iterations', type=int, default=0, metavar='K', help='the planners\' step_iterations '
+                   '(swarm iterations of a step plan per control tick; default 0: the whole plan in one tick)')
     p.add_argument('--layout', choices=LAYOUTS, default='node', help='processes as fastep-launch --layout '
                    '(default node: one per node)')
     p.add_argument('--executor', choices=EXECUTORS, default='single', help='FASTEP_EXECUTOR of every node '

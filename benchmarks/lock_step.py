@@ -80,6 +80,8 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument('--scenario', default='case_study_1')
     p.add_argument('--robots', type=int, default=0, help='the circle of N robots of benchmarks.graph_scaling')
     p.add_argument('--algorithm', default='fastep')
+    p.add_argument('--step-iterations', type=int, default=0, metavar='K', help='with --robots: the planners\' '
+                   'step_iterations (default 0: a step plan in one tick)')
     p.add_argument('--rtf', type=float, default=50.0)
     p.add_argument('--layouts', nargs='+', default=['robot', 'graph', 'node'])
     p.add_argument('--executors', nargs='+', default=['events', 'single'])
@@ -91,7 +93,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.robots:
         from benchmarks.graph_scaling import scenario_yaml
         scenario = str(out / f'circle_{args.robots}.yaml')
-        Path(scenario).write_text(scenario_yaml(args.robots, 20.0, 2.0))
+        Path(scenario).write_text(scenario_yaml(args.robots, 20.0, 2.0, args.step_iterations))
     reference = simulate(load_scenario(scenario), args.algorithm, 0).to_json()['robots']
     rows = []
     for executor in args.executors:

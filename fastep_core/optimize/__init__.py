@@ -6,8 +6,8 @@ a box, take every random draw from one numpy Generator (same seed, same result),
 """
 
 from fastep_core.optimize.aco import aco_r
-from fastep_core.optimize.fastep import fastep
+from fastep_core.optimize.fastep import fastep, fastep_iterations
 from fastep_core.optimize.firefly import firefly
 from fastep_core.optimize.result import OptimizeResult
 
-__all__ = ['OptimizeResult', 'fastep', 'firefly', 'aco_r']
+__all__ = ['OptimizeResult', 'fastep', 'fastep_iterations', 'firefly', 'aco_r']

@@ -61,6 +61,8 @@ receives (m, d) arrays in Fortran order (see `firefly.Swarm`).
 
 from __future__ import annotations
 
+from typing import Generator
+
 import numpy as np
 from numpy.typing import ArrayLike
 
@@ -76,7 +78,7 @@ from fastep_core.optimize.result import (
     initial_population,
 )
 
-__all__ = ['fastep', 'PREFERENCE_TOLERANCE']
+__all__ = ['fastep', 'fastep_iterations', 'PREFERENCE_TOLERANCE']
 
 PREFERENCE_TOLERANCE = 0.01
 """Q of the preference rule: a stepping-ahead move up to Q * |f_i| worse than f_i is still taken."""
@@ -117,6 +119,30 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
     OptimizeResult
         Best point and value, iterations, evaluated points and the best value after each iteration.
     """
+    run = fastep_iterations(fun, bounds, n_fireflies=n_fireflies, max_iter=max_iter, patience=patience, gamma=gamma,
+                            beta0=beta0, alpha=alpha, alpha_damping=alpha_damping, tol=tol, rng=rng, x0=x0,
+                            attraction_sample=attraction_sample)
+    while True:
+        try:
+            next(run)
+        except StopIteration as finished:
+            result: OptimizeResult = finished.value
+            return result
+
+
+def fastep_iterations(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50, max_iter: int = 30,
+                      patience: int = 5, gamma: float = 1.0, beta0: float = 2.0, alpha: float = 0.2,
+                      alpha_damping: float = 0.8, tol: float = 0.0, rng: RngLike = None,
+                      x0: ArrayLike | None = None,
+                      attraction_sample: int | None = None) -> Generator[None, None, OptimizeResult]:
+    """`fastep` one iteration at a time: a generator that pauses before each iteration and returns the result.
+
+    The first `next()` validates the arguments and evaluates the initial swarm; each further one runs an
+    iteration; StopIteration carries the OptimizeResult (`.value`). The same moves, draws and result as `fastep`
+    with the same arguments, however the iterations are spread out: a planner with a time budget per control
+    tick runs a few of them per tick (planning/step.py, StepRun). The objective and the Generator must not be
+    used by anything else between the pauses if the run is to equal `fastep`'s.
+    """
     _check_swarm_parameters(n_fireflies, max_iter, patience, gamma, beta0, alpha, alpha_damping)
     check_number('tol', tol)
     if attraction_sample is not None:
@@ -131,6 +157,7 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
 
     alpha_t = float(alpha)
     for _ in range(max_iter):
+        yield                                            # pause: the initial swarm or an iteration is done
         scale = alpha_t * swarm.span                     # alpha_t * span, a (d, 1) column
         X, F = swarm.rank(X, F)                          # 0. brightest first
 

@@ -39,7 +39,7 @@ from fastep_core.planning.others import OtherRobot, OtherRobots, robot_arrays, r
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
 from fastep_core.planning.recovery import BackUp, StopTimer, free_room
-from fastep_core.planning.step import StepProblem, plan_step_passing_right
+from fastep_core.planning.step import StepProblem, StepRun, step_run
 from fastep_core.planning.yielding import Yield, Yielding
 from fastep_core.world import World
 
@@ -98,6 +98,8 @@ class Navigator:
         self._ticks = 0                           # control ticks so far
         self._rule_gave_up = -1                   # the tick whose plan could not keep right (plan_next_step)
         self._hold_broken = -1                    # the tick whose hold breaker's plan could not keep right
+        self._pending: StepRun | None = None      # a step plan to be finished next tick (params.step_iterations)
+        self._pending_tick = -1                   # ... the tick that left it unfinished
         self._detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # last `blocked` answer
         self._near_detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # ... within plan_horizon
         # A run proven clear of obstacles or blocked by one, and how far its ends may move before it must be
@@ -147,6 +149,7 @@ class Navigator:
         self.waypoint, self.plan, self.cost, self._target = None, [], 0.0, None
         self.reference, self._path_checked, self._committed = None, False, False
         self._stuck, self._rule_gave_up, self._hold_broken = 0, -1, -1
+        self._pending, self._pending_tick = None, -1
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -191,7 +194,8 @@ class Navigator:
         """
         self._last_t = None
         self._retry_at = -math.inf
-        self._rule_gave_up = self._hold_broken = -1
+        self._rule_gave_up = self._hold_broken = self._pending_tick = -1
+        self._pending = None
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -409,32 +413,28 @@ class Navigator:
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists.
 
-        With robots ahead the step first keeps right of them (plan_step_passing_right). When that gives up, the
+        With robots ahead the step first keeps right of them (planning/step.py, step_run). When that gives up, the
         step without the rule is planned on the next tick, not in this one (`step_deferred`), and `tick` drives
         on meanwhile: two swarm runs in one tick were the slowest control ticks of a crowd (docs/benchmarks.md).
+        With params.step_iterations a plan that needs more swarm iterations is finished on the next ticks the
+        same way (it plans from where the robot was when it began), as the same activation.
         """
         assert self.goal is not None
         if self._last_t is not None and self._last_t < self._retry_at:
             return None
-        plain = self._rule_gave_up == self._ticks - 1   # the rule gave up last tick: this plan continues it
-        target = self.step_target()
-        centres, sums = robot_arrays(others, self.radius)
-        centres, sums = self.yielding.with_predictions(position, others, centres, sums,
-                                                       self.params.step_radius / max(self.params.max_speed, 1e-6))
-        problem = StepProblem(self.world, position, target, self.clearance, self.params.step_radius,
-                              self.params.a, self.params.b, self.params.c, centres,
-                              sums + self.params.clearance_margin)
-        offset = centres - position
-        ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (target - position) > 0)
-        if plain:
-            ahead[:] = False
-        else:
-            self.activations += 1
+        run = self._pending if self._pending_tick == self._ticks - 1 else None   # left unfinished last tick
+        self._pending, self._pending_tick = None, -1
+        if run is None:
+            run = self.start_step(position, others)
         start = time.perf_counter()
-        step = plan_step_passing_right(problem, self.params, self.rng, self.step_method, offset[ahead],
-                                       plain_after=False)
+        done = run.advance(self.step_budget())
         self.plan_time += time.perf_counter() - start
-        if step is None and ahead.any():
+        if not done:
+            self._pending, self._pending_tick = run, self._ticks
+            self.mode, self.reason = Mode.AVOIDING, 'planning a step (finished on the next tick)'
+            return None
+        step = run.plan
+        if step is None and len(run.problem.pass_on_right):
             self._rule_gave_up = self._ticks
             self.mode, self.reason = Mode.AVOIDING, 'cannot keep right; planning the step without it'
             return None
@@ -448,10 +448,35 @@ class Navigator:
         self.plan.append(step.waypoint)
         return step.waypoint
 
+    def step_budget(self) -> int | None:
+        """Swarm iterations this tick's step plan may run: params.step_iterations, None (to the end) for 0."""
+        return self.params.step_iterations or None
+
+    def start_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> StepRun:
+        """The step problem of this tick (eq. 10 toward step_target, the robots as they are and as yielding predicts
+        them) and its swarm run, keeping right of the robots ahead unless the rule gave up last tick (then this
+        plan continues that activation)."""
+        plain = self._rule_gave_up == self._ticks - 1
+        target = self.step_target()
+        centres, sums = robot_arrays(others, self.radius)
+        centres, sums = self.yielding.with_predictions(position, others, centres, sums,
+                                                       self.params.step_radius / max(self.params.max_speed, 1e-6))
+        problem = StepProblem(self.world, position, target, self.clearance, self.params.step_radius,
+                              self.params.a, self.params.b, self.params.c, centres,
+                              sums + self.params.clearance_margin)
+        offset = centres - position
+        ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (target - position) > 0)
+        if plain:
+            ahead[:] = False
+        else:
+            self.activations += 1
+        return step_run(problem, self.params, self.rng, self.step_method, offset[ahead])
+
     @property
     def step_deferred(self) -> bool:
-        """This tick's step could not keep right of the robots ahead: the step without that rule comes next tick."""
-        return self._rule_gave_up == self._ticks
+        """This tick's step is not planned yet: it could not keep right of the robots ahead (the step without that
+        rule comes next tick), or it needs more swarm iterations than a tick has (params.step_iterations)."""
+        return self._rule_gave_up == self._ticks or self._pending_tick == self._ticks
 
     def step_target(self) -> FloatArray:
         """The point d in eq. 10 is measured to: the goal (FAStep-Route: the route vertex it aims at)."""

@@ -18,21 +18,22 @@ the swarm is still pulled toward feasibility.
 from __future__ import annotations
 
 import copy
+import itertools
 from contextlib import contextmanager
 from dataclasses import dataclass, field
-from typing import Callable, Iterator
+from typing import Callable, Generator, Iterator
 
 import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import Obstacles, point_segment_distance
-from fastep_core.optimize import OptimizeResult, aco_r, fastep
+from fastep_core.optimize import OptimizeResult, aco_r, fastep_iterations
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'near_row_sum', 'plan_step', 'plan_step_passing_right',
-           'recorded_step_problems', 'sparse_row_sum']
+__all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'StepRun', 'near_row_sum', 'plan_step', 'plan_step_passing_right',
+           'recorded_step_problems', 'sparse_row_sum', 'step_run']
 
 FloatArray = NDArray[np.float64]
 INFEASIBLE = 1e6
@@ -508,23 +509,74 @@ def plan_step(problem: StepProblem, params: PlannerParams, rng: np.random.Genera
 
     feasible_within: raise _GaveUp once that many objective calls have found no feasible candidate.
     """
-    for recorder in _recorders:
-        recorder.append(copy.copy(problem))   # as posed: plan_step_passing_right reassigns pass_on_right
-    fitness = problem.fitness if feasible_within is None else _feasible_within(problem.fitness, feasible_within)
-    if method == 'fastep':
-        result = fastep(fitness, problem.bounds(), n_fireflies=params.n_fireflies,
-                        max_iter=params.max_iter, patience=params.patience, gamma=params.gamma,
-                        beta0=params.beta0, alpha=params.alpha, alpha_damping=params.alpha_damping, tol=params.tol,
-                        rng=rng, attraction_sample=params.attraction_sample or None)
-    elif method == 'aco':
-        result = aco_r(fitness, problem.bounds(), archive_size=params.aco_archive,
-                       n_ants=params.aco_ants, q=params.aco_q, xi=params.aco_xi, max_iter=params.aco_iter,
-                       patience=params.patience, tol=params.tol, rng=rng)
-    else:
-        raise ParameterError(f'unknown step optimizer {method!r} (fastep or aco)')
-    if not result.fun < INFEASIBLE:
-        return None
-    return StepPlan(np.asarray(result.x, dtype=float), float(result.fun), result)
+    run = StepRun(problem, params, rng, method, feasible_within)
+    run.advance()
+    if run.gave_up:
+        raise _GaveUp
+    return run.plan
+
+
+class StepRun:
+    """One step plan that may be spread over several control ticks: `advance(iterations)` runs at most that many
+    swarm iterations (the first call also the initial swarm) and says whether the plan is done; `plan` is then
+    plan_step's result. Run to the end in one call it is plan_step, draw for draw.
+
+    Why: in a crowd one step plan is the slowest part of a control tick (docs/benchmarks.md), and a planner with a
+    budget per tick (PlannerParams.step_iterations) finishes it over the next ticks instead. FAStep only: ACO_R
+    (the baseline) runs whole on the first call. With feasible_within, a plan whose swarm has found no feasible
+    candidate in that many objective calls ends there: done, `gave_up`, no plan.
+    """
+
+    def __init__(self, problem: StepProblem, params: PlannerParams, rng: np.random.Generator,
+                 method: str = 'fastep', feasible_within: int | None = None) -> None:
+        if method not in ('fastep', 'aco'):
+            raise ParameterError(f'unknown step optimizer {method!r} (fastep or aco)')
+        for recorder in _recorders:
+            recorder.append(copy.copy(problem))   # as posed: plan_step_passing_right reassigns pass_on_right
+        self.problem, self.params, self.rng, self.method = problem, params, rng, method
+        self.fitness = problem.fitness if feasible_within is None else \
+            _feasible_within(problem.fitness, feasible_within)
+        self._iterations: Generator[None, None, OptimizeResult] | None = None
+        self.result: OptimizeResult | None = None
+        self.gave_up = False
+
+    @property
+    def done(self) -> bool:
+        return self.result is not None or self.gave_up
+
+    @property
+    def plan(self) -> StepPlan | None:
+        """The planned step once done; None before, and when no feasible waypoint was found."""
+        result = self.result
+        if result is None or not result.fun < INFEASIBLE:
+            return None
+        return StepPlan(np.asarray(result.x, dtype=float), float(result.fun), result)
+
+    def advance(self, iterations: int | None = None) -> bool:
+        """Run at most `iterations` swarm iterations (None: to the end); True when the plan is done."""
+        if self.done:
+            return True
+        params = self.params
+        try:
+            if self.method == 'aco':
+                self.result = aco_r(self.fitness, self.problem.bounds(), archive_size=params.aco_archive,
+                                    n_ants=params.aco_ants, q=params.aco_q, xi=params.aco_xi,
+                                    max_iter=params.aco_iter, patience=params.patience, tol=params.tol, rng=self.rng)
+                return True
+            if self._iterations is None:
+                self._iterations = fastep_iterations(
+                    self.fitness, self.problem.bounds(), n_fireflies=params.n_fireflies, max_iter=params.max_iter,
+                    patience=params.patience, gamma=params.gamma, beta0=params.beta0, alpha=params.alpha,
+                    alpha_damping=params.alpha_damping, tol=params.tol, rng=self.rng,
+                    attraction_sample=params.attraction_sample or None)
+                next(self._iterations)            # the initial swarm: it pauses before the first iteration
+            for _ in itertools.repeat(None) if iterations is None else range(iterations):
+                next(self._iterations)
+        except StopIteration as finished:
+            self.result = finished.value
+        except _GaveUp:
+            self.gave_up = True
+        return self.done
 
 
 def _feasible_within(fitness: Callable[[FloatArray], FloatArray], calls: int) -> Callable[[FloatArray], FloatArray]:
@@ -561,6 +613,16 @@ def recorded_step_problems() -> Iterator[list[StepProblem]]:
         _recorders[:] = [r for r in _recorders if r is not problems]
 
 
+def step_run(problem: StepProblem, params: PlannerParams, rng: np.random.Generator, method: str,
+             ahead: FloatArray) -> StepRun:
+    """A StepRun keeping right of the robots met `ahead` (offsets from the robot), given RULE_CALLS objective calls to
+    find a feasible candidate (plan_step_passing_right says why); a plain one when `ahead` is empty."""
+    if not len(ahead):
+        return StepRun(problem, params, rng, method)
+    problem.pass_on_right = ahead
+    return StepRun(problem, params, rng, method, feasible_within=RULE_CALLS)
+
+
 def plan_step_passing_right(problem: StepProblem, params: PlannerParams, rng: np.random.Generator, method: str,
                             ahead: FloatArray, plain_after: bool = True) -> StepPlan | None:
     """plan_step keeping right of the robots met `ahead` (offsets from the robot) when that is possible at all;
@@ -577,13 +639,12 @@ def plan_step_passing_right(problem: StepProblem, params: PlannerParams, rng: np
     (the navigator, on the next control tick).
     """
     if len(ahead):
-        problem.pass_on_right = ahead
+        run = step_run(problem, params, rng, method, ahead)
         try:
-            step = plan_step(problem, params, rng, method, feasible_within=RULE_CALLS)
-        except _GaveUp:
-            step = None
+            run.advance()
         finally:
             problem.pass_on_right = np.zeros((0, 2))
+        step = run.plan
         if step is not None or not plain_after:
             return step
     return plan_step(problem, params, rng, method)

@@ -234,3 +234,28 @@ def test_attraction_sample_off_is_the_paper():
 def test_attraction_sample_must_be_a_positive_integer(k):
     with pytest.raises(ParameterError, match='attraction_sample'):
         fastep(sphere, BOX, attraction_sample=k)
+
+
+# One iteration at a time (fastep_iterations): what a planner with a budget per control tick runs.
+@pytest.mark.parametrize('seed', range(3))
+def test_the_run_spread_over_pauses_is_fasteps_draw_for_draw(seed):
+    from fastep_core.optimize import fastep_iterations
+    kw = dict(n_fireflies=20, max_iter=40, patience=5, tol=1e-9)
+    whole = fastep(rastrigin, RASTRIGIN_BOX, rng=np.random.default_rng(seed), **kw)
+    run = fastep_iterations(rastrigin, RASTRIGIN_BOX, rng=np.random.default_rng(seed), **kw)
+    pauses = 0
+    with pytest.raises(StopIteration) as finished:
+        while True:
+            next(run)
+            pauses += 1
+    spread = finished.value.value
+    assert pauses == whole.nit   # after the initial swarm, then after each iteration but the last
+    assert np.array_equal(spread.x, whole.x) and spread.fun == whole.fun
+    assert (spread.nit, spread.nfev) == (whole.nit, whole.nfev) and np.array_equal(spread.history, whole.history)
+
+
+def test_bad_arguments_are_refused_at_the_first_pause():
+    from fastep_core.optimize import fastep_iterations
+    run = fastep_iterations(rastrigin, RASTRIGIN_BOX, n_fireflies=0)
+    with pytest.raises(ParameterError):
+        next(run)

@@ -171,15 +171,17 @@ def rule_gives_up(monkeypatch):
     """Every step plan that keeps right gives up (step.RULE_CALLS spent); the plans made, in order."""
     from fastep_core.planning import step as step_module
     plans: list[str] = []
-    plan_step = step_module.plan_step
+    start = step_module.StepRun.__init__
 
-    def planned(problem, params, rng, method='fastep', feasible_within=None):
+    def started(self, problem, params, rng, method='fastep', feasible_within=None):
+        start(self, problem, params, rng, method, feasible_within)
         plans.append('plain' if feasible_within is None else 'rule')
         if feasible_within is not None:
-            raise step_module._GaveUp
-        return plan_step(problem, params, rng, method)
+            def gives_up(X):
+                raise step_module._GaveUp
+            self.fitness = gives_up
 
-    monkeypatch.setattr(step_module, 'plan_step', planned)
+    monkeypatch.setattr(step_module.StepRun, '__init__', started)
     return plans
 
 
@@ -242,3 +244,54 @@ def test_a_hold_breaker_step_that_cannot_keep_right_is_planned_plainly_on_the_ne
         state = state + 0.05 * command
         command = nav.update(t, state, other)
     assert plans == ['rule', 'plain'] and np.any(command != 0.0)
+
+
+def test_a_step_plan_over_budget_is_finished_on_the_next_ticks_while_the_robot_drives_on():
+    """params.step_iterations bounds a control tick's swarm work: the plan is finished over the next ticks, as one
+    activation, from where it began, and comes out as the waypoint the whole plan gives; meanwhile the robot
+    drives on toward the target it had rather than stopping."""
+    world = World.from_obstacles([0, 0, 50, 50], [Circle((13.5, 10.0), 1.0)])
+    whole = make_navigator('fastep', SPEC, 0.5, world, PlannerParams(), 0)
+    spread = make_navigator('fastep', SPEC, 0.5, world, PlannerParams(step_iterations=1), 0)
+    far, near = np.array([8.0, 10.0]), np.array([11.0, 10.0])   # the circle's surface 4.5 and 1.5 m ahead
+    for nav in (whole, spread):
+        nav.set_goal((30.0, 10.0))
+        nav.update(0.0, far)
+    whole.update(0.05, near)
+    assert whole.waypoint is not None and whole.activations == 1
+    command = spread.update(0.05, near)
+    assert spread.waypoint is None and spread.step_deferred and 'planning a step' in spread.reason
+    assert command[0] > 0.0 and spread.mode is Mode.AVOIDING   # driving on toward the goal, guarded
+    ticks, t = 1, 0.05
+    while spread.waypoint is None:
+        t += 0.05
+        spread.update(t, near)
+        ticks += 1
+    assert ticks > 1
+    assert np.array_equal(spread.waypoint, whole.waypoint) and spread.cost == whole.cost
+    assert spread.activations == 1 and not spread.step_deferred
+
+
+def test_a_new_goal_drops_an_unfinished_step_plan():
+    world = World.from_obstacles([0, 0, 50, 50], [Circle((13.5, 10.0), 1.0)])
+    nav = make_navigator('fastep', SPEC, 0.5, world, PlannerParams(step_iterations=1), 0)
+    nav.set_goal((30.0, 10.0))
+    nav.update(0.0, np.array([11.0, 10.0]))
+    assert nav.step_deferred and nav.activations == 1
+    nav.set_goal((30.0, 10.5), 0.05)
+    nav.update(0.05, np.array([11.0, 10.0]))
+    assert nav.activations == 2   # a plan of its own for the new goal, not the old one finished
+
+
+def test_with_a_budget_a_tick_that_planned_a_route_leaves_the_step_to_the_next():
+    """FAStep-Route: a route replan and a step plan in one tick were the slowest ticks left in a crowd; with
+    step_iterations set, such a tick runs no swarm iteration (the step continues next tick). Without a budget the
+    step is planned whole, as always."""
+    spread = make_navigator('fastep_route', SPEC, 0.5, WORLD, PlannerParams(step_iterations=3), 0)
+    whole = make_navigator('fastep_route', SPEC, 0.5, WORLD, PlannerParams(), 0)
+    for nav in (spread, whole):
+        nav.set_goal((45.0, 45.0))
+        nav.update(0.0, np.array([5.0, 5.0]))   # the goal's first tick plans the first route
+    assert spread.step_budget() == 0 and whole.step_budget() is None
+    spread.update(0.05, np.array([5.1, 5.1]))   # no route this tick
+    assert spread.step_budget() == 3

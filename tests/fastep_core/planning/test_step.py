@@ -187,3 +187,34 @@ def test_a_budget_that_is_not_reached_changes_no_plan():
         bounded = plan_step(p, PlannerParams(), np.random.default_rng(seed), feasible_within=5)
         assert free is not None and bounded is not None
         assert np.array_equal(free.waypoint, bounded.waypoint) and free.cost == bounded.cost
+
+
+@pytest.mark.parametrize('iterations', [1, 2, 5])
+def test_a_step_plan_spread_over_ticks_is_the_whole_plan(iterations):
+    """StepRun.advance(k) runs at most k swarm iterations per call (a planner's budget per control tick, PlannerParams
+    .step_iterations); however it is spread, the plan is plan_step's, bit for bit."""
+    from fastep_core.planning.step import StepRun
+    p = problem(others=np.array([[8.5, 6.0]]), robot_clearance=np.array([1.2]))
+    for seed in range(3):
+        whole = plan_step(p, PlannerParams(), np.random.default_rng(seed))
+        run = StepRun(p, PlannerParams(), np.random.default_rng(seed))
+        calls = 1
+        while not run.advance(iterations):
+            calls += 1
+            assert run.plan is None and not run.done
+        assert whole is not None and run.plan is not None and run.done
+        assert np.array_equal(run.plan.waypoint, whole.waypoint) and run.plan.cost == whole.cost
+        assert calls == -(-whole.result.nit // iterations)   # the initial swarm comes with the first
+        assert run.advance(iterations) and run.plan.cost == whole.cost   # a finished run stays finished
+
+
+def test_a_spread_plan_that_finds_nothing_feasible_in_time_gives_up():
+    """feasible_within counts objective calls across advances: the run ends there, done, with no plan."""
+    from fastep_core.planning.step import StepRun
+    p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
+    p.pass_on_right = np.array([[3.0, 0.0], [-3.0, 0.0]])   # right of both: nowhere
+    run = StepRun(p, PlannerParams(), np.random.default_rng(0), feasible_within=5)
+    advances = 1
+    while not run.advance(1):
+        advances += 1
+    assert run.gave_up and run.plan is None and advances > 1
