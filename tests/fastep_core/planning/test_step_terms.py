@@ -12,7 +12,7 @@ import pytest
 
 from fastep_core.geometry import Circle, Segment
 from fastep_core.planning import StepProblem
-from fastep_core.planning.step import DENSE_FROM, INFEASIBLE, near_row_sum, sparse_row_sum
+from fastep_core.planning.step import INFEASIBLE
 from fastep_core.world import World
 from fastep_testing.step_reference import reference_terms
 
@@ -109,33 +109,3 @@ def test_fitness_of_a_lone_feasible_candidate_among_many():
                 assert viol_ref[0] == 0.0 and (viol_ref[1:] > 0.0).all()
                 assert_same_fitness(problem, batch, f_ref, viol_ref)
                 assert_same_fitness(problem, batch[::-1].copy(), f_ref[::-1], viol_ref[::-1])
-
-
-@pytest.mark.parametrize('n', [1, 2, 5, 7, 8, 9, 15, 16, 17, 39, 64, 100, 128, 129, 200, 300])
-@pytest.mark.parametrize('m', [1, 2, 3, 50, 1226])
-def test_sparse_row_sum_is_numpys_row_sum(n, m):
-    rng = np.random.default_rng(n * 10_000 + m)
-    for k in {1, 2, 3, n // 3 + 1, n}:
-        keep = np.sort(rng.choice(n, size=min(k, n), replace=False))
-        A = np.zeros((m, n))
-        A[:, keep] = rng.random((m, len(keep))) * rng.choice([1e-3, 1.0, 1e3], (m, len(keep)))
-        A[rng.random((m, n)) < 0.2] = 0.0                      # zeros inside the columns too
-        total = sparse_row_sum({int(j): A[:, j].copy() for j in keep}, n)
-        assert np.array_equal(total, A.sum(axis=1))
-    assert sparse_row_sum({}, n) is None
-
-
-@pytest.mark.parametrize('n', [1, 3, 5, 15, 39, 129])
-@pytest.mark.parametrize('m', [1, 50, 1226])
-def test_near_row_sum_is_numpys_row_sum_with_few_and_many_columns(n, m):
-    """Below DENSE_FROM columns it adds them alone (sparse_row_sum), from it on it builds the array: both give
-    numpy's sum of the whole array, bit for bit."""
-    rng = np.random.default_rng(n * 7_000 + m)
-    for k in sorted({1, DENSE_FROM - 1, DENSE_FROM, n // 2 + 1, n}):
-        if k > n:
-            continue
-        near = np.sort(rng.choice(n, size=k, replace=False))
-        A = np.zeros((m, n))
-        A[:, near] = rng.random((m, k)) * rng.choice([1e-3, 1.0, 1e3], (m, k))
-        assert np.array_equal(near_row_sum(near, A[:, near].T.copy(), n), A.sum(axis=1))
-    assert near_row_sum(np.zeros(0, dtype=np.intp), np.zeros((0, m)), n) is None
