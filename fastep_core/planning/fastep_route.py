@@ -253,8 +253,10 @@ class FAStepRoute(FAStepKinematic):
         return path
 
     def step_budget(self) -> int | None:
-        """With a budget per tick (params.step_iterations), a tick that planned a route runs no swarm iteration: its
-        step waits for the next tick (a route and a step plan in one tick were the slowest ticks left, 3-5 ms)."""
+        """With a budget per tick (params.step_iterations), a tick that planned a route runs no swarm iteration (a new
+        plan only its initial swarm): its step goes on next tick (a route and a step plan in one tick were the
+        slowest ticks left, 3-5 ms). Never two such ticks in a row (plan_next_step): routes every tick would
+        otherwise keep the step from ever ending."""
         budget = super().step_budget()
         return 0 if budget is not None and self._route_tick == self._ticks else budget
 

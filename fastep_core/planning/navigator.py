@@ -48,6 +48,7 @@ __all__ = ['FAStepKinematic', 'FAStepPaper', 'Mode', 'Navigator', 'OtherRobot']
 FloatArray = NDArray[np.float64]
 RETRY_AFTER = 0.5   # seconds between step-planning attempts while no feasible step exists
 CLEAR_REACH = 1.0   # metres a run proven clear stays proven (obstacles_on_run), at most
+PENDING_FOR = 0.5   # seconds a step plan left unfinished (params.step_iterations) may be continued, at most
 ClearRun = tuple[World, tuple[float, float], tuple[float, float], float, float, float, bool]
 """An answer of obstacles_on_run proven: world, start, end, sensing range, `within`, how far the run's ends may
 move while it holds, and the answer."""
@@ -100,6 +101,8 @@ class Navigator:
         self._hold_broken = -1                    # the tick whose hold breaker's plan could not keep right
         self._pending: StepRun | None = None      # a step plan to be finished next tick (params.step_iterations)
         self._pending_tick = -1                   # ... the tick that left it unfinished
+        self._pending_t = -math.inf               # ... and its time
+        self._idle_tick = -1                      # the last tick whose step plan was given no iteration
         self._detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # last `blocked` answer
         self._near_detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # ... within plan_horizon
         # A run proven clear of obstacles or blocked by one, and how far its ends may move before it must be
@@ -174,6 +177,7 @@ class Navigator:
         """
         self.check_params(params)
         self.params = params
+        self._pending = None   # an unfinished step plan: planned afresh with the new values
         self.guard_check.params = params
         self.yielding = self._yielding(params)
         if self.manoeuvring is not None:
@@ -277,7 +281,8 @@ class Navigator:
         if self.backup.active(t):
             return self.back_up(state, dt, others)
         if self.stops.hold_breaker_due(t) or self._hold_broken == self._ticks - 1:
-            # The hold breaker comes once; a step of it that could not keep right is planned plainly next tick.
+            # The hold breaker comes once; a step of it that could not keep right is planned plainly next tick,
+            # one that needs more swarm iterations than a tick has (params.step_iterations) goes on next tick.
             target = self.plan_next_step(position, others)
             self._committed = target is not None
             self._hold_broken = self._ticks if self.step_deferred else -1
@@ -288,9 +293,12 @@ class Navigator:
             if not self.escape.active:
                 target = self.choose_target(position, others)
         if target is None:
-            if self.step_deferred and self._target is not None:
+            if self.step_deferred and self._target is not None and \
+                    not (self._hold_broken == self._ticks and self._pending_tick == self._ticks):
                 # The plain step is planned next tick; meanwhile the robot drives on as it did, guarded,
-                # rather than stopping for one tick in the middle of a crowd.
+                # rather than stopping for one tick in the middle of a crowd. Not while the hold breaker's step
+                # is still being planned: that would drive at what holds the robot, and the guard, stopping it
+                # again, would call the hold breaker a second time.
                 return self.drive_to(state, self._target, t, dt, others)
             self._target = None
             return stop
@@ -417,20 +425,33 @@ class Navigator:
         step without the rule is planned on the next tick, not in this one (`step_deferred`), and `tick` drives
         on meanwhile: two swarm runs in one tick were the slowest control ticks of a crowd (docs/benchmarks.md).
         With params.step_iterations a plan that needs more swarm iterations is finished on the next ticks the
-        same way (it plans from where the robot was when it began), as the same activation.
+        same way (it plans from where the robot was when it began), as the same activation: continued only on the
+        very next tick, within PENDING_FOR seconds and in the same world (else planned afresh, and after a world
+        change whole, so that a world changing every tick cannot keep a plan from ending).
         """
         assert self.goal is not None
         if self._last_t is not None and self._last_t < self._retry_at:
             return None
-        run = self._pending if self._pending_tick == self._ticks - 1 else None   # left unfinished last tick
+        run, whole = self._pending, False
+        if run is not None and (self._pending_tick != self._ticks - 1 or self._last_t is None or
+                                self._last_t - self._pending_t > PENDING_FOR):
+            run = None            # not continued on the very next tick: the robots it went round have moved
+        elif run is not None and run.problem.world is not self.world:
+            run, whole = None, True   # the world changed under it (a new obstacle): planned afresh, whole
         self._pending, self._pending_tick = None, -1
         if run is None:
             run = self.start_step(position, others)
+        budget = None if whole else self.step_budget()
+        if budget == 0:
+            if self._idle_tick == self._ticks - 1:   # no iteration at most one tick in a row: every plan ends
+                budget = self.params.step_iterations
+            else:
+                self._idle_tick = self._ticks
         start = time.perf_counter()
-        done = run.advance(self.step_budget())
+        done = run.advance(budget)
         self.plan_time += time.perf_counter() - start
         if not done:
-            self._pending, self._pending_tick = run, self._ticks
+            self._pending, self._pending_tick, self._pending_t = run, self._ticks, self._last_t or 0.0
             self.mode, self.reason = Mode.AVOIDING, 'planning a step (finished on the next tick)'
             return None
         step = run.plan

@@ -58,10 +58,11 @@ class PlannerParams:
     attraction_sample: int = _p(0, 'FAStep attracts each firefly to at most this many brighter fireflies, drawn at '
                                    'random every iteration (fewer candidates per iteration; a departure from the '
                                    'paper); 0: to all of them, as the paper', 0, 10_000)
-    step_iterations: int = _p(0, 'swarm iterations of a step plan per control tick at most: a plan that needs more is '
-                                 'finished on the next ticks while the robot drives on toward its last target (a '
-                                 'bound on a control tick\'s work among many robots; the waypoint comes a tick or two '
-                                 'later); 0: the whole plan in the tick it is needed, as the paper', 0, 10_000)
+    step_iterations: int = _p(0, 'swarm iterations of a FAStep step plan per control tick at most: a plan that needs '
+                                 'more is finished on the next ticks while the robot drives on toward its last target '
+                                 '(a bound on a control tick\'s work among many robots; with 3 a plan takes 1-4 ticks, '
+                                 'at most max_iter / step_iterations; ACO_R plans ignore it); 0: the whole plan in the '
+                                 'tick it is needed, as the paper', 0, 10_000)
     # Step fitness f = a/f1 + b/f2 + c*d (eq. 10; Table 1 rows 6-8).
     a: float = _p(0.18, 'obstacle safety weight a, paper range [0.1, 1]', 0.0)
     b: float = _p(0.18, 'robot safety weight b, paper range [0.1, 1]', 0.0)

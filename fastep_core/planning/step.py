@@ -407,6 +407,7 @@ class StepRun:
         self._iterations: Generator[None, None, OptimizeResult] | None = None
         self.result: OptimizeResult | None = None
         self.gave_up = False
+        self._error: Exception | None = None   # what ended the run otherwise (raised again by every advance)
 
     @property
     def done(self) -> bool:
@@ -421,7 +422,12 @@ class StepRun:
         return StepPlan(np.asarray(result.x, dtype=float), float(result.fun), result)
 
     def advance(self, iterations: int | None = None) -> bool:
-        """Run at most `iterations` swarm iterations (None: to the end); True when the plan is done."""
+        """Run at most `iterations` swarm iterations (None: to the end); True when the plan is done.
+
+        An exception from the objective (or bad parameters, found at the first call) ends the run: it is raised
+        here and again by every later call, never taken for an unfinished plan."""
+        if self._error is not None:
+            raise self._error
         if self.done:
             return True
         params = self.params
@@ -444,6 +450,9 @@ class StepRun:
             self.result = finished.value
         except _GaveUp:
             self.gave_up = True
+        except Exception as exc:
+            self._error = exc
+            raise
         return self.done
 
 
@@ -507,8 +516,8 @@ def plan_step_passing_right(problem: StepProblem, params: PlannerParams, rng: np
     (the navigator, on the next control tick).
     """
     if len(ahead):
-        run = step_run(problem, params, rng, method, ahead)
         try:
+            run = step_run(problem, params, rng, method, ahead)
             run.advance()
         finally:
             problem.pass_on_right = np.zeros((0, 2))

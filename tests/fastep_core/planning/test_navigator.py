@@ -295,3 +295,77 @@ def test_with_a_budget_a_tick_that_planned_a_route_leaves_the_step_to_the_next()
     assert spread.step_budget() == 0 and whole.step_budget() is None
     spread.update(0.05, np.array([5.1, 5.1]))   # no route this tick
     assert spread.step_budget() == 3
+
+
+def test_an_unfinished_step_plan_is_planned_afresh_when_the_world_changed_or_time_went_by():
+    """A plan left unfinished continues only on the very next tick, within PENDING_FOR, in the same world: a new
+    obstacle where its waypoint would land is planned round (afresh and whole, so a world changing every tick
+    cannot keep a plan from ending), and robots seen 10 s ago are not."""
+    old = World.from_obstacles([0, 0, 50, 50], [Circle((13.5, 10.0), 1.0)])
+    whole = make_navigator('fastep', SPEC, 0.5, old, PlannerParams(), 0)
+    whole.set_goal((30.0, 10.0))
+    whole.update(0.0, np.array([11.0, 10.0]))
+    assert whole.waypoint is not None
+    new = World.from_obstacles([0, 0, 50, 50], [Circle((13.5, 10.0), 1.0), Circle(tuple(whole.waypoint), 0.5)])
+    for gap, world in ((0.05, new), (10.0, old)):
+        nav = make_navigator('fastep', SPEC, 0.5, old, PlannerParams(step_iterations=1), 0)
+        nav.set_goal((30.0, 10.0))
+        nav.update(0.0, np.array([11.0, 10.0]))
+        assert nav.step_deferred and nav.activations == 1
+        nav.world = world
+        nav.update(gap, np.array([11.0, 10.0]))
+        assert nav.activations == 2                               # planned afresh, not continued
+        if world is new:                                          # ... whole, round the new obstacle
+            assert nav.waypoint is not None and not nav.step_deferred
+            assert new.obstacles.clearance(nav.waypoint) >= nav.clearance - 1e-9
+
+
+def test_with_a_budget_the_robot_stands_while_the_hold_breakers_step_is_planned(monkeypatch):
+    """Driving on while the hold breaker's step is planned would drive at what holds the robot; the guard would
+    stop it again and call the hold breaker a second time. So the robot stands until the step is planned, then
+    drives it, committed, as without a budget: one activation."""
+    monkeypatch.setattr(FAStepKinematic, 'blocked', lambda self, *a, **k: False)   # only the guard acts
+    for budget in (0, 1):
+        nav = make_navigator('fastep', SPEC, 0.5, World.from_obstacles([0, 0, 50, 50], []),
+                             PlannerParams(step_iterations=budget), 0)
+        nav.set_goal((30.0, 10.0))
+        other = [OtherRobot('r2', (11.7, 10.0), (0.0, 0.0), 0.5)]
+        state, t, pending = np.array([10.6, 10.0]), 0.0, []
+        for _ in range(60):
+            command = nav.update(t, state, other)
+            if nav.step_deferred:
+                pending.append(tuple(command))
+            state, t = state + 0.05 * command, t + 0.05
+        assert nav.activations == 1 and nav.waypoint is not None and nav._committed
+        assert all(c == (0.0, 0.0) for c in pending) and (len(pending) > 0) == (budget > 0)
+
+
+def test_a_step_plan_given_no_iteration_every_tick_still_ends(monkeypatch):
+    """A tick may give a step plan no swarm iteration (FAStep-Route, after a route), but never two ticks in a row:
+    routes every tick would otherwise keep the step from ever ending."""
+    monkeypatch.setattr(FAStepKinematic, 'step_budget', lambda self: 0)
+    nav = make_navigator('fastep', SPEC, 0.5, World.from_obstacles([0, 0, 50, 50], [Circle((13.5, 10.0), 1.0)]),
+                         PlannerParams(step_iterations=3), 0)
+    nav.set_goal((30.0, 10.0))
+    ticks, t = 0, 0.0
+    while nav.waypoint is None and ticks < 40:
+        nav.update(t, np.array([11.0, 10.0]))
+        ticks, t = ticks + 1, t + 0.05
+    assert nav.waypoint is not None and nav.activations == 1 and 2 < ticks < 40
+
+
+def test_with_a_budget_routes_every_tick_still_let_the_step_end():
+    """FAStep-Route replans its route every tick when the world object is new every tick (perception): such a
+    tick still gets its step planned (a plan is planned whole after a world change)."""
+    def world():
+        return World.from_obstacles([0, 0, 50, 50], [Circle((25.0, 25.0), 1.0)])
+    nav = make_navigator('fastep_route', SPEC, 0.5, world(), PlannerParams(step_iterations=3), 0)
+    nav.set_goal((30.0, 10.0))
+    state, t = np.array([10.0, 10.0]), 0.0
+    nav.update(t, state)
+    for _ in range(20):
+        t += 0.05
+        nav.world = world()
+        command = nav.update(t, state, [OtherRobot('r2', (state[0] + 2.0, 10.0), (-0.3, 0.0), 0.5)])
+        state = state + 0.05 * command
+    assert nav.replans >= 20 and len(nav.plan) >= 1 and nav.reason != 'planning a step (finished on the next tick)'

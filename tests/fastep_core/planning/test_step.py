@@ -218,3 +218,24 @@ def test_a_spread_plan_that_finds_nothing_feasible_in_time_gives_up():
     while not run.advance(1):
         advances += 1
     assert run.gave_up and run.plan is None and advances > 1
+
+
+def test_a_spread_plan_whose_objective_raises_raises_again_rather_than_looking_unfinished():
+    from fastep_core.planning.step import StepRun
+    run = StepRun(problem(), PlannerParams(), np.random.default_rng(0))
+    fitness, calls = run.fitness, []
+
+    def breaks_on_the_third(X: np.ndarray) -> np.ndarray:
+        calls.append(len(X))
+        if len(calls) == 3:
+            raise ValueError('boom')
+        return fitness(X)
+
+    run.fitness = breaks_on_the_third
+    with pytest.raises(ValueError, match='boom'):
+        while not run.advance(1):
+            pass
+    for iterations in (1, None):
+        with pytest.raises(ValueError, match='boom'):
+            run.advance(iterations)
+    assert not run.done and run.plan is None and len(calls) == 3
