@@ -12,17 +12,19 @@ The writers make the bytes of the message (little-endian CDR with zero padding, 
 padding bytes as it finds them; the tests decode them with rclpy), which a publisher sends as they are: rclpy
 publishes bytes without building a message. A
 plant's odometry and a planner's cmd_vel, once per robot and lock-step tick, cost ~35 us each as messages
-(building one, then converting it for the middleware) and a few us as bytes.
+(building one, then converting it for the middleware) and a few us as bytes; a planner's waypoint, plan and
+status (a DiagnosticStatus of 20 key/values, ~0.4 ms of CPU a publish as a message, live) likewise.
 """
 
 from __future__ import annotations
 
 import functools
 import struct
+from typing import Sequence
 
-__all__ = ['CdrError', 'clock_cdr', 'float64_cdr', 'float64_field', 'header_frame_id', 'header_stamp', 'odometry_cdr',
-           'odometry_fields', 'odometry_transform', 'stamp_parts', 'tf_message_cdr', 'twist_cdr', 'twist_fields',
-           'twist_stamped_cdr', 'twist_stamped_fields']
+__all__ = ['CdrError', 'clock_cdr', 'diagnostic_status_cdr', 'float64_cdr', 'float64_field', 'header_frame_id',
+           'header_stamp', 'odometry_cdr', 'odometry_fields', 'odometry_transform', 'path_cdr', 'pose_stamped_cdr',
+           'stamp_parts', 'tf_message_cdr', 'twist_cdr', 'twist_fields', 'twist_stamped_cdr', 'twist_stamped_fields']
 
 _CDR_LE = b'\x00\x01'
 _ENCAPSULATION = b'\x00\x01\x00\x00'    # little-endian CDR, no options
@@ -34,6 +36,8 @@ _TWIST = struct.Struct('<3d3d')
 _POSE = struct.Struct('<3d4d')
 _F64 = struct.Struct('<d')
 _STAMP = struct.Struct('<iI')   # a header's stamp: sec, nanosec (right after the 4-byte CDR header)
+_BYTE = struct.Struct('<B')
+_IDENTITY = (0.0, 0.0, 0.0, 1.0)   # orientation (x, y, z, w) of yaw 0: convert.yaw_quaternion(0.0)
 
 
 class CdrError(ValueError):
@@ -149,10 +153,13 @@ def stamp_parts(t: float) -> tuple[int, int]:
     return total // 1_000_000_000, total % 1_000_000_000
 
 
+_PADDING_TO_4 = (b'', b'\x00\x00\x00', b'\x00\x00', b'\x00')   # by offset % 4: looked up, a status writes 43 strings
+
+
 def _string(text: str, offset: int) -> bytes:
     """A CDR string written at payload offset `offset`: padding to 4, length (with the NUL), text, NUL."""
     raw = text.encode() + b'\x00'
-    return bytes(-offset % 4) + _U32.pack(len(raw)) + raw
+    return _PADDING_TO_4[offset & 3] + _U32.pack(len(raw)) + raw
 
 
 @functools.lru_cache(maxsize=64)
@@ -205,4 +212,38 @@ def tf_message_cdr(transforms: list[Transform]) -> bytes:
         out += _string(frame, len(out))
         out += _string(child, len(out))
         out += bytes(-len(out) % 8) + _POSE.pack(*translation, *rotation)
+    return _ENCAPSULATION + bytes(out)
+
+
+def pose_stamped_cdr(stamp: tuple[int, int], frame_id: str, position: tuple[float, float]) -> bytes:
+    """geometry_msgs/PoseStamped at (x, y), z 0, yaw 0 (convert.point_to_pose_stamped's message)."""
+    return _ENCAPSULATION + _STAMP.pack(*stamp) + _header_tail(frame_id) + \
+        _POSE.pack(position[0], position[1], 0.0, *_IDENTITY)
+
+
+def path_cdr(stamp: tuple[int, int], frame_id: str, points: Sequence[Sequence[float]]) -> bytes:
+    """nav_msgs/Path through the points (x, y), each pose stamped and framed as the path, z 0, yaw 0
+    (convert.waypoints_to_path's message)."""
+    # A header: the frame name right after the stamp needs no padding, and the same bytes head every pose (a
+    # pose starts 4-aligned: after the sequence's length, or 8-aligned after the doubles of the pose before).
+    header = _STAMP.pack(*stamp) + _string(frame_id, 8)
+    out = bytearray(header)
+    out += bytes(-len(out) % 4) + _U32.pack(len(points))
+    for point in points:
+        out += header
+        out += bytes(-len(out) % 8) + _POSE.pack(point[0], point[1], 0.0, *_IDENTITY)
+    return _ENCAPSULATION + bytes(out)
+
+
+def diagnostic_status_cdr(level: int, name: str, message: str, hardware_id: str,
+                          values: Sequence[tuple[str, str]]) -> bytes:
+    """diagnostic_msgs/DiagnosticStatus: level (a byte: 0 OK, 1 WARN, 2 ERROR, 3 STALE), name, message, hardware_id
+    and the (key, value) pairs (convert.status_values gives them as convert.make_status writes them)."""
+    out = bytearray(_BYTE.pack(level))
+    for text in (name, message, hardware_id):
+        out += _string(text, len(out))
+    out += bytes(-len(out) % 4) + _U32.pack(len(values))
+    for key, value in values:
+        out += _string(key, len(out))
+        out += _string(value, len(out))
     return _ENCAPSULATION + bytes(out)

@@ -48,8 +48,9 @@ __all__ = [
     'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
     'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point', 'pose_to_state',
     'quaternion_to_yaw', 'scan_to_laser_scan', 'seconds_to_clock', 'seconds_to_stamp', 'stamp_to_seconds',
-    'state_to_odometry', 'trailer_pose', 'trailer_yaw', 'twist_in_map', 'twist_to_command', 'twist_values_to_command',
-    'waypoints_to_path', 'world_to_occupancy_grid', 'yaw_of', 'yaw_quaternion', 'yaw_to_quaternion',
+    'state_to_odometry', 'status_values', 'trailer_pose', 'trailer_yaw', 'twist_in_map', 'twist_to_command',
+    'twist_values_to_command', 'waypoints_to_path', 'world_to_occupancy_grid', 'yaw_of', 'yaw_quaternion',
+    'yaw_to_quaternion',
 ]
 
 CIRCLES_NS = 'circles'
@@ -670,8 +671,13 @@ def make_status(name: str, message: str, level: str | bytes, values: Mapping[str
     msg = DiagnosticStatus()
     msg.level = LEVELS[level] if isinstance(level, str) else level
     msg.name, msg.message, msg.hardware_id = name, message, hardware_id
-    msg.values = [KeyValue(key=str(k), value=_value_text(v)) for k, v in (values or {}).items()]
+    msg.values = [KeyValue(key=key, value=text) for key, text in status_values(values)]
     return msg
+
+
+def status_values(values: Mapping[str, Any] | None) -> list[tuple[str, str]]:
+    """The (key, value) pairs of make_status's message, values as text (msg_tools.cdr writes them as bytes)."""
+    return [(str(k), _value_text(v)) for k, v in (values or {}).items()]
 
 
 def _value_text(value: Any) -> str:

@@ -386,6 +386,44 @@ def test_nodes_publish_the_interface_and_fastep_sim_records_their_qos(context: A
     assert recording.topics[goal].qos == interface.offered_qos_profiles(goal)
 
 
+def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: Any) -> None:
+    """The waypoint, plan and status a planner sends as bytes (msg_tools.cdr) decode to the messages convert builds
+    for what it planned: the target, the plan and its goal in its frame, the status' level, mode and values."""
+    from geometry_msgs.msg import PoseStamped
+    from nav_msgs.msg import Path as PathMsg
+    node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0], frame_id='world_frame')
+    sent: dict[str, list[Any]] = {'waypoint': [], 'plan': [], 'status': []}
+    keep_published(node.waypoint_pub, sent['waypoint'].append)
+    keep_published(node.plan_pub, sent['plan'].append)
+    keep_published(node.status_pub, sent['status'].append)
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
+        node.on_goal(convert.point_to_pose_stamped((8.0, 8.0), frame_id='world_frame'))
+        node.on_odom(convert.state_to_odometry([1.0, 1.0], convert.seconds_to_stamp(node.now()),
+                                               frame_id='world_frame'))
+        node.on_control()
+        nav = node.navigator
+        assert nav is not None and nav.target is not None
+        waypoint, plan, status = sent['waypoint'][-1], sent['plan'][-1], sent['status'][-1]
+        assert isinstance(waypoint, PoseStamped) and isinstance(plan, PathMsg)
+        assert waypoint == convert.point_to_pose_stamped(tuple(nav.target), waypoint.header.stamp, 'world_frame')
+        assert waypoint.header.stamp.sec > 0
+        points = [*(tuple(p) for p in nav.plan), (8.0, 8.0)]
+        assert plan == convert.waypoints_to_path(points, plan.header.stamp, 'world_frame')
+        level, message, reason = node.status()
+        assert (status.level, status.name, status.message, status.hardware_id) == (level, '/', message, '')
+        values = {kv.key: kv.value for kv in status.values}
+        assert list(values) == [kv.key for kv in status.values] == [
+            'reason', 'activations', 'escapes', 'manoeuvres', 'waypoint', 'goal', 'cost', 'others', 'algorithm', 't',
+            'since', 'odom_lag', 'obstacles', 'cmd_vel_readers', 'odom_heard', 'scans', 'tracks', 'scan_problem',
+            'control_ms', 'control_cpu_ms']
+        assert (values['reason'], values['goal'], values['algorithm'], values['obstacles']) == \
+            (reason, '8,8', node.algorithm, '1')
+        assert values['control_ms'] == '' and values['odom_heard'] == '1'   # the tick under way is not counted yet
+    finally:
+        node.destroy_node()
+
+
 def test_status_tells_how_long_the_control_callback_takes(context: Any) -> None:
     """status' control_ms and control_cpu_ms: p50 / p99 / max wall and thread-CPU milliseconds of the recent control
     callbacks (what benchmarks read at 16 robots), '' before the first."""
