@@ -151,6 +151,21 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
     return out
 
 
+WALL_ROBOTS_PER_CORE = 4
+"""Robots per CPU core from which, on wall time, planning a whole step in one control tick makes the tick long
+(16 robots on 2 cores: a planner's control p99 5.4-6.9 ms against 3.9-4.7 ms with step_iterations 3; docs/benchmarks.md,
+"A step plan spread over control ticks")."""
+
+
+def step_budget_hint(robots: int, cores: int, sim_time: bool, algorithm: str, params: PlannerParams) -> str:
+    """A line for the terminal when a run on wall time has many robots per core whose planners plan whole FAStep
+    steps (step_iterations 0); '' otherwise. In lock step a long tick only slows the run, it changes nothing."""
+    if sim_time or params.step_iterations or algorithm in ('aco', 'dwa') or robots <= WALL_ROBOTS_PER_CORE * cores:
+        return ''
+    return (f'note: {robots} robots on {cores} CPU core(s) on wall time: a step plan among them takes several ms of a '
+            f'control tick; "planner: {{step_iterations: 3}}" in the scenario spreads it over the next ticks (README)')
+
+
 # ----------------------------------------------------------------------------------------------- the run
 
 def _alone(monitor: Monitor) -> None:
@@ -183,6 +198,9 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     # Before any participant of this launch exists: the launcher's own (the monitor's) and its processes'.
     profile = use_discovery_profile()
     procs = Processes(args.verbose, args.layout or default_layout(sim_time, len(scenario.robots)), args.executor)
+    hint = step_budget_hint(len(scenario.robots), os.cpu_count() or 1, sim_time, args.algorithm, scenario.planner)
+    if hint:
+        print(hint, flush=True)
     monitor: Monitor | None = None
     stopping: threading.Thread | None = None
     code = 1

@@ -435,3 +435,16 @@ def test_a_process_joins_dds_only_when_its_gate_opens(context: Any, tmp_path: Pa
         node.destroy_node()
     closed = subprocess.run(cmd, env=env, input=b'', capture_output=True, timeout=30)
     assert closed.returncode == 0 and closed.stdout == b'' and closed.stderr == b''
+
+
+def test_a_wall_time_run_with_many_robots_per_core_is_told_about_step_iterations() -> None:
+    """16 robots on 2 cores on wall time plan whole steps in 5-7 ms control ticks: the launcher says how to spread
+    them; not in lock step, not with a budget set, not for planners without FAStep steps, not for few robots."""
+    from fastep_core.planning.params import PlannerParams
+    from fastep_ros.launch import step_budget_hint
+    paper = PlannerParams()
+    assert 'step_iterations: 3' in step_budget_hint(16, 2, False, 'fastep_route', paper)
+    assert step_budget_hint(16, 2, True, 'fastep_route', paper) == ''
+    assert step_budget_hint(16, 2, False, 'fastep_route', PlannerParams(step_iterations=3)) == ''
+    assert step_budget_hint(16, 2, False, 'dwa', paper) == ''
+    assert step_budget_hint(8, 2, False, 'fastep', paper) == ''
