@@ -130,7 +130,7 @@ class Route:
         room: the clearance stays on the same side of the usual threshold (and `within` moves by less than the
         robot did), and no run can cross its threshold while the robot moves less than half its distance from
         it. The rooms are shortened by a rounding margin far beyond the floats' own error (1e-6 m, relative to
-        the coordinates' size), as in Navigator.obstacles_on_run.
+        the coordinates' size), as in detection.RunDetector.obstacles_on_run.
         """
         x, y = float(position[0]), float(position[1])
         proof = self.sight_proof

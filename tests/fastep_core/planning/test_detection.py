@@ -1,0 +1,50 @@
+"""Detection: RunDetector keeps an answer about the obstacles while it stays proven, and it is always the answer
+measuring every obstacle gives."""
+
+import numpy as np
+import pytest
+
+from fastep_core.geometry import Circle, Segment
+from fastep_core.planning.detection import RunDetector
+from fastep_core.planning.params import PlannerParams
+from fastep_core.world import World
+
+
+@pytest.mark.parametrize('seed', range(4))
+def test_an_answer_kept_while_proven_is_the_answer_measured_afresh(seed):
+    """A robot and its run's end wandering through circles and walls, in small steps and sometimes a jump: every
+    answer of the detector that keeps its proofs equals a fresh detector's, and both kept and measured answers
+    (blocked and clear) occur."""
+    rng = np.random.default_rng(seed)
+    circles = [Circle((float(x), float(y)), float(r)) for x, y, r in
+               zip(rng.uniform(5, 45, 30), rng.uniform(5, 45, 30), rng.uniform(0.3, 2.0, 30))]
+    walls = [Segment((20.0, 2.0), (20.0, 14.0)), Segment((28.0, 36.0), (44.0, 36.0))]
+    world = World.from_obstacles([0, 0, 50, 50], circles + walls)
+    kept = RunDetector(0.5)
+    position, offset = np.array([25.0, 25.0]), np.array([6.0, 2.0])
+    reused = answers = blocked = 0
+    for k in range(600):
+        jump = k % 41 == 0
+        position = np.clip(position + rng.normal(0.0, 2.0 if jump else 0.05, 2), 0.5, 49.5)
+        offset = offset + rng.normal(0.0, 3.0 if jump else 0.08, 2)   # the run's end: a target a few metres on
+        end = np.clip(position + offset, 0.5, 49.5)
+        for near_run in (False, True):
+            before = kept._clear_runs[int(near_run)]
+            answer = kept.obstacles_on_run(world, position, end, 2.5, 0.75, near_run)
+            assert answer == RunDetector(0.5).obstacles_on_run(world, position, end, 2.5, 0.75, near_run)
+            reused += before is not None and kept._clear_runs[int(near_run)] is before
+            answers += 1
+            blocked += answer
+    assert 0 < reused < answers and 0 < blocked < answers
+
+
+def test_a_new_world_or_forget_drops_the_kept_answers():
+    params = PlannerParams()
+    empty = World.from_obstacles([0, 0, 50, 50], [])
+    detector = RunDetector(0.5)
+    position, goal = np.array([10.0, 10.0]), np.array([20.0, 10.0])
+    assert not detector.blocked(empty, params, position, goal, [])
+    walled = World.from_obstacles([0, 0, 50, 50], [Circle((11.5, 10.0), 0.5)])
+    assert detector.blocked(walled, params, position, goal, [])         # the world changed: measured again
+    detector.forget()
+    assert detector._detection is None and detector._clear_runs == [None, None]
