@@ -94,7 +94,7 @@ class StepProblem:
         # technique); the distance itself is taken for all but the walls' starts.
         nc = obstacles.n_circles
         self._all_rows = DistanceRows(np.concatenate([self.origin[None], self.target[None]]), obstacles,
-                                       np.arange(len(obstacles)))
+                                      np.arange(len(obstacles)))
         # The local obstacles (the clearance rule): their rows alone, after the origin's, for fitness().
         local = np.flatnonzero(self._local)
         self._local_rows = local
