@@ -249,9 +249,15 @@ def _spin(nodes: Sequence[Node], executor: rclpy.executors.Executor) -> None:
                 warned = True
 
 
+_stop_signalled: list[int] = []   # SIGINT / SIGTERM received before rclpy's own handler was there to act on it
+
+
 def _ignore_stop_signals() -> None:
+    """Python's handlers for SIGINT / SIGTERM: remember the signal, raise nothing (rclpy's handler, installed by
+    rclpy.init, calls this one after shutting the context down). A signal that comes before rclpy.init was lost:
+    the node then started and ran on (a node stopped 0.3 s after its start, CI, 2026-11-27)."""
     for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda signum, frame: None)
+        signal.signal(sig, lambda signum, frame: _stop_signalled.append(signum))
 
 
 def node_main(prog: str, factory: Callable[[], Node | Sequence[Node]], args: Sequence[str] | None = None) -> int:
@@ -286,7 +292,7 @@ def _gate_opened() -> bool:
 def _run_node(factory: Callable[[], Node | Sequence[Node]], args: Sequence[str] | None) -> int:
     """node_main's body: 0 after a stop (Ctrl-C is a normal stop for a node); a FastepError propagates,
     after the node is destroyed and ROS shut down."""
-    if not _gate_opened():
+    if not _gate_opened() or _stop_signalled:
         return 0
     try:
         rclpy.init(args=None if args is None else list(args))
@@ -295,6 +301,8 @@ def _run_node(factory: Callable[[], Node | Sequence[Node]], args: Sequence[str] 
     nodes: list[Node] = []
     executor = None
     try:
+        if _stop_signalled:   # during rclpy.init, before its handler: a stop all the same
+            raise KeyboardInterrupt
         # The executor before the node: built on a context a signal has already shut down, it fails half-way
         # and rclpy's destructor prints an AttributeError; a node that has logged that it is up is what a user
         # (or a test) stops, so by then the executor must exist.

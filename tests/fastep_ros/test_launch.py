@@ -374,6 +374,22 @@ def test_a_node_interrupted_while_it_imports_ends_without_a_traceback(tmp_path: 
     assert proc.returncode in (0, 130) and 'Traceback' not in err, (proc.returncode, err)
 
 
+def test_a_stop_signal_before_rclpy_init_is_not_lost(tmp_path: Path) -> None:
+    """The window between a node's own signal handlers and rclpy's (rclpy.init): a SIGINT there ended nothing, the
+    node started and ran on. Now it is remembered and the node stops before it is built."""
+    script = (
+        'import os, signal\n'
+        'from fastep_ros import common\n'
+        'def build():\n'
+        '    raise SystemExit("built after a stop signal")\n'
+        'common._ignore_stop_signals()\n'
+        'os.kill(os.getpid(), signal.SIGINT)   # lands in the window\n'
+        'print("exit", common.node_main("test", build))\n')
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    done = subprocess.run([sys.executable, '-c', script], env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stdout.strip() == 'exit 0', (done.returncode, done.stdout, done.stderr)
+
+
 def test_a_full_disk_under_fastep_launch_is_not_reported_as_written(tmp_path: Path) -> None:
     """Issue "Hardening", item 15: the recorder's file hits a file size limit (RLIMIT_FSIZE of the launcher,
     inherited by every node; a full disk without filling one): the launcher must not print "wrote ..."."""
