@@ -24,9 +24,10 @@ seconds (default 5), until every listed topic has delivered a message that answe
 message with a stamp (a header's, or a rosgraph_msgs/Clock's time) answers it if stamped after the tick before,
 one without a stamp whatever tick is current. fastep-launch lists every planner's cmd_vel (TwistStamped, stamped
 with the tick it was decided for: a planner in lock step acts on its plant's odometry of the tick, so its command
-also says that the plant has integrated) and the `clock_ack` of its observers (its own monitor, fastep-record: each
-says the /clock time it has taken, so neither falls behind the graph and loses messages), and runs plants and
-planners in lock step (fastep_ros.lock_step): the live graph then steps exactly like fastep-sim, whatever the
+also says that the plant has integrated) and, as observer_topics, the `clock_ack` of its observers (its own
+monitor, fastep-record: each says the /clock time it has taken, so neither falls further behind the graph than
+observer_lag ticks and loses messages from its queue; they take no part in a tick, so a tick need not wait for
+them), and runs plants and planners in lock step (fastep_ros.lock_step): the live graph then steps exactly like fastep-sim, whatever the
 machine's load and the order DDS delivers messages in, and rtf is an upper bound. A topic that timed out (its
 node died) is not waited for again until it publishes again. The timeout is long because a loaded machine starves
 a node for a second or two at times, and with 1 s the clock then ran on without it (a planner stopped for 2.5 s
@@ -55,10 +56,11 @@ from fastep_ros.common import (
     StartupError,
     check_range,
     declare,
+    declare_strings,
     node_main,
     quiet_at_stop,
 )
-from fastep_ros.limits import RTF_RANGE, STEP_RANGE
+from fastep_ros.limits import OBSERVER_LAG_MAX, RTF_RANGE, STEP_RANGE
 from fastep_ros.lock_step import STAMP_EPS
 from msg_tools import cdr, convert, interface
 
@@ -67,13 +69,16 @@ __all__ = ['ClockNode', 'main', 'tick_plan']
 SETTLE = 0.05       # wall seconds the start time is held after the expected subscribers matched (a subscriber
                     # whose end matched later misses the first tick: it gets it again after HOLD_PERIOD)
 HOLD_PERIOD = 0.1   # wall seconds between repeated /clock messages while the time is held
+LOOKUP_PERIOD = 0.05   # wall seconds between looks at the graph for the sync topics, while the start time is held
+                       # (every 0.2 s, make demo's start waited up to 0.45 s for the clock's cmd_vel subscriptions)
 START_MAX = 1e9     # simulated seconds: far from the int32 seconds of a /clock message (2^31 - 1)
 
 
 @dataclass
 class _Sync:
     sub: Any = None
-    fresh: bool = False
+    lag: int = 0            # ticks it may answer late (an observer's clock_ack: observer_lag; a node's: 0)
+    heard: float = -math.inf   # the latest time it answered (a message without a stamp: the tick it came in)
     absent: bool = False   # timed out once: not waited for until it publishes again
     answered: bool = False  # has published since the clock started
 
@@ -144,9 +149,15 @@ class ClockNode(Node):
                                 '/clock subscriptions are matched (so no node misses the beginning)')
         self.wait_timeout = declare(self, 'wait_timeout', 30.0, 'start anyway after this many wall seconds of '
                                     'waiting for subscribers (s)')
-        topics = declare(self, 'sync_topics', [''], 'lock step: before each tick, wait until every one of these '
+        topics = declare_strings(self, 'sync_topics', 'lock step: before each tick, wait until every one of these '
                          'topics (e.g. the planners\' cmd_vel, published once per control period) has delivered a '
                          'message since the previous tick; empty: free-running')
+        observers = declare_strings(self, 'observer_topics', 'lock step: like sync_topics, but each of these may '
+                            'answer up to observer_lag ticks late (the clock_ack of a node that watches the graph and '
+                            'is not part of it: fastep-launch\'s monitor, fastep-record)')
+        self.observer_lag = declare(self, 'observer_lag', 0, 'lock step: ticks an observer_topics answer may lag '
+                                    'behind (0: each tick waits for every observer, as for sync_topics)',
+                                    value_range=(0, OBSERVER_LAG_MAX), unit=' ticks')
         self.sync_timeout = declare(self, 'sync_timeout', 5.0, 'lock step: tick anyway after waiting this many '
                                     'wall seconds, and stop waiting for a topic that did not answer until it '
                                     'publishes again (a node that stopped does not freeze time)')
@@ -159,18 +170,18 @@ class ClockNode(Node):
             raise StartupError(f'a tick of {self.increment:g} s (rtf {self.rtf:g} at max_rate_hz '
                                f'{self.max_rate_hz:g}) is more than the nodes take from one /clock message '
                                f'({CLOCK_JUMP_LIMIT:g} s): lower rtf or raise max_rate_hz')
-        if topics and any(topics):
+        if topics or observers:
             # Lock step: every tick is one control period, as in the in-process simulator. A bigger increment
             # would make rcl timers skip periods (planners at 8 Hz instead of 20 Hz of simulated time), so
             # beyond max_rate_hz the clock runs slower than rtf instead (rtf is an upper bound here anyway).
             self.increment = self.step
         self.ticks = 0
-        self.left = -math.inf   # the time before the current tick (what a stamped answer must be later than)
         self.steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.created = self.steady.now()
         self.matched_at: float | None = None  # steady seconds when the subscribers were all there
         self.held_at = -math.inf
-        self.sync: dict[str, _Sync] = {t: _Sync() for t in topics if t}
+        self.sync: dict[str, _Sync] = {t: _Sync() for t in topics}
+        self.sync.update((t, _Sync(lag=self.observer_lag)) for t in observers if t not in self.sync)
         self.last_tick = -math.inf      # steady seconds of the last advancing tick
         self.last_lookup = -math.inf    # steady seconds of the last graph look-up for sync topics
         self.pub = self.create_publisher(ClockMsg, interface.CLOCK, interface.offered_qos(interface.CLOCK))
@@ -189,7 +200,7 @@ class ClockNode(Node):
         """Subscribe to the sync topics that are on the graph (their type is read from it); True when all
         are subscribed and published."""
         missing = [t for t, s in self.sync.items() if s.sub is None]
-        if missing and self.seconds() - self.last_lookup > 0.2:
+        if missing and self.seconds() - self.last_lookup > LOOKUP_PERIOD:
             self.last_lookup = self.seconds()
             types = dict(self.get_topic_names_and_types())
             for topic in missing:
@@ -209,21 +220,28 @@ class ClockNode(Node):
         """A message on a sync topic. One with a stamp answers the current tick if it is stamped after the tick
         before (a planner's cmd_vel decided for the current time; a 50 Hz plant's odometry of its last step), one
         without answers whatever tick is current."""
-        if stamp is not None and stamp <= self.left + STAMP_EPS:
+        sync = self.sync[topic]
+        sync.heard = max(sync.heard, self.time if stamp is None else stamp)
+        if not self.answers(sync):
             return   # an answer to an earlier tick (in lock step a planner's first command is stamped 0)
-        self.sync[topic].fresh = True
-        self.sync[topic].absent = False
-        self.sync[topic].answered = self.ticks > 0
+        sync.absent = False
+        sync.answered = self.ticks > 0
         # The last answer came after the tick period: tick now rather than at the next timer event.
         if self.matched_at is not None and self.seconds() - self.last_tick >= self.period \
-                and all(s.fresh for s in self.sync.values()) and not self.waiting():
+                and all(self.answers(s) for s in self.sync.values()) and not self.waiting():
             self.advance()
+
+    def answers(self, sync: _Sync) -> bool:
+        """Has `sync` answered the current tick, or (an observer) the tick `lag` ticks before: said a time later
+        than the tick before that one?"""
+        before = self.ticks - 1 - sync.lag   # the tick whose time an answer must be later than
+        return before < 0 or sync.heard > self.start + before * self.increment + STAMP_EPS
 
     def synced(self) -> bool:
         """Every node we lock step with has answered the last tick (or stopped publishing)."""
-        if all(s.fresh or s.absent for s in self.sync.values()):
+        if all(s.absent or self.answers(s) for s in self.sync.values()):
             return True
-        late = [t for t, s in self.sync.items() if not (s.fresh or s.absent) and self.count_publishers(t) > 0]
+        late = [t for t, s in self.sync.items() if not (s.absent or self.answers(s)) and self.count_publishers(t) > 0]
         if not late:
             return True
         waited = self.seconds() - self.last_tick
@@ -275,9 +293,6 @@ class ClockNode(Node):
         self.pub.publish(cdr.clock_cdr(cdr.stamp_parts(self.time)))
 
     def advance(self) -> None:
-        self.left = self.time
-        for sync in self.sync.values():
-            sync.fresh = False
         self.last_tick = self.seconds()
         self.ticks += 1
         self.pub.publish(cdr.clock_cdr(cdr.stamp_parts(self.time)))

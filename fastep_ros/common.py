@@ -29,7 +29,7 @@ from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-e
 from fastep_ros.parameters import warn_unknown_overrides
 
 __all__ = ['CLOCK_JUMP_LIMIT', 'GATE_ENV', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'StartupError', 'check_range',
-           'declare', 'declare_empty_array', 'guard_clock', 'node_main', 'quiet_at_stop']
+           'declare', 'declare_empty_array', 'declare_strings', 'guard_clock', 'node_main', 'quiet_at_stop']
 
 
 INT64_MAX = 2**63 - 1
@@ -80,6 +80,19 @@ def declare_empty_array(node: Node, name: str, kind: Parameter.Type, descriptor:
     descriptor.type = writable.type
     node.set_descriptor(name, descriptor)
     return list(node.get_parameter(name).value)
+
+
+def declare_strings(node: Node, name: str, description: str) -> list[str]:
+    """Declare a read-only string array parameter whose default is [] and return its value, the empty strings left
+    out (a launch file's ['']). Given as `[]` on the command line, rclpy had no type for it (a traceback); a value
+    of another type is a StartupError with one line."""
+    descriptor = ParameterDescriptor(name=name, type=Parameter.Type.STRING_ARRAY.value, read_only=True,
+                                     description=description)
+    try:
+        value = declare_empty_array(node, name, Parameter.Type.STRING_ARRAY, descriptor)
+    except ParameterException as exc:
+        raise StartupError(f'parameter {name} must be a string array: {exc}') from None
+    return [str(each) for each in value or [] if each]
 
 
 def declare(node: Node, name: str, default: Any, description: str, *, read_only: bool = True,

@@ -61,6 +61,10 @@ STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the wor
 SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
 END_WAIT = 5.0          # wall seconds the report waits at most for odometry up to the end of each robot's run
 STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
+OBSERVER_LAG = 20       # ticks the observers (this monitor, fastep-record) may lag behind the lock step ...
+ACK_TICKS = 5           # ... acknowledging every ACK_TICKS ticks: each tick waited for both (and for an
+# acknowledgement of each, 2 more messages into the graph's process) ran 25.8x real time, these 28.7x (make demo,
+# 5 runs each; docs/benchmarks.md, "Observers behind the lock step")
 DISCOVERY_WAIT = 0.6    # wall seconds the launcher looks for another graph on its domain before its nodes join DDS
 # (DDS showed an existing publisher to a new process after 0.3-0.45 s in most starts, up to 3.2 s in some (a
 # participant that missed the others' endpoints, fastep_ros.dds_profile): one seen later stops the launch, by the
@@ -221,7 +225,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             # Started before the goals and the clock, so the recording holds the whole run.
             procs.start('fastep-record', 'recorder', '/', {'output': str(args.record.resolve()),
                                                            'scenario': _scenario_arg(args.scenario),
-                                                           'use_sim_time': sim_time, 'clock_ack': sim_time})
+                                                           'use_sim_time': sim_time, 'clock_ack': sim_time,
+                                                           'clock_ack_period': ACK_TICKS * scenario.planner.dt})
         if sim_time:
             # The clock holds time 0 until the map, every plant and planner and, last, the monitor follow it.
             # Lock step: each tick of one control period waits for every planner's command stamped with it (each
@@ -232,9 +237,10 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                 'max_rate_hz': min(RATE_RANGE[1], max(400.0, float(args.rtf) / scenario.planner.dt)),
                 # The recorder subscribes to /clock twice: for its own time, and to record it.
                 'wait_for_subscribers': 2 + 2 * len(scenario.robots) + 2 * (args.record is not None),
-                # ... and for the observers (this monitor, the recorder) to have taken the tick before.
-                'sync_topics': [robot_topic(spec.name, CMD_VEL) for spec in scenario.robots] +
-                               ['/fastep_launch/clock_ack'] + ['/recorder/clock_ack'] * (args.record is not None)})
+                'sync_topics': [robot_topic(spec.name, CMD_VEL) for spec in scenario.robots],
+                # ... and for the observers (this monitor, the recorder) to be at most OBSERVER_LAG ticks behind.
+                'observer_topics': ['/fastep_launch/clock_ack'] + ['/recorder/clock_ack'] * (args.record is not None),
+                'observer_lag': OBSERVER_LAG})
         procs.launch()   # the nodes above, in the processes of --layout: they import, then wait at their gates
         # Two launches on one domain drove each other's robots and clocks (one reported a 498 m path in a 50 m
         # map): look for another graph before any node of this launch joins DDS, and keep looking (run's loop,
@@ -286,7 +292,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
 
         _wait(monitor, procs, deadline, goals_taken, 'sending the goals')
         if sim_time:
-            monitor.follow_clock()
+            monitor.follow_clock(ACK_TICKS * scenario.planner.dt, recorder=args.record is not None)
             monitor.sim_now = 0.0
         t0 = monitor.now()
         pace = f'simulated time at rtf {args.rtf:g} at most' if sim_time else 'wall time'
@@ -337,17 +343,20 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             progress.update(outcomes.count('arrived'), len(outcomes) - outcomes.count('') - outcomes.count('arrived'),
                             now)
         progress.close()
-        # Let the last odometry in before reporting: at least 0.2 s (in lock step, where this monitor takes every
-        # tick's odometry before the next, 0.05 s), and until every robot's reaches the time its run ended (at a high
-        # --rtf this monitor's odometry queue lagged its status messages by seconds of simulated time), for END_WAIT
-        # wall seconds at most.
+        # Let the last odometry in before reporting: at least 0.2 s (in lock step, where this monitor is at most
+        # OBSERVER_LAG ticks behind the graph, 0.05 s), and until every robot's reaches the time its run ended (at a
+        # high --rtf this monitor's odometry queue lagged its status messages by seconds of simulated time), and in
+        # lock step until the recorder has acknowledged the time this monitor has seen (it may lag as far behind,
+        # and the nodes are stopped next), for END_WAIT wall seconds at most.
         short, end = time.monotonic() + (0.05 if sim_time else 0.2), time.monotonic() + END_WAIT
+        seen = monitor.now()
 
-        def odometry_behind() -> bool:
+        def behind() -> bool:
             return any(r.end_time is not None and (not r.rows or r.rows[-1][0] < r.end_time - 1e-6 +
                                                    (r.started_at if r.started_at is not None else t0))
-                       for r in robots.values())
-        while time.monotonic() < short or (odometry_behind() and time.monotonic() < end):
+                       for r in robots.values()) or \
+                (sim_time and args.record is not None and monitor.recorder_acked < seen - 1e-6)
+        while time.monotonic() < short or (behind() and time.monotonic() < end):
             monitor.spin(0.02)
         # The nodes stop (the recorder finishes its file) while the report is written and drawn.
         stopping = threading.Thread(target=procs.stop, name='stop-nodes')

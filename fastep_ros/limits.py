@@ -5,8 +5,8 @@ from __future__ import annotations
 
 from fastep_core.scenario import MODELS, Scenario
 
-__all__ = ['CLOCK_JUMP_LIMIT', 'PERIOD_RANGE', 'RATE_RANGE', 'ROBOT_NAME_MAX', 'RTF_RANGE', 'STEP_RANGE',
-           'GRAPH_MODELS', 'graph_problem', 'robot_name_problem']
+__all__ = ['ACK_PERIOD_RANGE', 'CLOCK_JUMP_LIMIT', 'GRAPH_MODELS', 'OBSERVER_LAG_MAX', 'PERIOD_RANGE', 'RATE_RANGE',
+           'ROBOT_NAME_MAX', 'RTF_RANGE', 'STEP_RANGE', 'graph_problem', 'robot_name_problem']
 
 GRAPH_MODELS: tuple[str, ...] = MODELS
 """Robot models the ROS plant and planner nodes run: every model (diff_drive included)."""
@@ -25,6 +25,14 @@ RTF_RANGE = (1e-3, 1e4)
 """Real-time factors of fastep-clock and fastep-launch --rtf. 1e-300 overflowed rclpy's create_timer (the tick
 period is step / rtf): at 1e-3 a tick of the largest step takes 10^4 wall seconds. fastep-clock also refuses a
 tick of more than CLOCK_JUMP_LIMIT simulated seconds (what a node takes from one /clock message unconfirmed)."""
+
+OBSERVER_LAG_MAX = 500
+"""Ticks an observer of the lock step (fastep-clock's observer_topics) may lag behind: half the 1000-message queues
+in which fastep-record and fastep-launch's monitor keep what they have not taken yet (a topic sends one message a
+tick at most), so that none is dropped."""
+
+ACK_PERIOD_RANGE = (0.0, 60.0)
+"""Simulated seconds between fastep-record's clock_ack messages (0: one for every /clock time)."""
 
 CLOCK_JUMP_LIMIT = 3600.0
 """Simulated seconds a /clock message may run ahead of the last one and be taken at once (fastep_ros.common)."""

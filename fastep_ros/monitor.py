@@ -74,6 +74,7 @@ class Monitor:
         # Wall time: simulated time is read from /clock by follow_clock(), once the goals are in.
         self.node = rclpy.create_node('fastep_launch', context=self.context)
         self.sim_now: float | None = None
+        self.recorder_acked = -math.inf   # the latest /clock time fastep-record acknowledged (follow_clock)
         # The node's executor (fastep_ros.executors): a SingleThreadedExecutor rebuilt its wait set of every robot's
         # status, plan and goal endpoints in Python at each wake-up, one per lock-step tick (~0.5 ms of CPU each).
         self.executor = make_executor(None, context=self.context)
@@ -152,20 +153,36 @@ class Monitor:
             raise GraphConflict(f'another ROS graph shares ROS_DOMAIN_ID {domain}: {found}; the runs would mix '
                                 f'their robots and clocks (stop it, or give each launch its own ROS_DOMAIN_ID)')
 
-    def follow_clock(self) -> None:
+    def follow_clock(self, ack_period: float = 0.0, recorder: bool = False) -> None:
         """Subscribe to /clock: the clock, holding the start time until all its subscribers are there,
-        starts when this last one joins."""
+        starts when this last one joins. Each /clock time taken is acknowledged on clock_ack, one every
+        `ack_period` simulated seconds at most; with `recorder`, fastep-record's acknowledgements are followed
+        (recorder_acked)."""
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rosgraph_msgs.msg import Clock
 
-        from msg_tools.interface import CLOCK
+        from fastep_ros.lock_step import STAMP_EPS
+        from msg_tools.interface import CLOCK, CLOCK_ACK, RELIABLE
+
+        acked = -math.inf
 
         def on_clock(msg: Any) -> None:
-            self.sim_now = max(self.sim_now or 0.0, self.convert.stamp_to_seconds(msg.clock))
+            nonlocal acked
+            t = self.convert.stamp_to_seconds(msg.clock)
+            self.sim_now = max(self.sim_now or 0.0, t)
             self.drain()
-            self.ack_pub.publish(msg)   # lock step: the clock waits for this monitor too (it must see every tick)
+            # Lock step: the clock lets this monitor lag its observer_lag ticks behind at most (it must take every
+            # odometry message before its queue is full).
+            if t >= acked + ack_period - STAMP_EPS:
+                acked = t
+                self.ack_pub.publish(msg)
         self.node.create_subscription(Clock, CLOCK, on_clock,
                                       QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))
+        if recorder:
+            def on_recorder_ack(msg: Any) -> None:
+                self.recorder_acked = max(self.recorder_acked, self.convert.stamp_to_seconds(msg.clock))
+            self.node.create_subscription(Clock, '/recorder/' + CLOCK_ACK.removeprefix('~/'), on_recorder_ack,
+                                          RELIABLE)
 
     def now(self) -> float:
         """Simulated time once /clock is followed (0 before its first message; the latest of /clock and the

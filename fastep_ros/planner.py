@@ -119,8 +119,10 @@ __all__ = ['PlannerNode', 'main']
 
 TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radius', 'max_extrapolation')
 """The node's own parameters that change while it runs, besides every PlannerParams field."""
-DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots
-HEARTBEAT_TICKS = 4      # status, waypoint and plan are re-published every 4 * 0.25 s = 1 s of wall time
+DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots ...
+START_PERIOD = 0.05      # ... the first START_LOOKS looks (3 s) every START_PERIOD: a launcher waits for every
+START_LOOKS = 60         # planner to see the others and its cmd_vel's readers (make demo's start waited 0.2-0.5 s)
+HEARTBEAT = 1.0          # wall seconds between re-publications of status, waypoint and plan
 CONTROL_TIMES = 200      # control callbacks (10 s at 20 Hz) whose wall times status' control_ms sums up
 
 
@@ -297,7 +299,8 @@ class PlannerNode(ManagedNode):
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control_tick)
         steady = self.wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
         self.wall_ticks = 0
-        self.wall_timer = self.create_timer(DISCOVERY_PERIOD, self.on_wall_tick, clock=steady)
+        self.heartbeat_at = -math.inf   # steady seconds of the last re-publication
+        self.wall_timer = self.create_timer(START_PERIOD, self.on_wall_tick, clock=steady)
         self.discover()
         self.update_world()
         self.sim_time = SimTimeWatch(self, clock_guard, clock_timeout)
@@ -879,9 +882,15 @@ class PlannerNode(ManagedNode):
 
     @quiet_at_stop
     def on_wall_tick(self) -> None:
-        """Every DISCOVERY_PERIOD wall seconds: look at the clock, discover robots; once a wall second, re-publish
-        status, target and plan (for late listeners) and publish /diagnostics."""
+        """Every DISCOVERY_PERIOD wall seconds (START_PERIOD at first): look at the clock, discover robots; every
+        HEARTBEAT, re-publish status, target and plan (for late listeners) and publish /diagnostics."""
         self.wall_ticks += 1
+        if self.wall_ticks == START_LOOKS:
+            self.wall_timer.timer_period_ns = round(DISCOVERY_PERIOD * 1e9)
+        now = self.wall_clock.now().nanoseconds * 1e-9
+        heartbeat = now - self.heartbeat_at >= HEARTBEAT - 0.5 * START_PERIOD
+        if heartbeat:
+            self.heartbeat_at = now
         self.check_clock()
         found = self.discover()
         self.goal_sub.look()
@@ -891,12 +900,12 @@ class PlannerNode(ManagedNode):
         self.lock_try()      # an input waited for too long is given up on
         # A launcher waits for cmd_vel's readers (the plant, the clock) before it starts the run: told at once.
         readers = self.cmd_pub.get_subscription_count()
-        if found or readers != self.cmd_vel_readers or self.wall_ticks % HEARTBEAT_TICKS == 0:
+        if found or readers != self.cmd_vel_readers or heartbeat:
             self.cmd_vel_readers = readers
             self.publish_status(force=True)
         else:
             self.publish_status()
-        if self.wall_ticks % HEARTBEAT_TICKS == 0:
+        if heartbeat:
             self.publish_target(force=True)
             self.publish_plan(force=True)
             self.diagnostics.publish(self.diagnostic_tasks())

@@ -48,6 +48,7 @@ Parameters are read-only; a bad one (or an output that cannot be created) is one
 from __future__ import annotations
 
 import functools
+import math
 import struct
 import sys
 import time
@@ -55,12 +56,9 @@ from pathlib import Path
 from typing import Any, Sequence
 
 from diagnostic_msgs.msg import DiagnosticStatus
-from rcl_interfaces.msg import ParameterDescriptor
 from rclpy.clock import Clock, ClockType
-from rclpy.exceptions import ParameterException
 from rclpy.logging import LoggingSeverity
 from rclpy.node import Node
-from rclpy.parameter import Parameter
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock as ClockMsg
 
@@ -71,11 +69,13 @@ from fastep_ros.common import (
     StartupError,
     check_range,
     declare,
-    declare_empty_array,
+    declare_strings,
     guard_clock,
     node_main,
     quiet_at_stop,
 )
+from fastep_ros.limits import ACK_PERIOD_RANGE
+from fastep_ros.lock_step import STAMP_EPS
 from msg_tools import cdr, convert, frames, interface
 from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError
 from msg_tools.ros2_profile import message_class, qos_profile_to_dict
@@ -90,8 +90,8 @@ class RecordingStopped(FastepError):
 _write_failures: list[str] = []   # what stopped a recorder of this process: main() exits 1 instead of 0 or 2
 _stopped: list[str] = []          # ... of which the ones not printed yet (stop_writing): exit_code() prints them
 
-FAST_DISCOVERY_PERIOD = 0.1   # wall seconds between the first looks at the graph for topics ...
-FAST_LOOKS = 30               # ... so many (3 s), then every discovery_period
+FAST_DISCOVERY_PERIOD = 0.05  # wall seconds between the first looks at the graph for topics ...
+FAST_LOOKS = 60               # ... so many (3 s), then every discovery_period
 
 # What an empty `topics` parameter records.
 _DEFAULT_TOPICS = (', '.join(interface.SHARED_TOPICS) + ' and /<robot>/{' + ', '.join(interface.ROBOT_TOPICS) +
@@ -124,8 +124,14 @@ class RecorderNode(Node):
         self.depth = declare(self, 'queue_depth', 1000, 'subscription queue depth (messages kept while the '
                              'recorder is busy)', constraints='>= 1')
         clock_ack = declare(self, 'clock_ack', False, 'lock step: say on ~/clock_ack each /clock time recorded, so '
-                            'that the clock (sync_topics) never runs further ahead of the recording than a tick '
-                            '(fastep-launch sets it; at a high rtf the recorder fell behind and messages were lost)')
+                            'that the clock (its observer_topics) never runs further ahead of the recording than its '
+                            'observer_lag (fastep-launch sets it; at a high rtf the recorder fell behind and messages '
+                            'were lost)')
+        self.ack_period = declare(self, 'clock_ack_period', 0.0, 'lock step: simulated seconds from one clock_ack to '
+                                  'the next, at least (0: every /clock time; fastep-launch: a quarter of the clock\'s '
+                                  'observer_lag, so that the clock hears from the recorder a few times per tick it '
+                                  'waits for, rather than every tick)', value_range=ACK_PERIOD_RANGE, unit=' s')
+        self.acked = -math.inf   # the /clock time last acknowledged
         if chunk_size < 1024:
             raise StartupError(f'parameter chunk_size must be >= 1024, got {chunk_size}')
         for name, value in (('flush_period', flush_period), ('discovery_period', discovery_period)):
@@ -169,14 +175,9 @@ class RecorderNode(Node):
 
     # ------------------------------------------------------------------------------------------- setup
     def _declare_topics(self) -> set[str]:
-        descriptor = ParameterDescriptor(name='topics', type=Parameter.Type.STRING_ARRAY.value, read_only=True,
-                                         description=f'topics to record; empty: {_DEFAULT_TOPICS} as they appear')
-        try:
-            value = declare_empty_array(self, 'topics', Parameter.Type.STRING_ARRAY, descriptor)
-        except ParameterException as exc:
-            raise StartupError(f'parameter topics must be a string array: {exc}') from None
+        value = declare_strings(self, 'topics', f'topics to record; empty: {_DEFAULT_TOPICS} as they appear')
         out = set()
-        for name in value or []:
+        for name in value:
             try:
                 out.add(self.resolve_topic_name(str(name)))
             except Exception as exc:  # rclpy raises its own validation errors
@@ -265,7 +266,9 @@ class RecorderNode(Node):
             if topic == interface.CLOCK and self.ack_pub is not None and len(data) >= 12:
                 # A CDR Clock: 4 bytes of encapsulation, then int32 sec, uint32 nanosec.
                 sec, nanosec = struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
-                self.ack_pub.publish(cdr.clock_cdr((sec, nanosec)))
+                if sec + nanosec * 1e-9 >= self.acked + self.ack_period - STAMP_EPS:
+                    self.acked = sec + nanosec * 1e-9
+                    self.ack_pub.publish(cdr.clock_cdr((sec, nanosec)))
             if self.tf_from_odometry is not None:
                 for tf_topic, tf_data in self.tf_from_odometry.take(topic, data):
                     writer.write(tf_topic, tf_data, now, now, type_name=frames.TF_TYPE,

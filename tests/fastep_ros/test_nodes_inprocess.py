@@ -288,6 +288,79 @@ def test_clock_lock_step_waits_longer_for_a_first_answer_and_says_the_time_again
         clock.destroy_node()
 
 
+def test_clock_lets_observers_lag_observer_lag_ticks_behind_and_no_further(context: Any) -> None:
+    """An observer (fastep-launch's monitor, fastep-record) answers on its clock_ack: the lock step goes on without
+    it for observer_lag ticks, then waits for it; a planner's cmd_vel (sync_topics) is waited for every tick."""
+    from fastep_ros.clock import ClockNode
+
+    clock = make(ClockNode, context, rtf=1.0, step=0.05, sync_topics=['/r1/cmd_vel'],
+                 observer_topics=['/recorder/clock_ack'], observer_lag=3, wait_timeout=30.0)
+    sent: list[float] = []
+    keep_published(clock.pub, lambda msg: sent.append(convert.stamp_to_seconds(msg.clock)))
+    wall = [0.0]
+    clock.seconds = lambda: wall[0]  # type: ignore[method-assign]  # the test's wall clock
+    commands = clock.create_publisher(Twist, '/r1/cmd_vel', 10)
+    acks = clock.create_publisher(Twist, '/recorder/clock_ack', 10)   # (only its presence counts here)
+    try:
+        clock.matched_at = -1.0
+        clock.sync['/r1/cmd_vel'].sub, clock.sync['/recorder/clock_ack'].sub = commands, acks
+
+        def answered_tick() -> None:   # the planner answers the tick; the clock ticks once the period is over
+            clock.on_sync('/r1/cmd_vel', sent[-1])
+            wall[0] += 0.05
+            clock.on_tick()
+
+        clock.on_tick()
+        for _ in range(6):
+            answered_tick()
+        # Ticks 1-4 (0.05-0.2 s) went out without a word from the observer; tick 5 waits for its acknowledgement of
+        # tick 1 at least, and is said again meanwhile.
+        assert sent[:4] == pytest.approx([0.05, 0.1, 0.15, 0.2]) and clock.ticks == 4
+        clock.on_sync('/recorder/clock_ack', 0.05)   # it has taken tick 1
+        assert clock.ticks == 5 and sent[-1] == pytest.approx(0.25)
+        clock.on_sync('/recorder/clock_ack', 0.25)   # all caught up: the next ticks wait for the planner only
+        for _ in range(3):
+            answered_tick()
+        assert clock.ticks == 8 and sent[-1] == pytest.approx(0.4)
+        wall[0] += 1.0
+        clock.on_tick()   # without the planner's answer no tick, whatever the observer says
+        assert clock.ticks == 8
+    finally:
+        clock.destroy_node()
+
+
+def test_clock_takes_an_empty_topic_list_and_refuses_a_lag_out_of_range(context: Any) -> None:
+    from fastep_ros.clock import ClockNode
+    from fastep_ros.errors import StartupError
+
+    # `-p sync_topics:=[]` on a command line: an empty string array (it was a traceback)
+    clock = ClockNode(context=context, cli_args=['--ros-args', '-p', 'sync_topics:=[]', '-p', "observer_topics:=['']"])
+    try:
+        assert clock.sync == {}
+    finally:
+        clock.destroy_node()
+    with pytest.raises(StartupError, match='observer_lag must be in'):
+        make(ClockNode, context, observer_lag=501)
+
+
+def test_recorder_acknowledges_clock_times_clock_ack_period_apart(context: Any, tmp_path: Path) -> None:
+    from fastep_ros.recorder import RecorderNode
+    from msg_tools import cdr, interface
+
+    recorder = make(RecorderNode, context, output=str(tmp_path / 'run.mcap'), clock_ack=True,
+                    clock_ack_period=0.2)
+    acked: list[float] = []
+    keep_published(recorder.ack_pub, lambda msg: acked.append(convert.stamp_to_seconds(msg.clock)))
+    try:
+        recorder.types[interface.CLOCK], recorder.counts[interface.CLOCK] = 'rosgraph_msgs/msg/Clock', 0
+        for k in range(1, 21):
+            recorder.on_message(interface.CLOCK, cdr.clock_cdr(cdr.stamp_parts(0.05 * k)))
+        assert acked == pytest.approx([0.05, 0.25, 0.45, 0.65, 0.85])
+        assert recorder.counts[interface.CLOCK] == 20   # every time recorded
+    finally:
+        recorder.destroy_node()
+
+
 def test_launch_passes_the_scenario_to_the_nodes() -> None:
     scenario = load_scenario('application')
     plant = launch.plant_params(scenario.robots[0], True)
