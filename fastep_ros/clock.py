@@ -27,8 +27,8 @@ with the tick it was decided for: a planner in lock step acts on its plant's odo
 also says that the plant has integrated) and, as observer_topics, the `clock_ack` of its observers (its own
 monitor, fastep-record: each says the /clock time it has taken, so neither falls further behind the graph than
 observer_lag ticks and loses messages from its queue; they take no part in a tick, so a tick need not wait for
-them), and runs plants and planners in lock step (fastep_ros.lock_step): the live graph then steps exactly like fastep-sim, whatever the
-machine's load and the order DDS delivers messages in, and rtf is an upper bound. A topic that timed out (its
+them), and runs plants and planners in lock step (fastep_ros.lock_step): the live graph then steps exactly like
+fastep-sim, whatever the machine's load and the order DDS delivers messages in, and rtf is an upper bound. A topic that timed out (its
 node died) is not waited for again until it publishes again. The timeout is long because a loaded machine starves
 a node for a second or two at times, and with 1 s the clock then ran on without it (a planner stopped for 2.5 s
 let 6 s of simulated time pass); a dead node costs those 5 s once. A topic that has not answered once since the
