@@ -19,22 +19,22 @@ no node misses the beginning of the run because DDS discovery took a while. DDS 
 connection each on its own (under load, seconds apart), so a subscriber may still miss the first ticks: see
 lock step.
 
-Lock step (sync_topics, with step = the planners' control period): each tick waits, up to sync_timeout wall
-seconds (default 5), until every listed topic has delivered a message that answers it since the previous tick: a
-message with a stamp (a header's, or a rosgraph_msgs/Clock's time) answers it if stamped after the tick before,
-one without a stamp whatever tick is current. fastep-launch lists every planner's cmd_vel (TwistStamped, stamped
-with the tick it was decided for: a planner in lock step acts on its plant's odometry of the tick, so its command
-also says that the plant has integrated) and, as observer_topics, the `clock_ack` of its observers (its own
-monitor, fastep-record: each says the /clock time it has taken, so neither falls further behind the graph than
-observer_lag ticks and loses messages from its queue; they take no part in a tick, so a tick need not wait for
-them), and runs plants and planners in lock step (fastep_ros.lock_step): the live graph then steps exactly like
-fastep-sim, whatever the machine's load and the order DDS delivers messages in, and rtf is an upper bound. A topic that timed out (its
-node died) is not waited for again until it publishes again. The timeout is long because a loaded machine starves
-a node for a second or two at times, and with 1 s the clock then ran on without it (a planner stopped for 2.5 s
-let 6 s of simulated time pass); a dead node costs those 5 s once. A topic that has not answered once since the
-run started is waited for up to wait_timeout: a node still being matched is late, not dead. /clock is best
-effort, so while the clock waits it says the current time again every HOLD_PERIOD: a node that lost a tick's
-message, or was matched after it, still gets it.
+Lock step (sync_topics, with step = the planners' control period): each tick waits, up to sync_timeout wall seconds
+(default 5), until every listed topic has delivered a message that answers it since the previous tick: a message
+with a stamp (a header's, or a rosgraph_msgs/Clock's time) answers it if stamped after the tick before, one without
+a stamp whatever tick is current. fastep-launch lists every planner's cmd_vel (TwistStamped, stamped with the tick
+it was decided for: a planner in lock step acts on its plant's odometry of the tick, so its command also says that
+the plant has integrated) and, as observer_topics, the `clock_ack` of its observers (its own monitor, fastep-
+record: each says the /clock time it has taken, so neither falls further behind the graph than observer_lag ticks
+and loses messages from its queue; they take no part in a tick, so a tick need not wait for them), and runs plants
+and planners in lock step (fastep_ros.lock_step): the live graph then steps exactly like fastep-sim, whatever the
+machine's load and the order DDS delivers messages in, and rtf is an upper bound. A topic that timed out (its node
+died) is not waited for again until it publishes again. The timeout is long because a loaded machine starves a node
+for a second or two at times, and with 1 s the clock then ran on without it (a planner stopped for 2.5 s let 6 s of
+simulated time pass); a dead node costs those 5 s once. A topic that has not answered once since the run started is
+waited for up to wait_timeout: a node still being matched is late, not dead. /clock is best effort, so while the
+clock waits it says the current time again every HOLD_PERIOD: a node that lost a tick's message, or was matched
+after it, still gets it.
 """
 
 from __future__ import annotations
