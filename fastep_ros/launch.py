@@ -2,20 +2,21 @@
 
     fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco|optimal|dwa] [--seed N]
                   [--json OUT] [--plot OUT.png] [--no-clock] [--layout node|robot|graph|cores]
-                  [--executor events|single]
+                  [--executor events|single] [--step-iterations K]
                   [--foxglove PORT] [--no-progress] [--verbose]   (fastep_ros.foxglove_bridge, fastep_ros.progress)
 
 Starts, in the processes --layout says (fastep_ros.layouts: each node in its own, `python -m fastep_ros.<node>
 --ros-args ...`; a robot's plant and planner in one fastep-container; every node in one; or one per CPU core;
-fastep_ros.processes), gated until it has seen no other graph on the domain: the map, then a plant
-and a planner per robot in the robot's namespace with its parameters from the scenario (the scenario's planner
-overrides included), and waits until every planner knows the world and the other robots. It then sends each
-goal on `/<name>/goal_pose`, starts the clock (simulated time at --rtf, in exact lock step: the run is the run
-fastep-sim makes, tick for tick, fastep_ros.lock_step; --no-clock runs every node on wall time instead), follows
-every `status` and `odom`, and prints one line per robot: arrived or not, the path length measured from its
-odometry, the time taken. The default layout is `graph` in lock step for up to 4 robots, `cores` otherwise
-(fastep_ros.layouts). Its view of the graph is fastep_ros.monitor. Every process it started is stopped at the end
-(SIGINT, then SIGKILL after a grace period), also on Ctrl-C.
+fastep_ros.processes), gated until it has seen no other graph on the domain: the map, then a plant and a planner
+per robot in the robot's namespace with its parameters from the scenario (the scenario's planner overrides
+included), and waits until every planner knows the world and the other robots. It then sends each goal on
+`/<name>/goal_pose`, starts the clock (simulated time at --rtf, in exact lock step: the run is the run fastep-sim
+makes, tick for tick, fastep_ros.lock_step; --no-clock runs every node on wall time instead), follows every
+`status` and `odom`, and prints one line per robot: arrived or not, the path length measured from its odometry, the
+time taken. The default layout is `graph` in lock step for up to 4 robots, `cores` otherwise (fastep_ros.layouts).
+On wall time with more than WALL_ROBOTS_PER_CORE robots per CPU core, planners whose scenario sets no
+step_iterations get WALL_STEP_ITERATIONS (step_budget). Its view of the graph is fastep_ros.monitor. Every process
+it started is stopped at the end (SIGINT, then SIGKILL after a grace period), also on Ctrl-C.
 
 Exit 0 if every robot arrived (without colliding, as measured from the odometry), 1 otherwise, 2 with one
 line on stderr for bad input, checked before anything starts: --rtf outside [0.001, 10000], a robot name ROS
@@ -26,6 +27,7 @@ written (or --json / --plot failing after the run).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 import json
 import math
@@ -39,7 +41,7 @@ from typing import Any, NoReturn, Sequence
 
 from fastep_core.cli import Parser, fail, guard, seed, tcp_port, tcp_port_problem
 from fastep_core.dynamic_world import DynamicWorld
-from fastep_core.errors import ScenarioError
+from fastep_core.errors import ParameterError, ScenarioError
 from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
 from fastep_core.planning.params import PlannerParams
@@ -47,7 +49,7 @@ from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenar
 from fastep_ros.dds_profile import PROFILE_ENV, use_discovery_profile
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import DEFAULT_EXECUTOR, EXECUTOR_ENV, EXECUTORS
-from fastep_ros.layouts import GRAPH_ROBOTS, LAYOUTS, Member, default_layout
+from fastep_ros.layouts import GRAPH_ROBOTS, LAYOUTS, Member, default_layout, usable_cores
 from fastep_ros.layouts import command as layout_command
 from fastep_ros.limits import RATE_RANGE, RTF_RANGE, graph_problem, robot_name_problem
 from fastep_ros.monitor import STOP, Monitor, RobotLive, watched_topics
@@ -99,9 +101,25 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--executor', choices=EXECUTORS, default=None,
                    help=f'rclpy executor of every node (default: ${EXECUTOR_ENV}, else {DEFAULT_EXECUTOR}): events '
                    '(rclpy.experimental.EventsExecutor) or single (SingleThreadedExecutor)')
+    p.add_argument('--step-iterations', type=_step_iterations, metavar='K',
+                   help='the planners\' step_iterations: swarm iterations of a step plan per control tick, 0 for a '
+                   'whole plan in the tick it is needed (default: the scenario\'s; on wall time with more than '
+                   f'{WALL_ROBOTS_PER_CORE} robots per CPU core, {WALL_STEP_ITERATIONS} if it has none)')
     p.add_argument('--startup-timeout', type=float, default=STARTUP_TIMEOUT, help=argparse.SUPPRESS)
     p.add_argument('--verbose', action='store_true', help='show the nodes\' INFO logs')
     return p
+
+
+def _step_iterations(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f'not an integer: {text!r}') from None
+    try:
+        PlannerParams(step_iterations=value)   # its range
+    except ParameterError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return value
 
 
 # ----------------------------------------------------------------------------------------------- processes
@@ -159,15 +177,26 @@ WALL_ROBOTS_PER_CORE = 4
 """Robots per CPU core from which, on wall time, planning a whole step in one control tick makes the tick long
 (16 robots on 2 cores: a planner's control p99 5.4-6.9 ms against 3.9-4.7 ms with step_iterations 3; docs/benchmarks.md,
 "A step plan spread over control ticks")."""
+WALL_STEP_ITERATIONS = 3
+"""step_iterations of such a launch, unless told (with 2 FAStep-Route's worst path among diff-drive robots in the
+families benchmark grew from 1.19 to 1.43 times the optimum; with 3 to 1.22)."""
 
 
-def step_budget_hint(robots: int, cores: int, sim_time: bool, algorithm: str, params: PlannerParams) -> str:
-    """A line for the terminal when a run on wall time has many robots per core whose planners plan whole FAStep
-    steps (step_iterations 0); '' otherwise. In lock step a long tick only slows the run, it changes nothing."""
-    if sim_time or params.step_iterations or algorithm in ('aco', 'dwa') or robots <= WALL_ROBOTS_PER_CORE * cores:
-        return ''
-    return (f'note: {robots} robots on {cores} CPU core(s) on wall time: a step plan among them takes several ms of a '
-            f'control tick; "planner: {{step_iterations: 3}}" in the scenario spreads it over the next ticks (README)')
+def step_budget(robots: int, cores: int, sim_time: bool, algorithm: str, params: PlannerParams,
+                given: int | None = None) -> tuple[int, str]:
+    """The planners' step_iterations for a launch, and a line for the terminal ('' for none). --step-iterations
+    (`given`) decides when set; otherwise the scenario's, except on wall time with more than WALL_ROBOTS_PER_CORE
+    robots per CPU core whose FAStep planners would plan each step whole in one control tick (step_iterations 0):
+    then WALL_STEP_ITERATIONS. In lock step a long tick only slows the run and changes nothing: the scenario's."""
+    if given is not None:
+        return given, ''
+    if sim_time or params.step_iterations or algorithm in ('aco', 'dwa', 'optimal') or \
+            robots <= WALL_ROBOTS_PER_CORE * cores:
+        return params.step_iterations, ''
+    return WALL_STEP_ITERATIONS, (
+        f'note: {robots} robots on {cores} CPU core(s) on wall time: each planner spreads a step plan over its control '
+        f'ticks, {WALL_STEP_ITERATIONS} swarm iterations a tick (step_iterations; --step-iterations 0: each step '
+        f'planned whole in the tick it is needed, as the paper)')
 
 
 # ----------------------------------------------------------------------------------------------- the run
@@ -202,9 +231,12 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     # Before any participant of this launch exists: the launcher's own (the monitor's) and its processes'.
     profile = use_discovery_profile()
     procs = Processes(args.verbose, args.layout or default_layout(sim_time, len(scenario.robots)), args.executor)
-    hint = step_budget_hint(len(scenario.robots), os.cpu_count() or 1, sim_time, args.algorithm, scenario.planner)
-    if hint:
-        print(hint, flush=True)
+    budget, note = step_budget(len(scenario.robots), usable_cores(), sim_time, args.algorithm, scenario.planner,
+                               args.step_iterations)
+    if note:
+        print(note, flush=True)
+    if budget != scenario.planner.step_iterations:
+        scenario = dataclasses.replace(scenario, planner=dataclasses.replace(scenario.planner, step_iterations=budget))
     monitor: Monitor | None = None
     stopping: threading.Thread | None = None
     code = 1

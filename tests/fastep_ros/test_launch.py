@@ -453,14 +453,18 @@ def test_a_process_joins_dds_only_when_its_gate_opens(context: Any, tmp_path: Pa
     assert closed.returncode == 0 and closed.stdout == b'' and closed.stderr == b''
 
 
-def test_a_wall_time_run_with_many_robots_per_core_is_told_about_step_iterations() -> None:
-    """16 robots on 2 cores on wall time plan whole steps in 5-7 ms control ticks: the launcher says how to spread
-    them; not in lock step, not with a budget set, not for planners without FAStep steps, not for few robots."""
+def test_a_wall_time_run_with_many_robots_per_core_spreads_step_plans_over_ticks_unless_told() -> None:
+    """16 robots on 2 cores on wall time plan whole steps in 5-7 ms control ticks: the launcher gives their planners
+    step_iterations 3 and says so; not in lock step, not over the scenario's own budget or --step-iterations, not for
+    planners without FAStep steps, not for few robots."""
     from fastep_core.planning.params import PlannerParams
-    from fastep_ros.launch import step_budget_hint
+    from fastep_ros.launch import WALL_STEP_ITERATIONS, step_budget
     paper = PlannerParams()
-    assert 'step_iterations: 3' in step_budget_hint(16, 2, False, 'fastep_route', paper)
-    assert step_budget_hint(16, 2, True, 'fastep_route', paper) == ''
-    assert step_budget_hint(16, 2, False, 'fastep_route', PlannerParams(step_iterations=3)) == ''
-    assert step_budget_hint(16, 2, False, 'dwa', paper) == ''
-    assert step_budget_hint(8, 2, False, 'fastep', paper) == ''
+    budget, note = step_budget(16, 2, False, 'fastep_route', paper)
+    assert budget == WALL_STEP_ITERATIONS == 3 and 'step_iterations' in note and '--step-iterations 0' in note
+    assert step_budget(16, 2, False, 'fastep_route', paper, given=0) == (0, '')
+    assert step_budget(16, 2, False, 'fastep', paper, given=5) == (5, '')
+    assert step_budget(16, 2, True, 'fastep_route', paper) == (0, '')
+    assert step_budget(16, 2, False, 'fastep_route', PlannerParams(step_iterations=2)) == (2, '')
+    assert step_budget(16, 2, False, 'dwa', paper) == (0, '')
+    assert step_budget(8, 2, False, 'fastep', paper) == (0, '')
