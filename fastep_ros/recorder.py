@@ -131,7 +131,7 @@ class RecorderNode(Node):
                                   'the next, at least (0: every /clock time; fastep-launch: a quarter of the clock\'s '
                                   'observer_lag, so that the clock hears from the recorder a few times per tick it '
                                   'waits for, rather than every tick)', value_range=ACK_PERIOD_RANGE, unit=' s')
-        self.acked = -math.inf   # the /clock time last acknowledged
+        self.acked = self.clock_seen = -math.inf   # the /clock time last acknowledged, and last recorded
         if chunk_size < 1024:
             raise StartupError(f'parameter chunk_size must be >= 1024, got {chunk_size}')
         for name, value in (('flush_period', flush_period), ('discovery_period', discovery_period)):
@@ -266,9 +266,7 @@ class RecorderNode(Node):
             if topic == interface.CLOCK and self.ack_pub is not None and len(data) >= 12:
                 # A CDR Clock: 4 bytes of encapsulation, then int32 sec, uint32 nanosec.
                 sec, nanosec = struct.unpack_from('<iI' if data[1] == 1 else '>iI', data, 4)
-                if sec + nanosec * 1e-9 >= self.acked + self.ack_period - STAMP_EPS:
-                    self.acked = sec + nanosec * 1e-9
-                    self.ack_pub.publish(cdr.clock_cdr((sec, nanosec)))
+                self.acknowledge(sec, nanosec)
             if self.tf_from_odometry is not None:
                 for tf_topic, tf_data in self.tf_from_odometry.take(topic, data):
                     writer.write(tf_topic, tf_data, now, now, type_name=frames.TF_TYPE,
@@ -279,6 +277,16 @@ class RecorderNode(Node):
         self.counts[topic] += 1
         if self.counts[topic] == 1:
             self.publish_status()
+
+    def acknowledge(self, sec: int, nanosec: int) -> None:
+        """Say on clock_ack that the /clock time (sec, nanosec) is recorded: once every clock_ack_period, and a
+        time said again (the clock holds it: a launcher waiting for the recording to reach it waits no longer)."""
+        t = sec + nanosec * 1e-9
+        again, self.clock_seen = t == self.clock_seen, t
+        if t >= self.acked + self.ack_period - STAMP_EPS or (again and t > self.acked):
+            self.acked = t
+            assert self.ack_pub is not None
+            self.ack_pub.publish(cdr.clock_cdr((sec, nanosec)))
 
     @quiet_at_stop
     def flush(self) -> None:

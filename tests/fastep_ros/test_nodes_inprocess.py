@@ -357,6 +357,10 @@ def test_recorder_acknowledges_clock_times_clock_ack_period_apart(context: Any, 
             recorder.on_message(interface.CLOCK, cdr.clock_cdr(cdr.stamp_parts(0.05 * k)))
         assert acked == pytest.approx([0.05, 0.25, 0.45, 0.65, 0.85])
         assert recorder.counts[interface.CLOCK] == 20   # every time recorded
+        recorder.on_message(interface.CLOCK, cdr.clock_cdr(cdr.stamp_parts(1.0)))   # the clock holds 1.0 s
+        assert acked[-1] == pytest.approx(1.0) and len(acked) == 6, 'a held time is acknowledged'
+        recorder.on_message(interface.CLOCK, cdr.clock_cdr(cdr.stamp_parts(1.0)))
+        assert len(acked) == 6, 'once'
     finally:
         recorder.destroy_node()
 
@@ -394,6 +398,29 @@ def test_launch_monitor_keeps_time_from_odometry_when_clock_messages_are_lost(
         monitor.on_odom(robot, convert.state_to_odometry([3.0, 4.0], convert.seconds_to_stamp(12.0)))
         assert monitor.now() == pytest.approx(12.5), 'an older stamp must not take time back'
         assert robot.rows == [[pytest.approx(12.5), 3.0, 4.0]]
+    finally:
+        monitor.close()
+
+
+def test_launch_monitor_acknowledges_clock_times_ack_period_apart_and_a_held_time_at_once(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    from rosgraph_msgs.msg import Clock
+
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain()))
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monitor = Monitor(load_scenario('table2_s1'))
+    try:
+        monitor.connect()
+        acked: list[float] = []
+        keep_published(monitor.ack_pub, lambda msg: acked.append(convert.stamp_to_seconds(msg.clock)))
+        monitor.follow_clock(0.25)
+        on_clock = next(s.callback for s in monitor.node.subscriptions if s.topic_name == '/clock')
+        for k in range(1, 11):
+            on_clock(Clock(clock=convert.seconds_to_stamp(0.05 * k)))
+        assert acked == pytest.approx([0.05, 0.3]) and monitor.now() == pytest.approx(0.5)
+        on_clock(Clock(clock=convert.seconds_to_stamp(0.5)))   # said again: the clock holds it
+        on_clock(Clock(clock=convert.seconds_to_stamp(0.5)))
+        assert acked == pytest.approx([0.05, 0.3, 0.5])
     finally:
         monitor.close()
 
