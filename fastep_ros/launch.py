@@ -63,6 +63,7 @@ STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the wor
 SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
 END_WAIT = 5.0          # wall seconds the report waits at most for odometry up to the end of each robot's run
 STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
+INTERRUPT_WAIT = 1.0    # wall seconds a Ctrl-C'd run waits at most for the recorder to reach the time it was stopped at
 OBSERVER_LAG = 20       # ticks the observers (this monitor, fastep-record) may lag behind the lock step ...
 ACK_TICKS = 5           # ... acknowledging every ACK_TICKS ticks: each tick waited for both (and for an
 # acknowledgement of each, 2 more messages into the graph's process) ran 25.8x real time, these 28.7x (make demo,
@@ -238,6 +239,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     if budget != scenario.planner.step_iterations:
         scenario = dataclasses.replace(scenario, planner=dataclasses.replace(scenario.planner, step_iterations=budget))
     monitor: Monitor | None = None
+    recording_followed = False   # the monitor follows the recorder's acknowledgements (lock step, --record)
     stopping: threading.Thread | None = None
     code = 1
     try:
@@ -325,6 +327,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         _wait(monitor, procs, deadline, goals_taken, 'sending the goals')
         if sim_time:
             monitor.follow_clock(ACK_TICKS * scenario.planner.dt, recorder=args.record is not None)
+            recording_followed = args.record is not None
             monitor.sim_now = 0.0
         t0 = monitor.now()
         pace = f'simulated time at rtf {args.rtf:g} at most' if sim_time else 'wall time'
@@ -387,7 +390,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             return any(r.end_time is not None and (not r.rows or r.rows[-1][0] < r.end_time - 1e-6 +
                                                    (r.started_at if r.started_at is not None else t0))
                        for r in robots.values()) or \
-                (sim_time and args.record is not None and monitor.recorder_acked < seen - 1e-6)
+                (recording_followed and monitor.recorder_acked < seen - 1e-6)
         while time.monotonic() < short or (behind() and time.monotonic() < end):
             monitor.spin(0.02)
         # The nodes stop (the recorder finishes its file) while the report is written and drawn.
@@ -405,6 +408,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     except KeyboardInterrupt:
         print(f'{PROG}: interrupted; stopping every node', file=sys.stderr)
         code = 1
+        if monitor is not None and recording_followed:
+            monitor.await_recording(monitor.now(), INTERRUPT_WAIT)   # the recording holds the run up to here
     finally:
         if stopping is not None:
             stopping.join()

@@ -202,6 +202,16 @@ class Monitor:
         if STOP.is_set():
             raise KeyboardInterrupt   # here, between spins: never from inside rclpy (see _request_stop)
 
+    def await_recording(self, t: float, seconds: float) -> bool:
+        """Spin until fastep-record has acknowledged simulated time `t` (follow_clock with `recorder`), for
+        `seconds` wall seconds at most, also after Ctrl-C (STOP); True if it has. In lock step the recorder may lag
+        the clock's observer_lag ticks behind: the nodes are stopped after this, and what it has not taken by then
+        would not be in the file."""
+        end = time.monotonic() + seconds
+        while self.recorder_acked < t - 1e-6 and (left := end - time.monotonic()) > 0:
+            self.executor.spin_once(timeout_sec=min(left, 0.01))
+        return self.recorder_acked >= t - 1e-6
+
     def close(self) -> None:
         for _, subscription in self.odometry:
             subscription.destroy()

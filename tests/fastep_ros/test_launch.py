@@ -80,6 +80,7 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
     stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in odometry]
     assert stamps[0] == 0.0 and (odometry[0].pose.pose.position.x, odometry[0].pose.pose.position.y) == (2.0, 10.0)
     assert stamps[-1] >= rows[-1][0] - 1e-9
+    assert_every_tick(stamps)
     assert {(m.header.frame_id, m.child_frame_id) for m in odometry} == {('r1/odom', 'r1/base_link')}
     assert [(t.header.frame_id, t.child_frame_id) for m in tf['/tf_static'] for t in m.transforms] == \
         [('map', 'r1/odom')]
@@ -88,6 +89,44 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
     assert (last.header.frame_id, last.child_frame_id) == ('r1/odom', 'r1/base_link')
     assert (last.transform.translation.x, last.transform.translation.y) == \
         (odometry[-1].pose.pose.position.x, odometry[-1].pose.pose.position.y)
+
+
+def assert_every_tick(stamps: list[float], dt: float = 0.05) -> None:
+    """Odometry of a lock-step run as recorded: the start state (stamped 0, repeated until the clock starts), then
+    one message a tick, none missing: the recorder, which may lag the clock a few ticks, lost nothing."""
+    assert stamps == sorted(stamps)
+    ticks = [round(t / dt) for t in stamps if t > 0.0]
+    assert ticks == list(range(1, len(ticks) + 1)), 'a tick is missing from the recording'
+    assert max(abs(t - k * dt) for t, k in zip([t for t in stamps if t > 0.0], ticks)) < 1e-6
+
+
+def test_a_recorded_run_interrupted_keeps_every_tick_up_to_where_it_stopped(tmp_path: Path) -> None:
+    """Ctrl-C in a recorded lock-step run at a high rtf: the file is finished, and it holds every tick from the
+    start to where the run stopped (the recorder lags the clock by a few ticks at most, and the launcher lets it
+    reach the time it stopped at before it stops the nodes)."""
+    recorded = tmp_path / 'cut.mcap'
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    # make demo's run: 107 s of simulated time, 3-6 s of wall time
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', 'case_study_1', '--rtf', '50', '--record',
+                             str(recorded), '--no-progress'], env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    try:
+        assert proc.stdout is not None
+        line = proc.stdout.readline()
+        assert 'on their way' in line, line
+        time.sleep(1.5)   # (the clock runs at 50x real time at most: 75 s of the 107)
+        proc.send_signal(signal.SIGINT)
+        out, err = proc.communicate(timeout=30)
+    finally:
+        stop_process(proc)
+    assert proc.returncode == 1 and 'interrupted' in err and 'Traceback' not in err, err
+    assert f'wrote {recorded}' in out
+    with AnyReader([recorded]) as reader:
+        connections = [c for c in reader.connections if c.topic == '/r1/odom']
+        stamps = [(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9) for m in
+                  (reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=connections))]
+    assert 2.0 < stamps[-1] < 100.0, 'Ctrl-C came in the middle of the run'
+    assert_every_tick(stamps)
 
 
 def test_a_v2_world_runs_live_with_the_outcome_of_fastep_sim_judged_against_the_truth(tmp_path: Path) -> None:
