@@ -28,7 +28,7 @@ from fastep_core.geometry import Circle
 from fastep_core.world import World
 from msg_tools import convert
 from msg_tools.interface import offered_qos_profiles
-from msg_tools.mcap_io import McapWriter
+from msg_tools.mcap_writer import McapWriter
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -77,7 +77,7 @@ from fastep_ros.common import (
 from fastep_ros.limits import ACK_PERIOD_RANGE
 from fastep_ros.lock_step import STAMP_EPS
 from msg_tools import cdr, convert, frames, interface
-from msg_tools.mcap_io import COMPRESSIONS, McapWriter, WriteFailedError
+from msg_tools.mcap_writer import COMPRESSIONS, McapWriter, WriteFailedError
 from msg_tools.ros2_profile import message_class, qos_profile_to_dict
 
 __all__ = ['RecorderNode', 'RecordingStopped', 'main']

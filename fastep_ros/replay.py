@@ -44,7 +44,8 @@ from rosgraph_msgs.msg import Clock
 from fastep_core.cli import Parser, guard
 from fastep_core.errors import FastepError
 from msg_tools import interface
-from msg_tools.mcap_io import MESSAGE_ENCODING, ChannelInfo, Recording, open_recording
+from msg_tools.mcap_io import ChannelInfo, Recording, open_recording
+from msg_tools.mcap_writer import MESSAGE_ENCODING
 from msg_tools.ros2_profile import message_class, qos_from_dicts
 
 __all__ = ['ReplayNode', 'main']

@@ -60,7 +60,7 @@ from msg_tools.interface import (
     robot_topic,
     scenario_metadata,
 )
-from msg_tools.mcap_io import DEFAULT_CHUNK_SIZE, McapWriter
+from msg_tools.mcap_writer import DEFAULT_CHUNK_SIZE, McapWriter
 
 __all__ = ['SimRecorder', 'record_run']
 

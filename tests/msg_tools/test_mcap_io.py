@@ -18,12 +18,11 @@ import numpy as np
 import pytest
 from mcap.reader import SeekingReader
 from rosbags.highlevel import AnyReader
-from std_msgs.msg import Float64
 
 from msg_tools import recover, sim_cli
 from msg_tools.errors import NotMcapError, RecordingError, TruncatedRecordingError
-from msg_tools.mcap_io import McapWriter, copy_recording, open_recording
-from msg_tools.ros2_profile import message_definition, qos_dict, qos_from_dicts
+from msg_tools.mcap_io import copy_recording, open_recording
+from msg_tools.ros2_profile import message_definition, qos_dict
 
 # One point mass and one tractor-trailer (so trailer_pose is there), a circle and a wall (both marker kinds).
 MIXED = """\
@@ -240,28 +239,6 @@ def test_unreadable_files_give_one_line_errors(small_chunks: Path, tmp_path: Pat
         assert err.count('\n') == 1 and err.startswith('fastep-recover: error:')
     with pytest.raises(RecordingError, match='no such file'):
         open_recording(tmp_path / 'missing.mcap')
-
-
-# ----------------------------------------------------------------------------------------------- writer
-
-def test_writer_round_trip_and_qos(tmp_path: Path) -> None:
-    path = tmp_path / 'w.mcap'
-    with McapWriter(path, compression='lz4') as writer:
-        writer.add_channel('/map', 'nav_msgs/msg/OccupancyGrid', [qos_dict(depth=1, transient_local=True)])
-        writer.write('/x', Float64(data=1.5), 3)
-        writer.write('/x', Float64(data=2.5), 5, 4)
-        with pytest.raises(RecordingError, match='already recorded'):
-            writer.add_channel('/x', 'std_msgs/msg/String')
-    recording = open_recording(path)
-    assert [(m.log_time, m.message.data) for m in recording.messages()] == [(3, 1.5), (5, 2.5)]
-    assert [r.publish_time for r in recording.raw_messages()] == [3, 4]
-    latched = qos_from_dicts(recording.topics['/map'].qos)
-    plain_qos = qos_from_dicts(recording.topics['/x'].qos)
-    assert (latched.durability.name, latched.depth) == ('TRANSIENT_LOCAL', 1)
-    assert (plain_qos.durability.name, plain_qos.reliability.name, plain_qos.depth) == ('VOLATILE', 'RELIABLE', 10)
-    # rosbag2 metadata version <= 8 wrote numbers; an unknown history keeps the default depth.
-    old = qos_from_dicts([{'history': 3, 'depth': 0, 'reliability': 1, 'durability': 1}])
-    assert (old.durability.name, old.reliability.name, old.depth) == ('TRANSIENT_LOCAL', 'RELIABLE', 10)
 
 
 def test_fastep_sim_mcap_records_the_first_run_and_reports_bad_paths(
