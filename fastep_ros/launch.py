@@ -390,7 +390,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
             return any(r.end_time is not None and (not r.rows or r.rows[-1][0] < r.end_time - 1e-6 +
                                                    (r.started_at if r.started_at is not None else t0))
                        for r in robots.values()) or \
-                (recording_followed and monitor.recorder_acked < seen - 1e-6)
+                (recording_followed and monitor.recorder_acked < seen - 1e-6 and
+                 not any(label == 'fastep-record' for label, _ in procs.dead()))   # (a dead one: no wait)
         while time.monotonic() < short or (behind() and time.monotonic() < end):
             monitor.spin(0.02)
         # The nodes stop (the recorder finishes its file) while the report is written and drawn.
@@ -408,7 +409,8 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     except KeyboardInterrupt:
         print(f'{PROG}: interrupted; stopping every node', file=sys.stderr)
         code = 1
-        if monitor is not None and recording_followed:
+        if monitor is not None and recording_followed and \
+                not any(label == 'fastep-record' for label, _ in procs.dead()):
             monitor.await_recording(monitor.now(), INTERRUPT_WAIT)   # the recording holds the run up to here
     finally:
         if stopping is not None:
