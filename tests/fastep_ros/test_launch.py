@@ -77,6 +77,10 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
         # REP-105 TF, derived by the recorder from the odometry it records (Foxglove draws the robot with it).
         tf = {c.topic: [reader.deserialize(raw, c.msgtype) for _, _, raw in reader.messages(connections=[c])]
               for c in reader.connections if c.topic in ('/tf', '/tf_static')}
+        # The goal, recorded before the clock started (fastep-report times the run from it).
+        goals = [t for _, t, _ in reader.messages(connections=[c for c in reader.connections
+                                                                if c.topic == '/r1/goal_pose'])]
+    assert goals and goals[0] == 0, goals
     stamps = [m.header.stamp.sec + m.header.stamp.nanosec * 1e-9 for m in odometry]
     assert stamps[0] == 0.0 and (odometry[0].pose.pose.position.x, odometry[0].pose.pose.position.y) == (2.0, 10.0)
     assert stamps[-1] >= rows[-1][0] - 1e-9
