@@ -232,9 +232,11 @@ class ClockNode(Node):
             self.advance()
 
     def answers(self, sync: _Sync) -> bool:
-        """Has `sync` answered the current tick, or (an observer) the tick `lag` ticks before: said a time later
-        than the tick before that one?"""
-        before = self.ticks - 1 - sync.lag   # the tick whose time an answer must be later than
+        """Has `sync` answered the current tick, or (an observer that has answered since the run started) the tick
+        `lag` ticks before: said a time later than the tick before that one? (An observer's first answer is waited
+        for at once: it also says that its /clock reader has matched, so the run's first ticks reach it. A
+        recording lost its first 18 /clock messages, in 1 launch of 6, while the clock ran ahead without it.)"""
+        before = self.ticks - 1 - (sync.lag if sync.answered else 0)   # the tick an answer must be later than
         return before < 0 or sync.heard > self.start + before * self.increment + STAMP_EPS
 
     def synced(self) -> bool:

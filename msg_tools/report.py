@@ -7,8 +7,10 @@ simulator object to ask, and offline recordings (fastep-sim --mcap) use the same
 both and the numbers can be checked against each other. Everything is measured from the messages:
 
 - path_length: sum of the distances between consecutive `odom` positions (log-time order);
-- reached / time_to_goal: the first `status` whose message is `arrived`, its log time minus the robot's first
-  `goal_pose` log time (or, without a goal_pose, its first odom);
+- reached / time_to_goal: the first `status` whose message is `arrived`, when it began minus the robot's first
+  `goal_pose` log time (or, without a goal_pose, its first odom). When it began: the status' `since` value (the
+  planner's time of the decision; fastep-record in lock step may take a message some ticks after it was sent),
+  else its log time;
 - min_clearance: smallest distance from an odom position to the surface of an obstacle of the file's
   `/obstacles` (a format-v2 run: of the true world in its metadata, every still obstacle where it really is and
   every mover where it was at that time), minus the robot radius (negative means it touched); min_robot_gap
@@ -35,7 +37,7 @@ import math
 import sys
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -170,6 +172,17 @@ class _Problems:
     def summary(self) -> list[str]:
         counted = [f'{n} message(s) on {topic} left out ({what})' for (topic, what), n in self.counts.items()]
         return self.lines + counted
+
+
+def _began(log_time: float, status: Mapping[str, Any], start: float | None) -> float:
+    """When a status' message began: its `since` value (a planner's), if it is a time between `start` and the log
+    time (not logged before it was sent; on the recording's clock, not another), else the log time."""
+    try:
+        since = float(status.get('since', ''))
+    except (TypeError, ValueError):
+        return log_time
+    low = -math.inf if start is None else start - 1e-6
+    return since if math.isfinite(since) and low <= since <= log_time + 1e-6 else log_time
 
 
 def load_run(recording: Recording) -> RecordedRun:
@@ -406,7 +419,8 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
         xy = odom[:, 1:3]
         length = float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum()) if len(xy) > 1 else 0.0
         start = robot.goal_time if robot.goal_time is not None else (float(odom[0, 0]) if len(odom) else None)
-        arrived = [t for t, s in robot.statuses if s.get('message') == 'arrived' and (start is None or t >= start)]
+        arrived = [_began(t, s, start) for t, s in robot.statuses
+                   if s.get('message') == 'arrived' and (start is None or t >= start)]
         reached = bool(arrived)
         time_to_goal = arrived[0] - start if reached and start is not None else None
         # inf: no obstacle in the file, no other robot with odometry, or no odometry of this robot

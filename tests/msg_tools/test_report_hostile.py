@@ -78,6 +78,26 @@ def run_report(path: Path, capsys: pytest.CaptureFixture[str], figures: bool = T
     return code, err, doc
 
 
+@pytest.mark.parametrize('since, expected', [('5.0', 5.0), (None, 6.0), ('x', 6.0), ('nan', 6.0), ('7.0', 6.0),
+                                             ('-1.0', 6.0)])
+def test_an_arrival_counts_from_when_it_began(tmp_path: Path, since: str | None, expected: float,
+                                               capsys: pytest.CaptureFixture[str]) -> None:
+    """An arrived status logged at 6 s by a recorder some ticks behind, saying it began (`since`) at 5 s: the run
+    took 5 s. Without `since`, or with one that cannot be (not a number, after the log time, before the goal):
+    the log time."""
+    values = {'reason': 'goal reached'} if since is None else {'reason': 'goal reached', 'since': since}
+    path = tmp_path / 'late.mcap'
+    with McapWriter(path) as w:
+        w.add_metadata('fastep', {'robots': 'r1', 'radius/r1': '0.5'})
+        w.write('/r1/goal_pose', convert.point_to_pose_stamped((9.0, 9.0)), 0)
+        for i in range(10):
+            w.write('/r1/odom', odometry(1.0 + 0.5 * i, 1.0), (i + 1) * 500_000_000)
+        w.write('/r1/status', convert.make_status('/r1', 'arrived', 'ok', values), 6_000_000_000)
+    code, _, doc = run_report(path, capsys, figures=False)
+    assert code == 0 and doc['robots'][0]['reached']
+    assert doc['robots'][0]['time_to_goal'] == pytest.approx(expected)
+
+
 WRONG_TYPES = ['/r1/odom', '/r1/cmd_vel', '/r1/cost', '/r1/status', '/r1/waypoint', '/r1/plan', '/r1/goal_pose',
                '/obstacles', '/map']
 
