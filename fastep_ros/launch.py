@@ -37,7 +37,7 @@ import sys
 import threading
 import time
 from pathlib import Path
-from typing import Any, NoReturn, Sequence
+from typing import Any, Callable, Mapping, NoReturn, Sequence
 
 from fastep_core.cli import Parser, fail, guard, seed, tcp_port, tcp_port_problem
 from fastep_core.dynamic_world import DynamicWorld
@@ -212,20 +212,60 @@ def _alone(monitor: Monitor) -> None:
         monitor.spin(0.1)
 
 
-def _wait(monitor: Monitor, procs: Processes, deadline: float, ready: Any, what: str) -> None:
-    while not ready():
+def _wait(monitor: Monitor, procs: Processes, deadline: float, unready: Callable[[], str], what: str) -> None:
+    """Spin until `unready()` says nothing ('' : ready); a LaunchError that says what is still missing at the
+    deadline, or which process exited."""
+    while why := unready():
         monitor.check_alone()
         dead = procs.dead()
         if dead:
             label, code = dead[0]
             raise LaunchError(f'{label} exited with code {code} while {what}')
         if time.monotonic() > deadline:
-            raise LaunchError(f'timed out while {what}')
+            raise LaunchError(f'timed out while {what}: {why}')
         monitor.spin(0.01)   # (each stage of the start is seen within 10 ms: make demo's start waits for 4 of them)
 
 
-def run(args: argparse.Namespace, scenario: Scenario) -> int:
+def not_ready(name: str, robot: RobotLive, goal_readers: int, goal_readers_needed: int, cmd_vel_readers_needed: int,
+              names: set[str], recorded: Mapping[str, Any] | None) -> str:
+    """Why robot `name` is not ready for its goal ('' when it is), from its planner's status and this monitor's
+    view: the goal's readers (the planner, and the recorder when recording), the odometry heard here and by the
+    planner, cmd_vel's readers (the plant, and the clock in lock step), the other robots followed, and the
+    odometry recorded (`recorded`: fastep-record's topics, None when not recording)."""
     from msg_tools.interface import CMD_VEL, GOAL_POSE, ODOM, robot_topic
+
+    status = robot.status
+    message = status.get('message')
+    if message is None:
+        return f'no status from the planner of {name} yet'
+    if message != 'idle':
+        return f'the planner of {name} is {message}' + (f': {status["reason"]}' if status.get('reason') else '')
+    if goal_readers < goal_readers_needed:
+        return (f'{robot_topic(name, GOAL_POSE)} has {goal_readers} of {goal_readers_needed} readers (the planner'
+                f'{", fastep-record" if goal_readers_needed > 1 else ""})')
+    # Odometry is volatile: a plant this monitor has not matched yet when the clock starts would drive a run it
+    # never sees (on a loaded machine, DDS matches endpoints seconds after the graph lists them). Plants publish
+    # their start state until time starts: wait until it is heard here and by the planner.
+    if not robot.rows:
+        return f'no odometry on {robot_topic(name, ODOM)} heard by fastep-launch yet'
+    if int(status.get('odom_heard', 0)) < 1:
+        return f'the planner of {name} has heard no odometry yet'
+    # Nor may a planner's commands go unheard: its plant (and the clock's lock step) must have matched.
+    readers = int(status.get('cmd_vel_readers', 0))
+    if readers < cmd_vel_readers_needed:
+        return (f'{robot_topic(name, CMD_VEL)} has {readers} of {cmd_vel_readers_needed} readers (the plant'
+                f'{", fastep-clock" if cmd_vel_readers_needed > 1 else ""})')
+    missing = sorted(names - {name} - set(status.get('others', '').split()))
+    if missing:
+        return f'the planner of {name} does not follow {", ".join(missing)} yet'
+    # And the recording holds the run from its start.
+    if recorded is not None and robot_topic(name, ODOM) not in recorded:
+        return f'fastep-record has not recorded {robot_topic(name, ODOM)} yet'
+    return ''
+
+
+def run(args: argparse.Namespace, scenario: Scenario) -> int:
+    from msg_tools.interface import CMD_VEL, GOAL_POSE, robot_topic
 
     sim_time = not args.no_clock
     timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
@@ -290,26 +330,13 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
 
         goal_readers = 1 + (args.record is not None)   # the planner, and the recorder when recording
 
-        def planners_ready() -> bool:
+        def planners_ready() -> str:
             for name, robot in robots.items():
-                if robot.status.get('message') != 'idle' or \
-                        monitor.goal_pubs[name].get_subscription_count() < goal_readers:
-                    return False
-                # Odometry is volatile: a plant this monitor has not matched yet when the clock starts would
-                # drive a run it never sees (on a loaded machine, DDS matches endpoints seconds after the graph
-                # lists them). Plants publish their start state until time starts: wait until it is heard here
-                # and by the planner.
-                if not robot.rows or int(robot.status.get('odom_heard', 0)) < 1:
-                    return False
-                # Nor may a planner's commands go unheard: its plant (and the clock's lock step) must have matched.
-                if int(robot.status.get('cmd_vel_readers', 0)) < 1 + sim_time:
-                    return False
-                if not names - {name} <= set(robot.status.get('others', '').split()):
-                    return False
-                # And the recording holds the run from its start.
-                if args.record is not None and robot_topic(name, ODOM) not in monitor.recorded:
-                    return False
-            return True
+                why = not_ready(name, robot, monitor.goal_pubs[name].get_subscription_count(), goal_readers,
+                                1 + sim_time, names, monitor.recorded if args.record is not None else None)
+                if why:
+                    return why
+            return ''
 
         _wait(monitor, procs, deadline, planners_ready,
               'waiting for the planners to see the world and each other, and for every odometry topic')
@@ -317,15 +344,19 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
         monitor.send_goals()
         sent = time.monotonic()
 
-        def goals_taken() -> bool:
+        def goals_taken() -> str:
             nonlocal sent
             if time.monotonic() - sent > 1.0:  # a goal can be lost only if the planner was not yet matched
                 monitor.send_goals()
                 sent = time.monotonic()
-            # ... and recorded: a recorder whose end of the goal's connection matched after the clock started got the
-            # (latched) goal then, and fastep-report timed the run from then (1.45 s short in a make demo).
-            return all(r.status.get('message') not in (None, 'idle') for r in robots.values()) and \
-                (args.record is None or all(robot_topic(name, GOAL_POSE) in monitor.recorded for name in robots))
+            for name, robot in robots.items():
+                if robot.status.get('message') in (None, 'idle'):
+                    return f'the planner of {name} has not taken its goal'
+                # ... and recorded: a recorder whose end of the goal's connection matched after the clock started got
+                # the (latched) goal then, and fastep-report timed the run from then (1.45 s short in a make demo).
+                if args.record is not None and robot_topic(name, GOAL_POSE) not in monitor.recorded:
+                    return f'fastep-record has not recorded {robot_topic(name, GOAL_POSE)} yet'
+            return ''
 
         _wait(monitor, procs, deadline, goals_taken, 'sending the goals')
         if sim_time:

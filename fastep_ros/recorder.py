@@ -253,6 +253,7 @@ class RecorderNode(Node):
                           durability=DurabilityPolicy.TRANSIENT_LOCAL if latched else DurabilityPolicy.VOLATILE)
 
     # ------------------------------------------------------------------------------------------- writing
+    @quiet_at_stop   # (a launch stopped at its start: a first message's status publish met the shut-down context)
     def on_message(self, topic: str, data: bytes) -> None:
         writer = self.writer
         if writer is None:

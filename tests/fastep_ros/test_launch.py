@@ -496,6 +496,33 @@ def test_a_process_joins_dds_only_when_its_gate_opens(context: Any, tmp_path: Pa
     assert closed.returncode == 0 and closed.stdout == b'' and closed.stderr == b''
 
 
+def test_the_launcher_says_what_a_robot_still_waits_for() -> None:
+    """Before the goals go out, each missing piece is named (a start that times out says which one)."""
+    from fastep_ros.launch import not_ready
+    from fastep_ros.monitor import RobotLive
+
+    robot = RobotLive(load_scenario('case_study_1').robots[0])
+    names = {'r1', 'r2'}
+
+    def why(goal_readers: int = 2, recorded: dict[str, Any] | None = None, **status: Any) -> str:
+        robot.status = {'message': 'idle', 'odom_heard': '3', 'cmd_vel_readers': '2', 'others': 'r2', **status}
+        return not_ready('r1', robot, goal_readers, 2, 2, names, {'/r1/odom': 5} if recorded is None else recorded)
+
+    robot.rows = [[0.0, 5.0, 45.0]]
+    assert why() == ''
+    robot.status = {}
+    assert not_ready('r1', robot, 2, 2, 2, names, None) == 'no status from the planner of r1 yet'
+    assert why(message='waiting', reason='waiting for the world (/obstacles)') == \
+        'the planner of r1 is waiting: waiting for the world (/obstacles)'
+    assert why(goal_readers=1) == '/r1/goal_pose has 1 of 2 readers (the planner, fastep-record)'
+    assert why(odom_heard='0') == 'the planner of r1 has heard no odometry yet'
+    assert why(cmd_vel_readers='1') == '/r1/cmd_vel has 1 of 2 readers (the plant, fastep-clock)'
+    assert why(others='') == 'the planner of r1 does not follow r2 yet'
+    assert why(recorded={}) == 'fastep-record has not recorded /r1/odom yet'
+    robot.rows = []
+    assert why() == 'no odometry on /r1/odom heard by fastep-launch yet'
+
+
 def test_a_wall_time_run_with_many_robots_per_core_spreads_step_plans_over_ticks_unless_told() -> None:
     """16 robots on 2 cores on wall time plan whole steps in 5-7 ms control ticks: the launcher gives their planners
     step_iterations 3 and says so; not in lock step, not over the scenario's own budget or --step-iterations, not for
