@@ -15,7 +15,8 @@ first says a later time (while the clock holds 0 before the run, goals are still
 come within `wait` wall seconds (its node died or starves) is given up on, and not waited for again until a
 newer stamp of it comes, so a dead robot costs the wait once, not every tick.
 
-LockStep is the bookkeeping, without ROS (unit-tested alone); the planner node feeds it.
+LockStep is the bookkeeping, without ROS (unit-tested alone); the planner node feeds it. AckPacer paces an
+observer's acknowledgements.
 """
 
 from __future__ import annotations
@@ -24,7 +25,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Mapping
 
-__all__ = ['LOCK_WAIT', 'STAMP_EPS', 'LockStep']
+__all__ = ['LOCK_WAIT', 'STAMP_EPS', 'AckPacer', 'LockStep']
 
 LOCK_WAIT = 5.0     # wall seconds an input is waited for (the clock's sync_timeout: a loaded machine starves a node)
 STAMP_EPS = 1e-6    # seconds: stamps this close are the same time (float times through nanosecond stamps)
@@ -64,3 +65,22 @@ class LockStep:
             self.gone[name] = inputs[name]
         self.abandoned, self.waiting_since = late, None
         return []
+
+
+@dataclass
+class AckPacer:
+    """When an observer of the lock step (fastep-launch's monitor, fastep-record) acknowledges a /clock time it has
+    taken: once every `period` simulated seconds (the clock lets it lag its observer_lag ticks behind), and a time
+    said again at once (the clock holds it: whoever waits for the observer to reach it waits no longer)."""
+
+    period: float = 0.0
+    acked: float = -math.inf   # the time acknowledged last
+    seen: float = -math.inf    # the time taken last
+
+    def due(self, t: float) -> bool:
+        """Take /clock time `t`; True if it is to be acknowledged now."""
+        again, self.seen = t == self.seen, t
+        if t >= self.acked + self.period - STAMP_EPS or (again and t > self.acked):
+            self.acked = t
+            return True
+        return False

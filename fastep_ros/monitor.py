@@ -161,21 +161,18 @@ class Monitor:
         from rclpy.qos import QoSProfile, ReliabilityPolicy
         from rosgraph_msgs.msg import Clock
 
-        from fastep_ros.lock_step import STAMP_EPS
+        from fastep_ros.lock_step import AckPacer
         from msg_tools.interface import CLOCK, CLOCK_ACK, RELIABLE
 
-        acked = seen = -math.inf
+        acks = AckPacer(ack_period)
 
         def on_clock(msg: Any) -> None:
-            nonlocal acked, seen
             t = self.convert.stamp_to_seconds(msg.clock)
             self.sim_now = max(self.sim_now or 0.0, t)
             self.drain()
             # Lock step: the clock lets this monitor lag its observer_lag ticks behind at most (it must take every
-            # odometry message before its queue is full); a time said again (held) is acknowledged at once.
-            again, seen = t == seen, t
-            if t >= acked + ack_period - STAMP_EPS or (again and t > acked):
-                acked = t
+            # odometry message before its queue is full).
+            if acks.due(t):
                 self.ack_pub.publish(msg)
         self.node.create_subscription(Clock, CLOCK, on_clock,
                                       QoSProfile(depth=1, reliability=ReliabilityPolicy.BEST_EFFORT))

@@ -48,7 +48,6 @@ Parameters are read-only; a bad one (or an output that cannot be created) is one
 from __future__ import annotations
 
 import functools
-import math
 import struct
 import sys
 import time
@@ -75,7 +74,7 @@ from fastep_ros.common import (
     quiet_at_stop,
 )
 from fastep_ros.limits import ACK_PERIOD_RANGE
-from fastep_ros.lock_step import STAMP_EPS
+from fastep_ros.lock_step import AckPacer
 from msg_tools import cdr, convert, frames, interface
 from msg_tools.mcap_writer import COMPRESSIONS, McapWriter, WriteFailedError
 from msg_tools.ros2_profile import message_class, qos_profile_to_dict
@@ -127,11 +126,11 @@ class RecorderNode(Node):
                             'that the clock (its observer_topics) never runs further ahead of the recording than its '
                             'observer_lag (fastep-launch sets it; at a high rtf the recorder fell behind and messages '
                             'were lost)')
-        self.ack_period = declare(self, 'clock_ack_period', 0.0, 'lock step: simulated seconds from one clock_ack to '
+        ack_period = declare(self, 'clock_ack_period', 0.0, 'lock step: simulated seconds from one clock_ack to '
                                   'the next, at least (0: every /clock time; fastep-launch: a quarter of the clock\'s '
                                   'observer_lag, so that the clock hears from the recorder a few times per tick it '
                                   'waits for, rather than every tick)', value_range=ACK_PERIOD_RANGE, unit=' s')
-        self.acked = self.clock_seen = -math.inf   # the /clock time last acknowledged, and last recorded
+        self.acks = AckPacer(ack_period)
         if chunk_size < 1024:
             raise StartupError(f'parameter chunk_size must be >= 1024, got {chunk_size}')
         for name, value in (('flush_period', flush_period), ('discovery_period', discovery_period)):
@@ -280,12 +279,9 @@ class RecorderNode(Node):
             self.publish_status()
 
     def acknowledge(self, sec: int, nanosec: int) -> None:
-        """Say on clock_ack that the /clock time (sec, nanosec) is recorded: once every clock_ack_period, and a
-        time said again (the clock holds it: a launcher waiting for the recording to reach it waits no longer)."""
-        t = sec + nanosec * 1e-9
-        again, self.clock_seen = t == self.clock_seen, t
-        if t >= self.acked + self.ack_period - STAMP_EPS or (again and t > self.acked):
-            self.acked = t
+        """Say on clock_ack that the /clock time (sec, nanosec) is recorded, as AckPacer says (once every
+        clock_ack_period; a time said again at once)."""
+        if self.acks.due(sec + nanosec * 1e-9):
             assert self.ack_pub is not None
             self.ack_pub.publish(cdr.clock_cdr((sec, nanosec)))
 

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import pytest
+
 from fastep_ros.lock_step import LockStep
 
 
@@ -49,3 +51,16 @@ def test_the_clock_reads_an_answers_stamp_from_its_bytes() -> None:
                       TwistStamped, True) == 16.45
     assert _raw_stamp(cdr.clock_cdr(cdr.stamp_parts(0.05)), Clock, True) == 0.05
     assert _raw_stamp(cdr.twist_cdr((1.0, 0.0), 0.0), Twist, False) is None
+
+
+def test_an_observer_acknowledges_a_period_apart_and_a_held_time_at_once() -> None:
+    from fastep_ros.lock_step import AckPacer
+    pacer = AckPacer(0.25)
+    due = [t for t in (0.05 * k for k in range(1, 21)) if pacer.due(t)]
+    assert due == pytest.approx([0.05, 0.3, 0.55, 0.8])
+    assert pacer.due(1.0)           # said again (the clock holds 1.0): at once
+    assert not pacer.due(1.0)       # once
+    assert not pacer.due(1.05)
+    every = AckPacer()              # period 0: every time
+    assert all(every.due(0.05 * k) for k in range(1, 6))
+
