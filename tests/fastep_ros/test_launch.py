@@ -417,6 +417,26 @@ def test_a_node_interrupted_while_it_imports_ends_without_a_traceback(tmp_path: 
     assert proc.returncode in (0, 130) and 'Traceback' not in err, (proc.returncode, err)
 
 
+def test_a_launched_node_stopped_at_any_moment_of_its_imports_exits_0_without_a_traceback(tmp_path: Path) -> None:
+    """A launch that refuses to start (another graph on the domain) stops its nodes while they import: one stopped
+    while rclpy's C extension initialised printed "ImportError: initialization failed" with two tracebacks (a red
+    CI). The moments below cover the imports (python, numpy, rclpy, the node's modules)."""
+    import os
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    env['FASTEP_PARENT_PID'] = str(os.getpid())   # started by "fastep-launch": this process
+    for delay in (0.05, 0.1, 0.15, 0.2, 0.25, 0.3, 0.4, 0.5):
+        proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.container', '--node', 'planner', '--node', 'plant'],
+                                env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                                stdin=subprocess.DEVNULL)
+        try:
+            time.sleep(delay)
+            proc.send_signal(signal.SIGINT)
+            _, err = proc.communicate(timeout=30)
+        finally:
+            stop_process(proc)
+        assert proc.returncode == 0 and 'Traceback' not in err, (delay, proc.returncode, err)
+
+
 def test_a_stop_signal_before_rclpy_init_is_not_lost(tmp_path: Path) -> None:
     """The window between a node's own signal handlers and rclpy's (rclpy.init): a SIGINT there ended nothing, the
     node started and ran on. Now it is remembered and the node stops before it is built."""
