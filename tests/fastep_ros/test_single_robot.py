@@ -151,8 +151,11 @@ def test_stale_odometry_stops_the_robot(one: Graph) -> None:
     h.spin_until(lambda: bool(cmds) and math.hypot(cmds[-1].linear.x, cmds[-1].linear.y) > 0.1, 30.0,
                  'the robot to be commanded to move')
     one.stop('plant', signal.SIGKILL)
-    status = h.wait_status(NS, lambda s: s['message'] == 'stale', 30.0, 'status stale')
-    assert status['level'] == 'warn' and 'odometry stale' in status['reason']
+    # (Once, in a fresh-clone CI, the planner first said "no /clock for 3.0 s": it heard no /clock for 3 s right
+    # after the kill, then went on; docs/robustness.md. What is tested here is what follows the odometry's end.)
+    status = h.wait_status(NS, lambda s: s['message'] == 'stale' and 'odometry stale' in s['reason'], 30.0,
+                           'status stale, odometry stale')
+    assert status['level'] == 'warn'
     first = len(cmds)
     h.spin_for(0.5)  # 5 simulated seconds: ~100 control ticks
     # cmd_vel and status are separate topics: a command sent just before the planner went stale may arrive
