@@ -6,7 +6,7 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterator
 
 import numpy as np
 import pytest
@@ -389,47 +389,45 @@ def test_launch_passes_the_scenario_to_the_nodes() -> None:
     assert ros_value(1e-5) == '1e-05' and ros_value([5, 25]) == '[5.0, 25.0]'
 
 
-def test_launch_monitor_keeps_time_from_odometry_when_clock_messages_are_lost(
-        monkeypatch: pytest.MonkeyPatch) -> None:
+@pytest.fixture
+def monitor(monkeypatch: pytest.MonkeyPatch) -> Iterator[Monitor]:
+    """fastep-launch's monitor of table2_s1, on a domain of its own."""
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain()))
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    built = Monitor(load_scenario('table2_s1'))
+    try:
+        yield built
+    finally:
+        built.close()
+
+
+def test_launch_monitor_keeps_time_from_odometry_when_clock_messages_are_lost(monitor: Monitor) -> None:
     # /clock is best effort: on a loaded machine the monitor once got none for 30 s while the robot drove on,
     # and gave the run up as stalled. Odometry stamps (reliable) carry simulated time too.
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain()))
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monitor = Monitor(load_scenario('table2_s1'))
-    try:
-        monitor.follow_clock()
-        monitor.sim_now = 0.0
-        robot = next(iter(monitor.robots.values()))
-        monitor.on_odom(robot, convert.state_to_odometry([3.0, 4.0], convert.seconds_to_stamp(12.5)))
-        assert monitor.now() == pytest.approx(12.5)
-        monitor.on_odom(robot, convert.state_to_odometry([3.0, 4.0], convert.seconds_to_stamp(12.0)))
-        assert monitor.now() == pytest.approx(12.5), 'an older stamp must not take time back'
-        assert robot.rows == [[pytest.approx(12.5), 3.0, 4.0]]
-    finally:
-        monitor.close()
+    monitor.follow_clock()
+    monitor.sim_now = 0.0
+    robot = next(iter(monitor.robots.values()))
+    monitor.on_odom(robot, convert.state_to_odometry([3.0, 4.0], convert.seconds_to_stamp(12.5)))
+    assert monitor.now() == pytest.approx(12.5)
+    monitor.on_odom(robot, convert.state_to_odometry([3.0, 4.0], convert.seconds_to_stamp(12.0)))
+    assert monitor.now() == pytest.approx(12.5), 'an older stamp must not take time back'
+    assert robot.rows == [[pytest.approx(12.5), 3.0, 4.0]]
 
 
-def test_launch_monitor_acknowledges_clock_times_ack_period_apart_and_a_held_time_at_once(
-        monkeypatch: pytest.MonkeyPatch) -> None:
+def test_launch_monitor_acknowledges_clock_times_ack_period_apart_and_a_held_time_at_once(monitor: Monitor) -> None:
     from rosgraph_msgs.msg import Clock
 
-    monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain()))
-    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
-    monitor = Monitor(load_scenario('table2_s1'))
-    try:
-        monitor.connect()
-        acked: list[float] = []
-        keep_published(monitor.ack_pub, lambda msg: acked.append(convert.stamp_to_seconds(msg.clock)))
-        monitor.follow_clock(0.25)
-        on_clock = next(s.callback for s in monitor.node.subscriptions if s.topic_name == '/clock')
-        for k in range(1, 11):
-            on_clock(Clock(clock=convert.seconds_to_stamp(0.05 * k)))
-        assert acked == pytest.approx([0.05, 0.3]) and monitor.now() == pytest.approx(0.5)
-        on_clock(Clock(clock=convert.seconds_to_stamp(0.5)))   # said again: the clock holds it
-        on_clock(Clock(clock=convert.seconds_to_stamp(0.5)))
-        assert acked == pytest.approx([0.05, 0.3, 0.5])
-    finally:
-        monitor.close()
+    monitor.connect()
+    acked: list[float] = []
+    keep_published(monitor.ack_pub, lambda msg: acked.append(convert.stamp_to_seconds(msg.clock)))
+    monitor.follow_clock(0.25)
+    on_clock = next(s.callback for s in monitor.node.subscriptions if s.topic_name == '/clock')
+    for k in range(1, 11):
+        on_clock(Clock(clock=convert.seconds_to_stamp(0.05 * k)))
+    assert acked == pytest.approx([0.05, 0.3]) and monitor.now() == pytest.approx(0.5)
+    on_clock(Clock(clock=convert.seconds_to_stamp(0.5)))   # said again: the clock holds it
+    on_clock(Clock(clock=convert.seconds_to_stamp(0.5)))
+    assert acked == pytest.approx([0.05, 0.3, 0.5])
 
 
 def test_stamped_cmd_vel_between_planner_and_plant(context: Any) -> None:
