@@ -29,7 +29,6 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import importlib
-import json
 import math
 import os
 import signal
@@ -40,15 +39,14 @@ from pathlib import Path
 from typing import Any, Callable, Mapping, NoReturn, Sequence
 
 from fastep_core.cli import Parser, fail, guard, seed, tcp_port, tcp_port_problem
-from fastep_core.dynamic_world import DynamicWorld
 from fastep_core.errors import ParameterError, ScenarioError
-from fastep_core.metrics import trajectory_margins
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenario
 from fastep_ros.dds_profile import PROFILE_ENV, use_discovery_profile
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import DEFAULT_EXECUTOR, EXECUTOR_ENV, EXECUTORS
+from fastep_ros.launch_report import report
 from fastep_ros.layouts import GRAPH_ROBOTS, LAYOUTS, Member, default_layout, usable_cores
 from fastep_ros.layouts import command as layout_command
 from fastep_ros.limits import RATE_RANGE, RTF_RANGE, graph_problem, robot_name_problem
@@ -60,7 +58,6 @@ __all__ = ['main']
 
 PROG = 'fastep-launch'
 STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the world and the other robots
-SAMPLE_SPACING = 0.05   # metres between trajectory rows written to --json, at least
 END_WAIT = 5.0          # wall seconds the report waits at most for odometry up to the end of each robot's run
 STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
 INTERRUPT_WAIT = 1.0    # wall seconds a Ctrl-C'd run waits at most for the recorder to reach the time it was stopped at
@@ -425,13 +422,13 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                                                    (r.started_at if r.started_at is not None else t0))
                        for r in robots.values()) or \
                 (recording_followed and monitor.recorder_acked < seen - 1e-6 and
-                 not any(label == 'fastep-record' for label, _ in procs.dead()))   # (a dead one: no wait)
+                 procs.running('fastep-record'))   # (a recorder that exited: no wait)
         while time.monotonic() < short or (behind() and time.monotonic() < end):
             monitor.spin(0.02)
         # The nodes stop (the recorder finishes its file) while the report is written and drawn.
         stopping = threading.Thread(target=procs.stop, name='stop-nodes')
         stopping.start()
-        collided, written = report(args, scenario, monitor, t0, sim_time)
+        collided, written = report(PROG, args, scenario, monitor.robots, t0, sim_time)
         code = 0 if all(r.outcome == 'arrived' for r in robots.values()) and not collided else 1
         if not written:
             code = 2
@@ -443,8 +440,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
     except KeyboardInterrupt:
         print(f'{PROG}: interrupted; stopping every node', file=sys.stderr)
         code = 1
-        if monitor is not None and recording_followed and \
-                not any(label == 'fastep-record' for label, _ in procs.dead()):
+        if monitor is not None and recording_followed and procs.running('fastep-record'):
             monitor.await_recording(monitor.now(), INTERRUPT_WAIT)   # the recording holds the run up to here
     finally:
         if stopping is not None:
@@ -505,67 +501,6 @@ def _output_problem(path: Path, plot: bool = False) -> str:
 def _scenario_arg(source: str) -> str:
     path = Path(source)
     return str(path.resolve()) if path.is_file() else source
-
-
-def _min_clearance(scenario: Scenario, robots: dict[str, RobotLive]) -> dict[str, float]:
-    """Smallest margin each robot kept (negative: collided), from its odometry, to the obstacles and the other
-    robots (fastep_core.metrics; with simulated time every plant stamps odometry on the same grid)."""
-    movers = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs).movers   # a v2 world's, over time
-    margins = trajectory_margins([[row[:3] for row in robot.rows] for robot in robots.values()],
-                                 [robot.spec.radius for robot in robots.values()], scenario.world.obstacles,
-                                 movers if len(movers) else None)
-    return {name: float(margin) for name, margin in zip(robots, margins.overall)}
-
-
-def _sampled(rows: list[list[float]]) -> list[list[float]]:
-    if len(rows) < 3:
-        return rows
-    out = [rows[0]]
-    for row in rows[1:-1]:
-        if math.hypot(row[1] - out[-1][1], row[2] - out[-1][2]) >= SAMPLE_SPACING:
-            out.append(row)
-    out.append(rows[-1])
-    return out
-
-
-def report(args: argparse.Namespace, scenario: Scenario, monitor: Monitor, t0: float,
-           sim_time: bool) -> tuple[bool, bool]:
-    """Print one line per robot, write --json / --plot; (did any robot collide, were the files written)."""
-    from fastep_core.simulator import RobotRun, Run
-
-    clearance = _min_clearance(scenario, monitor.robots)
-    runs = []
-    for name, robot in monitor.robots.items():
-        rows = [[r[0] - t0, *r[1:]] for r in robot.rows]
-        when = f'{robot.end_time:.1f} s' if robot.end_time is not None else '-'
-        collided = clearance[name] < 0.0
-        print(f'{name}: {robot.outcome}{" COLLIDED" if collided else ""}, path {robot.path_length:.2f} m, '
-              f'time {when}, min clearance {clearance[name]:.2f} m, activations {robot.activations} '
-              f'({robot.reason})', flush=True)
-        runs.append(RobotRun(name=name, model=robot.spec.model, reached=robot.outcome == 'arrived',
-                             collided=collided, path_length=robot.path_length,
-                             sim_time=robot.end_time if robot.outcome == 'arrived' else None,
-                             min_clearance=clearance[name], activations=robot.activations,
-                             escapes=robot.escapes, manoeuvres=robot.manoeuvres,
-                             status=f'{robot.outcome}: {robot.reason}', trajectory=_sampled(rows),
-                             waypoints=robot.waypoints))
-    run = Run(args.seed, args.algorithm, runs)
-    try:
-        if args.json is not None:
-            doc = {'scenario': scenario.name, 'algorithm': args.algorithm, 'live': True,
-                   'rtf': None if not sim_time else args.rtf, 'runs': [run.to_json()]}
-            args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(json.dumps(doc) + '\n')
-            print(f'wrote {args.json}')
-        if args.plot is not None:
-            from msg_tools.plots import plot_paths
-            args.plot.parent.mkdir(parents=True, exist_ok=True)
-            plot_paths(scenario, run, args.plot)
-            print(f'wrote {args.plot}')
-    except OSError as exc:
-        fail(PROG, f'cannot write output: {exc}')
-        return any(r.collided for r in runs), False
-    return any(r.collided for r in runs), True
 
 
 def _request_stop(signum: int, frame: Any) -> None:

@@ -106,6 +106,10 @@ class Processes:
     def processes(self) -> list[subprocess.Popen[bytes]]:
         return list({proc.pid: proc for _, proc in self.items}.values())
 
+    def running(self, label: str) -> bool:
+        """Is the process of `label` (a node's, e.g. 'fastep-record') started and not exited?"""
+        return any(self.labels[proc.pid] == label and proc.poll() is None for proc in self.processes())
+
     def dead(self) -> list[tuple[str, int]]:
         return [(self.labels[proc.pid], proc.returncode) for proc in self.processes() if proc.poll() is not None]
 
