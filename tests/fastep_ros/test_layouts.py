@@ -89,7 +89,7 @@ def _children(pid: int) -> list[int]:
 
 def _launch(tmp_path: Path, layout: str, executor: str = 'single') -> dict[str, Any]:
     """fastep-launch CROSSING --layout `layout`, watched from a helper node on its domain: the graph's node names
-    and topics (with types) while the robots drive, its node processes, its output and --json."""
+    and topics (with types) seen while it runs, its node processes, its output and --json."""
     scenario = write(tmp_path / 'crossing.yaml', CROSSING)
     out = tmp_path / f'{layout}_{executor}.json'
     domain = free_domain()
@@ -109,11 +109,13 @@ def _launch(tmp_path: Path, layout: str, executor: str = 'single') -> dict[str, 
         deadline = time.monotonic() + 180
         while proc.poll() is None and time.monotonic() < deadline:
             helper.spin_for(0.1)
-            if any('on their way' in line for line in lines):
-                if processes is None:
-                    processes = len(_children(proc.pid))
-                nodes |= {ns.rstrip('/') + '/' + name for name, ns in helper.node.get_node_names_and_namespaces()}
-                topics |= {(topic, ','.join(types)) for topic, types in helper.node.get_topic_names_and_types()}
+            if processes is None and any('on their way' in line for line in lines):
+                processes = len(_children(proc.pid))
+            # From the start, not only while the robots drive: in CI (2 busy workers) the graph layout's 3 s drive
+            # ended before the helper had heard of 11 of its publishers (a lost discovery message is resent only at
+            # a later heartbeat, is the suspicion); watching from the start gives them the whole run.
+            nodes |= {ns.rstrip('/') + '/' + name for name, ns in helper.node.get_node_names_and_namespaces()}
+            topics |= {(topic, ','.join(types)) for topic, types in helper.node.get_topic_names_and_types()}
         _, err = proc.communicate(timeout=30)
     finally:
         stop_process(proc)
