@@ -61,6 +61,7 @@ from fastep_core.world import World
 __all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES', 'TURN_ROOM_SLACK']
 
 BLOCK_TIME = 1.0        # s: another robot standing on the route ahead this long makes the route go round it
+CLEAR_TIME = 0.25       # s: the route free of standing robots this long ends that wait (a retried step is shorter)
 REPLAN_INTERVAL = 1.0   # s: the route is planned at most this often for robots (blocking, or gone)
 MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
@@ -206,6 +207,7 @@ class FAStepRoute(FAStepKinematic):
         self._looked_at: FloatArray | None = None     # where the robot was when the target was last looked for
         self._look_after = 0.0                        # ... and how far it may drive before the next look
         self._blocked_since: float | None = None      # since when a robot has stood on the route ahead
+        self._clear_since: float | None = None        # since when none has, while the wait goes on
         self._replanned_at = -math.inf
         self._route_best = math.inf                   # the shortest route left so far (progress)
         self._route_tick = -1                         # the last tick that planned a route
@@ -263,7 +265,7 @@ class FAStepRoute(FAStepKinematic):
     def _install(self, path: OptimalPath, world: World, parked: FloatArray) -> None:
         self.route = Route.from_path(path, world, self.world, parked)
         self._vertex = self._aim = self._looked_at = None
-        self._blocked_since = None
+        self._blocked_since = self._clear_since = None
         self._route_best = math.inf   # progress is measured along the new route from here on
 
     def _parked(self, others: Sequence[OtherRobot]) -> FloatArray:
@@ -286,11 +288,20 @@ class FAStepRoute(FAStepKinematic):
         assert route is not None
         if route.base is not self.world:
             return 'the world changed'
-        on_route = bool(others) and self._robot_on_route(position, others)
-        if not on_route:
-            self._blocked_since = None
-        elif self._blocked_since is None:
-            self._blocked_since = t
+        blocked = bool(others) and self._robot_on_route(position, others)
+        if blocked:
+            self._clear_since = None
+            if self._blocked_since is None:
+                self._blocked_since = t
+        elif self._blocked_since is not None:
+            # Two robots that hold each other up twitch: each retries its step every RETRY_AFTER, and the move of
+            # one tick makes it a moving robot for the other. Only a route free for CLEAR_TIME ends the wait: else
+            # it restarted every half second, neither routed round the other, and they stood face to face until
+            # the trap detector fired (multi_robot:1000010, 18 s; docs/clutter.md).
+            if self._clear_since is None:
+                self._clear_since = t
+            if t - self._clear_since >= CLEAR_TIME:
+                self._blocked_since = self._clear_since = None
         if t - self._replanned_at < REPLAN_INTERVAL:
             return None
         if len(route.parked):
@@ -298,7 +309,7 @@ class FAStepRoute(FAStepKinematic):
             if not len(centres) or (np.hypot(*(route.parked[:, None, :] - centres[None]).transpose(2, 0, 1))
                                     .min(axis=1) > MOVED).any():
                 return 'a robot the route went round has moved'
-        if self._blocked_since is not None and t - self._blocked_since >= BLOCK_TIME:
+        if blocked and self._blocked_since is not None and t - self._blocked_since >= BLOCK_TIME:
             return 'a robot stands on the route'
         return None
 

@@ -13,7 +13,7 @@ from fastep_core.planning.fastep_route import BLOCK_TIME, FAStepRoute
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
-from fastep_core.random_scenarios import u_trap, u_trap_scenario_data
+from fastep_core.random_scenarios import random_family_data, u_trap, u_trap_scenario_data
 from fastep_core.scenario import RobotSpec, load_scenario, parse_scenario
 from fastep_core.simulator import simulate
 from fastep_core.world import World
@@ -133,6 +133,36 @@ def test_replans_round_a_robot_standing_on_the_route_and_back_once_it_has_gone()
     assert first >= BLOCK_TIME   # it waited BLOCK_TIME with the robot on its route before planning round it
     gaps = np.hypot(*(states[: int(40.0 / nav.params.dt)] - parked.position).T)
     assert gaps.min() > 2 * 0.5
+
+
+def test_a_robot_twitching_on_the_route_is_still_routed_round():
+    """A robot held up by this one retries its step every half second and moves for a tick each time: it still
+    stands on the route. Before, each such tick restarted the BLOCK_TIME wait, so it never ended."""
+    world = World.from_obstacles([0, 0, 50, 50], [])
+    nav = make_navigator('fastep_route', SPEC, 0.5, world, PlannerParams(), 0)
+    nav.set_goal((45.0, 45.0))
+
+    def others(t):
+        twitch = (t % 0.55) < nav.params.dt   # one tick of 0.3 m/s every 0.55 s, as a retried step
+        return (OtherRobot('r2', (25.0, 25.0), (0.3, 0.0) if twitch else (0.0, 0.0), 0.5),)
+
+    drive(nav, np.array([5.0, 5.0]), others)
+    assert nav.mode is Mode.ARRIVED
+    assert nav.replan_log and nav.replan_log[0][1] == 'a robot stands on the route'
+    assert nav.activations == 0   # routed round it before it was near enough to start the swarm
+
+
+def test_two_robots_face_to_face_in_a_passage_do_not_stand_there():
+    """multi_robot:1000010, seed 0: r1 and r2 met head-on between two U-shapes and stood face to face for 18 s
+    (each twitching at the other's retried steps) until the trap detector fired: home at 86 and 90.5 s. Now r1
+    routes round r2 within BLOCK_TIME of standing, and both are home before 60 s."""
+    scenario = parse_scenario(random_family_data('multi_robot', 1000010))
+    navigators = {}
+    run = simulate(scenario, 'fastep_route', 0, observer=lambda tick: navigators.setdefault(tick.name, tick.navigator))
+    assert all(robot.reached and not robot.collided for robot in run.robots)
+    assert max(robot.sim_time for robot in run.robots if robot.name in ('r1', 'r2')) < 60.0
+    t, reason = navigators['r1'].replan_log[0]
+    assert reason == 'a robot stands on the route' and t < 20.0
 
 
 def test_deterministic_per_seed():
