@@ -110,7 +110,7 @@ from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.lock_step import STAMP_EPS, LockStep
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.perception import ScanPerception
-from fastep_ros.robots import RobotFollower
+from fastep_ros.robots import RobotFollower, robot_name
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
@@ -442,6 +442,7 @@ class PlannerNode(ManagedNode):
         if self.navigator is None:
             self.navigator = make_navigator(self.algorithm, self.body, self.radius, self.world, self.params,
                                             self.rng)
+            self.navigator.name = robot_name(self.get_namespace())   # as the other robots' planners name it
             self.get_logger().info(f'world known: {len(self.obstacles)} obstacles in {workspace}')
         else:
             self.navigator.world = self.world

@@ -116,4 +116,6 @@ def make_navigator(algorithm: str, spec: RobotLike, radius: float, world: World,
         raise ParameterError(f'unknown algorithm {algorithm!r}; choose one of {", ".join(ALGORITHMS)}')
     check_drives(algorithm, spec.model, getattr(spec, 'name', ''))
     model, controller = make_robot(spec, params)
-    return NAVIGATORS[algorithm](model, controller, radius, world, params, rng)
+    navigator = NAVIGATORS[algorithm](model, controller, radius, world, params, rng)
+    navigator.name = str(getattr(spec, 'name', ''))
+    return navigator

@@ -22,6 +22,10 @@ Algorithm 1 with a route in place of the goal (`FAStepRoute.choose_target`, ever
    that waypoint as FAStep-Kinematic does (the lead of `aim`, the hold breaker, recoveries: planning/navigator.py).
 Static obstacles therefore never start the swarm (the route knows them, and a changed world is replanned at
 once): it plans only round other robots.
+5. Before a one-lane passage on the route (where another robot could not pass beside it: planning/passage.py)
+   the robot stands while another robot comes through it towards this one, or comes towards its far end and is
+   nearer to it (ties by name), at most PASSAGE_WAIT seconds: `wait_before_passage`. Two robots meeting inside
+   one could neither pass nor keep right.
 
 Speed: the kinematic controllers slow down in proportion to the distance to their target (eq. 12: alpha1 x
 distance; eq. 13: speed_gain x distance). The route target only sets a direction, so the controller is aimed
@@ -56,6 +60,7 @@ from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason, robot_
 from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
+from fastep_core.planning.passage import Passage, passages
 from fastep_core.world import World
 
 __all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES', 'TURN_ROOM_SLACK']
@@ -63,6 +68,8 @@ __all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SI
 BLOCK_TIME = 1.0        # s: another robot standing on the route ahead this long makes the route go round it
 CLEAR_TIME = 0.25       # s: the route free of standing robots this long ends that wait (a retried step is shorter)
 REPLAN_INTERVAL = 1.0   # s: the route is planned at most this often for robots (blocking, or gone)
+PASSAGE_LOOK = 15.0     # m: passages whose entry is this near along the route are watched for oncoming robots
+PASSAGE_WAIT = 30.0     # s: a robot waits before one passage at most this long (one that never comes through)
 MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
@@ -264,6 +271,9 @@ class FAStepRoute(FAStepKinematic):
 
     def _install(self, path: OptimalPath, world: World, parked: FloatArray) -> None:
         self.route = Route.from_path(path, world, self.world, parked)
+        self._route_points = path.points                          # with its start: passages are measured on it
+        self._passages: tuple[float, list[Passage]] | None = None   # (other robots' radius, the passages)
+        self._waited: tuple[float, float] | None = None            # (the passage's entry, since when) waited for
         self._vertex = self._aim = self._looked_at = None
         self._blocked_since = self._clear_since = None
         self._route_best = math.inf   # progress is measured along the new route from here on
@@ -419,6 +429,8 @@ class FAStepRoute(FAStepKinematic):
         self._committed = self._committed and following
         if self._committed:                                  # a step that broke a hold is driven to its end
             return self.waypoint
+        if others and self.wait_before_passage(position, t, others):
+            return None
         if not robots_on_run(others, self.radius, position, vertex, self.params.sensing_range,
                              0.5 * self.params.clearance_margin):
             self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'following the route'
@@ -431,6 +443,40 @@ class FAStepRoute(FAStepKinematic):
         if waypoint is not None and self.params.stuck_steps > 0:
             self.note_stuck(position, waypoint, others)
         return None if waypoint is None else self.aim(position, waypoint)
+
+    def wait_before_passage(self, position: FloatArray, t: float, others: Sequence[OtherRobot]) -> bool:
+        """Stand before a one-lane passage ahead while another robot comes through it (planning/passage.py);
+        True (and the status says so) while waiting. The progress checker and the trap detector wait too."""
+        route = self.route
+        assert route is not None and self.goal is not None
+        robots = [o for o in others if not o.mover]
+        if not robots:
+            return False
+        other_radius = max(o.radius for o in robots)
+        if self._passages is None or self._passages[0] < other_radius:
+            self._passages = (other_radius, passages(self.world, self._route_points, self.radius, other_radius,
+                                                     self.params.clearance_margin))
+        if not self._passages[1]:
+            return False
+        start, first = self._route_points[0], route.vertices[0]   # metres along the route, from its start:
+        length = float(route.rest[0]) + math.hypot(float(first[0]) - float(start[0]), float(first[1]) - float(start[1]))
+        along = length - route.remaining(position)
+        passage = next((p for p in self._passages[1] if p.exit > along), None)
+        if passage is None or passage.entry <= along or passage.entry - along > PASSAGE_LOOK:
+            return False                          # none left, inside one already, or the next one is far: drive on
+        if self._waited is not None and self._waited[0] == passage.entry and t - self._waited[1] > PASSAGE_WAIT:
+            return False
+        reach = self.radius + self.params.clearance_margin
+        other = passage.conflict(position, self.name, robots, PARKED_SPEED, reach)
+        if other is None or passage.entry - along > other.radius + 2.0 * reach:
+            return False                          # free, or not there yet: drive on towards it
+        if self._waited is None or self._waited[0] != passage.entry:
+            self._waited = (passage.entry, t)
+        self.waypoint, self.cost = None, 0.0
+        self.mode, self.reason = Mode.KINEMATIC, f'waiting for {other.name} to come through the passage'
+        self.progress.made_progress(t)
+        self.trap.reset(t, math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]))
+        return True
 
     def note_progress(self, position: FloatArray, t: float) -> None:
         """A route left progress_distance shorter than ever restarts the progress checker and the trap detector."""

@@ -68,6 +68,7 @@ class Navigator:
     method = 'fastep'        # the algorithm's name
     step_method = 'fastep'   # the optimizer that plans a step (plan_step's `method`)
     escapes_traps = True     # False for a navigator that already follows the exact path
+    name = ''                # the robot's name as the other robots know it ('' unknown): ties at passages
 
     def __init__(self, model: RobotModel, controller: Controller, radius: float, world: World,
                  params: PlannerParams | None = None, rng: np.random.Generator | int | None = None) -> None:

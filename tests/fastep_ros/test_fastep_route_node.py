@@ -39,6 +39,18 @@ def test_planner_node_follows_the_route_and_replans_when_the_map_changes(context
         node.destroy_node()
 
 
+def test_the_navigator_knows_its_robot_by_the_name_the_other_planners_use(context: Any) -> None:
+    """Ties before a one-lane passage go by name (planning/passage.py): the planner names its robot as the
+    others' planners name it, its namespace without the slash."""
+    node = PlannerNode(context=context, namespace='/r7',
+                       parameter_overrides=[Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0])])
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 2.0)]))
+        assert node.navigator is not None and node.navigator.name == 'r7'
+    finally:
+        node.destroy_node()
+
+
 def test_planner_node_reports_no_valid_path_for_fastep_route(context: Any) -> None:
     node = make(context, algorithm='fastep_route', workspace=[0.0, 0.0, 10.0, 10.0])
     try:
