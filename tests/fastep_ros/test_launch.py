@@ -558,3 +558,34 @@ def test_a_wall_time_run_with_many_robots_per_core_spreads_step_plans_over_ticks
     assert step_budget(16, 2, False, 'fastep_route', PlannerParams(step_iterations=2)) == (2, '')
     assert step_budget(16, 2, False, 'dwa', paper) == (0, '')
     assert step_budget(8, 2, False, 'fastep', paper) == (0, '')
+
+
+CORRIDOR = """\
+name: corridor_head_on
+workspace: [0, 0, 40, 20]
+obstacles:
+  - segment: {start: [15, 11.2], end: [25, 11.2]}
+  - segment: {start: [15, 8.8], end: [25, 8.8]}
+robots:
+  - {name: r1, model: point_mass, start: [4, 10], goal: [36, 10.5], radius: 0.5}
+  - {name: r2, model: point_mass, start: [37, 9.5], goal: [3, 10], radius: 0.5}
+"""
+
+
+def test_two_robots_take_turns_in_a_corridor_on_the_graph_exactly_as_in_fastep_sim(tmp_path: Path) -> None:
+    """The passage rule (planning/passage.py) on the live graph: each planner names its robot by its namespace,
+    as fastep-sim names it, so r2 waits for r1 before the 2.4 m corridor tick for tick as in fastep-sim."""
+    scenario = write(tmp_path / 'corridor.yaml', CORRIDOR)
+    statuses: dict[str, set[str]] = {}
+    reference = simulate(load_scenario(str(scenario)), 'fastep_route', 0,
+                         observer=lambda tick: statuses.setdefault(tick.name, set()).add(tick.navigator.reason))
+    assert 'waiting for r1 to come through the passage' in statuses['r2']
+    out = tmp_path / 'live.json'
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '50', '--seed', '0',
+                  '--algorithm', 'fastep_route', '--json', str(out)], env, timeout=180)
+    assert result.returncode == 0, result.stdout + result.stderr
+    for robot, sim in zip(json.loads(out.read_text())['runs'][0]['robots'], reference.robots):
+        assert robot['reached'] and sim.reached and not robot['collided']
+        assert robot['sim_time'] == pytest.approx(sim.sim_time, abs=1e-6)
+        assert robot['path_length'] == pytest.approx(sim.path_length, abs=2e-6)
