@@ -70,6 +70,7 @@ CLEAR_TIME = 0.25       # s: the route free of standing robots this long ends th
 REPLAN_INTERVAL = 1.0   # s: the route is planned at most this often for robots (blocking, or gone)
 PASSAGE_LOOK = 15.0     # m: passages whose entry is this near along the route are watched for oncoming robots
 PASSAGE_WAIT = 30.0     # s: a robot waits before one passage at most this long (one that never comes through)
+PASSAGE_WINDOW = 60.0   # m of route ahead measured for passages at a time
 MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
@@ -272,7 +273,8 @@ class FAStepRoute(FAStepKinematic):
     def _install(self, path: OptimalPath, world: World, parked: FloatArray) -> None:
         self.route = Route.from_path(path, world, self.world, parked)
         self._route_points = path.points                          # with its start: passages are measured on it
-        self._passages: tuple[float, list[Passage]] | None = None   # (other robots' radius, the passages)
+        # (other robots' radius, from and to where along the route it was measured, the passages found there)
+        self._passages: tuple[float, float, float, list[Passage]] | None = None
         self._waited: tuple[float, float] | None = None            # (the passage's entry, since when) waited for
         self._vertex = self._aim = self._looked_at = None
         self._blocked_since = self._clear_since = None
@@ -453,15 +455,14 @@ class FAStepRoute(FAStepKinematic):
         if not robots:
             return False
         other_radius = max(o.radius for o in robots)
-        if self._passages is None or self._passages[0] < other_radius:
-            self._passages = (other_radius, passages(self.world, self._route_points, self.radius, other_radius,
-                                                     self.params.clearance_margin))
-        if not self._passages[1]:
-            return False
         start, first = self._route_points[0], route.vertices[0]   # metres along the route, from its start:
         length = float(route.rest[0]) + math.hypot(float(first[0]) - float(start[0]), float(first[1]) - float(start[1]))
         along = length - route.remaining(position)
-        passage = next((p for p in self._passages[1] if p.exit > along), None)
+        found = self._passages
+        if found is None or found[0] < other_radius or along < found[1] or \
+                (along + PASSAGE_LOOK > found[2] and found[2] < length):
+            found = self._measure_passages(max(0.0, along), other_radius, length)
+        passage = next((p for p in found[3] if p.exit > along), None)
         if passage is None or passage.entry <= along or passage.entry - along > PASSAGE_LOOK:
             return False                          # none left, inside one already, or the next one is far: drive on
         if self._waited is not None and self._waited[0] == passage.entry and t - self._waited[1] > PASSAGE_WAIT:
@@ -477,6 +478,20 @@ class FAStepRoute(FAStepKinematic):
         self.progress.made_progress(t)
         self.trap.reset(t, math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]))
         return True
+
+    def _measure_passages(self, start: float, other_radius: float,
+                          length: float) -> tuple[float, float, float, list[Passage]]:
+        """The passages of the route from `start` metres along it, PASSAGE_WINDOW metres on (further while the
+        last one found runs on to the window's end), kept until the robot nears the window's end."""
+        stop = start + PASSAGE_WINDOW
+        while True:
+            found = passages(self.world, self._route_points, self.radius, other_radius,
+                             self.params.clearance_margin, start, stop)
+            if not found or found[-1].exit < min(stop, length) - 1e-9 or stop >= length:
+                break
+            stop += PASSAGE_WINDOW
+        self._passages = (other_radius, start, stop, found)
+        return self._passages
 
     def note_progress(self, position: FloatArray, t: float) -> None:
         """A route left progress_distance shorter than ever restarts the progress checker and the trap detector."""
