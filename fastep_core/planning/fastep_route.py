@@ -60,7 +60,7 @@ from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason, robot_
 from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
-from fastep_core.planning.passage import Passage, passages
+from fastep_core.planning.passage import Passage, passages, waiting_room
 from fastep_core.world import World
 
 __all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES', 'TURN_ROOM_SLACK']
@@ -71,6 +71,8 @@ REPLAN_INTERVAL = 1.0   # s: the route is planned at most this often for robots 
 PASSAGE_LOOK = 15.0     # m: passages whose entry is this near along the route are watched for oncoming robots
 PASSAGE_WAIT = 30.0     # s: a robot waits before one passage at most this long (one that never comes through)
 PASSAGE_WINDOW = 60.0   # m of route ahead measured for passages at a time
+PASSAGE_SAME = 1.0      # m: a passage whose entry moved less than this (measured again) is the one waited before
+PASSAGE_BEHIND = 5.0    # m of route behind the robot measured too (a robot backing up does not measure anew)
 MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
@@ -215,6 +217,8 @@ class FAStepRoute(FAStepKinematic):
         self._looked_at: FloatArray | None = None     # where the robot was when the target was last looked for
         self._look_after = 0.0                        # ... and how far it may drive before the next look
         self._blocked_since: float | None = None      # since when a robot has stood on the route ahead
+        # The passage waited before last: its entry (x, y), since when, and whether this robot waited last tick.
+        self._waited: tuple[float, float, float, bool] | None = None
         self._clear_since: float | None = None        # since when none has, while the wait goes on
         self._replanned_at = -math.inf
         self._route_best = math.inf                   # the shortest route left so far (progress)
@@ -275,7 +279,6 @@ class FAStepRoute(FAStepKinematic):
         self._route_points = path.points                          # with its start: passages are measured on it
         # (other robots' radius, from and to where along the route it was measured, the passages found there)
         self._passages: tuple[float, float, float, list[Passage]] | None = None
-        self._waited: tuple[float, float] | None = None            # (the passage's entry, since when) waited for
         self._vertex = self._aim = self._looked_at = None
         self._blocked_since = self._clear_since = None
         self._route_best = math.inf   # progress is measured along the new route from here on
@@ -448,31 +451,43 @@ class FAStepRoute(FAStepKinematic):
 
     def wait_before_passage(self, position: FloatArray, t: float, others: Sequence[OtherRobot]) -> bool:
         """Stand before a one-lane passage ahead while another robot comes through it (planning/passage.py);
-        True (and the status says so) while waiting. The progress checker and the trap detector wait too."""
+        True (and the status says so) while waiting, at most PASSAGE_WAIT seconds for one passage (a replan
+        does not restart that). The progress checker and the trap detector wait too."""
         route = self.route
         assert route is not None and self.goal is not None
-        robots = [o for o in others if not o.mover]
-        if not robots:
+        waited = self._waited
+        if waited is not None:
+            self._waited = (waited[0], waited[1], waited[2], False)
+        radii = [o.radius for o in others if not o.mover and math.isfinite(o.radius)]
+        if not radii:
             return False
-        other_radius = max(o.radius for o in robots)
+        other_radius = max(radii)
         start, first = self._route_points[0], route.vertices[0]   # metres along the route, from its start:
         length = float(route.rest[0]) + math.hypot(float(first[0]) - float(start[0]), float(first[1]) - float(start[1]))
         along = length - route.remaining(position)
         found = self._passages
         if found is None or found[0] < other_radius or along < found[1] or \
                 (along + PASSAGE_LOOK > found[2] and found[2] < length):
-            found = self._measure_passages(max(0.0, along), other_radius, length)
+            found = self._measure_passages(max(0.0, along - PASSAGE_BEHIND), other_radius, length)
         passage = next((p for p in found[3] if p.exit > along), None)
-        if passage is None or passage.entry <= along or passage.entry - along > PASSAGE_LOOK:
-            return False                          # none left, inside one already, or the next one is far: drive on
-        if self._waited is not None and self._waited[0] == passage.entry and t - self._waited[1] > PASSAGE_WAIT:
+        if passage is None or passage.entry - along > PASSAGE_LOOK:
+            return False                          # none left, or the next one is far: drive on
+        if passage.entry <= along:
+            return False                          # inside it already: drive on
+        # The same passage as waited before, give or take the sampling of a new measurement or a new route.
+        entry = passage.points[0]
+        same = waited is not None and \
+            math.hypot(waited[0] - float(entry[0]), waited[1] - float(entry[1])) < PASSAGE_SAME
+        if waited is not None and same and t - waited[2] > PASSAGE_WAIT:
             return False
-        reach = self.radius + self.params.clearance_margin
-        other = passage.conflict(position, self.name, robots, PARKED_SPEED, reach)
-        if other is None or passage.entry - along > other.radius + 2.0 * reach:
+        robots = [o for o in others if not o.mover]
+        other = passage.conflict(position, self.name, robots, PARKED_SPEED, self.radius,
+                                 self.params.clearance_margin, waited is not None and same and waited[3])
+        if other is None or passage.entry - along > waiting_room(self.radius, other.radius,
+                                                                 self.params.clearance_margin):
             return False                          # free, or not there yet: drive on towards it
-        if self._waited is None or self._waited[0] != passage.entry:
-            self._waited = (passage.entry, t)
+        since = waited[2] if waited is not None and same else t
+        self._waited = (float(entry[0]), float(entry[1]), since, True)
         self.waypoint, self.cost = None, 0.0
         self.mode, self.reason = Mode.KINEMATIC, f'waiting for {other.name} to come through the passage'
         self.progress.made_progress(t)
