@@ -73,6 +73,7 @@ PASSAGE_WAIT = 30.0     # s: a robot waits before one passage at most this long 
 PASSAGE_WINDOW = 60.0   # m of route ahead measured for passages at a time
 PASSAGE_SAME = 1.0      # m: a passage whose entry moved less than this (measured again) is the one waited before
 PASSAGE_BEHIND = 5.0    # m of route behind the robot measured too (a robot backing up does not measure anew)
+RADII_INTERVAL = 1.0    # s between looks for a larger robot than the passages were measured for
 MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
@@ -277,8 +278,12 @@ class FAStepRoute(FAStepKinematic):
     def _install(self, path: OptimalPath, world: World, parked: FloatArray) -> None:
         self.route = Route.from_path(path, world, self.world, parked)
         self._route_points = path.points                          # with its start: passages are measured on it
+        start, first = path.points[0], self.route.vertices[0]
+        self._route_length = float(self.route.rest[0]) + math.hypot(float(first[0]) - float(start[0]),
+                                                                    float(first[1]) - float(start[1]))
         # (other robots' radius, from and to where along the route it was measured, the passages found there)
         self._passages: tuple[float, float, float, list[Passage]] | None = None
+        self._radii_seen = -math.inf                                # when the other robots' radii were last looked at
         self._vertex = self._aim = self._looked_at = None
         self._blocked_since = self._clear_since = None
         self._route_best = math.inf   # progress is measured along the new route from here on
@@ -458,17 +463,20 @@ class FAStepRoute(FAStepKinematic):
         waited = self._waited
         if waited is not None:
             self._waited = (waited[0], waited[1], waited[2], False)
-        radii = [o.radius for o in others if not o.mover and math.isfinite(o.radius)]
-        if not radii:
-            return False
-        other_radius = max(radii)
-        start, first = self._route_points[0], route.vertices[0]   # metres along the route, from its start:
-        length = float(route.rest[0]) + math.hypot(float(first[0]) - float(start[0]), float(first[1]) - float(start[1]))
-        along = length - route.remaining(position)
         found = self._passages
+        other_radius = -1.0 if found is None else found[0]
+        if found is None or t - self._radii_seen >= RADII_INTERVAL:
+            # The largest robot known, looked for at most every RADII_INTERVAL (iterating over the others every
+            # tick was most of this method's cost): a larger one measures the passages again.
+            self._radii_seen = t
+            other_radius = max((o.radius for o in others if not o.mover and math.isfinite(o.radius)), default=-1.0)
+            if other_radius < 0.0:
+                return False
+        length = self._route_length
+        along = length - route.remaining(position)                 # metres along the route, from its start
         if found is None or found[0] < other_radius or along < found[1] or \
                 (along + PASSAGE_LOOK > found[2] and found[2] < length):
-            found = self._measure_passages(max(0.0, along - PASSAGE_BEHIND), other_radius, length)
+            found = self._measure_passages(max(0.0, along - PASSAGE_BEHIND), max(other_radius, 0.0), length)
         passage = next((p for p in found[3] if p.exit > along), None)
         if passage is None or passage.entry - along > PASSAGE_LOOK:
             return False                          # none left, or the next one is far: drive on

@@ -50,6 +50,7 @@ class Passage:
     entry: float
     exit: float
     points: FloatArray   # (k, 2) the route's samples in it, entry to exit
+    box: tuple[float, float, float, float] = (-math.inf, -math.inf, math.inf, math.inf)   # the points' bounds
 
     @property
     def far_end(self) -> FloatArray:
@@ -77,7 +78,10 @@ class Passage:
                 if waiting and gap <= waiting_room(r, radius, margin) + STEP and other.name < name:
                     return other
                 continue
-            inside = float(np.hypot(*(self.points - (x, y)).T).min()) < r + reach
+            near = r + reach
+            x0, y0, x1, y1 = self.box
+            inside = x0 - near < x < x1 + near and y0 - near < y < y1 + near and \
+                float(np.hypot(*(self.points - (x, y)).T).min()) < near
             if inside:
                 if vx * direction[0] + vy * direction[1] > 0.0:   # in it, coming this way
                     return other
@@ -121,5 +125,8 @@ def passages(world: World, points: FloatArray, radius: float, other_radius: floa
     out: list[Passage] = []
     edges = np.flatnonzero(np.diff(np.concatenate([[0], narrow.astype(np.int8), [0]])))
     for first, end in zip(edges[::2], edges[1::2]):
-        out.append(Passage(float(s[first]), float(s[end - 1]), samples[first:end].copy()))
+        points = samples[first:end].copy()
+        low, high = points.min(axis=0), points.max(axis=0)
+        out.append(Passage(float(s[first]), float(s[end - 1]), points,
+                           (float(low[0]), float(low[1]), float(high[0]), float(high[1]))))
     return out
