@@ -218,9 +218,9 @@ class FAStepRoute(FAStepKinematic):
         self._looked_at: FloatArray | None = None     # where the robot was when the target was last looked for
         self._look_after = 0.0                        # ... and how far it may drive before the next look
         self._blocked_since: float | None = None      # since when a robot has stood on the route ahead
+        self._clear_since: float | None = None        # since when none has, while the wait goes on
         # The passage waited before last: its entry (x, y), since when, and whether this robot waited last tick.
         self._waited: tuple[float, float, float, bool] | None = None
-        self._clear_since: float | None = None        # since when none has, while the wait goes on
         self._replanned_at = -math.inf
         self._route_best = math.inf                   # the shortest route left so far (progress)
         self._route_tick = -1                         # the last tick that planned a route
