@@ -22,7 +22,7 @@ rule is older: whoever comes later waits before the narrow part until the other 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -50,7 +50,11 @@ class Passage:
     entry: float
     exit: float
     points: FloatArray   # (k, 2) the route's samples in it, entry to exit
-    box: tuple[float, float, float, float] = (-math.inf, -math.inf, math.inf, math.inf)   # the points' bounds
+    box: tuple[float, float, float, float] = field(init=False)   # the points' bounds (x0, y0, x1, y1)
+
+    def __post_init__(self) -> None:
+        low, high = self.points.min(axis=0), self.points.max(axis=0)
+        object.__setattr__(self, 'box', (float(low[0]), float(low[1]), float(high[0]), float(high[1])))
 
     @property
     def far_end(self) -> FloatArray:
@@ -125,8 +129,5 @@ def passages(world: World, points: FloatArray, radius: float, other_radius: floa
     out: list[Passage] = []
     edges = np.flatnonzero(np.diff(np.concatenate([[0], narrow.astype(np.int8), [0]])))
     for first, end in zip(edges[::2], edges[1::2]):
-        points = samples[first:end].copy()
-        low, high = points.min(axis=0), points.max(axis=0)
-        out.append(Passage(float(s[first]), float(s[end - 1]), points,
-                           (float(low[0]), float(low[1]), float(high[0]), float(high[1]))))
+        out.append(Passage(float(s[first]), float(s[end - 1]), samples[first:end].copy()))
     return out
