@@ -139,6 +139,9 @@ class Graph:
         self.domain = free_domain()
         self.tmp = tmp
         self.env = isolated_env(self.domain, tmp / 'roslog')
+        # A node that hangs can be asked where (SIGABRT: Python's fault handler writes every thread's stack to its
+        # log before it dies); used by failure diagnoses only.
+        self.env['PYTHONFAULTHANDLER'] = '1'
         self.procs: dict[str, subprocess.Popen[bytes]] = {}
         self.helper: Helper | None = None
 
@@ -155,6 +158,20 @@ class Graph:
 
     def stop(self, label: str, sig: int = signal.SIGINT) -> int:
         return stop_process(self.procs[label], sig)
+
+    def stacks(self, label: str, wait: float = 3.0) -> str:
+        """Where a running node process is (its threads' Python stacks, from the fault handler), ending it; '' when
+        it is not running."""
+        proc = self.procs[label]
+        if proc.poll() is not None:
+            return ''
+        before = len(self.log(label))
+        proc.send_signal(signal.SIGABRT)
+        try:
+            proc.wait(timeout=wait)
+        except subprocess.TimeoutExpired:
+            pass
+        return self.log(label)[before:]
 
     def log(self, label: str) -> str:
         return (self.tmp / f'{label.replace("/", "_")}.log').read_text(errors='replace')

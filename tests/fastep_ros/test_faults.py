@@ -173,10 +173,15 @@ def map_diagnosis(graph: Graph, h: Helper) -> str:
     heard = h.record(interface.OBSTACLES, MarkerArray, interface.offered_qos(interface.OBSTACLES))
     h.spin_for(5.0)
     counts = [len(marker_array_to_obstacles(msg)) for msg in heard]
-    publishers = h.node.count_publishers(interface.OBSTACLES)
+    # Which /obstacles publishers the graph shows (the killed map's may linger until its lease ends), and the
+    # nodes it shows: is the restarted map's node there at all?
+    publishers = [(info.node_namespace, info.node_name, bytes(info.endpoint_gid[:12]).hex())
+                  for info in h.node.get_publishers_info_by_topic(interface.OBSTACLES)]
+    nodes = sorted(ns.rstrip('/') + '/' + name for name, ns in h.node.get_node_names_and_namespaces())
     tails = '; '.join(f'{label} log: {graph.log(label)[-600:]!r}' for label in ('map', 'planner'))
-    return (f'map exit code {graph.procs["map"].poll()}, {publishers} /obstacles publishers, the test heard '
-            f'{counts} obstacles; {tails}')
+    # Last, as it ends the map: where the map process is (a start-up that never got to publish?).
+    return (f'map exit code {graph.procs["map"].poll()}, /obstacles publishers {publishers}, nodes {nodes}, the '
+            f'test heard {counts} obstacles; {tails}; the map\'s stacks: {graph.stacks("map")[:2000]!r}')
 
 
 def test_odometry_stops_and_resumes(graph: Graph) -> None:
