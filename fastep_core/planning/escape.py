@@ -134,13 +134,25 @@ class EscapePath:
             seen = self._seen(position, self.index, self.index + reach, within, slack)
         else:
             seen = np.ones(reach, dtype=bool)
+        # Round a wall's end the path is an arc at the clearance it keeps, and a robot that cut a chord of it (by
+        # up to what `within` allows) sees the next vertex only along a chord that dips a little lower still.
+        # The vertex aimed at, and the next one once the robot is on it, count as in sight down to a quarter
+        # margin less (not below radius + a quarter margin, the slack the guard leaves): else the path is
+        # planned again from there, keeping only what the robot has, and the robot crawls round the arc
+        # planning a path every REPLAN_AFTER (docs/clutter.md, "Trap escapes round a wall's end").
+        lower = min(within, max(within - 0.25 * margin, radius + 0.25 * margin))
+        if len(obstacles) and not seen[0] and lower < within:
+            seen[0] = self._seen(position, self.index, self.index + 1, lower, slack)[0]
         if not seen.any():
             if not fresh:
                 return None
             seen[0] = True
         last = int(np.flatnonzero(seen)[-1])
         if last == 0 and gaps[0] <= waypoint_tolerance and len(gaps) > 1 and not fresh:
-            return None   # on the aimed vertex and nothing after it in sight
+            if not (len(obstacles) and lower < within and
+                    self._seen(position, self.index + 1, self.index + 2, lower, slack)[0]):
+                return None   # on the aimed vertex and not even the next one in sight
+            last = 1
         self.index += last
         aim = route[self.index]
         if self.index == len(route) - 1:

@@ -226,17 +226,28 @@ def test_a_circle_on_the_straight_line_is_passed_with_the_clearance():
 
 
 def test_two_robots_face_to_face_in_a_corridor_fail_saying_so_without_touching():
-    # Random world 10, with the escape: r1 and r3 meet head-on between two walls, each the other's obstacle;
-    # neither has an admissible velocity that brings it closer (a known failure of reciprocal DWA).
+    # Random world 10: r1 and r3 meet head-on between two walls, each the other's obstacle; neither has an
+    # admissible velocity that brings it closer (a known failure of reciprocal DWA).
+    scenario = random_scenario(10, tractor_share=0.0)
+    scenario = dataclasses.replace(scenario, planner=scenario.planner.with_overrides(
+        {'dwa_escape': 0, 'progress_timeout': 30.0}))
+    run = simulate(scenario, 'dwa', 0)
+    assert_safe(scenario, run)
+    statuses = {robot.name: robot.status for robot in run.robots}
+    assert statuses['r1'] == statuses['r3'] == ('failed: failed to make progress: not 0.5 m closer to the goal in '
+                                                f'30 s ({LOCAL_MINIMUM}, another robot in the way)')
+
+
+def test_with_the_escape_the_robots_face_to_face_in_a_corridor_get_home_without_touching():
+    """The same world with the trap escape: each goes round the other along its exact path. Until the escape
+    kept the next vertex of an arc in sight a quarter margin lower, r1 and r3 still failed there."""
     scenario = random_scenario(10, tractor_share=0.0)
     scenario = dataclasses.replace(scenario, planner=scenario.planner.with_overrides(
         {'dwa_escape': 1, 'progress_timeout': 30.0}))
     run = simulate(scenario, 'dwa', 0)
     assert_safe(scenario, run)
-    statuses = {robot.name: robot.status for robot in run.robots}
-    assert statuses['r2'] == statuses['r4'] == 'arrived: goal reached'
-    assert statuses['r1'] == statuses['r3'] == ('failed: failed to make progress: not 0.5 m closer to the goal in '
-                                                f'30 s ({LOCAL_MINIMUM}, another robot in the way)')
+    assert all(robot.status == 'arrived: goal reached' for robot in run.robots)
+    assert run.robots[0].escapes >= 1 and run.robots[2].escapes >= 1
 
 
 # ------------------------------------------------------------------------------- a differential-drive base

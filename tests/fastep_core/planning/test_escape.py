@@ -68,3 +68,33 @@ def test_a_far_goal_at_a_crawl_ends_with_a_status():
         robot = simulate(parse_scenario(data)).robots[0]
     assert robot.escapes >= 1 and not robot.reached
     assert robot.status.startswith('failed')
+
+
+def arc_vertex(escape, end, keep):
+    """A vertex in the middle of the path's arc round `end`, and the point under it at `keep` from `end`."""
+    on_arc = [k for k, v in enumerate(escape.vertices[:-2]) if abs(np.hypot(*(v - end)) - keep) < 0.02
+              and abs(np.hypot(*(escape.vertices[k + 1] - end)) - keep) < 0.02]
+    k = on_arc[len(on_arc) // 2]
+    v = escape.vertices[k]
+    return k, end + (v - end) * (keep / np.hypot(*(v - end)))
+
+
+def test_the_next_vertex_round_a_wall_end_stays_in_sight_a_quarter_margin_lower():
+    """Round a wall's end the path is an arc; a path planned from a robot that cut a chord of it keeps only what the
+    robot has, and from under a vertex the run to the next one dips a little below that. It was out of sight: the
+    path was planned again every REPLAN_AFTER while the robot went round the arc (11 paths per escape in U-traps)."""
+    world = wall_world()
+    end = np.array([10.0, 16.0])
+    escape = EscapePath.from_path(shortest_path(world, (8.0, 15.0), (12.0, 15.0), 0.602), world)
+    k, position = arc_vertex(escape, end, 0.602)
+    assert world.obstacles.path_clearance(position, escape.vertices[k + 1]) < 0.6   # below `within`
+    escape.index = k
+    target = escape.target(position, 0.5, 0.2, 2.0, 0.3, 0.7)
+    assert target is not None and escape.index > k
+    assert world.obstacles.path_clearance(position, target) >= 0.55 - 1e-9
+    # Never below radius + a quarter margin: a run that dips lower is still out of sight.
+    escape = EscapePath.from_path(shortest_path(world, (8.0, 15.0), (12.0, 15.0), 0.5505), world)
+    k, position = arc_vertex(escape, end, 0.5505)
+    escape.index = k
+    assert world.obstacles.path_clearance(position, escape.vertices[k + 1]) < 0.5495
+    assert escape.target(position, 0.5, 0.2, 2.0, 0.3, 0.7) is None
