@@ -209,8 +209,9 @@ class TrapEscape:
     The robot hands back to its algorithm once it is `progress_distance` closer to the goal than it ever was
     in the trap (the leave rule of the Bug algorithms), so each escape ends strictly closer to the goal and
     escapes cannot cycle. The path is planned again when no vertex ahead is in sight, at most every
-    REPLAN_AFTER seconds. Progress along an escape is a shorter way left to go (path length), not a smaller
-    distance to the goal.
+    REPLAN_AFTER seconds, and when what the robot knows of the world has changed (an obstacle seen, one found
+    gone: the path was planned round what it knew then). Progress along an escape is a shorter way left to go
+    (path length), not a smaller distance to the goal.
     """
 
     def __init__(self) -> None:
@@ -218,18 +219,21 @@ class TrapEscape:
         self.planned_at = -math.inf           # when it was last planned
         self.exit = 0.0                       # hand back to the algorithm once this close to the goal
         self.best = math.inf                  # the shortest way left so far
+        self.known: World | None = None       # the world the robot knew when the path was planned
 
     @property
     def active(self) -> bool:
         return self.path is not None
 
-    def start(self, path: OptimalPath, world: World, t: float, exit_distance: float) -> None:
-        self.replan(path, world, t)
+    def start(self, path: OptimalPath, world: World, t: float, exit_distance: float,
+              known: World | None = None) -> None:
+        """Escape along `path` (planned in `world`, parked robots included, when the robot knew `known`)."""
+        self.replan(path, world, t, known)
         self.exit, self.best = exit_distance, math.inf
 
-    def replan(self, path: OptimalPath, world: World, t: float) -> None:
-        """Follow a new path (planned in `world`, parked robots included) from now on."""
-        self.path, self.planned_at = EscapePath.from_path(path, world), t
+    def replan(self, path: OptimalPath, world: World, t: float, known: World | None = None) -> None:
+        """Follow a new path (planned in `world`, parked robots included, when the robot knew `known`)."""
+        self.path, self.planned_at, self.known = EscapePath.from_path(path, world), t, known
 
     def stop(self) -> None:
         self.path = None
@@ -242,9 +246,13 @@ class TrapEscape:
         return False
 
     def next_target(self, position: FloatArray, t: float, plan: Callable[[], tuple[OptimalPath, World] | None],
-                    radius: float, params: EscapeParams, replan: bool = False) -> tuple[FloatArray | None, bool]:
+                    radius: float, params: EscapeParams, replan: bool = False,
+                    known: World | None = None) -> tuple[FloatArray | None, bool]:
         """The pursuit target and whether the way left got `progress_distance` shorter; (None, False) when the
-        path had to be planned again (`replan` asks for that) and `plan()` found none."""
+        path had to be planned again (`replan` asks for that, and so does a `known` world, what the robot knows
+        now, that is not the one the path was planned in) and `plan()` found none."""
+        if known is not None and known is not self.known:
+            replan = True
         if not replan:
             target, progressed = self._pursue(position, radius, params, fresh=t - self.planned_at < REPLAN_AFTER)
             if target is not None:
@@ -252,7 +260,7 @@ class TrapEscape:
         found = plan()
         if found is None:
             return None, False
-        self.replan(*found, t)
+        self.replan(*found, t, known)
         return self._pursue(position, radius, params, fresh=True)
 
     def _pursue(self, position: FloatArray, radius: float, params: EscapeParams,

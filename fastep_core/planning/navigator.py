@@ -469,7 +469,8 @@ class Navigator:
             self.fail(no_path_reason(self.radius, position, self.goal))
             return False
         self.escapes += 1
-        self.escape.start(path, self.path_world, t, min(distance, self.trap.best) - self.params.progress_distance)
+        self.escape.start(path, self.path_world, t, min(distance, self.trap.best) - self.params.progress_distance,
+                          self.world)
         self.waypoint, self._committed = None, False
         self.progress.made_progress(t)
         self.mode, self.reason = Mode.AVOIDING, ESCAPING
@@ -479,7 +480,8 @@ class Navigator:
                       others: Sequence[OtherRobot]) -> FloatArray | None:
         """The escape's target; None once the robot has left the trap, or failed with no path left.
 
-        A step around another robot (the hold breaker) leaves the path, which is planned again after it.
+        A step around another robot (the hold breaker) leaves the path, which is planned again after it; so does a
+        change of the world the robot knows (a sensed obstacle: the path was planned round what it knew).
         """
         assert self.goal is not None
         if self.escape.left(distance):
@@ -495,7 +497,7 @@ class Navigator:
             path = self.exact_path(position, others)
             return None if path is None else (path, self.path_world)
 
-        target, progressed = self.escape.next_target(position, t, plan, self.radius, self.params, replan)
+        target, progressed = self.escape.next_target(position, t, plan, self.radius, self.params, replan, self.world)
         if target is None:
             self.fail(no_path_reason(self.radius, position, self.goal))
             return None

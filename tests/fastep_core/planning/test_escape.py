@@ -2,8 +2,9 @@
 
 import numpy as np
 
-from fastep_core.geometry import Segment
-from fastep_core.planning.escape import EscapePath, densify
+from fastep_core.geometry import Circle, Segment
+from fastep_core.planning import PlannerParams
+from fastep_core.planning.escape import EscapePath, TrapEscape, densify
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.world import World
 
@@ -98,3 +99,29 @@ def test_the_next_vertex_round_a_wall_end_stays_in_sight_a_quarter_margin_lower(
     escape.index = k
     assert world.obstacles.path_clearance(position, escape.vertices[k + 1]) < 0.5495
     assert escape.target(position, 0.5, 0.2, 2.0, 0.3, 0.7) is None
+
+
+def test_an_escape_is_planned_again_when_the_robot_knows_another_world():
+    """A robot that senses (or finds gone) an obstacle while escaping plans its path round what it knows now: it
+    followed the old path, through the obstacle it had just seen, until the guard stopped it and no vertex was in
+    sight (the arc rule above took away the replans that used to pick the new world up by chance)."""
+    world = wall_world()
+    start, goal = np.array([5.0, 10.0]), np.array([15.0, 10.0])
+    escape = TrapEscape()
+    escape.start(shortest_path(world, start, goal, 0.7), world, 0.0, 1.0, world)
+    on_path = escape.path.vertices[len(escape.path.vertices) // 2]
+    sensed = World(world.workspace, world.obstacle_list + (Circle((float(on_path[0]), float(on_path[1])), 0.5),))
+    plans = []
+
+    def plan():
+        plans.append(1)
+        return shortest_path(sensed, start, goal, 0.7), sensed
+
+    params = PlannerParams()
+    assert escape.next_target(start, 1.0, plan, 0.5, params, known=world)[0] is not None and not plans
+    assert escape.next_target(start, 1.05, plan, 0.5, params, known=sensed)[0] is not None and plans == [1]
+    assert escape.known is sensed and escape.path.world is sensed
+    assert sensed.obstacles.path_clearance(np.array(escape.path.vertices[:-1]), np.array(escape.path.vertices[1:])) \
+        .min() >= 0.7 - 1e-6                                       # round the sensed circle too
+    escape.next_target(start, 1.1, plan, 0.5, params, known=sensed)
+    assert plans == [1]                                            # planned once for that world
