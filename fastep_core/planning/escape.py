@@ -209,9 +209,9 @@ class TrapEscape:
     The robot hands back to its algorithm once it is `progress_distance` closer to the goal than it ever was
     in the trap (the leave rule of the Bug algorithms), so each escape ends strictly closer to the goal and
     escapes cannot cycle. The path is planned again when no vertex ahead is in sight, at most every
-    REPLAN_AFTER seconds, and when what the robot knows of the world has changed (an obstacle seen, one found
-    gone: the path was planned round what it knew then). Progress along an escape is a shorter way left to go
-    (path length), not a smaller distance to the goal.
+    REPLAN_AFTER seconds, and when what the robot knows of the world has changed so that the rest of the path
+    comes too near an obstacle (`adopt`). Progress along an escape is a shorter way left to go (path length),
+    not a smaller distance to the goal.
     """
 
     def __init__(self) -> None:
@@ -245,14 +245,31 @@ class TrapEscape:
             return True
         return False
 
+    def adopt(self, known: World, world: World, keep: float) -> bool:
+        """The robot knows `known` now (`world`: the same with the parked robots, as a path is planned in): go on
+        along the path, measured against `world` from now on, when the rest of it keeps `keep` there (True);
+        False when it does not, and the path must be planned again.
+
+        Why not plan again at every change: a sensing robot's world changes with every correction of an obstacle
+        it had misplaced, and a path planned from where the robot stands keeps only the clearance it has there,
+        all the way (exact_path): replanned from every sag, an escape hugged walls ever closer.
+        """
+        path = self.path
+        assert path is not None
+        ahead = path.stacked[path.index:]
+        if len(world.obstacles) and len(ahead) > 1 and \
+                float(world.obstacles.path_clearance(ahead[:-1], ahead[1:]).min()) < keep:
+            return False
+        self.path = EscapePath(path.vertices, path.rest, path.keep, world, path.index)   # nothing measured kept
+        self.known = known
+        return True
+
     def next_target(self, position: FloatArray, t: float, plan: Callable[[], tuple[OptimalPath, World] | None],
                     radius: float, params: EscapeParams, replan: bool = False,
                     known: World | None = None) -> tuple[FloatArray | None, bool]:
         """The pursuit target and whether the way left got `progress_distance` shorter; (None, False) when the
-        path had to be planned again (`replan` asks for that, and so does a `known` world, what the robot knows
-        now, that is not the one the path was planned in) and `plan()` found none."""
-        if known is not None and known is not self.known:
-            replan = True
+        path had to be planned again (`replan` asks for that) and `plan()` found none. `known`: the world the
+        robot knows now, recorded with a path planned here."""
         if not replan:
             target, progressed = self._pursue(position, radius, params, fresh=t - self.planned_at < REPLAN_AFTER)
             if target is not None:

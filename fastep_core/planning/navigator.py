@@ -481,13 +481,19 @@ class Navigator:
         """The escape's target; None once the robot has left the trap, or failed with no path left.
 
         A step around another robot (the hold breaker) leaves the path, which is planned again after it; so does a
-        change of the world the robot knows (a sensed obstacle: the path was planned round what it knew).
+        change of the world the robot knows (a sensed obstacle) that brings an obstacle within radius + a quarter
+        margin of the rest of the path (the path was planned round what the robot knew then).
         """
         assert self.goal is not None
         if self.escape.left(distance):
             self.trap.reset(t, distance)
             return None
         replan = self._committed
+        if self.escape.known is not self.world:
+            parked = parked_world(self.world, others, self.goal, self.radius, self.params) or self.world
+            keep = min(self.escape.path.keep if self.escape.path else 0.0,
+                       self.radius + 0.25 * self.params.clearance_margin) - 1e-6
+            replan = not self.escape.adopt(self.world, parked, keep) or replan
         if self._committed:
             if self.keep_waypoint(position, others):
                 return self.waypoint
