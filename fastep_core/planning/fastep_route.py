@@ -63,8 +63,7 @@ from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
 from fastep_core.planning.passage import Passage, passages, waiting_room
 from fastep_core.world import World
 
-__all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_CHUNK', 'SIGHT_VERTICES',
-           'TURN_ROOM_SLACK']
+__all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES', 'TURN_ROOM_SLACK']
 
 BLOCK_TIME = 1.0        # s: another robot standing on the route ahead this long makes the route go round it
 CLEAR_TIME = 0.25       # s: the route free of standing robots this long ends that wait (a retried step is shorter)
@@ -78,7 +77,6 @@ RADII_INTERVAL = 1.0    # s between looks for a larger robot than the passages w
 MOVED = 0.5             # m: a robot the route was planned round has moved away once it is this far from there
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
-SIGHT_CHUNK = 32        # ... measured this many at a time, until the answer is known (Route._sight_runs)
 TURN_ROOM_SLACK = 0.03  # a robot that cannot turn in place takes the route with turn room if at most 3 % longer
 SightProof = tuple[int, float, float, float, float, float, int | None]
 """An answer of Route.in_sight proven: the index it was asked at, the position (x, y), radius and margin, how far
@@ -172,10 +170,12 @@ class Route:
                 margin_of_branch = abs(here - usual)
                 if here < within:
                     within = min(within - 0.25 * margin, here) - 1e-6
+            runs = obstacles.fan_clearance(position, candidates)
+            seen = runs >= within
             # The vertex aimed at so far (the first candidate) stays in sight a quarter margin longer: the robot
             # drives the run to it, which keeps what it kept, give or take a rounding error or a trailer's curve.
             first_within = within - 0.25 * margin
-            runs, seen = self._sight_runs(position, candidates, within, first_within)
+            seen[0] = runs[0] >= first_within
         if not seen.any():
             answer, last = None, 0
         else:
@@ -191,30 +191,6 @@ class Route:
             if room > 0.0 and math.isfinite(room):
                 self.sight_proof = (self.index, x, y, radius, margin, room, answer)
         return answer
-
-    def _sight_runs(self, position: FloatArray, candidates: FloatArray, within: float,
-                    first_within: float) -> tuple[FloatArray, NDArray[np.bool_]]:
-        """The runs' clearances and which candidates are in sight, measured SIGHT_CHUNK candidates at a time until
-        what in_sight decides is known: the first candidate in sight and the first one out of sight after it.
-
-        Each run's clearance is the same float however many are measured together (fan_clearance is elementwise in
-        the runs), so the answer is the one measuring all of them gives. Round bends (arcs of vertices 0.25 m
-        apart) the run in sight ends within the first few: a tractor-trailer's route measured ~100 runs a look.
-        """
-        obstacles = self.world.obstacles
-        n = len(candidates)
-        runs = np.empty(n)
-        measured = 0
-        while True:
-            stop = min(n, measured + SIGHT_CHUNK)
-            runs[measured:stop] = obstacles.fan_clearance(position, candidates[measured:stop])
-            measured = stop
-            seen = runs[:measured] >= within
-            seen[0] = runs[0] >= first_within
-            if measured == n:
-                return runs, seen
-            if seen.any() and not seen[int(np.argmax(seen)):].all():
-                return runs[:measured], seen
 
     def passing(self, position: FloatArray, tolerance: float) -> None:
         """Aim past the vertices within `tolerance` of position (a vertex counts as passed, as any waypoint):

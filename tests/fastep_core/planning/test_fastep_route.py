@@ -279,44 +279,6 @@ def test_in_sight_kept_while_proven_answers_as_measuring_every_time(seed):
     assert 0 < proven < answers   # both paths taken
 
 
-def test_in_sight_measures_the_runs_a_chunk_at_a_time_with_the_answer_of_measuring_all(monkeypatch):
-    """Route.in_sight measures SIGHT_CHUNK runs at a time until the answer is known: the same index as measuring
-    every candidate, where the run in sight is short (a bend: one chunk), longer than a chunk, and where no vertex
-    is in sight at all (every chunk)."""
-    from fastep_core.geometry import Obstacles
-    from fastep_core.planning.fastep_route import SIGHT_CHUNK, Route
-    # 120 vertices 0.25 m apart along y = 10 (30 m: more than three chunks in SIGHT), then a bend up past a wall.
-    line = [np.array([5.0 + 0.25 * k, 10.0]) for k in range(1, 121)]
-    bend = [np.array([35.0, 10.0 + 0.25 * k]) for k in range(1, 41)]
-    world = World.from_obstacles([0, 0, 50, 50], [Segment((36.0, 8.0), (36.0, 30.0)), Circle((20.0, 20.0), 2.0),
-                                                  Circle((33.8, 13.0), 0.8)])   # hides the bend past y = 12
-    sizes = []
-    measure = Obstacles.fan_clearance
-
-    def counted(self, origin, ends):
-        sizes.append(len(ends))
-        return measure(self, origin, ends)
-
-    monkeypatch.setattr(Obstacles, 'fan_clearance', counted)
-    looks = {'long run': np.array([5.0, 10.0]), 'bend': np.array([34.5, 10.0]),
-             'none in sight': np.array([37.0, 12.0])}
-    for name, position in looks.items():
-        start = 0 if name == 'long run' else (118 if name == 'bend' else 0)
-        kept = Route([v.copy() for v in line + bend], 1.0, world, world, np.zeros((0, 2)))
-        fresh = Route([v.copy() for v in line + bend], 1.0, world, world, np.zeros((0, 2)))
-        kept.index = fresh.index = start
-        sizes.clear()
-        expected = in_sight_measured(fresh, position, 0.5, 0.5)
-        sizes.clear()
-        assert kept.in_sight(position, 0.5, 0.5) == expected, name
-        assert (expected is None) == (name == 'none in sight'), name
-        assert all(size <= SIGHT_CHUNK for size in sizes), name
-        if name == 'bend':
-            assert len(sizes) == 1
-        else:
-            assert len(sizes) > 1, name
-
-
 @pytest.mark.parametrize('world_kind', ['open', 'one circle near the line', 'wall across'])
 def test_tractor_route_skips_the_tight_search_only_where_the_roomy_route_wins_anyway(world_kind, monkeypatch):
     """A robot that cannot turn in place searches the route without turn room only when the roomy one is more than
