@@ -24,11 +24,12 @@ from numpy.typing import NDArray
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.world import World
 
-__all__ = ['ESCAPING', 'MAX_VERTICES', 'REPLAN_AFTER', 'EscapePath', 'TrapEscape', 'densify']
+__all__ = ['ADOPT_REACH', 'ESCAPING', 'MAX_VERTICES', 'REPLAN_AFTER', 'EscapePath', 'TrapEscape', 'densify']
 
 FloatArray = NDArray[np.float64]
 ESCAPING = 'escaping a trap along the exact shortest path'   # the status reason while escaping
 REPLAN_AFTER = 0.5   # seconds: a path with no vertex in sight is planned again at most this often
+ADOPT_REACH = 20.0   # metres of path ahead checked against a world known anew (TrapEscape.adopt)
 
 
 class EscapeParams(Protocol):
@@ -106,6 +107,12 @@ class EscapePath:
         legs = np.hypot(*np.diff(np.array(points), axis=0).T)
         rest = np.concatenate([np.cumsum(legs[::-1])[::-1][1:], [0.0]])
         return cls(points[1:], rest, path.clearance, world)
+
+    def measure_in(self, world: World) -> None:
+        """Measure sight against `world` from now on (the robot knows it now); nothing measured before is kept."""
+        self.world = world
+        self.fan[:] = np.nan
+        self.carrot_run = self.room = None
 
     def remaining(self, position: FloatArray) -> float:
         """Path length left from position (via the vertex aimed at)."""
@@ -256,11 +263,14 @@ class TrapEscape:
         """
         path = self.path
         assert path is not None
-        ahead = path.stacked[path.index:]
+        # The next ADOPT_REACH metres of it (a path across a big map has thousands of vertices, and the world of a
+        # sensing robot changes often); farther on, a sensed obstacle is met as one out of sight, and planned round.
+        stop = int(np.searchsorted(-path.rest, -(path.rest[path.index] - ADOPT_REACH), side='right'))
+        ahead = path.stacked[path.index:max(stop, path.index + 2)]
         if len(world.obstacles) and len(ahead) > 1 and \
                 float(world.obstacles.path_clearance(ahead[:-1], ahead[1:]).min()) < keep:
             return False
-        self.path = EscapePath(path.vertices, path.rest, path.keep, world, path.index)   # nothing measured kept
+        path.measure_in(world)
         self.known = known
         return True
 

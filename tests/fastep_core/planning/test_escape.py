@@ -124,3 +124,16 @@ def test_an_escape_goes_on_in_a_world_known_anew_only_while_the_rest_of_its_path
     assert target is not None and escape.known is sensed and escape.path.world is sensed
     assert sensed.obstacles.path_clearance(np.array(escape.path.vertices[:-1]), np.array(escape.path.vertices[1:])) \
         .min() >= 0.7 - 1e-6                                       # round the sensed circle too
+
+
+def test_a_world_known_anew_is_checked_against_the_next_stretch_of_the_path_only():
+    """ADOPT_REACH metres of path ahead are checked (a path across a big map has thousands of vertices); an obstacle
+    sensed farther on is met later as one out of sight."""
+    from fastep_core.planning.escape import ADOPT_REACH
+    world = World.from_obstacles([0, 0, 100, 100], [])
+    start, goal = np.array([5.0, 50.0]), np.array([95.0, 50.0])
+    for x, adopted in ((5.0 + ADOPT_REACH - 2.0, False), (5.0 + ADOPT_REACH + 5.0, True)):
+        escape = TrapEscape()
+        escape.start(shortest_path(world, start, goal, 0.7), world, 0.0, 1.0, world)
+        sensed = World(world.workspace, (Circle((x, 50.0), 0.5),))
+        assert escape.adopt(sensed, sensed, 0.55) is adopted
