@@ -489,10 +489,11 @@ class Navigator:
             self.trap.reset(t, distance)
             return None
         replan = self._committed
+        path = self.escape.path
+        assert path is not None   # escaping
         if self.escape.known is not self.world:
             parked = parked_world(self.world, others, self.goal, self.radius, self.params) or self.world
-            keep = min(self.escape.path.keep if self.escape.path else 0.0,
-                       self.radius + 0.25 * self.params.clearance_margin) - 1e-6
+            keep = min(path.keep, self.radius + 0.25 * self.params.clearance_margin) - 1e-6
             replan = not self.escape.adopt(self.world, parked, keep) or replan
         if self._committed:
             if self.keep_waypoint(position, others):
