@@ -95,7 +95,10 @@ def _launch(tmp_path: Path, layout: str, executor: str = 'single') -> dict[str, 
     domain = free_domain()
     helper = Helper(domain)
     env = isolated_env(domain, tmp_path / f'roslog_{layout}_{executor}')
-    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '5', '--seed', '0',
+    # --rtf 2, a drive of ~7 s: at --rtf 5 (3 s) the helper twice heard of none of the graph layout's 11 publishers
+    # without a reader (cost, waypoint, tracked_obstacles, transition_event, /diagnostics) in CI, where they
+    # normally come with all the others 1.5 s after the start; lock step makes the run the same at any rtf.
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--rtf', '2', '--seed', '0',
                              '--layout', layout, '--executor', executor, '--json', str(out)], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
     lines: list[str] = []
@@ -111,7 +114,7 @@ def _launch(tmp_path: Path, layout: str, executor: str = 'single') -> dict[str, 
             helper.spin_for(0.1)
             if processes is None and any('on their way' in line for line in lines):
                 processes = len(_children(proc.pid))
-            # From the start, not only while the robots drive: in CI (2 busy workers) the graph layout's 3 s drive
+            # From the start, not only while the robots drive: in CI (2 busy workers) the graph layout's drive
             # ended before the helper had heard of 11 of its publishers (a lost discovery message is resent only at
             # a later heartbeat, is the suspicion); watching from the start gives them the whole run.
             nodes |= {ns.rstrip('/') + '/' + name for name, ns in helper.node.get_node_names_and_namespaces()}
