@@ -31,8 +31,12 @@ __all__ = ['fastep_loop']
 def fastep_loop(fun: Callable[[np.ndarray], ArrayLike], bounds: ArrayLike, *, n_fireflies: int = 50,
                 max_iter: int = 30, patience: int = 5, gamma: float = 1.0, beta0: float = 2.0,
                 alpha: float = 0.2, alpha_damping: float = 0.8, tol: float = 0.0,
-                rng: np.random.Generator | int | None = None, x0: ArrayLike | None = None) -> OptimizeResult:
-    """FAStep with loops over fireflies and pairs; same API and result as `fastep` (no input validation)."""
+                rng: np.random.Generator | int | None = None, x0: ArrayLike | None = None,
+                merged_moves: bool = False) -> OptimizeResult:
+    """FAStep with loops over fireflies and pairs; same API and result as `fastep` (no input validation).
+
+    merged_moves: `fastep`'s departure of that name, with its draws (one block per iteration, the pairs' columns
+    then every firefly's step ahead of the brightest at the iteration's start)."""
     rng = np.random.default_rng(rng)
     b = np.asarray(bounds, dtype=np.float64)
     low, high = b[:, 0].copy(), b[:, 1].copy()
@@ -79,7 +83,7 @@ def fastep_loop(fun: Callable[[np.ndarray], ArrayLike], bounds: ArrayLike, *, n_
             brighter = [j for j in range(n) if F[j] < F[i]]
             for j in brighter or [i]:
                 pairs.append((i, j))
-        u = rng.random((d, len(pairs)))
+        u = rng.random((d, len(pairs) + (n if merged_moves else 0)))
         best_c: list[np.ndarray | None] = [None] * n
         best_fc = [np.inf] * n
         for p, (i, j) in enumerate(pairs):
@@ -87,6 +91,11 @@ def fastep_loop(fun: Callable[[np.ndarray], ArrayLike], bounds: ArrayLike, *, n_
             fc = evaluate(c)
             if best_c[i] is None or fc < best_fc[i]:
                 best_c[i], best_fc[i] = c, fc
+        if merged_moves:   # every firefly's step ahead of the brightest at the start, evaluated before any move
+            steps = []
+            for i in range(n):
+                s = move(X[0], X[i], u[:, len(pairs) + i], scale)
+                steps.append((i, s, evaluate(s)))
         moved = [False] * n
         for i in range(n):
             if best_fc[i] < F[i]:
@@ -94,7 +103,10 @@ def fastep_loop(fun: Callable[[np.ndarray], ArrayLike], bounds: ArrayLike, *, n_
 
         # 2. Stepping ahead (eq. 4) of the brightest firefly, for those that did not move.
         stuck = [i for i in range(n) if not moved[i]]
-        if stuck:
+        if merged_moves:
+            b = 0
+            steps = [step for step in steps if not moved[step[0]]]
+        elif stuck:
             b = min(range(n), key=F.__getitem__)
             xb = X[b].copy()
             u = rng.random((d, len(stuck)))
@@ -102,6 +114,7 @@ def fastep_loop(fun: Callable[[np.ndarray], ArrayLike], bounds: ArrayLike, *, n_
             for q, i in enumerate(stuck):
                 s = move(xb, X[i], u[:, q], scale)
                 steps.append((i, s, evaluate(s)))
+        if stuck:
             # 3. Preference rule.
             for i, s, fs in steps:
                 f = F[i]

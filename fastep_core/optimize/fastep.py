@@ -54,6 +54,18 @@ what keeps one planned step above a millisecond; with k = 5 it makes at most n k
 runs differ from the paper's even when no firefly has more than k brighter ones. Measured in
 docs/optimizers.md ("Attraction to a sample") and docs/benchmarks.md (step latency).
 
+Departure from the paper, off by default: `merged_moves=True` evaluates each iteration's attraction and
+stepping-ahead candidates in ONE objective call. Stepping ahead (step 2) then starts from the brightest firefly
+at the iteration's start (x_0 after ranking) instead of the brightest after the attraction moves, and is built
+for every firefly, from the positions at the iteration's start, before anyone knows whose attraction move will
+fail; a firefly whose attraction candidate is strictly better moves there as before, and the others apply the
+preference rule to their stepping-ahead candidate (x_0 exempt from the tolerance, as x_b is). The brightest
+value still never increases. Why: the fitness of one planned step costs tens of microseconds per call whatever
+the batch (numpy's per-operation overhead), so two calls per iteration were a third of a plan; one call costs
+n more candidates (the steps of the fireflies that moved, wasted) and saves a call. Its draws: per iteration one
+`rng.random((d, m + n))` block, the m attraction pairs' columns first, then the n fireflies' steps in ranked
+order. Measured in docs/optimizers.md ("Merged moves") and docs/benchmarks.md (step latency).
+
 Objective values are only compared, never subtracted, so +inf and huge values (the planner scores an
 infeasible candidate 1e6 + violation) raise no floating-point warnings; NaN counts as +inf. The objective
 receives (m, d) arrays in Fortran order (see `firefly.Swarm`).
@@ -68,6 +80,7 @@ from numpy.typing import ArrayLike
 
 from fastep_core.optimize.firefly import Elite, Swarm, _check_swarm_parameters
 from fastep_core.optimize.result import (
+    FloatArray,
     Objective,
     OptimizeResult,
     RngLike,
@@ -87,7 +100,8 @@ PREFERENCE_TOLERANCE = 0.01
 def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50, max_iter: int = 30,
            patience: int = 5, gamma: float = 1.0, beta0: float = 2.0, alpha: float = 0.2,
            alpha_damping: float = 0.8, tol: float = 0.0, rng: RngLike = None,
-           x0: ArrayLike | None = None, attraction_sample: int | None = None) -> OptimizeResult:
+           x0: ArrayLike | None = None, attraction_sample: int | None = None,
+           merged_moves: bool = False) -> OptimizeResult:
     """Minimise a vectorised function over a box with the Stepping Ahead Firefly algorithm.
 
     Parameters
@@ -113,6 +127,10 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
     attraction_sample : int >= 1, optional
         Attract each firefly to at most this many brighter fireflies, sampled at random every iteration (a
         departure from the paper, see the module docstring); None (default): to all of them, as the paper.
+    merged_moves : bool
+        Evaluate each iteration's attraction and stepping-ahead candidates in one call, stepping ahead of the
+        brightest firefly at the iteration's start (a departure from the paper, see the module docstring);
+        False (default): two calls, stepping ahead of the brightest after the attraction moves, as the paper.
 
     Returns
     -------
@@ -121,7 +139,7 @@ def fastep(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies: int = 50,
     """
     run = fastep_iterations(fun, bounds, n_fireflies=n_fireflies, max_iter=max_iter, patience=patience, gamma=gamma,
                             beta0=beta0, alpha=alpha, alpha_damping=alpha_damping, tol=tol, rng=rng, x0=x0,
-                            attraction_sample=attraction_sample)
+                            attraction_sample=attraction_sample, merged_moves=merged_moves)
     while True:
         try:
             next(run)
@@ -134,7 +152,8 @@ def fastep_iterations(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies
                       patience: int = 5, gamma: float = 1.0, beta0: float = 2.0, alpha: float = 0.2,
                       alpha_damping: float = 0.8, tol: float = 0.0, rng: RngLike = None,
                       x0: ArrayLike | None = None,
-                      attraction_sample: int | None = None) -> Generator[None, None, OptimizeResult]:
+                      attraction_sample: int | None = None,
+                      merged_moves: bool = False) -> Generator[None, None, OptimizeResult]:
     """`fastep` one iteration at a time: a generator that pauses before each iteration and returns the result.
 
     The first `next()` validates the arguments and evaluates the initial swarm; each further one runs an
@@ -160,6 +179,12 @@ def fastep_iterations(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies
         yield                                            # pause: the initial swarm or an iteration is done
         scale = alpha_t * swarm.span                     # alpha_t * span, a (d, 1) column
         X, F = swarm.rank(X, F)                          # 0. brightest first
+        if merged_moves:
+            X, F = _merged_moves(swarm, X, F, objective, gen, scale, attraction_sample)
+            alpha_t *= alpha_damping
+            if elite.update(X, F):
+                break
+            continue
 
         # 1. Attraction moves (eq. 3): relocate where the best candidate is strictly better.
         C, fc = swarm.attraction(X, F, objective, gen, scale, attraction_sample)
@@ -188,3 +213,26 @@ def fastep_iterations(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies
         if elite.update(X, F):
             break
     return elite.result(objective.nfev)
+
+
+def _merged_moves(swarm: Swarm, X: FloatArray, F: FloatArray, objective: Objective, rng: np.random.Generator,
+                  scale: FloatArray, sample: int | None) -> tuple[FloatArray, FloatArray]:
+    """Steps 1-3 of one iteration with `merged_moves`: the attraction pairs' candidates and every firefly's step
+    ahead of x_0 (the brightest at the iteration's start; X, F ranked) in one objective call, then the same rules."""
+    pairs = swarm.pairs(F, rng, sample)
+    m = len(pairs.i)
+    origin, towards = swarm.with_steps(pairs)
+    C = swarm.candidates(X.take(origin, axis=1), X.take(towards, axis=1), rng, scale)   # the pairs, then the steps
+    fc = objective(C.T)
+    k = swarm.best_of_pairs(pairs, fc[:m])
+    fa = fc.take(k)
+    moved = fa < F                                       # 1. strictly better: relocate
+    fs = fc[m:]                                          # 3. the others: the preference rule (x_0: better only)
+    take = fs <= F + PREFERENCE_TOLERANCE * np.minimum(np.abs(F), 1e300)
+    take[0] = fs[0] < F[0]
+    take &= ~moved
+    X = np.where(moved, C.take(k, axis=1), X)
+    F = np.where(moved, fa, F)
+    X[:, take] = C[:, m:][:, take]
+    F[take] = fs[take]
+    return X, F

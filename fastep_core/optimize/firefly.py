@@ -36,6 +36,7 @@ p-th pair in row-major (i, then j) order of the ranked swarm.
 from __future__ import annotations
 
 import functools
+from typing import NamedTuple
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -116,6 +117,15 @@ class Elite:
                               history=np.asarray(self.history, dtype=np.float64))
 
 
+class Pairs(NamedTuple):
+    """The attraction pairs of one iteration: firefly i is pulled toward firefly j, candidate p is pair p."""
+
+    i: IntArray
+    j: IntArray
+    pair: IntArray                      # i * n + j, ascending
+    brighter: NDArray[np.bool_] | None  # the (n, n) mask of the pairs; None: the precomputed lower triangle
+
+
 class Swarm:
     """The geometry of one run and the moves shared by `firefly` and `fastep`.
 
@@ -136,6 +146,7 @@ class Swarm:
         self._ranked_i, self._ranked_j, self._ranked_pair, self._ranked_start = _ranked_pairs(n)
         self._rows = np.arange(n)
         self._value = np.full((n, n), np.inf)   # written only at the ranked pairs, +inf elsewhere
+        self._ranked_steps: tuple[IntArray, IntArray] | None = None   # with_steps of the ranked pairs
 
     @staticmethod
     def rank(X: FloatArray, F: FloatArray) -> tuple[FloatArray, FloatArray]:
@@ -175,16 +186,18 @@ class Swarm:
         = k, a firefly with more than k brighter fireflies is attracted to k of them only, drawn at random
         without replacement (see `sampled`); None: to all of them (the paper).
         """
-        n = F.size
-        if sample is None and bool((F[1:] > F[:-1]).all()):   # ranked, no ties: the precomputed lower triangle
-            i, j, pair = self._ranked_i, self._ranked_j, self._ranked_pair
-            C = self.candidates(X.take(i, axis=1), X.take(j, axis=1), rng, scale)
-            fc = objective(C.T)
-            value = self._value
-            value.reshape(-1)[pair] = fc
-            k = self._ranked_start + value.argmin(axis=1)   # argmin is always a pair: column 0 or the diagonal
-            return C.take(k, axis=1), fc.take(k)
+        pairs = self.pairs(F, rng, sample)
+        C = self.candidates(X.take(pairs.i, axis=1), X.take(pairs.j, axis=1), rng, scale)
+        fc = objective(C.T)
+        k = self.best_of_pairs(pairs, fc)
+        return C.take(k, axis=1), fc.take(k)
 
+    def pairs(self, F: FloatArray, rng: np.random.Generator, sample: int | None = None) -> Pairs:
+        """The attraction pairs (i, j) of a ranked swarm with values F: j brighter than i, or (i, i) for a firefly
+        nobody outshines (its random walk), row-major. With `sample`, draws the sampling keys (`sampled`)."""
+        if sample is None and bool((F[1:] > F[:-1]).all()):   # ranked, no ties: the precomputed lower triangle
+            return Pairs(self._ranked_i, self._ranked_j, self._ranked_pair, None)
+        n = F.size
         brighter = F < F[:, None]                        # brighter[i, j]: firefly j outshines firefly i
         if sample is not None:
             brighter = self.sampled(brighter, rng, sample)
@@ -192,16 +205,36 @@ class Swarm:
         brighter[lonely, lonely] = True
         pair = np.flatnonzero(brighter)                  # i * n + j, row-major
         i, j = np.divmod(pair, n)
-        C = self.candidates(X.take(i, axis=1), X.take(j, axis=1), rng, scale)
-        fc = objective(C.T)
+        return Pairs(i, j, pair, brighter)
+
+    def with_steps(self, pairs: Pairs) -> tuple[IntArray, IntArray]:
+        """(origin, towards) firefly indices of the pairs' candidates followed by every firefly's step ahead of
+        firefly 0 (the brightest of a ranked swarm): `fastep`'s merged moves build them all in one block."""
+        if pairs.brighter is None and self._ranked_steps is not None:
+            return self._ranked_steps
+        n = len(self._rows)
+        steps = (np.concatenate([pairs.i, np.zeros(n, dtype=pairs.i.dtype)]), np.concatenate([pairs.j, self._rows]))
+        if pairs.brighter is None:
+            self._ranked_steps = steps
+        return steps
+
+    def best_of_pairs(self, pairs: Pairs, fc: FloatArray) -> IntArray:
+        """Index (among the pairs' candidates, values fc) of each firefly's best candidate: the first in j order
+        among equal values."""
+        n = len(self._rows)
+        if pairs.brighter is None:
+            value = self._value
+            value.reshape(-1)[pairs.pair] = fc
+            k: IntArray = self._ranked_start + value.argmin(axis=1)   # always a pair: column 0 or the diagonal
+            return k
         value = np.full((n, n), np.inf)
-        value.reshape(-1)[pair] = fc
+        value.reshape(-1)[pairs.pair] = fc
         best = value.argmin(axis=1)
-        unused = ~brighter[self._rows, best]              # every candidate of row i was +inf: take its first
+        unused = ~pairs.brighter[self._rows, best]       # every candidate of row i was +inf: take its first
         if unused.any():
-            best[unused] = brighter[unused].argmax(axis=1)
-        k = np.searchsorted(pair, self._rows * n + best)  # position of pair (i, best_i) among the candidates
-        return C.take(k, axis=1), fc.take(k)
+            best[unused] = pairs.brighter[unused].argmax(axis=1)
+        k = np.searchsorted(pairs.pair, self._rows * n + best)  # position of pair (i, best_i) among the candidates
+        return k
 
     def sampled(self, brighter: NDArray[np.bool_], rng: np.random.Generator, sample: int) -> NDArray[np.bool_]:
         """Keep at most `sample` brighter fireflies per row of `brighter` (n, n), uniformly without replacement.

@@ -58,6 +58,10 @@ class PlannerParams:
     attraction_sample: int = _p(0, 'FAStep attracts each firefly to at most this many brighter fireflies, drawn at '
                                    'random every iteration (fewer candidates per iteration; a departure from the '
                                    'paper); 0: to all of them, as the paper', 0, 10_000)
+    merged_moves: int = _p(0, 'FAStep evaluates each iteration\'s attraction and stepping-ahead candidates in one '
+                              'call, stepping ahead of the brightest firefly at the iteration\'s start instead of '
+                              'after the attraction moves (a quarter less CPU per step plan, the same fitness '
+                              'reached; a departure from the paper): 1; 0: two calls, as the paper', 0, 1)
     step_iterations: int = _p(0, 'swarm iterations of a FAStep step plan per control tick at most: a plan that needs '
                                  'more is finished on the next ticks while the robot drives on toward its last target '
                                  '(a bound on a control tick\'s work among many robots; with 3 a plan takes 1-4 ticks, '

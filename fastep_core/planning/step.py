@@ -442,7 +442,7 @@ class StepRun:
                     self.fitness, self.problem.bounds(), n_fireflies=params.n_fireflies, max_iter=params.max_iter,
                     patience=params.patience, gamma=params.gamma, beta0=params.beta0, alpha=params.alpha,
                     alpha_damping=params.alpha_damping, tol=params.tol, rng=self.rng,
-                    attraction_sample=params.attraction_sample or None)
+                    attraction_sample=params.attraction_sample or None, merged_moves=bool(params.merged_moves))
                 next(self._iterations)            # the initial swarm: it pauses before the first iteration
             for _ in itertools.repeat(None) if iterations is None else range(iterations):
                 next(self._iterations)

@@ -236,6 +236,51 @@ def test_attraction_sample_must_be_a_positive_integer(k):
         fastep(sphere, BOX, attraction_sample=k)
 
 
+# Merged moves (merged_moves; a departure from the paper, off by default): one objective call per iteration.
+
+@pytest.mark.parametrize('seed', range(5))
+def test_merged_moves_reach_the_sphere_minimum(seed):
+    r = fastep(sphere, BOX, max_iter=200, patience=50, rng=seed, merged_moves=True)
+    assert np.linalg.norm(r.x - CENTRE) < 1e-3 and r.fun < 1e-6
+
+
+def test_merged_moves_solve_rastrigin_as_often_as_the_paper():
+    def solved(**kw):
+        return sum(fastep(rastrigin, RASTRIGIN_BOX, n_fireflies=20, rng=seed, **kw).fun < 1e-2 for seed in range(30))
+    assert solved(merged_moves=True) >= solved() - 3
+
+
+def test_merged_moves_make_one_call_per_iteration_of_pairs_and_steps():
+    rec = Recorder(rastrigin)
+    r = fastep(rec, RASTRIGIN_BOX, n_fireflies=50, max_iter=4, patience=4, rng=0, merged_moves=True)
+    assert r.nit == 4 and len(rec.batches) == 1 + 4
+    assert all(len(b) == 1 + 50 * 49 // 2 + 50 for b in rec.batches[1:])   # every pair, then every firefly's step
+    assert np.all(np.diff(r.history) <= 0.0) and r.nfev == len(rec.points)
+    assert r.fun == rec.fun(rec.points).min()
+
+
+@pytest.mark.parametrize('fun', [sphere, half_infinite, rastrigin], ids=['sphere', 'half-infinite', 'rastrigin'])
+def test_merged_moves_are_the_loop_references_move_for_move(fun):
+    a = fastep(fun, BOX, max_iter=12, patience=12, rng=5, merged_moves=True)
+    b = fastep_loop(fun, BOX, max_iter=12, patience=12, rng=5, merged_moves=True)
+    assert np.array_equal(a.x, b.x) and a.fun == b.fun
+    assert np.array_equal(a.history, b.history) and (a.nit, a.nfev) == (b.nit, b.nfev)
+    paper = fastep(fun, BOX, max_iter=12, patience=12, rng=5)
+    assert not np.array_equal(a.history, paper.history)    # another run: the draws and moves differ
+
+
+def test_merged_moves_with_ties_and_an_attraction_sample_follow_the_loop_reference():
+    # Values in steps of 1: many fireflies tie, so the pairs are not the precomputed triangle.
+    def steps(X):
+        return np.floor(np.sum((X - 1.0) ** 2, axis=1))
+    a = fastep(steps, BOX, max_iter=8, patience=8, rng=2, merged_moves=True)
+    b = fastep_loop(steps, BOX, max_iter=8, patience=8, rng=2, merged_moves=True)
+    assert np.array_equal(a.history, b.history) and np.array_equal(a.x, b.x)
+    s = fastep(rastrigin, RASTRIGIN_BOX, rng=3, merged_moves=True, attraction_sample=4)
+    t = fastep(rastrigin, RASTRIGIN_BOX, rng=3, merged_moves=True, attraction_sample=4)
+    assert np.array_equal(s.history, t.history) and np.all(np.diff(s.history) <= 0.0)
+
+
 # One iteration at a time (fastep_iterations): what a planner with a budget per control tick runs.
 @pytest.mark.parametrize('seed', range(3))
 def test_the_run_spread_over_pauses_is_fasteps_draw_for_draw(seed):

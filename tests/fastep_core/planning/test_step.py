@@ -154,6 +154,34 @@ def test_attraction_sample_plans_a_feasible_step_close_to_the_papers(seed):
     assert sampled.result.nfev < paper.result.nfev / 2
 
 
+def test_merged_moves_plan_the_loop_references_step_with_one_call_per_iteration():
+    """merged_moves (a departure from the paper, off by default) on a real step problem: the planner's swarm is the
+    plain-loop reference's with merged_moves, bit for bit, and calls the fitness once per iteration."""
+    from fastep_testing.fastep_loop import fastep_loop
+    params = PlannerParams(merged_moves=1)
+    p = problem(others=np.array([[8.5, 6.0]]), robot_clearance=np.array([1.2]))
+    kw = dict(n_fireflies=params.n_fireflies, max_iter=params.max_iter, patience=params.patience,
+              gamma=params.gamma, beta0=params.beta0, alpha=params.alpha, alpha_damping=params.alpha_damping,
+              tol=params.tol)
+    fitness = p.fitness
+    for seed in range(2):
+        calls: list[int] = []
+
+        def counted(X, calls=calls):
+            calls.append(len(X))
+            return fitness(X)
+        p.fitness = counted     # type: ignore[method-assign]  # count the swarm's calls
+        try:
+            step = plan_step(p, params, np.random.default_rng(seed))
+        finally:
+            del p.fitness
+        reference = fastep_loop(p.fitness, p.bounds(), rng=np.random.default_rng(seed), merged_moves=True, **kw)
+        assert step is not None and np.array_equal(step.waypoint, reference.x) and step.cost == reference.fun
+        assert len(calls) == 1 + step.result.nit and calls[1:] == [1226 + 50] * step.result.nit
+        w = step.waypoint
+        assert np.hypot(*(w - p.origin)) <= 2.0 + 1e-9 and WORLD.obstacles.path_clearance(p.origin, w) >= 0.7 - 1e-9
+
+
 @pytest.mark.parametrize('plain_after', [True, False])
 def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible_step(plain_after):
     """Robots ahead on both sides leave no step right of both: the rule's swarm stops after RULE_CALLS calls
