@@ -7,7 +7,9 @@ reused while it stays proven (RunDetector.obstacles_on_run says why it holds).
 
 from __future__ import annotations
 
+import bisect
 import math
+from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
@@ -17,13 +19,51 @@ from fastep_core.planning.others import OtherRobot, robots_on_run
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['CLEAR_REACH', 'RunDetector']
+__all__ = ['RunDetector', 'RunProof']
 
 FloatArray = NDArray[np.float64]
-CLEAR_REACH = 1.0   # metres a run proven clear stays proven (obstacles_on_run), at most
-ClearRun = tuple[World, tuple[float, float], tuple[float, float], float, float, float, bool]
-"""An answer of obstacles_on_run proven: world, start, end, sensing range, `within`, how far the run's ends may
-move while it holds, and the answer."""
+
+
+@dataclass(frozen=True)
+class RunProof:
+    """An answer of obstacles_on_run and what keeps it proven (RunDetector.obstacles_on_run says why it holds).
+
+    Blocked: while the run's ends have moved less than `room`. Clear: while, for every obstacle i the robot may have
+    come within sensing range of (entry[i] <= how far it moved), the new run deviates from the old one by less
+    than run_room[i + 1]; `entry` ascending, run_room[k] the least room of the first k obstacles (run_room[0] inf).
+    """
+
+    world: World
+    start: tuple[float, float]
+    stop: tuple[float, float]
+    sensing_range: float
+    within: float
+    blocked: bool
+    room: float = 0.0
+    entry: tuple[float, ...] = ()
+    run_room: tuple[float, ...] = (math.inf,)
+
+    def holds(self, position: FloatArray, end: FloatArray) -> bool:
+        """Is the answer still what measuring would give, for the run position-end?"""
+        sx, sy = self.start
+        ex, ey = self.stop
+        moved = math.hypot(position[0] - sx, position[1] - sy)
+        if self.blocked:
+            return max(moved, math.hypot(end[0] - ex, end[1] - ey)) < self.room
+        k = bisect.bisect_right(self.entry, moved)   # the obstacles that may have come within sensing range
+        if k == 0:
+            return True
+        deviation = max(_to_segment(position[0], position[1], sx, sy, ex, ey),
+                        _to_segment(end[0], end[1], sx, sy, ex, ey))
+        return deviation < self.run_room[k]
+
+
+def _to_segment(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:
+    """Distance from point p to segment a-b."""
+    dx, dy = bx - ax, by - ay
+    length2 = dx * dx + dy * dy
+    t = 0.0 if length2 <= 0.0 else min(1.0, max(0.0, ((px - ax) * dx + (py - ay) * dy) / length2))
+    return math.hypot(px - ax - t * dx, py - ay - t * dy)
 
 
 class RunDetector:
@@ -33,9 +73,9 @@ class RunDetector:
         self.radius = radius
         self._detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # last `blocked` answer
         self._near_detection: tuple[World, FloatArray, FloatArray, bool] | None = None  # ... within plan_horizon
-        # A run proven clear of obstacles or blocked by one, and how far its ends may move before it must be
-        # measured again (obstacles_on_run): [the run to the target, the plan_horizon run].
-        self._clear_runs: list[ClearRun | None] = [None, None]
+        # A run proven clear of obstacles or blocked by one, and what keeps it proven (obstacles_on_run): [the run
+        # to the target, the plan_horizon run].
+        self._clear_runs: list[RunProof | None] = [None, None]
 
     def forget(self) -> None:
         """Drop every answer kept (new parameters: sensing range, clearance margin)."""
@@ -83,42 +123,52 @@ class RunDetector:
         position-end? (`blocked` for the obstacles; `near_run`: the plan_horizon run, which keeps its own proof.)
 
         The answer is what measuring every obstacle gives, but most measurements are skipped: an answer stays
-        proven, without measuring, while the robot and the run's end have moved less than the room it had. Why
-        that holds: a surface distance changes by at most the distance the point moved, and a run's distance to
-        an obstacle by at most the farther of its two ends' moves. So a clear run stays clear while no obstacle
-        not yet within sensing_range + CLEAR_REACH can have come within sensing_range and each of the others
-        still keeps more than `within` from the run; a blocked run stays blocked while one obstacle that blocked
-        it is still within sensing_range and nearer than `within` to the run. The room is shortened by a
-        rounding margin far beyond the floats' own error (1e-6 m, relative to the coordinates' size).
+        proven, without measuring, while the robot and the run have moved less than the room it had. Why that
+        holds: a surface distance changes by at most the distance the point moved, and the run's distance to an
+        obstacle by at most how far the new run strays from the old one, the farther of its two ends' distances
+        to the old run (every point of the new run is that close to the old one: the distance to a segment is
+        convex along a segment). So
+        - a clear run stays clear while every obstacle the robot may have come within sensing_range of (it was
+          nearer than sensing_range plus the distance moved) is still farther than `within` from the run. A robot
+          driving along its run to a fixed end strays from it by nothing: the answer holds until an obstacle that
+          truly lies on the run comes within sensing range (before, every obstacle near the run, wherever, ended
+          the proof after the least room of any: a robot skirting one measured again every tick or two);
+        - a blocked run stays blocked while one obstacle that blocked it is still within sensing_range and nearer
+          than `within` to the run (by the farther of the ends' moves).
+        The rooms are shortened by a rounding margin far beyond the floats' own error (1e-6 m, relative to the
+        coordinates' size).
         """
         obstacles = world.obstacles
         slot = 1 if near_run else 0
         proof = self._clear_runs[slot]
-        if proof is not None and proof[0] is world and proof[3] == sensing_range and proof[4] == within:
-            start, stop = proof[1], proof[2]
-            moved = max(math.hypot(position[0] - start[0], position[1] - start[1]),
-                        math.hypot(end[0] - stop[0], end[1] - stop[1]))
-            if moved < proof[5]:
-                return proof[6]
+        if proof is not None and proof.world is world and proof.sensing_range == sensing_range and \
+                proof.within == within and proof.holds(position, end):
+            return proof.blocked
         distance = obstacles.distances(position)
         near = distance < sensing_range
-        wide = distance < sensing_range + CLEAR_REACH
-        room = CLEAR_REACH
-        blocked = False
-        if wide.any():
-            runs = obstacles.path_distances(position, end)
-            blocking = near & (runs < within)
-            blocked = bool(near.any() and (runs[near] < within).any())
-            if blocked:   # the room of the obstacle that blocks it most surely
-                room = float(np.minimum(sensing_range - distance, within - runs)[blocking].max())
-            else:
-                room = min(room, float(runs[wide].min()) - within)
-        scale = max(abs(float(position[0])), abs(float(position[1])), abs(float(end[0])), abs(float(end[1])),
-                    obstacles.scale)
-        room -= 1e-6 * (1.0 + scale)
-        if not math.isfinite(room) or room <= 0.0:
+        start, stop = (float(position[0]), float(position[1])), (float(end[0]), float(end[1]))
+        scale = max(abs(start[0]), abs(start[1]), abs(stop[0]), abs(stop[1]), obstacles.scale)
+        margin = 1e-6 * (1.0 + scale)
+        if not near.any():   # nothing in sensing range: clear until the robot has come within range of one
+            nearest = float(distance.min(initial=math.inf)) - sensing_range - margin
+            self._clear_runs[slot] = RunProof(world, start, stop, sensing_range, within, False,
+                                              entry=(nearest,), run_room=(math.inf, -math.inf)) \
+                if math.isfinite(nearest) or not len(distance) else None
+            return False
+        runs = obstacles.path_distances(position, end)
+        blocking = near & (runs < within)
+        blocked = bool(blocking.any())
+        if blocked:   # the room of the obstacle that blocks it most surely
+            room = float(np.minimum(sensing_range - distance, within - runs)[blocking].max()) - margin
+            self._clear_runs[slot] = RunProof(world, start, stop, sensing_range, within, True, room=room) \
+                if math.isfinite(room) and room > 0.0 else None
+            return True
+        order = np.argsort(distance, kind='stable')
+        entry = distance[order] - sensing_range - margin
+        run_room = np.minimum.accumulate(runs[order] - within - margin)
+        if not (np.isfinite(entry).all() and np.isfinite(run_room).all()):
             self._clear_runs[slot] = None
-        else:
-            self._clear_runs[slot] = (world, (float(position[0]), float(position[1])),
-                                      (float(end[0]), float(end[1])), sensing_range, within, room, blocked)
-        return blocked
+            return False
+        self._clear_runs[slot] = RunProof(world, start, stop, sensing_range, within, False,
+                                          entry=tuple(entry.tolist()), run_room=(math.inf, *run_room.tolist()))
+        return False

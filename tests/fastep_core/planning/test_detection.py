@@ -38,6 +38,33 @@ def test_an_answer_kept_while_proven_is_the_answer_measured_afresh(seed):
     assert 0 < reused < answers and 0 < blocked < answers
 
 
+def test_a_robot_driving_along_its_run_past_obstacles_beside_it_keeps_its_clear_answer():
+    """The run to a fixed goal passes 5 cm outside `within` of three circles and a wall, and a circle on the run lies
+    far ahead. Driving along the run (a few millimetres off it) the robot measures once, and again only when the
+    circle on the run comes within sensing range; every answer is a fresh detector's. (With a room of the least
+    distance of any obstacle beside the run, it measured again every tick or two.)"""
+    within, sensing = 0.75, 2.5
+    beside = [Circle((6.0, 10.0 + 0.8 + within + 0.05), 0.8), Circle((9.0, 10.0 - 0.5 - within - 0.05), 0.5),
+              Circle((12.0, 10.0 + 1.0 + within + 0.05), 1.0)]
+    wall = Segment((14.0, 10.0 - within - 0.05), (17.0, 10.0 - within - 0.05))
+    world = World.from_obstacles([0, 0, 50, 50], [*beside, Circle((27.0, 10.0), 0.6), wall])
+    kept = RunDetector(0.5)
+    goal = np.array([40.0, 10.0])
+    rng = np.random.default_rng(0)
+    measured, answers = [], []
+    for k in range(600):
+        position = np.array([3.0 + 0.04 * k, 10.0 + rng.uniform(-0.004, 0.004)])
+        before = kept._clear_runs[0]
+        answer = kept.obstacles_on_run(world, position, goal, sensing, within)
+        assert answer == RunDetector(0.5).obstacles_on_run(world, position, goal, sensing, within)
+        answers.append(answer)
+        if kept._clear_runs[0] is not before:
+            measured.append(k)
+    first_blocked = answers.index(True)
+    assert not any(answers[:first_blocked]) and 27.0 - 0.6 - sensing <= 3.0 + 0.04 * first_blocked < 27.0
+    assert measured[0] == 0 and len([k for k in measured if k < first_blocked]) <= 2
+
+
 def test_a_new_world_or_forget_drops_the_kept_answers():
     params = PlannerParams()
     empty = World.from_obstacles([0, 0, 50, 50], [])
