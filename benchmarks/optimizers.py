@@ -19,7 +19,8 @@ The contenders, each with its own defaults:
   'FAStep n20' and 'firefly n20' are the same code with niapy's population (20) and damping (0.97): 191
   candidates per iteration, about 100 iterations within the budget. 'FAStep k5' is FAStep with
   attraction_sample=5 (each firefly attracted to at most 5 brighter ones, a departure from the paper): at most
-  250 candidates per iteration, about 75 iterations.
+  250 candidates per iteration, about 75 iterations. 'FAStep merged' is FAStep with merged_moves (an
+  iteration's attraction and stepping-ahead candidates in one call, also a departure): 1276 per iteration.
 - niapy.algorithms.basic.FireflyAlgorithm (the firefly algorithm, not "FA" = fireworks): niapy's defaults,
   population 20, alpha 1, beta0 1, gamma 0.01, theta 0.97; one evaluation per move, up to 400 per iteration.
 - scipy.optimize.differential_evolution: best1bin, popsize 15 (x d individuals), Latin hypercube start,
@@ -152,6 +153,7 @@ OPTIMIZERS: dict[str, Callable[[Budget, FloatArray, int], None]] = {
     'firefly': _swarm(firefly),
     'FAStep n20': _swarm(fastep, n_fireflies=20, alpha_damping=0.97),
     'FAStep k5': _swarm(fastep, attraction_sample=5),
+    'FAStep merged': _swarm(fastep, merged_moves=True),
     'firefly n20': _swarm(firefly, n_fireflies=20, alpha_damping=0.97),
     'niapy FA': _run_niapy,
     'DE (scipy)': _run_de,

@@ -34,7 +34,7 @@ from fastep_core.planning.step_arrays import DistanceRows, near_row_sum
 from fastep_core.world import World
 
 __all__ = ['INFEASIBLE', 'StepPlan', 'StepProblem', 'StepRun', 'plan_step', 'plan_step_passing_right',
-           'recorded_step_problems', 'step_run']
+           'recorded_step_problems', 'rule_calls', 'step_run']
 
 FloatArray = NDArray[np.float64]
 INFEASIBLE = 1e6
@@ -43,7 +43,13 @@ FEASIBLE_ONLY_FROM = 128
 attraction call); for fewer (the initial swarm, stepping ahead) one pass over every row costs less."""
 RULE_CALLS = 9
 """Objective calls (FAStep: the initial swarm and four iterations) a step plan keeping right of the robots ahead
-is given to find a feasible candidate before the step is planned without that rule (plan_step_passing_right)."""
+is given to find a feasible candidate before the step is planned without that rule (plan_step_passing_right).
+With merged_moves (one call per iteration) the same four iterations: rule_calls()."""
+
+
+def rule_calls(params: PlannerParams, method: str = 'fastep') -> int:
+    """RULE_CALLS for this swarm: the initial swarm and the same iterations, whatever an iteration's calls."""
+    return 1 + (RULE_CALLS - 1) // 2 if method == 'fastep' and params.merged_moves else RULE_CALLS
 
 
 @dataclass
@@ -497,7 +503,7 @@ def step_run(problem: StepProblem, params: PlannerParams, rng: np.random.Generat
     if not len(ahead):
         return StepRun(problem, params, rng, method)
     problem.pass_on_right = ahead
-    return StepRun(problem, params, rng, method, feasible_within=RULE_CALLS)
+    return StepRun(problem, params, rng, method, feasible_within=rule_calls(params, method))
 
 
 def plan_step_passing_right(problem: StepProblem, params: PlannerParams, rng: np.random.Generator, method: str,

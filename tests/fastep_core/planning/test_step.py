@@ -208,6 +208,24 @@ def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible
     assert p.pass_on_right.shape == (0, 2)
 
 
+def test_with_merged_moves_keeping_right_is_given_up_after_the_same_four_iterations():
+    from fastep_core.planning.step import plan_step_passing_right, rule_calls
+    params = PlannerParams(merged_moves=1)
+    assert rule_calls(params) == 5 and rule_calls(PlannerParams()) == 9 and rule_calls(params, 'aco') == 9
+    p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
+    calls: list[int] = []
+    fitness = p.fitness
+
+    def counted(X: np.ndarray) -> np.ndarray:
+        calls.append(len(p.pass_on_right))
+        return fitness(X)
+
+    p.fitness = counted   # type: ignore[method-assign]  # counts the calls each plan makes
+    step = plan_step_passing_right(p, params, np.random.default_rng(0), 'fastep', np.array([[3.0, 0.0], [-3.0, 0.0]]),
+                                   plain_after=False)
+    assert step is None and calls == [2] * 5    # the initial swarm and four iterations, one call each
+
+
 def test_a_budget_that_is_not_reached_changes_no_plan():
     p = oncoming_robot_problem()
     for seed in range(5):
