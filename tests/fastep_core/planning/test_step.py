@@ -182,13 +182,8 @@ def test_merged_moves_plan_the_loop_references_step_with_one_call_per_iteration(
         assert np.hypot(*(w - p.origin)) <= 2.0 + 1e-9 and WORLD.obstacles.path_clearance(p.origin, w) >= 0.7 - 1e-9
 
 
-@pytest.mark.parametrize('plain_after', [True, False])
-def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible_step(plain_after):
-    """Robots ahead on both sides leave no step right of both: the rule's swarm stops after RULE_CALLS calls
-    (it used to shrink the violation until max_iter); the step is then planned without the rule, or, with
-    plain_after False, left to the caller (the navigator plans it on the next tick)."""
-    from fastep_core.planning.step import RULE_CALLS, plan_step_passing_right
-    p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
+def robots_kept_right_per_call(p: StepProblem) -> list[int]:
+    """Count p's fitness calls: the list gets, per call, how many robots the plan was keeping right of."""
     calls: list[int] = []
     fitness = p.fitness
 
@@ -197,6 +192,17 @@ def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible
         return fitness(X)
 
     p.fitness = counted   # type: ignore[method-assign]  # counts the calls each plan makes
+    return calls
+
+
+@pytest.mark.parametrize('plain_after', [True, False])
+def test_keeping_right_is_given_up_within_rule_calls_where_it_leaves_no_feasible_step(plain_after):
+    """Robots ahead on both sides leave no step right of both: the rule's swarm stops after RULE_CALLS calls
+    (it used to shrink the violation until max_iter); the step is then planned without the rule, or, with
+    plain_after False, left to the caller (the navigator plans it on the next tick)."""
+    from fastep_core.planning.step import RULE_CALLS, plan_step_passing_right
+    p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
+    calls = robots_kept_right_per_call(p)
     ahead = np.array([[3.0, 0.0], [-3.0, 0.0]])   # right of +x is -y, right of -x is +y
     step = plan_step_passing_right(p, PlannerParams(), np.random.default_rng(0), 'fastep', ahead,
                                    plain_after=plain_after)
@@ -213,14 +219,7 @@ def test_with_merged_moves_keeping_right_is_given_up_after_the_same_four_iterati
     params = PlannerParams(merged_moves=1)
     assert rule_calls(params) == 5 and rule_calls(PlannerParams()) == 9 and rule_calls(params, 'aco') == 9
     p = problem(origin=(30.0, 30.0), target=(45.0, 30.0))
-    calls: list[int] = []
-    fitness = p.fitness
-
-    def counted(X: np.ndarray) -> np.ndarray:
-        calls.append(len(p.pass_on_right))
-        return fitness(X)
-
-    p.fitness = counted   # type: ignore[method-assign]  # counts the calls each plan makes
+    calls = robots_kept_right_per_call(p)
     step = plan_step_passing_right(p, params, np.random.default_rng(0), 'fastep', np.array([[3.0, 0.0], [-3.0, 0.0]]),
                                    plain_after=False)
     assert step is None and calls == [2] * 5    # the initial swarm and four iterations, one call each

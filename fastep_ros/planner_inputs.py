@@ -1,0 +1,291 @@
+"""What the planner node hears, and the robot's state it makes of it: the world (/obstacles, /map), its robot's
+odometry, localization and trailer pose, the movers (/movers) and its own scans.
+
+Apart from the node (fastep_ros/planner.py: parameters, goals, lock step, the control loop) because these are the
+handlers of its inputs and the state they give, one concern. `PlannerInputs` is PlannerNode's base, under
+PlannerReports: PlannerNode sets every attribute it declares and supplies `lock_try` and `on_goal`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
+
+import numpy as np
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
+from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.publisher import Publisher
+from sensor_msgs.msg import LaserScan
+from visualization_msgs.msg import MarkerArray
+
+from fastep_core.perception.belief import heading
+from fastep_core.planning.algorithms import make_navigator
+from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.params import PlannerParams
+from fastep_core.world import World
+from fastep_ros.lock_step import STAMP_EPS, LockStep
+from fastep_ros.planner_status import PlannerReports
+from fastep_ros.robots import robot_name
+from msg_tools import convert, frames
+
+__all__ = ['Body', 'PlannerInputs']
+
+
+@dataclass(frozen=True)
+class Body:
+    """What make_robot needs to know about the robot."""
+
+    model: str
+    length: float
+    trailer_length: float
+    hitch_offset: float
+
+
+class PlannerInputs(PlannerReports):
+    """The input handlers and the robot's state of the planner node (fastep_ros.planner.PlannerNode derives from it)."""
+
+    # What the handlers read and set, set up by PlannerNode.
+    params: PlannerParams
+    model: str
+    body: Body
+    radius: float
+    rng: np.random.Generator
+    frame_id: str
+    odom_frame_id: str
+    localization_topic: str
+    obstacle_source: str
+    occupied_threshold: int
+    occupied: Callable[[Sequence[float]], bool] | None
+    world: World | None
+    pending_goal: PoseStamped | None
+    pending_scan: LaserScan | None
+    odom_stamp: float
+    map_from_odom: frames.MapFromOdom
+    trailer: float | None
+    trailer_stamp: float
+    body_yaw: float
+    last_command: np.ndarray
+    max_extrapolation: float
+    known_movers: list[OtherRobot]
+    movers_stamp: float
+    tracked_pub: Publisher
+    lock_step: bool
+    lock: LockStep
+
+    def lock_try(self) -> None:
+        """Lock step: act once every input of the newest odometry's time is in (PlannerNode's)."""
+        raise NotImplementedError
+
+    def on_goal(self, msg: PoseStamped) -> None:
+        """A goal (PlannerNode's: one that came before the world is taken once the world is known)."""
+        raise NotImplementedError
+
+    def locked(self) -> bool:
+        """Lock step is on: asked for, and the node runs on simulated time."""
+        return self.lock_step and self.sim_time.active
+
+    def stamp(self) -> Any:
+        return self.get_clock().now().to_msg()
+
+    # ------------------------------------------------------------------------------------------- the world
+    def on_obstacles(self, msg: MarkerArray) -> None:
+        try:
+            self.obstacles = convert.marker_array_to_obstacles(msg)
+        except ValueError as exc:
+            self.get_logger().error(f'ignoring /obstacles: {exc}')
+            return
+        self.update_world()
+
+    def on_map(self, msg: OccupancyGrid) -> None:
+        try:
+            workspace = convert.occupancy_grid_workspace(msg)
+            obstacles = (convert.occupancy_grid_obstacles(msg, self.occupied_threshold)
+                         if self.obstacle_source == 'map' else None)
+        except ValueError as exc:
+            self.get_logger().error(f'ignoring /map: {exc}')
+            return
+        self.map_workspace = workspace
+        if obstacles is not None:   # obstacle_source map: the occupied cells' outline (msg_tools.convert)
+            self.obstacles = list(obstacles)
+            self.occupied = convert.occupancy_grid_lookup(msg, self.occupied_threshold)
+        self.update_world()
+
+    def update_world(self) -> None:
+        workspace = self.workspace_param or self.map_workspace
+        if self.obstacles is None or workspace is None:
+            return
+        self.world = World.from_obstacles(workspace, self.obstacles)
+        self.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
+        if self.navigator is None:
+            self.navigator = make_navigator(self.algorithm, self.body, self.radius, self.world, self.params,
+                                            self.rng)
+            self.navigator.name = robot_name(self.get_namespace())   # as the other robots' planners name it
+            self.get_logger().info(f'world known: {len(self.obstacles)} obstacles in {workspace}')
+        else:
+            self.navigator.world = self.world
+            self.get_logger().info(f'world updated: {len(self.obstacles)} obstacles')
+        self._status_key = None   # the obstacle count is part of the status
+        if self.pending_goal is not None:
+            goal, self.pending_goal = self.pending_goal, None
+            self.on_goal(goal)
+        self.publish_status()
+
+    # ------------------------------------------------------------------------------------------- inputs
+    def on_odom(self, msg: Odometry | bytes) -> None:
+        """The robot's own odometry: a message, or its bytes (the subscription's: read with msg_tools.cdr)."""
+        try:
+            odom = frames.stamped_pose(msg)
+            frame, pose, stamp = odom.frame_id, odom.pose, odom.stamp
+            if frame not in (self.frame_id, self.odom_frame_id):
+                raise ValueError(f'frame {frame!r} is neither the map frame {self.frame_id!r} nor this robot\'s odom '
+                                 f'frame {self.odom_frame_id!r} (parameters frame_id, odom_frame_id)')
+        except ValueError as exc:
+            self.odom_problem = f'odometry rejected: {exc}'
+            self.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
+            return
+        now = self.now()
+        # In lock step odometry is of its stamp's time: the start state (stamped 0) is heard again once time runs.
+        self.odom, self.odom_received, self.odom_problem = odom, min(now, stamp) if self.locked() else now, ''
+        self.odom_stamp = stamp if stamp > 0.0 else self.odom_received
+        if frame == self.odom_frame_id:
+            self.map_from_odom.add_odometry(self.odom_stamp, pose)
+        self.odom_heard += 1
+        if self.odom_heard == 1:
+            self.publish_status(force=True)   # a launcher waits for the odometry path to be up
+        self.lock_try()
+
+    def on_localization(self, msg: PoseWithCovarianceStamped) -> None:
+        """A map pose of base_link: map -> odom = it o inverse(the odometry at its stamp)."""
+        try:
+            if msg.header.frame_id not in ('', self.frame_id):
+                raise ValueError(f'frame {msg.header.frame_id!r} is not the map frame {self.frame_id!r}')
+            pose = frames.odometry_pose(msg)
+        except ValueError as exc:
+            self.get_logger().warning(f'localization pose ignored: {exc}', throttle_duration_sec=5.0)
+            return
+        stamp = convert.stamp_to_seconds(msg.header.stamp)
+        self.map_from_odom.add_localization(stamp if stamp > 0.0 else self.now(), pose)
+
+    def map_to_odom(self) -> frames.Pose2D | None:
+        """map -> odom of the odometry last taken (None: not known yet, the robot holds still)."""
+        if self.odom is None or self.odom.frame_id == self.frame_id or not self.localization_topic:
+            return frames.IDENTITY
+        return self.map_from_odom.transform
+
+    def on_trailer(self, msg: PoseStamped) -> None:
+        try:
+            self.trailer = convert.trailer_yaw(msg)
+        except ValueError as exc:
+            self.odom_problem = f'trailer pose rejected: {exc}'
+            self.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
+            return
+        self.trailer_stamp = convert.stamp_to_seconds(msg.header.stamp)
+        self.lock_try()
+
+    def other_robots(self, t: float) -> list[OtherRobot]:
+        """The other robots (their odometry), the known movers (/movers) and the movers this robot's scans track."""
+        robots = self.robots.fleet.obstacles(t, self.robots.radius, lambda stamp: self.lag(t, stamp))
+        return [*robots, *self.movers_at(t), *self.scan_perception.movers(t)]
+
+    def on_movers(self, msg: MarkerArray) -> None:
+        try:
+            movers = convert.marker_array_to_movers(msg)
+        except ValueError as exc:
+            self.get_logger().warning(f'ignoring /movers: {exc}', throttle_duration_sec=5.0)
+            return
+        # Every marker after the leading DELETEALL carries the map node's stamp; unset: when it came.
+        stamp = convert.stamp_to_seconds(msg.markers[1].header.stamp) if len(msg.markers) > 1 else 0.0
+        self.known_movers = movers
+        self.movers_stamp = stamp if stamp > 0.0 else self.now()
+
+    def movers_at(self, t: float) -> list[OtherRobot]:
+        """The known movers predicted from their stamp to t (at most max_extrapolation); none once older than
+        odom_timeout (the map node stopped)."""
+        age = t - self.movers_stamp
+        if not self.known_movers or not -self.odom_timeout <= age <= self.odom_timeout:
+            return []
+        ahead = self.lag(t, self.movers_stamp)
+        return [OtherRobot(m.name, (m.position[0] + m.velocity[0] * ahead, m.position[1] + m.velocity[1] * ahead),
+                           m.velocity, m.radius, mover=True) for m in self.known_movers]
+
+    def on_scan(self, msg: LaserScan) -> None:
+        """Fold a scan into what the robot believes (in lock step: when the planner acts on its time)."""
+        if self.locked():
+            self.pending_scan = msg
+            self.lock_try()
+        else:
+            self.perceive(msg, self.now())
+
+    def perceive(self, msg: LaserScan, t: float, at: float | None = None) -> None:
+        """Fold a scan into what the robot believes at node time t; the navigator plans in the belief from then on.
+        `at`: the time it was taken (lock step: the tick's), else its stamp."""
+        nav = self.navigator
+        if nav is None or self.world is None:
+            return   # no map yet: nothing to fuse the scan with
+        state, _ = self.state(t)
+        if state is None:
+            return   # where the scan was taken from is not known
+        stamp = convert.stamp_to_seconds(msg.header.stamp)
+        pose = (float(state[0]), float(state[1]), heading(self.model, state))
+        told = [*self.robots.fleet.obstacles(t, self.robots.radius, lambda s: self.lag(t, s)), *self.movers_at(t)]
+        try:
+            taken = at if at is not None else stamp if stamp > 0.0 else t
+            belief = self.scan_perception.update(msg, taken, pose, self.world, told)
+        except ValueError as exc:
+            self.scan_problem = f'scan ignored: {exc}'
+            self.get_logger().warning(self.scan_problem, throttle_duration_sec=5.0)
+            return
+        self.scan_problem = ''
+        nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
+        if belief.world is not nav.world:
+            nav.world = belief.world
+        self.tracked_pub.publish(convert.belief_to_marker_array(belief, self.stamp(), self.frame_id))
+
+    # ------------------------------------------------------------------------------------------- the state
+    def state(self, t: float) -> tuple[np.ndarray | None, str]:
+        """The robot's state, or None and why the robot must hold still."""
+        if self.odom_problem:
+            return None, self.odom_problem
+        if self.odom is None:
+            return None, f'waiting for odometry on {self.own_odom_topic}'
+        if t - self.odom_received > self.odom_timeout:
+            return None, f'odometry stale: none for {t - self.odom_received:.2f} s (odom_timeout ' \
+                         f'{self.odom_timeout:g} s)'
+        if t < self.odom_received - STAMP_EPS:
+            # The clock went back since it came (a restarted clock): how old it is is not known.
+            return None, f'odometry stale: received at {self.odom_received:.2f} s, after this node\'s clock ' \
+                         f'({t:.2f} s): the clock went back'
+        if self.model == 'tractor_trailer' and self.trailer is None:
+            return None, 'waiting for trailer_pose'
+        transform = self.map_to_odom()
+        if transform is None:
+            return None, f'waiting for localization on {self.localization_topic} (map -> {self.odom_frame_id})'
+        try:
+            state = frames.state_in_frame(transform, convert.pose_to_state(self.odom.pose, self.model, self.trailer))
+            self.body_yaw = frames.compose(transform, self.odom.pose)[2]
+        except ValueError as exc:
+            return None, f'odometry rejected: {exc}'
+        self.odom_lag = t - self.odom_stamp
+        if self.odom_lag < -self.odom_timeout:
+            # From a clock that ran ahead of this node's (a restarted plant, a clock jump): acting on it would
+            # take a position the robot has left for its present one.
+            return None, (f'odometry stale: stamped {-self.odom_lag:.2f} s ahead of this node\'s clock '
+                          f'(odom_timeout {self.odom_timeout:g} s)')
+        if self.max_extrapolation > 0.0 and self.odom_lag > self.max_extrapolation:
+            # Where the robot is now cannot be predicted that far: a command from this state would be checked (by
+            # the guard) at a position the robot has left.
+            return None, (f'odometry stale: stamped {self.odom_lag:.2f} s ago, beyond what it is predicted over '
+                          f'(max_extrapolation {self.max_extrapolation:g} s)')
+        lag = self.lag(t, self.odom_stamp)
+        if lag > 0.0 and self.navigator is not None:
+            # Latency compensation: the plant has applied the last command since the odometry was stamped.
+            state = self.navigator.model.integrate(state, self.last_command, lag)
+        return state, ''
+
+    def lag(self, t: float, stamp: float) -> float:
+        """How far to predict a message stamped `stamp` forward to the control time t (not at all within STAMP_EPS:
+        a stamp is whole nanoseconds, a tick's time k * dt is not, and a prediction over 1e-15 s moves a position by
+        its last bit)."""
+        ahead = t - stamp
+        return 0.0 if ahead < STAMP_EPS else min(ahead, self.max_extrapolation)
+
