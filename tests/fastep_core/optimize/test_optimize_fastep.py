@@ -282,10 +282,10 @@ def test_merged_moves_with_ties_and_an_attraction_sample_follow_the_loop_referen
 
 
 # One iteration at a time (fastep_iterations): what a planner with a budget per control tick runs.
-@pytest.mark.parametrize('seed', range(3))
-def test_the_run_spread_over_pauses_is_fasteps_draw_for_draw(seed):
+@pytest.mark.parametrize('seed,merged', [(0, False), (1, False), (2, False), (0, True), (1, True)])
+def test_the_run_spread_over_pauses_is_fasteps_draw_for_draw(seed, merged):
     from fastep_core.optimize import fastep_iterations
-    kw = dict(n_fireflies=20, max_iter=40, patience=5, tol=1e-9)
+    kw = dict(n_fireflies=20, max_iter=40, patience=5, tol=1e-9, merged_moves=merged)
     whole = fastep(rastrigin, RASTRIGIN_BOX, rng=np.random.default_rng(seed), **kw)
     run = fastep_iterations(rastrigin, RASTRIGIN_BOX, rng=np.random.default_rng(seed), **kw)
     pauses = 0
