@@ -28,9 +28,10 @@ FloatArray = NDArray[np.float64]
 class RunProof:
     """An answer of obstacles_on_run and what keeps it proven (RunDetector.obstacles_on_run says why it holds).
 
-    Blocked: while the run's ends have moved less than `room`. Clear: while, for every obstacle i the robot may have
-    come within sensing range of (entry[i] <= how far it moved), the new run deviates from the old one by less
-    than run_room[i + 1]; `entry` ascending, run_room[k] the least room of the first k obstacles (run_room[0] inf).
+    Blocked: while the run's ends have moved less than `room`. Clear: while the new run strays from the old one by
+    less than run_room[k], k the number of obstacles the robot may have come within sensing range of (their
+    `entry`, ascending, at most how far the robot moved); run_room[k] is the least room of those k obstacles
+    (run_room[0] inf: none).
     """
 
     world: World
