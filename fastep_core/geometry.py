@@ -62,6 +62,10 @@ def _cross(u: FloatArray, v: FloatArray) -> FloatArray:
     return u[..., 0] * v[..., 1] - u[..., 1] * v[..., 0]
 
 
+PARALLEL = 1e-9
+"""segment_segment_distance: segments whose angle has a sine at most this are parallel (they do not cross)."""
+
+
 def segment_segment_distance(p0: FloatArray, p1: FloatArray, q0: FloatArray, q1: FloatArray) -> FloatArray:
     """Minimum distance between segments p0-p1 and q0-q1 (0 where they cross), broadcasting."""
     d = np.minimum(
@@ -69,10 +73,16 @@ def segment_segment_distance(p0: FloatArray, p1: FloatArray, q0: FloatArray, q1:
         np.minimum(point_segment_distance(q0, p0, p1), point_segment_distance(q1, p0, p1)),
     )
     r, s = p1 - p0, q1 - q0
-    # Proper crossing: the endpoints of each segment lie strictly on opposite sides of the other.
+    # Proper crossing: the endpoints of each segment lie strictly on opposite sides of the other, and the segments
+    # are not parallel. On (nearly) collinear segments the four cross products are rounding noise whose signs say
+    # nothing: two collinear segments a metre apart came out crossing, distance 0. Segments that cross that close
+    # to parallel (sin of the angle <= PARALLEL) have an endpoint within PARALLEL x their length of the other,
+    # which d measures.
     o1, o2 = _cross(r, q0 - p0), _cross(r, q1 - p0)
     o3, o4 = _cross(s, p0 - q0), _cross(s, p1 - q0)
-    crossing = (o1 * o2 < 0.0) & (o3 * o4 < 0.0)
+    turn = _cross(r, s)
+    crossing = (o1 * o2 < 0.0) & (o3 * o4 < 0.0) & \
+        (turn * turn > PARALLEL * PARALLEL * np.sum(r * r, axis=-1) * np.sum(s * s, axis=-1))
     return np.where(crossing, 0.0, d)
 
 

@@ -49,14 +49,14 @@ class RunProof:
         sx, sy = self.start
         ex, ey = self.stop
         moved = math.hypot(position[0] - sx, position[1] - sy)
-        if self.blocked:
-            return max(moved, math.hypot(end[0] - ex, end[1] - ey)) < self.room
+        if self.blocked:   # each compared on its own: max() would drop a NaN
+            return moved < self.room and math.hypot(end[0] - ex, end[1] - ey) < self.room
         k = bisect.bisect_right(self.entry, moved)   # the obstacles that may have come within sensing range
         if k == 0:
             return True
-        deviation = max(_to_segment(position[0], position[1], sx, sy, ex, ey),
-                        _to_segment(end[0], end[1], sx, sy, ex, ey))
-        return deviation < self.run_room[k]
+        room = self.run_room[k]
+        return _to_segment(position[0], position[1], sx, sy, ex, ey) < room and \
+            _to_segment(end[0], end[1], sx, sy, ex, ey) < room
 
 
 def _to_segment(px: float, py: float, ax: float, ay: float, bx: float, by: float) -> float:

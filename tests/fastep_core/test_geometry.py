@@ -22,6 +22,21 @@ def test_segment_segment_crossing_parallel_and_apart():
     assert segment_segment_distance(z([0, 0.]), z([1, 0.]), z([3, 4.]), z([3, 9.])) == pytest.approx(np.hypot(2, 4))
 
 
+def test_collinear_segments_apart_do_not_cross():
+    """On one diagonal line a metre apart: the four cross products are rounding noise, and their signs once said the
+    segments crossed (distance 0). path_clearance and fan_clearance agree on the gap."""
+    p0, p1 = np.array([0.16710579185448293, 8.661835666543016]), np.array([-1.9100071270009744, 12.203157328052114])
+    q0, q1 = np.array([-2.4159379358776403, 13.06573139248334]), np.array([-3.9337303625076383, 15.653453585777015])
+    assert segment_segment_distance(p0, p1, q0, q1) == pytest.approx(1.0)
+    wall = Obstacles([Segment(tuple(q0), tuple(q1))])
+    assert wall.path_clearance(p0, p1) == pytest.approx(1.0) == wall.fan_clearance(p0, p1[None])[0]
+    # Crossing at the smallest angle that still counts (sine 1e-8) and collinear overlapping: distance 0.
+    assert segment_segment_distance(np.array([0.0, 0.0]), np.array([10.0, 1e-7]), np.array([0.0, 1e-7]),
+                                    np.array([10.0, 0.0])) == 0.0
+    assert segment_segment_distance(np.array([0.0, 0.0]), np.array([2.0, 2.0]), np.array([1.0, 1.0]),
+                                    np.array([3.0, 3.0])) == pytest.approx(0.0, abs=1e-12)
+
+
 def test_clearance_is_surface_distance_to_nearest_obstacle():
     obs = Obstacles([Circle((0.0, 0.0), 2.0), Segment((10.0, -5.0), (10.0, 5.0))])
     pts = np.array([[5.0, 0.0], [3.0, 0.0], [12.0, 0.0], [0.0, 1.0]])

@@ -65,6 +65,17 @@ def test_a_robot_driving_along_its_run_past_obstacles_beside_it_keeps_its_clear_
     assert measured[0] == 0 and len([k for k in measured if k < first_blocked]) <= 2
 
 
+def test_a_run_to_a_nan_end_is_measured_not_taken_from_a_proof():
+    """A blocked answer kept for a run to (12, 10) is not reused for a run to (nan, 10): measuring says clear."""
+    world = World.from_obstacles([0, 0, 50, 50], [Circle((10.0, 10.0), 1.0)])
+    kept = RunDetector(0.5)
+    position = np.array([8.0, 10.0])
+    assert kept.obstacles_on_run(world, position, np.array([12.0, 10.0]), 2.5, 0.75)
+    nan_end = np.array([np.nan, 10.0])
+    assert kept.obstacles_on_run(world, position, nan_end, 2.5, 0.75) == \
+        RunDetector(0.5).obstacles_on_run(world, position, nan_end, 2.5, 0.75)
+
+
 def test_a_new_world_or_forget_drops_the_kept_answers():
     params = PlannerParams()
     empty = World.from_obstacles([0, 0, 50, 50], [])
