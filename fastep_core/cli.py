@@ -10,6 +10,7 @@ Long batches show a `progress_bar` (tqdm) on stderr, so stdout stays the result.
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 from typing import TYPE_CHECKING, Any, Callable, NoReturn
@@ -71,6 +72,19 @@ def positive_int(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f'must be at least 1, got {value}')
     return value
+
+
+def realtime_factor(text: str) -> float:
+    """argparse type of --realtime's FACTOR: how many times slower than this machine the robot's computer plans
+    (a finite number >= 0; 0 counts no planning time, yet every plan still reaches the control loop a tick late)."""
+    value = float(text)
+    if not (math.isfinite(value) and 0.0 <= value <= 1000.0):
+        raise argparse.ArgumentTypeError(f'a realtime factor must be in [0, 1000], got {text}')
+    return value
+
+
+REALTIME_HELP = ('planning takes time: a plan reaches the control loop only after the wall time it took x FACTOR '
+                 '(default 1), the robot driving on its last plan meanwhile, as on a robot; not deterministic')
 
 
 def tcp_port(text: str) -> int:

@@ -92,6 +92,9 @@ class Record:
     activations: int
     status: str
     cpu_time: float = math.nan   # CPU seconds of the whole simulate call (all robots): immune to other load
+    ticks: int | None = None     # --realtime: control ticks, those without a fresh plan, the longest latency (s)
+    stale_ticks: int | None = None
+    max_plan_latency: float | None = None
 
     @property
     def ok(self) -> bool:
@@ -130,8 +133,9 @@ def cached_scenario(source: str) -> Scenario:
     return load_scenario(source)
 
 
-def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = ()) -> list[Record]:
-    """One simulate call (in a worker process); `overrides` replace planner parameters (used by tuning)."""
+def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = (), realtime: float | None = None) -> list[Record]:
+    """One simulate call (in a worker process); `overrides` replace planner parameters (used by tuning);
+    `realtime`: simulate's latency factor (None: lock step)."""
     from dataclasses import replace
 
     source, algorithm, seed = task
@@ -139,10 +143,13 @@ def run_task(task: Task, overrides: tuple[tuple[str, float], ...] = ()) -> list[
     if overrides:
         scenario = replace(scenario, planner=scenario.planner.with_overrides(dict(overrides)))
     cpu = time.process_time()
-    run = simulate(scenario, algorithm, seed)
+    run = simulate(scenario, algorithm, seed, realtime=realtime)
     cpu = time.process_time() - cpu
     return [Record(source, algorithm, seed, r.name, r.reached, r.collided, r.path_length, r.sim_time,
-                   r.compute_time, r.min_clearance, r.activations, r.status, cpu) for r in run.robots]
+                   r.compute_time, r.min_clearance, r.activations, r.status, cpu,
+                   *((None, None, None) if r.realtime is None else
+                     (r.realtime.ticks, r.realtime.stale_ticks, r.realtime.max_latency)))
+            for r in run.robots]
 
 
 def pool_context() -> multiprocessing.context.BaseContext:
@@ -153,7 +160,7 @@ def pool_context() -> multiprocessing.context.BaseContext:
 
 def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, workers: int = 2, *,
               seed0: int = 0, progress: bool | None = False, label: str = 'runs',
-              overrides: dict[str, float] | None = None) -> list[Record]:
+              overrides: dict[str, float] | None = None, realtime: float | None = None) -> list[Record]:
     """Simulate every scenario with every algorithm for seeds seed0..seed0+runs-1; records sorted.
 
     workers <= 1 runs in this process. `progress`: a progress bar titled `label` on stderr, None when stderr
@@ -166,7 +173,7 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     # scenario-major order one planner's runs would share one stretch of background load).
     todo = [todo[k] for k in np.random.default_rng(seed0).permutation(len(todo))]
     frozen = tuple(sorted((overrides or {}).items()))
-    job = functools.partial(run_task, overrides=frozen)
+    job = functools.partial(run_task, overrides=frozen, realtime=realtime)
     out: list[Record] = []
     with progress_bar(len(todo), label, progress) as bar:
         if workers <= 1 or len(todo) == 1:

@@ -54,13 +54,14 @@ def family_sources(families: Sequence[str], worlds: int) -> list[str]:
 
 def run_families(families: Sequence[str], algorithms: Sequence[str], worlds: int, runs: int = 1,
                  workers: int = 2, *, seed0: int = 0, progress: bool | None = False, label: str = 'families',
-                 overrides: dict[str, float] | None = None) -> list[Record]:
-    """Every planner on `worlds` worlds per family, run seeds seed0..seed0+runs-1 (deterministic planners once)."""
+                 overrides: dict[str, float] | None = None, realtime: float | None = None) -> list[Record]:
+    """Every planner on `worlds` worlds per family, run seeds seed0..seed0+runs-1 (deterministic planners once);
+    `realtime`: fastep_core.simulator.simulate's latency factor (None: lock step)."""
     for family in families:
         if family not in ALL_FAMILIES:
             raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
     return experiments.run_batch(family_sources(families, worlds), algorithms, runs, workers, seed0=seed0,
-                                 progress=progress, label=label, overrides=overrides)
+                                 progress=progress, label=label, overrides=overrides, realtime=realtime)
 
 
 @dataclass(frozen=True)
@@ -85,6 +86,9 @@ class Row:
     activations: int
     activations_per_m: float
     status: str
+    ticks: int | None = None              # --realtime: control ticks ...
+    stale_ticks: int | None = None        # ... of which without a fresh plan
+    max_plan_latency: float | None = None  # the longest planning latency (s)
 
     def to_json(self) -> dict[str, Any]:
         return {k: (None if isinstance(v, float) and not math.isfinite(v) else v) for k, v in asdict(self).items()}
@@ -102,7 +106,8 @@ def rows_of(records: Sequence[Record]) -> list[Row]:
         out.append(Row(family, world, r.algorithm, r.seed, r.robot, robots[r.scenario], r.reached, r.collided,
                        r.min_clearance, r.path_length, best, r.path_length / best if best and r.ok else None,
                        r.sim_time, r.compute_time, r.cpu_time, r.activations,
-                       r.activations / r.path_length if r.path_length > 0 else math.nan, r.status))
+                       r.activations / r.path_length if r.path_length > 0 else math.nan, r.status,
+                       r.ticks, r.stale_ticks, r.max_plan_latency))
     return out
 
 
@@ -204,6 +209,30 @@ def _num(x: float, digits: int = 2) -> str:
     return '-' if x is None or not math.isfinite(x) else f'{x:.{digits}f}'
 
 
+def realtime_table(rows: Sequence[Row]) -> list[str]:
+    """With --realtime: per family and planner, the control ticks without a fresh plan and the planning latencies
+    (none without it)."""
+    timed = [r for r in rows if r.ticks is not None and r.stale_ticks is not None and r.max_plan_latency is not None]
+    if not timed:
+        return []
+    groups: dict[tuple[str, str], list[Row]] = {}
+    for r in timed:
+        groups.setdefault((r.family, r.algorithm), []).append(r)
+    lines = ['', '### Planning latency (--realtime)', '',
+             'Stale ticks: control ticks that drove on a plan no newer than the last tick\'s, of all ticks; latency: '
+             'the longest planning pass of a robot run in seconds of the simulated robot (wall time x FACTOR), median '
+             'and worst over the robot runs.', '',
+             '| family | planner | stale ticks | latency median of the longest (s) | longest (s) |',
+             '|---|---|---|---|---|']
+    for (family, algorithm), group in groups.items():
+        ticks = sum(r.ticks or 0 for r in group)
+        stale = sum(r.stale_ticks or 0 for r in group)
+        longest = [r.max_plan_latency or 0.0 for r in group]
+        lines.append(f'| {FAMILY_NAMES.get(family, family)} | {algorithm_name(algorithm)} | '
+                     f'{100.0 * stale / max(ticks, 1):.1f} % | {_num(_median(longest), 3)} | {_num(max(longest), 3)} |')
+    return lines
+
+
 def markdown_report(rows: Sequence[Row], *, command: str = '', notes: Sequence[str] = (),
                     worst_of: str | None = None) -> str:
     """Markdown: the family table (one line per family and planner) and each family's worst run (of planner
@@ -232,6 +261,7 @@ def markdown_report(rows: Sequence[Row], *, command: str = '', notes: Sequence[s
             f'{_num(s.cpu_per_run, 3)} / {_num(s.cpu_per_run_mean, 3)} | {_num(s.compute_per_run, 3)} | '
             f'{_num(s.cpu_vs_aco)} | {_num(s.cpu_ms_per_m, 1)} | {_num(s.compute_ms_per_m, 1)} | '
             f'{_num(s.activations_per_m, 3)} | {s.activations} | {_num(s.sim_time, 1)} |')
+    lines += realtime_table(rows)
     worst = worst_runs(rows, worst_of)
     if worst:
         whose = f' ({algorithm_name(worst_of)})' if worst_of else ''

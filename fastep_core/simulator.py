@@ -29,6 +29,7 @@ from fastep_core.metrics import trajectory_margins
 from fastep_core.perception.belief import Belief
 from fastep_core.perception.robot import SensingRobot
 from fastep_core.planning.algorithms import make_navigator
+from fastep_core.planning.control import ControlTick, Plan, PlanLatency
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot, OtherRobots
 from fastep_core.scenario import Scenario
@@ -61,6 +62,7 @@ class RobotRun:
     cost: list[tuple[float, float]] = field(default_factory=list)        # (t, fitness of the step in use)
     velocity: list[tuple[float, float, float]] = field(default_factory=list)  # (t, vx, vy) map frame
     belief: Belief | None = None  # a robot with a sensor: what it believed at the end (figures; not in the JSON)
+    realtime: PlanLatency | None = None   # --realtime: ticks without a fresh plan, the longest planning latency
 
     def to_json(self) -> dict[str, object]:
         return {
@@ -73,6 +75,7 @@ class RobotRun:
             'status': self.status,
             'waypoints': [[round(v, 6) for v in w] for w in self.waypoints],
             'trajectory': [[round(v, 6) for v in row] for row in self.trajectory],
+            **({} if self.realtime is None else {'realtime': self.realtime.to_json()}),
         }
 
 
@@ -100,8 +103,14 @@ class Tick:
 
 
 def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
-             observer: Callable[[Tick], None] | None = None) -> Run:
+             observer: Callable[[Tick], None] | None = None, realtime: float | None = None) -> Run:
     """Run every robot of the scenario until each has arrived, failed, or max_sim_time has passed.
+
+    realtime (FACTOR, >= 0): planning is not free. A planning pass (perception of the scan and Navigator.update)
+    starts on a tick's state and its plan reaches the control loop only once its wall time x FACTOR has passed on
+    the simulated clock, at the next tick at the earliest; every tick meanwhile drives on the plan it has
+    (fastep_core/planning/control.py), as the planner node does. Not deterministic: it depends on the machine.
+    None (the default): the clock waits for the planner, every tick plans, same seed same run.
 
     min_clearance is the smallest margin a robot kept (fastep_core.metrics.trajectory_margins): distance from
     its reference point to the nearest obstacle surface minus its radius, or to another robot's centre minus
@@ -123,6 +132,10 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     states = [np.array(spec.start, dtype=float) for spec in specs]
     velocities = [np.zeros(2) for _ in specs]
     runs = [RobotRun(spec.name, spec.model) for spec in specs]
+    latencies = [PlanLatency(realtime) for _ in specs] if realtime is not None else None
+    controls = [ControlTick(nav) for nav in navigators] if realtime is not None else None
+    for run, latency in zip(runs, latencies or ()):
+        run.realtime = latency
     for nav, spec, run, state in zip(navigators, specs, runs, states):
         try:
             nav.set_goal(spec.goal)
@@ -138,9 +151,16 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     step_times: list[float] = []               # every robot's position after each step, for the margins
     step_positions: list[FloatArray] = []
 
+    def mode(i: int) -> Mode:
+        """Where robot i stands: its navigator's mode, or with realtime the mode of the plan it drives on."""
+        if latencies is None:
+            return navigators[i].mode
+        plan = latencies[i].plan
+        return Mode.IDLE if plan is None else plan.mode
+
     for k in range(n_ticks):
         t = k * dt
-        active = [nav.mode not in (Mode.ARRIVED, Mode.FAILED) for nav in navigators]
+        active = [mode(i) not in (Mode.ARRIVED, Mode.FAILED) for i in range(len(specs))]
         if not any(active):
             break
         commands = []
@@ -161,10 +181,20 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 continue
             start = time.perf_counter()
             sense = senses[i]
-            seen = views[i] if sense is None else sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
-            commands.append(nav.update(t, states[i], seen))
+            if latencies is None or controls is None:
+                seen = views[i] if sense is None else sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
+                commands.append(nav.update(t, states[i], seen))
+            else:
+                latency = latencies[i]
+                latency.take(t)
+                if latency.idle:   # the next pass starts on this tick's state
+                    seen = views[i] if sense is None else \
+                        sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
+                    plan = Plan.of(nav, t, nav.update(t, states[i], seen), seen[len(views[i]):])
+                    latency.submit(plan, t, time.perf_counter() - start)
+                commands.append(controls[i].command(t, states[i], views[i], latency.plan, dt))
             runs[i].compute_time += time.perf_counter() - start
-            if nav.mode is Mode.ARRIVED:
+            if mode(i) is Mode.ARRIVED:
                 runs[i].reached, runs[i].sim_time = True, t
                 active[i] = False
                 # It stands still from now on (a plant publishes the zero twist it is sent): its last velocity,
@@ -217,9 +247,13 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
         last = pending[i]
         if last is not None:
             run.trajectory.append(last)
-        if nav.mode not in (Mode.ARRIVED, Mode.FAILED):
-            nav.fail(f'not arrived within max_sim_time={params.max_sim_time:g} s')
-        run.status = f'{nav.mode.value}: {nav.reason}'
+        adopted = None if latencies is None else latencies[i].plan
+        if adopted is not None and adopted.mode in (Mode.ARRIVED, Mode.FAILED):
+            run.status = f'{adopted.mode.value}: {adopted.reason}'
+        else:
+            if nav.mode not in (Mode.ARRIVED, Mode.FAILED) or latencies is not None:
+                nav.fail(f'not arrived within max_sim_time={params.max_sim_time:g} s')
+            run.status = f'{nav.mode.value}: {nav.reason}'
         run.activations = nav.activations
         run.escapes = nav.escapes
         run.manoeuvres = nav.manoeuvres

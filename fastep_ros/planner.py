@@ -64,7 +64,7 @@ import collections
 import math
 import time
 import traceback
-from dataclasses import fields
+from dataclasses import dataclass, fields
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -86,6 +86,7 @@ from fastep_core.planning.algorithms import (
     check_drives,
     make_robot,
 )
+from fastep_core.planning.control import ControlTick, Plan
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
@@ -109,6 +110,7 @@ from fastep_ros.lock_step import LockStep
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.perception import ScanPerception
 from fastep_ros.planner_inputs import Body, PlannerInputs
+from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
@@ -116,13 +118,26 @@ from msg_tools.interface import LATEST, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
-TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radius', 'max_extrapolation')
+TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radius', 'max_extrapolation',
+           'max_plan_age')
 """The node's own parameters that change while it runs, besides every PlannerParams field."""
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots ...
 START_PERIOD = 0.05      # ... the first START_LOOKS looks (3 s) every START_PERIOD: a launcher waits for every
 START_LOOKS = 60         # planner to see the others and its cmd_vel's readers (make demo's start waited 0.2-0.5 s)
 HEARTBEAT = 1.0          # wall seconds between re-publications of status, waypoint and plan
 CONTROL_TIMES = 200      # control callbacks (10 s at 20 Hz) whose wall times status' control_ms sums up
+
+
+@dataclass(frozen=True)
+class PlanSnapshot:
+    """What a planning pass plans from: the control tick's time, state and the robots and movers it was told of,
+    and the newest scan not yet perceived."""
+
+    t: float
+    tick: int                # the control tick's number
+    state: np.ndarray
+    others: list[OtherRobot]
+    scan: LaserScan | None
 
 
 def stream_rng(seed: int, stream: int) -> np.random.Generator:
@@ -201,6 +216,13 @@ class PlannerNode(PlannerInputs):
                             'the other robots\' odometry (and the scan) of that time are in, and stamp cmd_vel with '
                             'it, so a graph steps like fastep-sim (fastep-launch sets it; needs use_stamped_cmd_vel '
                             'and plants in lock step)')
+        threaded = declare(self, 'planning_thread', True, 'plan on a thread of its own, so that the control loop never '
+                           'waits for planning (it drives on the newest plan, guarded every tick); false: every '
+                           'control tick plans, the clock of a simulation waiting for it. Lock step always plans on '
+                           'the tick')
+        self.max_plan_age = declare(self, 'max_plan_age', 2.0, 'a plan older than this (s, node clock) is not driven '
+                                    'on: the robot stops, status ERROR, until a planning pass ends (planning_thread)',
+                                    value_range=(0.1, 60.0), unit=' s', read_only=False)
         self._check(length, trailer_length, hitch_offset, other_radius, workspace)
         self.lock_step = bool(lock_step)
         self.lock = LockStep()
@@ -231,6 +253,14 @@ class PlannerNode(PlannerInputs):
         self.cmd_vel_readers = 0       # cmd_vel's matched readers when status last told them
         self.control_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
         self.control_cpu_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
+        self.control_stamps: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)   # node times
+        # Planning off the control path (fastep_ros.planning_thread), unless every tick plans (lock step, or asked).
+        self.planning: PlanningThread[PlanSnapshot, Plan] | None = None
+        self.control_tick: ControlTick | None = None   # the control loop's part of the navigator, with the thread
+        self.latest_scan: LaserScan | None = None      # with the thread: the newest scan, perceived by the next pass
+        self.plan_problem = ''                         # why the plan is not driven on ('' when it is)
+        self.control_count = 0                         # control ticks so far
+        self.plan_tick = 0                             # the control tick the newest plan was planned from
         self.trailer: float | None = None
         self.trailer_stamp = -math.inf
         self.fault_logged = False
@@ -286,6 +316,8 @@ class PlannerNode(PlannerInputs):
         self.scan_sub = self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
         self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
         self.scan_problem = ''
+        if threaded and not self.lock_step:
+            self.planning = PlanningThread(self.plan_pass, self.get_logger().error)
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control_tick)
         steady = self.wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
         self.wall_ticks = 0
@@ -305,8 +337,12 @@ class PlannerNode(PlannerInputs):
 
     # ------------------------------------------------------------------------------------------- lifecycle
     def activate(self) -> None:
-        if self.navigator is not None:
-            self.navigator.restart_clock(self.now())   # time spent inactive is no lack of progress
+        t = self.now()
+
+        def restart() -> None:
+            if self.navigator is not None:
+                self.navigator.restart_clock(t)   # time spent inactive is no lack of progress
+        self.change(restart)
         self.control_timer.reset()
         self._status_key = None
 
@@ -318,8 +354,19 @@ class PlannerNode(PlannerInputs):
 
     def cleanup(self) -> None:
         """A fresh navigator: the goal is forgotten (the world, latched, is kept)."""
-        self.navigator, self.goal, self.pending_goal = None, None, None
-        self.update_world()
+        def forget() -> None:
+            self.navigator, self.control_tick, self.goal, self.pending_goal = None, None, None, None
+            if self.planning is not None:
+                self.planning.drop_plan()
+            self.update_world()
+        self.change(forget)
+
+    def change(self, work: Callable[[], Any]) -> None:
+        """Change the navigator: between two passes on the planning thread, or at once without one."""
+        if self.planning is None:
+            work()
+        else:
+            self.planning.call(work)
 
     # ------------------------------------------------------------------------------------------- setup
     def _declare_planner_params(self) -> PlannerParams:
@@ -374,11 +421,17 @@ class PlannerNode(PlannerInputs):
         if odom_timeout <= 0.0:
             return f'parameter odom_timeout must be > 0, got {odom_timeout:g}'
         if planner:
-            if self.navigator is not None:
-                self.navigator.retune(params, make_robot(self.body, params)[1])
+            def retune() -> None:
+                nav = self.navigator
+                if nav is not None:
+                    nav.retune(params, make_robot(self.body, params)[1])
+                    if self.planning is not None:
+                        self.control_tick = ControlTick(nav)
+            self.change(retune)
             self.params = params
         self.odom_timeout = odom_timeout
         self.max_extrapolation = changes.get('max_extrapolation', self.max_extrapolation)
+        self.max_plan_age = changes.get('max_plan_age', self.max_plan_age)
         self.robots.fleet.still_after = self.odom_timeout
         self.robots.override_radius = changes.get('other_robot_radius', self.robots.override_radius)
         if 'control_rate_hz' in changes:
@@ -395,6 +448,10 @@ class PlannerNode(PlannerInputs):
         return ns // 1_000_000_000, ns % 1_000_000_000
 
     def on_goal(self, msg: PoseStamped) -> None:
+        self.change(lambda: self.take_goal(msg))
+
+    def take_goal(self, msg: PoseStamped) -> None:
+        """A goal, given to the navigator (on the planning thread when there is one)."""
         point = convert.pose_stamped_to_point(msg)
         if self.navigator is None:
             self.pending_goal = msg
@@ -437,6 +494,8 @@ class PlannerNode(PlannerInputs):
         self.robots.take()
 
     def destroy_node(self) -> None:
+        if self.planning is not None:
+            self.planning.stop()
         self.robots.destroy()
         super().destroy_node()
 
@@ -501,10 +560,13 @@ class PlannerNode(PlannerInputs):
         if self.sim_time.switched():
             self.on_clock_switched()
         t = self.now() if at is None else at
+        self.control_stamps.append(t)
         self.take_others()
         nav = self.navigator
         command = np.zeros(2)
-        if nav is not None:
+        if self.planning is not None:
+            command = self.drive_on_plan(t)
+        elif nav is not None:
             state, problem = self.state(t)
             if state is None:
                 self.hold = problem
@@ -527,6 +589,56 @@ class PlannerNode(PlannerInputs):
             self.publish_target()
             self.publish_plan()
         self.publish_status(at=t)
+
+    def drive_on_plan(self, t: float) -> np.ndarray:
+        """With the planning thread: hand it this tick's snapshot and drive on the newest plan it has made
+        (fastep_core.planning.control), never waiting for it."""
+        assert self.planning is not None
+        stop = np.zeros(2)
+        nav, control = self.navigator, self.control_tick
+        if nav is None or control is None:
+            return stop
+        state, problem = self.state(t)
+        self.hold = problem
+        if state is None:
+            return stop
+        told = self.told_others(t)
+        scan, self.latest_scan = self.latest_scan, None
+        self.control_count += 1
+        self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan))
+        plan = self.planning.plan
+        # Age in control periods since the tick it was planned from: a simulated clock may jump between two ticks.
+        age = (self.control_count - self.plan_tick) / self.control_rate_hz
+        if plan is not None and plan.under_way and age > self.max_plan_age:
+            if not self.plan_problem:
+                self.get_logger().error(f'planning stalled: the newest plan is {age:.2f} s old (max_plan_age '
+                                        f'{self.max_plan_age:g} s); stopped until a pass ends')
+            self.plan_problem = f'planning stalled: plan {age:.2f} s old (max_plan_age {self.max_plan_age:g} s)'
+            return stop
+        self.plan_problem = ''
+        return control.command(t, state, told, plan, 1.0 / self.control_rate_hz)
+
+    def plan_pass(self, snapshot: PlanSnapshot) -> Plan | None:
+        """One planning pass on the planning thread: perceive the newest scan, then the navigator's update."""
+        nav = self.navigator
+        if nav is None:
+            return None
+        t, state = snapshot.t, snapshot.state
+        if snapshot.scan is not None:
+            self.perceive(snapshot.scan, t, state=state)
+        tracked = self.scan_perception.movers(t)
+        try:
+            command = nav.update(t, state, [*snapshot.others, *tracked])
+            if not np.all(np.isfinite(command)):
+                raise FloatingPointError(f'command {command.tolist()} is not finite')
+        except Exception as exc:  # a planner fault stops this robot, never the node
+            command = np.zeros(2)
+            if not self.fault_logged:
+                self.get_logger().error(f'planner fault: {exc}\n{traceback.format_exc()}')
+                self.fault_logged = True
+            nav.fail(f'planner fault: {exc}')
+        self.plan_tick = snapshot.tick
+        return Plan.of(nav, t, command, tracked)
 
     def publish_command(self, command: np.ndarray, at: float | None = None) -> None:
         """cmd_vel in the body frame: a point mass's map-frame velocity turned by its heading (the identity while
@@ -597,6 +709,9 @@ class PlannerNode(PlannerInputs):
             self.publish_target(force=True)
             self.publish_plan(force=True)
             self.diagnostics.publish(self.diagnostic_tasks())
+            late = self.rate_problem()
+            if late and self.is_active:
+                self.get_logger().warning(late, throttle_duration_sec=10.0)
 
     # ------------------------------------------------------------------------------------------- time
     def check_clock(self) -> None:
@@ -626,8 +741,10 @@ class PlannerNode(PlannerInputs):
         for robot in self.robots.fleet.robots.values():
             if robot.received > -math.inf:   # kept where last heard, as if heard now: still avoided
                 robot.received = robot.stamp = t
-        if self.navigator is not None:
-            self.navigator.restart_clock(t)
+        def restart() -> None:
+            if self.navigator is not None:
+                self.navigator.restart_clock(t)
+        self.change(restart)
         self.last_command = np.zeros(2)
         self.publish_command(self.last_command)
         self.clock_problem = self.sim_time.problem()   # the silence counts from the switch

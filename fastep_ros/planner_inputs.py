@@ -20,11 +20,13 @@ from visualization_msgs.msg import MarkerArray
 
 from fastep_core.perception.belief import heading
 from fastep_core.planning.algorithms import make_navigator
+from fastep_core.planning.control import ControlTick, Plan
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 from fastep_ros.lock_step import STAMP_EPS, LockStep
 from fastep_ros.planner_status import PlannerReports
+from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import robot_name
 from msg_tools import convert, frames
 
@@ -71,6 +73,9 @@ class PlannerInputs(PlannerReports):
     tracked_pub: Publisher
     lock_step: bool
     lock: LockStep
+    planning: PlanningThread[Any, Plan] | None
+    control_tick: ControlTick | None
+    latest_scan: LaserScan | None
 
     def lock_try(self) -> None:
         """Lock step: act once every input of the newest odometry's time is in (PlannerNode's)."""
@@ -78,6 +83,10 @@ class PlannerInputs(PlannerReports):
 
     def on_goal(self, msg: PoseStamped) -> None:
         """A goal (PlannerNode's: one that came before the world is taken once the world is known)."""
+        raise NotImplementedError
+
+    def change(self, work: Callable[[], Any]) -> None:
+        """Change the navigator between two planning passes (PlannerNode's)."""
         raise NotImplementedError
 
     def locked(self) -> bool:
@@ -114,21 +123,28 @@ class PlannerInputs(PlannerReports):
         workspace = self.workspace_param or self.map_workspace
         if self.obstacles is None or workspace is None:
             return
-        self.world = World.from_obstacles(workspace, self.obstacles)
-        self.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
-        if self.navigator is None:
-            self.navigator = make_navigator(self.algorithm, self.body, self.radius, self.world, self.params,
-                                            self.rng)
-            self.navigator.name = robot_name(self.get_namespace())   # as the other robots' planners name it
-            self.get_logger().info(f'world known: {len(self.obstacles)} obstacles in {workspace}')
-        else:
-            self.navigator.world = self.world
-            self.get_logger().info(f'world updated: {len(self.obstacles)} obstacles')
-        self._status_key = None   # the obstacle count is part of the status
-        if self.pending_goal is not None:
-            goal, self.pending_goal = self.pending_goal, None
-            self.on_goal(goal)
-        self.publish_status()
+        self.world = world = World.from_obstacles(workspace, self.obstacles)
+        count = len(self.obstacles)
+
+        def adopt() -> None:
+            self.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
+            if self.navigator is None:
+                self.navigator = nav = make_navigator(self.algorithm, self.body, self.radius, world, self.params,
+                                                      self.rng)
+                nav.name = robot_name(self.get_namespace())   # as the other robots' planners name it
+                if self.planning is not None:
+                    self.planning.drop_plan()
+                    self.control_tick = ControlTick(nav)
+                self.get_logger().info(f'world known: {count} obstacles in {workspace}')
+            else:
+                self.navigator.world = world
+                self.get_logger().info(f'world updated: {count} obstacles')
+            self._status_key = None   # the obstacle count is part of the status
+            if self.pending_goal is not None:
+                goal, self.pending_goal = self.pending_goal, None
+                self.on_goal(goal)
+            self.publish_status()
+        self.change(adopt)
 
     # ------------------------------------------------------------------------------------------- inputs
     def on_odom(self, msg: Odometry | bytes) -> None:
@@ -184,8 +200,12 @@ class PlannerInputs(PlannerReports):
 
     def other_robots(self, t: float) -> list[OtherRobot]:
         """The other robots (their odometry), the known movers (/movers) and the movers this robot's scans track."""
+        return [*self.told_others(t), *self.scan_perception.movers(t)]
+
+    def told_others(self, t: float) -> list[OtherRobot]:
+        """The other robots (their odometry) and the known movers (/movers): what the robot is told of."""
         robots = self.robots.fleet.obstacles(t, self.robots.radius, lambda stamp: self.lag(t, stamp))
-        return [*robots, *self.movers_at(t), *self.scan_perception.movers(t)]
+        return [*robots, *self.movers_at(t)]
 
     def on_movers(self, msg: MarkerArray) -> None:
         try:
@@ -213,16 +233,20 @@ class PlannerInputs(PlannerReports):
         if self.locked():
             self.pending_scan = msg
             self.lock_try()
+        elif self.planning is not None:
+            self.latest_scan = msg   # perceived by the next planning pass, off the control path
         else:
             self.perceive(msg, self.now())
 
-    def perceive(self, msg: LaserScan, t: float, at: float | None = None) -> None:
+    def perceive(self, msg: LaserScan, t: float, at: float | None = None, state: np.ndarray | None = None) -> None:
         """Fold a scan into what the robot believes at node time t; the navigator plans in the belief from then on.
-        `at`: the time it was taken (lock step: the tick's), else its stamp."""
+        `at`: the time it was taken (lock step: the tick's), else its stamp; `state`: the robot's at t (default: as
+        the odometry gives it now)."""
         nav = self.navigator
         if nav is None or self.world is None:
             return   # no map yet: nothing to fuse the scan with
-        state, _ = self.state(t)
+        if state is None:
+            state, _ = self.state(t)
         if state is None:
             return   # where the scan was taken from is not known
         stamp = convert.stamp_to_seconds(msg.header.stamp)

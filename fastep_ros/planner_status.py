@@ -19,11 +19,15 @@ from fastep_core.planning.navigator import Mode, Navigator
 from fastep_ros.diagnostics import Task
 from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.perception import ScanPerception
+from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
 
-__all__ = ['PlannerReports']
+__all__ = ['RATE_SHORTFALL', 'RATE_WINDOW', 'PlannerReports']
+
+RATE_WINDOW = 2.0        # s of node time over which the control loop's achieved rate is measured
+RATE_SHORTFALL = 0.9     # an achieved rate below this share of control_rate_hz is a missed rate (WARN)
 
 
 class PlannerReports(ManagedNode):
@@ -48,6 +52,12 @@ class PlannerReports(ManagedNode):
     own_odom_topic: str
     control_times: collections.deque[float]
     control_cpu_times: collections.deque[float]
+    control_stamps: collections.deque[float]   # node times of the recent control callbacks
+    control_rate_hz: float
+    planning: PlanningThread[Any, Any] | None
+    plan_problem: str              # why the plan is not driven on ('' when it is)
+    control_count: int
+    plan_tick: int
     robots: RobotFollower
     cmd_pub: Publisher
     status_pub: Publisher
@@ -80,6 +90,8 @@ class PlannerReports(ManagedNode):
         mode = nav.mode
         if mode is Mode.FAILED:
             return DiagnosticStatus.ERROR, mode.value, nav.reason
+        if self.plan_problem and mode in (Mode.KINEMATIC, Mode.AVOIDING):
+            return DiagnosticStatus.ERROR, 'stale', self.plan_problem
         if mode in (Mode.IDLE, Mode.ARRIVED):
             return DiagnosticStatus.OK, mode.value, nav.reason
         if self.hold:
@@ -90,6 +102,39 @@ class PlannerReports(ManagedNode):
             return DiagnosticStatus.WARN, mode.value, f'{self.goal_refused}; still driving to ' \
                                                      f'({self.goal[0]:g}, {self.goal[1]:g})'
         return DiagnosticStatus.OK, mode.value, nav.reason
+
+    def control_rate(self) -> float | None:
+        """Control ticks per second of node time over the last RATE_WINDOW seconds (None before a window's worth)."""
+        stamps = self.control_stamps
+        if len(stamps) < 2:
+            return None
+        last = stamps[-1]
+        ticks = [s for s in stamps if last - s <= RATE_WINDOW]
+        span = last - ticks[0]
+        if span < 0.5 * RATE_WINDOW:
+            return None
+        return (len(ticks) - 1) / span
+
+    def rate_problem(self) -> str:
+        """Why the control loop misses its rate ('' when it keeps it, or before there is a window to tell)."""
+        rate = self.control_rate()
+        if rate is None or rate >= RATE_SHORTFALL * self.control_rate_hz:
+            return ''
+        return f'control loop missed its rate: {rate:.1f} Hz of {self.control_rate_hz:g} Hz over the last ' \
+               f'{RATE_WINDOW:g} s (tick ms p50 / p99 / max: {self.control_ms()})'
+
+    def plan_age(self) -> float:
+        """Seconds (control periods) since the tick the plan in use was planned from; 0 without the thread."""
+        if self.planning is None or self.planning.plan is None:
+            return 0.0
+        return (self.control_count - self.plan_tick) / self.control_rate_hz
+
+    def planning_ms(self) -> str:
+        """'p50 / p99 / max' of the recent planning passes in ms ('' without the thread or before a pass)."""
+        if self.planning is None or not self.planning.pass_times.times:
+            return ''
+        p50, p99, top = np.percentile(np.array(self.planning.pass_times.times) * 1e3, [50.0, 99.0, 100.0])
+        return f'{p50:.3f} / {p99:.3f} / {top:.3f}'
 
     def control_ms(self, cpu: bool = False) -> str:
         """'p50 / p99 / max' of the recent control callbacks' wall times (cpu: CPU times) in ms ('' before the
@@ -145,6 +190,11 @@ class PlannerReports(ManagedNode):
             'scan_problem': self.scan_problem,
         }
         values['control_ms'], values['control_cpu_ms'] = self.control_ms_both()
+        rate = self.control_rate()
+        # The control loop's deadlines: its achieved rate, how old the plan driven on is, how long passes take.
+        values['control_hz'] = '' if rate is None else round(rate, 2)
+        values['plan_age'] = round(self.plan_age(), 3)
+        values['planning_ms'] = self.planning_ms()
         # Sent as its bytes (msg_tools.cdr): convert.make_status's message (~0.4 ms of CPU to build and convert for
         # the middleware at 16 robots), not built. The level is one of DiagnosticStatus' byte constants.
         self.status_pub.publish(cdr.diagnostic_status_cdr(level[0], self.get_namespace(), message, '',
@@ -169,7 +219,13 @@ class PlannerReports(ManagedNode):
         else:
             odometry = Task('odometry', DiagnosticStatus.OK, 'fresh', {'topic': topic, 'lag': self.odom_lag,
                                                                        'heard': self.odom_heard})
+        rate, late = self.control_rate(), self.rate_problem()
+        level = DiagnosticStatus.ERROR if self.plan_problem else DiagnosticStatus.WARN if late else DiagnosticStatus.OK
+        control = Task('control', level, 'stalled' if self.plan_problem else 'late' if late else 'on time', {
+            'reason': self.plan_problem or late, 'rate_hz': '' if rate is None else round(rate, 2),
+            'target_hz': self.control_rate_hz, 'tick_ms': self.control_ms(), 'plan_age': round(self.plan_age(), 3),
+            'planning_ms': self.planning_ms()})
         kind = 'simulated time' if self.sim_time.active else 'wall time'
         clock = Task('clock', DiagnosticStatus.WARN if self.clock_problem else DiagnosticStatus.OK, kind,
                      {'reason': self.clock_problem, 't': t})
-        return [*tasks, odometry, clock]
+        return [*tasks, control, odometry, clock]

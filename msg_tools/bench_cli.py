@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Sequence
 
 from fastep_core import experiments, families
-from fastep_core.cli import Parser, fail, guard, positive_int, seed
+from fastep_core.cli import REALTIME_HELP, Parser, fail, guard, positive_int, realtime_factor, seed
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
 from fastep_core.random_scenarios import ALL_FAMILIES, FAMILIES, FAMILY_SEED0
@@ -62,6 +62,8 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     p.add_argument('--planner-set', nargs='+', default=[], type=_override, metavar='NAME=VALUE',
                    help='planner parameter overrides for every planner, e.g. stuck_steps=1 plan_horizon=2')
     p.add_argument('--workers', type=positive_int, default=2, help='worker processes (default 2)')
+    p.add_argument('--realtime', type=realtime_factor, nargs='?', const=1.0, default=None, metavar='FACTOR',
+                   help=REALTIME_HELP)
     p.add_argument('--seed', type=seed, default=0, help='first run seed (default 0)')
     p.add_argument('--out', type=Path, default=Path('docs'), help='output folder (default docs/)')
     p.add_argument('--report', help='report name: OUT/REPORT.md, figures/REPORT_*.png (default table2, or '
@@ -113,7 +115,8 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
     for name in scenarios:  # a bad one is a FastepError: one line before any run starts
         load_scenario(name)
     records = experiments.run_batch(scenarios, args.algorithms, args.runs or 30, args.workers, seed0=args.seed,
-                                    progress=True if args.progress else None, label=prog, overrides=overrides)
+                                    progress=True if args.progress else None, label=prog, overrides=overrides,
+                                    realtime=args.realtime)
     optimal = {s: experiments.optimal_lengths(s) for s in scenarios}
     title = 'Table 2 regenerated' if scenarios == list(experiments.TABLE2) else \
         'FAStep-Kinematic, ACO-Kinematic and the optimum'
@@ -145,7 +148,8 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
     worlds, runs = args.worlds or 30, args.runs or 1
     load_before, wall = families.load_average(), time.perf_counter()
     records = families.run_families(chosen, args.algorithms, worlds, runs, args.workers, seed0=args.seed,
-                                    progress=True if args.progress else None, label=prog, overrides=overrides)
+                                    progress=True if args.progress else None, label=prog, overrides=overrides,
+                                    realtime=args.realtime)
     rows = families.rows_of(records)
     wall = time.perf_counter() - wall
     load_after = families.load_average()
@@ -154,7 +158,9 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
              f'runs per world: {runs} (seeds {args.seed}-{args.seed + runs - 1}; deterministic planners once). '
              f'Wall time {wall:.0f} s with {args.workers} worker(s), CPU in the runs {run_cpu:.0f} s; load average '
              f'(1 min) {load_before:.2f} at the start, {load_after:.2f} at the end.' +
-             (f' Planner overrides: {", ".join(f"{k}={v:g}" for k, v in overrides.items())}.' if overrides else '')]
+             (f' Planner overrides: {", ".join(f"{k}={v:g}" for k, v in overrides.items())}.' if overrides else '') +
+             ('' if args.realtime is None else f' Realtime x{args.realtime:g}: planning latency counted '
+              '(fastep-sim --realtime), so runs differ from machine to machine.')]
     text = families.markdown_report(rows, command=command, notes=notes, worst_of=args.worst_of)
     summary = families.summarise(rows)
     try:
@@ -165,7 +171,7 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
         out_json.parent.mkdir(parents=True, exist_ok=True)
         out_json.write_text(json.dumps({
             'command': command, 'families': chosen, 'worlds': worlds, 'runs': runs, 'algorithms': args.algorithms,
-            'overrides': overrides, 'workers': args.workers, 'wall_time': wall,
+            'overrides': overrides, 'workers': args.workers, 'realtime': args.realtime, 'wall_time': wall,
             'load_average': [load_before, load_after],
             'summary': [s.to_json() for s in summary], 'rows': [r.to_json() for r in rows]}, indent=1) + '\n')
         written = [report, out_json]

@@ -27,7 +27,7 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, TYPE_CHECKING, Callable, Iterator, Sequence
 
-from fastep_core.cli import INTERRUPTED, Parser, fail, guard, positive_int, seed
+from fastep_core.cli import INTERRUPTED, REALTIME_HELP, Parser, fail, guard, positive_int, realtime_factor, seed
 from fastep_core.dynamic_world import dynamic_feature
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.scenario import Scenario, builtin_names, load_scenario
@@ -64,6 +64,8 @@ def _parser() -> argparse.ArgumentParser:
                    help='draw the first run like the paper\'s Fig. 2 (.png, .pdf or .svg)')
     p.add_argument('--mcap', type=Path, metavar='OUT.mcap',
                    help='record the first run as MCAP with the topics of a live run (msg_tools.sim_mcap)')
+    p.add_argument('--realtime', type=realtime_factor, nargs='?', const=1.0, default=None, metavar='FACTOR',
+                   help=REALTIME_HELP)
     p.add_argument('--list', action='store_true', help='list built-in scenarios and exit')
     return p
 
@@ -75,7 +77,10 @@ def _summary(run: Run) -> str:
         when = f'{r.sim_time:.1f} s' if r.sim_time is not None else '-'
         lines.append(f'seed {run.seed} {r.name}: {state}{" COLLIDED" if r.collided else ""}, '
                      f'path {r.path_length:.2f} m, time {when}, compute {r.compute_time * 1e3:.0f} ms, '
-                     f'min clearance {r.min_clearance:.2f} m, activations {r.activations} ({r.status})')
+                     f'min clearance {r.min_clearance:.2f} m, activations {r.activations} ({r.status})'
+                     + ('' if r.realtime is None else f'; realtime x{r.realtime.factor:g}: '
+                        f'{r.realtime.stale_ticks} of {r.realtime.ticks} ticks without a fresh plan, '
+                        f'longest planning latency {r.realtime.max_latency * 1e3:.0f} ms'))
     return '\n'.join(lines)
 
 
@@ -186,7 +191,8 @@ def _run(argv: Sequence[str] | None) -> int:
                 for run_seed in range(args.seed, args.seed + args.runs):
                     stops.check()
                     run = simulate(scenario, args.algorithm, run_seed,
-                                   observer=_observing(recorder if run_seed == args.seed else None, stops))
+                                   observer=_observing(recorder if run_seed == args.seed else None, stops),
+                                   realtime=args.realtime)
                     if json_runs is not None:
                         json_runs.add(run)   # before the summary: a run printed is a run in the file
                     print(_summary(run), flush=True)

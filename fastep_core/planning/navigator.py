@@ -91,6 +91,7 @@ class Navigator:
         self.reference: OptimalPath | None = None  # the exact shortest path, computed on the goal's first tick
         self.path_world = world                   # the world the last exact_path was planned in
         self._target: FloatArray | None = None    # what the controller steers to (identity tells a new one)
+        self.driven: FloatArray | None = None     # the target this tick's command was driven to (drive_to), if any
         self._last_t: float | None = None
         self._path_checked = False                # has the goal been checked for a path
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
@@ -182,6 +183,9 @@ class Navigator:
         self.detector.forget()   # answers cached with the old sensing range and margin
         if controller is not None:
             self.controller = controller
+            # The new controller must hear what the robot got: told nothing, a diff_drive controller's ramp started
+            # from 0 every tick (0.13 m/s at 20 Hz after any parameter change).
+            self._applied = getattr(controller, 'applied', None)
             self._target = None   # drive_to resets a controller when its target is new
 
     def restart_clock(self, t: float) -> None:
@@ -237,6 +241,7 @@ class Navigator:
         """The command of one control tick (`update` without telling the controller)."""
         stop = np.zeros(2)
         self.yield_kind = ''   # what yielding to movers did this tick (planning/yielding.py), '' for nothing
+        self.driven = None
         self._ticks += 1
         dt = self.params.dt if self._last_t is None or t <= self._last_t else t - self._last_t
         self._last_t = t
@@ -305,6 +310,7 @@ class Navigator:
             self.controller.reset(state, target)
             self._target = target
         command = self.controller.command(state, target, dt)
+        self.driven = target
         # Movers: slow down, wait or get out of the way over the time ahead (planning/yielding.py).
         yielded = self.yield_to_movers(state, command, dt, others)
         self.yield_kind = yielded.kind

@@ -21,9 +21,12 @@ from fastep_testing.published import keep_published
 from msg_tools import convert, frames
 
 
+# Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
+SYNCHRONOUS = {'planning_thread': False}
+
 def make(cls: type, context: Any, namespace: str = '', **params: Any) -> Any:
     return cls(context=context, namespace=namespace,
-               parameter_overrides=[Parameter(k, value=v) for k, v in params.items()])
+               parameter_overrides=[Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items()])
 
 
 def odometry(x: float, y: float, yaw: float = 0.0, frame: str = 'r1/odom') -> Odometry:

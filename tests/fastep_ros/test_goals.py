@@ -51,9 +51,12 @@ def test_a_publisher_that_comes_back_is_caught_up_with_again() -> None:
 
 # ----------------------------------------------------------------------------------------------- refused goals
 
+# Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
+SYNCHRONOUS = {'planning_thread': False}
+
 def make(context: Any, **params: Any) -> PlannerNode:
     overrides = [Parameter('workspace', value=[0.0, 0.0, 10.0, 10.0]),
-                 *(Parameter(k, value=v) for k, v in params.items())]
+                 *(Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items())]
     return PlannerNode(context=context, parameter_overrides=overrides)
 
 

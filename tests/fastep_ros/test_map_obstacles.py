@@ -22,8 +22,11 @@ ROOM = World.from_obstacles([0, 0, 12, 10], [Segment((6.0, 0.0), (6.0, 4.2)), Se
                                              Circle((9.0, 7.0), 0.8)])
 
 
+# Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
+SYNCHRONOUS = {'planning_thread': False}
+
 def make(context: Any, **params: Any) -> PlannerNode:
-    overrides = [Parameter(k, value=v) for k, v in params.items()]
+    overrides = [Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items()]
     return PlannerNode(context=context, parameter_overrides=overrides)
 
 

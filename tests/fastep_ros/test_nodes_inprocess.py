@@ -30,8 +30,11 @@ from fastep_testing.published import keep_published
 from msg_tools import convert
 
 
+# Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
+SYNCHRONOUS = {'planning_thread': False}
+
 def make(cls: type, context: Any, **params: Any) -> Any:
-    overrides = [Parameter(k, value=v) for k, v in params.items()]
+    overrides = [Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items()]
     return cls(context=context, parameter_overrides=overrides)
 
 
@@ -521,7 +524,7 @@ def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: A
         assert list(values) == [kv.key for kv in status.values] == [
             'reason', 'activations', 'escapes', 'manoeuvres', 'waypoint', 'goal', 'cost', 'others', 'algorithm', 't',
             'since', 'odom_lag', 'obstacles', 'cmd_vel_readers', 'odom_heard', 'scans', 'tracks', 'scan_problem',
-            'control_ms', 'control_cpu_ms']
+            'control_ms', 'control_cpu_ms', 'control_hz', 'plan_age', 'planning_ms']
         assert (values['reason'], values['goal'], values['algorithm'], values['obstacles']) == \
             (reason, '8,8', node.algorithm, '1')
         assert values['control_ms'] == '' and values['odom_heard'] == '1'   # the tick under way is not counted yet

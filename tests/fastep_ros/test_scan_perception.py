@@ -22,9 +22,12 @@ KNOWN = Circle((10.0, 16.0), 1.0)     # on the map
 UNKNOWN = Circle((12.0, 10.0), 1.5)   # not on the map, on the straight run from (3, 10) to (21, 10)
 
 
+# Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
+SYNCHRONOUS = {'planning_thread': False}
+
 def make(context: Any, **params: Any) -> PlannerNode:
     overrides = [Parameter('workspace', value=[0.0, 0.0, 24.0, 20.0]), Parameter('use_sim_time', value=True),
-                 *(Parameter(k, value=v) for k, v in params.items())]
+                 *(Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items())]
     return PlannerNode(context=context, parameter_overrides=overrides)
 
 

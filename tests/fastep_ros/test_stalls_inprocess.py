@@ -101,7 +101,8 @@ class Bench:
     def __init__(self, context: Any, stalls: Sequence[Stall] = ()) -> None:
         self.stalls = tuple(stalls)
         self.now_ms = 0
-        overrides = {**FAST, 'robot_radius': RADIUS, 'seed': 0}
+        # The bench's clock decides when each node runs: every control tick plans (no thread running beside it).
+        overrides = {**FAST, 'robot_radius': RADIUS, 'seed': 0, 'planning_thread': False}
         self.planner = PlannerNode(context=context,
                                    parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()])
         self.plant = PlantNode(context=context, parameter_overrides=[Parameter('start', value=list(START))])
@@ -232,7 +233,8 @@ def test_no_command_decided_on_stale_odometry_drives_the_robot_into_an_obstacle(
 
 def test_planner_acts_on_odometry_stamped_within_max_extrapolation_only(context: Any) -> None:
     planner = PlannerNode(context=context,
-                          parameter_overrides=[Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0])])
+                          parameter_overrides=[Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0]),
+                                               Parameter('planning_thread', value=False)])
     now = [50.0]
     planner.now = lambda: now[0]   # type: ignore[method-assign]  # the test's clock
     try:

@@ -1,0 +1,165 @@
+"""The control loop's bounded tick: drive on the latest plan while planning runs elsewhere.
+
+A planning pass is one `Navigator.update` on a snapshot of the robot's state and the robots around it: the
+algorithm, exact paths and routes, escapes, manoeuvres, the swarm. It can take seconds (an exact path across a big
+map, a swarm over its budget), and a robot's clock does not stop meanwhile. `ControlTick.command` turns the
+latest `Plan` into this tick's command from the robot's current state, in well under a millisecond: the
+controller toward the plan's target (or the plan's own command: backing up, a manoeuvre's arc, standing still),
+then yielding to movers and the guard against the newest robots and the plan's world, as `Navigator.drive_to`
+does. Nav2 splits its planner and controller servers for the same reason.
+
+Used by the planner node's control timer while a thread plans (fastep_ros/planner.py) and by `fastep-sim
+--realtime` (fastep_core/simulator.py: `PlanLatency` hands a pass's plan to the control loop only after the wall
+time it took, times a factor). Lock-step runs use neither: the navigator's own command is the tick's, as before.
+"""
+
+from __future__ import annotations
+
+import copy
+import math
+from dataclasses import dataclass
+from typing import Callable, Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.planning.guard import Guard
+from fastep_core.planning.navigator import Mode, Navigator
+from fastep_core.planning.others import OtherRobot
+from fastep_core.world import World
+
+__all__ = ['ControlTick', 'Plan', 'PlanLatency']
+
+FloatArray = NDArray[np.float64]
+UNDER_WAY = (Mode.KINEMATIC, Mode.AVOIDING)
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What a planning pass leaves for the control loop until the next pass ends."""
+
+    t: float                          # the time of the state it was planned from
+    target: FloatArray | None         # what the controller drives to (drive_to's target); None: follow `command`
+    command: FloatArray               # the pass's own command: held while there is no target
+    world: World                      # the world it was planned in (the guard checks against it)
+    movers: tuple[OtherRobot, ...]    # movers the robot's own perception tracked, as of t
+    mode: Mode
+    reason: str
+    cost: float = 0.0
+
+    @classmethod
+    def of(cls, navigator: Navigator, t: float, command: FloatArray,
+           movers: Sequence[OtherRobot] = ()) -> Plan:
+        """The plan a pass of `navigator` at time t left, `command` being what its update returned."""
+        return cls(t, navigator.driven, np.array(command, dtype=float), navigator.world, tuple(movers),
+                   navigator.mode, navigator.reason, float(navigator.cost))
+
+    @property
+    def under_way(self) -> bool:
+        return self.mode in UNDER_WAY
+
+    def movers_at(self, t: float) -> list[OtherRobot]:
+        """The tracked movers predicted to t along their velocities (a plan can be seconds old)."""
+        ahead = max(0.0, t - self.t)
+        return [OtherRobot(m.name, (m.position[0] + m.velocity[0] * ahead, m.position[1] + m.velocity[1] * ahead),
+                           m.velocity, m.radius, m.mover) for m in self.movers]
+
+
+class ControlTick:
+    """The per-tick part of a navigator, with its own controller, guard and yielding (the pass runs the originals,
+    possibly on another thread)."""
+
+    def __init__(self, navigator: Navigator) -> None:
+        self.navigator = navigator
+        self.retune()
+
+    def retune(self) -> None:
+        """Take the navigator's parameters and controller afresh (after Navigator.retune)."""
+        nav = self.navigator
+        self.model = nav.model
+        self.controller = copy.deepcopy(nav.controller)
+        self._applied: Callable[[FloatArray], None] | None = getattr(self.controller, 'applied', None)
+        self.guard = Guard(nav.model, nav.radius, nav.params)
+        self.yielding = nav._yielding(nav.params)
+        self._target: FloatArray | None = None
+        self.reason = ''        # why this tick's command differs from the plan's ('' when it does not)
+
+    def command(self, t: float, state: FloatArray, others: Sequence[OtherRobot], plan: Plan | None,
+                dt: float) -> FloatArray:
+        """This tick's command on `plan` (zeros without one, or when it is not under way)."""
+        stop = np.zeros(2)
+        self.reason = ''
+        state = np.asarray(state, dtype=float)
+        if plan is None or not plan.under_way or not all(map(math.isfinite, state)):
+            self._tell(stop)
+            return stop
+        others = [*others, *plan.movers_at(t)]
+        # Surfaces known only as well as the robot's scans show them (set by the pass's perception).
+        self.guard.obstacle_margin = self.navigator.guard_check.obstacle_margin
+
+        def allowed(c: FloatArray) -> bool:
+            return self.guard.check(plan.world, state, c, dt, others) is c
+
+        target = plan.target
+        if target is not None:
+            if target is not self._target:
+                self.controller.reset(state, target)
+                self._target = target
+            command = self.controller.command(state, target, dt)
+        else:
+            self._target = None
+            command = plan.command
+        standing = not any(c != 0.0 for c in command.tolist())
+        yielded = self.yielding.check(state, command, others, allowed)
+        if yielded.kind and (not standing or yielded.kind == 'evading'):
+            command, self.reason = yielded.command, yielded.reason
+        guarded = self.guard.check(plan.world, state, command, dt, others)
+        if guarded is not command:
+            self.reason = self.guard.reason
+        self._tell(guarded)
+        return guarded
+
+    def _tell(self, command: FloatArray) -> None:
+        if self._applied is not None:
+            self._applied(command)
+
+
+@dataclass
+class PlanLatency:
+    """fastep-sim --realtime: a pass's plan reaches the control loop only once the wall time the pass took, times
+    `factor`, has passed on the simulated clock (at the first tick after its start, at the earliest); meanwhile the
+    robot drives on the plan it has, as the planner node does while its thread plans."""
+
+    factor: float
+    plan: Plan | None = None          # the plan the control loop drives on
+    pending: Plan | None = None       # a pass's plan not yet available ...
+    ready_at: float = math.inf        # ... from this simulated time
+    ticks: int = 0                    # control ticks
+    stale_ticks: int = 0              # control ticks with no plan newer than the last tick's
+    passes: int = 0
+    max_latency: float = 0.0          # the longest pass, in seconds of the simulated robot (wall x factor)
+
+    def take(self, t: float) -> bool:
+        """At the control tick of time t: adopt the pending plan if it is ready; True if the plan is fresh."""
+        self.ticks += 1
+        if self.pending is not None and self.ready_at <= t + 1e-9:
+            self.plan, self.pending = self.pending, None
+            return True
+        self.stale_ticks += 1
+        return False
+
+    @property
+    def idle(self) -> bool:
+        """No pass under way: the next one starts on this tick's state."""
+        return self.pending is None
+
+    def submit(self, plan: Plan, t: float, wall: float) -> None:
+        """A pass started at t that took `wall` seconds of wall time left `plan`."""
+        latency = wall * self.factor
+        self.pending, self.ready_at = plan, t + latency
+        self.passes += 1
+        self.max_latency = max(self.max_latency, latency)
+
+    def to_json(self) -> dict[str, object]:
+        return {'factor': self.factor, 'ticks': self.ticks, 'stale_ticks': self.stale_ticks, 'passes': self.passes,
+                'max_plan_latency': round(self.max_latency, 6)}

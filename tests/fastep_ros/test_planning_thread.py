@@ -1,0 +1,198 @@
+"""The planner node's planning thread (fastep_ros/planning_thread.py): the control loop never waits for a pass."""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any, Callable
+
+import numpy as np
+from diagnostic_msgs.msg import DiagnosticStatus
+from rclpy.parameter import Parameter
+
+from fastep_core.geometry import Circle
+from fastep_ros.planner import PlannerNode
+from fastep_ros.planning_thread import PlanningThread
+from msg_tools import convert
+
+WAIT = 30.0   # s: what a test waits at most for the thread (only a machine under heavy load comes near)
+
+
+def wait_for(condition: Callable[[], bool], what: str) -> None:
+    deadline = time.monotonic() + WAIT
+    while not condition():
+        assert time.monotonic() < deadline, f'{what}: not within {WAIT:g} s'
+        time.sleep(0.002)
+
+
+class Gate:
+    """A pass that waits until the test opens it (and says when it has started)."""
+
+    def __init__(self) -> None:
+        self.open, self.entered = threading.Event(), threading.Event()
+
+    def wait(self) -> None:
+        self.entered.set()
+        assert self.open.wait(WAIT), 'the gate was never opened'
+
+
+def test_a_change_runs_at_once_while_no_pass_is_under_way() -> None:
+    thread: PlanningThread[int, int] = PlanningThread(lambda snapshot: snapshot, print)
+    try:
+        done: list[str] = []
+        thread.call(lambda: done.append('now'))
+        assert done == ['now']   # no pass under way: on the caller's thread, before call returns
+    finally:
+        thread.stop()
+
+
+def test_changes_wait_for_the_pass_under_way_and_only_the_newest_snapshot_is_planned() -> None:
+    gate, seen, done = Gate(), [], []
+
+    def plan(snapshot: int) -> int:
+        seen.append(snapshot)
+        if snapshot == 1:
+            gate.wait()
+        return snapshot * 10
+
+    errors: list[str] = []
+    thread: PlanningThread[int, int] = PlanningThread(plan, errors.append)
+    try:
+        thread.submit(1)
+        assert gate.entered.wait(WAIT)
+        assert thread.busy_for > 0.0
+        thread.call(lambda: done.append('goal'))
+        thread.call(lambda: done.append('world'))
+        thread.submit(2)
+        thread.submit(3)   # replaces 2: a pass plans from the newest state only
+        assert done == [] and thread.plan is None   # nothing ran beside the pass, and the caller did not wait
+        gate.open.set()
+        wait_for(lambda: thread.plan == 30, 'the pass on the newest snapshot')
+        assert seen == [1, 3] and done == ['goal', 'world'] and errors == []
+        assert thread.passes == 2 and len(thread.pass_times.times) == 2
+    finally:
+        gate.open.set()
+        thread.stop()
+
+
+def test_a_fault_in_a_pass_is_logged_and_the_thread_plans_on() -> None:
+    errors: list[str] = []
+
+    def plan(snapshot: int) -> int:
+        if snapshot == 1:
+            raise RuntimeError('broken pass')
+        return snapshot
+
+    thread: PlanningThread[int, int] = PlanningThread(plan, errors.append)
+    try:
+        thread.submit(1)
+        wait_for(lambda: thread.passes == 1, 'the faulty pass')
+        thread.submit(2)
+        wait_for(lambda: thread.plan == 2, 'the next pass')
+        assert len(errors) == 1 and 'broken pass' in errors[0]
+    finally:
+        thread.stop()
+
+
+# ------------------------------------------------------------------------------------------------ the node
+
+def make(context: Any, **params: Any) -> PlannerNode:
+    overrides = {'workspace': [0.0, 0.0, 20.0, 20.0], **params}
+    return PlannerNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()])
+
+
+def start_driving(node: PlannerNode) -> None:
+    node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 16.0), 1.0)]))
+    node.on_goal(convert.point_to_pose_stamped((18.0, 10.0)))
+    node.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(node.now())))
+
+
+def test_the_control_tick_drives_on_the_last_plan_while_a_pass_is_stuck_then_stops_when_it_is_too_old(
+        context: Any) -> None:
+    node = make(context, max_plan_age=0.2)   # 4 control periods at 20 Hz
+    try:
+        assert node.planning is not None
+        start_driving(node)
+        node.on_control()
+        wait_for(lambda: node.planning is not None and node.planning.plan is not None, 'the first plan')
+        node.on_control()
+        assert node.last_command[0] > 0.0   # driving east to the goal on that plan
+
+        nav = node.navigator
+        assert nav is not None
+        gate, update = Gate(), nav.update
+
+        def stuck(*args: Any) -> np.ndarray:
+            gate.wait()
+            return update(*args)
+        nav.update = stuck   # type: ignore[method-assign]  # a pass that takes as long as the test wants
+        node.on_control()
+        assert gate.entered.wait(WAIT)
+        # The pass is stuck: control ticks go on, on the plan they have, and return.
+        ticks = 0
+        while node.status()[0] != DiagnosticStatus.ERROR:
+            node.on_control()
+            ticks += 1
+            if ticks <= 2:   # the plan in use was planned from tick 1, 2 or 3: too old from tick 6 on
+                assert node.last_command[0] > 0.0, ticks
+            assert ticks < 10
+        level, message, reason = node.status()
+        assert message == 'stale' and reason.startswith('planning stalled') and not node.last_command.any()
+        control = {task.task: task for task in node.diagnostic_tasks()}['control']
+        assert control.level == DiagnosticStatus.ERROR and control.message == 'stalled'
+        gate.open.set()
+        wait_for(lambda: node.planning is not None and node.planning.busy_for == 0.0, 'the stuck pass to end')
+        node.on_control()
+        wait_for(lambda: node.planning is not None and node.plan_age() <= 0.05, 'a fresh plan')
+        node.on_control()
+        assert node.status()[0] == DiagnosticStatus.OK and node.last_command[0] > 0.0
+    finally:
+        gate.open.set()
+        node.destroy_node()
+
+
+def test_a_goal_given_while_a_pass_runs_is_taken_after_it(context: Any) -> None:
+    node = make(context)
+    try:
+        start_driving(node)
+        nav = node.navigator
+        assert nav is not None
+        gate, update = Gate(), nav.update
+
+        def stuck(*args: Any) -> np.ndarray:
+            gate.wait()
+            return update(*args)
+        nav.update = stuck   # type: ignore[method-assign]  # a pass that takes as long as the test wants
+        node.on_control()
+        assert gate.entered.wait(WAIT)
+        node.on_goal(convert.point_to_pose_stamped((18.0, 4.0)))
+        assert nav.goal is not None and tuple(nav.goal) == (18.0, 10.0)   # not under the pass's feet
+        gate.open.set()
+        wait_for(lambda: nav.goal is not None and tuple(nav.goal) == (18.0, 4.0), 'the new goal')
+    finally:
+        gate.open.set()
+        node.destroy_node()
+
+
+def test_status_and_diagnostics_carry_the_control_loops_deadlines(context: Any) -> None:
+    node = make(context)
+    now = [100.0]
+    node.now = lambda: now[0]   # type: ignore[method-assign]  # the test's clock
+    try:
+        start_driving(node)
+        for _ in range(60):   # 3 s at 20 Hz
+            node.on_control()
+            now[0] += 0.05
+        assert node.control_rate() is not None and abs((node.control_rate() or 0.0) - 20.0) < 1e-6
+        control = {task.task: task for task in node.diagnostic_tasks()}['control']
+        assert control.level == DiagnosticStatus.OK and control.message == 'on time'
+        for _ in range(60):   # a loop that runs at 10 Hz where 20 are asked for
+            node.on_control()
+            now[0] += 0.1
+        assert abs((node.control_rate() or 0.0) - 10.0) < 1e-6
+        assert node.rate_problem().startswith('control loop missed its rate: 10.0 Hz of 20 Hz')
+        control = {task.task: task for task in node.diagnostic_tasks()}['control']
+        assert control.level == DiagnosticStatus.WARN and control.message == 'late'
+        assert {'rate_hz', 'target_hz', 'tick_ms', 'plan_age', 'planning_ms'} <= set(control.values)
+    finally:
+        node.destroy_node()
