@@ -80,10 +80,20 @@ class PlannerParams:
     # Nav2's TurtleBot3 DWB acceleration limits (2.5 m/s^2, 3.2 rad/s^2) and a TurtleBot3's turn rate (1.8-2.8).
     turn_gain: float = _p(2.0, 'diff_drive turn gain k2: omega = k2 alpha + ... (1/s)', 1e-6)
     max_turn_rate: float = _p(2.0, 'diff_drive turn-rate limit |omega| (rad/s); 0 means unlimited', 0.0)
-    max_acceleration: float = _p(2.5, 'diff_drive acceleration and braking limit |dv/dt| (m/s^2); 0 means '
-                                      'unlimited', 0.0)
-    max_turn_acceleration: float = _p(3.2, 'diff_drive turn acceleration limit |domega/dt| (rad/s^2); 0 means '
-                                           'unlimited', 0.0)
+    max_acceleration: float = _p(2.5, 'acceleration and braking limit |dv/dt| of the diff_drive controller and of '
+                                      'the velocity smoother (planning/smoother.py; a point mass: of its velocity '
+                                      'vector) (m/s^2); 0 means unlimited', 0.0)
+    max_turn_acceleration: float = _p(3.2, 'turn acceleration limit |domega/dt| of the diff_drive controller and of '
+                                           'the velocity smoother (rad/s^2); 0 means unlimited', 0.0)
+    # The velocity smoother, the last stage before cmd_vel (planning/smoother.py), and backing up
+    # (planning/recovery.py). The default reverse speed is the backing-up recovery's (BACKUP_SPEED).
+    max_reverse_speed: float = _p(0.25, 'a steered robot (diff_drive, tractor_trailer) never reverses faster than '
+                                        'this: the velocity smoother caps v >= -max_reverse_speed, and the backing-up '
+                                        'recovery moves at 0.25 m/s or this if lower (m/s); 0 means unlimited',
+                                  0.0)
+    emergency_deceleration: float = _p(5.0, 'the guard\'s emergency stop brakes at this (m/s^2), every other '
+                                             'command at max_acceleration: at least max_acceleration (default twice '
+                                             'its default); 0: the stop is immediate', 0.0)
     min_approach_speed: float = _p(0.3, 'the kinematic controllers (eq. 12 / 13) drive at least this fast toward a '
                                         'waypoint or the goal, capped at max_speed and at the distance left per '
                                         'tick, so a robot arrives in bounded time where speed = gain x distance '
@@ -97,6 +107,11 @@ class PlannerParams:
     step_radius: float = _p(2.0, 'largest distance from the robot to a planned waypoint (m)', 0.05)
     clearance_margin: float = _p(0.2, 'extra clearance beyond the robot radius for planned waypoints (m)', 0.0)
     goal_tolerance: float = _p(0.1, 'the goal counts as reached within this distance (m)', 1e-4)
+    yaw_goal_tolerance: float = _p(0.25, 'a goal with a heading (diff_drive) counts as reached once the robot, within '
+                                         'goal_tolerance of it, faces it within this angle (rad; Nav2\'s default)',
+                                   1e-3, 3.1416)
+    goal_heading: int = _p(1, 'turn in place to a goal\'s heading once at its position (robots that turn in '
+                              'place): 1; 0: a goal\'s heading is ignored', 0, 1)
     waypoint_tolerance: float = _p(0.3, 'a waypoint counts as reached within this distance (m)', 1e-4)
     dt: float = _p(0.05, 'control and integration step (s)', 1e-4, 10.0)
     progress_distance: float = _p(0.5, 'progress checker: come this much closer to the goal ... (m)', 0.0)
@@ -158,6 +173,10 @@ class PlannerParams:
                 raise ParameterError(f'planner parameter {f.name} must be an integer, got {_show(value)}')
             if not low <= value <= high:
                 raise ParameterError(f'planner parameter {f.name}={_show(value)} is outside [{low}, {high}]')
+        if 0.0 < self.emergency_deceleration < self.max_acceleration:
+            raise ParameterError(f'planner parameter emergency_deceleration={self.emergency_deceleration:g} is below '
+                                 f'max_acceleration={self.max_acceleration:g}: the emergency stop brakes at least as '
+                                 f'hard as any command (set both at once, or 0 for an immediate stop)')
 
     @classmethod
     def names(cls) -> tuple[str, ...]:

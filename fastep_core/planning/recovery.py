@@ -11,32 +11,54 @@
   otherwise, or when none is found, it backs up for BACKUP_TIME seconds (Nav2's backup recovery):
   a holonomic robot straight away from what is nearest; a steered one the move (back or forward, straight or at
   full lock) that gains the most room without folding its trailer. The guard still checks every tick of it,
-  and the recovery ends where the guard stops it.
+  and the recovery ends where the guard stops it. It moves at BACKUP_SPEED, or max_reverse_speed when that is
+  lower (`backup_speed`).
+- Evidence (issue 30): a robot never reverses into space it has no evidence is free. `reverse_free` sweeps the
+  robot's disc along a command's path and checks it against the map (obstacles, other robots, the workspace) and,
+  for a robot with a laser, against what recent scans saw (`SeenFree`: the space their beams passed through; a
+  270-degree laser is blind in the rear 90 degrees, so only where an earlier scan looked counts). BackUp given
+  such a check (`free`) moves only while the next REVERSE_HORIZON seconds of its move pass it.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
+from dataclasses import dataclass
 from typing import Callable, Sequence
 
 import numpy as np
-from numpy.typing import NDArray
+from numpy.typing import ArrayLike, NDArray
 
+from fastep_core.geometry import point_segment_distance
 from fastep_core.kinematics.model import RobotModel
 from fastep_core.kinematics.tractor_trailer import hitch_angle
 from fastep_core.planning.guard import Stop
 from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.params import PlannerParams
+from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, Scan
 from fastep_core.world import World
 
-__all__ = ['BACKUP_SPEED', 'BACKUP_TIME', 'HOLD_BEFORE_STEP', 'HOLD_RELEASE', 'MAX_RECOVERY_HITCH', 'BackUp',
-           'StopTimer', 'free_room']
+__all__ = ['BACKUP_SPEED', 'BACKUP_TIME', 'HOLD_BEFORE_STEP', 'HOLD_RELEASE', 'MAX_RECOVERY_HITCH',
+           'REVERSE_HORIZON', 'BackUp', 'RecentScans', 'SeenFree', 'StopTimer', 'backup_speed', 'free_room',
+           'reverse_free', 'swept_centres']
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+BoolArray = NDArray[np.bool_]
 HOLD_BEFORE_STEP = 1.0    # seconds a robot waits for another before stepping around it
 HOLD_RELEASE = 0.25       # metres from where the guard first stopped it: until then the robot is still stopped
 BACKUP_SPEED = 0.25       # m/s of the backing-up recovery ...
 BACKUP_TIME = 4.0         # ... for this many seconds (1 m)
 MAX_RECOVERY_HITCH = 1.0  # rad: a recovery move may not fold the trailer beyond this (or beyond where it is)
+REVERSE_HORIZON = 1.0     # s: backing up with evidence goes on while this much of its move ahead is seen free
+
+# reverse_free checks the swept disc at its centre and on rings of half and all its radius (8 and 16 points).
+_RING_ANGLES = [np.linspace(0.0, 2.0 * math.pi, n, endpoint=False) for n in (8, 16)]
+FOOTPRINT: FloatArray = np.concatenate([np.zeros((1, 2)),
+                                        0.5 * np.column_stack([np.cos(_RING_ANGLES[0]), np.sin(_RING_ANGLES[0])]),
+                                        np.column_stack([np.cos(_RING_ANGLES[1]), np.sin(_RING_ANGLES[1])])])
+"""Points of the unit disc at which reverse_free checks the robot's disc (times its radius) about each centre."""
 
 
 class StopTimer:
@@ -83,11 +105,153 @@ def free_room(world: World, points: FloatArray, others: Sequence[OtherRobot]) ->
     return room
 
 
+def backup_speed(params: PlannerParams) -> float:
+    """The backing-up recovery's speed: BACKUP_SPEED, or max_reverse_speed when that is lower (0: unlimited)."""
+    cap = params.max_reverse_speed
+    return min(BACKUP_SPEED, cap) if cap > 0.0 else BACKUP_SPEED
+
+
+@dataclass(frozen=True)
+class SeenFree:
+    """The free space laser scans saw: each beam from its scan's origin out to what it hit, or to range_max where
+    it hit nothing. All scans in stacked arrays (k scans, n beams in all), so a query is one numpy computation."""
+
+    origins: FloatArray      # (k, 2) where each scan was taken (map frame)
+    first: FloatArray        # (k,) the map-frame angle of each scan's first beam
+    increment: FloatArray    # (k,) the angle between its beams (> 0)
+    beams: IntArray          # (k,) how many beams it has
+    full_turn: BoolArray     # (k,) whether they go all the way round
+    offset: IntArray         # (k,) where its beams start in `reach`
+    reach: FloatArray        # (n,) how far each beam saw free space (m)
+
+    @classmethod
+    def of_scans(cls, scans: Sequence[tuple[Scan, ArrayLike]]) -> SeenFree:
+        """From (scan, pose of the scanner (x, y, heading) when it was taken) pairs. A reading of +inf (no return)
+        saw free space to range_max; NaN, -inf and readings below range_min saw none. Scans with no beams or no
+        positive increment are left out."""
+        kept = [(scan, np.asarray(pose, dtype=float)) for scan, pose in scans
+                if len(scan.ranges) and scan.angle_increment > 0.0 and math.isfinite(scan.angle_increment)]
+        beams = np.array([len(scan.ranges) for scan, _ in kept], dtype=np.int64)
+        increment = np.array([scan.angle_increment for scan, _ in kept], dtype=float)
+        reach = [np.where(np.isposinf(scan.ranges), scan.range_max,
+                          np.where(np.isnan(scan.ranges) | (scan.ranges < scan.range_min), 0.0,
+                                   np.minimum(scan.ranges, scan.range_max))) for scan, _ in kept]
+        return cls(origins=np.array([pose[:2] for _, pose in kept], dtype=float).reshape(-1, 2),
+                   first=np.array([pose[2] + scan.angle_min for scan, pose in kept], dtype=float),
+                   increment=increment, beams=beams,
+                   full_turn=increment * beams >= 2.0 * math.pi - FULL_TURN_TOLERANCE,
+                   offset=(np.cumsum(beams) - beams).astype(np.int64),
+                   reach=np.concatenate(reach).astype(float) if reach else np.zeros(0))
+
+    def covers(self, points: ArrayLike) -> BoolArray:
+        """Which points (m, 2) some scan saw free: within its angle, and nearer its origin than both beams on either
+        side of the point's bearing reach (the fan between two beams counts as seen, as a costmap clears it)."""
+        p = np.asarray(points, dtype=float).reshape(-1, 2)
+        if not len(self.reach) or not len(p):
+            return np.zeros(len(p), dtype=bool)
+        dx = p[:, None, 0] - self.origins[:, 0]                      # (m, k)
+        dy = p[:, None, 1] - self.origins[:, 1]
+        along = np.mod(np.arctan2(dy, dx) - self.first, 2.0 * math.pi) / self.increment   # in beams from the first
+        last = self.beams - 1
+        inside = self.full_turn | (along <= last + 1e-9)
+        below = np.minimum(np.floor(along), last).astype(np.int64)
+        above = np.where(self.full_turn, (below + 1) % self.beams, np.minimum(below + 1, last))
+        below = np.where(self.full_turn, below % self.beams, below)
+        reach = np.minimum(self.reach[self.offset + below], self.reach[self.offset + above])
+        seen: BoolArray = (inside & (np.hypot(dx, dy) <= reach)).any(axis=1)
+        return seen
+
+
+class RecentScans:
+    """The scans of the last `keep` seconds (by their time stamps) and the free space they saw."""
+
+    def __init__(self, keep: float = 5.0) -> None:
+        self.keep = keep
+        self.scans: deque[tuple[Scan, FloatArray]] = deque()
+        self._seen: SeenFree | None = None
+
+    def add(self, scan: Scan, pose: ArrayLike) -> None:
+        """A scan taken from pose (x, y, heading); scans older than `keep` before it are forgotten."""
+        self.scans.append((scan, np.array(pose, dtype=float)))
+        while self.scans and self.scans[0][0].time < scan.time - self.keep:
+            self.scans.popleft()
+        self._seen = None
+
+    def seen(self) -> SeenFree:
+        if self._seen is None:
+            self._seen = SeenFree.of_scans(self.scans)
+        return self._seen
+
+
+def swept_centres(model: RobotModel, state: FloatArray, command: FloatArray, horizon: float,
+                  spacing: float) -> FloatArray:
+    """The reference point's path (n, 2) under `command` held for `horizon` seconds, at most `spacing` apart.
+
+    In closed form: a holonomic model's straight run; for a steered one the unicycle's arc (diff_drive exactly)
+    plus a tractor-trailer's lateral term (L omega / 2 across its heading: (L / 2) (cos, sin) of the heading's
+    change), the exact solution of what its integrate steps with RK4.
+    """
+    c = np.asarray(command, dtype=float)
+    if model.holonomic:
+        length = math.hypot(c[0], c[1]) * horizon
+    else:
+        lever = 0.5 * float(getattr(model, 'length', 0.0)) if model.trailer else 0.0
+        length = (abs(c[0]) + lever * abs(c[1])) * horizon
+    t = np.linspace(0.0, horizon, int(min(max(math.ceil(length / spacing), 1), 10_000)) + 1)
+    x0, y0 = float(state[0]), float(state[1])
+    if model.holonomic:
+        return np.column_stack([x0 + c[0] * t, y0 + c[1] * t])
+    theta, turn = float(state[2]), c[1] * t
+    chord = c[0] * t * np.sinc(turn / (2.0 * math.pi))   # np.sinc(x) = sin(pi x) / (pi x): sinc of turn / 2
+    middle = theta + 0.5 * turn
+    x = x0 + chord * np.cos(middle) + lever * (np.cos(theta + turn) - math.cos(theta))
+    y = y0 + chord * np.sin(middle) + lever * (np.sin(theta + turn) - math.sin(theta))
+    return np.column_stack([x, y])
+
+
+def reverse_free(model: RobotModel, state: FloatArray, radius: float, command: FloatArray, horizon: float,
+                 world: World, seen: SeenFree | None = None, others: Sequence[OtherRobot] = (),
+                 margin: float = 0.0) -> bool:
+    """May the robot drive `command` (a reverse move, or any) for `horizon` seconds? Its disc of `radius` swept
+    along the path must keep radius + margin from every obstacle surface, other robot and the workspace border
+    (or, where it is nearer already, come no nearer), and, given `seen`, lie in the free space recent scans saw
+    (the robot's own disc where it stands counts as free). Without `seen` (no laser) the map alone decides."""
+    state = np.asarray(state, dtype=float)
+    c = np.asarray(command, dtype=float)
+    if not (np.isfinite(state).all() and np.isfinite(c).all() and horizon >= 0.0):
+        return False
+    keep = radius + margin
+    here = state[:2]
+    centres = swept_centres(model, state, c, horizon, max(radius, 0.01) / 4.0)
+    a, b = centres[:-1], centres[1:]
+    # The map: each stretch between two centres is a capsule of the disc; near already, no nearer than now.
+    if len(world.obstacles):
+        now = float(world.obstacles.clearance(here))
+        if float(world.obstacles.path_clearance(a, b).min()) < min(keep, now) - 1e-9:
+            return False
+    if float(world.wall_distance(centres).min()) < min(keep, float(world.wall_distance(here))) - 1e-9:
+        return False
+    if len(others):
+        where = np.array([o.position for o in others], dtype=float)
+        radii = np.array([o.radius for o in others], dtype=float)
+        gap = point_segment_distance(where[:, None, :], a, b).min(axis=1) - radii
+        now_gap = np.hypot(*(where - here).T) - radii
+        if (gap < np.minimum(keep, now_gap) - 1e-9).any():
+            return False
+    if seen is None:
+        return True
+    # The evidence: the disc's centre and rings about every centre of the path, in space the beams passed.
+    points = (centres[:, None, :] + keep * FOOTPRINT[None]).reshape(-1, 2)
+    standing = np.hypot(*(points - here).T) <= radius + 1e-9
+    return bool((standing | seen.covers(points)).all())
+
+
 class BackUp:
     """The backing-up recovery: which move, and until when."""
 
-    def __init__(self, model: RobotModel) -> None:
+    def __init__(self, model: RobotModel, speed: float = BACKUP_SPEED) -> None:
         self.model = model
+        self.speed = speed                       # m/s of every move (backup_speed(params))
         self.until = -math.inf                   # backing up until this time ...
         self.command: FloatArray | None = None   # ... with this command (a steered robot's choice, kept)
 
@@ -101,9 +265,18 @@ class BackUp:
         return t < self.until
 
     def drive(self, state: FloatArray, dt: float, room: Callable[[FloatArray], FloatArray],
-              guard: Callable[[FloatArray], FloatArray]) -> FloatArray:
-        """This tick's command as `guard(command)` lets it through; a refused one ends the recovery."""
-        command = self.choose(state, dt, room, lambda option: guard(option) is option)
+              guard: Callable[[FloatArray], FloatArray],
+              free: Callable[[FloatArray], bool] | None = None) -> FloatArray:
+        """This tick's command as `guard(command)` lets it through; a refused one ends the recovery. `free`, when
+        given, is the evidence check (reverse_free over REVERSE_HORIZON): a move it refuses is not chosen, and
+        the recovery ends, standing still, once the move it drives is refused."""
+        if free is None:
+            command = self.choose(state, dt, room, lambda option: guard(option) is option)
+        else:
+            command = self.choose(state, dt, room, lambda option: guard(option) is option and free(option))
+            if not free(command):
+                self.stop()
+                return np.zeros(2)
         guarded = guard(command)
         if guarded is not command:
             self.stop()
@@ -121,7 +294,7 @@ class BackUp:
         free = room(probes)
         away = np.array([free[0] - free[1], free[2] - free[3]])
         norm = float(np.hypot(*away))
-        return away * (BACKUP_SPEED / norm) if norm > 0 else np.zeros(2)
+        return away * (self.speed / norm) if norm > 0 else np.zeros(2)
 
     def _steered_move(self, state: FloatArray, dt: float, room: Callable[[FloatArray], FloatArray],
                       allowed: Callable[[FloatArray], bool]) -> FloatArray:
@@ -132,8 +305,8 @@ class BackUp:
         instead kept trailers straighter but landed fewer robots (docs/robustness.md, "Tractor-trailers before
         manoeuvres")."""
         max_steer = float(getattr(self.model, 'max_steer', 0.0))
-        lock = BACKUP_SPEED * math.tan(max_steer) / max(getattr(self.model, 'length', 1.0), 1e-6)
-        options = [np.array([v, w]) for v in (-BACKUP_SPEED, BACKUP_SPEED) for w in (0.0, -lock, lock)]
+        lock = self.speed * math.tan(max_steer) / max(getattr(self.model, 'length', 1.0), 1e-6)
+        options = [np.array([v, w]) for v in (-self.speed, self.speed) for w in (0.0, -lock, lock)]
         scores = []
         for option in options:
             if not allowed(option):

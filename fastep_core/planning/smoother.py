@@ -1,0 +1,131 @@
+"""The velocity smoother: the last stage between a command and cmd_vel, for every robot model.
+
+Whatever chose a command (a controller, DWA, a recovery, yielding), the base gets it as Nav2's velocity_smoother
+(nav2_velocity_smoother, the anchor) would send it. First the speed limits, one factor for all components so a
+steered robot keeps its path's curvature: |v| <= max_speed, v >= -max_reverse_speed, |omega| <= max_turn_rate
+where the model has one (diff_drive; commands (v, omega), body frame); a point mass's (vx, vy) (map frame) has
+its norm capped at max_speed and no rear, so no reverse cap. Then the acceleration limits: the command moves from
+the velocity the base has toward the capped one by at most max_acceleration (a point mass: the norm of the change)
+and max_turn_acceleration times the time it is held, along one straight line in command space (Nav2's
+scale_velocities). That time is the time since the last command, capped at one control tick (params.dt): after a
+pause of any length the base ramps from what it is doing (the last command sent, or odometry's twist given to
+`reset`), never jumps. A limit lowered below the current speed is reached braking at max_acceleration, as Nav2
+does. Only the guard's emergency stop (`emergency=True`) brakes harder, at emergency_deceleration (its turn
+braking scaled alike). 0 for any limit means unlimited; a command that is not finite is a stop.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from fastep_core.kinematics.model import RobotModel
+from fastep_core.planning.params import PlannerParams
+
+__all__ = ['VelocitySmoother']
+
+FloatArray = NDArray[np.float64]
+
+
+def _zeros() -> FloatArray:
+    return np.zeros(2)
+
+
+@dataclass
+class VelocitySmoother:
+    """Speed and acceleration limits on every command of one robot (module docstring).
+
+    holonomic: commands are map-frame (vx, vy) (a point mass), else body-frame (v, omega). turn_limited: the
+    model has a turn-rate limit (diff_drive). The limits are PlannerParams' (`for_model`, `retune`); `period` is
+    the control tick, the most time one command's change is spread over. `velocity` is what the base does now.
+    """
+
+    holonomic: bool
+    turn_limited: bool = False
+    max_speed: float = 0.0
+    max_reverse_speed: float = 0.0
+    max_turn_rate: float = 0.0
+    max_acceleration: float = 0.0
+    max_turn_acceleration: float = 0.0
+    emergency_deceleration: float = 0.0
+    period: float = 0.05
+    velocity: FloatArray = field(default_factory=_zeros)
+
+    @classmethod
+    def for_model(cls, model: RobotModel, params: PlannerParams) -> VelocitySmoother:
+        """The smoother of a robot of this model (make_robot's), with the planner parameters' limits."""
+        smoother = cls(bool(model.holonomic), turn_limited=hasattr(model, 'max_turn_rate'))
+        smoother.retune(params)
+        return smoother
+
+    def retune(self, params: PlannerParams) -> None:
+        """New limits, from the next command on; the base's velocity is kept (it ramps to the new limits)."""
+        self.max_speed = params.max_speed
+        self.max_reverse_speed = 0.0 if self.holonomic else params.max_reverse_speed
+        self.max_turn_rate = params.max_turn_rate if self.turn_limited and not self.holonomic else 0.0
+        self.max_acceleration = params.max_acceleration
+        self.max_turn_acceleration = 0.0 if self.holonomic else params.max_turn_acceleration
+        self.emergency_deceleration = params.emergency_deceleration
+        self.period = params.dt
+
+    def reset(self, velocity: ArrayLike) -> None:
+        """What the base is doing now, in the model's command form (odometry's twist after a pause, say); the next
+        command ramps from it. Not finite: standing still."""
+        v = np.asarray(velocity, dtype=float).reshape(2)
+        self.velocity = v.copy() if np.isfinite(v).all() else np.zeros(2)
+
+    def cap(self, command: ArrayLike) -> FloatArray:
+        """The command within the speed limits, scaled down by one factor (the direction or curvature stays)."""
+        c = np.asarray(command, dtype=float).reshape(2)
+        if not np.isfinite(c).all():
+            return np.zeros(2)
+        over = 1.0
+        if self.holonomic:
+            speed = math.hypot(c[0], c[1])
+            if self.max_speed > 0.0 and speed > self.max_speed:
+                over = speed / self.max_speed
+        else:
+            v, omega = float(c[0]), float(c[1])
+            if self.max_speed > 0.0 and v > self.max_speed:
+                over = v / self.max_speed
+            if self.max_reverse_speed > 0.0 and -v > self.max_reverse_speed:
+                over = max(over, -v / self.max_reverse_speed)
+            if self.max_turn_rate > 0.0 and abs(omega) > self.max_turn_rate:
+                over = max(over, abs(omega) / self.max_turn_rate)
+        capped: FloatArray = c / over if over > 1.0 else c
+        return capped
+
+    def limits(self, emergency: bool = False) -> tuple[float, float]:
+        """(linear, turn) acceleration limits of a command, math.inf for unlimited; the emergency stop's at
+        emergency_deceleration, its turn braking scaled by emergency_deceleration / max_acceleration."""
+        linear = self.max_acceleration if self.max_acceleration > 0.0 else math.inf
+        turn = self.max_turn_acceleration if self.max_turn_acceleration > 0.0 else math.inf
+        if emergency:
+            harder = self.emergency_deceleration / linear if self.emergency_deceleration > 0.0 else math.inf
+            scale = max(harder, 1.0)   # never gentler than any other command
+            linear, turn = linear * scale, turn * scale
+        return linear, turn
+
+    def smooth(self, command: ArrayLike, elapsed: float, emergency: bool = False) -> FloatArray:
+        """The command to send: `command` capped, reached from the base's velocity within the acceleration limits
+        over min(elapsed, period) seconds (elapsed: since the last command). emergency: it is the guard's stop."""
+        wanted = self.cap(command)
+        window = min(elapsed, self.period) if elapsed > 0.0 else 0.0   # NaN and negative: no time, no change
+        linear, turn = self.limits(emergency)
+        change = wanted - self.velocity
+        share = 1.0
+        if self.holonomic:
+            size = math.hypot(change[0], change[1])
+            if size > linear * window:
+                share = linear * window / size
+        else:
+            if abs(change[0]) > linear * window:
+                share = linear * window / abs(change[0])
+            if abs(change[1]) > turn * window:
+                share = min(share, turn * window / abs(change[1]))
+        sent = wanted if share >= 1.0 else self.velocity + share * change
+        self.velocity = sent.copy()
+        return sent
