@@ -87,6 +87,7 @@ class RobotSpec:
     width: float = 0.5            # tractor_trailer only: b, tractor width (m)
     hitch_offset: float = 0.0     # tractor_trailer only: c in eq. 13 (m)
     sensor: LaserSpec | None = None   # v2: a planar laser scanner at the reference point
+    goal_heading: float | None = None  # v2, diff_drive: the heading to end in (radians; goal [x, y, theta])
 
 
 @dataclass(frozen=True)
@@ -292,6 +293,14 @@ def _point(value: Any, path: str) -> tuple[float, float]:
     return x, y
 
 
+def _goal(value: Any, path: str, model: str) -> tuple[tuple[float, float], float | None]:
+    """A goal [x, y], or for a robot that turns in place (diff_drive) also [x, y, theta]: where to end, facing."""
+    if model == 'diff_drive' and isinstance(value, list) and len(value) == 3:
+        x, y, theta = _numbers(value, path, 3, '[x, y, theta]')
+        return (x, y), _heading(theta)
+    return _point(value, path), None
+
+
 def _text(value: Any, path: str) -> str:
     if not isinstance(value, str) or not value.strip():
         raise _Invalid(f'{path} must be a non-empty string, got {_show(value)}')
@@ -449,7 +458,8 @@ def _robot(value: Any, path: str) -> RobotSpec:
     n = _START_LENGTH[model]
     start = _numbers(data['start'], f'{path}.start', n, _START_FORM[n])
     start = start[:2] + tuple(_heading(theta) for theta in start[2:])
-    robot = RobotSpec(name=name, model=model, start=start, goal=_point(data['goal'], f'{path}.goal'),
+    goal, heading = _goal(data['goal'], f'{path}.goal', model)
+    robot = RobotSpec(name=name, model=model, start=start, goal=goal, goal_heading=heading,
                       radius=_positive(data['radius'], f'{path}.radius'),
                       sensor=_sensor(data['sensor'], f'{path}.sensor') if 'sensor' in data else None,
                       **_tractor_dimensions(data, path))
@@ -647,7 +657,8 @@ def scenario_data(scenario: Scenario) -> dict[str, Any]:
     robots: list[dict[str, Any]] = []
     for robot in scenario.robots:
         item: dict[str, Any] = {'name': robot.name, 'model': robot.model, 'start': list(robot.start),
-                                'goal': list(robot.goal), 'radius': robot.radius}
+                                'goal': list(robot.goal) + ([] if robot.goal_heading is None else [robot.goal_heading]),
+                                'radius': robot.radius}
         if robot.model == 'tractor_trailer':
             item.update(length=robot.length, trailer_length=robot.trailer_length, width=robot.width,
                         hitch_offset=robot.hitch_offset)

@@ -138,7 +138,7 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
         run.realtime = latency
     for nav, spec, run, state in zip(navigators, specs, runs, states):
         try:
-            nav.set_goal(spec.goal)
+            nav.set_goal(spec.goal, heading=spec.goal_heading)
         except GoalError as exc:   # a misplaced obstacle covers the goal on the map: the robot refuses it
             nav.fail(f'goal refused on the map: {exc}')
         run.trajectory.append([0.0, *state.tolist()])
@@ -191,6 +191,8 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                     seen = views[i] if sense is None else \
                         sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
                     plan = Plan.of(nav, t, nav.update(t, states[i], seen), seen[len(views[i]):])
+                    if sense is not None:
+                        controls[i].seen = sense.recent.seen()
                     latency.submit(plan, t, time.perf_counter() - start)
                 commands.append(controls[i].command(t, states[i], views[i], latency.plan, dt))
             runs[i].compute_time += time.perf_counter() - start

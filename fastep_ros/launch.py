@@ -168,6 +168,8 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
         out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
                    hitch_offset=float(spec.hitch_offset))
     out.update(_planner_overrides(scenario.planner))
+    if spec.model == 'diff_drive' and spec.goal_heading is None:
+        out['goal_heading'] = 0   # the goal's orientation is any: the robot stops where it arrives, as in fastep-sim
     return out
 
 

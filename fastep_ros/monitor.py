@@ -291,7 +291,8 @@ class Monitor:
 
     def send_goals(self) -> None:
         for name, robot in self.robots.items():
-            goal = self.convert.point_to_pose_stamped(robot.spec.goal, self.node.get_clock().now().to_msg())
+            goal = self.convert.point_to_pose_stamped(robot.spec.goal, self.node.get_clock().now().to_msg(),
+                                                      yaw=robot.spec.goal_heading or 0.0)
             self.goal_pubs[name].publish(goal)
 
 

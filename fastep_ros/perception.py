@@ -22,7 +22,9 @@ from numpy.typing import NDArray
 from sensor_msgs.msg import LaserScan
 
 from fastep_core.perception.belief import Belief, Perception, perception_margin
+from fastep_core.perception.robot import RECENT_SCANS
 from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.recovery import RecentScans
 from fastep_core.world import World
 from msg_tools import convert
 
@@ -43,10 +45,12 @@ class ScanPerception:
         self.last_scan = -np.inf
         self.scans = 0
         self.margin = 0.0   # the guard's margin beyond the radius once the robot plans in its scans
+        self.recent = RecentScans(RECENT_SCANS)   # the free space the recent scans saw (where it may back up)
 
     def reset(self) -> None:
         """A new map: start believing it afresh at the next scan."""
         self.perception, self.map_world = None, None
+        self.recent = RecentScans(RECENT_SCANS)
 
     @property
     def belief(self) -> Belief | None:
@@ -64,6 +68,7 @@ class ScanPerception:
         if self.perception is None or self.map_world is not map_world or key != self.spec_key:
             self.perception, self.map_world, self.spec_key = Perception(spec, map_world), map_world, key
         belief = self.perception.update(t, pose, scan, others)
+        self.recent.add(scan, pose)
         self.last_scan, self.scans = t, self.scans + 1
         return belief
 

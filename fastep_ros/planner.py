@@ -453,6 +453,7 @@ class PlannerNode(PlannerInputs):
     def take_goal(self, msg: PoseStamped) -> None:
         """A goal, given to the navigator (on the planning thread when there is one)."""
         point = convert.pose_stamped_to_point(msg)
+        heading = self.goal_heading_of(msg)
         if self.navigator is None:
             self.pending_goal = msg
             self.get_logger().info(f'goal ({point[0]:g}, {point[1]:g}) received; waiting for the world')
@@ -461,7 +462,7 @@ class PlannerNode(PlannerInputs):
         frame = msg.header.frame_id
         nav = self.navigator
         if self.goal is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING) and \
-                tuple(float(v) for v in point) == self.goal:
+                tuple(float(v) for v in point) == self.goal and heading == nav.goal_heading:
             return   # the goal driven to already (a latched goal seen twice, or sent again): nothing changes
         try:
             if frame not in ('', 'map', self.frame_id):
@@ -469,7 +470,9 @@ class PlannerNode(PlannerInputs):
             if self.occupied is not None and self.occupied(point):
                 # Inside an occupied region of /map, far from its outline: the walls alone would not say so.
                 raise GoalError(f'goal ({point[0]:g}, {point[1]:g}) is occupied: an occupied cell of /map')
-            self.navigator.set_goal(point, self.now())
+            if isinstance(heading, str):
+                raise GoalError(heading)
+            self.navigator.set_goal(point, self.now(), heading)
         except GoalError as exc:
             self.goal_refused = f'goal ({point[0]:g}, {point[1]:g}) refused: {exc}'
             self.get_logger().warning(self.goal_refused)
@@ -483,6 +486,17 @@ class PlannerNode(PlannerInputs):
             self.get_logger().info(f'new goal ({point[0]:g}, {point[1]:g})')
         self.publish_plan(force=True)
         self.publish_status()
+
+    def goal_heading_of(self, msg: PoseStamped) -> float | str | None:
+        """The heading a goal asks a robot that turns in place to end in (its orientation's yaw; None for other
+        models and for a quaternion of zero length, which says none); why not, as text, when it is not finite."""
+        if self.model != 'diff_drive':
+            return None
+        q = msg.pose.orientation
+        try:
+            return convert.yaw_of(q.x, q.y, q.z, q.w)
+        except ValueError as exc:
+            return None if 'zero length' in str(exc) else f'goal orientation: {exc}'
 
     def discover(self) -> bool:
         """Look at the graph for robots that announce themselves (fastep_ros.robots); True if those followed
@@ -598,10 +612,13 @@ class PlannerNode(PlannerInputs):
         nav, control = self.navigator, self.control_tick
         if nav is None or control is None:
             return stop
+        period = 1.0 / self.control_rate_hz
+        if not np.array_equal(self.last_command, control.smoother.velocity):
+            control.smoother.reset(self.last_command)   # a stop sent past the smoother (inactive, no clock)
         state, problem = self.state(t)
         self.hold = problem
         if state is None:
-            return stop
+            return control.stop(t, period)
         told = self.told_others(t)
         scan, self.latest_scan = self.latest_scan, None
         self.control_count += 1
@@ -614,9 +631,9 @@ class PlannerNode(PlannerInputs):
                 self.get_logger().error(f'planning stalled: the newest plan is {age:.2f} s old (max_plan_age '
                                         f'{self.max_plan_age:g} s); stopped until a pass ends')
             self.plan_problem = f'planning stalled: plan {age:.2f} s old (max_plan_age {self.max_plan_age:g} s)'
-            return stop
+            return control.stop(t, period)
         self.plan_problem = ''
-        return control.command(t, state, told, plan, 1.0 / self.control_rate_hz)
+        return control.command(t, state, told, plan, period)
 
     def plan_pass(self, snapshot: PlanSnapshot) -> Plan | None:
         """One planning pass on the planning thread: perceive the newest scan, then the navigator's update."""

@@ -118,11 +118,11 @@ class PlanningThread(Generic[Snapshot, PlanT]):
                 if snapshot is not None:
                     self.pass_started = began = time.perf_counter()
                     plan = self._guarded(functools.partial(self._plan_pass, snapshot))
-                    self.pass_started = None
                     self.pass_times.add(time.perf_counter() - began)
                     self.passes += 1
                     if plan is not None:
                         self.plan = plan
+                    self.pass_started = None
 
     def _guarded(self, work: Callable[[], Any]) -> Any:
         """A fault in a change or a pass is logged, never the end of the thread (the node fails the goal)."""

@@ -18,11 +18,13 @@ from fastep_core.dynamic_world import DynamicWorld
 from fastep_core.perception.belief import Belief, Perception, heading, perception_margin, sensor_generator
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.recovery import RecentScans
 from fastep_core.sensing.laser import LaserSpec
 
 __all__ = ['SensingRobot']
 
 FloatArray = NDArray[np.float64]
+RECENT_SCANS = 2.0   # s of scans whose free space counts as evidence (a reversing robot's way, planning/control.py)
 
 
 class SensingRobot:
@@ -33,6 +35,7 @@ class SensingRobot:
         self.spec, self.model, self.index, self.truth = spec, model, index, truth
         self.rng = sensor_generator(seed, index)
         self.perception = Perception(spec, navigator.world)
+        self.recent = RecentScans(RECENT_SCANS)   # the free space its recent scans saw: where it may back up
         navigator.guard_check.obstacle_margin = perception_margin(spec)
 
     @property
@@ -50,6 +53,7 @@ class SensingRobot:
         pose = (float(state[0]), float(state[1]), heading(self.model, state))
         scan = self.truth.scan(self.spec, pose, t, self.rng, (centres, radii))
         belief = self.perception.update(t, pose, scan, others)
+        self.recent.add(scan, pose)
         if belief.world is not navigator.world:
             navigator.world = belief.world
         return [*others, *belief.movers]

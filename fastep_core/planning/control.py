@@ -6,7 +6,10 @@ map, a swarm over its budget), and a robot's clock does not stop meanwhile. `Con
 latest `Plan` into this tick's command from the robot's current state, in well under a millisecond: the
 controller toward the plan's target (or the plan's own command: backing up, a manoeuvre's arc, standing still),
 then yielding to movers and the guard against the newest robots and the plan's world, as `Navigator.drive_to`
-does. Nav2 splits its planner and controller servers for the same reason.
+does, looking as far ahead as the robot needs to brake; then the velocity smoother (planning/smoother.py: speed
+and acceleration limits, the guard's stop braking at emergency_deceleration) and, for a steered robot backing
+up, its swept disc checked against the world and the free space recent scans saw (recovery.reverse_free). Nav2
+splits its planner and controller servers, and ends with its velocity_smoother, for the same reasons.
 
 Used by the planner node's control timer while a thread plans (fastep_ros/planner.py) and by `fastep-sim
 --realtime` (fastep_core/simulator.py: `PlanLatency` hands a pass's plan to the control loop only after the wall
@@ -26,6 +29,8 @@ from numpy.typing import NDArray
 from fastep_core.planning.guard import Guard
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.recovery import REVERSE_HORIZON, SeenFree, reverse_free
+from fastep_core.planning.smoother import VelocitySmoother
 from fastep_core.world import World
 
 __all__ = ['ControlTick', 'Plan', 'PlanLatency']
@@ -69,8 +74,12 @@ class ControlTick:
     """The per-tick part of a navigator, with its own controller, guard and yielding (the pass runs the originals,
     possibly on another thread)."""
 
-    def __init__(self, navigator: Navigator) -> None:
+    def __init__(self, navigator: Navigator, period: float | None = None) -> None:
         self.navigator = navigator
+        self.period = navigator.params.dt if period is None else period   # the control tick (s)
+        self.seen: SeenFree | None = None   # the free space recent scans saw (None: no laser, the world alone)
+        self.smoother = VelocitySmoother.for_model(navigator.model, navigator.params)
+        self._last_t: float | None = None
         self.retune()
 
     def retune(self) -> None:
@@ -79,6 +88,9 @@ class ControlTick:
         self.model = nav.model
         self.controller = copy.deepcopy(nav.controller)
         self._applied: Callable[[FloatArray], None] | None = getattr(self.controller, 'applied', None)
+        self._tell(self.smoother.velocity)   # a new controller ramps from what the robot does now
+        self.smoother.retune(nav.params)
+        self.smoother.period = self.period
         self.guard = Guard(nav.model, nav.radius, nav.params)
         self.yielding = nav._yielding(nav.params)
         self._target: FloatArray | None = None
@@ -86,13 +98,32 @@ class ControlTick:
 
     def command(self, t: float, state: FloatArray, others: Sequence[OtherRobot], plan: Plan | None,
                 dt: float) -> FloatArray:
-        """This tick's command on `plan` (zeros without one, or when it is not under way)."""
+        """This tick's command on `plan` (a stop without one, or when it is not under way), smoothed."""
+        elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
+        self._last_t = t
+        self.smoother.period = dt
+        wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
+        sent = self.smoother.smooth(wanted, elapsed, emergency)
+        self._tell(sent)
+        return sent
+
+    def stop(self, t: float, dt: float) -> FloatArray:
+        """A stop the control loop must make without a plan to judge by (a robot held still): braking at
+        emergency_deceleration from what the robot does."""
+        elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
+        self._last_t = t
+        sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
+        self._tell(sent)
+        return sent
+
+    def _unsmoothed(self, t: float, state: FloatArray, others: Sequence[OtherRobot], plan: Plan | None,
+                    dt: float) -> tuple[FloatArray, bool]:
+        """The tick's command before the smoother, and whether it is the guard's (or the reverse check's) stop."""
         stop = np.zeros(2)
         self.reason = ''
         state = np.asarray(state, dtype=float)
         if plan is None or not plan.under_way or not all(map(math.isfinite, state)):
-            self._tell(stop)
-            return stop
+            return stop, False
         others = [*others, *plan.movers_at(t)]
         # Surfaces known only as well as the robot's scans show them (set by the pass's perception).
         self.guard.obstacle_margin = self.navigator.guard_check.obstacle_margin
@@ -113,11 +144,20 @@ class ControlTick:
         yielded = self.yielding.check(state, command, others, allowed)
         if yielded.kind and (not standing or yielded.kind == 'evading'):
             command, self.reason = yielded.command, yielded.reason
-        guarded = self.guard.check(plan.world, state, command, dt, others)
+        # The guard looks a tick ahead plus the distance the robot needs to brake at emergency_deceleration.
+        braking = self.smoother.emergency_deceleration
+        speed = math.hypot(*self.smoother.velocity) if self.model.holonomic else abs(float(self.smoother.velocity[0]))
+        ahead = dt + (0.5 * speed / braking if braking > 0.0 else 0.0)
+        guarded = self.guard.check(plan.world, state, command, ahead, others)
         if guarded is not command:
             self.reason = self.guard.reason
-        self._tell(guarded)
-        return guarded
+            return guarded, True
+        if not self.model.holonomic and float(command[0]) < 0.0 and \
+                not reverse_free(self.model, state, self.navigator.radius, command, REVERSE_HORIZON, plan.world,
+                                 self.seen, others, self.guard.obstacle_margin):
+            self.reason = 'stopped: no evidence the space behind is free'
+            return stop, True
+        return command, False
 
     def _tell(self, command: FloatArray) -> None:
         if self._applied is not None:

@@ -210,8 +210,8 @@ class FAStepRoute(FAStepKinematic):
     route_time = 0.0             # wall seconds spent in exact paths (the first route, replans, escapes)
     replan_log: list[tuple[float, str]]   # (t, reason) of every replan
 
-    def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
-        super().set_goal(goal, t)
+    def set_goal(self, goal: Sequence[float], t: float = 0.0, heading: float | None = None) -> None:
+        super().set_goal(goal, t, heading)
         self.route, self.replans, self.route_time, self.replan_log = None, 0, 0.0, []
         self._vertex: FloatArray | None = None        # the route target (identity tells a new one)
         self._aim: FloatArray | None = None           # what the controller is aimed at for it

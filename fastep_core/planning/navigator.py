@@ -30,6 +30,7 @@ from typing import Callable, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from fastep_core.errors import GoalError
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.detection import RunDetector
 from fastep_core.planning.escape import ESCAPING, TrapEscape
@@ -40,7 +41,7 @@ from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, OtherRobots, robot_arrays, robots_on_run
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
-from fastep_core.planning.recovery import BackUp, StopTimer, free_room
+from fastep_core.planning.recovery import BackUp, StopTimer, backup_speed, free_room
 from fastep_core.planning.step import StepProblem, StepRun, step_run
 from fastep_core.planning.yielding import Yield, Yielding
 from fastep_core.world import World
@@ -48,6 +49,7 @@ from fastep_core.world import World
 __all__ = ['FAStepKinematic', 'FAStepPaper', 'Mode', 'Navigator', 'OtherRobot']
 
 FloatArray = NDArray[np.float64]
+ROTATING = 'rotating to the goal heading'
 RETRY_AFTER = 0.5   # seconds between step-planning attempts while no feasible step exists
 PENDING_FOR = 0.5   # seconds a step plan left unfinished (params.step_iterations) may be continued, at most
 
@@ -80,6 +82,7 @@ class Navigator:
         self.params = p = params or PlannerParams()
         self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
         self.goal: FloatArray | None = None
+        self.goal_heading: float | None = None    # the heading to end in (robots that turn in place), if any
         self.mode = Mode.IDLE
         self.reason = 'waiting for a goal'
         self.waypoint: FloatArray | None = None   # the swarm's waypoint being driven to
@@ -112,7 +115,7 @@ class Navigator:
         self.trap = TrapDetector(p.progress_distance, p.trap_timeout)
         self.escape = TrapEscape()
         self.stops = StopTimer()
-        self.backup = BackUp(model)
+        self.backup = BackUp(model, backup_speed(p))
         # A robot that cannot turn in place leaves traps and tight spots by manoeuvres of its own arcs.
         self.manoeuvring = None if model.turns_in_place else ManoeuvreDriver(model, self.radius, p)
 
@@ -140,10 +143,14 @@ class Navigator:
         return self.manoeuvring.count if self.manoeuvring is not None else 0
 
     # ----------------------------------------------------------------- goals
-    def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
-        """Accept a new goal (raises GoalError if it is outside the map, occupied or not finite)."""
+    def set_goal(self, goal: Sequence[float], t: float = 0.0, heading: float | None = None) -> None:
+        """Accept a new goal (raises GoalError if it is outside the map, occupied or not finite); `heading`: the
+        one to end in, for a robot that turns in place (params.goal_heading), None for any."""
         self.world.check_point(goal, self.radius)
+        if heading is not None and not math.isfinite(heading):
+            raise GoalError(f'goal heading {heading} is not finite')
         self.goal = np.array([float(goal[0]), float(goal[1])])
+        self.goal_heading = None if heading is None else math.atan2(math.sin(heading), math.cos(heading))
         self.mode, self.reason = Mode.KINEMATIC, 'goal accepted'
         self.waypoint, self.plan, self.cost, self._target = None, [], 0.0, None
         self.reference, self._path_checked, self._committed = None, False, False
@@ -181,11 +188,15 @@ class Navigator:
         self.progress.distance, self.progress.timeout = params.progress_distance, params.progress_timeout
         self.trap.distance, self.trap.timeout = params.progress_distance, params.trap_timeout
         self.detector.forget()   # answers cached with the old sensing range and margin
+        self.backup.speed = backup_speed(params)
         if controller is not None:
-            self.controller = controller
-            # The new controller must hear what the robot got: told nothing, a diff_drive controller's ramp started
-            # from 0 every tick (0.13 m/s at 20 Hz after any parameter change).
-            self._applied = getattr(controller, 'applied', None)
+            # The new controller hears what the robot got, starting with what it does now: told nothing, a diff_drive
+            # controller's ramp started from rest every tick (0.13 m/s at 20 Hz after any parameter change).
+            applied = getattr(controller, 'applied', None)
+            last = getattr(self.controller, 'last', None)
+            if applied is not None and last is not None:
+                applied(last)
+            self.controller, self._applied = controller, applied
             self._target = None   # drive_to resets a controller when its target is new
 
     def restart_clock(self, t: float) -> None:
@@ -202,7 +213,7 @@ class Navigator:
         self.trap.reset(t)
         self.escape.stop()
         self.stops = StopTimer()
-        self.backup = BackUp(self.model)
+        self.backup = BackUp(self.model, backup_speed(self.params))
         if self.manoeuvring is not None:
             self.manoeuvring.reset()
         self._target = None
@@ -223,6 +234,26 @@ class Navigator:
         if self._applied is not None:
             self._applied(command)
         return command
+
+    def turn_to_heading(self, state: FloatArray, dt: float) -> FloatArray | None:
+        """At the goal's position: the turn in place toward the goal's heading, within the turn rate and its
+        acceleration from the last command; None when there is nothing to turn (no heading, a robot without one
+        or that cannot turn in place, params.goal_heading 0, or facing it within yaw_goal_tolerance)."""
+        p = self.params
+        if self.goal_heading is None or not p.goal_heading or self.model.holonomic or \
+                not self.model.turns_in_place or len(state) < 3:
+            return None
+        error = math.atan2(math.sin(self.goal_heading - state[2]), math.cos(self.goal_heading - state[2]))
+        if abs(error) <= p.yaw_goal_tolerance:
+            return None
+        omega = p.turn_gain * error
+        if p.max_turn_rate > 0.0:
+            omega = max(-p.max_turn_rate, min(p.max_turn_rate, omega))
+        last = getattr(self.controller, 'last', None)
+        if last is not None and p.max_turn_acceleration > 0.0:
+            step = p.max_turn_acceleration * dt
+            omega = max(float(last[1]) - step, min(float(last[1]) + step, omega))
+        return np.array([0.0, omega])
 
     def stand_clear(self, state: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
         """A robot standing still (no valid step, held, waiting) that a mover would run into gets out of its
@@ -256,9 +287,14 @@ class Navigator:
             others = [o for o in others if math.isfinite(o.position[0]) and math.isfinite(o.position[1])]
         distance = math.hypot(self.goal[0] - position[0], self.goal[1] - position[1])
         if distance <= self.params.goal_tolerance:
-            self.mode, self.reason = Mode.ARRIVED, 'goal reached'
             self.waypoint, self.cost, self._target = None, 0.0, None
-            return stop
+            turn = self.turn_to_heading(state, dt)
+            if turn is None:
+                self.mode, self.reason = Mode.ARRIVED, 'goal reached'
+                return stop
+            self.mode, self.reason = Mode.KINEMATIC, ROTATING
+            self.progress.made_progress(t)
+            return self.guard(state, turn, dt, others)
         if not self._path_checked:
             self._path_checked = True
             self.reference = self.exact_path(position)

@@ -47,8 +47,8 @@ class OptimalKinematic(Navigator):
     _index = 0                               # the vertex driven to now
     _detour = False                          # following a swarm step around another robot
 
-    def set_goal(self, goal: Sequence[float], t: float = 0.0) -> None:
-        super().set_goal(goal, t)
+    def set_goal(self, goal: Sequence[float], t: float = 0.0, heading: float | None = None) -> None:
+        super().set_goal(goal, t, heading)
         self.path, self._route, self._index, self._detour = None, None, 0, False
 
     def _plan(self, position: np.ndarray) -> bool:

@@ -48,9 +48,13 @@ planner: {max_speed: 1.5}
 """
 
 
+# Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
+SYNCHRONOUS = {'planning_thread': False}
+
+
 def make(cls: type, context: Any, namespace: str = '', **params: Any) -> Any:
     return cls(context=context, namespace=namespace,
-               parameter_overrides=[Parameter(k, value=v) for k, v in params.items()])
+               parameter_overrides=[Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items()])
 
 
 def test_plant_drives_a_diff_drive_base_and_reports_what_it_executed(context: Any) -> None:

@@ -13,12 +13,13 @@ from fastep_core.planning.fastep_route import FAStepRoute
 from fastep_ros.planner import PlannerNode
 from msg_tools import convert
 
-
 # Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
 SYNCHRONOUS = {'planning_thread': False}
 
+
 def make(context: Any, **params: Any) -> PlannerNode:
-    return PlannerNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items()])
+    return PlannerNode(context=context, parameter_overrides=[Parameter(k, value=v)
+                                                          for k, v in {**SYNCHRONOUS, **params}.items()])
 
 
 def test_planner_node_follows_the_route_and_replans_when_the_map_changes(context: Any) -> None:

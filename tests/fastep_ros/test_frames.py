@@ -20,9 +20,9 @@ from fastep_ros.plant import PlantNode
 from fastep_testing.published import keep_published
 from msg_tools import convert, frames
 
-
 # Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
 SYNCHRONOUS = {'planning_thread': False}
+
 
 def make(cls: type, context: Any, namespace: str = '', **params: Any) -> Any:
     return cls(context=context, namespace=namespace,

@@ -51,8 +51,10 @@ def test_a_publisher_that_comes_back_is_caught_up_with_again() -> None:
 
 # ----------------------------------------------------------------------------------------------- refused goals
 
+
 # Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
 SYNCHRONOUS = {'planning_thread': False}
+
 
 def make(context: Any, **params: Any) -> PlannerNode:
     overrides = [Parameter('workspace', value=[0.0, 0.0, 10.0, 10.0]),
@@ -185,3 +187,37 @@ def test_a_volatile_publisher_that_comes_during_a_catch_up_ends_it(context: Any)
         if planner is not None:
             planner.destroy_node()
         user.destroy_node()
+
+
+def test_a_diff_drive_goal_s_orientation_is_the_heading_to_end_in(context: Any) -> None:
+    node = make(context, model='diff_drive', robot_radius=0.3)
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.on_odom(convert.state_to_odometry([1.0, 1.0, 0.0]))
+        node.on_goal(convert.point_to_pose_stamped((8.0, 2.0), yaw=2.5))
+        nav = node.navigator
+        assert nav is not None and nav.goal_heading is not None and math.isclose(nav.goal_heading, 2.5)
+        node.on_goal(convert.point_to_pose_stamped((8.0, 2.0), yaw=-1.0))   # the same place, another heading
+        assert nav.goal_heading is not None and math.isclose(nav.goal_heading, -1.0)
+        zero = convert.point_to_pose_stamped((8.0, 3.0))
+        zero.pose.orientation.w = 0.0   # a quaternion of zero length says no heading
+        node.on_goal(zero)
+        assert nav.goal_heading is None and node.goal == (8.0, 3.0)
+        bad = convert.point_to_pose_stamped((8.0, 4.0))
+        bad.pose.orientation.z = math.nan
+        node.on_goal(bad)
+        node.on_control()
+        level, _, reason = node.status()
+        assert level == DiagnosticStatus.WARN and 'goal orientation' in reason and node.goal == (8.0, 3.0)
+    finally:
+        node.destroy_node()
+
+
+def test_a_point_mass_goal_has_no_heading(context: Any) -> None:
+    node = make(context)
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.on_goal(convert.point_to_pose_stamped((8.0, 2.0), yaw=2.5))
+        assert node.navigator is not None and node.navigator.goal_heading is None
+    finally:
+        node.destroy_node()

@@ -25,6 +25,7 @@ ROOM = World.from_obstacles([0, 0, 12, 10], [Segment((6.0, 0.0), (6.0, 4.2)), Se
 # Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
 SYNCHRONOUS = {'planning_thread': False}
 
+
 def make(context: Any, **params: Any) -> PlannerNode:
     overrides = [Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items()]
     return PlannerNode(context=context, parameter_overrides=overrides)

@@ -29,9 +29,9 @@ from fastep_testing.graph import free_domain
 from fastep_testing.published import keep_published
 from msg_tools import convert
 
-
 # Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
 SYNCHRONOUS = {'planning_thread': False}
+
 
 def make(cls: type, context: Any, **params: Any) -> Any:
     overrides = [Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items()]

@@ -37,8 +37,10 @@ DBL_MAX = sys.float_info.max
 # Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
 SYNCHRONOUS = {'planning_thread': False}
 
+
 def make(cls: type, context: Any, **params: Any) -> Any:
-    return cls(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items()])
+    return cls(context=context, parameter_overrides=[Parameter(k, value=v)
+                                                  for k, v in {**SYNCHRONOUS, **params}.items()])
 
 
 def _with_world_and_goal(node: PlannerNode, start: tuple[float, float] = (1.0, 1.0),

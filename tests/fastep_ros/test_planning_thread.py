@@ -7,6 +7,7 @@ import time
 from typing import Any, Callable
 
 import numpy as np
+import pytest
 from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.parameter import Parameter
 
@@ -110,12 +111,19 @@ def start_driving(node: PlannerNode) -> None:
 def test_the_control_tick_drives_on_the_last_plan_while_a_pass_is_stuck_then_stops_when_it_is_too_old(
         context: Any) -> None:
     node = make(context, max_plan_age=0.2)   # 4 control periods at 20 Hz
+    now = [100.0]
+    node.now = lambda: now[0]   # type: ignore[method-assign]  # the test's clock: a tick every 0.05 s
+
+    def tick() -> None:
+        now[0] += 0.05
+        node.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(now[0])))
+        node.on_control()
     try:
         assert node.planning is not None
         start_driving(node)
-        node.on_control()
+        tick()
         wait_for(lambda: node.planning is not None and node.planning.plan is not None, 'the first plan')
-        node.on_control()
+        tick()
         assert node.last_command[0] > 0.0   # driving east to the goal on that plan
 
         nav = node.navigator
@@ -126,25 +134,30 @@ def test_the_control_tick_drives_on_the_last_plan_while_a_pass_is_stuck_then_sto
             gate.wait()
             return update(*args)
         nav.update = stuck   # type: ignore[method-assign]  # a pass that takes as long as the test wants
-        node.on_control()
+        tick()
         assert gate.entered.wait(WAIT)
         # The pass is stuck: control ticks go on, on the plan they have, and return.
         ticks = 0
         while node.status()[0] != DiagnosticStatus.ERROR:
-            node.on_control()
+            tick()
             ticks += 1
             if ticks <= 2:   # the plan in use was planned from tick 1, 2 or 3: too old from tick 6 on
                 assert node.last_command[0] > 0.0, ticks
             assert ticks < 10
         level, message, reason = node.status()
-        assert message == 'stale' and reason.startswith('planning stalled') and not node.last_command.any()
+        assert message == 'stale' and reason.startswith('planning stalled')
+        speeds = [float(node.last_command[0])]
+        while speeds[-1] > 0.0 and len(speeds) < 10:   # braking at emergency_deceleration, to a standstill
+            tick()
+            speeds.append(float(node.last_command[0]))
+        assert speeds[-1] == 0.0 and node.status()[1] == 'stale'
         control = {task.task: task for task in node.diagnostic_tasks()}['control']
         assert control.level == DiagnosticStatus.ERROR and control.message == 'stalled'
         gate.open.set()
         wait_for(lambda: node.planning is not None and node.planning.busy_for == 0.0, 'the stuck pass to end')
-        node.on_control()
+        tick()
         wait_for(lambda: node.planning is not None and node.plan_age() <= 0.05, 'a fresh plan')
-        node.on_control()
+        tick()
         assert node.status()[0] == DiagnosticStatus.OK and node.last_command[0] > 0.0
     finally:
         gate.open.set()
@@ -194,5 +207,48 @@ def test_status_and_diagnostics_carry_the_control_loops_deadlines(context: Any) 
         control = {task.task: task for task in node.diagnostic_tasks()}['control']
         assert control.level == DiagnosticStatus.WARN and control.message == 'late'
         assert {'rate_hz', 'target_hz', 'tick_ms', 'plan_age', 'planning_ms'} <= set(control.values)
+    finally:
+        node.destroy_node()
+
+
+class Base:
+    """A diff-drive base in the test's process: it drives the planner's commands, tick by tick, on the test's clock."""
+
+    def __init__(self, node: PlannerNode) -> None:
+        self.node, self.now, self.state = node, 100.0, np.array([1.0, 10.0, 0.0])
+        node.now = lambda: self.now   # type: ignore[method-assign]  # the test's clock
+        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.on_goal(convert.point_to_pose_stamped((95.0, 10.0)))   # far: the law's speed (gain x distance) is higher
+
+    def tick(self) -> float:
+        node = self.node
+        node.on_odom(convert.state_to_odometry(self.state, convert.seconds_to_stamp(self.now)))
+        node.on_control()
+        v, omega = (float(c) for c in node.last_command)
+        self.state = self.state + 0.05 * np.array([v * np.cos(self.state[2]), v * np.sin(self.state[2]), omega])
+        self.now += 0.05
+        # The pass on this tick's snapshot ends before the next tick (50 ms of a robot's time; here, at once).
+        wait_for(lambda: node.plan_tick == node.control_count and node.planning is not None and
+                 node.planning.pass_started is None, 'the pass')
+        return v
+
+
+def test_every_speed_parameter_set_at_runtime_takes_effect_as_set(context: Any) -> None:
+    node = make(context, model='diff_drive', robot_radius=0.3, workspace=[0.0, 0.0, 100.0, 20.0])
+    try:
+        base = Base(node)
+        speeds = [base.tick() for _ in range(30)]
+        assert speeds[-1] == pytest.approx(1.0)   # max_speed's default
+        for value in (1.0, 0.5, 1.5):   # its own value too: that once left the robot at 0.13 m/s
+            assert node.set_parameters([Parameter('max_speed', value=value)])[0].successful
+            speeds = [base.tick() for _ in range(20)]
+            assert speeds[-1] == pytest.approx(value), value
+            steps = np.abs(np.diff(speeds))
+            assert steps.max() <= 2.5 * 0.05 + 1e-9   # reached within max_acceleration
+        assert node.set_parameters([Parameter('max_acceleration', value=1.0),
+                                    Parameter('max_speed', value=0.5)])[0].successful
+        speeds = [base.tick() for _ in range(30)]
+        assert max(np.abs(np.diff(speeds))) == pytest.approx(1.0 * 0.05)   # braking at the new limit
+        assert speeds[-1] == pytest.approx(0.5)
     finally:
         node.destroy_node()

@@ -25,6 +25,7 @@ UNKNOWN = Circle((12.0, 10.0), 1.5)   # not on the map, on the straight run from
 # Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
 SYNCHRONOUS = {'planning_thread': False}
 
+
 def make(context: Any, **params: Any) -> PlannerNode:
     overrides = [Parameter('workspace', value=[0.0, 0.0, 24.0, 20.0]), Parameter('use_sim_time', value=True),
                  *(Parameter(k, value=v) for k, v in {**SYNCHRONOUS, **params}.items())]

@@ -34,6 +34,7 @@ def test_a_fresh_plan_on_its_own_state_gives_the_navigators_command(model: str) 
     command = nav.update(0.0, state, ())
     plan = Plan.of(nav, 0.0, command)
     assert plan.target is not None and plan.mode is Mode.KINEMATIC
+    control.smoother.reset(command)   # the robot already drives so: the smoother lets the command through
     np.testing.assert_allclose(control.command(0.0, state, (), plan, 0.05), command)
 
 
@@ -134,3 +135,43 @@ def test_realtime_factor_zero_arrives_like_lock_step() -> None:
     assert timed.realtime is not None and timed.realtime.stale_ticks == 1   # the first tick has no plan yet
     assert timed.sim_time is not None and locked.sim_time is not None
     assert math.isclose(timed.sim_time, locked.sim_time, abs_tol=1.0)
+
+
+def test_commands_ramp_within_the_acceleration_limits_and_the_guards_stop_brakes_harder() -> None:
+    nav, state = _navigator('diff_drive')
+    nav.set_goal([18.0, 10.0])
+    plan = Plan.of(nav, 0.0, nav.update(0.0, state, ()))
+    control = ControlTick(nav)
+    p = nav.params
+    speeds = [float(control.command(0.05 * k, state, (), plan, 0.05)[0]) for k in range(1, 30)]
+    steps = np.diff([0.0, *speeds])
+    assert max(steps) <= p.max_acceleration * 0.05 + 1e-9 and speeds[-1] == pytest.approx(p.max_speed)
+    # A wall the plan did not know, right ahead: the guard's stop, braking at emergency_deceleration.
+    walled = World.from_obstacles((0.0, 0.0, 20.0, 20.0), [Segment((2.6, 0.0), (2.6, 20.0))])
+    plan = Plan(plan.t, plan.target, plan.command, walled, (), plan.mode, plan.reason)
+    # Held where it is (the test does not move it), it brakes until its braking distance fits before the wall.
+    braking, reasons = [], []
+    for k in range(1, 3):
+        braking.append(float(control.command(1.5 + 0.05 * k, state, (), plan, 0.05)[0]))
+        reasons.append(control.reason)
+    assert all('obstacle' in reason for reason in reasons), reasons
+    drops = -np.diff([speeds[-1], *braking])
+    assert drops.min() > p.max_acceleration * 0.05 + 1e-9                      # harder than any other command ...
+    assert drops.max() == pytest.approx(p.emergency_deceleration * 0.05)       # ... at emergency_deceleration
+
+
+def test_a_steered_robot_does_not_back_into_space_no_scan_has_seen() -> None:
+    from fastep_core.planning.recovery import SeenFree
+    from fastep_core.sensing.laser import Scan
+    nav, state = _navigator('diff_drive')
+    nav.set_goal([18.0, 10.0])
+    nav.update(0.0, state, ())
+    back = np.array([-0.25, 0.0])
+    plan = Plan(0.0, None, back, nav.world, (), Mode.AVOIDING, 'backing up: stuck')
+    control = ControlTick(nav)
+    assert control.command(0.0, state, (), plan, 0.05)[0] < 0.0   # no laser: the map alone says the way is free
+    # A 270-degree laser facing ahead: the quarter behind the robot is blind.
+    scan = Scan(-0.75 * math.pi, 0.75 * math.pi, 1.5 * math.pi / 269, 0.05, 5.0, np.full(270, np.inf))
+    control.seen = SeenFree.of_scans([(scan, np.array([2.0, 10.0, 0.0]))])
+    assert not control.command(0.05, state, (), plan, 0.05).any()
+    assert control.reason.startswith('stopped: no evidence')

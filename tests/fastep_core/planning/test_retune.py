@@ -62,8 +62,6 @@ def test_max_speed_set_at_runtime_takes_effect_as_set():
         assert run.ticks(40)[-10:] == pytest.approx(value)
 
 
-@pytest.mark.xfail(strict=True, reason='needs the Navigator.retune patch that tells the new controller the '
-                                       'velocity the base has (its ramp starts from rest, a 17.5 m/s^2 drop)')
 def test_a_new_controller_ramps_from_the_velocity_the_base_has():
     run = Run('fastep')
     before = run.ticks(40)
