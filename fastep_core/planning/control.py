@@ -136,7 +136,7 @@ class ControlTick:
             if target is not self._target:
                 self.controller.reset(state, target)
                 self._target = target
-            command = self.controller.command(state, target, dt)
+            command = self.navigator.regulate(state, self.controller.command(state, target, dt), dt)
         else:
             self._target = None
             command = plan.command

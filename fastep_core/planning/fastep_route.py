@@ -406,7 +406,7 @@ class FAStepRoute(FAStepKinematic):
     def aim_route(self, position: FloatArray, vertex: FloatArray) -> FloatArray:
         """What the controller is aimed at for the route target (see the module's "Speed")."""
         assert self.route is not None
-        if vertex is self.route.vertices[-1]:
+        if vertex is self.route.vertices[-1] and not self.params.regulated_speed:
             return vertex                      # the goal: the paper's approach
         run = vertex - position
         gap = math.hypot(run[0], run[1])
@@ -416,6 +416,59 @@ class FAStepRoute(FAStepKinematic):
         gain = min(p.alpha1, p.alpha2) if self.model.holonomic else p.speed_gain
         lead = p.max_speed / gain if p.max_speed > 0.0 else p.waypoint_lead
         return vertex if lead <= 0.0 else vertex + run * (lead / gap)
+
+    def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
+        """With params.regulated_speed, the command no faster than `speed_allowed` (a point mass: its velocity
+        scaled; a steered robot: its forward speed, the turn left as the law wants it)."""
+        if not self.params.regulated_speed or self.route is None or self.goal is None or self._vertex is None:
+            return command
+        allowed = self.speed_allowed(state[:2], dt)
+        if self.model.holonomic:
+            speed = math.hypot(float(command[0]), float(command[1]))
+            return command if speed <= allowed else command * (allowed / speed)
+        if abs(float(command[0])) <= allowed:
+            return command
+        return np.array([math.copysign(allowed, float(command[0])), float(command[1])])
+
+    def speed_allowed(self, position: FloatArray, dt: float) -> float:
+        """The speed the way allows at position (the module's "Speed"): max_speed, braking at max_acceleration to
+        stop at the goal and to take the bend at the vertex aimed at, and less in a gap tighter than radius +
+        clearance_margin; never below min_approach_speed (or what reaches the goal in a tick) short of the goal."""
+        p, route, vertex, goal = self.params, self.route, self._vertex, self.goal
+        assert route is not None and vertex is not None and goal is not None
+        x, y = float(position[0]), float(position[1])
+        top = p.max_speed if p.max_speed > 0.0 else math.inf
+        braking = p.max_acceleration if p.max_acceleration > 0.0 else math.inf
+        # The goal, measured along the way to the vertex aimed at: once past it, nothing is allowed (a stale plan
+        # aimed beyond the goal must not carry the robot on).
+        ahead = (float(vertex[0]) - x, float(vertex[1]) - y)
+        gap = math.hypot(*ahead)
+        if vertex is route.vertices[-1]:
+            aim = self._aim if self._aim is not None else vertex   # aimed beyond the goal: the way driven
+            way = (float(aim[0]) - x, float(aim[1]) - y)
+            length = math.hypot(*way)
+            left = ((float(goal[0]) - x) * way[0] + (float(goal[1]) - y) * way[1]) / length if length > 1e-9 else 0.0
+        else:
+            left = route.remaining(position)
+        if left <= 0.0:
+            return 0.0
+        allowed = min(top, math.sqrt(2.0 * braking * left))
+        index = route.index
+        if vertex is not route.vertices[-1] and index + 1 < len(route.vertices) and gap > 1e-9:
+            after = route.stacked[index + 1] - vertex
+            length = math.hypot(float(after[0]), float(after[1]))
+            bend = (ahead[0] * float(after[0]) + ahead[1] * float(after[1])) / (gap * length) if length > 1e-9 else 1.0
+            corner = max(p.min_approach_speed, min(top, p.max_speed * max(bend, 0.0)))
+            allowed = min(allowed, math.sqrt(corner * corner + 2.0 * braking * gap))
+        obstacles = self.world.obstacles
+        if len(obstacles) and p.clearance_margin > 0.0:
+            known = route.clearance_at
+            least = -math.inf if known is None else known[2] - math.hypot(x - known[0], y - known[1])
+            if least < self.radius + p.clearance_margin:
+                room = float(obstacles.clearance(position)) - self.radius
+                if room < p.clearance_margin:
+                    allowed = min(allowed, max(p.min_approach_speed, top * max(room, 0.0) / p.clearance_margin))
+        return max(allowed, min(p.min_approach_speed, left / dt))
 
     # -------------------------------------------------------------- Algorithm 1
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:

@@ -345,7 +345,7 @@ class Navigator:
         if target is not self._target:   # targets are never changed in place: identity tells a new one
             self.controller.reset(state, target)
             self._target = target
-        command = self.controller.command(state, target, dt)
+        command = self.regulate(state, self.controller.command(state, target, dt), dt)
         self.driven = target
         # Movers: slow down, wait or get out of the way over the time ahead (planning/yielding.py).
         yielded = self.yield_to_movers(state, command, dt, others)
@@ -361,6 +361,12 @@ class Navigator:
             if not (self.manoeuvring is not None and self.start_manoeuvre(state, t, others)):
                 self.backup.start(t)
         return guarded
+
+    def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
+        """The controller's command with the speed the way allows (FAStep-Route's; the paper's controllers as
+        they are). Also called by the control loop between planning passes (planning/control.py): it reads the
+        navigator's goal and route, changes nothing."""
+        return command
 
     def yield_to_movers(self, state: FloatArray, command: FloatArray, dt: float,
                         others: Sequence[OtherRobot]) -> Yield:

@@ -110,6 +110,10 @@ class PlannerParams:
     yaw_goal_tolerance: float = _p(0.25, 'a goal with a heading (diff_drive) counts as reached once the robot, within '
                                          'goal_tolerance of it, faces it within this angle (rad; Nav2\'s default)',
                                    1e-3, 3.1416)
+    regulated_speed: int = _p(1, 'FAStep-Route drives its route at the speed the way allows: max_speed, slowing only '
+                                 'to stop at the goal and to take a bend at the vertex ahead at max_acceleration, and '
+                                 'in gaps tighter than radius + clearance_margin (Nav2\'s Regulated Pure Pursuit is '
+                                 'the anchor): 1; 0: eq. 12 / 13 toward the goal (speed gain x distance)', 0, 1)
     goal_heading: int = _p(1, 'turn in place to a goal\'s heading once at its position (robots that turn in '
                               'place): 1; 0: a goal\'s heading is ignored', 0, 1)
     waypoint_tolerance: float = _p(0.3, 'a waypoint counts as reached within this distance (m)', 1e-4)
