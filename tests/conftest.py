@@ -52,20 +52,23 @@ for _signum, _default in ((signal.SIGINT, signal.default_int_handler), (signal.S
 
 
 GRAPH_TESTS = Path(__file__).resolve().parent / 'fastep_ros'
+# Live-graph tests outside tests/fastep_ros/ that join its group: the robot harness runs real node processes too.
+GRAPH_FILES = (Path(__file__).resolve().parent / 'fastep_testing' / 'test_robot_harness.py',)
 GRAPH_GROUP = 'ros_graph'
 
 
 @pytest.hookimpl(optionalhook=True)  # an xdist hook: pytest without xdist never calls it
 def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
-    """--dist loadgroup, with every test of tests/fastep_ros/ in one group."""
+    """--dist loadgroup, with every test of tests/fastep_ros/ (and of GRAPH_FILES) in one group."""
     if config.getvalue('dist') != 'loadgroup':
         return None
     from xdist.scheduler import LoadGroupScheduling
 
-    prefix = GRAPH_TESTS.relative_to(config.rootpath).as_posix() + '/'
+    prefixes = (GRAPH_TESTS.relative_to(config.rootpath).as_posix() + '/',
+                *(path.relative_to(config.rootpath).as_posix() + '::' for path in GRAPH_FILES))
 
     class GraphGroupScheduling(LoadGroupScheduling):
         def _split_scope(self, nodeid: str) -> str:
-            return GRAPH_GROUP if nodeid.startswith(prefix) else super()._split_scope(nodeid)
+            return GRAPH_GROUP if nodeid.startswith(prefixes) else super()._split_scope(nodeid)
 
     return GraphGroupScheduling(config, log)
