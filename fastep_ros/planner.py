@@ -29,6 +29,16 @@ is not acted on: the robot is held still (zero cmd_vel, `stale`) until fresher o
 command decided and guarded at a position the robot has left can drive it into an obstacle (docs/robustness.md,
 "A loaded machine").
 
+Planning runs on a thread of its own (`planning_thread`, fastep_ros.planning_thread): each control tick hands it
+the tick's state and drives on the newest plan it has made (fastep_core.planning.control: the controller toward
+the plan's target, mover yielding and the guard every tick, then the velocity smoother: acceleration limits, the
+guard's stop braking at emergency_deceleration, no reversing into space no recent scan saw free), so the control
+loop never waits for an exact path, a route, an escape or a swarm; scans are perceived by the next pass. A plan
+older than `max_plan_age` (in control periods) is not driven on: the robot brakes to a stop, status ERROR `stale`,
+"planning stalled ...". A diff_drive goal's orientation is the heading to end in (parameter goal_heading; status
+reason "rotating to the goal heading"; a quaternion of zero length says none). Lock step, and
+planning_thread:=false, plan on every tick and send the navigator's command as it is.
+
 Outputs, on a control timer of the node clock (simulated time with use_sim_time): `cmd_vel`, `cost`; and when
 they change (and once a wall second): `waypoint` (the point driven to now), `plan` (the waypoints planned so
 far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the namespace, message = mode, values
@@ -37,7 +47,11 @@ and for a launcher: others (the robots followed now), cmd_vel_readers (subscript
 cmd_vel) and odom_heard (own odometry messages taken); and control_ms and control_cpu_ms: the wall time and the
 CPU time of this node's thread over the last CONTROL_TIMES control callbacks, "p50 / p99 / max" in milliseconds
 (wall time also counts the moments the operating system ran another process instead: on a loaded machine the
-difference is the wait, the CPU time is the planner's own work).
+difference is the wait, the CPU time is the planner's own work); control_hz (the control loop's achieved rate over
+the last RATE_WINDOW seconds of node time), plan_age (seconds since the tick the plan in use was planned from) and
+planning_ms (the planning passes' "p50 / p99 / max"). /diagnostics adds a `control` task: OK "on time", WARN "late"
+when the achieved rate is below RATE_SHORTFALL of control_rate_hz (also logged, as Nav2's controller server warns),
+ERROR "stalled" while the plan is too old.
 
 status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
 run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry

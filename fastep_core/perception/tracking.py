@@ -49,6 +49,11 @@ class Tracker:
     """Every track of one robot: states (n, 4), covariances (n, 4, 4), radii, hits, last seen, ids."""
 
     def __init__(self, params: TrackParams | None = None) -> None:
+        # Imported with the first tracker (a robot with a laser), not with the module (scipy.optimize costs ~0.3 s
+        # of import in every planner process) nor on the first association: that stalled a moving robot's planning
+        # for 0.37 s (the robot harness, docs/benchmarks.md).
+        from scipy.optimize import linear_sum_assignment
+        self._assign = linear_sum_assignment
         self.params = params or TrackParams()
         self.states = np.zeros((0, 4))
         self.covariances = np.zeros((0, 4, 4))
@@ -93,10 +98,7 @@ class Tracker:
             y = centres[None, :, :] - self.states[:, None, :2]                       # (n, m, 2)
             cost = np.einsum('nmi,nij,nmj->nm', y, inverse, y)
             allowed = (cost <= GATE) & (np.hypot(y[..., 0], y[..., 1]) <= GATE_DISTANCE)
-            # Imported here: scipy.optimize costs ~0.2 s of import in every planner process, and only a planner
-            # with a laser tracks.
-            from scipy.optimize import linear_sum_assignment
-            rows, cols = linear_sum_assignment(np.where(allowed, cost, 1e6))
+            rows, cols = self._assign(np.where(allowed, cost, 1e6))
             good = allowed[rows, cols]
             paired_tracks, paired_detections = rows[good], cols[good]
             if len(paired_tracks):
