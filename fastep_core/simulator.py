@@ -190,9 +190,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 if latency.idle:   # the next pass starts on this tick's state
                     seen = views[i] if sense is None else \
                         sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
-                    plan = Plan.of(nav, t, nav.update(t, states[i], seen), seen[len(views[i]):])
                     if sense is not None:
-                        controls[i].seen = sense.recent.seen()
+                        nav.seen = sense.recent.seen()   # backing up only where its scans saw free space
+                    plan = Plan.of(nav, t, nav.update(t, states[i], seen), seen[len(views[i]):])
                     latency.submit(plan, t, time.perf_counter() - start)
                 commands.append(controls[i].command(t, states[i], views[i], latency.plan, dt))
             runs[i].compute_time += time.perf_counter() - start

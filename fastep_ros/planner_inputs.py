@@ -261,8 +261,8 @@ class PlannerInputs(PlannerReports):
             return
         self.scan_problem = ''
         nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
-        if self.control_tick is not None:
-            self.control_tick.seen = self.scan_perception.recent.seen()   # where the control loop may back up
+        if self.planning is not None:
+            nav.seen = self.scan_perception.recent.seen()   # where the robot may back up (planning/control.py)
         if belief.world is not nav.world:
             nav.world = belief.world
         self.tracked_pub.publish(convert.belief_to_marker_array(belief, self.stamp(), self.frame_id))

@@ -29,7 +29,7 @@ from numpy.typing import NDArray
 from fastep_core.planning.guard import Guard
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
-from fastep_core.planning.recovery import REVERSE_HORIZON, SeenFree, reverse_free
+from fastep_core.planning.recovery import REVERSE_HORIZON, reverse_free
 from fastep_core.planning.smoother import VelocitySmoother
 from fastep_core.world import World
 
@@ -77,9 +77,9 @@ class ControlTick:
     def __init__(self, navigator: Navigator, period: float | None = None) -> None:
         self.navigator = navigator
         self.period = navigator.params.dt if period is None else period   # the control tick (s)
-        self.seen: SeenFree | None = None   # the free space recent scans saw (None: no laser, the world alone)
         self.smoother = VelocitySmoother.for_model(navigator.model, navigator.params)
         self._last_t: float | None = None
+        self._open_world: World | None = None   # the plan's workspace without obstacles: the robots' check
         self.retune()
 
     def retune(self) -> None:
@@ -103,9 +103,37 @@ class ControlTick:
         self._last_t = t
         self.smoother.period = dt
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
+        before = self.smoother.velocity.copy()
         sent = self.smoother.smooth(wanted, elapsed, emergency)
+        if not emergency and plan is not None and plan.under_way and not np.array_equal(sent, wanted):
+            # What the robot will really do, on its way from its velocity to the command, must pass the guard too
+            # (a turn away from a robot, ramped, still heads at it for a tick or two).
+            if self._guarded(plan, np.asarray(state, dtype=float), sent, dt, [*others, *plan.movers_at(t)]) is not sent:
+                self.reason = self.guard.reason
+                self.smoother.velocity = before
+                sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
         self._tell(sent)
         return sent
+
+    def _guarded(self, plan: Plan, state: FloatArray, command: FloatArray, dt: float,
+                 others: Sequence[OtherRobot]) -> FloatArray:
+        """The guard's verdict: still obstacles a tick and the braking distance ahead; the other robots and movers a
+        tick ahead, as the pass's own guard sees them (they brake too, and a stricter look than the pass's held robots
+        face to face for good: the pass, seeing no hold, never called its hold breaker)."""
+        guarded = self.guard.check(plan.world, state, command, self._ahead(dt), ())
+        if guarded is not command or not others:
+            return guarded
+        open_world = self._open_world
+        if open_world is None or open_world.workspace != plan.world.workspace:
+            open_world = self._open_world = World.from_obstacles(plan.world.workspace, [])
+        return self.guard.check(open_world, state, command, dt, others)
+
+    def _ahead(self, dt: float) -> float:
+        """How far ahead (s) the guard looks: a tick, and the time to brake at emergency_deceleration from the
+        robot's speed (half of it: braking distance v^2 / 2a at speed v)."""
+        braking = self.smoother.emergency_deceleration
+        speed = math.hypot(*self.smoother.velocity) if self.model.holonomic else abs(float(self.smoother.velocity[0]))
+        return dt + (0.5 * speed / braking if braking > 0.0 else 0.0)
 
     def stop(self, t: float, dt: float) -> FloatArray:
         """A stop the control loop must make without a plan to judge by (a robot held still): braking at
@@ -144,17 +172,15 @@ class ControlTick:
         yielded = self.yielding.check(state, command, others, allowed)
         if yielded.kind and (not standing or yielded.kind == 'evading'):
             command, self.reason = yielded.command, yielded.reason
-        # The guard looks a tick ahead plus the distance the robot needs to brake at emergency_deceleration.
-        braking = self.smoother.emergency_deceleration
-        speed = math.hypot(*self.smoother.velocity) if self.model.holonomic else abs(float(self.smoother.velocity[0]))
-        ahead = dt + (0.5 * speed / braking if braking > 0.0 else 0.0)
-        guarded = self.guard.check(plan.world, state, command, ahead, others)
+        guarded = self._guarded(plan, state, command, dt, others)
         if guarded is not command:
             self.reason = self.guard.reason
             return guarded, True
-        if not self.model.holonomic and float(command[0]) < 0.0 and \
+        seen = self.navigator.seen   # None without a laser: the map is known, and the guard checks it
+        if seen is not None and not self.model.holonomic and float(command[0]) < 0.0 and \
                 not reverse_free(self.model, state, self.navigator.radius, command, REVERSE_HORIZON, plan.world,
-                                 self.seen, others, self.guard.obstacle_margin):
+                                 seen, (), self.guard.obstacle_margin):
+            # Still obstacles and what no scan has seen: the robots, which move, are the guard's (above).
             self.reason = 'stopped: no evidence the space behind is free'
             return stop, True
         return command, False

@@ -41,7 +41,15 @@ from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, OtherRobots, robot_arrays, robots_on_run
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
-from fastep_core.planning.recovery import BackUp, StopTimer, backup_speed, free_room
+from fastep_core.planning.recovery import (
+    REVERSE_HORIZON,
+    BackUp,
+    SeenFree,
+    StopTimer,
+    backup_speed,
+    free_room,
+    reverse_free,
+)
 from fastep_core.planning.step import StepProblem, StepRun, step_run
 from fastep_core.planning.yielding import Yield, Yielding
 from fastep_core.world import World
@@ -95,6 +103,9 @@ class Navigator:
         self.path_world = world                   # the world the last exact_path was planned in
         self._target: FloatArray | None = None    # what the controller steers to (identity tells a new one)
         self.driven: FloatArray | None = None     # the target this tick's command was driven to (drive_to), if any
+        # The free space recent scans saw, given where planning runs in real time (planning/control.py): backing up
+        # only into it. None: the map alone, as in lock step.
+        self.seen: SeenFree | None = None
         self._last_t: float | None = None
         self._path_checked = False                # has the goal been checked for a path
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
@@ -591,8 +602,12 @@ class Navigator:
 
     def back_up(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
         """The backing-up recovery's command (planning/recovery.py), guarded; it ends where the guard stops it."""
+        seen = self.seen
+        free = None if seen is None else (
+            lambda command: reverse_free(self.model, state, self.radius, command, REVERSE_HORIZON, self.world, seen,
+                                         (), self.guard_check.obstacle_margin))
         guarded = self.backup.drive(state, dt, lambda points: free_room(self.world, points, others),
-                                    lambda command: self.guard(state, command, dt, others))
+                                    lambda command: self.guard(state, command, dt, others), free)
         if self.backup.until > -math.inf:
             self.reason = 'backing up: stuck'
         return guarded
