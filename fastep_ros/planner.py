@@ -154,6 +154,13 @@ class PlanSnapshot:
     scan: LaserScan | None
 
 
+def same_heading(heading: float | str | None, kept: float | None) -> bool:
+    """Is a goal's heading the one the navigator keeps (normalised into (-pi, pi], as set_goal keeps it)?"""
+    if heading is None or kept is None or isinstance(heading, str):
+        return heading is None and kept is None
+    return math.atan2(math.sin(heading), math.cos(heading)) == kept
+
+
 def stream_rng(seed: int, stream: int) -> np.random.Generator:
     """default_rng(seed) for stream -1, else the generator of SeedSequence(seed).spawn(stream + 1)[stream] (what
     fastep-sim gives its stream-th robot), built directly: spawn made every child before it, and stream 2e9 grew
@@ -356,6 +363,8 @@ class PlannerNode(PlannerInputs):
         def restart() -> None:
             if self.navigator is not None:
                 self.navigator.restart_clock(t)   # time spent inactive is no lack of progress
+            if self.planning is not None:
+                self.planning.drop_plan()         # planned before the pause: not driven on after it
         self.change(restart)
         self.control_timer.reset()
         self._status_key = None
@@ -476,7 +485,7 @@ class PlannerNode(PlannerInputs):
         frame = msg.header.frame_id
         nav = self.navigator
         if self.goal is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING) and \
-                tuple(float(v) for v in point) == self.goal and heading == nav.goal_heading:
+                tuple(float(v) for v in point) == self.goal and same_heading(heading, nav.goal_heading):
             return   # the goal driven to already (a latched goal seen twice, or sent again): nothing changes
         try:
             if frame not in ('', 'map', self.frame_id):
@@ -497,6 +506,8 @@ class PlannerNode(PlannerInputs):
         else:
             self.goal_refused = ''
             self.goal = (float(point[0]), float(point[1]))
+            if self.planning is not None:
+                self.planning.drop_plan()   # no more driving toward the last goal's target: brake until the new plan
             self.get_logger().info(f'new goal ({point[0]:g}, {point[1]:g})')
         self.publish_plan(force=True)
         self.publish_status()
@@ -628,7 +639,7 @@ class PlannerNode(PlannerInputs):
             return stop
         period = 1.0 / self.control_rate_hz
         if not np.array_equal(self.last_command, control.smoother.velocity):
-            control.smoother.reset(self.last_command)   # a stop sent past the smoother (inactive, no clock)
+            control.reset(self.last_command)   # a stop sent past the control tick (inactive, no clock)
         state, problem = self.state(t)
         self.hold = problem
         if state is None:
@@ -647,7 +658,15 @@ class PlannerNode(PlannerInputs):
             self.plan_problem = f'planning stalled: plan {age:.2f} s old (max_plan_age {self.max_plan_age:g} s)'
             return control.stop(t, period)
         self.plan_problem = ''
-        return control.command(t, state, told, plan, period)
+        try:
+            return control.command(t, state, told, plan, period)
+        except Exception as exc:  # a fault of the control tick stops this robot, never the node
+            if not self.fault_logged:
+                self.get_logger().error(f'control fault: {exc}\n{traceback.format_exc()}')
+                self.fault_logged = True
+            reason = f'control fault: {exc}'
+            self.change(lambda: nav.fail(reason))
+            return control.stop(t, period)
 
     def plan_pass(self, snapshot: PlanSnapshot) -> Plan | None:
         """One planning pass on the planning thread: perceive the newest scan, then the navigator's update."""
@@ -656,7 +675,7 @@ class PlannerNode(PlannerInputs):
             return None
         t, state = snapshot.t, snapshot.state
         if snapshot.scan is not None:
-            self.perceive(snapshot.scan, t, state=state)
+            self.perceive(snapshot.scan, t, state=state, told=snapshot.others)
         tracked = self.scan_perception.movers(t)
         try:
             command = nav.update(t, state, [*snapshot.others, *tracked])
@@ -700,6 +719,9 @@ class PlannerNode(PlannerInputs):
     def publish_plan(self, force: bool = False) -> None:
         nav = self.navigator
         if nav is None:
+            return
+        if self.planning is not None and self.planning.on_thread():
+            self._plan_key = None   # the next control tick publishes it (publishers are the executor's)
             return
         points = [tuple(float(v) for v in p) for p in nav.plan]
         if self.goal is not None:
@@ -775,6 +797,8 @@ class PlannerNode(PlannerInputs):
         def restart() -> None:
             if self.navigator is not None:
                 self.navigator.restart_clock(t)
+            if self.planning is not None:
+                self.planning.drop_plan()   # planned on the other clock
         self.change(restart)
         self.last_command = np.zeros(2)
         self.publish_command(self.last_command)

@@ -238,7 +238,8 @@ class PlannerInputs(PlannerReports):
         else:
             self.perceive(msg, self.now())
 
-    def perceive(self, msg: LaserScan, t: float, at: float | None = None, state: np.ndarray | None = None) -> None:
+    def perceive(self, msg: LaserScan, t: float, at: float | None = None, state: np.ndarray | None = None,
+                 told: Sequence[OtherRobot] | None = None) -> None:
         """Fold a scan into what the robot believes at node time t; the navigator plans in the belief from then on.
         `at`: the time it was taken (lock step: the tick's), else its stamp; `state`: the robot's at t (default: as
         the odometry gives it now)."""
@@ -251,7 +252,8 @@ class PlannerInputs(PlannerReports):
             return   # where the scan was taken from is not known
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         pose = (float(state[0]), float(state[1]), heading(self.model, state))
-        told = [*self.robots.fleet.obstacles(t, self.robots.radius, lambda s: self.lag(t, s)), *self.movers_at(t)]
+        if told is None:   # the robots and movers the robot is told of (a planning pass hands its snapshot's)
+            told = self.told_others(t)
         try:
             taken = at if at is not None else stamp if stamp > 0.0 else t
             belief = self.scan_perception.update(msg, taken, pose, self.world, told)

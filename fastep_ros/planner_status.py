@@ -105,7 +105,7 @@ class PlannerReports(ManagedNode):
 
     def control_rate(self) -> float | None:
         """Control ticks per second of node time over the last RATE_WINDOW seconds (None before a window's worth)."""
-        stamps = self.control_stamps
+        stamps = list(self.control_stamps)   # a copy: the control tick appends to it
         if len(stamps) < 2:
             return None
         last = stamps[-1]
@@ -153,6 +153,9 @@ class PlannerReports(ManagedNode):
 
     def publish_status(self, force: bool = False, at: float | None = None) -> None:
         """Status when it changed (or `force`); `at` is the node time of the decision it reports (default now)."""
+        if self.planning is not None and self.planning.on_thread():
+            self._status_key = None   # a change on the planning thread: the next control tick publishes it
+            return
         level, message, reason = self.status()
         key = (level, message, reason)
         if key == self._status_key and not force:

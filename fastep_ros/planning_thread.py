@@ -88,6 +88,10 @@ class PlanningThread(Generic[Snapshot, PlanT]):
         """Forget the plan (a new navigator: its predecessor's plan is not its own); call from a `call`."""
         self.plan = None
 
+    def on_thread(self) -> bool:
+        """Is the caller the planning thread (a change it runs)?"""
+        return threading.current_thread() is self._thread
+
     @property
     def busy_for(self) -> float:
         """Wall seconds the pass under way has run (0 when none is)."""

@@ -27,7 +27,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.planning.guard import Guard
-from fastep_core.planning.navigator import Mode, Navigator
+from fastep_core.planning.navigator import Mode, Navigator, SpeedLaw
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.recovery import REVERSE_HORIZON, reverse_free
 from fastep_core.planning.smoother import VelocitySmoother
@@ -37,6 +37,7 @@ __all__ = ['ControlTick', 'Plan', 'PlanLatency']
 
 FloatArray = NDArray[np.float64]
 UNDER_WAY = (Mode.KINEMATIC, Mode.AVOIDING)
+PREDICT_MOVERS = 1.0   # s: a plan's tracked movers are predicted along their velocities at most this far
 
 
 @dataclass(frozen=True)
@@ -51,21 +52,23 @@ class Plan:
     mode: Mode
     reason: str
     cost: float = 0.0
+    speed: SpeedLaw | None = None     # the speed the way allows (FAStep-Route's), frozen with the plan
 
     @classmethod
     def of(cls, navigator: Navigator, t: float, command: FloatArray,
            movers: Sequence[OtherRobot] = ()) -> Plan:
         """The plan a pass of `navigator` at time t left, `command` being what its update returned."""
         return cls(t, navigator.driven, np.array(command, dtype=float), navigator.world, tuple(movers),
-                   navigator.mode, navigator.reason, float(navigator.cost))
+                   navigator.mode, navigator.reason, float(navigator.cost), navigator.speed_law())
 
     @property
     def under_way(self) -> bool:
         return self.mode in UNDER_WAY
 
     def movers_at(self, t: float) -> list[OtherRobot]:
-        """The tracked movers predicted to t along their velocities (a plan can be seconds old)."""
-        ahead = max(0.0, t - self.t)
+        """The tracked movers predicted to t along their velocities (a plan can be seconds old; at most
+        PREDICT_MOVERS ahead: a track is a guess, and after a pause the clock may have jumped)."""
+        ahead = min(max(0.0, t - self.t), PREDICT_MOVERS)
         return [OtherRobot(m.name, (m.position[0] + m.velocity[0] * ahead, m.position[1] + m.velocity[1] * ahead),
                            m.velocity, m.radius, m.mover) for m in self.movers]
 
@@ -105,27 +108,36 @@ class ControlTick:
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
         before = self.smoother.velocity.copy()
         sent = self.smoother.smooth(wanted, elapsed, emergency)
-        if not emergency and plan is not None and plan.under_way and not np.array_equal(sent, wanted):
-            # What the robot will really do, on its way from its velocity to the command, must pass the guard too
-            # (a turn away from a robot, ramped, still heads at it for a tick or two).
-            if self._guarded(plan, np.asarray(state, dtype=float), sent, dt, [*others, *plan.movers_at(t)]) is not sent:
+        state = np.asarray(state, dtype=float)
+        if not emergency and not np.array_equal(sent, wanted) and any(c != 0.0 for c in sent.tolist()) and \
+                all(map(math.isfinite, state)):
+            # What the robot will really do, on its way from its velocity to the command (or to a stop), must pass
+            # the guard too: a turn away from a robot, ramped, still heads at it for a tick or two.
+            world = self.navigator.world if plan is None else plan.world
+            movers = [] if plan is None else plan.movers_at(t)
+            if self._guarded(world, state, sent, dt, [*others, *movers]) is not sent:
                 self.reason = self.guard.reason
                 self.smoother.velocity = before
                 sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
         self._tell(sent)
         return sent
 
-    def _guarded(self, plan: Plan, state: FloatArray, command: FloatArray, dt: float,
+    def reset(self, velocity: FloatArray) -> None:
+        """What the robot does now (a stop sent past the control tick): the smoother and the controller ramp from it."""
+        self.smoother.reset(velocity)
+        self._tell(self.smoother.velocity)
+
+    def _guarded(self, world: World, state: FloatArray, command: FloatArray, dt: float,
                  others: Sequence[OtherRobot]) -> FloatArray:
         """The guard's verdict: still obstacles a tick and the braking distance ahead; the other robots and movers a
         tick ahead, as the pass's own guard sees them (they brake too, and a stricter look than the pass's held robots
         face to face for good: the pass, seeing no hold, never called its hold breaker)."""
-        guarded = self.guard.check(plan.world, state, command, self._ahead(dt), ())
+        guarded = self.guard.check(world, state, command, self._ahead(dt), ())
         if guarded is not command or not others:
             return guarded
         open_world = self._open_world
-        if open_world is None or open_world.workspace != plan.world.workspace:
-            open_world = self._open_world = World.from_obstacles(plan.world.workspace, [])
+        if open_world is None or open_world.workspace != world.workspace:
+            open_world = self._open_world = World.from_obstacles(world.workspace, [])
         return self.guard.check(open_world, state, command, dt, others)
 
     def _ahead(self, dt: float) -> float:
@@ -164,7 +176,9 @@ class ControlTick:
             if target is not self._target:
                 self.controller.reset(state, target)
                 self._target = target
-            command = self.navigator.regulate(state, self.controller.command(state, target, dt), dt)
+            command = self.controller.command(state, target, dt)
+            if plan.speed is not None:
+                command = plan.speed.regulate(state, command, dt)
         else:
             self._target = None
             command = plan.command
@@ -172,7 +186,7 @@ class ControlTick:
         yielded = self.yielding.check(state, command, others, allowed)
         if yielded.kind and (not standing or yielded.kind == 'evading'):
             command, self.reason = yielded.command, yielded.reason
-        guarded = self._guarded(plan, state, command, dt, others)
+        guarded = self._guarded(plan.world, state, command, dt, others)
         if guarded is not command:
             self.reason = self.guard.reason
             return guarded, True

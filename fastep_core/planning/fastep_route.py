@@ -60,10 +60,12 @@ from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason, robot_
 from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
+from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.passage import Passage, passages, waiting_room
 from fastep_core.world import World
 
-__all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'SIGHT', 'SIGHT_VERTICES', 'TURN_ROOM_SLACK']
+__all__ = ['BLOCK_TIME', 'FAStepRoute', 'REPLAN_INTERVAL', 'Route', 'RouteSpeed', 'SIGHT', 'SIGHT_VERTICES',
+           'TURN_ROOM_SLACK']
 
 BLOCK_TIME = 1.0        # s: another robot standing on the route ahead this long makes the route go round it
 CLEAR_TIME = 0.25       # s: the route free of standing robots this long ends that wait (a retried step is shorter)
@@ -199,6 +201,69 @@ class Route:
         last = len(self.vertices) - 1
         while self.index < last and math.hypot(*(self.stacked[self.index] - position)) <= tolerance:
             self.index += 1
+
+
+@dataclass(frozen=True)
+class RouteSpeed:
+    """FAStep-Route's speed law on one route (params.regulated_speed; the module's "Speed"), frozen when made."""
+
+    vertices: FloatArray                  # (n, 2) the route's vertices
+    rest: FloatArray                      # route length from each vertex to the goal
+    index: int                            # the vertex aimed at ...
+    vertex: FloatArray                    # ... itself
+    aim: FloatArray | None                # where the controller is aimed for it (beyond it)
+    goal: FloatArray
+    at_goal: bool                         # the vertex aimed at is the goal
+    radius: float
+    params: PlannerParams
+    world: World
+    holonomic: bool
+    clearance_at: tuple[float, float, float] | None   # a clearance known at a point (x, y, clearance)
+
+    def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
+        """The command no faster than `allowed`, scaled whole (a steered robot keeps its curvature, a tractor its
+        steering angle within its lock)."""
+        allowed = self.allowed(state[:2], dt)
+        speed = math.hypot(float(command[0]), float(command[1])) if self.holonomic else abs(float(command[0]))
+        return command if speed <= allowed else command * (allowed / speed)
+
+    def allowed(self, position: FloatArray, dt: float) -> float:
+        """The speed the way allows at position: max_speed, braking at max_acceleration to stop at the goal and to
+        take the bend at the vertex aimed at, and less in a gap tighter than radius + clearance_margin; never below
+        min_approach_speed (or what reaches the goal in a tick) short of the goal, nothing past it."""
+        p, vertex, goal = self.params, self.vertex, self.goal
+        x, y = float(position[0]), float(position[1])
+        top = p.max_speed if p.max_speed > 0.0 else math.inf
+        braking = p.max_acceleration if p.max_acceleration > 0.0 else math.inf
+        ahead = (float(vertex[0]) - x, float(vertex[1]) - y)
+        gap = math.hypot(*ahead)
+        if self.at_goal:
+            # Measured along the way driven (aimed beyond the goal): once past it, nothing is allowed (a stale
+            # plan aimed beyond the goal must not carry the robot on).
+            aim = self.aim if self.aim is not None else vertex
+            way = (float(aim[0]) - x, float(aim[1]) - y)
+            length = math.hypot(*way)
+            left = ((float(goal[0]) - x) * way[0] + (float(goal[1]) - y) * way[1]) / length if length > 1e-9 else 0.0
+        else:
+            left = gap + float(self.rest[self.index])
+        if left <= 0.0:
+            return 0.0
+        allowed = min(top, math.sqrt(2.0 * braking * left))
+        if not self.at_goal and self.index + 1 < len(self.vertices) and gap > 1e-9:
+            after = self.vertices[self.index + 1] - vertex
+            length = math.hypot(float(after[0]), float(after[1]))
+            bend = (ahead[0] * float(after[0]) + ahead[1] * float(after[1])) / (gap * length) if length > 1e-9 else 1.0
+            corner = max(p.min_approach_speed, min(top, top * max(bend, 0.0)))
+            allowed = min(allowed, math.sqrt(corner * corner + 2.0 * braking * gap))
+        obstacles = self.world.obstacles
+        if len(obstacles) and p.clearance_margin > 0.0:
+            known = self.clearance_at
+            least = -math.inf if known is None else known[2] - math.hypot(x - known[0], y - known[1])
+            if least < self.radius + p.clearance_margin:
+                room = float(obstacles.clearance(position)) - self.radius
+                if room < p.clearance_margin:
+                    allowed = min(allowed, max(p.min_approach_speed, top * max(room, 0.0) / p.clearance_margin))
+        return max(allowed, min(p.min_approach_speed, left / dt))
 
 
 class FAStepRoute(FAStepKinematic):
@@ -417,58 +482,20 @@ class FAStepRoute(FAStepKinematic):
         lead = p.max_speed / gain if p.max_speed > 0.0 else p.waypoint_lead
         return vertex if lead <= 0.0 else vertex + run * (lead / gap)
 
-    def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
-        """With params.regulated_speed, the command no faster than `speed_allowed` (a point mass: its velocity
-        scaled; a steered robot: its forward speed, the turn left as the law wants it)."""
-        if not self.params.regulated_speed or self.route is None or self.goal is None or self._vertex is None:
-            return command
-        allowed = self.speed_allowed(state[:2], dt)
-        if self.model.holonomic:
-            speed = math.hypot(float(command[0]), float(command[1]))
-            return command if speed <= allowed else command * (allowed / speed)
-        if abs(float(command[0])) <= allowed:
-            return command
-        return np.array([math.copysign(allowed, float(command[0])), float(command[1])])
+    def speed_law(self) -> RouteSpeed | None:
+        """What regulates the speed now (params.regulated_speed): the route, the vertex aimed at and the goal as
+        they are, frozen, so the control loop can regulate between passes while the next pass replans."""
+        route, vertex, goal = self.route, self._vertex, self.goal
+        if not self.params.regulated_speed or route is None or goal is None or vertex is None:
+            return None
+        return RouteSpeed(route.stacked, route.rest, route.index, vertex, self._aim, goal.copy(),
+                          vertex is route.vertices[-1], self.radius, self.params, self.world,
+                          bool(self.model.holonomic), route.clearance_at)
 
     def speed_allowed(self, position: FloatArray, dt: float) -> float:
-        """The speed the way allows at position (the module's "Speed"): max_speed, braking at max_acceleration to
-        stop at the goal and to take the bend at the vertex aimed at, and less in a gap tighter than radius +
-        clearance_margin; never below min_approach_speed (or what reaches the goal in a tick) short of the goal."""
-        p, route, vertex, goal = self.params, self.route, self._vertex, self.goal
-        assert route is not None and vertex is not None and goal is not None
-        x, y = float(position[0]), float(position[1])
-        top = p.max_speed if p.max_speed > 0.0 else math.inf
-        braking = p.max_acceleration if p.max_acceleration > 0.0 else math.inf
-        # The goal, measured along the way to the vertex aimed at: once past it, nothing is allowed (a stale plan
-        # aimed beyond the goal must not carry the robot on).
-        ahead = (float(vertex[0]) - x, float(vertex[1]) - y)
-        gap = math.hypot(*ahead)
-        if vertex is route.vertices[-1]:
-            aim = self._aim if self._aim is not None else vertex   # aimed beyond the goal: the way driven
-            way = (float(aim[0]) - x, float(aim[1]) - y)
-            length = math.hypot(*way)
-            left = ((float(goal[0]) - x) * way[0] + (float(goal[1]) - y) * way[1]) / length if length > 1e-9 else 0.0
-        else:
-            left = route.remaining(position)
-        if left <= 0.0:
-            return 0.0
-        allowed = min(top, math.sqrt(2.0 * braking * left))
-        index = route.index
-        if vertex is not route.vertices[-1] and index + 1 < len(route.vertices) and gap > 1e-9:
-            after = route.stacked[index + 1] - vertex
-            length = math.hypot(float(after[0]), float(after[1]))
-            bend = (ahead[0] * float(after[0]) + ahead[1] * float(after[1])) / (gap * length) if length > 1e-9 else 1.0
-            corner = max(p.min_approach_speed, min(top, p.max_speed * max(bend, 0.0)))
-            allowed = min(allowed, math.sqrt(corner * corner + 2.0 * braking * gap))
-        obstacles = self.world.obstacles
-        if len(obstacles) and p.clearance_margin > 0.0:
-            known = route.clearance_at
-            least = -math.inf if known is None else known[2] - math.hypot(x - known[0], y - known[1])
-            if least < self.radius + p.clearance_margin:
-                room = float(obstacles.clearance(position)) - self.radius
-                if room < p.clearance_margin:
-                    allowed = min(allowed, max(p.min_approach_speed, top * max(room, 0.0) / p.clearance_margin))
-        return max(allowed, min(p.min_approach_speed, left / dt))
+        """RouteSpeed.allowed of the route as it is now (max_speed, or what the way allows: the module's "Speed")."""
+        law = self.speed_law()
+        return self.params.max_speed if law is None else law.allowed(position, dt)
 
     # -------------------------------------------------------------- Algorithm 1
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:

@@ -25,7 +25,7 @@ from __future__ import annotations
 import math
 import time
 from enum import Enum
-from typing import Callable, Sequence
+from typing import Callable, Protocol, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -54,12 +54,18 @@ from fastep_core.planning.step import StepProblem, StepRun, step_run
 from fastep_core.planning.yielding import Yield, Yielding
 from fastep_core.world import World
 
-__all__ = ['FAStepKinematic', 'FAStepPaper', 'Mode', 'Navigator', 'OtherRobot']
+__all__ = ['FAStepKinematic', 'FAStepPaper', 'Mode', 'Navigator', 'OtherRobot', 'SpeedLaw']
 
 FloatArray = NDArray[np.float64]
 ROTATING = 'rotating to the goal heading'
 RETRY_AFTER = 0.5   # seconds between step-planning attempts while no feasible step exists
 PENDING_FOR = 0.5   # seconds a step plan left unfinished (params.step_iterations) may be continued, at most
+
+
+class SpeedLaw(Protocol):
+    """A speed limit on the controller's commands that depends on where the robot is (FAStep-Route's RouteSpeed)."""
+
+    def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray: ...
 
 
 class Mode(str, Enum):
@@ -374,10 +380,15 @@ class Navigator:
         return guarded
 
     def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
-        """The controller's command with the speed the way allows (FAStep-Route's; the paper's controllers as
-        they are). Also called by the control loop between planning passes (planning/control.py): it reads the
-        navigator's goal and route, changes nothing."""
-        return command
+        """The controller's command with the speed the way allows (`speed_law`: FAStep-Route's; the paper's
+        controllers' command as it is)."""
+        law = self.speed_law()
+        return command if law is None else law.regulate(state, command, dt)
+
+    def speed_law(self) -> SpeedLaw | None:
+        """What limits the controller's speed beyond its own law, frozen as it is now (the control loop uses it
+        between passes: planning/control.py); None for the paper's controllers."""
+        return None
 
     def yield_to_movers(self, state: FloatArray, command: FloatArray, dt: float,
                         others: Sequence[OtherRobot]) -> Yield:

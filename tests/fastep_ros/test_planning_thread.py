@@ -252,3 +252,36 @@ def test_every_speed_parameter_set_at_runtime_takes_effect_as_set(context: Any) 
         assert speeds[-1] == pytest.approx(0.5)
     finally:
         node.destroy_node()
+
+
+def test_a_fault_of_the_control_tick_stops_the_robot_and_fails_the_goal_never_the_node(context: Any) -> None:
+    node = make(context)
+    try:
+        start_driving(node)
+        node.on_control()
+        wait_for(lambda: node.planning is not None and node.planning.plan is not None, 'the first plan')
+        control = node.control_tick
+        assert control is not None
+
+        def broken(*args: Any) -> np.ndarray:
+            raise FloatingPointError('broken control tick')
+        control.command = broken   # type: ignore[method-assign]  # a fault where none is expected
+        node.on_control()   # returns: the executor spins on
+        assert not node.last_command.any()
+        wait_for(lambda: node.status()[1] == 'failed', 'the goal failed')
+        assert 'control fault: broken control tick' in node.status()[2]
+    finally:
+        node.destroy_node()
+
+
+def test_a_new_goal_is_not_driven_to_on_the_last_goal_s_plan(context: Any) -> None:
+    node = make(context)
+    try:
+        start_driving(node)
+        node.on_control()
+        wait_for(lambda: node.planning is not None and node.planning.busy_for == 0.0 and
+                 node.planning.plan is not None, 'the first plan')
+        node.on_goal(convert.point_to_pose_stamped((18.0, 4.0)))
+        assert node.planning is not None and node.planning.plan is None   # braking until the new goal's plan
+    finally:
+        node.destroy_node()

@@ -67,8 +67,10 @@ def test_tracked_movers_of_an_old_plan_are_predicted_to_now() -> None:
     nav.set_goal([18.0, 10.0])
     mover = simulator.OtherRobot('track 1', (10.0, 10.0), (1.0, 0.0), 0.3, mover=True)
     plan = Plan.of(nav, 1.0, nav.update(1.0, state, ()), [mover])
-    (moved,) = plan.movers_at(3.0)
-    assert moved.position == (12.0, 10.0) and moved.mover
+    (moved,) = plan.movers_at(1.5)
+    assert moved.position == (10.5, 10.0) and moved.mover
+    (far,) = plan.movers_at(30.0)   # a track is a guess: predicted PREDICT_MOVERS (1 s) at most
+    assert far.position == (11.0, 10.0)
 
 
 def test_plan_latency_hands_a_plan_over_only_after_its_latency() -> None:

@@ -81,3 +81,17 @@ def test_a_plan_aimed_past_the_goal_allows_nothing_once_the_robot_is_past_it() -
     assert nav.target is not None and nav.target[0] > 20.0   # aimed beyond the goal: no slow-down before it
     assert command[0] > 0.0
     assert nav.speed_allowed(np.array([20.5, 10.0]), p.dt) == 0.0
+
+
+def test_a_steered_robot_slowed_keeps_its_curvature() -> None:
+    p = PlannerParams()
+    world = World.from_obstacles((0.0, 0.0, 40.0, 20.0), [])
+    spec = RobotSpec('r1', 'diff_drive', (5.0, 10.0, 0.0), (20.0, 10.0), 0.3)
+    nav = make_navigator('fastep_route', spec, 0.3, world, p, np.random.default_rng(0))
+    nav.set_goal((20.0, 10.0))
+    nav.update(0.0, np.array([5.0, 10.0, 0.0]), ())
+    law = nav.speed_law()
+    assert law is not None
+    near_goal = np.array([19.9, 10.0, 0.0])
+    slowed = law.regulate(near_goal, np.array([1.0, 0.4]), p.dt)
+    assert slowed[0] < 1.0 and slowed[1] / slowed[0] == pytest.approx(0.4)
