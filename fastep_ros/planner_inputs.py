@@ -163,8 +163,8 @@ class PlannerInputs(PlannerReports):
         # In lock step odometry is of its stamp's time: the start state (stamped 0) is heard again once time runs.
         self.odom, self.odom_received, self.odom_problem = odom, min(now, stamp) if self.locked() else now, ''
         self.odom_stamp = stamp if stamp > 0.0 else self.odom_received
-        if frame == self.odom_frame_id:
-            self.map_from_odom.add_odometry(self.odom_stamp, pose)
+        # Kept in either frame: localization finds the odometry of its stamp in it, a scan the pose of its stamp.
+        self.map_from_odom.add_odometry(self.odom_stamp, pose)
         self.odom_heard += 1
         if self.odom_heard == 1:
             self.publish_status(force=True)   # a launcher waits for the odometry path to be up
@@ -252,6 +252,8 @@ class PlannerInputs(PlannerReports):
             return   # where the scan was taken from is not known
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         pose = (float(state[0]), float(state[1]), heading(self.model, state))
+        if at is None and stamp > 0.0:
+            pose = self.pose_at(stamp) or pose   # where the robot was when the scan was taken
         if told is None:   # the robots and movers the robot is told of (a planning pass hands its snapshot's)
             told = self.told_others(t)
         try:
@@ -309,6 +311,15 @@ class PlannerInputs(PlannerReports):
             # Latency compensation: the plant has applied the last command since the odometry was stamped.
             state = self.navigator.model.integrate(state, self.last_command, lag)
         return state, ''
+
+    def pose_at(self, stamp: float) -> tuple[float, float, float] | None:
+        """The robot's map pose (x, y, the scanner's heading) at `stamp`, interpolated from its odometry; None when
+        the odometry kept does not reach it (a scan stamped after the newest odometry: the state now is nearer)."""
+        odometry, transform = self.map_from_odom.interpolated(stamp), self.map_to_odom()
+        if odometry is None or transform is None:
+            return None
+        x, y, yaw = frames.compose(transform, odometry)
+        return x, y, 0.0 if self.model == 'point_mass' else yaw
 
     def lag(self, t: float, stamp: float) -> float:
         """How far to predict a message stamped `stamp` forward to the control time t (not at all within STAMP_EPS:

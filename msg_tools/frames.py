@@ -156,6 +156,19 @@ class MapFromOdom:
             i -= 1
         return self.poses[i]
 
+    def interpolated(self, stamp: float) -> Pose2D | None:
+        """The odometry pose at `stamp`, interpolated between the kept poses around it (linearly, the yaw along the
+        shorter turn); None outside the kept stamps (a scan stamped after the newest odometry, or long ago)."""
+        stamps = self.stamps
+        if not stamps or not stamps[0] <= stamp <= stamps[-1]:
+            return None
+        i = bisect.bisect_left(stamps, stamp)
+        if stamps[i] == stamp or i == 0:
+            return self.poses[i]
+        (t0, a), (t1, b) = (stamps[i - 1], self.poses[i - 1]), (stamps[i], self.poses[i])
+        share = (stamp - t0) / (t1 - t0) if t1 > t0 else 1.0
+        return (a[0] + share * (b[0] - a[0]), a[1] + share * (b[1] - a[1]), _wrap(a[2] + share * _wrap(b[2] - a[2])))
+
     def add_localization(self, stamp: float, pose: Pose2D) -> None:
         odometry = self.odometry_at(stamp)
         if odometry is None:

@@ -8,6 +8,7 @@ import math
 from typing import Any
 
 import numpy as np
+import pytest
 from rclpy.parameter import Parameter
 from rclpy.time import Time
 from visualization_msgs.msg import MarkerArray
@@ -112,5 +113,31 @@ def test_a_scan_that_is_not_one_is_ignored_with_a_reason(context: Any) -> None:
         good.ranges[0] = math.nan   # one reading that is not a return: taken as none (REP-117)
         node.on_scan(good)
         assert node.scan_problem == '' and node.scan_perception.scans == 1
+    finally:
+        node.destroy_node()
+
+
+def test_a_scan_is_placed_where_the_robot_was_at_its_stamp(context: Any) -> None:
+    """Off lock step, a scan is perceived from the pose the odometry gives for its stamp (interpolated), not from
+    where the robot is when it is perceived: a turning robot does not smear what it sees."""
+    node = make(context, model='diff_drive', robot_radius=0.3, use_sim_time=False)
+    poses: list[tuple[float, float, float]] = []
+    update = node.scan_perception.update
+
+    def kept(msg: Any, t: float, pose: Any, *args: Any) -> Any:
+        poses.append(tuple(pose))
+        return update(msg, t, pose, *args)
+    node.scan_perception.update = kept   # type: ignore[method-assign]  # see the pose the scan is placed at
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+        reading = scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0), 0.0, np.array([KNOWN.center]),
+                       np.array([KNOWN.radius]))
+        now = node.now()
+        for stamp, state in ((now - 0.2, [2.0, 10.0, 0.0]), (now - 0.1, [4.0, 10.0, 1.0])):
+            node.on_odom(convert.state_to_odometry(state, convert.seconds_to_stamp(stamp)))
+        node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(now - 0.15)))
+        assert poses and poses[-1] == pytest.approx((3.0, 10.0, 0.5), abs=1e-4)   # stamps are whole ns
+        node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(now - 0.05)))
+        assert poses[-1] == pytest.approx((4.0, 10.0, 1.0))   # newer than the odometry: the state now
     finally:
         node.destroy_node()
