@@ -56,7 +56,7 @@ _START_FORM = {2: '[x, y]', 3: '[x, y, theta]', 4: '[x, y, theta0, theta1]'}
 _TOP_KEYS = ('name', 'description', 'workspace', 'obstacles', 'robots', 'planner')
 _ROBOT_KEYS = ('name', 'model', 'start', 'goal', 'radius')
 _OPTIONAL_ROBOT_KEYS = ('sensor',)
-_SENSOR_KEYS = ('range', 'fov', 'beams', 'noise')
+_SENSOR_KEYS = ('range', 'fov', 'beams', 'noise', 'mount')
 _OBSTACLE_EXTRAS = ('motion', 'known', 'position_sigma')   # v2: beside the shape key of an obstacle entry
 _MOTION_KEYS = ('waypoints', 'speed')
 _TRACTOR_KEYS = ('length', 'trailer_length', 'width', 'hitch_offset')
@@ -420,7 +420,8 @@ def _sensor(value: Any, path: str) -> LaserSpec:
         fov = min(fov, 2.0 * math.pi)
     beams = _integer(body['beams'], f'{path}.beams', 1, MAX_BEAMS) if 'beams' in body else defaults.beams
     noise = _non_negative(body['noise'], f'{path}.noise') if 'noise' in body else defaults.noise
-    return LaserSpec(rng, fov, beams, noise)
+    mount = _numbers(body['mount'], f'{path}.mount', 3, '[x, y, yaw]') if 'mount' in body else defaults.mount
+    return LaserSpec(rng, fov, beams, noise, (mount[0], mount[1], mount[2]))
 
 
 def _robot_name(value: Any, path: str) -> str:
@@ -465,6 +466,9 @@ def _robot(value: Any, path: str) -> RobotSpec:
                       **_tractor_dimensions(data, path))
     if model == 'tractor_trailer':
         _check_tractor_radius(robot, path)
+    if robot.sensor is not None and math.hypot(*robot.sensor.mount[:2]) > robot.radius:
+        raise _Invalid(f'{path}.sensor.mount must lie on the robot: within its radius {robot.radius:g} m of its '
+                       f'reference point, got {list(robot.sensor.mount)}')
     return robot
 
 
@@ -664,7 +668,8 @@ def scenario_data(scenario: Scenario) -> dict[str, Any]:
                         hitch_offset=robot.hitch_offset)
         if robot.sensor is not None:
             item['sensor'] = {'range': robot.sensor.range, 'fov': robot.sensor.fov, 'beams': robot.sensor.beams,
-                              'noise': robot.sensor.noise}
+                              'noise': robot.sensor.noise,
+                              **({'mount': list(robot.sensor.mount)} if any(robot.sensor.mount) else {})}
         robots.append(item)
     defaults = PlannerParams()
     planner = {name: getattr(scenario.planner, name) for name in PlannerParams.names()

@@ -145,8 +145,9 @@ def plant_params(spec: RobotSpec, sim_time: bool, params: PlannerParams | None =
         # Integrated at 50 Hz, told at the planners' control rate: each planner takes every robot's odometry.
         out.update(odom_rate_hz=1.0 / (params or PlannerParams()).dt)
     if spec.sensor is not None:
+        mount = [float(v) for v in spec.sensor.mount] if any(spec.sensor.mount) else []
         out.update(sensor=[float(spec.sensor.range), float(spec.sensor.fov), float(spec.sensor.beams),
-                           float(spec.sensor.noise)], scenario=scenario, seed=int(seed), robot_index=int(index),
+                           float(spec.sensor.noise), *mount], scenario=scenario, seed=int(seed), robot_index=int(index),
                    scan_rate_hz=1.0 / (params or PlannerParams()).dt)
     if spec.model == 'tractor_trailer':
         out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
@@ -168,6 +169,8 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
         out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
                    hitch_offset=float(spec.hitch_offset))
     out.update(_planner_overrides(scenario.planner))
+    if spec.sensor is not None and any(spec.sensor.mount):
+        out['laser_mount'] = [float(v) for v in spec.sensor.mount]   # its scans come in <ns>/laser
     if spec.model == 'diff_drive' and spec.goal_heading is None:
         out['goal_heading'] = 0   # the goal's orientation is any: the robot stops where it arrives, as in fastep-sim
     return out

@@ -214,6 +214,9 @@ class PlannerNode(PlannerInputs):
             'longer ago is stale: the robot is held still; 0 disables both', value_range=(0.0, math.inf),
             read_only=False)
         workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
+        laser_mount = declare(self, 'laser_mount', None, '[x (m), y (m), yaw (rad)]: where the scanner sits in '
+                              'base_link, for scans in a frame of their own (the static transform base_link -> '
+                              'the scan\'s frame; /tf_static is not read here); empty: scans must be in base_link')
         self.obstacle_source = declare(self, 'obstacle_source', 'markers', 'where the obstacles come from: markers '
                                        '(the /obstacles MarkerArray of fastep-map: circles and walls) | map (the '
                                        'occupied cells of the /map OccupancyGrid, as Nav2\'s map_server publishes '
@@ -255,6 +258,10 @@ class PlannerNode(PlannerInputs):
         self.rng = stream_rng(self.seed, self.seed_stream)
         self.odom_frame_id = odom_frame_id or frames.odom_frame(self.get_namespace())
         self.base_frame_id = frames.base_frame(self.get_namespace())
+        if laser_mount and (len(laser_mount) != 3 or not all(math.isfinite(v) for v in laser_mount)):
+            raise StartupError(f'parameter laser_mount must be [x, y, yaw], three finite numbers, got {laser_mount}')
+        self.laser_mount: frames.Pose2D | None = \
+            (float(laser_mount[0]), float(laser_mount[1]), float(laser_mount[2])) if laser_mount else None
         self.map_from_odom = frames.MapFromOdom()
         self.body_yaw = 0.0   # map-frame heading of base_link at the last state: turns map commands into body ones
 

@@ -73,6 +73,8 @@ class PlannerInputs(PlannerReports):
     tracked_pub: Publisher
     lock_step: bool
     lock: LockStep
+    base_frame_id: str
+    laser_mount: frames.Pose2D | None
     planning: PlanningThread[Any, Plan] | None
     control_tick: ControlTick | None
     latest_scan: LaserScan | None
@@ -254,6 +256,13 @@ class PlannerInputs(PlannerReports):
         pose = (float(state[0]), float(state[1]), heading(self.model, state))
         if at is None and stamp > 0.0:
             pose = self.pose_at(stamp) or pose   # where the robot was when the scan was taken
+        mount, problem = self.scanner_mount(msg.header.frame_id)
+        if mount is None:
+            self.scan_problem = problem
+            self.get_logger().warning(problem, throttle_duration_sec=5.0)
+            return
+        if mount != frames.IDENTITY:
+            pose = frames.compose(pose, mount)   # the scanner's pose: where its beams start, along its zero angle
         if told is None:   # the robots and movers the robot is told of (a planning pass hands its snapshot's)
             told = self.told_others(t)
         try:
@@ -311,6 +320,16 @@ class PlannerInputs(PlannerReports):
             # Latency compensation: the plant has applied the last command since the odometry was stamped.
             state = self.navigator.model.integrate(state, self.last_command, lag)
         return state, ''
+
+    def scanner_mount(self, frame: str) -> tuple[frames.Pose2D | None, str]:
+        """Where a scan in `frame` was taken on the robot: base_link (or no frame) is the reference point; any other
+        frame is the scanner's own, mounted at laser_mount; None and why when that is not given."""
+        if frame in ('', self.base_frame_id, 'base_link'):
+            return frames.IDENTITY, ''
+        if self.laser_mount is None:
+            return None, (f'scan ignored: its frame {frame!r} is not {self.base_frame_id!r} and parameter laser_mount '
+                          f'(where that frame sits in base_link) is not set')
+        return self.laser_mount, ''
 
     def pose_at(self, stamp: float) -> tuple[float, float, float] | None:
         """The robot's map pose (x, y, the scanner's heading) at `stamp`, interpolated from its odometry; None when

@@ -51,6 +51,7 @@ from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
+from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
@@ -148,8 +149,10 @@ class PlantNode(ManagedNode):
         clock_timeout = declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
                                 'seconds is a warning on /diagnostics', value_range=PERIOD_RANGE, unit=' s',
                                 read_only=False)
-        sensor = declare(self, 'sensor', None, 'a laser scanner: [range (m), fov (rad), beams, noise (m)] (a '
-                         'scenario robot\'s `sensor`); empty: none. It scans the world of `scenario`, the truth')
+        sensor = declare(self, 'sensor', None, 'a laser scanner: [range (m), fov (rad), beams, noise (m)] or with '
+                         'its mount on the robot [range, fov, beams, noise, x (m), y (m), yaw (rad)] (a scenario '
+                         'robot\'s `sensor`); empty: none. It scans the world of `scenario`, the truth; a mounted '
+                         'one\'s scans are in <ns>/laser (base_link -> laser on /tf_static where TF is published)')
         scenario = declare(self, 'scenario', '', 'with a sensor: the scenario file or built-in name whose true world '
                            '(every still obstacle, known or not, where it is; every mover where it is at the '
                            'integrated time) the scanner sees')
@@ -188,6 +191,9 @@ class PlantNode(ManagedNode):
         self.frame_id = frame_id or frames.odom_frame(self.get_namespace())
         self.child_frame_id = frames.base_frame(self.get_namespace())
         self.trailer_frame_id = frames.trailer_frame(self.get_namespace())
+        self.scan_frame_id = self.child_frame_id   # <ns>/laser for a scanner mounted off the reference point
+        if self.scanner is not None and any(self.scanner.spec.mount):
+            self.scan_frame_id = frames.frame_name(self.get_namespace(), 'laser')
         self.step = 1.0 / self.rate_hz
         self.odom_period = 1.0 / odom_rate if odom_rate > 0.0 else 0.0
         self.tick: int | None = None           # integrated time = tick * step
@@ -212,8 +218,13 @@ class PlantNode(ManagedNode):
         self.cmd_type = TwistStamped if stamped else Twist
         self.cmd_sub = self.create_subscription(self.cmd_type, interface.CMD_VEL, take_cmd_vel, LATEST, raw=True)
         self.tf = TfBroadcaster(self)
-        if self.publish_map_to_odom and self.frame_id != interface.MAP_FRAME:
-            self.tf.send_static([frames.static_map_to_odom(interface.MAP_FRAME, self.frame_id)])
+        statics = [frames.static_map_to_odom(interface.MAP_FRAME, self.frame_id)] \
+            if self.publish_map_to_odom and self.frame_id != interface.MAP_FRAME else []
+        if self.scan_frame_id != self.child_frame_id and self.scanner is not None:
+            statics.append(frames.transform_stamped(self.child_frame_id, self.scan_frame_id, self.scanner.spec.mount,
+                                                    Time()))
+        if statics:
+            self.tf.send_static(statics)   # one message: /tf_static keeps the last one
         self.timer = self.create_timer(self.step, self.on_timer)
         self.steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick, clock=self.steady)
@@ -236,14 +247,16 @@ class PlantNode(ManagedNode):
         """The laser scanner of `sensor` on the true world of `source`; None without a sensor."""
         if not sensor:
             return None
-        if len(sensor) != 4:
-            raise StartupError(f'parameter sensor must be [range, fov, beams, noise], got {sensor}')
+        if len(sensor) not in (4, 7):
+            raise StartupError(f'parameter sensor must be [range, fov, beams, noise] or [range, fov, beams, noise, '
+                               f'x, y, yaw], got {sensor}')
         if not source:
             raise StartupError('parameter scenario is required with a sensor (the world it scans)')
         if seed < 0 or index < 0:
             raise StartupError(f'parameters seed and robot_index must be >= 0, got {seed} and {index}')
         try:
-            spec = LaserSpec(float(sensor[0]), float(sensor[1]), int(sensor[2]), float(sensor[3]))
+            mount = (float(sensor[4]), float(sensor[5]), float(sensor[6])) if len(sensor) == 7 else (0.0, 0.0, 0.0)
+            spec = LaserSpec(float(sensor[0]), float(sensor[1]), int(sensor[2]), float(sensor[3]), mount)
         except ValueError as exc:
             raise StartupError(f'parameter sensor: {exc}') from None
         try:
@@ -507,11 +520,12 @@ class PlantNode(ManagedNode):
             t = self.tick * self.step
             if t + 1e-9 >= scanner.next_time:
                 scanner.next_time = t + scanner.period
-                # The scanner at base_link along the heading (a point mass: along +x; perception.belief.heading).
+                # The scanner where it is mounted on the robot (a point mass's frame looks along +x:
+                # perception.belief.heading); a mounted one's scans are in its own frame, <ns>/laser.
                 yaw = 0.0 if self.model_name == 'point_mass' else float(self.state[2])
-                reading = scanner.truth.scan(scanner.spec, (float(self.state[0]), float(self.state[1]), yaw), t,
-                                             scanner.rng)
-                self.scan_pub.publish(convert.scan_to_laser_scan(reading, stamp, self.child_frame_id))
+                pose = scanner.spec.pose_on((float(self.state[0]), float(self.state[1]), yaw))
+                reading = scanner.truth.scan(scanner.spec, pose, t, scanner.rng)
+                self.scan_pub.publish(convert.scan_to_laser_scan(reading, stamp, self.scan_frame_id))
 
 
 def main(args: Sequence[str] | None = None) -> int:

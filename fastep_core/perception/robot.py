@@ -50,7 +50,7 @@ class SensingRobot:
         visible = [r for k, r in enumerate(robots) if k != self.index]
         centres = np.array([r.position for r in visible], dtype=float).reshape(-1, 2)
         radii = np.array([r.radius for r in visible], dtype=float)
-        pose = (float(state[0]), float(state[1]), heading(self.model, state))
+        pose = self.spec.pose_on((float(state[0]), float(state[1]), heading(self.model, state)))   # the scanner's
         scan = self.truth.scan(self.spec, pose, t, self.rng, (centres, radii))
         belief = self.perception.update(t, pose, scan, others)
         self.recent.add(scan, pose)

@@ -62,12 +62,14 @@ beam (fan_hits): seen from so near, its angle is too wide or too ill-conditioned
 
 @dataclass(frozen=True)
 class LaserSpec:
-    """A scanner's parameters (a scenario robot's `sensor`): range_max (m), fov (rad), beams, noise (m)."""
+    """A scanner's parameters (a scenario robot's `sensor`): range_max (m), fov (rad), beams, noise (m), and where
+    it sits on the robot: mount (x, y, yaw) in the robot's frame (m, rad; the reference point facing ahead)."""
 
     range: float = DEFAULT_RANGE
     fov: float = DEFAULT_FOV
     beams: int = DEFAULT_BEAMS
     noise: float = DEFAULT_NOISE
+    mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.range) and self.range > 0.0):
@@ -78,6 +80,18 @@ class LaserSpec:
             raise ValueError(f'beams must be an integer in [1, {MAX_BEAMS}], got {self.beams}')
         if not (math.isfinite(self.noise) and self.noise >= 0.0):
             raise ValueError(f'noise must be >= 0, got {self.noise}')
+        if len(self.mount) != 3 or not all(math.isfinite(v) for v in self.mount):
+            raise ValueError(f'mount must be three finite numbers [x, y, yaw], got {self.mount}')
+
+    def pose_on(self, robot: Sequence[float]) -> tuple[float, float, float]:
+        """The scanner's pose (x, y, heading) on a robot at `robot` (x, y, heading of the robot's frame)."""
+        x, y, heading = float(robot[0]), float(robot[1]), float(robot[2])
+        mx, my, myaw = self.mount
+        if mx == 0.0 and my == 0.0 and myaw == 0.0:
+            return x, y, heading   # at the reference point: the pose itself, to the bit
+        c, s = math.cos(heading), math.sin(heading)
+        turned = heading + myaw
+        return x + c * mx - s * my, y + s * mx + c * my, math.atan2(math.sin(turned), math.cos(turned))
 
     @property
     def full_turn(self) -> bool:

@@ -157,3 +157,26 @@ def test_two_diff_drive_bases_through_fastep_launch(tmp_path: Path) -> None:
     assert report.main([str(recorded), '--out', str(tmp_path / 'report')]) == 0
     summary = json.loads((tmp_path / 'report' / 'report.json').read_text())
     assert {r['name']: r['model'] for r in summary['robots']} == {'d1': 'diff_drive', 'd2': 'diff_drive'}
+
+
+def test_launch_passes_a_mounted_laser_to_the_plant_and_the_planner(tmp_path: Path) -> None:
+    path = write(tmp_path / 'mounted.yaml', TWO_BASES.replace(
+        'radius: 0.35', 'radius: 0.35\n    sensor: {range: 6.0, beams: 90, mount: [0.2, 0.0, 0.1]}', 1))
+    scenario = load_scenario(str(path))
+    index = next(k for k, robot in enumerate(scenario.robots) if robot.sensor is not None)
+    plant = launch.plant_params(scenario.robots[index], True, scenario.planner, scenario=str(path), index=index)
+    assert plant['sensor'][4:] == pytest.approx([0.2, 0.0, 0.1])
+    planner = launch.planner_params(scenario, index, 'fastep_route', 0, True)
+    assert planner['laser_mount'] == pytest.approx([0.2, 0.0, 0.1])
+
+
+def test_a_plant_with_a_mounted_laser_scans_from_the_mount_in_its_own_frame(context: Any, tmp_path: Path) -> None:
+    path = tmp_path / 'mounted.yaml'
+    write(path, TWO_BASES)
+    node = make(PlantNode, context, '/d1', model='diff_drive', start=[2.0, 2.0, 0.0], scenario=str(path),
+                sensor=[6.0, 6.2832, 90.0, 0.0, 0.2, 0.0, 0.0], use_sim_time=False)
+    try:
+        assert node.scanner is not None and node.scanner.spec.mount == (0.2, 0.0, 0.0)
+        assert node.scan_frame_id == 'd1/laser'
+    finally:
+        node.destroy_node()

@@ -141,3 +141,28 @@ def test_a_scan_is_placed_where_the_robot_was_at_its_stamp(context: Any) -> None
         assert poses[-1] == pytest.approx((4.0, 10.0, 1.0))   # newer than the odometry: the state now
     finally:
         node.destroy_node()
+
+
+def test_a_scan_in_a_frame_of_its_own_needs_laser_mount_and_is_placed_at_it(context: Any) -> None:
+    reading = scan(SPEC, (3.25, 10.0, 0.0), np.random.default_rng(0), 0.0, np.array([KNOWN.center]),
+                   np.array([KNOWN.radius]))
+    for mount in (None, [0.25, 0.0, 0.0]):
+        extra = {} if mount is None else {'laser_mount': mount}
+        node = make(context, model='diff_drive', robot_radius=0.3, use_sim_time=False, **extra)
+        poses: list[tuple[float, float, float]] = []
+        update = node.scan_perception.update
+
+        def kept(msg: Any, t: float, pose: Any, *args: Any) -> Any:
+            poses.append(tuple(pose))
+            return update(msg, t, pose, *args)
+        node.scan_perception.update = kept   # type: ignore[method-assign]  # see the pose the scan is placed at
+        try:
+            node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+            node.on_odom(convert.state_to_odometry([3.0, 10.0, 0.0], convert.seconds_to_stamp(node.now())))
+            node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(node.now()), frame_id='laser'))
+            if mount is None:
+                assert not poses and "frame 'laser'" in node.scan_problem and 'laser_mount' in node.scan_problem
+            else:
+                assert poses[-1] == pytest.approx((3.25, 10.0, 0.0), abs=1e-6) and node.scan_problem == ''
+        finally:
+            node.destroy_node()
