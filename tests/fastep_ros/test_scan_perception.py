@@ -117,17 +117,23 @@ def test_a_scan_that_is_not_one_is_ignored_with_a_reason(context: Any) -> None:
         node.destroy_node()
 
 
-def test_a_scan_is_placed_where_the_robot_was_at_its_stamp(context: Any) -> None:
-    """Off lock step, a scan is perceived from the pose the odometry gives for its stamp (interpolated), not from
-    where the robot is when it is perceived: a turning robot does not smear what it sees."""
-    node = make(context, model='diff_drive', robot_radius=0.3, use_sim_time=False)
-    poses: list[tuple[float, float, float]] = []
+def placed_at(node: PlannerNode) -> list[tuple[float, ...]]:
+    """The poses the node's scans are placed at from now on (filled as they are perceived)."""
+    poses: list[tuple[float, ...]] = []
     update = node.scan_perception.update
 
     def kept(msg: Any, t: float, pose: Any, *args: Any) -> Any:
         poses.append(tuple(pose))
         return update(msg, t, pose, *args)
     node.scan_perception.update = kept   # type: ignore[method-assign]  # see the pose the scan is placed at
+    return poses
+
+
+def test_a_scan_is_placed_where_the_robot_was_at_its_stamp(context: Any) -> None:
+    """Off lock step, a scan is perceived from the pose the odometry gives for its stamp (interpolated), not from
+    where the robot is when it is perceived: a turning robot does not smear what it sees."""
+    node = make(context, model='diff_drive', robot_radius=0.3, use_sim_time=False)
+    poses = placed_at(node)
     try:
         node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
         reading = scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0), 0.0, np.array([KNOWN.center]),
@@ -149,13 +155,7 @@ def test_a_scan_in_a_frame_of_its_own_needs_laser_mount_and_is_placed_at_it(cont
     for mount in (None, [0.25, 0.0, 0.0]):
         extra = {} if mount is None else {'laser_mount': mount}
         node = make(context, model='diff_drive', robot_radius=0.3, use_sim_time=False, **extra)
-        poses: list[tuple[float, float, float]] = []
-        update = node.scan_perception.update
-
-        def kept(msg: Any, t: float, pose: Any, *args: Any) -> Any:
-            poses.append(tuple(pose))
-            return update(msg, t, pose, *args)
-        node.scan_perception.update = kept   # type: ignore[method-assign]  # see the pose the scan is placed at
+        poses = placed_at(node)
         try:
             node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
             node.on_odom(convert.state_to_odometry([3.0, 10.0, 0.0], convert.seconds_to_stamp(node.now())))
