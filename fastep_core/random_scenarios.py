@@ -42,6 +42,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core import cli
+from fastep_core.dense_clutter import DENSE_FAMILIES, dense_clutter_data
 from fastep_core.dynamic_families import DYNAMIC_FAMILIES, dynamic_family_data
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import Circle
@@ -61,8 +62,9 @@ _ATTEMPTS = 200  # random layouts tried per scenario before giving up (a few are
 FAMILIES: tuple[str, ...] = ('circle_field', 'circles_walls', 'u_trap', 'multi_robot', 'tractor_trailer',
                              'diff_drive_walls', 'diff_drive_robots')
 """The static world families of random_family_data, in the order tables list them (the default benchmark)."""
-ALL_FAMILIES: tuple[str, ...] = FAMILIES + DYNAMIC_FAMILIES
-"""Every family random_family_data knows: the static ones and the v2 ones (dynamic_families.py)."""
+ALL_FAMILIES: tuple[str, ...] = FAMILIES + DYNAMIC_FAMILIES + DENSE_FAMILIES
+"""Every family random_family_data knows: the static ones, the v2 ones (dynamic_families.py) and dense clutter
+(dense_clutter.py)."""
 FAMILY_SEED0 = 1_000_000
 """First world seed of the families benchmark: disjoint from the seeds the tests use."""
 FIELD_SIZE = 50.0   # metres: the square workspace of circle fields and circles + walls
@@ -309,6 +311,8 @@ def random_family_data(family: str, seed: int) -> dict[str, Any]:
         data = diff_drive_data(random_scenario_data(seed, n_robots=count, tractor_share=0.0), seed)
     elif family in DYNAMIC_FAMILIES:
         data = dynamic_family_data(family, seed)
+    elif family in DENSE_FAMILIES:
+        data = dense_clutter_data(seed, on_map=family == 'dense_clutter')
     else:
         raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
     return {**data, 'name': f'{family}_{seed}'}
