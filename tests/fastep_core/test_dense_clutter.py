@@ -25,7 +25,8 @@ def test_a_world_is_a_cylinder_field_between_a_closed_start_box_and_a_goal_10_m_
     assert solvable(scenario)
     (robot,) = scenario.robots
     assert robot.model == 'diff_drive' and robot.radius == ROBOT_RADIUS and scenario.planner.max_speed == 2.0
-    assert robot.sensor is not None and robot.sensor.beams == 720 and robot.sensor.fov == pytest.approx(1.5 * math.pi, abs=1e-8)
+    assert robot.sensor is not None and robot.sensor.beams == 720
+    assert robot.sensor.fov == pytest.approx(1.5 * math.pi, abs=1e-8)   # 270 degrees
     assert math.hypot(robot.goal[0] - robot.start[0], robot.goal[1] - robot.start[1]) == pytest.approx(10.0)
     cylinders = [o for o in data['obstacles'] if 'circle' in o]
     assert len(cylinders) > 50   # walls and pockets, not a few stray poles
