@@ -24,7 +24,7 @@ from fastep_core.sensing.laser import LaserSpec
 __all__ = ['SensingRobot']
 
 FloatArray = NDArray[np.float64]
-RECENT_SCANS = 2.0   # s of scans whose free space counts as evidence (a reversing robot's way, planning/control.py)
+RECENT_SCANS = 30.0  # s of scans whose free space counts as evidence (a reversing robot's way, planning/control.py)
 
 
 class SensingRobot:

@@ -220,11 +220,16 @@ class RouteSpeed:
     holonomic: bool
     clearance_at: tuple[float, float, float] | None   # a clearance known at a point (x, y, clearance)
 
-    def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
+    def regulate(self, state: FloatArray, command: FloatArray, dt: float,
+                 last: FloatArray | None = None) -> FloatArray:
         """The command no faster than `allowed`, scaled whole (a steered robot keeps its curvature, a tractor its
-        steering angle within its lock)."""
+        steering angle within its lock), and never braking harder than max_acceleration from `last`, the command
+        the robot got last tick (where a new bend or a tight gap asks for less at once)."""
         allowed = self.allowed(state[:2], dt)
         speed = math.hypot(float(command[0]), float(command[1])) if self.holonomic else abs(float(command[0]))
+        if last is not None and self.params.max_acceleration > 0.0:
+            before = math.hypot(float(last[0]), float(last[1])) if self.holonomic else abs(float(last[0]))
+            allowed = max(allowed, min(speed, before - self.params.max_acceleration * dt))
         return command if speed <= allowed else command * (allowed / speed)
 
     def allowed(self, position: FloatArray, dt: float) -> float:

@@ -65,7 +65,8 @@ PENDING_FOR = 0.5   # seconds a step plan left unfinished (params.step_iteration
 class SpeedLaw(Protocol):
     """A speed limit on the controller's commands that depends on where the robot is (FAStep-Route's RouteSpeed)."""
 
-    def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray: ...
+    def regulate(self, state: FloatArray, command: FloatArray, dt: float,
+                 last: FloatArray | None = None) -> FloatArray: ...
 
 
 class Mode(str, Enum):
@@ -383,7 +384,7 @@ class Navigator:
         """The controller's command with the speed the way allows (`speed_law`: FAStep-Route's; the paper's
         controllers' command as it is)."""
         law = self.speed_law()
-        return command if law is None else law.regulate(state, command, dt)
+        return command if law is None else law.regulate(state, command, dt, getattr(self.controller, 'last', None))
 
     def speed_law(self) -> SpeedLaw | None:
         """What limits the controller's speed beyond its own law, frozen as it is now (the control loop uses it
@@ -619,7 +620,9 @@ class Navigator:
                                          (), self.guard_check.obstacle_margin))
         guarded = self.backup.drive(state, dt, lambda points: free_room(self.world, points, others),
                                     lambda command: self.guard(state, command, dt, others), free)
-        if self.backup.until > -math.inf:
+        if self.backup.looking:
+            self.reason = 'backing up: stuck; turning to see the space behind (no scan has seen it free)'
+        elif self.backup.until > -math.inf:
             self.reason = 'backing up: stuck'
         return guarded
 

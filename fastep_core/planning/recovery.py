@@ -51,7 +51,11 @@ HOLD_RELEASE = 0.25       # metres from where the guard first stopped it: until 
 BACKUP_SPEED = 0.25       # m/s of the backing-up recovery ...
 BACKUP_TIME = 4.0         # ... for this many seconds (1 m)
 MAX_RECOVERY_HITCH = 1.0  # rad: a recovery move may not fold the trailer beyond this (or beyond where it is)
-REVERSE_HORIZON = 1.0     # s: backing up with evidence goes on while this much of its move ahead is seen free
+REVERSE_HORIZON = 0.2     # s: backing up with evidence goes on while this much of its move ahead is seen free
+LOOK_TURN = 1.0            # rad/s: the turn in place of a robot that has no evidence to back up into
+MOVED_AT_LEAST = 0.2       # m: RecentScans keeps a scan from where the robot has moved this far, or ...
+TURNED_AT_LEAST = 0.3      # rad: ... turned this far, since the last scan it kept, ...
+KEPT_SCANS = 50            # ... and this many at most (the free space of 10 m of way, whatever its age)
 
 # reverse_free checks the swept disc at its centre and on rings of half and all its radius (8 and 16 points).
 _RING_ANGLES = [np.linspace(0.0, 2.0 * math.pi, n, endpoint=False) for n in (8, 16)]
@@ -163,19 +167,30 @@ class SeenFree:
 
 
 class RecentScans:
-    """The scans of the last `keep` seconds (by their time stamps) and the free space they saw."""
+    """The scans of the last `keep` seconds (by their time stamps) and the free space they saw.
+
+    A scan from near where the last one kept was taken (within MOVED_AT_LEAST metres and TURNED_AT_LEAST
+    radians) is not kept beside it: it shows little new, and a robot that stands or shuffles would otherwise soon
+    keep only (KEPT_SCANS) scans from where it stands, none of the way it came (a 270-degree laser's blind
+    quarter behind it: no evidence to back up into, and a robot held in dense clutter stood there for good).
+    """
 
     def __init__(self, keep: float = 5.0) -> None:
         self.keep = keep
-        self.scans: deque[tuple[Scan, FloatArray]] = deque()
+        self.scans: deque[tuple[Scan, FloatArray]] = deque(maxlen=KEPT_SCANS)
         self._seen: SeenFree | None = None
 
     def add(self, scan: Scan, pose: ArrayLike) -> None:
         """A scan taken from pose (x, y, heading); scans older than `keep` before it are forgotten."""
-        self.scans.append((scan, np.array(pose, dtype=float)))
+        where = np.array(pose, dtype=float)
         while self.scans and self.scans[0][0].time < scan.time - self.keep:
             self.scans.popleft()
-        self._seen = None
+            self._seen = None
+        last = self.scans[-1][1] if self.scans else None
+        if last is None or math.hypot(where[0] - last[0], where[1] - last[1]) >= MOVED_AT_LEAST or \
+                abs(math.atan2(math.sin(where[2] - last[2]), math.cos(where[2] - last[2]))) >= TURNED_AT_LEAST:
+            self.scans.append((scan, where))
+            self._seen = None
 
     def seen(self) -> SeenFree:
         if self._seen is None:
@@ -254,6 +269,7 @@ class BackUp:
         self.speed = speed                       # m/s of every move (backup_speed(params))
         self.until = -math.inf                   # backing up until this time ...
         self.command: FloatArray | None = None   # ... with this command (a steered robot's choice, kept)
+        self.looking = False                     # turning in place to see behind it (no evidence to back into)
 
     def start(self, t: float) -> None:
         self.until, self.command = t + BACKUP_TIME, None
@@ -270,13 +286,19 @@ class BackUp:
         """This tick's command as `guard(command)` lets it through; a refused one ends the recovery. `free`, when
         given, is the evidence check (reverse_free over REVERSE_HORIZON): a move it refuses is not chosen, and
         the recovery ends, standing still, once the move it drives is refused."""
+        self.looking = False
         if free is None:
             command = self.choose(state, dt, room, lambda option: guard(option) is option)
         else:
             command = self.choose(state, dt, room, lambda option: guard(option) is option and free(option))
             if not free(command):
-                self.stop()
-                return np.zeros(2)
+                if self.model.holonomic or not self.model.turns_in_place:
+                    self.stop()
+                    return np.zeros(2)
+                # No scan has seen the space behind (a laser's blind quarter): turn in place to see it, and back
+                # up once a move is seen free (chosen afresh).
+                self.command, self.looking = None, True
+                command = np.array([0.0, LOOK_TURN])
         guarded = guard(command)
         if guarded is not command:
             self.stop()

@@ -19,7 +19,7 @@ from fastep_core.planning.recovery import (
     BACKUP_TIME,
     HOLD_BEFORE_STEP,
     HOLD_RELEASE,
-    REVERSE_HORIZON,
+    LOOK_TURN,
     BackUp,
     RecentScans,
     SeenFree,
@@ -106,6 +106,7 @@ def test_a_refused_backup_ends_the_recovery():
 
 # ------------------------------------------------------------------ reversing only into space seen free (issue 30)
 OPEN = World.from_obstacles([0, 0, 20, 20], [])
+HORIZON = 1.0   # s: a quarter metre of backing up at BACKUP_SPEED (the recovery's checks look REVERSE_HORIZON ahead)
 BASE = DiffDrive(1.0, 2.0)
 FACING_EAST = np.array([5.0, 5.0, 0.0])
 BACK = np.array([-0.25, 0.0])
@@ -134,39 +135,39 @@ def test_the_swept_path_is_where_the_model_drives(model, state, command):
 def test_reversing_is_refused_where_the_laser_is_blind_and_allowed_where_it_saw():
     """The report: it reversed with the rear 90 degrees of its laser blind."""
     blind = seen(LASER_270, FACING_EAST)
-    assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, blind)
-    assert reverse_free(BASE, FACING_EAST, 0.3, -BACK, REVERSE_HORIZON, OPEN, blind)   # forward: seen
-    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, seen(LASER_360, FACING_EAST))
+    assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, blind)
+    assert reverse_free(BASE, FACING_EAST, 0.3, -BACK, HORIZON, OPEN, blind)   # forward: seen
+    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, seen(LASER_360, FACING_EAST))
     # A scan taken a moment earlier, facing the other way (before the robot turned), saw the space behind.
     earlier = (5.0, 5.0, math.pi)
     both = SeenFree.of_scans([(scan(LASER_270, FACING_EAST), FACING_EAST), (scan(LASER_270, earlier), earlier)])
-    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, both)
-    assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, SeenFree.of_scans([]))
+    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, both)
+    assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, SeenFree.of_scans([]))
 
 
 def test_reversing_is_refused_into_what_the_laser_saw_even_off_the_map():
     behind = seen(LASER_360, FACING_EAST, circles=[[4.45, 5.0]], radii=[0.1])   # 0.15 m behind; off the map
-    assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, behind)
+    assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, behind)
     assert reverse_free(BASE, FACING_EAST, 0.3, BACK, 0.2, OPEN, behind)   # 5 cm back keeps 10 cm from it
     beside = seen(LASER_360, FACING_EAST, circles=[[5.0, 6.0]], radii=[0.2])   # abeam: out of the way
-    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, beside)
+    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, beside)
 
 
 def test_reversing_is_refused_into_the_map_s_obstacles_robots_and_border_with_or_without_a_laser():
     wall = World.from_obstacles([0, 0, 20, 20], [Segment((4.6, 3.0), (4.6, 7.0))])
     everything = seen(LASER_360, FACING_EAST)   # a stale scan that did not see the wall
     for evidence in (None, everything):
-        assert reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, evidence)
-        assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, wall, evidence)
+        assert reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, evidence)
+        assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, wall, evidence)
         other = [OtherRobot('r2', (4.3, 5.1), (0.0, 0.0), 0.3)]
-        assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, evidence, other)
+        assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, evidence, other)
         at_border = np.array([0.5, 5.0, 0.0])
-        assert not reverse_free(BASE, at_border, 0.3, BACK, REVERSE_HORIZON, OPEN, None)
+        assert not reverse_free(BASE, at_border, 0.3, BACK, HORIZON, OPEN, None)
     # A robot already too near may back away (it comes no nearer), not closer.
     touching = World.from_obstacles([0, 0, 20, 20], [Circle((5.4, 5.0), 0.2)])   # 0.2 m from the robot's centre
-    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, touching)
-    assert not reverse_free(BASE, FACING_EAST, 0.3, -BACK, REVERSE_HORIZON, touching)
-    assert not reverse_free(BASE, FACING_EAST, 0.3, np.array([math.nan, 0.0]), REVERSE_HORIZON, OPEN)
+    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, touching)
+    assert not reverse_free(BASE, FACING_EAST, 0.3, -BACK, HORIZON, touching)
+    assert not reverse_free(BASE, FACING_EAST, 0.3, np.array([math.nan, 0.0]), HORIZON, OPEN)
 
 
 def test_a_full_turn_scan_covers_the_bearing_where_its_beams_wrap_round():
@@ -182,8 +183,18 @@ def test_recent_scans_forget_what_is_older_than_keep():
     recent = RecentScans(keep=2.0)
     earlier = (5.0, 5.0, math.pi)
     recent.add(scan(LASER_270, earlier, t=0.0), earlier)
-    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, _with(recent, 1.5))
-    assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, REVERSE_HORIZON, OPEN, _with(recent, 2.5))
+    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, _with(recent, 1.5))
+    assert not reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, _with(recent, 2.5))
+
+
+def test_recent_scans_keep_the_way_the_robot_came_while_it_stands():
+    recent = RecentScans(keep=30.0)
+    earlier = (5.0, 5.0, math.pi)   # looking back the way it will back up into
+    recent.add(scan(LASER_270, earlier, t=0.0), earlier)
+    for k in range(1, 100):         # 10 s of scans from where it stands, facing east: nothing new is seen
+        recent.add(scan(LASER_270, FACING_EAST, t=0.1 * k), FACING_EAST)
+    assert len(recent.scans) == 2
+    assert reverse_free(BASE, FACING_EAST, 0.3, BACK, HORIZON, OPEN, recent.seen())
 
 
 def _with(recent: RecentScans, t: float) -> SeenFree:
@@ -211,7 +222,7 @@ def test_backing_up_with_evidence_moves_only_into_space_seen_free():
     blind = seen(LASER_270, FACING_EAST, circles=None)
 
     def free(command):
-        return reverse_free(BASE, FACING_EAST, 0.3, command, REVERSE_HORIZON, wall_ahead, blind)
+        return reverse_free(BASE, FACING_EAST, 0.3, command, HORIZON, wall_ahead, blind)
 
     def room(points):
         return free_room(wall_ahead, points, [])
@@ -219,10 +230,11 @@ def test_backing_up_with_evidence_moves_only_into_space_seen_free():
     backup = BackUp(BASE)
     backup.start(0.0)
     out = backup.drive(FACING_EAST, 0.05, room, lambda c: c, free)
-    assert np.all(out == 0.0) and not backup.active(0.1)   # nothing seen behind, the wall ahead: it stays
+    # Nothing seen behind, the wall ahead: it turns in place to see behind, the recovery going on.
+    assert out.tolist() == [0.0, LOOK_TURN] and backup.looking and backup.active(0.1)
     seen_behind = SeenFree.of_scans([(scan(LASER_270, FACING_EAST), FACING_EAST),
                                      (scan(LASER_270, (5.0, 5.0, math.pi)), (5.0, 5.0, math.pi))])
     backup.start(0.0)
     out = backup.drive(FACING_EAST, 0.05, room, lambda c: c,
-                       lambda c: reverse_free(BASE, FACING_EAST, 0.3, c, REVERSE_HORIZON, wall_ahead, seen_behind))
+                       lambda c: reverse_free(BASE, FACING_EAST, 0.3, c, HORIZON, wall_ahead, seen_behind))
     assert out[0] == pytest.approx(-BACKUP_SPEED) and backup.active(0.1)
