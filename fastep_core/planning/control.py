@@ -78,16 +78,18 @@ class ControlTick:
     possibly on another thread)."""
 
     def __init__(self, navigator: Navigator, period: float | None = None) -> None:
+        # The pass's guard looks as far ahead as this one does (retune: Navigator.braking): a stricter control tick
+        # held robots for good while the pass, its own guard letting them go, never saw the hold (nor broke it).
         self.navigator = navigator
         self.period = navigator.params.dt if period is None else period   # the control tick (s)
         self.smoother = VelocitySmoother.for_model(navigator.model, navigator.params)
         self._last_t: float | None = None
-        self._open_world: World | None = None   # the plan's workspace without obstacles: the robots' check
         self.retune()
 
     def retune(self) -> None:
         """Take the navigator's parameters and controller afresh (after Navigator.retune)."""
         nav = self.navigator
+        nav.braking = nav.params.emergency_deceleration
         self.model = nav.model
         self.controller = copy.deepcopy(nav.controller)
         self._applied: Callable[[FloatArray], None] | None = getattr(self.controller, 'applied', None)
@@ -129,16 +131,8 @@ class ControlTick:
 
     def _guarded(self, world: World, state: FloatArray, command: FloatArray, dt: float,
                  others: Sequence[OtherRobot]) -> FloatArray:
-        """The guard's verdict: still obstacles a tick and the braking distance ahead; the other robots and movers a
-        tick ahead, as the pass's own guard sees them (they brake too, and a stricter look than the pass's held robots
-        face to face for good: the pass, seeing no hold, never called its hold breaker)."""
-        guarded = self.guard.check(world, state, command, self._ahead(dt), ())
-        if guarded is not command or not others:
-            return guarded
-        open_world = self._open_world
-        if open_world is None or open_world.workspace != world.workspace:
-            open_world = self._open_world = World.from_obstacles(world.workspace, [])
-        return self.guard.check(open_world, state, command, dt, others)
+        """The guard's verdict a tick and the braking distance ahead (as the pass's guard: Navigator.braking)."""
+        return self.guard.check(world, state, command, self._ahead(dt), others)
 
     def _ahead(self, dt: float) -> float:
         """How far ahead (s) the guard looks: a tick, and the time to brake at emergency_deceleration from the

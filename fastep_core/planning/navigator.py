@@ -113,6 +113,10 @@ class Navigator:
         # The free space recent scans saw, given where planning runs in real time (planning/control.py): backing up
         # only into it. None: the map alone, as in lock step.
         self.seen: SeenFree | None = None
+        # The guard's stop brakes at this (m/s^2) where a control loop smooths the commands (planning/control.py):
+        # the guard looks the braking distance further ahead. 0: a stop is immediate, as in lock step.
+        self.braking = 0.0
+        self._speed = 0.0   # of the last command (m/s)
         self._last_t: float | None = None
         self._path_checked = False                # has the goal been checked for a path
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
@@ -251,6 +255,8 @@ class Navigator:
             command = self.stand_clear(state, others)
         if self._applied is not None:
             self._applied(command)
+        self._speed = math.hypot(float(command[0]), float(command[1])) if self.model.holonomic else \
+            abs(float(command[0]))
         return command
 
     def turn_to_heading(self, state: FloatArray, dt: float) -> FloatArray | None:
@@ -512,6 +518,8 @@ class Navigator:
     def guard(self, state: FloatArray, command: FloatArray, dt: float,
               others: Sequence[OtherRobot]) -> FloatArray:
         """Stop instead of moving into an obstacle or within reach of another robot (planning/guard.py)."""
+        if self.braking > 0.0:   # its stops brake (planning/control.py): look as far ahead as that takes
+            dt += 0.5 * self._speed / self.braking
         guarded = self.guard_check.check(self.world, state, command, dt, others)
         if guarded is not command:
             self.reason = self.guard_check.reason

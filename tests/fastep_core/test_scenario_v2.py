@@ -156,7 +156,7 @@ BAD_SENSORS: list[tuple[dict[str, Any], str]] = [
     (sensor(beams=True), 'robots[0].sensor.beams must be a whole number in [1, 10000], got True'),
     (sensor(beams='360'), "robots[0].sensor.beams must be a finite number, got '360' (text, not a number"),
     (sensor(noise=-0.01), 'robots[0].sensor.noise must be >= 0, got -0.01'),
-    (sensor(rate=10), "robots[0].sensor: unknown key 'rate' (allowed: range, fov, beams, noise)"),
+    (sensor(rate=10), "robots[0].sensor: unknown key 'rate' (allowed: range, fov, beams, noise, mount)"),
 ]
 
 

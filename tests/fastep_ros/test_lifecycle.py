@@ -17,9 +17,13 @@ from fastep_ros.plant import PlantNode
 from fastep_testing.services import Services
 from msg_tools import convert
 
+# Every control tick plans, so a handler's effect is seen at once (the planning thread: test_planning_thread.py).
+SYNCHRONOUS = {'planning_thread': False}
+
 
 def make(cls: type, context: Any, **params: Any) -> Any:
-    return cls(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in params.items()])
+    return cls(context=context, parameter_overrides=[Parameter(k, value=v)
+                                                     for k, v in {**SYNCHRONOUS, **params}.items()])
 
 
 def _drive(node: PlannerNode) -> None:

@@ -78,8 +78,9 @@ class World:
     def __init__(self, context: Any, **params: Any) -> None:
         from rclpy.executors import SingleThreadedExecutor
         self.context = context
+        # Every control tick plans: the test's clock decides when (the planning thread: test_planning_thread.py).
         overrides = [Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0]), Parameter('max_speed', value=1.0),
-                     *(Parameter(k, value=v) for k, v in params.items())]
+                     Parameter('planning_thread', value=False), *(Parameter(k, value=v) for k, v in params.items())]
         self.planner = PlannerNode(context=context, namespace='/d1', parameter_overrides=overrides)
         self.planner.on_obstacles(convert.obstacles_to_marker_array([]))
         self.executor = SingleThreadedExecutor(context=context)
