@@ -618,16 +618,7 @@ class PlannerNode(PlannerInputs):
                 self.hold = problem
             else:
                 self.hold = ''
-                try:
-                    command = nav.update(t, state, self.other_robots(t))
-                    if not np.all(np.isfinite(command)):
-                        raise FloatingPointError(f'command {command.tolist()} is not finite')
-                except Exception as exc:  # a planner fault stops this robot, never the node
-                    command = np.zeros(2)
-                    if not self.fault_logged:
-                        self.get_logger().error(f'planner fault: {exc}\n{traceback.format_exc()}')
-                        self.fault_logged = True
-                    nav.fail(f'planner fault: {exc}')
+                command = self.navigate(nav, t, state, self.other_robots(t))
         self.publish_command(command, at)
         self.last_command = command
         if nav is not None:
@@ -684,18 +675,23 @@ class PlannerNode(PlannerInputs):
         if snapshot.scan is not None:
             self.perceive(snapshot.scan, t, state=state, told=snapshot.others)
         tracked = self.scan_perception.movers(t)
+        command = self.navigate(nav, t, state, [*snapshot.others, *tracked])
+        self.plan_tick = snapshot.tick
+        return Plan.of(nav, t, command, tracked)
+
+    def navigate(self, nav: Navigator, t: float, state: np.ndarray, others: list[OtherRobot]) -> np.ndarray:
+        """The navigator's update; a fault of the planner fails its goal and stops this robot, never the node."""
         try:
-            command = nav.update(t, state, [*snapshot.others, *tracked])
+            command = nav.update(t, state, others)
             if not np.all(np.isfinite(command)):
                 raise FloatingPointError(f'command {command.tolist()} is not finite')
+            return command
         except Exception as exc:  # a planner fault stops this robot, never the node
-            command = np.zeros(2)
             if not self.fault_logged:
                 self.get_logger().error(f'planner fault: {exc}\n{traceback.format_exc()}')
                 self.fault_logged = True
             nav.fail(f'planner fault: {exc}')
-        self.plan_tick = snapshot.tick
-        return Plan.of(nav, t, command, tracked)
+            return np.zeros(2)
 
     def publish_command(self, command: np.ndarray, at: float | None = None) -> None:
         """cmd_vel in the body frame: a point mass's map-frame velocity turned by its heading (the identity while

@@ -108,6 +108,14 @@ def start_driving(node: PlannerNode) -> None:
     node.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(node.now())))
 
 
+def drive_on_first_plan(node: PlannerNode) -> None:
+    """A goal, the world and odometry given, one control tick, and the first pass over."""
+    start_driving(node)
+    node.on_control()
+    wait_for(lambda: node.planning is not None and node.planning.busy_for == 0.0 and
+             node.planning.plan is not None, 'the first plan')
+
+
 def test_the_control_tick_drives_on_the_last_plan_while_a_pass_is_stuck_then_stops_when_it_is_too_old(
         context: Any) -> None:
     node = make(context, max_plan_age=0.2)   # 4 control periods at 20 Hz
@@ -257,9 +265,7 @@ def test_every_speed_parameter_set_at_runtime_takes_effect_as_set(context: Any) 
 def test_a_fault_of_the_control_tick_stops_the_robot_and_fails_the_goal_never_the_node(context: Any) -> None:
     node = make(context)
     try:
-        start_driving(node)
-        node.on_control()
-        wait_for(lambda: node.planning is not None and node.planning.plan is not None, 'the first plan')
+        drive_on_first_plan(node)
         control = node.control_tick
         assert control is not None
 
@@ -277,10 +283,7 @@ def test_a_fault_of_the_control_tick_stops_the_robot_and_fails_the_goal_never_th
 def test_a_new_goal_is_not_driven_to_on_the_last_goal_s_plan(context: Any) -> None:
     node = make(context)
     try:
-        start_driving(node)
-        node.on_control()
-        wait_for(lambda: node.planning is not None and node.planning.busy_for == 0.0 and
-                 node.planning.plan is not None, 'the first plan')
+        drive_on_first_plan(node)
         node.on_goal(convert.point_to_pose_stamped((18.0, 4.0)))
         assert node.planning is not None and node.planning.plan is None   # braking until the new goal's plan
     finally:
