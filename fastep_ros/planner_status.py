@@ -131,9 +131,9 @@ class PlannerReports(ManagedNode):
 
     def planning_ms(self) -> str:
         """'p50 / p99 / max' of the recent planning passes in ms ('' without the thread or before a pass)."""
-        if self.planning is None or not self.planning.pass_times.times:
+        if self.planning is None or not self.planning.pass_times:
             return ''
-        p50, p99, top = np.percentile(np.array(self.planning.pass_times.times) * 1e3, [50.0, 99.0, 100.0])
+        p50, p99, top = np.percentile(np.array(self.planning.pass_times) * 1e3, [50.0, 99.0, 100.0])
         return f'{p50:.3f} / {p99:.3f} / {top:.3f}'
 
     def control_ms(self, cpu: bool = False) -> str:

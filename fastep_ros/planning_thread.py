@@ -20,28 +20,15 @@ import sys
 import threading
 import time
 import traceback
-from dataclasses import dataclass
 from typing import Any, Callable, Generic, TypeVar
 
-__all__ = ['PassTimes', 'PlanningThread', 'SWITCH_INTERVAL']
+__all__ = ['PlanningThread', 'SWITCH_INTERVAL']
 
 SWITCH_INTERVAL = 0.0005   # s: how long a thread holding the GIL keeps another waiting for it, at most (default 5 ms)
 PASS_TIMES = 200           # passes whose wall times the diagnostics sum up
 
 Snapshot = TypeVar('Snapshot')
 PlanT = TypeVar('PlanT')
-
-
-@dataclass
-class PassTimes:
-    """Wall seconds of the recent planning passes."""
-
-    times: collections.deque[float]
-    longest: float = 0.0
-
-    def add(self, seconds: float) -> None:
-        self.times.append(seconds)
-        self.longest = max(self.longest, seconds)
 
 
 class PlanningThread(Generic[Snapshot, PlanT]):
@@ -57,7 +44,7 @@ class PlanningThread(Generic[Snapshot, PlanT]):
         self.plan: PlanT | None = None          # the newest plan (replaced whole: the control timer reads it)
         self.passes = 0
         self.pass_started: float | None = None  # perf_counter() when the pass under way began
-        self.pass_times = PassTimes(collections.deque(maxlen=PASS_TIMES))
+        self.pass_times: collections.deque[float] = collections.deque(maxlen=PASS_TIMES)   # wall seconds
         if sys.getswitchinterval() > SWITCH_INTERVAL:
             sys.setswitchinterval(SWITCH_INTERVAL)
         self._thread = threading.Thread(target=self._run, name='planning', daemon=True)
@@ -122,7 +109,7 @@ class PlanningThread(Generic[Snapshot, PlanT]):
                 if snapshot is not None:
                     self.pass_started = began = time.perf_counter()
                     plan = self._guarded(functools.partial(self._plan_pass, snapshot))
-                    self.pass_times.add(time.perf_counter() - began)
+                    self.pass_times.append(time.perf_counter() - began)
                     self.passes += 1
                     if plan is not None:
                         self.plan = plan

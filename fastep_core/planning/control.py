@@ -77,11 +77,10 @@ class ControlTick:
     """The per-tick part of a navigator, with its own controller, guard and yielding (the pass runs the originals,
     possibly on another thread)."""
 
-    def __init__(self, navigator: Navigator, period: float | None = None) -> None:
+    def __init__(self, navigator: Navigator) -> None:
         # The pass's guard looks as far ahead as this one does (retune: Navigator.braking): a stricter control tick
         # held robots for good while the pass, its own guard letting them go, never saw the hold (nor broke it).
         self.navigator = navigator
-        self.period = navigator.params.dt if period is None else period   # the control tick (s)
         self.smoother = VelocitySmoother.for_model(navigator.model, navigator.params)
         self._last_t: float | None = None
         self.retune()
@@ -94,8 +93,7 @@ class ControlTick:
         self.controller = copy.deepcopy(nav.controller)
         self._applied: Callable[[FloatArray], None] | None = getattr(self.controller, 'applied', None)
         self._tell(self.smoother.velocity)   # a new controller ramps from what the robot does now
-        self.smoother.retune(nav.params)
-        self.smoother.period = self.period
+        self.smoother.retune(nav.params)   # its period: each command's dt (command)
         self.guard = Guard(nav.model, nav.radius, nav.params)
         self.yielding = nav._yielding(nav.params)
         self._target: FloatArray | None = None

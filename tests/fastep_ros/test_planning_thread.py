@@ -36,6 +36,17 @@ class Gate:
         self.entered.set()
         assert self.open.wait(WAIT), 'the gate was never opened'
 
+    @classmethod
+    def holding(cls, nav: Any) -> Gate:
+        """A gate every pass of `nav` waits at: a pass that takes as long as the test wants."""
+        gate, update = cls(), nav.update
+
+        def stuck(*args: Any) -> np.ndarray:
+            gate.wait()
+            return update(*args)
+        nav.update = stuck
+        return gate
+
 
 def test_a_change_runs_at_once_while_no_pass_is_under_way() -> None:
     thread: PlanningThread[int, int] = PlanningThread(lambda snapshot: snapshot, print)
@@ -70,7 +81,7 @@ def test_changes_wait_for_the_pass_under_way_and_only_the_newest_snapshot_is_pla
         gate.open.set()
         wait_for(lambda: thread.plan == 30, 'the pass on the newest snapshot')
         assert seen == [1, 3] and done == ['goal', 'world'] and errors == []
-        assert thread.passes == 2 and len(thread.pass_times.times) == 2
+        assert thread.passes == 2 and len(thread.pass_times) == 2
     finally:
         gate.open.set()
         thread.stop()
@@ -136,12 +147,7 @@ def test_the_control_tick_drives_on_the_last_plan_while_a_pass_is_stuck_then_sto
 
         nav = node.navigator
         assert nav is not None
-        gate, update = Gate(), nav.update
-
-        def stuck(*args: Any) -> np.ndarray:
-            gate.wait()
-            return update(*args)
-        nav.update = stuck   # type: ignore[method-assign]  # a pass that takes as long as the test wants
+        gate = Gate.holding(nav)
         tick()
         assert gate.entered.wait(WAIT)
         # The pass is stuck: control ticks go on, on the plan they have, and return.
@@ -178,12 +184,7 @@ def test_a_goal_given_while_a_pass_runs_is_taken_after_it(context: Any) -> None:
         start_driving(node)
         nav = node.navigator
         assert nav is not None
-        gate, update = Gate(), nav.update
-
-        def stuck(*args: Any) -> np.ndarray:
-            gate.wait()
-            return update(*args)
-        nav.update = stuck   # type: ignore[method-assign]  # a pass that takes as long as the test wants
+        gate = Gate.holding(nav)
         node.on_control()
         assert gate.entered.wait(WAIT)
         node.on_goal(convert.point_to_pose_stamped((18.0, 4.0)))
