@@ -21,8 +21,7 @@ import numpy as np
 from numpy.typing import NDArray
 from sensor_msgs.msg import LaserScan
 
-from fastep_core.perception.belief import Belief, Perception, perception_margin
-from fastep_core.perception.robot import RECENT_SCANS
+from fastep_core.perception.belief import RECENT_SCANS, Belief, Perception, perception_margin
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.recovery import RecentScans
 from fastep_core.world import World
@@ -45,12 +44,20 @@ class ScanPerception:
         self.last_scan = -np.inf
         self.scans = 0
         self.margin = 0.0   # the guard's margin beyond the radius once the robot plans in its scans
-        self.recent = RecentScans(RECENT_SCANS)   # the free space the recent scans saw (where it may back up)
 
     def reset(self) -> None:
         """A new map: start believing it afresh at the next scan."""
         self.perception, self.map_world = None, None
-        self.recent = RecentScans(RECENT_SCANS)
+
+    @property
+    def returns(self) -> NDArray[np.float64]:
+        """The latest scan's returns (map frame)."""
+        return self.perception.returns if self.perception is not None else np.zeros((0, 2))
+
+    @property
+    def recent(self) -> RecentScans:
+        """The free space the recent scans saw (where the robot may back up)."""
+        return self.perception.recent if self.perception is not None else RecentScans(RECENT_SCANS)
 
     @property
     def belief(self) -> Belief | None:
@@ -68,7 +75,6 @@ class ScanPerception:
         if self.perception is None or self.map_world is not map_world or key != self.spec_key:
             self.perception, self.map_world, self.spec_key = Perception(spec, map_world), map_world, key
         belief = self.perception.update(t, pose, scan, others)
-        self.recent.add(scan, pose)
         self.last_scan, self.scans = t, self.scans + 1
         return belief
 

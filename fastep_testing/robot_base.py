@@ -6,7 +6,8 @@ Unlike fastep-plant (lock step, one clock for the graph), nothing waits for anyo
 `rate_hz` on the steady clock with the last cmd_vel (geometry_msgs/Twist: linear.x, angular.z) applied as it
 is, no limits (a base does what it is told; zero after `cmd_timeout` without a command, as ros2_control's
 diff_drive_controller does), publishes `odom` (`odom` -> `base_link`, the pose in map coordinates: map -> odom
-is the identity) at `odom_rate_hz` and a laser's LaserScan on `scan` (base_link) at `scan_rate_hz`, both stamped
+is the identity) at `odom_rate_hz` and a laser's LaserScan on `scan` (base_link, or <ns>/laser for a laser at
+`laser_mount` off the centre) at `scan_rate_hz`, both stamped
 with the system clock, ray-cast on the TRUE world of `scenario` (fastep_core.dynamic_world), and /map once,
 latched, rasterised at `map_resolution` from the world the planner may know (`known: false` obstacles left out).
 It records what it took and did: each command's arrival (steady seconds) and value, and its state and applied
@@ -53,6 +54,8 @@ class BaseNode(Node):
         scan_rate = declare(self, 'scan_rate_hz', 20.0, 'laser scans per second; 0: no laser',
                             value_range=(0, 1e3))
         laser = declare(self, 'laser', DEFAULT_LASER, 'the laser: [range (m), fov (rad), beams, noise (m)]')
+        mount = declare(self, 'laser_mount', [0.0, 0.0, 0.0], 'where the laser sits on the base: [x (m), y (m), '
+                        'yaw (rad)] in base_link; off the centre its scans are in <ns>/laser')
         resolution = declare(self, 'map_resolution', 0.05, '/map cell size (m)', constraints='> 0')
         seed = declare(self, 'seed', 0, 'seed of the laser noise and of the map errors')
         self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'no cmd_vel for this long (s): the base stops',
@@ -60,8 +63,9 @@ class BaseNode(Node):
         self.record_path = declare(self, 'record', '', 'the .npz file written when the node stops; empty: none')
         try:
             scenario = load_scenario(source)
-            self.spec = LaserSpec(float(laser[0]), float(laser[1]), int(laser[2]), float(laser[3]))
-        except (FastepError, ValueError, IndexError) as exc:
+            self.spec = LaserSpec(float(laser[0]), float(laser[1]), int(laser[2]), float(laser[3]),
+                                  (float(mount[0]), float(mount[1]), float(mount[2])))
+        except (FastepError, ValueError, IndexError, TypeError) as exc:
             raise StartupError(f'robot base: {exc}') from None
         self.state = np.array(start or scenario.robots[0].start, dtype=float)
         if self.state.shape != (3,):
@@ -80,6 +84,7 @@ class BaseNode(Node):
         self.scan_cpu: list[float] = []                                # seconds per cast and publish
         self.odom_frame = frames.odom_frame(self.get_namespace())
         self.base_frame = frames.base_frame(self.get_namespace())
+        self.scan_frame = frames.frame_name(self.get_namespace(), 'laser') if any(self.spec.mount) else self.base_frame
 
         self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
         self.scan_pub = self.create_publisher(LaserScan, interface.SCAN, qos_profile_sensor_data)
@@ -128,8 +133,9 @@ class BaseNode(Node):
         began = time.thread_time()
         self.advance(time.monotonic())
         stamp = self.get_clock().now().to_msg()
-        scan = self.truth.scan(self.spec, self.state.tolist(), self.t, self.rng)
-        self.scan_pub.publish(convert.scan_to_laser_scan(scan, stamp, self.base_frame))
+        pose = self.spec.pose_on((float(self.state[0]), float(self.state[1]), float(self.state[2])))
+        scan = self.truth.scan(self.spec, pose, self.t, self.rng)
+        self.scan_pub.publish(convert.scan_to_laser_scan(scan, stamp, self.scan_frame))
         self.scan_cpu.append(time.thread_time() - began)
 
     def destroy_node(self) -> None:

@@ -73,6 +73,10 @@ class HarnessResult:
     planner_cpu: float = math.nan     # % of a core, goal sent -> end
     base_cpu: float = math.nan
     scans: int = 0                    # scans the planner took (its status)
+    laser_mount: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    phantom_movers: int = 0           # distinct tracks the planner called movers (every harness world is still)
+    most_movers: int = 0              # the most it called movers at once
+    phantom_obstacles: int = 0        # the most still obstacles it believed from its scans where the truth has none
     load: tuple[float, float, float] = (0.0, 0.0, 0.0)   # os.getloadavg() at the start
     log_dir: str = ''
     notes: list[str] = field(default_factory=list)
@@ -96,20 +100,25 @@ def _cpu(pid: int) -> float:
 
 
 def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 90.0, start_timeout: float = 60.0,
-              max_speed: float = 1.0, seed: int = 0, algorithm: str = '', log_dir: Path | None = None) -> HarnessResult:
+              max_speed: float = 1.0, seed: int = 0, algorithm: str = '', log_dir: Path | None = None,
+              laser_mount: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> HarnessResult:
     """One run of a harness world (a robot_worlds name or a Scenario with one diff-drive robot); see the module
     docstring. Every process it starts is stopped before it returns. Logs go to log_dir (default: a temporary
-    folder, removed)."""
+    folder, removed). laser_mount: where the laser sits on the base (x, y, yaw); the planner is told it
+    (parameter laser_mount) when it is off the centre."""
     scenario = harness_world(scenario) if isinstance(scenario, str) else scenario
     if log_dir is None:
         with tempfile.TemporaryDirectory(prefix='fastep-harness-') as tmp:
             result = run_world(scenario, laser=laser, timeout=timeout, start_timeout=start_timeout,
-                               max_speed=max_speed, seed=seed, algorithm=algorithm, log_dir=Path(tmp))
+                               max_speed=max_speed, seed=seed, algorithm=algorithm, log_dir=Path(tmp),
+                               laser_mount=laser_mount)
             result.log_dir = ''
             return result
     log_dir.mkdir(parents=True, exist_ok=True)
     robot = scenario.robots[0]
-    result = HarnessResult(scenario.name, laser, load=os.getloadavg(), log_dir=str(log_dir))
+    mount = tuple(float(v) for v in laser_mount)
+    result = HarnessResult(scenario.name, laser, load=os.getloadavg(), log_dir=str(log_dir),
+                           laser_mount=(mount[0], mount[1], mount[2]))
     world_file, record = log_dir / 'world.yaml', log_dir / 'base.npz'
     world_file.write_text(yaml.safe_dump(scenario_data(scenario)))
     record.unlink(missing_ok=True)
@@ -119,19 +128,21 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     ros = ['--ros-args', '--log-level', os.environ.get('FASTEP_TEST_LOG_LEVEL', 'warn')]
     base_cmd = [sys.executable, '-m', 'fastep_testing.robot_harness', 'base', *ros, '-p',
                 f'scenario:={world_file}', '-p', f'record:={record}', '-p', f'seed:={seed}',
-                '-p', f'scan_rate_hz:={20.0 if laser else 0.0}']
+                '-p', f'scan_rate_hz:={20.0 if laser else 0.0}', '-p', f'laser_mount:={list(mount)!r}']
     planner_cmd = [*_planner_command(), *ros, '-p', 'obstacle_source:=map', '-p', 'model:=diff_drive',
                    '-p', f'robot_radius:={robot.radius!r}', '-p', f'max_speed:={float(max_speed)!r}',
-                   '-p', f'seed:={seed}'] + (['-p', f'algorithm:={algorithm}'] if algorithm else [])
+                   '-p', f'seed:={seed}'] + (['-p', f'algorithm:={algorithm}'] if algorithm else []) + \
+                  (['-p', f'laser_mount:={list(mount)!r}'] if any(mount) else [])
     procs: dict[str, subprocess.Popen[bytes]] = {}
     helper: Helper | None = None
     statuses: list[tuple[float, dict[str, Any]]] = []
+    beliefs: list[tuple[float, Any]] = []
     window = (math.nan, math.nan)
     cpu: dict[str, tuple[float, float]] = {}
     try:
         procs['base'] = _start(base_cmd, env, log_dir / 'base.log')
         procs['planner'] = _start(planner_cmd, env, log_dir / 'planner.log')
-        helper = _status_helper(domain, statuses)
+        helper = _status_helper(domain, statuses, beliefs)
         helper.spin_until(lambda: _ready(statuses, laser) or _dead(procs), start_timeout,
                           lambda: f'the planner to be idle with odometry (last status: {_last(statuses) or "none"})')
         if _dead(procs):
@@ -162,20 +173,26 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     if record.exists() and not math.isnan(window[0]):
         with np.load(record) as data:
             judge(result, scenario, data['commands'], data['track'], statuses, window, cpu)
+        count_phantoms(result, scenario, [m for t, m in beliefs if window[0] <= t <= window[1]])
     elif not result.notes:
         result.notes.append('the base wrote no record')
     return result
 
 
-def _status_helper(domain: int, statuses: list[tuple[float, dict[str, Any]]]) -> Helper:
+def _status_helper(domain: int, statuses: list[tuple[float, dict[str, Any]]],
+                   beliefs: list[tuple[float, Any]]) -> Helper:
     from diagnostic_msgs.msg import DiagnosticStatus
+    from visualization_msgs.msg import MarkerArray
 
     from msg_tools.convert import diagnostic_to_dict
-    from msg_tools.interface import STATUS, STATUS_QOS
+    from msg_tools.interface import LATEST, STATUS, STATUS_QOS, TRACKED_OBSTACLES
     helper = Helper(domain)
     helper.node.create_subscription(DiagnosticStatus, '/' + STATUS,
                                     lambda msg: statuses.append((time.monotonic(), diagnostic_to_dict(msg))),
                                     STATUS_QOS)
+    helper.node.create_subscription(MarkerArray, '/' + TRACKED_OBSTACLES,
+                                    lambda msg: beliefs.append((time.monotonic(), msg)),
+                                    LATEST)
     return helper
 
 
@@ -274,6 +291,36 @@ def judge(result: HarnessResult, scenario: Scenario, commands: np.ndarray, track
     return result
 
 
+PHANTOM_REACH = 0.3   # m: a believed surface farther than this from every true one is a phantom
+
+
+def count_phantoms(result: HarnessResult, scenario: Scenario, beliefs: Sequence[Any]) -> HarnessResult:
+    """Fill the phantom counts from the planner's tracked_obstacles (visualization_msgs/MarkerArray, as
+    msg_tools.convert.belief_to_marker_array draws a Belief) heard during the run: every harness world is still,
+    so each track called a mover is a phantom, and so is each seen circle or wall piece not within PHANTOM_REACH
+    of a true surface (a circle: its nearest point; a wall piece: both ends and its middle)."""
+    from msg_tools.convert import CIRCLES_NS, SEGMENTS_NS, TRACKS_NS
+    truth = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs).still.obstacles
+    names: set[str] = set()
+    for msg in beliefs:
+        movers = [m.text for m in msg.markers if m.ns == TRACKS_NS]
+        names.update(movers)
+        result.most_movers = max(result.most_movers, len(movers))
+        phantoms = 0
+        for m in msg.markers:
+            if m.ns == f'seen_{CIRCLES_NS}':
+                gap = truth.clearance(np.array([[m.pose.position.x, m.pose.position.y]])) - 0.5 * m.scale.x
+                phantoms += int(gap[0] > PHANTOM_REACH)
+            elif m.ns == f'seen_{SEGMENTS_NS}' and m.points:
+                ends = np.array([[p.x, p.y] for p in m.points]).reshape(-1, 2, 2)
+                samples = np.concatenate([ends, ends.mean(axis=1, keepdims=True)], axis=1).reshape(-1, 2)
+                far = ~truth.near(samples, PHANTOM_REACH)
+                phantoms += int(far.reshape(-1, 3).any(axis=1).sum())
+        result.phantom_obstacles = max(result.phantom_obstacles, phantoms)
+    result.phantom_movers = len(names)
+    return result
+
+
 # ----------------------------------------------------------------------------------------------- command line
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -291,9 +338,11 @@ def main(argv: Sequence[str] | None = None) -> int:
     run.add_argument('--algorithm', default='', help='the planner\'s algorithm (default: its own)')
     run.add_argument('--log-dir', type=Path, help='keep the processes\' logs and the base\'s record here')
     run.add_argument('--json', type=Path, help='write the result here')
+    run.add_argument('--laser-mount', type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=('X', 'Y', 'YAW'),
+                     help='where the laser sits on the base (m, m, rad)')
     options = parser.parse_args(args)
     result = run_world(options.world, laser=not options.no_laser, timeout=options.timeout,
-                       algorithm=options.algorithm, log_dir=options.log_dir)
+                       algorithm=options.algorithm, log_dir=options.log_dir, laser_mount=tuple(options.laser_mount))
     text = json.dumps(asdict(result), indent=1)
     print(text)
     if options.json:

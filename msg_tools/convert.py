@@ -381,9 +381,11 @@ def scan_to_laser_scan(scan: Scan, stamp: Time | None = None, frame_id: str = 'b
 
 
 def laser_scan_to_scan(msg: LaserScan, time: float = 0.0) -> Scan:
-    """The Scan of any sensor_msgs/LaserScan. Readings that are not a return (NaN, +-inf, below range_min or
-    beyond range_max: REP-117) become +inf, as the scanner model has them. ValueError (one line) for no
-    ranges, non-finite angles or range limits, a zero increment, or range_max <= range_min."""
+    """The Scan of any sensor_msgs/LaserScan, readings as REP-117 means them: +inf (nothing within range: the
+    beam's whole length is free) stays +inf; NaN, -inf and readings below range_min or beyond range_max are no
+    measurement and become NaN (they neither mark nor clear anything: a beam that missed a dark or glass surface
+    does not make the map's obstacle there go away). ValueError (one line) for no ranges, non-finite angles or
+    range limits, a zero increment, or range_max <= range_min."""
     fields = (msg.angle_min, msg.angle_max, msg.angle_increment, msg.range_min, msg.range_max)
     _finite(fields, 'laser scan')
     if not len(msg.ranges):
@@ -394,8 +396,9 @@ def laser_scan_to_scan(msg: LaserScan, time: float = 0.0) -> Scan:
         raise ValueError(f'laser scan range limits [{msg.range_min:g}, {msg.range_max:g}] are not 0 <= min < max')
     ranges = np.asarray(msg.ranges, dtype=float)
     valid = np.isfinite(ranges) & (ranges >= msg.range_min) & (ranges <= msg.range_max)
+    readings = np.where(valid, ranges, np.where(np.isposinf(ranges), np.inf, np.nan))
     return Scan(float(msg.angle_min), float(msg.angle_max), float(msg.angle_increment), float(msg.range_min),
-                float(msg.range_max), np.where(valid, ranges, np.inf), time)
+                float(msg.range_max), readings, time)
 
 
 def laser_spec(msg: LaserScan, noise: float) -> LaserSpec:

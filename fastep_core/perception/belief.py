@@ -33,18 +33,23 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment, point_segment_distance
-from fastep_core.perception.fusion import explained, seen_through
+from fastep_core.perception.fusion import EXPLAINED, explained, seen_through
 from fastep_core.perception.segmentation import scan_points, segment
-from fastep_core.perception.shapes import WALL_TOLERANCE, shapes
+from fastep_core.perception.shapes import shapes
 from fastep_core.perception.tracking import Tracker, TrackParams
 from fastep_core.planning.others import OtherRobot
-from fastep_core.sensing.laser import LaserSpec, Scan
+from fastep_core.planning.recovery import RecentScans
+from fastep_core.sensing.laser import LaserSpec, Scan, fan_hits
 from fastep_core.world import World
 
-__all__ = ['MERGE_GAP', 'MERGE_REACH', 'PERCEPTION_MARGIN', 'SENSOR_STREAM', 'STILL_SPEED', 'STILL_TIME',
-           'WALL_RANGE', 'Belief', 'Perception', 'heading', 'perception_margin', 'sensor_generator', 'track_name']
+__all__ = ['FITTED_THROUGH', 'FREE_MARGIN', 'IN_FRONT', 'MERGE_GAP', 'MERGE_REACH', 'MERGE_TOLERANCE', 'MOVER_DISTANCE',
+           'MOVER_FREE_POINTS', 'PERCEPTION_MARGIN', 'RECENT_SCANS', 'SENSOR_STREAM', 'STANDING_SHIFT', 'STILL_SPEED',
+           'STILL_TIME', 'WALL_RANGE', 'Belief', 'Perception', 'heading', 'perception_margin', 'sensor_generator',
+           'track_name']
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
+NO_CENTRES, NO_RADII = np.zeros((0, 2)), np.zeros(0)
 
 STILL_SPEED = 0.15
 """m/s: a confirmed track slower than this is a still obstacle (the families' movers go 0.3 m/s and more)."""
@@ -52,12 +57,36 @@ STILL_TIME = 1.5
 """Seconds a track must have been slower than STILL_SPEED, without a break, before it counts as still."""
 WALL_RANGE = 0.6
 """Share of the scanner's range within which a cluster no circle fits is believed a wall (shapes.shapes)."""
+FITTED_THROUGH = 0.03
+"""Metres (or 3 noise sigmas, if more) a beam of the scan a circle was fitted to must pass through the disc, shrunk
+by as much, for the disc to be no circle: a cluster of poles fits a disc that bulges over the gaps between them."""
+IN_FRONT = 0.05
+"""Metres (or 4 noise sigmas, if more) a return must lie in front of the believed surface on its beam to be a
+surface the belief lacks (Perception._in_front): a wall is believed at its nearest return (shapes._in_front_of),
+so its own returns lie in front of it by the noise alone."""
+MOVER_DISTANCE = 0.3
+"""Metres a confirmed track must have gone from where it was confirmed (at STILL_SPEED or more) to be a mover: the
+centre fitted to a still thing wanders as the robot's viewpoint and the noise change, by centimetres (a pole) to
+a decimetre or two (a cluster of them); a mover keeps going."""
+STANDING_SHIFT = 0.1
+"""Metres a standing track's estimate may drift from its circle in the world before the circle follows it."""
+MERGE_TOLERANCE = 0.03
+"""Metres off a believed wall's line within which a new piece continues it (farther: a surface of its own, in
+front of the wall or behind it)."""
 MERGE_GAP = 0.5
 """Metres: a new wall piece this close to a collinear believed wall extends it instead of adding a segment."""
 MERGE_REACH = 0.3
 """Metres beyond a moving track's radius within which a wall piece is that mover seen merged (Perception)."""
 MERGE_MARGIN = 1e-6
 """Metres: rounding margin of Perception._wall_candidates, far above the 1e-15 m its arithmetic may differ by."""
+FREE_MARGIN = 0.1
+"""Metres from anything earlier scans did not see free a point must lie to be in space they saw free (the noise, a
+beam grazing a surface, the odometry's error between two scans)."""
+MOVER_FREE_POINTS = 3
+"""Points of a track that must lie where an earlier scan saw free space before it counts as a mover: a mover
+comes into space that was free; a still thing's surface is where beams always stopped."""
+RECENT_SCANS = 30.0
+"""Seconds of scans whose free space counts as evidence (a mover's, and the way a reversing robot may take)."""
 SENSOR_STREAM = 0x736E73   # 'sns': spawn key of the scanners' noise streams, far above any robot's index
 
 
@@ -113,6 +142,9 @@ class Perception:
         self.tracker = Tracker(track_params)
         self._obstacle_cache: dict[str, tuple[tuple[int, ...], Obstacles]] = {}
         self.slow_since: dict[int, float] = {}   # track id -> since when it has been slower than STILL_SPEED
+        self.standing: dict[int, Circle] = {}     # track id -> its circle in the world while not found moving
+        self.recent = RecentScans(RECENT_SCANS)   # the free space its earlier scans saw
+        self.returns: FloatArray = np.zeros((0, 2))   # the latest scan's returns (map frame)
         self.world = map_world
         self.belief = Belief(0.0, map_world, tuple(self.map_items), (), (), (), np.zeros((0, 2)))
 
@@ -121,59 +153,151 @@ class Perception:
         robots (odometry) and known movers as the robot is told of them."""
         pose_array = np.asarray(pose, dtype=float)[:3]
         changed = False
-        believed = self.world.obstacles
+        believed = self._obstacles('believed')
         through = seen_through(scan, pose_array, believed)
         if through.any():
             gone = {id(item) for item, drop in zip(believed.items, through) if drop}
             self.dropped += [o for o in self.map_items if id(o) in gone]
             self.map_items = [o for o in self.map_items if id(o) not in gone]
             self.seen_items = [o for o in self.seen_items if id(o) not in gone]
-            believed = Obstacles(self.map_items + self.seen_items)
             changed = True
         points, beams = scan_points(scan, pose_array)
+        self.returns = points   # all of them: the guard's (planning/guard.py)
         centres = np.array([o.position for o in others], dtype=float).reshape(-1, 2)
         radii = np.array([o.radius for o in others], dtype=float)
-        new = ~explained(points, self._obstacles('seen'), centres, radii, map_obstacles=self._obstacles('map'))
+        # New: what no robot or mover explains, and no believed still obstacle either, unless it lies well in front
+        # of the believed surface on its beam (a surface the belief lacks).
+        still = explained(points, self._obstacles('seen'), NO_CENTRES, NO_RADII, map_obstacles=self._obstacles('map'))
+        still &= ~self._in_front(scan, pose_array, points, beams)
+        new = ~still & ~explained(points, Obstacles([]), centres, radii)
         points, beams = points[new], beams[new]
         labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
+
+        def seen_free(circle_centres: FloatArray, circle_radii: FloatArray) -> NDArray[np.bool_]:
+            circles = Obstacles([Circle((float(c[0]), float(c[1])), float(r))
+                                 for c, r in zip(circle_centres, circle_radii)])
+            return seen_through(scan, pose_array, circles, max(FITTED_THROUGH, 3.0 * self.spec.noise))
+
         found = shapes(points, beams, labels, pose_array[:2], self.spec.noise, WALL_RANGE * self.spec.range,
-                       abs(scan.angle_increment))
+                       abs(scan.angle_increment), seen_free)
         tracker = self.tracker
         tracker.update(t, found.centres, found.radii)
         starts, ends, merged = self._merged_movers(t, points, found.starts, found.ends)
+        speed = np.hypot(tracker.states[:, 2], tracker.states[:, 3])
+        # A mover on consistent evidence only: confirmed, going at STILL_SPEED or more, and gone MOVER_DISTANCE
+        # from where it was confirmed (a fit's centre that wanders with the viewpoint or the noise does not).
+        gone_from = np.hypot(*(tracker.states[:, :2] - tracker.origins).T)
+        candidates = tracker.confirmed & ~tracker.moved & (speed >= STILL_SPEED) & (gone_from >= MOVER_DISTANCE)
+        if candidates.any():
+            tracker.moved[candidates] = self._came_into_free_space(points, tracker.states[candidates, :2],
+                                                                   tracker.radii[candidates])
         # Tracks that stood still long enough become still obstacles: slow for STILL_TIME without a break, so a
         # mover whose velocity estimate dipped for a few scans (two movers merged into one detection) stays one.
-        speed = np.hypot(tracker.states[:, 2], tracker.states[:, 3])
         slow = (speed < STILL_SPEED) & ~np.isin(tracker.ids, merged) if len(merged) else speed < STILL_SPEED
         self.slow_since = {int(i): self.slow_since.get(int(i), t) for i in tracker.ids[slow]}
         since = np.array([self.slow_since.get(int(i), math.inf) for i in tracker.ids])
         still = tracker.confirmed & slow & (t - since >= STILL_TIME) & (tracker.seen == t)
         if still.any():
-            found_circles = [Circle((float(s[0]), float(s[1])), float(r))
-                             for s, r in zip(tracker.states[still], tracker.radii[still])]
+            found_circles = [self._standing_circle(int(i), s, float(r)) for i, s, r in
+                             zip(tracker.ids[still], tracker.states[still], tracker.radii[still])]
             self._replace_map_circles(found_circles)
             self.seen_items += found_circles
             tracker.keep(~still)
             changed = True
+        changed |= self._update_standing()
         for start, end in zip(starts, ends):
             self._add_wall(start, end)
             changed = True
         if changed:
-            self.world = World(self.map_world.workspace, tuple(self.map_items + self.seen_items))
-        confirmed = np.flatnonzero(tracker.confirmed)
+            self.world = World(self.map_world.workspace,
+                               tuple(self.map_items + self.seen_items + list(self.standing.values())))
+        moving = np.flatnonzero(tracker.confirmed & tracker.moved)
         movers = tuple(OtherRobot(track_name(int(tracker.ids[k])),
                                   (float(tracker.states[k, 0]), float(tracker.states[k, 1])),
                                   (float(tracker.states[k, 2]), float(tracker.states[k, 3])), float(tracker.radii[k]),
                                   mover=True)
-                       for k in confirmed)
-        self.belief = Belief(t, self.world, tuple(self.map_items), tuple(self.seen_items), tuple(self.dropped),
-                             movers, points)
+                       for k in moving)
+        self.belief = Belief(t, self.world, tuple(self.map_items),
+                             tuple(self.seen_items + list(self.standing.values())), tuple(self.dropped), movers,
+                             points)
+        self.recent.add(scan, pose_array)
         return self.belief
 
+    def _in_front(self, scan: Scan, pose: FloatArray, points: FloatArray, beams: IntArray) -> NDArray[np.bool_]:
+        """Which returns lie IN_FRONT or more in front of every believed still obstacle on their beam: a surface
+        the belief lacks, nearer than what it has there (a cluster of poles fitted a little small, a wall a little
+        behind its bumps, a map obstacle drawn where it is not). They are new, however near a believed surface."""
+        believed = self._obstacles('believed')
+        out = np.zeros(len(points), dtype=bool)
+        if not len(believed) or not len(points):
+            return out
+        circles = believed.n_circles
+        beam, _, expected = fan_hits(pose[:2], pose[2], scan.angle_min, scan.angle_increment, len(scan.ranges),
+                                     believed.centers[:circles], believed.radii[:circles], believed.starts,
+                                     believed.ends)
+        nearest = np.full(len(scan.ranges), np.inf)
+        np.minimum.at(nearest, beam, np.where(expected > 0.0, expected, np.inf))
+        out = scan.ranges[beams] < nearest[beams] - max(IN_FRONT, 4.0 * self.spec.noise)
+        return out
+
+    def _came_into_free_space(self, points: FloatArray, centres: FloatArray, radii: FloatArray) -> NDArray[np.bool_]:
+        """For each track (centres (k, 2), radii (k,)): do MOVER_FREE_POINTS of this scan's points on it (within
+        EXPLAINED of its circle) lie where earlier scans saw free space, FREE_MARGIN from its edge?"""
+        out = np.zeros(len(centres), dtype=bool)
+        if not len(points) or not self.recent.scans:
+            return out
+        gap = np.hypot(points[:, None, 0] - centres[:, 0], points[:, None, 1] - centres[:, 1]) - radii   # (n, k)
+        on = np.abs(gap) < EXPLAINED
+        near = on.any(axis=1)
+        if not near.any():
+            return out
+        free = np.zeros(len(points), dtype=bool)
+        free[near] = self.recent.seen().covers(points[near], FREE_MARGIN)
+        counts: NDArray[np.int64] = (on & free[:, None]).sum(axis=0)
+        return counts >= MOVER_FREE_POINTS
+
+    def _standing_circle(self, track_id: int, state: FloatArray, radius: float) -> Circle:
+        """The still circle of a track: the one it stood as in the world, when it is still about there."""
+        circle = self.standing.pop(track_id, None)
+        if circle is not None and math.dist(circle.center, (state[0], state[1])) <= STANDING_SHIFT and \
+                abs(circle.radius - radius) <= STANDING_SHIFT:
+            return circle
+        return Circle((float(state[0]), float(state[1])), radius)
+
+    def _update_standing(self) -> bool:
+        """The circles of the confirmed tracks not (yet) found moving, in the world as still obstacles (a thing
+        seen is an obstacle from its third scan on, not once it has stood STILL_TIME); a track found moving leaves
+        the world for the movers, one that died unseen stays, as a still obstacle, until beams show its place
+        free. A standing circle follows its track, where a scan sees it, only once it is STANDING_SHIFT off (the
+        world changes, and planners replan, only then). True when the world's circles changed."""
+        tracker = self.tracker
+        changed = False
+        alive = {int(i): k for k, i in enumerate(tracker.ids)}
+        for track_id in list(self.standing):
+            k = alive.get(track_id)
+            if k is None:        # not seen for MAX_COAST: kept, until beams show its place free
+                self.seen_items.append(self.standing.pop(track_id))
+            elif tracker.moved[k]:
+                del self.standing[track_id]
+                changed = True
+        # Only where a scan saw it: a track coasting unseen is predicted, not seen, and a standing one that died
+        # stays where it was last seen.
+        for index in np.flatnonzero(tracker.confirmed & ~tracker.moved & (tracker.seen == tracker.time)):
+            k = int(index)
+            track_id = int(tracker.ids[k])
+            circle = self.standing.get(track_id)
+            state, radius = tracker.states[k], float(tracker.radii[k])
+            if circle is None or math.dist(circle.center, (state[0], state[1])) > STANDING_SHIFT or \
+                    abs(circle.radius - radius) > STANDING_SHIFT:
+                self.standing[track_id] = Circle((float(state[0]), float(state[1])), radius)
+                changed = True
+        return changed
+
     def _obstacles(self, which: str) -> Obstacles:
-        """The believed obstacles from the map ('map') or from the scans ('seen'), as Obstacles, made again only
-        when they changed."""
-        items = self.map_items if which == 'map' else self.seen_items
+        """The believed obstacles from the map ('map'), from the scans ('seen') or both ('believed'; not the
+        standing tracks' circles, which the tracker keeps), as Obstacles, made again only when they changed."""
+        items = (self.map_items if which == 'map' else self.seen_items if which == 'seen' else
+                 self.map_items + self.seen_items)
         key = tuple(map(id, items))
         cached = self._obstacle_cache.get(which)
         if cached is None or cached[0] != key:
@@ -193,7 +317,8 @@ class Perception:
         within MERGE_REACH of a moving track is that mover, not a wall.
         """
         tracker = self.tracker
-        moving = tracker.confirmed & (np.hypot(tracker.states[:, 2], tracker.states[:, 3]) >= STILL_SPEED)
+        moving = tracker.confirmed & tracker.moved & \
+            (np.hypot(tracker.states[:, 2], tracker.states[:, 3]) >= STILL_SPEED)
         if not moving.any():
             return starts, ends, np.zeros(0, dtype=np.int64)
         centres, reach = tracker.states[moving, :2], tracker.radii[moving] + MERGE_REACH
@@ -239,7 +364,7 @@ class Perception:
             offset = new - a
             off_line = np.abs(unit[0] * offset[:, 1] - unit[1] * offset[:, 0])
             along = offset @ unit
-            if off_line.max() > WALL_TOLERANCE or along.max() < -MERGE_GAP or along.min() > length + MERGE_GAP:
+            if off_line.max() > MERGE_TOLERANCE or along.max() < -MERGE_GAP or along.min() > length + MERGE_GAP:
                 continue
             low, high = min(0.0, float(along.min())), max(length, float(along.max()))
             p, q = a + low * unit, a + high * unit
@@ -264,6 +389,6 @@ class Perception:
         along = unit[:, None, 0] * offset[..., 0] + unit[:, None, 1] * offset[..., 1]
         # Negated as _add_wall's test is, so that a nan lets a wall through here as it does there.
         margin = MERGE_GAP + MERGE_MARGIN
-        maybe = ~((off_line.max(axis=1) > WALL_TOLERANCE + MERGE_MARGIN) | (along.max(axis=1) < -margin) |
+        maybe = ~((off_line.max(axis=1) > MERGE_TOLERANCE + MERGE_MARGIN) | (along.max(axis=1) < -margin) |
                   (along.min(axis=1) > length + margin))
         return [walls[k][0] for k in np.flatnonzero(maybe)]

@@ -7,7 +7,9 @@ believed obstacles the scan sees through.
 - Seen through: a believed obstacle is contradicted by a beam that reads farther than the obstacle's surface
   on that beam by more than SEE_THROUGH (the beam passed where the obstacle should be). Only obstacles whose
   surface the beam would reach within range_max - SEE_THROUGH count (beyond, the beam says nothing), and the
-  obstacle is shrunk by SEE_THROUGH first (circles' radii, segments' ends: grazing beams say nothing). An
+  obstacle is shrunk by SEE_THROUGH first (circles' radii, segments' ends: grazing beams say nothing); a beam
+  with no reading (NaN: a dark or glass surface, an error) says nothing either, +inf (no return within range)
+  that its whole length is free. An
   obstacle contradicted by at least SEE_THROUGH_BEAMS beams of one scan is not where the map says (a misplaced
   obstacle's ghost, or a mover perception once took for a still obstacle). Vectorised: each obstacle against
   the beams that can meet it (laser.fan_hits, the same distances as all beams x all obstacles).
@@ -59,13 +61,15 @@ def explained(points: FloatArray, obstacles: Obstacles, centres: FloatArray, rad
     return out
 
 
-def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles) -> NDArray[np.bool_]:
-    """Which believed obstacles (circles first, as Obstacles orders them) this scan from pose sees through."""
+def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles, through: float = SEE_THROUGH) -> NDArray[np.bool_]:
+    """Which believed obstacles (circles first, as Obstacles orders them) this scan from pose sees through;
+    `through`: SEE_THROUGH (module docstring), or less for a shape fitted to this very scan, whose surface is
+    known to the noise."""
     out = np.zeros(len(obstacles), dtype=bool)
     if not len(obstacles):
         return out
     reach = scan.range_max
-    candidates = np.flatnonzero(obstacles.distances(pose[:2]) < reach - SEE_THROUGH)
+    candidates = np.flatnonzero(obstacles.distances(pose[:2]) < reach - through)
     if not len(candidates):
         return out
     circles = candidates[candidates < obstacles.n_circles]
@@ -73,15 +77,15 @@ def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles) -> NDArray[
     # Shrunk by the margin (a circle's radius, a segment's ends): a beam grazing an edge that perception or the
     # map drew a little too large says nothing.
     radii = obstacles.radii[circles]
-    radii = radii - np.minimum(SEE_THROUGH, 0.5 * radii)
+    radii = radii - np.minimum(through, 0.5 * radii)
     starts, ends = obstacles.starts[segments], obstacles.ends[segments]
     run = ends - starts
     length = np.maximum(np.hypot(run[:, 0], run[:, 1]), 1e-12)
-    cut = (np.minimum(SEE_THROUGH, 0.25 * length) / length)[:, None] * run
+    cut = (np.minimum(through, 0.25 * length) / length)[:, None] * run
     # Only the (beam, candidate) pairs where the beam can meet the candidate: any other pair is a miss.
     beam, candidate, expected = fan_hits(pose[:2], pose[2], scan.angle_min, scan.angle_increment, len(scan.ranges),
                                          obstacles.centers[circles], radii, starts + cut, ends - cut)
-    measured = np.where(np.isfinite(scan.ranges), scan.ranges, np.inf)[beam]
-    through = (expected > 0.0) & (expected < reach - SEE_THROUGH) & (measured > expected + SEE_THROUGH)
-    out[candidates] = np.bincount(candidate[through], minlength=len(candidates)) >= SEE_THROUGH_BEAMS
+    measured = np.nan_to_num(scan.ranges, nan=-np.inf)[beam]   # no reading (nan) sees through nothing
+    passed = (expected > 0.0) & (expected < reach - through) & (measured > expected + through)
+    out[candidates] = np.bincount(candidate[passed], minlength=len(candidates)) >= SEE_THROUGH_BEAMS
     return out

@@ -24,7 +24,6 @@ from fastep_core.sensing.laser import LaserSpec
 __all__ = ['SensingRobot']
 
 FloatArray = NDArray[np.float64]
-RECENT_SCANS = 30.0  # s of scans whose free space counts as evidence (a reversing robot's way, planning/control.py)
 
 
 class SensingRobot:
@@ -35,8 +34,12 @@ class SensingRobot:
         self.spec, self.model, self.index, self.truth = spec, model, index, truth
         self.rng = sensor_generator(seed, index)
         self.perception = Perception(spec, navigator.world)
-        self.recent = RecentScans(RECENT_SCANS)   # the free space its recent scans saw: where it may back up
         navigator.guard_check.obstacle_margin = perception_margin(spec)
+
+    @property
+    def recent(self) -> RecentScans:
+        """The free space its recent scans saw: where it may back up (planning/control.py)."""
+        return self.perception.recent
 
     @property
     def belief(self) -> Belief:
@@ -53,7 +56,7 @@ class SensingRobot:
         pose = self.spec.pose_on((float(state[0]), float(state[1]), heading(self.model, state)))   # the scanner's
         scan = self.truth.scan(self.spec, pose, t, self.rng, (centres, radii))
         belief = self.perception.update(t, pose, scan, others)
-        self.recent.add(scan, pose)
+        navigator.guard_check.scan_points = self.perception.returns
         if belief.world is not navigator.world:
             navigator.world = belief.world
         return [*others, *belief.movers]

@@ -6,19 +6,23 @@ per cluster; the sums of every cluster come from one np.bincount each and the sy
 Centre (-D/2, -E/2), radius sqrt(cx^2 + cy^2 - F). A cluster is a circle when it has MIN_CIRCLE_POINTS points,
 the fit's RMS residual is within the scan's noise plus CIRCLE_RESIDUAL, the radius is at most MAX_CIRCLE_RADIUS,
 the chord from its first to its last point is at least MIN_ARC radii (an arc of 60 degrees or more: a few
-points at the edge of the range fit any circle) and the centre lies beyond the points as the scanner sees them
-(a convex surface facing it).
+points at the edge of the range fit any circle), the centre lies beyond the points as the scanner sees them
+(a convex surface facing it) and no beam of the scan passes through the disc (a slightly bent wall fits a circle
+of metres that reaches into space the scan shows free).
 Walls: every other cluster of at least MIN_POINTS points that comes within `wall_range` of the scanner becomes
-a polyline by Douglas-Peucker simplification (Douglas and Peucker 1973) with tolerance WALL_TOLERANCE, each
-piece a segment, the polyline's two ends extended by the gap between beams there (`beam_gap` radians: the
-wall ends somewhere before the next beam). Farther ones wait: the robot will see them better as it comes
-nearer (a circle that enters the range shows its nearest few points first, which are no wall).
+a polyline by Douglas-Peucker simplification (Douglas and Peucker 1973) with tolerance WALL_TOLERANCE (or 3
+noise sigmas), each piece a segment moved toward the scanner to its nearest return (so that a return found in
+front of a believed wall later is something new, perception/belief.py), the polyline's two ends extended by
+the gap between beams there (`beam_gap` radians: the wall ends somewhere before the next beam). Farther ones
+wait: the robot will see them better as it comes nearer (a circle that enters the range shows its nearest few
+points first, which are no wall).
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,7 +43,8 @@ CIRCLE_RESIDUAL = 0.02
 MAX_CIRCLE_RADIUS = 4.0
 """Metres: larger fits are walls (a straight wall fits a huge circle)."""
 WALL_TOLERANCE = 0.1
-"""Metres: Douglas-Peucker tolerance of walls."""
+"""Metres (or 3 noise sigmas, if more): Douglas-Peucker tolerance of walls (each piece then moved toward the
+scanner to its nearest return: _in_front_of)."""
 
 
 @dataclass(frozen=True)
@@ -120,9 +125,33 @@ def polyline(points: FloatArray, tolerance: float = WALL_TOLERANCE) -> list[int]
     return sorted(set(keep))
 
 
+def _in_front_of(ordered: FloatArray, kept: list[int], vertices: FloatArray,
+                 origin: FloatArray) -> tuple[FloatArray, FloatArray]:
+    """The polyline's pieces (starts, ends) each moved toward the scanner to its nearest point: a wall is never
+    believed behind a return it was fitted to (a simplified piece's chord lies up to its tolerance off its points,
+    either side), so that a return in front of a believed wall is something the belief lacks."""
+    a, b = vertices[:-1].copy(), vertices[1:].copy()
+    for k in range(len(a)):
+        run = b[k] - a[k]
+        length = float(np.hypot(*run))
+        if length <= 0.0:
+            continue
+        normal = np.array([-run[1], run[0]]) / length
+        if float(normal @ (origin - a[k])) < 0.0:
+            normal = -normal                                        # toward the scanner
+        ahead = float(((ordered[kept[k]:kept[k + 1] + 1] - a[k]) @ normal).max())
+        if ahead > 0.0:
+            a[k] += ahead * normal
+            b[k] += ahead * normal
+    return a, b
+
+
 def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatArray, noise: float = 0.0,
-           wall_range: float = math.inf, beam_gap: float = 0.0) -> Shapes:
-    """Circles and walls of clustered scan points (segmentation.segment) seen from origin (module docstring)."""
+           wall_range: float = math.inf, beam_gap: float = 0.0,
+           seen_free: Callable[[FloatArray, FloatArray], NDArray[np.bool_]] | None = None) -> Shapes:
+    """Circles and walls of clustered scan points (segmentation.segment) seen from origin (module docstring).
+    seen_free(centres, radii): which circles the scan itself shows free space inside (beams passing through
+    the disc: a bent wall piece fits a large circle that reaches into free space); such a cluster is no circle."""
     if len(points) == 0:
         empty = np.zeros((0, 2))
         return Shapes(empty, np.zeros(0), empty, empty)
@@ -137,6 +166,8 @@ def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatA
     chord = _spans(points, labels, n_clusters)
     circle = (counts >= MIN_CIRCLE_POINTS) & np.isfinite(radii) & (rms <= CIRCLE_RESIDUAL + 2.0 * noise) & \
         (radii <= MAX_CIRCLE_RADIUS) & (radii > 0.0) & behind & (chord >= MIN_ARC * radii)
+    if seen_free is not None and circle.any():
+        circle[circle] = ~seen_free(centres[circle], radii[circle])
     starts: list[FloatArray] = []
     ends: list[FloatArray] = []
     for k in np.flatnonzero(~circle & (counts >= MIN_POINTS) & (nearest <= wall_range)):
@@ -145,7 +176,8 @@ def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatA
         if len(jumps):   # the cluster that closes a full turn: start it after its gap in beam order
             index = np.roll(index, -(int(jumps[0]) + 1))
         ordered = points[index]
-        vertices = ordered[polyline(ordered)].copy()
+        kept = polyline(ordered, max(WALL_TOLERANCE, 3.0 * noise))
+        vertices = ordered[kept].copy()
         # The wall goes on somewhere between its last return and the next beam: extend each end by the gap
         # between beams there (at 5 m and 1 degree, 9 cm), so the robot does not cut the true end.
         for end, inner in ((0, 1), (-1, -2)):
@@ -154,8 +186,9 @@ def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatA
             if length > 0.0:
                 reach = float(np.hypot(*(vertices[end] - origin))) * beam_gap
                 vertices[end] = vertices[end] + run * (reach / length)
-        starts.append(vertices[:-1])
-        ends.append(vertices[1:])
+        a, b = _in_front_of(ordered, kept, vertices, origin)
+        starts.append(a)
+        ends.append(b)
     return Shapes(centres[circle], radii[circle],
                   np.concatenate(starts) if starts else np.zeros((0, 2)),
                   np.concatenate(ends) if ends else np.zeros((0, 2)))

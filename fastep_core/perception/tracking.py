@@ -46,7 +46,8 @@ class TrackParams:
 
 
 class Tracker:
-    """Every track of one robot: states (n, 4), covariances (n, 4, 4), radii, hits, last seen, ids."""
+    """Every track of one robot: states (n, 4), covariances (n, 4, 4), radii, hits, last seen, ids, where each
+    was confirmed (origins (n, 2): its position then) and whether its user found it moving (moved)."""
 
     def __init__(self, params: TrackParams | None = None) -> None:
         # Imported with the first tracker (a robot with a laser), not with the module (scipy.optimize costs ~0.3 s
@@ -62,11 +63,18 @@ class Tracker:
         self.born = np.zeros(0)
         self.seen = np.zeros(0)
         self.ids = np.zeros(0, dtype=np.int64)
+        self.origins = np.zeros((0, 2))
+        self.moved = np.zeros(0, dtype=bool)
         self._next_id = 0
         self._t: float | None = None
 
     def __len__(self) -> int:
         return len(self.radii)
+
+    @property
+    def time(self) -> float:
+        """The time of the last update (-inf before the first)."""
+        return -np.inf if self._t is None else self._t
 
     @property
     def confirmed(self) -> NDArray[np.bool_]:
@@ -111,6 +119,8 @@ class Tracker:
                 self.radii[paired_tracks] += a * (radii[paired_detections] - self.radii[paired_tracks])
                 self.hits[paired_tracks] += 1
                 self.seen[paired_tracks] = t
+                confirmed_now = paired_tracks[self.hits[paired_tracks] == CONFIRM_HITS]
+                self.origins[confirmed_now] = self.states[confirmed_now, :2]
         # Births: every detection no track took.
         unpaired = np.ones(len(centres), dtype=bool)
         unpaired[paired_detections] = False
@@ -128,6 +138,8 @@ class Tracker:
             self.born = np.concatenate([self.born, np.full(k, t)])
             self.seen = np.concatenate([self.seen, np.full(k, t)])
             self.ids = np.concatenate([self.ids, self._next_id + np.arange(k)])
+            self.origins = np.concatenate([self.origins, centres[fresh]])
+            self.moved = np.concatenate([self.moved, np.zeros(k, dtype=bool)])
             self._next_id += k
         self.keep(t - self.seen <= MAX_COAST)
 
@@ -135,5 +147,5 @@ class Tracker:
         """Drop the tracks where keep is false."""
         if keep.all():
             return
-        for name in ('states', 'covariances', 'radii', 'hits', 'born', 'seen', 'ids'):
+        for name in ('states', 'covariances', 'radii', 'hits', 'born', 'seen', 'ids', 'origins', 'moved'):
             setattr(self, name, getattr(self, name)[keep])

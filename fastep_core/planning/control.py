@@ -159,6 +159,7 @@ class ControlTick:
         others = [*others, *plan.movers_at(t)]
         # Surfaces known only as well as the robot's scans show them (set by the pass's perception).
         self.guard.obstacle_margin = self.navigator.guard_check.obstacle_margin
+        self.guard.scan_points = self.navigator.guard_check.scan_points
 
         def allowed(c: FloatArray) -> bool:
             return self.guard.check(plan.world, state, c, dt, others) is c

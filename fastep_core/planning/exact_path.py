@@ -10,13 +10,14 @@ trap escapes (planning/escape.py) and by Optimal-Kinematic (planning/optimal_kin
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import TYPE_CHECKING, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle
-from fastep_core.planning.optimal import OptimalPath, shortest_path
+from fastep_core.planning.optimal import OptimalPath, PathPiece, shortest_path
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
@@ -24,13 +25,17 @@ from fastep_core.world import World
 if TYPE_CHECKING:   # scenario.py imports planning (params): only for the annotation
     from fastep_core.scenario import Scenario
 
-__all__ = ['PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'exact_path', 'no_path_reason', 'parked_world', 'robot_path',
+__all__ = ['BACK_OUT', 'PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'backed_out', 'exact_path', 'no_path_reason',
+           'parked_world', 'robot_path',
            'solvable']
 
 FloatArray = NDArray[np.float64]
 PATH_SPACING = 0.25   # metres between exact-path vertices along arcs (escape paths, the optimal reference)
 TURN_ROOM = 1.0       # extra clearance (m) for a robot that cannot turn in place, where there is room for it
 PARKED_SPEED = 0.05   # m/s: another robot slower than this is planned around like an obstacle
+BACK_OUT = 0.05       # m inside its radius a robot may find itself and still back out (planning from scans)
+BACK_OUT_SLACK = 0.01  # m beyond the radius the way out ends
+BACK_OUT_DIRECTIONS = 16
 
 
 def exact_path(world: World, position: FloatArray, goal: FloatArray, radius: float, params: PlannerParams, *,
@@ -44,6 +49,12 @@ def exact_path(world: World, position: FloatArray, goal: FloatArray, radius: flo
     """
     clearance = radius + params.clearance_margin
     if len(world.obstacles):
+        start = backed_out(world, position, radius)
+        if start is not position:
+            # A few millimetres inside the radius (a new scan put an obstacle nearer than believed): the path
+            # starts with the way out, and keeps the radius from there.
+            path = exact_path(world, start, goal, radius, params, turn_room=turn_room, floor=floor)
+            return None if path is None else _from(position, path)
         ends = np.array([position, goal])
         clearance = min(clearance, float(world.obstacles.clearance(ends).min()) - 1e-9)
     path = None
@@ -59,6 +70,32 @@ def exact_path(world: World, position: FloatArray, goal: FloatArray, radius: flo
             if path is not None:
                 break
     return path
+
+
+def backed_out(world: World, position: FloatArray, radius: float) -> FloatArray:
+    """`position` itself when it keeps the radius from every obstacle and the border (or lies deeper inside than
+    BACK_OUT: that is no robot's way out); else the point, of BACK_OUT_DIRECTIONS around it at the nearest of a
+    few distances up to BACK_OUT (+ slack), with the most room, once that keeps the radius and BACK_OUT_SLACK
+    more (itself when none does)."""
+    inside = radius - float(world.room(np.asarray(position, dtype=float)[None, :2])[0])
+    if inside <= 0.0 or inside > BACK_OUT:
+        return position
+    angles = np.linspace(0.0, 2.0 * math.pi, BACK_OUT_DIRECTIONS, endpoint=False)
+    for step in np.linspace(inside + BACK_OUT_SLACK, BACK_OUT + BACK_OUT_SLACK, 4):
+        candidates = position[None, :2] + step * np.column_stack([np.cos(angles), np.sin(angles)])
+        room = world.room(candidates) - radius - BACK_OUT_SLACK
+        if room.max() >= 0.0:
+            return np.asarray(candidates[int(np.argmax(room))], dtype=float)
+    return position
+
+
+def _from(position: FloatArray, path: OptimalPath) -> OptimalPath:
+    """`path` with a straight piece from `position` to its start before it."""
+    a = (float(position[0]), float(position[1]))
+    b = (float(path.points[0][0]), float(path.points[0][1]))
+    piece = PathPiece('line', a, b, math.dist(a, b))
+    return replace(path, length=path.length + piece.length, points=np.vstack([np.array([a]), path.points]),
+                   pieces=(piece, *path.pieces))
 
 
 def parked_world(world: World, others: Sequence[OtherRobot], goal: FloatArray, radius: float,

@@ -5,6 +5,9 @@ control tick of it takes the robot and stops the robot instead when that point i
 - within the robot's radius (plus `obstacle_margin`: a robot planning in what its scans show keeps a little more)
   of an obstacle surface and nearer than where the robot is now (a robot already that near may still move
   away), or
+- within the robot's radius of a return of the latest laser scan (`scan_points`, when the robot has a laser) and
+  nearer than now: whatever perception made of the scan (a circle fitted a little small, a wall a little off), the
+  beams' own ends are where something is;
 - within the sum of both radii of another robot, plus the other robot's travel in one tick (at max_speed, or
   at its own speed when it reports more: a mover) and a quarter of the clearance margin (odometry a tick old,
   a command a tick late on a real graph), and nearer than now.
@@ -46,6 +49,7 @@ class Guard:
         # Kept beyond the radius from obstacle surfaces: 0 on a map that is the truth; a robot that plans in what
         # its scans show (fastep_core/perception) keeps PERCEPTION_MARGIN, as its surfaces are known only that well.
         self.obstacle_margin = 0.0
+        self.scan_points: FloatArray | None = None   # the latest scan's returns, map frame (None: no laser)
         self.stop: Stop | None = None   # why the last refused command was refused ...
         self.reason = ''                # ... in words, for the status
         # A disc of the world known to be obstacle-free: any point within (clearance - radius) of a point whose
@@ -67,6 +71,13 @@ class Guard:
             if then < keep and then < float(obstacles.clearance(position)):
                 return self._refuse(command, Stop.OBSTACLE, 'stopped: an obstacle is within the robot radius ahead')
             self._free = (world, after, then - keep)
+        points = self.scan_points
+        if points is not None and len(points):
+            then_points = float(np.min(np.hypot(points[:, 0] - after[0], points[:, 1] - after[1])))
+            if then_points < self.radius and \
+                    then_points < float(np.min(np.hypot(points[:, 0] - position[0], points[:, 1] - position[1]))):
+                return self._refuse(command, Stop.OBSTACLE, 'stopped: the laser shows an obstacle within the robot '
+                                                            'radius ahead')
         if len(others):
             # All the others at once (one by one, this loop was a tenth of a 40-robot run); the same numbers.
             centres, velocities, radii = other_arrays(others)

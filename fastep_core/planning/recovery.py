@@ -115,6 +115,9 @@ def backup_speed(params: PlannerParams) -> float:
     return min(BACKUP_SPEED, cap) if cap > 0.0 else BACKUP_SPEED
 
 
+MARGIN_DIRECTIONS = 8   # points round a point SeenFree.covers checks with a margin
+
+
 @dataclass(frozen=True)
 class SeenFree:
     """The free space laser scans saw: each beam from its scan's origin out to what it hit, or to range_max where
@@ -147,10 +150,18 @@ class SeenFree:
                    offset=(np.cumsum(beams) - beams).astype(np.int64),
                    reach=np.concatenate(reach).astype(float) if reach else np.zeros(0))
 
-    def covers(self, points: ArrayLike) -> BoolArray:
+    def covers(self, points: ArrayLike, margin: float = 0.0) -> BoolArray:
         """Which points (m, 2) some scan saw free: within its angle, and nearer its origin than both beams on either
-        side of the point's bearing reach (the fan between two beams counts as seen, as a costmap clears it)."""
+        side of the point's bearing reach (the fan between two beams counts as seen, as a costmap clears it).
+        margin > 0: the free space eroded by it, the points MARGIN_DIRECTIONS around each at that distance seen
+        free too (a beam grazing a surface passes within the noise of it: what lies there was not seen free)."""
         p = np.asarray(points, dtype=float).reshape(-1, 2)
+        if margin > 0.0 and len(p):
+            angles = np.linspace(0.0, 2.0 * math.pi, MARGIN_DIRECTIONS, endpoint=False)
+            ring = margin * np.column_stack([np.cos(angles), np.sin(angles)])
+            around = np.concatenate([p[:, None, :], p[:, None, :] + ring[None]], axis=1)     # (m, 1 + d, 2)
+            covered: BoolArray = np.asarray(self.covers(around.reshape(-1, 2)).reshape(len(p), -1).all(axis=1))
+            return covered
         if not len(self.reach) or not len(p):
             return np.zeros(len(p), dtype=bool)
         dx = p[:, None, 0] - self.origins[:, 0]                      # (m, k)

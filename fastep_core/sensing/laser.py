@@ -107,7 +107,7 @@ class Scan:
     angle_increment: float
     range_min: float
     range_max: float
-    ranges: FloatArray           # (beams,), +inf where no return within range_max
+    ranges: FloatArray           # (beams,), +inf where no return within range_max, nan where the reading is not one
     time: float = 0.0            # simulated seconds at which it was taken
 
     def angles(self) -> FloatArray:

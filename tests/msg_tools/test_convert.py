@@ -324,7 +324,7 @@ def test_movers_round_trip_through_markers_and_a_bad_one_is_one_line() -> None:
         convert.marker_array_to_movers(bad)
 
 
-def test_laser_scans_round_trip_and_readings_that_are_no_return_become_inf() -> None:
+def test_laser_scans_round_trip_and_readings_that_are_no_measurement_become_nan() -> None:
     from fastep_core.sensing.laser import LaserSpec, scan
     spec = LaserSpec(range=8.0, fov=2 * math.pi, beams=36, noise=0.0)
     reading = scan(spec, (0.0, 0.0, 0.0), None, 0.0, np.array([[3.0, 0.0]]), np.array([1.0]))
@@ -334,8 +334,10 @@ def test_laser_scans_round_trip_and_readings_that_are_no_return_become_inf() -> 
     ahead = int(np.argmin(np.abs(back.angles())))   # the beam along +x hits the circle 2 m away
     assert back.ranges[ahead] == pytest.approx(2.0) and np.isinf(back.ranges[(ahead + 18) % 36])
     msg.ranges[ahead], msg.ranges[ahead + 1], msg.range_min = math.nan, 0.01, 0.05
+    msg.ranges[ahead + 2], msg.ranges[ahead + 3] = 9.0, -math.inf
     back = convert.laser_scan_to_scan(msg)
-    assert np.isinf(back.ranges[ahead]) and np.isinf(back.ranges[ahead + 1])   # NaN, below range_min (REP-117)
+    # REP-117: NaN, below range_min, beyond range_max and -inf are no measurement; +inf is nothing within range.
+    assert np.isnan(back.ranges[ahead:ahead + 4]).all() and np.isposinf(back.ranges[(ahead + 18) % 36])
     spec_back = convert.laser_spec(msg, 0.02)
     assert (spec_back.range, spec_back.beams, spec_back.noise) == (8.0, 36, 0.02)
     assert spec_back.fov == pytest.approx(2 * math.pi) and spec_back.full_turn

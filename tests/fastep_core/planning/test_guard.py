@@ -92,3 +92,16 @@ def test_a_navigator_steps_round_an_obstacle_that_appears_mid_run():
         t += 0.05
     assert nav.mode.value == 'arrived' and nav.activations >= 1
     assert float(AHEAD.obstacles.clearance(np.array(path)).min()) >= 0.5
+
+
+def test_the_guard_stops_short_of_a_laser_return_the_belief_lacks_and_lets_the_robot_move_away():
+    """Whatever perception made of a scan, the beams' ends are something: a return 0.4 m ahead, on an empty
+    map, stops a step that ends within the radius of it; moving away from it goes."""
+    guard, state = Guard(PointMass(), 0.5, PlannerParams()), np.array([5.0, 5.0])
+    step = np.array([2.0, 0.0])                               # 0.1 m in one tick: ends 0.3 m from the return
+    assert guard.check(EMPTY, state, step, 0.05, []) is step
+    guard.scan_points = np.array([[5.4, 5.0], [9.0, 9.0]])
+    assert np.all(guard.check(EMPTY, state, step, 0.05, []) == 0.0) and guard.stop is Stop.OBSTACLE
+    assert 'laser' in guard.reason
+    away = np.array([-2.0, 0.0])
+    assert guard.check(EMPTY, state, away, 0.05, []) is away

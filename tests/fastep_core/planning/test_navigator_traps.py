@@ -96,3 +96,21 @@ def test_gap_only_the_radius_fits_through_is_still_a_path():
             'robots': [{'name': 'r1', 'model': 'point_mass', 'start': [5, 15], 'goal': [35, 15], 'radius': 0.5}]}
     robot = simulate(parse_scenario(data), 'fastep', 0).robots[0]
     assert robot.reached and not robot.collided
+
+
+def test_a_robot_a_little_inside_its_radius_has_a_path_that_backs_out_first():
+    """A new scan put an obstacle 1 cm nearer than the radius: the path starts where the robot is and leaves the
+    obstacle's reach at once; 10 cm inside (more than BACK_OUT) is no robot's way out."""
+    from fastep_core.geometry import Circle
+    from fastep_core.planning.exact_path import BACK_OUT, exact_path
+    from fastep_core.planning.params import PlannerParams
+    from fastep_core.world import World
+    world = World.from_obstacles([0, 0, 20, 20], [Circle((5.99, 5.0), 0.5)])
+    radius, position, goal = 0.5, np.array([5.0, 5.0]), np.array([15.0, 5.0])
+    assert 0.0 < radius - float(world.obstacles.clearance(position[None])[0]) < BACK_OUT
+    path = exact_path(world, position, goal, radius, PlannerParams())
+    assert path is not None
+    np.testing.assert_allclose(path.points[0], position)
+    assert float(world.obstacles.clearance(path.points[1:2])[0]) >= radius
+    deep = World.from_obstacles([0, 0, 20, 20], [Circle((5.9, 5.0), 0.5)])   # 0.1 m inside
+    assert exact_path(deep, position, goal, radius, PlannerParams()) is None
