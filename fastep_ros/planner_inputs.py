@@ -275,6 +275,7 @@ class PlannerInputs(PlannerReports):
         self.scan_problem = ''
         nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
         nav.guard_check.scan_points = self.scan_perception.returns      # and the beams' ends are obstacles
+        nav.from_scans = True
         if self.planning is not None:
             nav.seen = self.scan_perception.recent.seen()   # where the robot may back up (planning/control.py)
         if belief.world is not nav.world:

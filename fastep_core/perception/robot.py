@@ -35,6 +35,7 @@ class SensingRobot:
         self.rng = sensor_generator(seed, index)
         self.perception = Perception(spec, navigator.world)
         navigator.guard_check.obstacle_margin = perception_margin(spec)
+        navigator.from_scans = True
 
     @property
     def recent(self) -> RecentScans:

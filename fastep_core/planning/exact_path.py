@@ -25,7 +25,8 @@ from fastep_core.world import World
 if TYPE_CHECKING:   # scenario.py imports planning (params): only for the annotation
     from fastep_core.scenario import Scenario
 
-__all__ = ['BACK_OUT', 'PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'backed_out', 'exact_path', 'no_path_reason',
+__all__ = ['BACK_OUT', 'BLOCKED_RETRY', 'PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'backed_out', 'blocked_reason',
+           'exact_path', 'no_path_reason',
            'parked_world', 'robot_path',
            'solvable']
 
@@ -36,6 +37,7 @@ PARKED_SPEED = 0.05   # m/s: another robot slower than this is planned around li
 BACK_OUT = 0.05       # m inside its radius a robot may find itself and still back out (planning from scans)
 BACK_OUT_SLACK = 0.01  # m beyond the radius the way out ends
 BACK_OUT_DIRECTIONS = 16
+BLOCKED_RETRY = 1.0   # s: a robot blocked in what it believes looks for a path again at least this often
 
 
 def exact_path(world: World, position: FloatArray, goal: FloatArray, radius: float, params: PlannerParams, *,
@@ -128,6 +130,27 @@ def robot_path(world: World, others: Sequence[OtherRobot], position: FloatArray,
         if path is not None:
             return path, parked
     return exact_path(world, position, goal, radius, params, turn_room=turn_room), world
+
+
+def blocked_reason(world: World, position: FloatArray, goal: FloatArray, radius: float, waited: float,
+                   timeout: float) -> str:
+    """The status of a robot holding because what it believes has no way to the goal (Navigator.fail_no_path),
+    naming what is in the way: the first obstacle within the radius of the straight run to the goal (else the
+    one nearest the goal)."""
+    start, end = np.asarray(position, dtype=float)[:2], np.asarray(goal, dtype=float)[:2]
+    steps = int(min(max(math.ceil(math.dist(start, end) / 0.1), 1), 1000))
+    run = start + np.linspace(0.0, 1.0, steps + 1)[:, None] * (end - start)
+    what = 'nothing known'
+    if len(world.obstacles):
+        distances = world.obstacles.distances(run)                        # (points, obstacles)
+        hit = np.flatnonzero(distances.min(axis=1) < radius)
+        row = int(hit[0]) if len(hit) else len(run) - 1
+        item = world.obstacles.items[int(np.argmin(distances[row]))]
+        what = (f'a circle of radius {item.radius:.2f} m at ({item.center[0]:.2f}, {item.center[1]:.2f})'
+                if isinstance(item, Circle) else
+                f'a wall from ({item.start[0]:.2f}, {item.start[1]:.2f}) to ({item.end[0]:.2f}, {item.end[1]:.2f})')
+    return (f'blocked: no way to the goal in what the laser shows; in the way: {what}; planning again '
+            f'({waited:.1f} of {timeout:g} s)')
 
 
 def no_path_reason(radius: float, position: FloatArray, goal: FloatArray) -> str:

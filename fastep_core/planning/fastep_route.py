@@ -56,7 +56,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import point_segment_distance
-from fastep_core.planning.exact_path import PARKED_SPEED, no_path_reason, robot_path
+from fastep_core.planning.exact_path import PARKED_SPEED, robot_path
 from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
@@ -302,8 +302,7 @@ class FAStepRoute(FAStepKinematic):
         path = self.exact_path(position, others)
         t = self._last_t or 0.0
         if path is None:
-            assert self.goal is not None
-            self.fail(no_path_reason(self.radius, position, self.goal))
+            self.fail_no_path(position)
             return False
         self.replans += 1
         self.replan_log.append((t, reason))

@@ -34,7 +34,7 @@ from fastep_core.errors import GoalError
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.detection import RunDetector
 from fastep_core.planning.escape import ESCAPING, TrapEscape
-from fastep_core.planning.exact_path import no_path_reason, parked_world, robot_path
+from fastep_core.planning.exact_path import BLOCKED_RETRY, blocked_reason, no_path_reason, parked_world, robot_path
 from fastep_core.planning.guard import Guard
 from fastep_core.planning.manoeuvring import ManoeuvreDriver
 from fastep_core.planning.optimal import OptimalPath
@@ -116,6 +116,12 @@ class Navigator:
         # The guard's stop brakes at this (m/s^2) where a control loop smooths the commands (planning/control.py):
         # the guard looks the braking distance further ahead. 0: a stop is immediate, as in lock step.
         self.braking = 0.0
+        # Whether the world is what the robot's laser shows (fastep_core/perception): a belief that can be wrong
+        # for a moment, so no path in it holds the robot a while before the goal fails (fail_no_path).
+        self.from_scans = False
+        self._blocked_since: float | None = None   # since when no path was found in what the laser shows
+        self._no_path_in: World | None = None      # the world the last search found no path in, and when
+        self._no_path_at = -math.inf
         self._speed = 0.0   # of the last command (m/s)
         self._last_t: float | None = None
         self._path_checked = False                # has the goal been checked for a path
@@ -178,6 +184,7 @@ class Navigator:
         self.reference, self._path_checked, self._committed = None, False, False
         self._stuck, self._rule_gave_up, self._hold_broken = 0, -1, -1
         self._pending, self._pending_tick = None, -1
+        self._blocked_since = self._no_path_in = None
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -187,6 +194,22 @@ class Navigator:
     def fail(self, reason: str) -> None:
         self.mode, self.reason = Mode.FAILED, reason
         self.waypoint, self._target, self.cost = None, None, 0.0
+
+    def fail_no_path(self, position: FloatArray) -> None:
+        """No way to the goal in the world believed now: the goal fails, unless the robot plans in what its laser
+        shows (`from_scans`) and has not been blocked for blocked_timeout yet; then it holds, says what blocks, and
+        looks for a path again (exact_path: on each new belief, at least every BLOCKED_RETRY s)."""
+        assert self.goal is not None
+        t = self._last_t or 0.0
+        since = t if self._blocked_since is None else self._blocked_since
+        if not self.from_scans or self.params.blocked_timeout <= 0.0 or t - since >= self.params.blocked_timeout:
+            self._blocked_since = None
+            self.fail(no_path_reason(self.radius, position, self.goal))
+            return
+        self._blocked_since = since
+        self.waypoint, self._target, self.cost, self._path_checked = None, None, 0.0, False
+        self.reason = blocked_reason(self.world, position, self.goal, self.radius, t - since,
+                                     self.params.blocked_timeout)
 
     # ------------------------------------------------------- while running
     @classmethod
@@ -323,7 +346,7 @@ class Navigator:
             self._path_checked = True
             self.reference = self.exact_path(position)
             if self.reference is None:
-                self.fail(no_path_reason(self.radius, position, self.goal))
+                self.fail_no_path(position)
                 return stop
         if self.progress.stalled(t, distance):
             self.fail(self.progress.reason)
@@ -527,10 +550,18 @@ class Navigator:
 
     # --------------------------------------------------- paths and traps
     def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:
-        """The exact shortest path to the goal round obstacles and parked robots (planning/exact_path.py)."""
+        """The exact shortest path to the goal round obstacles and parked robots (planning/exact_path.py); while
+        blocked (fail_no_path), None without a search until the belief changes or BLOCKED_RETRY s have passed."""
         assert self.goal is not None
+        t = self._last_t or 0.0
+        if self._blocked_since is not None and self._no_path_in is self.world and t - self._no_path_at < BLOCKED_RETRY:
+            return None
         path, self.path_world = robot_path(self.world, others, position, self.goal, self.radius, self.params,
                                            turn_room=not self.model.turns_in_place)
+        if path is None:
+            self._no_path_in, self._no_path_at = self.world, t
+        else:
+            self._blocked_since = self._no_path_in = None
         return path
 
     def trapped(self, t: float, distance: float) -> bool:
@@ -545,7 +576,7 @@ class Navigator:
         assert self.goal is not None
         path = self.exact_path(position, others)
         if path is None:
-            self.fail(no_path_reason(self.radius, position, self.goal))
+            self.fail_no_path(position)
             return False
         self.escapes += 1
         self.escape.start(path, self.path_world, t, min(distance, self.trap.best) - self.params.progress_distance,
@@ -585,7 +616,7 @@ class Navigator:
 
         target, progressed = self.escape.next_target(position, t, plan, self.radius, self.params, replan, self.world)
         if target is None:
-            self.fail(no_path_reason(self.radius, position, self.goal))
+            self.fail_no_path(position)
             return None
         if progressed:
             self.progress.made_progress(t)

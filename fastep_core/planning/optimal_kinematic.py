@@ -26,7 +26,7 @@ from typing import Sequence
 
 import numpy as np
 
-from fastep_core.planning.exact_path import PATH_SPACING, no_path_reason
+from fastep_core.planning.exact_path import PATH_SPACING
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot
@@ -57,7 +57,7 @@ class OptimalKinematic(Navigator):
         path = self.reference if self.reference is not None and np.array_equal(self.reference.points[0], position) \
             else self.exact_path(position)
         if path is None:
-            self.fail(no_path_reason(self.radius, position, self.goal))
+            self.fail_no_path(position)
             return False
         self.path = path
         self._route = path.points[1:] if len(path.points) > 1 else path.points

@@ -120,6 +120,9 @@ class PlannerParams:
     dt: float = _p(0.05, 'control and integration step (s)', 1e-4, 10.0)
     progress_distance: float = _p(0.5, 'progress checker: come this much closer to the goal ... (m)', 0.0)
     progress_timeout: float = _p(120.0, '... within this many seconds, else fail (s); 0 disables', 0.0)
+    blocked_timeout: float = _p(10.0, 'a robot planning in what its laser shows and finding no way to the goal there '
+                                      'waits this long (s), planning again on each new belief, before the goal fails '
+                                      '(no valid path): a belief can be wrong for a moment; 0: fail at once', 0.0)
     trap_timeout: float = _p(20.0, 'trap escape: no progress_distance (near the goal: half the distance) closer '
                                    'to the goal in this many seconds starts an escape along the exact shortest '
                                    'path (s); 0 disables', 0.0)

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from fastep_core.errors import GoalError
-from fastep_core.geometry import Circle
+from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import TractorTrailer
 from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator, manoeuvring
 from fastep_core.planning.manoeuvre import Manoeuvre
@@ -369,3 +369,34 @@ def test_with_a_budget_routes_every_tick_still_let_the_step_end():
         command = nav.update(t, state, [OtherRobot('r2', (state[0] + 2.0, 10.0), (-0.3, 0.0), 0.5)])
         state = state + 0.05 * command
     assert nav.replans >= 20 and len(nav.plan) >= 1 and nav.reason != 'planning a step (finished on the next tick)'
+
+
+@pytest.mark.parametrize('algorithm', ['fastep', 'fastep_route'])
+def test_no_path_in_what_the_laser_shows_holds_the_robot_and_it_goes_on_once_the_belief_opens(algorithm):
+    """A belief closing the only way (a mover standing in a doorway, a wrong wall) holds a robot that plans in its
+    scans, the status naming what is in the way; a new belief with the way open lets it go on. Without a laser, and
+    after blocked_timeout, no path fails the goal."""
+    room = [Segment((10.0, 0.0), (10.0, 9.0)), Segment((10.0, 11.0), (10.0, 20.0))]   # a 2 m door at y 9-11
+    closed = World.from_obstacles([0, 0, 20, 20], [*room, Circle((10.0, 10.0), 1.2)])
+    opened = World.from_obstacles([0, 0, 20, 20], room)
+    state = np.array([5.0, 10.0])
+    nav = make_navigator(algorithm, SPEC, 0.5, closed, PlannerParams(), 0)
+    nav.from_scans = True
+    nav.set_goal((15.0, 10.0))
+    for k in range(40):                                     # 2 s
+        command = nav.update(0.05 * k, state)
+        assert not nav.failed and np.all(command == 0.0)
+    assert nav.reason.startswith('blocked: no way to the goal') and '(10.00, 10.00)' in nav.reason
+    nav.world = opened
+    nav.update(2.0, state)
+    assert not nav.failed and np.hypot(*nav.update(2.05, state)) > 0.0
+    blind = make_navigator(algorithm, SPEC, 0.5, closed, PlannerParams(), 0)
+    blind.set_goal((15.0, 10.0))
+    blind.update(0.0, state)
+    assert blind.failed and blind.reason.startswith('no valid path')
+    patient = make_navigator(algorithm, SPEC, 0.5, closed, PlannerParams(blocked_timeout=1.0), 0)
+    patient.from_scans = True
+    patient.set_goal((15.0, 10.0))
+    for k in range(30):
+        patient.update(0.05 * k, state)
+    assert patient.failed and patient.reason.startswith('no valid path')
