@@ -49,7 +49,7 @@ __all__ = ['FITTED_THROUGH', 'FREE_MARGIN', 'IN_FRONT', 'MERGE_GAP', 'MERGE_REAC
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
-NO_CENTRES, NO_RADII = np.zeros((0, 2)), np.zeros(0)
+NO_CENTRES, NO_RADII, NO_OBSTACLES = np.zeros((0, 2)), np.zeros(0), Obstacles()
 
 STILL_SPEED = 0.15
 """m/s: a confirmed track slower than this is a still obstacle (the families' movers go 0.3 m/s and more)."""
@@ -169,7 +169,7 @@ class Perception:
         # of the believed surface on its beam (a surface the belief lacks).
         still = explained(points, self._obstacles('seen'), NO_CENTRES, NO_RADII, map_obstacles=self._obstacles('map'))
         still &= ~self._in_front(scan, pose_array, points, beams)
-        new = ~still & ~explained(points, Obstacles([]), centres, radii)
+        new = ~still & ~explained(points, NO_OBSTACLES, centres, radii)
         points, beams = points[new], beams[new]
         labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
 
@@ -205,8 +205,8 @@ class Perception:
             tracker.keep(~still)
             changed = True
         changed |= self._update_standing()
-        for start, end in zip(starts, ends):
-            self._add_wall(start, end)
+        if len(starts):
+            self._add_walls(starts, ends)
             changed = True
         if changed:
             self.world = World(self.map_world.workspace,
@@ -296,6 +296,8 @@ class Perception:
     def _obstacles(self, which: str) -> Obstacles:
         """The believed obstacles from the map ('map'), from the scans ('seen') or both ('believed'; not the
         standing tracks' circles, which the tracker keeps), as Obstacles, made again only when they changed."""
+        if which == 'believed' and not self.map_items:
+            return self._obstacles('seen')     # the same items: one Obstacles
         items = (self.map_items if which == 'map' else self.seen_items if which == 'seen' else
                  self.map_items + self.seen_items)
         key = tuple(map(id, items))
@@ -348,47 +350,53 @@ class Perception:
                     self.dropped.append(item)
                     break
 
-    def _add_wall(self, start: FloatArray, end: FloatArray) -> None:
-        """Believe in a wall piece: extend a collinear believed wall it continues, else add it."""
-        new = np.array([start, end])
-        for k in self._wall_candidates(new):
-            item = self.seen_items[k]
-            if not isinstance(item, Segment):
-                continue
-            a, b = np.array(item.start), np.array(item.end)
-            run = b - a
-            length = math.hypot(run[0], run[1])
-            if length <= 0.0:
-                continue
-            unit = run / length
-            offset = new - a
-            off_line = np.abs(unit[0] * offset[:, 1] - unit[1] * offset[:, 0])
-            along = offset @ unit
-            if off_line.max() > MERGE_TOLERANCE or along.max() < -MERGE_GAP or along.min() > length + MERGE_GAP:
-                continue
-            low, high = min(0.0, float(along.min())), max(length, float(along.max()))
-            p, q = a + low * unit, a + high * unit
-            self.seen_items[k] = Segment((float(p[0]), float(p[1])), (float(q[0]), float(q[1])))
-            return
-        self.seen_items.append(Segment((float(start[0]), float(start[1])), (float(end[0]), float(end[1]))))
-
-    def _wall_candidates(self, new: FloatArray) -> list[int]:
-        """Indices, in order, of the believed walls that the piece `new` (2, 2) may continue: _add_wall's test for
-        all walls at once, with a margin of MERGE_MARGIN that only lets more through, so that its exact test (one
-        wall at a time, as before) runs on these few and gives the same answer as on all of them."""
+    def _add_walls(self, starts: FloatArray, ends: FloatArray) -> None:
+        """Believe in this scan's wall pieces: each extends a collinear believed wall it continues, else is added.
+        The believed walls' ends are gathered once (a table kept up to date as pieces extend or join them)."""
         walls = [(k, item) for k, item in enumerate(self.seen_items) if isinstance(item, Segment)]
-        if not walls:
-            return []
-        ends = np.array([(item.start, item.end) for _, item in walls])                              # (w, 2, 2)
-        a = ends[:, 0]
-        run = ends[:, 1] - a
+        index = [k for k, _ in walls]
+        table: FloatArray = np.array([(item.start, item.end) for _, item in walls], dtype=np.float64).reshape(-1, 2, 2)
+        for new in np.stack([starts, ends], axis=1):
+            for row in np.flatnonzero(self._wall_candidates(new[None], table)[0]):
+                a, b = table[row, 0], table[row, 1]
+                run = b - a
+                length = math.hypot(run[0], run[1])
+                if length <= 0.0:
+                    continue
+                unit = run / length
+                offset = new - a
+                off_line = np.abs(unit[0] * offset[:, 1] - unit[1] * offset[:, 0])
+                along = offset @ unit
+                if off_line.max() > MERGE_TOLERANCE or along.max() < -MERGE_GAP or \
+                        along.min() > length + MERGE_GAP:
+                    continue
+                low, high = min(0.0, float(along.min())), max(length, float(along.max()))
+                p, q = a + low * unit, a + high * unit
+                self.seen_items[index[row]] = Segment((float(p[0]), float(p[1])), (float(q[0]), float(q[1])))
+                table[row] = (p, q)
+                break
+            else:
+                self.seen_items.append(Segment((float(new[0, 0]), float(new[0, 1])),
+                                               (float(new[1, 0]), float(new[1, 1]))))
+                index.append(len(self.seen_items) - 1)
+                table = np.concatenate([table, new[None]])
+
+    @staticmethod
+    def _wall_candidates(pieces: FloatArray, table: FloatArray) -> NDArray[np.bool_]:
+        """Which believed walls of the table (w, 2, 2) each of the pieces (p, 2, 2) may continue (p, w): _add_walls'
+        test for all at once, with a margin of MERGE_MARGIN that only lets more through, so that its exact test (one
+        wall at a time) runs on these few and gives the same answer as on all of them."""
+        if not len(table) or not len(pieces):
+            return np.zeros((len(pieces), len(table)), dtype=bool)
+        a = table[:, 0]
+        run = table[:, 1] - a
         length = np.hypot(run[:, 0], run[:, 1])
         unit = run / np.where(length > 0.0, length, 1.0)[:, None]
-        offset = new[None, :, :] - a[:, None, :]                                                    # (w, 2, 2)
-        off_line = np.abs(unit[:, None, 0] * offset[..., 1] - unit[:, None, 1] * offset[..., 0])
-        along = unit[:, None, 0] * offset[..., 0] + unit[:, None, 1] * offset[..., 1]
-        # Negated as _add_wall's test is, so that a nan lets a wall through here as it does there.
+        offset = pieces[:, None, :, :] - a[None, :, None, :]                                     # (p, w, 2, 2)
+        off_line = np.abs(unit[None, :, None, 0] * offset[..., 1] - unit[None, :, None, 1] * offset[..., 0])
+        along = unit[None, :, None, 0] * offset[..., 0] + unit[None, :, None, 1] * offset[..., 1]
+        # Negated as _add_walls' test is, so that a nan lets a wall through here as it does there.
         margin = MERGE_GAP + MERGE_MARGIN
-        maybe = ~((off_line.max(axis=1) > MERGE_TOLERANCE + MERGE_MARGIN) | (along.max(axis=1) < -margin) |
-                  (along.min(axis=1) > length + margin))
-        return [walls[k][0] for k in np.flatnonzero(maybe)]
+        maybe: NDArray[np.bool_] = ~((off_line.max(axis=2) > MERGE_TOLERANCE + MERGE_MARGIN) |
+                                     (along.max(axis=2) < -margin) | (along.min(axis=2) > length + margin))
+        return maybe

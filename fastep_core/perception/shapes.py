@@ -125,25 +125,20 @@ def polyline(points: FloatArray, tolerance: float = WALL_TOLERANCE) -> list[int]
     return sorted(set(keep))
 
 
-def _in_front_of(ordered: FloatArray, kept: list[int], vertices: FloatArray,
+def _in_front_of(points: FloatArray, first: IntArray, a: FloatArray, b: FloatArray,
                  origin: FloatArray) -> tuple[FloatArray, FloatArray]:
-    """The polyline's pieces (starts, ends) each moved toward the scanner to its nearest point: a wall is never
-    believed behind a return it was fitted to (a simplified piece's chord lies up to its tolerance off its points,
-    either side), so that a return in front of a believed wall is something the belief lacks."""
-    a, b = vertices[:-1].copy(), vertices[1:].copy()
-    for k in range(len(a)):
-        run = b[k] - a[k]
-        length = float(np.hypot(*run))
-        if length <= 0.0:
-            continue
-        normal = np.array([-run[1], run[0]]) / length
-        if float(normal @ (origin - a[k])) < 0.0:
-            normal = -normal                                        # toward the scanner
-        ahead = float(((ordered[kept[k]:kept[k + 1] + 1] - a[k]) @ normal).max())
-        if ahead > 0.0:
-            a[k] += ahead * normal
-            b[k] += ahead * normal
-    return a, b
+    """The polylines' pieces (starts a, ends b (p, 2)) each moved toward the scanner to its nearest point: a wall
+    is never believed behind a return it was fitted to (a simplified piece's chord lies up to its tolerance off its
+    points, either side), so that a return in front of a believed wall is something the belief lacks. points: the
+    walls' points in order, piece k's from first[k] up to first[k + 1] (each polyline's last point: its last)."""
+    run = b - a
+    length = np.hypot(run[:, 0], run[:, 1])
+    normal = np.column_stack([-run[:, 1], run[:, 0]]) / np.where(length > 0.0, length, 1.0)[:, None]
+    normal *= np.where(((origin - a) * normal).sum(axis=1) < 0.0, -1.0, 1.0)[:, None]      # toward the scanner
+    piece = np.searchsorted(first, np.arange(len(points)), side='right') - 1
+    ahead = np.maximum.reduceat(((points - a[piece]) * normal[piece]).sum(axis=1), first)
+    shift = np.where(length > 0.0, np.maximum(ahead, 0.0), 0.0)[:, None] * normal
+    return a + shift, b + shift
 
 
 def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatArray, noise: float = 0.0,
@@ -168,8 +163,10 @@ def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatA
         (radii <= MAX_CIRCLE_RADIUS) & (radii > 0.0) & behind & (chord >= MIN_ARC * radii)
     if seen_free is not None and circle.any():
         circle[circle] = ~seen_free(centres[circle], radii[circle])
-    starts: list[FloatArray] = []
-    ends: list[FloatArray] = []
+    walls: list[FloatArray] = []      # each wall cluster's points in order, and its polyline's vertices
+    vertices_of: list[FloatArray] = []
+    firsts: list[IntArray] = []       # where each piece's points begin among all the walls' points
+    count = 0
     for k in np.flatnonzero(~circle & (counts >= MIN_POINTS) & (nearest <= wall_range)):
         index = np.flatnonzero(labels == k)
         jumps = np.flatnonzero(np.diff(beams[index]) > 1)
@@ -186,9 +183,13 @@ def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatA
             if length > 0.0:
                 reach = float(np.hypot(*(vertices[end] - origin))) * beam_gap
                 vertices[end] = vertices[end] + run * (reach / length)
-        a, b = _in_front_of(ordered, kept, vertices, origin)
-        starts.append(a)
-        ends.append(b)
-    return Shapes(centres[circle], radii[circle],
-                  np.concatenate(starts) if starts else np.zeros((0, 2)),
-                  np.concatenate(ends) if ends else np.zeros((0, 2)))
+        walls.append(ordered)
+        vertices_of.append(vertices)
+        firsts.append(count + np.asarray(kept[:-1], dtype=np.int64))
+        count += len(ordered)
+    if not walls:
+        return Shapes(centres[circle], radii[circle], np.zeros((0, 2)), np.zeros((0, 2)))
+    starts, ends = _in_front_of(np.concatenate(walls), np.concatenate(firsts),
+                                np.concatenate([v[:-1] for v in vertices_of]),
+                                np.concatenate([v[1:] for v in vertices_of]), origin)
+    return Shapes(centres[circle], radii[circle], starts, ends)

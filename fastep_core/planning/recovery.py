@@ -118,6 +118,15 @@ def backup_speed(params: PlannerParams) -> float:
 MARGIN_DIRECTIONS = 8   # points round a point SeenFree.covers checks with a margin
 
 
+def free_reach(scan: Scan) -> FloatArray:
+    """How far each beam of the scan saw free space (m): to its return, range_max for +inf, none for no reading."""
+    ranges = scan.ranges
+    reach: FloatArray = np.where(np.isposinf(ranges), scan.range_max,
+                                 np.where(np.isnan(ranges) | (ranges < scan.range_min), 0.0,
+                                          np.minimum(ranges, scan.range_max))).astype(float)
+    return reach
+
+
 @dataclass(frozen=True)
 class SeenFree:
     """The free space laser scans saw: each beam from its scan's origin out to what it hit, or to range_max where
@@ -132,19 +141,20 @@ class SeenFree:
     reach: FloatArray        # (n,) how far each beam saw free space (m)
 
     @classmethod
-    def of_scans(cls, scans: Sequence[tuple[Scan, ArrayLike]]) -> SeenFree:
-        """From (scan, pose of the scanner (x, y, heading) when it was taken) pairs. A reading of +inf (no return)
-        saw free space to range_max; NaN, -inf and readings below range_min saw none. Scans with no beams or no
-        positive increment are left out."""
-        kept = [(scan, np.asarray(pose, dtype=float)) for scan, pose in scans
+    def of_scans(cls, scans: Sequence[tuple[Scan, ArrayLike]],
+                 reaches: Sequence[FloatArray] | None = None) -> SeenFree:
+        """From (scan, pose of the scanner (x, y, heading) when it was taken) pairs (and each one's free_reach,
+        when known). A reading of +inf (no return) saw free space to range_max; NaN, -inf and readings below
+        range_min saw none. Scans with no beams or no positive increment are left out."""
+        pairs = list(scans)
+        known = list(reaches) if reaches is not None else [free_reach(scan) for scan, _ in pairs]
+        kept = [(scan, np.asarray(pose, dtype=float), r) for (scan, pose), r in zip(pairs, known)
                 if len(scan.ranges) and scan.angle_increment > 0.0 and math.isfinite(scan.angle_increment)]
-        beams = np.array([len(scan.ranges) for scan, _ in kept], dtype=np.int64)
-        increment = np.array([scan.angle_increment for scan, _ in kept], dtype=float)
-        reach = [np.where(np.isposinf(scan.ranges), scan.range_max,
-                          np.where(np.isnan(scan.ranges) | (scan.ranges < scan.range_min), 0.0,
-                                   np.minimum(scan.ranges, scan.range_max))) for scan, _ in kept]
-        return cls(origins=np.array([pose[:2] for _, pose in kept], dtype=float).reshape(-1, 2),
-                   first=np.array([pose[2] + scan.angle_min for scan, pose in kept], dtype=float),
+        beams = np.array([len(scan.ranges) for scan, _, _ in kept], dtype=np.int64)
+        increment = np.array([scan.angle_increment for scan, _, _ in kept], dtype=float)
+        reach = [r for _, _, r in kept]
+        return cls(origins=np.array([pose[:2] for _, pose, _ in kept], dtype=float).reshape(-1, 2),
+                   first=np.array([pose[2] + scan.angle_min for scan, pose, _ in kept], dtype=float),
                    increment=increment, beams=beams,
                    full_turn=increment * beams >= 2.0 * math.pi - FULL_TURN_TOLERANCE,
                    offset=(np.cumsum(beams) - beams).astype(np.int64),
@@ -189,6 +199,7 @@ class RecentScans:
     def __init__(self, keep: float = 5.0) -> None:
         self.keep = keep
         self.scans: deque[tuple[Scan, FloatArray]] = deque(maxlen=KEPT_SCANS)
+        self._reaches: deque[FloatArray] = deque(maxlen=KEPT_SCANS)   # each kept scan's free_reach
         self._seen: SeenFree | None = None
 
     def add(self, scan: Scan, pose: ArrayLike) -> None:
@@ -196,16 +207,18 @@ class RecentScans:
         where = np.array(pose, dtype=float)
         while self.scans and self.scans[0][0].time < scan.time - self.keep:
             self.scans.popleft()
+            self._reaches.popleft()
             self._seen = None
         last = self.scans[-1][1] if self.scans else None
         if last is None or math.hypot(where[0] - last[0], where[1] - last[1]) >= MOVED_AT_LEAST or \
                 abs(math.atan2(math.sin(where[2] - last[2]), math.cos(where[2] - last[2]))) >= TURNED_AT_LEAST:
             self.scans.append((scan, where))
+            self._reaches.append(free_reach(scan))
             self._seen = None
 
     def seen(self) -> SeenFree:
         if self._seen is None:
-            self._seen = SeenFree.of_scans(self.scans)
+            self._seen = SeenFree.of_scans(self.scans, self._reaches)
         return self._seen
 
 
