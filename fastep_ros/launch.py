@@ -1,7 +1,7 @@
 """fastep-launch: run a scenario through the live ROS 2 graph and report what every robot did.
 
     fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco|optimal|dwa] [--seed N]
-                  [--json OUT] [--plot OUT.png] [--no-clock] [--layout node|robot|graph|cores]
+                  [--json OUT] [--plot OUT.png] [--no-clock | --realtime] [--layout node|robot|graph|cores]
                   [--executor events|single] [--step-iterations K]
                   [--foxglove PORT] [--no-progress] [--verbose]   (fastep_ros.foxglove_bridge, fastep_ros.progress)
 
@@ -11,7 +11,8 @@ fastep_ros.processes), gated until it has seen no other graph on the domain: the
 per robot in the robot's namespace with its parameters from the scenario (the scenario's planner overrides
 included), and waits until every planner knows the world and the other robots. It then sends each goal on
 `/<name>/goal_pose`, starts the clock (simulated time at --rtf, in exact lock step: the run is the run fastep-sim
-makes, tick for tick, fastep_ros.lock_step; --no-clock runs every node on wall time instead), follows every
+makes, tick for tick, fastep_ros.lock_step; --realtime counts planning latency in it, the planners driving on
+their newest plan as on a robot; --no-clock runs every node on wall time instead), follows every
 `status` and `odom`, and prints one line per robot: arrived or not, the path length measured from its odometry, the
 time taken. The default layout is `graph` in lock step for up to 4 robots, `cores` otherwise (fastep_ros.layouts).
 On wall time with more than WALL_ROBOTS_PER_CORE robots per CPU core, planners whose scenario sets no
@@ -87,6 +88,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--record', type=Path, metavar='OUT.mcap',
                    help='record every fastep topic into an MCAP file (fastep-record), finished on exit')
     p.add_argument('--no-clock', action='store_true', help='no simulated clock: every node runs on wall time')
+    p.add_argument('--realtime', action='store_true', help='lock step with planning latency counted: the planners '
+                   'plan on their planning thread, a plan reaching the control loop when its pass is done while the '
+                   'simulated clock goes on (at --rtf), as on a robot; not deterministic')
     p.add_argument('--foxglove', type=tcp_port, metavar='PORT', help='serve a live view for Foxglove (fastep-foxglove) '
                    'on ws://localhost:PORT while the run goes')
     p.add_argument('--no-progress', action='store_true', help='no progress on stderr (robots arrived, simulated '
@@ -158,13 +162,16 @@ def plant_params(spec: RobotSpec, sim_time: bool, params: PlannerParams | None =
     return out
 
 
-def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, sim_time: bool) -> dict[str, Any]:
+def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, sim_time: bool,
+                   realtime: bool = False) -> dict[str, Any]:
     spec = scenario.robots[index]
     out: dict[str, Any] = {'algorithm': algorithm, 'model': spec.model, 'robot_radius': float(spec.radius),
                            'seed': int(seed), 'seed_stream': index,
                            'control_rate_hz': 1.0 / scenario.planner.dt, 'use_sim_time': sim_time}
     if sim_time:
         out.update(lock_step=True, use_stamped_cmd_vel=True)   # exact lock step (fastep_ros.lock_step)
+        if realtime:
+            out['realtime'] = True   # ... planning on its thread, its latency counted
     if spec.model == 'tractor_trailer':
         out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
                    hitch_offset=float(spec.hitch_offset))
@@ -292,7 +299,7 @@ def run(args: argparse.Namespace, scenario: Scenario) -> int:
                         plant_params(spec, sim_time, scenario.planner, scenario=_scenario_arg(args.scenario),
                                      seed=args.seed, index=i))
             procs.start(f'fastep-planner /{spec.name}', 'planner', f'/{spec.name}',
-                        planner_params(scenario, i, args.algorithm, args.seed, sim_time))
+                        planner_params(scenario, i, args.algorithm, args.seed, sim_time, args.realtime))
         if args.foxglove is not None:   # on wall time: not a /clock subscriber, nor in the lock step
             procs.start('fastep-foxglove', 'foxglove_bridge', '/', {'port': args.foxglove,
                                                                      'scenario': _scenario_arg(args.scenario)})
@@ -528,6 +535,8 @@ def _main(argv: Sequence[str] | None) -> int:
         parser.error(f'--timeout must be > 0, got {args.timeout:g}')
     if args.no_clock and args.rtf != 1.0:
         parser.error('--no-clock runs on wall time: --rtf cannot be used with it')
+    if args.no_clock and args.realtime:
+        parser.error('--no-clock runs on wall time, where planning latency always counts: --realtime is for lock step')
     scenario = load_scenario(args.scenario)  # a FastepError: guard's one line, exit 2
     problem = graph_problem(scenario)
     if problem:

@@ -69,7 +69,8 @@ Lock step (`lock_step`, on simulated time; fastep-launch sets it): instead of on
 acts once on each odometry stamp t of its robot, when every other robot's odometry stamped t (and its laser's scan
 stamped t) is in, as of the node time t, and stamps cmd_vel t: the live graph then steps exactly like fastep-sim
 (fastep_ros.lock_step). Should its own odometry fall a whole control period behind the clock (its plant died),
-it acts on the control timer as without lock step.
+it acts on the control timer as without lock step. With `realtime` (fastep-launch --realtime) the lock step's tick
+drives on the newest plan of the planning thread instead of planning in it: the clock goes on while a pass runs.
 """
 
 from __future__ import annotations
@@ -242,8 +243,11 @@ class PlannerNode(PlannerInputs):
                             'and plants in lock step)')
         threaded = declare(self, 'planning_thread', True, 'plan on a thread of its own, so that the control loop never '
                            'waits for planning (it drives on the newest plan, guarded every tick); false: every '
-                           'control tick plans, the clock of a simulation waiting for it. Lock step always plans on '
-                           'the tick')
+                           'control tick plans, the clock of a simulation waiting for it. Lock step plans on the '
+                           'tick (unless realtime)')
+        realtime = declare(self, 'realtime', False, 'in lock step, plan on the planning thread as on wall time: a '
+                           'pass\'s plan reaches the control loop when it is done, the simulated clock going on '
+                           'meanwhile (fastep-launch --realtime: planning latency counted; not deterministic)')
         self.max_plan_age = declare(self, 'max_plan_age', 2.0, 'a plan older than this (s, node clock) is not driven '
                                     'on: the robot stops, status ERROR, until a planning pass ends (planning_thread)',
                                     value_range=(0.1, 60.0), unit=' s', read_only=False)
@@ -344,7 +348,7 @@ class PlannerNode(PlannerInputs):
         self.scan_sub = self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
         self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
         self.scan_problem = ''
-        if threaded and not self.lock_step:
+        if threaded and (not self.lock_step or realtime):
             self.planning = PlanningThread(self.plan_pass, self.get_logger().error)
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control_tick)
         steady = self.wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
@@ -573,7 +577,9 @@ class PlannerNode(PlannerInputs):
         period = 1.0 / self.control_rate_hz
         t = round(stamp / period) * period
         scan, self.pending_scan = self.pending_scan, None
-        if scan is not None:
+        if scan is not None and self.planning is not None:
+            self.latest_scan = scan   # perceived by the next planning pass (realtime)
+        elif scan is not None:
             self.perceive(scan, t, at=t)
         self.on_control(t)
 

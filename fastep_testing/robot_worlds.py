@@ -39,6 +39,32 @@ def _scenario(name: str, description: str, size: tuple[float, float], obstacles:
                     'radius': RADIUS}]})
 
 
+def _office() -> list[dict[str, Any]]:
+    """A 24 m x 16 m floor: a corridor along y 7-9, four 6 m x 6.9 m rooms on each side with a 1 m door onto it,
+    a desk (1.2 m x 0.6 m) and a cabinet (0.5 m square) in each room: a map of some hundred wall runs."""
+    walls: list[dict[str, Any]] = []
+
+    def wall(a: tuple[float, float], b: tuple[float, float]) -> None:
+        walls.append({'segment': {'start': list(a), 'end': list(b)}})
+    for side, y, far in ((-1, 7.0, INSET), (1, 9.0, 16.0 - INSET)):
+        for k in range(4):
+            x0, x1 = INSET + 6.0 * k, min(INSET + 6.0 * (k + 1), 24.0 - INSET)
+            if k:
+                wall((x0, y), (x0, far))                       # between two rooms
+            wall((x0, y), (x0 + 2.5, y))                       # the corridor wall, the door from x0 + 2.5 to 3.5
+            wall((x0 + 3.5, y), (x1, y))
+            desk_y = y + side * 4.5
+            walls.extend(_rectangle(x0 + 1.0, desk_y, 1.2, 0.6))
+            walls.extend(_rectangle(x0 + 4.5, y + side * 2.0, 0.5, 0.5))
+    return walls
+
+
+def _rectangle(cx: float, cy: float, width: float, height: float) -> list[dict[str, Any]]:
+    w, h = width / 2.0, height / 2.0
+    corners = [(cx - w, cy - h), (cx + w, cy - h), (cx + w, cy + h), (cx - w, cy + h)]
+    return [{'segment': {'start': list(corners[k]), 'end': list(corners[(k + 1) % 4])}} for k in range(4)]
+
+
 def _worlds() -> dict[str, Scenario]:
     poles = [{'circle': {'center': [x, y], 'radius': 0.05}}
              for x, y in ((5.0, 4.6), (6.5, 3.3), (8.0, 4.2), (9.5, 3.5), (11.0, 4.8), (7.2, 5.6))]
@@ -52,6 +78,8 @@ def _worlds() -> dict[str, Scenario]:
                   (16.0, 4.0), _box(8.0, 2.0, 0.6, known=False), (1.5, 2.0, 0.0), (14.5, 2.2)),
         _scenario('thin_cylinders', 'a 14 m x 8 m room with six poles of 0.1 m diameter across the way',
                   (14.0, 8.0), poles, (1.5, 4.0, 0.0), (12.5, 4.0)),
+        _scenario('office', 'a 24 m x 16 m floor of eight furnished rooms off a corridor; from a room on one side '
+                  'to the far room on the other', (24.0, 16.0), _office(), (3.0, 3.0, 1.57), (21.0, 13.0)),
     )}
 
 

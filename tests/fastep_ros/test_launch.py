@@ -95,6 +95,26 @@ def test_launch_runs_a_scenario_like_fastep_sim(tmp_path: Path) -> None:
         (odometry[-1].pose.pose.position.x, odometry[-1].pose.pose.position.y)
 
 
+def test_launch_realtime_counts_planning_latency_in_lock_step_and_arrives(tmp_path: Path) -> None:
+    """--realtime: the planners drive on their planning thread's newest plan while the simulated clock goes on
+    (their status carries planning_ms, which only the thread measures); the robot arrives without touching."""
+    scenario = write(tmp_path / 'one.yaml', ONE_CIRCLE)
+    recorded = tmp_path / 'live.mcap'
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    result = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--realtime', '--rtf', '4',
+                  '--record', str(recorded), '--no-progress'], env, timeout=150)
+    assert result.returncode == 0, result.stdout + result.stderr
+    lines = [line for line in result.stdout.splitlines() if line.startswith('r1:')]
+    assert len(lines) == 1 and 'arrived' in lines[0], result.stdout
+    with AnyReader([recorded]) as reader:
+        connections = [c for c in reader.connections if c.topic == '/r1/status']
+        statuses = [reader.deserialize(raw, c.msgtype) for c, _, raw in reader.messages(connections=connections)]
+    planning = [kv.value for m in statuses for kv in m.values if kv.key == 'planning_ms']
+    assert any(planning), 'no planning pass was timed: the planner did not plan on its thread'
+    bad = run([sys.executable, '-m', 'fastep_ros.launch', str(scenario), '--realtime', '--no-clock'], env, 30)
+    assert bad.returncode == 2 and '--realtime is for lock step' in bad.stderr
+
+
 def assert_every_tick(stamps: list[float], dt: float = 0.05) -> None:
     """Odometry of a lock-step run as recorded: the start state (stamped 0, repeated until the clock starts), then
     one message a tick, none missing: the recorder, which may lag the clock a few ticks, lost nothing."""
