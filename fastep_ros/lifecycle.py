@@ -15,13 +15,15 @@ one-line exit 2 with no lifecycle involved), and ends it with `start_lifecycle()
 Transitions: configure checks nothing more (done at construction) and succeeds; activate calls `activate()`;
 deactivate, shutdown and an error call `deactivate()` (a planner sends a zero cmd_vel and stops its control timer;
 a plant stops integrating and drops its command); cleanup calls `cleanup()` (a planner forgets its goal). A node
-that is not active says so on its status (`inactive`).
+that is not active says so on its status (`inactive`). A transition the current state does not have is answered
+`success: false` (and logged); the node carries on in its state.
 """
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
+from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 
 from fastep_ros.common import declare
@@ -36,6 +38,24 @@ class ManagedNode(LifecycleNode):
         super().__init__(node_name, **kwargs)
         self.is_active = False
         self.autostart = True
+        service = getattr(self, '_service_change_state', None)
+        if service is not None:
+            service.callback = self._refusing_invalid(service.callback)
+
+    def _refusing_invalid(self, handle: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
+        """change_state's handler answering `success: false` to a transition the current state does not have
+        (configure while active): rclpy raises it out of the service callback, which ended the process."""
+        def change_state(request: Any, response: Any) -> Any:
+            try:
+                return handle(request, response)
+            except _rclpy.RCLError as exc:
+                wanted = request.transition.label or str(request.transition.id)
+                self.get_logger().warning(f'change_state refused: transition {wanted} is not valid in state '
+                                          f'{self._state_machine.current_state[1]} '
+                                          f'({str(exc).splitlines()[0] if str(exc) else "rcl error"})')
+                response.success = False
+                return response
+        return change_state
 
     def start_lifecycle(self) -> None:
         """The constructor's last step: autostart, or stand inactive until a lifecycle manager drives the node."""

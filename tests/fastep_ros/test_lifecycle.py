@@ -6,6 +6,7 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import pytest
 from geometry_msgs.msg import Twist
 from rclpy.parameter import Parameter
 
@@ -69,6 +70,23 @@ def test_a_lifecycle_manager_drives_the_planner(context: Any) -> None:
         assert services.change_state('cleanup') and services.state() == 'unconfigured'
         assert node.goal is None and node.navigator is not None and node.navigator.mode is Mode.IDLE
         assert services.change_state('shutdown') and services.state() == 'finalized'
+    finally:
+        services.close()
+
+
+@pytest.mark.parametrize('cls', [PlannerNode, PlantNode])
+def test_a_transition_the_state_does_not_have_is_refused_and_the_node_carries_on(context: Any, cls: type) -> None:
+    """activate while unconfigured, configure while active: success false, the state as it was (rclpy raised out of
+    the service callback, and the process ended: a plant's robot then stopped for good)."""
+    params = {'scenario': 'open_field'} if cls is PlantNode else {}
+    node = make(cls, context, autostart=False, **params)
+    services = Services(context, node)
+    try:
+        assert not services.change_state('activate') and services.state() == 'unconfigured'
+        assert services.change_state('configure') and services.change_state('activate')
+        assert not services.change_state('configure') and services.state() == 'active'
+        assert not services.change_state('cleanup') and services.state() == 'active'
+        assert services.change_state('deactivate') and services.state() == 'inactive'
     finally:
         services.close()
 
