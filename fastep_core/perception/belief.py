@@ -208,9 +208,11 @@ class Perception:
         if len(starts):
             self._add_walls(starts, ends)
             changed = True
-        if changed:
-            self.world = World(self.map_world.workspace,
-                               tuple(self.map_items + self.seen_items + list(self.standing.values())))
+        items = tuple(self.map_items + self.seen_items + list(self.standing.values()))
+        if changed and tuple(map(id, items)) != tuple(map(id, self.world.obstacle_list)):
+            # A new World only when what it holds changed (not for a standing circle made still, the same one):
+            # planners replan on a new one.
+            self.world = World(self.map_world.workspace, items)
         moving = np.flatnonzero(tracker.confirmed & tracker.moved)
         movers = tuple(OtherRobot(track_name(int(tracker.ids[k])),
                                   (float(tracker.states[k, 0]), float(tracker.states[k, 1])),

@@ -55,7 +55,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.geometry import point_segment_distance
+from fastep_core.geometry import Circle, Obstacle, Obstacles, point_segment_distance
 from fastep_core.planning.exact_path import PARKED_SPEED, robot_path
 from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
 from fastep_core.planning.optimal import OptimalPath
@@ -80,9 +80,26 @@ MOVED = 0.5             # m: a robot the route was planned round has moved away 
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
 TURN_ROOM_SLACK = 0.03  # a robot that cannot turn in place takes the route with turn room if at most 3 % longer
+ADOPT_REACH = 20.0      # m of route ahead checked against a world known anew (Route.adopt)
+REMOVED_REACH = 1.0     # m beyond its clearance: an obstacle gone from this near the route may have bent it
+COVERED = 0.05          # m: an obstacle whose points other obstacles come this near is still there (covered)
 SightProof = tuple[int, float, float, float, float, float, int | None]
 """An answer of Route.in_sight proven: the index it was asked at, the position (x, y), radius and margin, how far
 the robot may move while it holds, and the answer."""
+
+
+def covered(item: Obstacle, world: World) -> bool:
+    """Is the obstacle still there in `world`, as part of others (a wall piece a longer one continues, a circle a
+    new fit replaced): its ends and middle (a circle: its centre and four points of its rim) within COVERED of them?"""
+    if not len(world.obstacles):
+        return False
+    if isinstance(item, Circle):
+        cx, cy, r = item.center[0], item.center[1], item.radius
+        points = np.array([[cx, cy], [cx + r, cy], [cx - r, cy], [cx, cy + r], [cx, cy - r]])
+    else:
+        points = np.array([item.start, item.end,
+                           [(item.start[0] + item.end[0]) / 2, (item.start[1] + item.end[1]) / 2]])
+    return bool((world.obstacles.clearance(points) <= COVERED).all())
 
 
 @dataclass
@@ -116,6 +133,34 @@ class Route:
     def from_path(cls, path: OptimalPath, world: World, base: World, parked: FloatArray) -> Route:
         points = path.points[1:] if len(path.points) > 1 else path.points
         return cls([p.copy() for p in points], path.clearance, world, base, parked)
+
+    def adopt(self, known: World, position: FloatArray, margin: float) -> bool:
+        """The navigator knows `known` now, the route having been planned in `base`: go on along it, measured
+        against `known` from now on (True), when the next ADOPT_REACH metres of it (from `position`) keep its
+        clearance there (the leg to the vertex in sight half the margin less, as in_sight lets it) and no obstacle
+        it was planned round has gone from within REMOVED_REACH of it (the way may be shorter now); else False, and
+        it is planned again. Only a route planned round no robot standing still (its world is the base then).
+
+        Why not plan again at every change: a robot perceiving clutter knows a new obstacle or a longer wall
+        piece most ticks, and an exact path each time was most of its planning (dense_clutter_laser: a replan
+        every other tick)."""
+        if len(self.parked) or self.world is not self.base:
+            return False
+        legs = self.stacked[self.index:]
+        stop = int(np.searchsorted(-self.rest[self.index:], -(self.rest[self.index] - ADOPT_REACH), side='right'))
+        ahead = np.vstack([np.asarray(position, dtype=float)[None, :2], legs[:max(stop, 1) + 1]])
+        a, b = ahead[:-1], ahead[1:]
+        keep = np.full(len(a), self.keep - 1e-6)
+        keep[0] -= 0.5 * margin
+        if len(known.obstacles) and (known.obstacles.path_clearance(a, b) < keep).any():
+            return False
+        present = {id(item) for item in known.obstacle_list}
+        removed = [item for item in self.base.obstacle_list if id(item) not in present and not covered(item, known)]
+        if removed and float(Obstacles(removed).path_clearance(a, b).min()) < self.keep + REMOVED_REACH:
+            return False
+        self.world = self.base = known
+        self.sight_proof = self.clearance_at = None
+        return True
 
     def remaining(self, position: FloatArray) -> float:
         """Route length left from position (via the vertex last in sight)."""
@@ -376,7 +421,9 @@ class FAStepRoute(FAStepKinematic):
         route = self.route
         assert route is not None
         if route.base is not self.world:
-            return 'the world changed'
+            if not route.adopt(self.world, position, self.params.clearance_margin):
+                return 'the world changed'
+            self._passages, self._looked_at = None, None   # measured in the world before
         blocked = bool(others) and self._robot_on_route(position, others)
         if blocked:
             self._clear_since = None

@@ -116,6 +116,34 @@ def test_replans_when_the_world_given_to_it_changes():
     assert float(changed.obstacles.clearance(states).min()) > nav.radius
 
 
+def test_a_world_known_anew_is_adopted_without_a_replan_while_the_route_keeps_its_clearance_there():
+    """A perceiving robot's world changes most ticks (a new piece of a far wall, a wall piece extended): the route
+    goes on when it still keeps its clearance; an obstacle on it, or one it went round gone, plans it again."""
+    around = Circle((25.0, 25.0), 3.0)
+    world = World.from_obstacles([0, 0, 50, 50], [around])
+    nav = make_navigator('fastep_route', SPEC, 0.5, world, PlannerParams(), 0)
+    nav.set_goal((45.0, 45.0))
+    state = np.array([5.0, 5.0])
+    nav.update(0.0, state)
+    assert nav.route is not None and not nav.replan_log   # the goal's first path is the first route
+    far = World.from_obstacles([0, 0, 50, 50], [around, Circle((5.0, 45.0), 1.0), Segment((40.0, 5.0), (45.0, 5.0))])
+    nav.world = far
+    nav.update(0.05, state)
+    assert not nav.replan_log and nav.route is not None and nav.route.base is far   # adopted
+    longer = World.from_obstacles([0, 0, 50, 50], [around, far.obstacle_list[1], Segment((39.0, 5.0), (45.0, 5.0))])
+    nav.world = longer                                     # the wall piece replaced by a longer one: still there
+    nav.update(0.1, state)
+    assert not nav.replan_log
+    on_route = World.from_obstacles([0, 0, 50, 50], [*longer.obstacle_list, Circle((12.0, 12.0), 1.0)])
+    nav.world = on_route
+    nav.update(0.15, state)
+    assert [reason for _, reason in nav.replan_log] == ['the world changed']
+    gone = World.from_obstacles([0, 0, 50, 50], [Circle((12.0, 12.0), 1.0)])   # the circle it went round: gone
+    nav.world = gone
+    nav.update(0.2, state)
+    assert len(nav.replan_log) == 2
+
+
 def test_replans_round_a_robot_standing_on_the_route_and_back_once_it_has_gone():
     world = World.from_obstacles([0, 0, 50, 50], [])
     nav = make_navigator('fastep_route', SPEC, 0.5, world, PlannerParams(), 0)

@@ -355,17 +355,18 @@ def test_a_step_plan_given_no_iteration_every_tick_still_ends(monkeypatch):
 
 
 def test_with_a_budget_routes_every_tick_still_let_the_step_end():
-    """FAStep-Route replans its route every tick when the world object is new every tick (perception): such a
-    tick still gets its step planned (a plan is planned whole after a world change)."""
-    def world():
-        return World.from_obstacles([0, 0, 50, 50], [Circle((25.0, 25.0), 1.0)])
-    nav = make_navigator('fastep_route', SPEC, 0.5, world(), PlannerParams(step_iterations=3), 0)
+    """FAStep-Route replans its route every tick when the world changes near the route every tick (perception: a
+    circle by the route fitted larger, then smaller): such a tick still gets its step planned (a plan is planned
+    whole after a world change)."""
+    def world(k):
+        return World.from_obstacles([0, 0, 50, 50], [Circle((20.0, 11.0), 0.7 if k % 2 else 0.5)])
+    nav = make_navigator('fastep_route', SPEC, 0.5, world(0), PlannerParams(step_iterations=3), 0)
     nav.set_goal((30.0, 10.0))
     state, t = np.array([10.0, 10.0]), 0.0
     nav.update(t, state)
-    for _ in range(20):
+    for k in range(20):
         t += 0.05
-        nav.world = world()
+        nav.world = world(k + 1)
         command = nav.update(t, state, [OtherRobot('r2', (state[0] + 2.0, 10.0), (-0.3, 0.0), 0.5)])
         state = state + 0.05 * command
     assert nav.replans >= 20 and len(nav.plan) >= 1 and nav.reason != 'planning a step (finished on the next tick)'
