@@ -544,7 +544,8 @@ def grid_resolution(workspace: Sequence[float], resolution: float | None = None)
 def world_to_occupancy_grid(world: World, resolution: float | None = None, stamp: Time | None = None,
                             frame_id: str = 'map', thickness: float | None = None) -> OccupancyGrid:
     """Rasterise the world: 100 where a cell centre is inside a circle or within thickness / 2 of a segment
-    (default thickness: one cell, so a wall has no gaps), 0 elsewhere. The grid covers the workspace
+    (default thickness: one cell, so a wall has no gaps; a wall on a border between cells marks the cells on both
+    sides), 0 elsewhere. The grid covers the workspace
     (origin at xmin, ymin; cells rounded up at the far edges). resolution: see grid_resolution (None:
     automatic; ValueError if the grid would exceed MAX_GRID_CELLS). Each obstacle is rasterised over the cells
     of its bounding box only."""
@@ -579,7 +580,9 @@ def world_to_occupancy_grid(world: World, resolution: float | None = None, stamp
             grid[rows, cols] |= np.hypot(gx - cx, gy - cy) <= obstacle.radius
         else:
             d = Obstacles([obstacle]).distances(np.stack([gx, gy], axis=-1))[..., 0]
-            grid[rows, cols] |= d <= half
+            # A wall exactly on a border between two rows of cells is half a cell from both rows' centres, give
+            # or take a rounding: it marks both (strictly, both rounded away, and the wall was missing from /map).
+            grid[rows, cols] |= d <= half + BORDER_SLACK * resolution
     msg = OccupancyGrid()
     msg.header.frame_id = frame_id
     if stamp is not None:
@@ -612,6 +615,10 @@ def occupancy_grid_workspace(msg: OccupancyGrid) -> tuple[float, float, float, f
     resolution = float(f'{info.resolution:.7g}')
     return xmin, ymin, round(xmin + info.width * resolution, 9), round(ymin + info.height * resolution, 9)
 
+
+BORDER_SLACK = 1e-9
+"""Share of a cell by which a cell centre may lie beyond a wall's half thickness and still be the wall's
+(world_to_occupancy_grid): far above the rounding of the centres' coordinates, far below any real gap."""
 
 OCCUPIED_THRESHOLD = 65
 """A cell is occupied from this value (of 0-100) on: Nav2's map_server default (occupied_thresh 0.65)."""

@@ -344,3 +344,16 @@ def test_laser_scans_round_trip_and_readings_that_are_no_measurement_become_nan(
     sector = LaserSpec(range=5.0, fov=math.pi, beams=19, noise=0.0)   # both edges are beams: 18 increments
     msg = convert.scan_to_laser_scan(scan(sector, (0.0, 0.0, 0.0)))
     assert convert.laser_spec(msg, 0.0).fov == pytest.approx(math.pi)
+
+
+def test_a_wall_on_a_border_between_cells_is_on_the_map() -> None:
+    """office (the robot harness): the corridor wall at y = 9.0 lies on the border between two rows of 0.05 m
+    cells, half a cell from both rows' centres give or take a rounding; it was on neither, missing from /map, and
+    the planner drove through it."""
+    world = World.from_obstacles([0, 0, 24, 16], [Segment((18.1, 9.0), (20.6, 9.0)), Segment((3.0, 7.0), (3.0, 9.0))])
+    grid = convert.world_to_occupancy_grid(world, 0.05)
+    mapped = World.from_obstacles([0, 0, 24, 16], convert.occupancy_grid_obstacles(grid))
+    along = np.column_stack([np.linspace(18.2, 20.5, 24), np.full(24, 9.0)])
+    assert (mapped.obstacles.clearance(along) <= 0.05).all()
+    up = np.column_stack([np.full(20, 3.0), np.linspace(7.1, 8.9, 20)])
+    assert (mapped.obstacles.clearance(up) <= 0.05).all()
