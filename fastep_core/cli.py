@@ -20,7 +20,8 @@ from fastep_core.errors import FastepError
 if TYPE_CHECKING:
     from tqdm import tqdm
 
-__all__ = ['Parser', 'guard', 'fail', 'seed', 'positive_int', 'progress_bar', 'tcp_port', 'tcp_port_problem']
+__all__ = ['MAX_ITERATIONS', 'MAX_POPSIZE', 'MAX_RUNS', 'MAX_WORKERS', 'Parser', 'count', 'guard', 'fail', 'seed',
+           'positive_int', 'progress_bar', 'tcp_port', 'tcp_port_problem']
 
 INTERRUPTED = 130
 """Exit code after Ctrl-C: 128 + SIGINT, as a shell reports it."""
@@ -72,6 +73,25 @@ def positive_int(text: str) -> int:
     if value < 1:
         raise argparse.ArgumentTypeError(f'must be at least 1, got {value}')
     return value
+
+
+MAX_RUNS = 100_000
+"""Runs (or worlds) one command line may ask for: more is a typo, or an attack, that fills the memory with tasks
+before a first result (fastep-bench --runs 3000000: 1.8 GB in a minute)."""
+MAX_WORKERS = 256
+MAX_POPSIZE = 1_000   # DE population multiplier (x 4 x the dimensions: 99999999999 wanted 11.6 TiB)
+MAX_ITERATIONS = 10_000
+
+
+def count(limit: int) -> Callable[[str], int]:
+    """argparse type of a count from 1 to `limit` (runs, worlds, workers, seeds, a population): one line otherwise."""
+    def parse(text: str) -> int:
+        value = positive_int(text)
+        if value > limit:
+            raise argparse.ArgumentTypeError(f'must be at most {limit}, got {text}')
+        return value
+    parse.__name__ = 'count'
+    return parse
 
 
 def realtime_factor(text: str) -> float:

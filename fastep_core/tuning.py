@@ -44,7 +44,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core import experiments
-from fastep_core.cli import Parser, fail, guard, positive_int, seed
+from fastep_core.cli import MAX_ITERATIONS, MAX_POPSIZE, MAX_RUNS, MAX_WORKERS, Parser, count, fail, guard, seed
 from fastep_core.planning.params import PlannerParams
 
 __all__ = ['PARAMETERS', 'PENALTY', 'TRAIN', 'TEST', 'TuningResult', 'cost', 'decode', 'tune', 'evaluate',
@@ -177,11 +177,11 @@ def _parser() -> argparse.ArgumentParser:
     p = Parser(prog=PROG, description='Tune a, b, c and step_radius by differential evolution.')
     p.add_argument('--train', nargs='+', default=list(TRAIN), metavar='SCENARIO', help='training scenarios')
     p.add_argument('--test', nargs='+', default=list(TEST), metavar='SCENARIO', help='held-out scenarios')
-    p.add_argument('--seeds', type=positive_int, default=2, help='training seeds 0..N-1 per scenario (default 2)')
-    p.add_argument('--test-seeds', type=positive_int, default=10, help='held-out seeds 100..100+N-1 (default 10)')
-    p.add_argument('--popsize', type=positive_int, default=5, help='DE population = popsize x 4 (default 5)')
-    p.add_argument('--maxiter', type=int, default=3, help='DE generations (default 3)')
-    p.add_argument('--workers', type=positive_int, default=2, help='worker processes (default 2)')
+    p.add_argument('--seeds', type=count(MAX_RUNS), default=2, help='training seeds 0..N-1 per scenario (default 2)')
+    p.add_argument('--test-seeds', type=count(MAX_RUNS), default=10, help='held-out seeds 100..100+N-1 (default 10)')
+    p.add_argument('--popsize', type=count(MAX_POPSIZE), default=5, help='DE population = popsize x 4 (default 5)')
+    p.add_argument('--maxiter', type=count(MAX_ITERATIONS), default=3, help='DE generations (default 3)')
+    p.add_argument('--workers', type=count(MAX_WORKERS), default=2, help='worker processes (default 2)')
     p.add_argument('--seed', type=seed, default=0, help='seed of the search (default 0)')
     p.add_argument('--out', type=Path, metavar='FILE.md', help='also write the Markdown report here')
     p.add_argument('--json', type=Path, metavar='FILE', help='write the tuned parameters as JSON')

@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Sequence
 
 from fastep_core import experiments, families
-from fastep_core.cli import REALTIME_HELP, Parser, fail, guard, positive_int, realtime_factor, seed
+from fastep_core.cli import MAX_RUNS, MAX_WORKERS, REALTIME_HELP, Parser, count, fail, guard, realtime_factor, seed
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
 from fastep_core.random_scenarios import ALL_FAMILIES, FAMILIES, FAMILY_SEED0
@@ -44,7 +44,7 @@ __all__ = ['main']
 def _parser(prog: str) -> argparse.ArgumentParser:
     p = Parser(prog=prog, description='Regenerate Table 2: FAStep-Kinematic vs ACO-Kinematic (vs the optimum); '
                                       'or run every planner on random world families (--families).')
-    p.add_argument('--runs', type=positive_int,
+    p.add_argument('--runs', type=count(MAX_RUNS),
                    help='seeded runs per scenario (default 30) or per family world (default 1) and planner')
     what = p.add_mutually_exclusive_group()
     what.add_argument('--scenarios', nargs='+', metavar='SCENARIO',
@@ -52,7 +52,7 @@ def _parser(prog: str) -> argparse.ArgumentParser:
     what.add_argument('--families', nargs='*', choices=ALL_FAMILIES, metavar='FAMILY',
                       help=f'random world families among {", ".join(ALL_FAMILIES)} (none named: the static ones, '
                            f'{", ".join(FAMILIES)})')
-    p.add_argument('--worlds', type=positive_int, help='worlds per family with --families (default 30)')
+    p.add_argument('--worlds', type=count(MAX_RUNS), help='worlds per family with --families (default 30)')
     p.add_argument('--worst-of', choices=ALGORITHMS, metavar='ALG',
                    help='with --families: the worst-world table and figure show where this planner\'s path / '
                         'optimum was worst (default: any planner but optimal)')
@@ -61,7 +61,7 @@ def _parser(prog: str) -> argparse.ArgumentParser:
                    'scenarios with a tractor-trailer)')
     p.add_argument('--planner-set', nargs='+', default=[], type=_override, metavar='NAME=VALUE',
                    help='planner parameter overrides for every planner, e.g. stuck_steps=1 plan_horizon=2')
-    p.add_argument('--workers', type=positive_int, default=2, help='worker processes (default 2)')
+    p.add_argument('--workers', type=count(MAX_WORKERS), default=2, help='worker processes (default 2)')
     p.add_argument('--realtime', type=realtime_factor, nargs='?', const=1.0, default=None, metavar='FACTOR',
                    help=REALTIME_HELP)
     p.add_argument('--seed', type=seed, default=0, help='first run seed (default 0)')

@@ -27,7 +27,7 @@ from pathlib import Path
 from types import FrameType
 from typing import IO, TYPE_CHECKING, Callable, Iterator, Sequence
 
-from fastep_core.cli import INTERRUPTED, REALTIME_HELP, Parser, fail, guard, positive_int, realtime_factor, seed
+from fastep_core.cli import INTERRUPTED, MAX_RUNS, REALTIME_HELP, Parser, count, fail, guard, realtime_factor, seed
 from fastep_core.dynamic_world import dynamic_feature
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.scenario import Scenario, builtin_names, load_scenario
@@ -57,7 +57,7 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('scenario', nargs='?', help='scenario YAML file or built-in name (see --list)')
     p.add_argument('--algorithm', choices=ALGORITHMS, default='fastep', help='planner (default: fastep)')
     p.add_argument('--seed', type=seed, default=0, help='seed of the first run (default: 0)')
-    p.add_argument('--runs', type=positive_int, default=1,
+    p.add_argument('--runs', type=count(MAX_RUNS), default=1,
                    help='number of runs, seeds seed..seed+runs-1 (default: 1)')
     p.add_argument('--json', type=Path, metavar='OUT', help='write all runs as JSON')
     p.add_argument('--plot', type=_figure_path, metavar='OUT.png',

@@ -96,6 +96,8 @@ def test_run_batch_is_reproducible_and_independent_of_workers():
 
 
 @pytest.mark.parametrize('args', [['--popsize', '0'], ['--maxiter', '-1'],
+                                  ['--seeds', '99999999999999999999'], ['--popsize', '99999999999'],
+                                  ['--maxiter', '100000'], ['--test-seeds', '1000001'],
                                   ['--train', 'table2_s1', '--test', 'table2_s1'],
                                   ['--test', 'no_such_scenario'], ['--bogus']])
 def test_fastep_tune_bad_input_exits_2_with_one_line(args):

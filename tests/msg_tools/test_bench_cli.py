@@ -24,7 +24,10 @@ def test_fastep_bench_writes_the_table_and_figures(tmp_path, capsys):
                                   ['--families', '--worlds', '0'], ['--families', 'u_trap', '--scenarios', 'table2_s1'],
                                   ['--planner-set', 'no_such_parameter=1'], ['--planner-set', 'stuck_steps'],
                                   ['--planner-set', 'max_speed=-1'], ['--families', '--planner-set', 'stuck_steps=x'],
-                                  ['--worst-of', 'aco'], ['--families', '--algorithms', 'fastep', '--worst-of', 'aco']])
+                                  ['--worst-of', 'aco'], ['--families', '--algorithms', 'fastep', '--worst-of', 'aco'],
+                                  # counts no run could finish: they only filled the memory (issue 32)
+                                  ['--runs', '3000000'], ['--runs', '99999999999999999999'],
+                                  ['--families', '--worlds', '99999999999'], ['--workers', '100000']])
 def test_bad_input_exits_2_with_one_line(args):
     done = subprocess.run([sys.executable, '-m', 'msg_tools.bench_cli', *args], capture_output=True, text=True,
                           timeout=120)

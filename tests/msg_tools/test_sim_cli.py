@@ -163,7 +163,7 @@ def test_ctrl_c_keeps_every_finished_run(tmp_path, signum, code, said):
     """Ctrl-C during --runs N lost every finished run: the JSON was written only at the end (item 21)."""
     scenario, out, figure = tmp_path / 'quick.yaml', tmp_path / 'r.json', tmp_path / 'f.png'
     scenario.write_text(QUICK)
-    proc = subprocess.Popen([sys.executable, '-m', 'msg_tools.sim_cli', str(scenario), '--runs', '1000000',
+    proc = subprocess.Popen([sys.executable, '-m', 'msg_tools.sim_cli', str(scenario), '--runs', '100000',
                              '--json', str(out), '--plot', str(figure)], stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True)
     lines: queue.Queue[str] = queue.Queue()
