@@ -56,6 +56,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle, Obstacle, Obstacles, point_segment_distance
+from fastep_core.planning.escape import ADOPT_REACH  # as far ahead as an escape path is checked
 from fastep_core.planning.exact_path import PARKED_SPEED, robot_path
 from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
 from fastep_core.planning.optimal import OptimalPath
@@ -80,7 +81,6 @@ MOVED = 0.5             # m: a robot the route was planned round has moved away 
 SIGHT = 30.0            # m of route ahead whose vertices are tested for sight
 SIGHT_VERTICES = 256    # vertices tested for sight at most
 TURN_ROOM_SLACK = 0.03  # a robot that cannot turn in place takes the route with turn room if at most 3 % longer
-ADOPT_REACH = 20.0      # m of route ahead checked against a world known anew (Route.adopt)
 REMOVED_REACH = 1.0     # m beyond its clearance: an obstacle gone from this near the route may have bent it
 COVERED = 0.05          # m: an obstacle whose points other obstacles come this near is still there (covered)
 SightProof = tuple[int, float, float, float, float, float, int | None]
