@@ -20,6 +20,7 @@ from rclpy.exceptions import InvalidParameterValueException, ParameterException
 from rclpy.executors import ExternalShutdownException
 from rclpy.node import Node
 from rclpy.parameter import Parameter
+from rclpy.signals import SignalHandlerOptions
 
 from fastep_core.cli import guard
 from fastep_core.errors import FastepError
@@ -182,6 +183,32 @@ class ClockGuard:
         self.node.get_logger().warning(text, throttle_duration_sec=5.0)
 
 
+class RepeatedLine:
+    """A log line that may come often (a goal per message: goals at 1 kHz wrote 130 MB of log an hour): at most
+    one per `period` wall seconds; the next one says how many were left out meanwhile."""
+
+    def __init__(self, log: Callable[[str], None], period: float = 1.0) -> None:
+        self.log, self.period = log, period
+        self.last = -math.inf
+        self.left_out = 0
+
+    def __call__(self, text: str) -> None:
+        now = time.monotonic()
+        if now - self.last < self.period:
+            self.left_out += 1
+            return
+        if self.left_out:
+            text += f' ({self.left_out} more such line{"s" if self.left_out > 1 else ""} left out before it)'
+        self.log(text)
+        self.last, self.left_out = now, 0
+
+
+def shown(text: str, limit: int = 60) -> str:
+    """repr(text), cut to about `limit` characters: what a message from the outside may echo of a string it was
+    given (a 10 KB goal frame_id went whole into status)."""
+    return repr(text) if len(text) <= limit else f'{text[:limit]!r}... ({len(text)} characters)'
+
+
 def quiet_at_stop(callback: Callable[..., None]) -> Callable[..., None]:
     """A node method called back by the executor that publishes: an error raised because a stop (SIGINT) shut the
     context down while it ran is the stop, not a fault. The EventsExecutor logged it as a FATAL line with a
@@ -238,18 +265,19 @@ def _die_with_parent() -> None:
 
 
 def _spin(nodes: Sequence[Node], executor: rclpy.executors.Executor) -> None:
-    """rclpy.spin, but quiet about the races of a stop: an error raised because the context was shut down
-    (Ctrl-C / SIGINT) while spinning ends the loop, and a message rclpy cannot convert (seen with Fast DDS
-    while a peer process stops) is dropped with one warning instead of ending the node."""
+    """rclpy.spin until a stop signal (_stop_signalled) or the context's shutdown, but quiet about the races of a
+    stop: an error raised because the context was shut down while spinning ends the loop, and a message rclpy
+    cannot convert (seen with Fast DDS while a peer process stops) is dropped with one warning instead of ending
+    the node."""
     for node in nodes:
         executor.add_node(node)
     node = nodes[0]
     warned = False
-    while rclpy.ok():
+    while rclpy.ok() and not _stop_signalled:
         try:
-            # A timeout: rclpy 7.1.6's EventsExecutor never returned from spin_once() without one (nor handled a
-            # callback or a signal: fastep_ros.executors).
-            executor.spin_once(timeout_sec=1.0)
+            # A timeout: rclpy 7.1.6's EventsExecutor never returned from spin_once() without one; and a signal's
+            # Python handler runs only when this returns (or a callback runs), so it bounds the time to stop.
+            executor.spin_once(timeout_sec=STOP_POLL)
         except (KeyboardInterrupt, ExternalShutdownException):
             raise
         except Exception as exc:
@@ -262,13 +290,19 @@ def _spin(nodes: Sequence[Node], executor: rclpy.executors.Executor) -> None:
                 warned = True
 
 
-_stop_signalled: list[int] = []   # SIGINT / SIGTERM received before rclpy's own handler was there to act on it
+STOP_POLL = 0.1
+"""Seconds: the longest a node process takes to notice SIGINT / SIGTERM while nothing else happens."""
+
+_stop_signalled: list[int] = []   # SIGINT / SIGTERM received: the spin loop ends and the node is cleaned up
 
 
 def _ignore_stop_signals() -> None:
-    """Python's handlers for SIGINT / SIGTERM: remember the signal, raise nothing (rclpy's handler, installed by
-    rclpy.init, calls this one after shutting the context down). A signal that comes before rclpy.init was lost:
-    the node then started and ran on (a node stopped 0.3 s after its start, CI, 2026-11-27)."""
+    """Python's handlers for SIGINT / SIGTERM: remember the signal, raise nothing. rclpy.init installs none
+    (node_main): rclpy's own handler shut the context down at once, from any point of the spin, and rclpy 7.1.6's
+    EventsExecutor, stopped that way in the middle of taking a node's entities, kept callbacks it no longer
+    tracked and aborted the process when it was destroyed ("Destroying callback manager with callbacks
+    remaining", CI, 2026-11-28). Now the spin loop sees the signal, the executor is shut down while the context
+    is up, and only then the nodes and the context."""
     for sig in (signal.SIGINT, signal.SIGTERM):
         signal.signal(sig, lambda signum, frame: _stop_signalled.append(signum))
 
@@ -282,10 +316,9 @@ def node_main(prog: str, factory: Callable[[], Node | Sequence[Node]], args: Seq
     (and processes it starts after that would inherit the ignoring).
     """
     _die_with_parent()
-    # rclpy's own SIGINT / SIGTERM handler shuts the context down (spin then ends) and then calls the handler it
-    # found: Python's default SIGINT one raised KeyboardInterrupt at a random point, e.g. inside a destructor
-    # (a traceback), and the default SIGTERM action ended the node there (a recorder with its file unfinished, when
-    # a second SIGTERM came during the clean-up).
+    # Python's default SIGINT handler raised KeyboardInterrupt at a random point, e.g. inside a destructor (a
+    # traceback), and the default SIGTERM action ended the node there (a recorder with its file unfinished, when a
+    # second SIGTERM came during the clean-up).
     _ignore_stop_signals()
     return guard(prog, lambda: _run_node(factory, args))
 
@@ -308,17 +341,15 @@ def _run_node(factory: Callable[[], Node | Sequence[Node]], args: Sequence[str] 
     if not _gate_opened() or _stop_signalled:
         return 0
     try:
-        rclpy.init(args=None if args is None else list(args))
+        rclpy.init(args=None if args is None else list(args), signal_handler_options=SignalHandlerOptions.NO)
     except Exception as exc:   # e.g. UnknownROSArgsError for a mistyped --ros-args
         raise StartupError(f'cannot start ROS: {type(exc).__name__}: {exc}'.splitlines()[0]) from None
     nodes: list[Node] = []
     executor = None
     try:
-        if _stop_signalled:   # during rclpy.init, before its handler: a stop all the same
+        if _stop_signalled:   # during rclpy.init
             raise KeyboardInterrupt
-        # The executor before the node: built on a context a signal has already shut down, it fails half-way
-        # and rclpy's destructor prints an AttributeError; a node that has logged that it is up is what a user
-        # (or a test) stops, so by then the executor must exist.
+        # The executor before the node: a node that has logged that it is up is what a user (or a test) stops.
         executor = make_executor()   # FASTEP_EXECUTOR (fastep_ros.executors)
         built = factory()
         nodes = [built] if isinstance(built, Node) else list(built)
@@ -332,7 +363,7 @@ def _run_node(factory: Callable[[], Node | Sequence[Node]], args: Sequence[str] 
     except Exception:
         if rclpy.ok():
             raise
-        # stopped (SIGINT) while the node was being built: rclpy calls fail on the shut-down context
+        # the context shut down (a recorder that cannot write) while a node was being built: its calls fail
     finally:
         if executor is not None:
             executor.shutdown()

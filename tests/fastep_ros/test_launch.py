@@ -473,6 +473,29 @@ def test_a_stop_signal_before_rclpy_init_is_not_lost(tmp_path: Path) -> None:
     assert done.returncode == 0 and done.stdout.strip() == 'exit 0', (done.returncode, done.stdout, done.stderr)
 
 
+def test_a_stop_signal_cleans_the_node_up_before_the_context_is_shut_down(tmp_path: Path) -> None:
+    """SIGINT ends the spin loop; the executor and the node are torn down while the context is still up. rclpy's own
+    handler shut the context down at any point of the spin, and rclpy 7.1.6's EventsExecutor, stopped so in the
+    middle of taking a node's entities, aborted the process when destroyed (a red CI, 1 stop in about 80)."""
+    script = (
+        'import os, signal, threading, rclpy\n'
+        'from rclpy.node import Node\n'
+        'from fastep_ros import common\n'
+        'class Probe(Node):\n'
+        '    def __init__(self):\n'
+        '        super().__init__("probe")\n'
+        '        self.create_timer(0.01, lambda: None)\n'
+        '        threading.Timer(0.5, os.kill, (os.getpid(), signal.SIGINT)).start()\n'
+        '    def destroy_node(self):\n'
+        '        print("context up at clean-up:", self.context.ok(), flush=True)\n'
+        '        super().destroy_node()\n'
+        'print("exit", common.node_main("test", Probe, []))\n')
+    env = isolated_env(free_domain(), tmp_path / 'roslog')
+    done = subprocess.run([sys.executable, '-c', script], env=env, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and 'Traceback' not in done.stderr, (done.returncode, done.stderr)
+    assert done.stdout.split('\n')[:2] == ['context up at clean-up: True', 'exit 0'], done.stdout
+
+
 def test_a_full_disk_under_fastep_launch_is_not_reported_as_written(tmp_path: Path) -> None:
     """Issue "Hardening", item 15: the recorder's file hits a file size limit (RLIMIT_FSIZE of the launcher,
     inherited by every node; a full disk without filling one): the launcher must not print "wrote ..."."""
