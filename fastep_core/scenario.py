@@ -372,6 +372,16 @@ def _motion(value: Any, path: str) -> Motion:
     return Motion(waypoints, _positive(body['speed'], f'{path}.speed'))
 
 
+def _check_sigmas(obstacles: Sequence[ObstacleSpec], workspace: tuple[float, float, float, float]) -> None:
+    """A map error is at most the workspace's larger side: beyond it the obstacle is not misplaced but elsewhere
+    (1e300 loaded, and the planner's geometry overflowed: `no valid path` on an open field)."""
+    side = max(workspace[2] - workspace[0], workspace[3] - workspace[1])
+    for i, spec in enumerate(obstacles):
+        if spec.position_sigma > side:
+            raise _Invalid(f'obstacles[{i}].position_sigma must be at most the workspace\'s larger side ({side:g} m), '
+                           f'got {spec.position_sigma:g}')
+
+
 def _check_motion_length(spec: ObstacleSpec, path: str) -> None:
     """The polyline's length must be a finite number (points near +-1e308 apart overflow it)."""
     if spec.motion is None or not isinstance(spec.shape, Circle):
@@ -610,7 +620,9 @@ def _build(data: Any, default_name: str) -> Scenario:
     obstacles = _obstacles(top.get('obstacles'))
     # The true world of the still obstacles (known or not, where they really are): what starts, goals and
     # collisions are judged against; movers are judged over time (fastep_core/dynamic_world.py).
-    world = World.from_obstacles(_workspace(top['workspace']), [o.shape for o in obstacles if o.still])
+    workspace = _workspace(top['workspace'])
+    _check_sigmas(obstacles, workspace)
+    world = World.from_obstacles(workspace, [o.shape for o in obstacles if o.still])
     robots = _robots(top['robots'])
     planner = _planner(top.get('planner'))
     _check_placement(world, robots)

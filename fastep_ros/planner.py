@@ -11,8 +11,8 @@ unless the `workspace` parameter gives it), both transient-local; with `obstacle
 `/obstacles`: the obstacles are the outline of `/map`'s occupied cells (as Nav2's map_server publishes it), so
 a user with a map and no scenario file needs nothing else; and the `odom` of every other robot that
 announces itself: it publishes its `footprint` (as this planner does, latched) from a node of its namespace, and
-its odometry has a publisher; looked for every 0.25 s of wall time, dropped while its odometry is stale
-(fastep_ros.robots).
+its odometry has a publisher; looked for every 0.25 s of wall time, and kept where last seen (stale) when its
+odometry stops (fastep_ros.robots).
 Frames (REP-105, msg_tools.frames): own odometry must be in the map frame (`frame_id`) or in the robot's odom
 frame (`odom_frame_id`, default `<ns>/odom`; root namespace `odom`); any other frame is refused (status `stale`,
 reason "odometry rejected: frame ..."). The map pose is the odometry composed with map -> odom: the identity
@@ -62,7 +62,9 @@ still driven to: kinematic or avoiding with the refusal as reason), ERROR (faile
 when none is under way: reason is the goal check's message, e.g. "... is occupied ...").
 Goals: one subscription that volatile and latched publishers both reach (fastep_ros.goals).
 On simulated time with no /clock for clock_timeout wall seconds: WARN, reason "no /clock ...", `stale` for a robot
-under way (a zero cmd_vel is sent). Not active (lifecycle, fastep_ros.lifecycle): OK, `inactive`.
+under way (a zero cmd_vel is sent). Not active (lifecycle, fastep_ros.lifecycle): OK, `inactive`. Another
+publisher on cmd_vel (exclusive_cmd_vel): ERROR, `conflict`, naming it; no commands. Avoiding what went quiet
+(another robot's odometry, /movers: fastep_ros.robots): the mode at WARN, reason "stale: ...", value `stale`.
 Also `/diagnostics` (fastep_ros.diagnostics); status and /diagnostics are worked out in fastep_ros.planner_status.
 The tunable parameters change at runtime (docs/parameters.md).
 Lock step (`lock_step`, on simulated time; fastep-launch sets it): instead of on the control timer, the planner
@@ -110,12 +112,14 @@ from fastep_core.world import World
 from fastep_ros.common import (
     PERIOD_RANGE,
     RATE_RANGE,
+    RepeatedLine,
     StartupError,
     check_range,
     declare,
     guard_clock,
     node_main,
     quiet_at_stop,
+    shown,
 )
 from fastep_ros.diagnostics import Diagnostics
 from fastep_ros.frames import LOCALIZATION_QOS
@@ -134,7 +138,7 @@ from msg_tools.interface import LATEST, offered_qos
 __all__ = ['PlannerNode', 'main']
 
 TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radius', 'max_extrapolation',
-           'max_plan_age')
+           'max_plan_age', 'exclusive_cmd_vel')
 """The node's own parameters that change while it runs, besides every PlannerParams field."""
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots ...
 START_PERIOD = 0.05      # ... the first START_LOOKS looks (3 s) every START_PERIOD: a launcher waits for every
@@ -205,8 +209,9 @@ class PlannerNode(PlannerInputs):
                                '0: the radius each announces (its footprint), robot_radius until it is heard',
                                value_range=(0.0, math.inf), read_only=False)
         other_timeout = declare(self, 'other_robot_timeout', 3.0, 'another robot whose odometry has not come for '
-                                'this long (s, node clock) is no longer avoided (its publisher may be dead); '
-                                'after odom_timeout it is avoided standing still', constraints='> 0')
+                                'this long (s, node clock) is stale (status `stale`); from odom_timeout on it is '
+                                'avoided where last seen, widened by its last speed times up to this long',
+                                constraints='> 0')
         if not other_timeout > 0.0:
             raise StartupError(f'parameter other_robot_timeout must be > 0, got {other_timeout:g}')
         self.max_extrapolation = declare(
@@ -245,6 +250,11 @@ class PlannerNode(PlannerInputs):
                            'waits for planning (it drives on the newest plan, guarded every tick); false: every '
                            'control tick plans, the clock of a simulation waiting for it. Lock step plans on the '
                            'tick (unless realtime)')
+        self.exclusive_cmd_vel = declare(self, 'exclusive_cmd_vel', True, 'another publisher on cmd_vel (a second '
+                                         'planner started in this namespace, a teleop) stops this planner\'s '
+                                         'commands after one zero: status ERROR `conflict` until it is gone; false: '
+                                         'command anyway', read_only=False)
+        self.cmd_conflict = ''   # the other publishers on cmd_vel, while there are ('' when there are none)
         realtime = declare(self, 'realtime', False, 'in lock step, plan on the planning thread as on wall time: a '
                            'pass\'s plan reaches the control loop when it is done, the simulated clock going on '
                            'meanwhile (fastep-launch --realtime: planning latency counted; not deterministic)')
@@ -303,6 +313,11 @@ class PlannerNode(PlannerInputs):
         # What was last published.
         self._status_key: tuple[Any, ...] | None = None
         self._status_since = 0.0
+        self._stale_logged: list[str] = []
+        # Goals may come at any rate: their log lines at most once a second (fastep_ros.common.RepeatedLine). A
+        # call site of its own for each severity: rclpy refuses two severities from one line of code.
+        self.goal_info = RepeatedLine(lambda text: self.get_logger().info(text))
+        self.goal_warning = RepeatedLine(lambda text: self.get_logger().warning(text))
         self._plan_key: tuple[Any, ...] | None = None
         self._target_key: tuple[float, ...] | None = None
 
@@ -344,6 +359,7 @@ class PlannerNode(PlannerInputs):
         # The known movers of a v2 world (fastep-map's /movers, where the map puts them), avoided and yielded to.
         self.known_movers: list[OtherRobot] = []
         self.movers_stamp = -math.inf
+        self.movers_received = -math.inf
         self.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
         self.scan_sub = self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
         self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
@@ -466,6 +482,7 @@ class PlannerNode(PlannerInputs):
         self.odom_timeout = odom_timeout
         self.max_extrapolation = changes.get('max_extrapolation', self.max_extrapolation)
         self.max_plan_age = changes.get('max_plan_age', self.max_plan_age)
+        self.exclusive_cmd_vel = changes.get('exclusive_cmd_vel', self.exclusive_cmd_vel)
         self.robots.fleet.still_after = self.odom_timeout
         self.robots.override_radius = changes.get('other_robot_radius', self.robots.override_radius)
         if 'control_rate_hz' in changes:
@@ -490,7 +507,7 @@ class PlannerNode(PlannerInputs):
         heading = self.goal_heading_of(msg)
         if self.navigator is None:
             self.pending_goal = msg
-            self.get_logger().info(f'goal ({point[0]:g}, {point[1]:g}) received; waiting for the world')
+            self.goal_info(f'goal ({point[0]:g}, {point[1]:g}) received; waiting for the world')
             self.publish_status()
             return
         frame = msg.header.frame_id
@@ -500,7 +517,7 @@ class PlannerNode(PlannerInputs):
             return   # the goal driven to already (a latched goal seen twice, or sent again): nothing changes
         try:
             if frame not in ('', 'map', self.frame_id):
-                raise GoalError(f'goal frame {frame!r} is not {self.frame_id!r} (no transforms here)')
+                raise GoalError(f'goal frame {shown(frame)} is not {self.frame_id!r} (no transforms here)')
             if self.occupied is not None and self.occupied(point):
                 # Inside an occupied region of /map, far from its outline: the walls alone would not say so.
                 raise GoalError(f'goal ({point[0]:g}, {point[1]:g}) is occupied: an occupied cell of /map')
@@ -509,7 +526,7 @@ class PlannerNode(PlannerInputs):
             self.navigator.set_goal(point, self.now(), heading)
         except GoalError as exc:
             self.goal_refused = f'goal ({point[0]:g}, {point[1]:g}) refused: {exc}'
-            self.get_logger().warning(self.goal_refused)
+            self.goal_warning(self.goal_refused)
             if self.goal is None or nav.mode not in (Mode.KINEMATIC, Mode.AVOIDING):
                 self.goal = None
                 nav.fail(f'goal refused: {exc}')
@@ -519,7 +536,7 @@ class PlannerNode(PlannerInputs):
             self.goal = (float(point[0]), float(point[1]))
             if self.planning is not None:
                 self.planning.drop_plan()   # no more driving toward the last goal's target: brake until the new plan
-            self.get_logger().info(f'new goal ({point[0]:g}, {point[1]:g})')
+            self.goal_info(f'new goal ({point[0]:g}, {point[1]:g})')
         self.publish_plan(force=True)
         self.publish_status()
 
@@ -559,7 +576,7 @@ class PlannerNode(PlannerInputs):
         stamp, lock, now = self.odom_stamp, self.lock, self.now()
         if not lock.due(stamp, now):
             return
-        inputs = {robot.name: robot.stamp for robot in self.robots.fleet.followed(now)}
+        inputs = {robot.name: robot.stamp for robot in self.robots.fleet.fresh(now)}
         if self.model == 'tractor_trailer':
             inputs['trailer_pose'] = self.trailer_stamp   # the state of its time is odometry and trailer pose
         if self.scan_sub.get_publisher_count() > 0:
@@ -699,10 +716,45 @@ class PlannerNode(PlannerInputs):
             nav.fail(f'planner fault: {exc}')
             return np.zeros(2)
 
+    def check_cmd_vel(self) -> bool:
+        """Look for other publishers on cmd_vel (two planners in one namespace drove one robot by turns, and
+        nothing said so); True if that changed. On a new conflict the robot is sent one zero, then nothing more
+        while it lasts (exclusive_cmd_vel)."""
+        topic = self.cmd_pub.topic_name
+        try:
+            others = self.count_publishers(topic) - 1
+            if others > 0 or self.cmd_conflict:
+                names = sorted(f'{i.node_namespace.rstrip("/")}/{i.node_name}'
+                               for i in self.get_publishers_info_by_topic(topic))
+                own = f'{self.get_namespace().rstrip("/")}/{self.get_name()}'
+                if own in names:
+                    names.remove(own)
+                others = len(names)
+        except Exception as exc:   # the graph can change under us: look again later
+            self.get_logger().debug(f'graph look at {topic} failed: {exc}')
+            return False
+        conflict = f'{topic} has {others} other publisher{"s" if others > 1 else ""} ({", ".join(names)})' \
+            if others > 0 else ''
+        if conflict == self.cmd_conflict:
+            return False
+        if conflict and not self.cmd_conflict:
+            if self.exclusive_cmd_vel and self.is_active:
+                self.publish_command(np.zeros(2))
+            then = 'this planner stops commanding' if self.exclusive_cmd_vel else \
+                'commanding anyway (exclusive_cmd_vel false)'
+            self.get_logger().error(f'{conflict}: two nodes commanding one robot; {then}')
+        elif not conflict:
+            self.get_logger().info(f'{topic} is this planner\'s alone again')
+        self.cmd_conflict = conflict
+        return True
+
     def publish_command(self, command: np.ndarray, at: float | None = None) -> None:
         """cmd_vel in the body frame: a point mass's map-frame velocity turned by its heading (the identity while
         map -> odom and the odometry's yaw are 0, as in simulation); (v, omega) are body-frame already. Stamped
-        `at` (lock step: the time it was decided for), else now."""
+        `at` (lock step: the time it was decided for), else now. Nothing while another node commands the robot
+        too (check_cmd_vel)."""
+        if self.cmd_conflict and self.exclusive_cmd_vel:
+            return
         if self.model == 'point_mass':
             command = np.asarray(frames.body_velocity(command, self.body_yaw), dtype=float)
         # Sent as its bytes (msg_tools.cdr), once a tick: convert.command_to_twist's message, not built.
@@ -754,7 +806,7 @@ class PlannerNode(PlannerInputs):
         if heartbeat:
             self.heartbeat_at = now
         self.check_clock()
-        found = self.discover()
+        found = self.discover() | self.check_cmd_vel()
         self.goal_sub.look()
         for sub in self.world_subs:
             sub.look()

@@ -8,6 +8,7 @@ PlannerReports: PlannerNode sets every attribute it declares and supplies `lock_
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -218,17 +219,23 @@ class PlannerInputs(PlannerReports):
         # Every marker after the leading DELETEALL carries the map node's stamp; unset: when it came.
         stamp = convert.stamp_to_seconds(msg.markers[1].header.stamp) if len(msg.markers) > 1 else 0.0
         self.known_movers = movers
-        self.movers_stamp = stamp if stamp > 0.0 else self.now()
+        self.movers_received = self.now()
+        self.movers_stamp = stamp if stamp > 0.0 else self.movers_received
 
     def movers_at(self, t: float) -> list[OtherRobot]:
-        """The known movers predicted from their stamp to t (at most max_extrapolation); none once older than
-        odom_timeout (the map node stopped)."""
-        age = t - self.movers_stamp
-        if not self.known_movers or not -self.odom_timeout <= age <= self.odom_timeout:
+        """The known movers predicted from their stamp to t (at most max_extrapolation). Stale (movers_stale),
+        each is kept where it was last seen with its reach widening at its last speed: a disc of every place it
+        can have got to since (forgotten on a timer, it was driven through)."""
+        if not self.known_movers:
             return []
-        ahead = self.lag(t, self.movers_stamp)
-        return [OtherRobot(m.name, (m.position[0] + m.velocity[0] * ahead, m.position[1] + m.velocity[1] * ahead),
-                           m.velocity, m.radius, mover=True) for m in self.known_movers]
+        if not self.movers_stale(t):
+            ahead = self.lag(t, self.movers_stamp)
+            return [OtherRobot(m.name, (m.position[0] + m.velocity[0] * ahead, m.position[1] + m.velocity[1] * ahead),
+                               m.velocity, m.radius, mover=True) for m in self.known_movers]
+        since = self.movers_stamp if t - self.movers_stamp >= -self.odom_timeout else self.movers_received
+        age = max(t - since, 0.0)
+        return [OtherRobot(m.name, m.position, (0.0, 0.0), m.radius + math.hypot(*m.velocity) * age, mover=True)
+                for m in self.known_movers]
 
     def on_scan(self, msg: LaserScan) -> None:
         """Fold a scan into what the robot believes (in lock step: when the planner acts on its time)."""

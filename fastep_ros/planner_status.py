@@ -38,6 +38,8 @@ class PlannerReports(ManagedNode):
     navigator: Navigator | None
     goal: tuple[float, float] | None
     hold: str                      # why the robot is held still although it has a goal ('' when it is not)
+    cmd_conflict: str              # the other publishers on cmd_vel ('' when there are none)
+    exclusive_cmd_vel: bool
     goal_refused: str              # why the last goal was refused, while the goal before it is driven to
     clock_problem: str             # why this node's time stands still ('' when it does not)
     obstacles: list[Any] | None
@@ -64,15 +66,46 @@ class PlannerReports(ManagedNode):
     scan_perception: ScanPerception
     scan_problem: str
     sim_time: SimTimeWatch
+    known_movers: list[Any]
+    movers_stamp: float
+    movers_received: float
     _status_key: tuple[Any, ...] | None
     _status_since: float
+    _stale_logged: list[str]
 
     def now(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 
+    def movers_stale(self, t: float) -> bool:
+        """Whether the known movers are older than odom_timeout (the map node stopped or stalled), or stamped
+        further than that ahead of this node's clock."""
+        return bool(self.known_movers) and not (t - self.movers_received <= self.odom_timeout and
+                                                -self.odom_timeout <= t - self.movers_stamp <= self.odom_timeout)
+
+    def stale_inputs(self, t: float) -> list[tuple[str, float]]:
+        """What this robot avoids on data that stopped coming, and how old that data is: other robots whose
+        odometry stopped (by name; fastep_ros.robots), the known movers ('/movers'). Logged when that changes."""
+        stale = [(r.name, t - r.received) for r in self.robots.fleet.stale(t)]
+        if self.movers_stale(t):
+            stale.append((interface.MOVERS, t - self.movers_received))
+        names = [name for name, _ in stale]
+        if names != self._stale_logged:
+            went, back = [n for n in names if n not in self._stale_logged], \
+                [n for n in self._stale_logged if n not in names]
+            if went:
+                self.get_logger().warning(f'stale: {", ".join(went)}; avoided where last seen, the reach widening '
+                                          f'at the last speed known, until fresh data comes')
+            if back:
+                self.get_logger().info(f'fresh again: {", ".join(back)}')
+            self._stale_logged = names
+        return stale
+
     def status(self) -> tuple[bytes, str, str]:
         if not self.is_active:
             return DiagnosticStatus.OK, 'inactive', 'lifecycle: not active (no commands); activate to drive'
+        if self.cmd_conflict and self.exclusive_cmd_vel:
+            return DiagnosticStatus.ERROR, 'conflict', f'{self.cmd_conflict}: not commanding while another node ' \
+                                                       f'does (exclusive_cmd_vel)'
         level, message, reason = self.navigation_status()
         if self.clock_problem and level != DiagnosticStatus.ERROR:
             # The control loop stands still with the clock: a robot under way is held (check_clock).
@@ -101,6 +134,10 @@ class PlannerReports(ManagedNode):
         if self.goal_refused and self.goal is not None:
             return DiagnosticStatus.WARN, mode.value, f'{self.goal_refused}; still driving to ' \
                                                      f'({self.goal[0]:g}, {self.goal[1]:g})'
+        stale = self.stale_inputs(self.now())
+        if stale:
+            kept = f'stale: {", ".join(name for name, _ in stale)} (kept where last seen, the reach widening)'
+            return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {kept}' if nav.reason else kept
         return DiagnosticStatus.OK, mode.value, nav.reason
 
     def control_rate(self) -> float | None:
@@ -174,6 +211,8 @@ class PlannerReports(ManagedNode):
             'goal': self.goal,
             'cost': 0.0 if nav is None else float(nav.cost),
             'others': ' '.join(self.robots.fleet.names(self.now())),
+            # What is avoided on data that stopped coming: robots by name, '/movers' (stale_inputs).
+            'stale': ' '.join(name for name, _ in self.stale_inputs(self.now())),
             'algorithm': self.algorithm,
             't': self.now(),
             # When the message (mode) began: a monitor that missed that status (keep-last at a high rtf) and
@@ -231,4 +270,9 @@ class PlannerReports(ManagedNode):
         kind = 'simulated time' if self.sim_time.active else 'wall time'
         clock = Task('clock', DiagnosticStatus.WARN if self.clock_problem else DiagnosticStatus.OK, kind,
                      {'reason': self.clock_problem, 't': t})
-        return [*tasks, control, odometry, clock]
+        stale = self.stale_inputs(t)
+        others = Task('others', DiagnosticStatus.WARN, 'stale', {
+            'reason': 'kept where last seen, the reach widening at the last speed known, until fresh data comes',
+            **{name: f'{age:.1f} s old' for name, age in stale}}) if stale else \
+            Task('others', DiagnosticStatus.OK, 'fresh', {'robots': ' '.join(self.robots.fleet.names(t))})
+        return [*tasks, control, odometry, others, clock]

@@ -12,9 +12,11 @@ the robot of namespace `<ns>` (subscribes to `<ns>/odom` and avoids it) only whi
   which the odometry's freshness (below) tells whether it still has one,
 - `<ns>` is neither the planner's own namespace nor below it (its own base may publish more odometry, such as
   ros2_control's `/d1/diff_drive_controller/odom`: never another robot),
-- its odometry is fresh: a robot whose odometry has not come for `timeout` seconds (node clock) is dropped,
-  as its publisher may be dead; it is followed again when odometry comes again. Older than `still_after` it is
-  avoided standing still (no longer known to move).
+- its odometry has come once while it was announced. From then on it is avoided for as long as the planner runs,
+  even when its odometry stops or its node leaves the graph (a robot whose computer stalls or dies stands where it
+  was; DDS cannot tell a stalled node from one that left): older than `still_after` it is avoided where it was last
+  seen, its radius widened by how far it could have coasted at its last speed in `timeout`; older than `timeout`
+  it is also reported stale. Fresh odometry makes it a moving robot again.
 
 The radius avoided is the `override` when one is given (> 0), else the announced footprint's radius, else the
 planner's own radius (until the footprint message arrives).
@@ -103,6 +105,7 @@ class Robot:
     velocity: tuple[float, float] = (0.0, 0.0)
     received: float = -math.inf          # node time of the last odometry
     stamp: float = 0.0                   # its header stamp
+    known: bool = False                  # followed once: avoided from then on (the module docstring)
 
     @property
     def name(self) -> str:
@@ -145,6 +148,7 @@ class Fleet:
         robot = self.robots[namespace]
         changed = robot.announced != verdict
         robot.announced = verdict
+        robot.known = robot.known or (verdict and robot.position is not None)
         return changed
 
     def heard_footprint(self, namespace: str, radius: float) -> None:
@@ -152,36 +156,50 @@ class Fleet:
 
     def heard_odometry(self, namespace: str, position: tuple[float, float], velocity: tuple[float, float],
                        stamp: float, now: float) -> bool:
-        """Take a robot's odometry; True if that made it followed (it was not a moment ago)."""
+        """Take a robot's odometry; True if that made it fresh (it was not followed, or stale, a moment ago)."""
         robot = self.robots[namespace]
-        was = self.is_followed(robot, now)
+        was = self.is_fresh(robot, now)
         robot.position, robot.velocity, robot.received, robot.stamp = position, velocity, now, stamp
-        return not was and self.is_followed(robot, now)
+        robot.known = robot.known or robot.announced
+        return not was and self.is_fresh(robot, now)
 
-    def is_followed(self, robot: Robot, now: float) -> bool:
+    def is_fresh(self, robot: Robot, now: float) -> bool:
         # A time before the last odometry (a clock that went back) counts as fresh: how old it is is not known.
-        return robot.announced and robot.position is not None and now - robot.received <= self.timeout
+        return robot.known and now - robot.received <= self.timeout
 
-    def followed(self, now: float) -> list[Robot]:
-        return [r for r in self.robots.values() if self.is_followed(r, now)]
+    def followed(self) -> list[Robot]:
+        """Every robot avoided: fresh or stale."""
+        return [r for r in self.robots.values() if r.known]
+
+    def fresh(self, now: float) -> list[Robot]:
+        return [r for r in self.robots.values() if self.is_fresh(r, now)]
 
     def names(self, now: float) -> list[str]:
-        """The robots followed now, sorted (status `others`)."""
-        return sorted(r.name for r in self.followed(now))
+        """The robots whose odometry is fresh, sorted (status `others`)."""
+        return sorted(r.name for r in self.fresh(now))
+
+    def stale(self, now: float) -> list[Robot]:
+        """The robots avoided whose odometry is older than timeout, oldest first."""
+        return sorted((r for r in self.followed() if not self.is_fresh(r, now)), key=lambda r: (r.received, r.name))
 
     def obstacles(self, now: float, radius: Callable[[Robot], float], lag: Callable[[float], float]) \
             -> list[OtherRobot]:
         """The robots followed, as the navigator's OtherRobot, in the order of their names (not of discovery, which
         DDS decides: fastep-sim lists them so too, and the order of a sum decides its last bits): each predicted
-        forward by lag(its stamp) at its velocity (zero once its odometry is older than still_after: still there,
-        no longer known to move)."""
+        forward by lag(its stamp) at its velocity; once its odometry is older than still_after, still where it
+        was last seen (no longer known to move), its radius widened by its last speed times the time since, up to
+        timeout (a base whose commands stop brakes: it coasts no further)."""
         out = []
-        for robot in sorted(self.followed(now), key=lambda r: r.name):
+        for robot in sorted(self.followed(), key=lambda r: r.name):
             assert robot.position is not None
-            velocity = robot.velocity if now - robot.received <= self.still_after else (0.0, 0.0)
-            ahead = lag(robot.stamp)
+            age = now - robot.received
+            if age <= self.still_after:
+                velocity, ahead, widened = robot.velocity, lag(robot.stamp), 0.0
+            else:
+                velocity, ahead = (0.0, 0.0), 0.0
+                widened = math.hypot(*robot.velocity) * min(age, self.timeout)
             position = (robot.position[0] + velocity[0] * ahead, robot.position[1] + velocity[1] * ahead)
-            out.append(OtherRobot(robot.name, position, velocity, radius(robot)))
+            out.append(OtherRobot(robot.name, position, velocity, radius(robot) + widened))
         return out
 
 
@@ -220,7 +238,7 @@ class RobotFollower:
         self.on_change = on_change
         self.on_odometry = on_odometry
         self.looks = 0
-        self.last_names: list[str] = []
+        self.last_names: tuple[list[str], list[str]] = ([], [])
         # Per namespace: how many publishers its footprint had at the last check, and which nodes they were.
         self.footprints: dict[str, tuple[int, list[tuple[str, str]]]] = {}
         self.subscriptions: dict[str, list[Any]] = {}
@@ -249,9 +267,14 @@ class RobotFollower:
         self.looks += 1
         for namespace in check:
             self.check(namespace)
-        names = self.fleet.names(self.now())
+        names = self.names()
         changed, self.last_names = names != self.last_names, names
         return changed
+
+    def names(self) -> tuple[list[str], list[str]]:
+        """The robots whose odometry is fresh (status `others`) and those avoided whose odometry stopped."""
+        now = self.now()
+        return self.fleet.names(now), [r.name for r in self.fleet.stale(now)]
 
     def check(self, namespace: str) -> None:
         """Ask the graph whether a robot is (still) announced; follow its odometry from the first time it is."""
@@ -282,9 +305,12 @@ class RobotFollower:
             taken = polled(node, Odometry, robot.odom_topic, LATEST, raw=True) if self.on_odometry is None else None
             self.subscriptions[namespace].append(taken or node.create_subscription(
                 Odometry, robot.odom_topic, functools.partial(self.on_odom, namespace), LATEST, raw=True))
-        node.get_logger().info(f'{"following" if verdict else "no longer following"} robot {robot.name}: '
-                               f'{robot.footprint_topic} (from a node of {namespace}) and {robot.odom_topic} '
-                               f'{"have" if verdict else "lack"} publishers')
+        if verdict:
+            node.get_logger().info(f'following robot {robot.name}: {robot.footprint_topic} (from a node of '
+                                   f'{namespace}) and {robot.odom_topic} have publishers')
+        elif robot.known:
+            node.get_logger().warning(f'robot {robot.name} left the graph ({robot.footprint_topic} has no publisher '
+                                      f'of {namespace}): avoided where it was last seen')
 
     def on_footprint(self, namespace: str, msg: PolygonStamped) -> None:
         try:
@@ -303,7 +329,7 @@ class RobotFollower:
                                            throttle_duration_sec=5.0)
             return
         if self.fleet.heard_odometry(namespace, position, velocity, stamp, self.now()):
-            self.last_names = self.fleet.names(self.now())
+            self.last_names = self.names()
             self.on_change()
         if self.on_odometry is not None:
             self.on_odometry()

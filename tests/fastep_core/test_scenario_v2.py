@@ -116,6 +116,9 @@ BAD: list[tuple[dict[str, Any], str]] = [
     (mover(known=1), 'obstacles[0].known must be true or false, got 1'),
     (mover(position_sigma=-0.5), 'obstacles[0].position_sigma must be >= 0, got -0.5'),
     (mover(position_sigma=float('inf')), 'obstacles[0].position_sigma must be a finite number, got inf'),
+    # Issue "Faults", item 8: 1e300 loaded, and the robot failed at once with numpy overflow warnings.
+    (mover(position_sigma=1e300), "obstacles[0].position_sigma must be at most the workspace's larger side (50 m), "
+                                  'got 1e+300'),
     (mover(colour='red'), "obstacles[0]: unknown key 'colour'"),
     (mover(circle={'center': [5, 5.5], 'radius': 1.0}),
      "obstacles[0] (a mover) starts 0.5 m from robots[0] (r1)'s start"),

@@ -96,6 +96,28 @@ def test_a_refused_goal_with_none_under_way_is_a_failure_as_before(context: Any)
         node.destroy_node()
 
 
+def test_goals_at_any_rate_log_a_line_a_second_and_a_long_frame_is_not_echoed_whole(context: Any) -> None:
+    """Issue "Faults", item 11 and a borderline one: goals at 1 kHz wrote a "new goal" line each (130 MB of log an
+    hour); a 10 KB goal frame went whole into status."""
+    node = make(context)
+    lines: list[str] = []
+    node.goal_info.log = node.goal_warning.log = lines.append
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        for i in range(500):
+            node.on_goal(convert.point_to_pose_stamped((2.0 + i * 0.01, 2.0)))
+        assert lines == ['new goal (2, 2)'] and node.goal == (6.99, 2.0)   # every goal taken, one line
+        node.goal_info.last -= 1.0   # a second later
+        node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))
+        assert lines[1] == 'new goal (8, 8) (499 more such lines left out before it)'
+        node.on_goal(convert.point_to_pose_stamped((3.0, 3.0), frame_id='x' * 10_000))
+        reason = node.status()[2]
+        assert len(reason) < 300 and "goal frame 'xxxx" in reason and '(10000 characters)' in reason, reason
+    finally:
+        node.destroy_node()
+
+
 # ----------------------------------------------------------------------------------------------- over DDS
 
 def spin_until(executor: Any, predicate: Callable[[], bool], timeout: float, what: str) -> None:

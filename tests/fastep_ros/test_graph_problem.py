@@ -114,7 +114,10 @@ def test_a_planner_avoids_the_known_movers_of_movers_predicted_to_now(context: A
         seen = node.other_robots(node.now())
         assert len(seen) == 1 and seen[0].mover and seen[0].name == 'mover 1'
         assert seen[0].position[1] == pytest.approx(40.0 - 0.05, abs=0.02)   # predicted 0.1 s on
-        assert node.other_robots(node.now() + 10.0) == []   # the map node went quiet: no stale movers
+        # The map node went quiet: kept where last seen, its reach widened by 0.5 m/s (issue "Faults", item 2).
+        [stale] = node.other_robots(node.now() + 10.0)
+        assert stale.position == (25.0, 40.0) and stale.velocity == (0.0, 0.0)
+        assert stale.radius == pytest.approx(1.0 + 0.5 * 10.1, abs=0.02)
     finally:
         node.destroy_node()
 

@@ -49,11 +49,14 @@ def test_the_graph_verdict_needs_the_robot_s_own_footprint_publisher_and_an_odom
     assert not announced('/r2', [], odom_publishers=1)
 
 
-def test_a_robot_is_followed_while_announced_and_fresh_then_dropped_and_back() -> None:
+def test_a_robot_is_followed_once_announced_and_kept_where_last_seen_when_its_odometry_stops() -> None:
+    """Issue "Faults", item 1: a robot whose odometry stops (its plant stalled) or whose node leaves the graph stays
+    where it was last seen, its radius widened by how far it could coast at its last speed; it was dropped after
+    `timeout` and driven through."""
     fleet = Fleet('/r1', timeout=3.0, still_after=1.0)
     fleet.add('/r2')
     assert fleet.heard_odometry('/r2', (5.0, 5.0), (1.0, 0.0), stamp=10.0, now=10.0) is False  # not announced
-    assert fleet.names(10.0) == []
+    assert fleet.names(10.0) == [] and fleet.followed() == []
     assert fleet.judge('/r2', True)
     assert fleet.names(10.0) == ['r2']
     radius = lambda robot: 0.4 if robot.radius is None else robot.radius  # noqa: E731
@@ -62,12 +65,18 @@ def test_a_robot_is_followed_while_announced_and_fresh_then_dropped_and_back() -
     assert other.position == (5.0, 5.0) and other.velocity == (1.0, 0.0) and other.radius == 0.4
     fleet.heard_footprint('/r2', 0.7)
     [other] = fleet.obstacles(11.5, radius, no_lag)
-    assert other.velocity == (0.0, 0.0) and other.radius == 0.7     # still there, no longer known to move
-    assert fleet.obstacles(13.5, radius, no_lag) == [] and fleet.names(13.5) == []   # stale: dropped
-    assert fleet.heard_odometry('/r2', (6.0, 5.0), (0.0, 0.0), stamp=20.0, now=20.0) is True   # back
-    [other] = fleet.obstacles(20.0, radius, lambda stamp: 0.1)
-    assert other.position == (6.0, 5.0)
-    assert fleet.judge('/r2', False) and fleet.names(20.0) == []     # its publishers left the graph
+    # still there, no longer known to move: anywhere it could have got to at 1 m/s in 1.5 s
+    assert other.position == (5.0, 5.0) and other.velocity == (0.0, 0.0) and other.radius == pytest.approx(2.2)
+    assert fleet.stale(11.5) == []
+    [other] = fleet.obstacles(60.0, radius, no_lag)   # stale: kept, coasting no further than `timeout`
+    assert other.position == (5.0, 5.0) and other.radius == pytest.approx(3.7)
+    assert fleet.names(60.0) == [] and [r.name for r in fleet.stale(60.0)] == ['r2']
+    assert fleet.heard_odometry('/r2', (6.0, 5.0), (0.0, 0.0), stamp=70.0, now=70.0) is True   # fresh again
+    [other] = fleet.obstacles(70.0, radius, lambda stamp: 0.1)
+    assert other.position == (6.0, 5.0) and other.radius == 0.7 and fleet.stale(70.0) == []
+    assert fleet.judge('/r2', False)   # its publishers left the graph (or its node stalled past its lease)
+    [other] = fleet.obstacles(200.0, radius, no_lag)
+    assert other.position == (6.0, 5.0) and other.radius == 0.7   # parked: kept exactly where it stood
 
 
 # ----------------------------------------------------------------------------------------------- over DDS
@@ -186,7 +195,7 @@ def test_a_planner_with_no_plant_and_a_replayed_robot_are_not_followed(world: Wo
     assert '/r3/odom' not in subscribed and '/r4/odom' not in subscribed
 
 
-def test_an_announced_robot_is_followed_dropped_when_its_odometry_stops_and_back_when_it_comes(
+def test_an_announced_robot_is_followed_kept_stale_when_its_odometry_stops_and_fresh_when_it_comes(
         world: World) -> None:
     heard: list[DiagnosticStatus] = []
     robot = world.node('planner', '/r2')   # stands for r2's planner (the footprint) and its plant (odometry)
@@ -195,22 +204,21 @@ def test_an_announced_robot_is_followed_dropped_when_its_odometry_stops_and_back
 
     def followed() -> bool:
         odom.publish(odometry(5.0, 5.0, vx=0.5))
-        return world.others() == ['r2']
+        return world.others() == ['r2'] and world.planner.robots.fleet.names(world.planner.now()) == ['r2']
     world.spin_until(followed, 20.0, 'r2 to be followed')
     statuses = world.node('monitor', '/').create_subscription(DiagnosticStatus, '/d1/status', heard.append,
                                                               STATUS_QOS)
     world.spin_until(lambda: any(diagnostic_to_dict(m).get('others') == 'r2' for m in heard), 20.0,
                      'status to list r2')
-    # Its odometry stops (a dead plant whose endpoints the graph still lists): dropped after other_robot_timeout.
-    world.spin_until(lambda: world.others() == [], 20.0, 'r2 to be dropped')
+    # Its odometry stops (a stalled plant): after other_robot_timeout it is stale, and still avoided where it was.
     heard.clear()
-    world.spin_until(lambda: any(diagnostic_to_dict(m).get('others') == '' for m in heard), 20.0,
-                     'status to list no robot')
+    world.spin_until(lambda: any(diagnostic_to_dict(m).get('stale') == 'r2' and diagnostic_to_dict(m)['others'] == ''
+                                 for m in heard), 20.0, 'status to list r2 as stale')
+    [other] = world.planner.other_robots(world.planner.now())
+    assert other.name == 'r2' and other.velocity == (0.0, 0.0) and other.position == pytest.approx((5.0, 5.0))
+    assert other.radius == pytest.approx(0.8 + 0.5 * 1.5, abs=1e-6)   # its reach: 0.5 m/s for other_robot_timeout
     world.spin_until(followed, 20.0, 'r2 to be followed again')
     assert statuses is not None
-    # avoided with the radius it announced (robot_radius until its footprint came)
-    world.spin_until(lambda: world.planner.other_robots(world.planner.now())[0].radius != 0.5, 20.0,
-                     'its footprint')
     [other] = world.planner.other_robots(world.planner.now())
     assert other.radius == pytest.approx(0.8, abs=1e-6) and other.velocity == (0.5, 0.0)
 
@@ -298,3 +306,26 @@ def test_one_look_at_the_graph_serves_the_planners_of_a_process(context: Any) ->
     finally:
         a.destroy_node()
         b.destroy_node()
+
+
+def test_known_movers_gone_quiet_are_kept_where_last_seen_their_reach_widening(world: World) -> None:
+    """Issue "Faults", item 2: /movers stops (the map node stalled): each known mover stays where it was last seen,
+    a disc of every place it can have reached at its last speed since; it was dropped after odom_timeout."""
+    from visualization_msgs.msg import MarkerArray
+
+    from fastep_core.planning.others import OtherRobot
+    from msg_tools import interface
+    planner = world.planner
+    pub = world.node('map', '/').create_publisher(MarkerArray, interface.MOVERS, interface.RELIABLE)
+    told_at = planner.get_clock().now()
+    pub.publish(convert.movers_to_marker_array([OtherRobot('mover 0', (5.0, 5.0), (1.0, 0.0), 0.4, mover=True)],
+                                               told_at.to_msg()))
+    world.spin_until(lambda: planner.known_movers != [], 20.0, '/movers')
+    told = told_at.nanoseconds * 1e-9
+    [fresh] = planner.other_robots(told + 0.2)   # predicted along its velocity (max_extrapolation 0.25 s)
+    assert fresh.position == pytest.approx((5.2, 5.0)) and fresh.velocity == (1.0, 0.0) and fresh.radius == 0.4
+    later = planner.movers_received + 30.0
+    [stale] = planner.other_robots(later)
+    assert stale.mover and stale.position == (5.0, 5.0) and stale.velocity == (0.0, 0.0)
+    assert stale.radius == pytest.approx(0.4 + 1.0 * (later - told))
+    assert planner.stale_inputs(later) == [('/movers', pytest.approx(30.0))]
