@@ -38,7 +38,7 @@ from fastep_core.errors import GoalError, ParameterError, ScenarioError
 from fastep_core.geometry import Circle, Obstacle, Segment, point_segment_distance
 from fastep_core.kinematics.tractor_trailer import wrap_angle
 from fastep_core.planning.params import PlannerParams
-from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, MAX_BEAMS, LaserSpec
+from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, MAX_BEAMS, LaserSpec, beam_angles, way_problem
 from fastep_core.world import World
 
 __all__ = [
@@ -479,6 +479,13 @@ def _robot(value: Any, path: str) -> RobotSpec:
     if robot.sensor is not None and math.hypot(*robot.sensor.mount[:2]) > robot.radius:
         raise _Invalid(f'{path}.sensor.mount must lie on the robot: within its radius {robot.radius:g} m of its '
                        f'reference point, got {list(robot.sensor.mount)}')
+    if robot.sensor is not None:
+        spec = robot.sensor
+        angle_min, increment, angles = beam_angles(spec)
+        problem = way_problem(angle_min, float(angles[-1]), increment, spec.beams, spec.range, spec.mount[2],
+                              robot.radius)
+        if problem:
+            raise _Invalid(f'{path}.sensor cannot see the robot\'s way: {problem}')
     return robot
 
 

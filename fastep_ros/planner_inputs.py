@@ -24,6 +24,7 @@ from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.control import ControlTick, Plan
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
+from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
 from fastep_ros.lock_step import STAMP_EPS, LockStep
 from fastep_ros.planner_status import PlannerReports
@@ -279,7 +280,13 @@ class PlannerInputs(PlannerReports):
             self.scan_problem = f'scan ignored: {exc}'
             self.get_logger().warning(self.scan_problem, throttle_duration_sec=5.0)
             return
-        self.scan_problem = ''
+        # A scanner that cannot see the robot's way (too narrow, too sparse) is used all the same (every return is
+        # an obstacle to the guard), and said so on status.
+        blind = way_problem(msg.angle_min, msg.angle_max, msg.angle_increment, len(msg.ranges), msg.range_max,
+                            mount[2], self.radius)
+        self.scan_problem = f'the scan cannot see the robot\'s way: {blind}' if blind else ''
+        if blind:
+            self.get_logger().warning(self.scan_problem, throttle_duration_sec=60.0)
         nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
         nav.guard_check.scan_points = self.scan_perception.returns      # and the beams' ends are obstacles
         nav.from_scans = True

@@ -38,7 +38,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ['DEFAULT_BEAMS', 'DEFAULT_FOV', 'DEFAULT_NOISE', 'DEFAULT_RANGE', 'FULL_TURN_TOLERANCE', 'MAX_BEAMS',
-           'NEAR', 'LaserSpec', 'Scan', 'beam_angles', 'cast', 'fan_hits', 'hit_distances', 'main']
+           'NEAR', 'WAY_BEAMS', 'WAY_DISTANCE', 'LaserSpec', 'Scan', 'beam_angles', 'cast', 'fan_hits',
+           'hit_distances', 'main', 'way_problem']
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -126,6 +127,39 @@ def beam_angles(spec: LaserSpec) -> tuple[float, float, FloatArray]:
         return -math.pi, increment, -math.pi + increment * np.arange(n, dtype=float)
     increment = spec.fov / (n - 1)
     return -spec.fov / 2.0, increment, -spec.fov / 2.0 + increment * np.arange(n, dtype=float)
+
+
+WAY_AHEAD = 2.0 * math.atan(0.5)
+"""Radians centred straight ahead a scanner must see: the robot's way from one robot diameter ahead on (its
+half-width r at 2 r). A narrower scanner saw an obstacle dead ahead as a few points, and the robot drove in."""
+WAY_BEAMS = 3
+"""Beams that must fall across the robot's width at WAY_DISTANCE (or the range, if shorter)."""
+WAY_DISTANCE = 3.0
+"""Metres ahead where the beams are counted: nearer obstacles are denser in beams still."""
+
+
+def way_problem(angle_min: float, angle_max: float, increment: float, beams: int, range_max: float,
+                mount_yaw: float, radius: float) -> str:
+    """Why a scanner cannot see a robot's way ('' when it can): WAY_AHEAD in view (from a scanner mounted at
+    mount_yaw), and beams no further apart than WAY_BEAMS across the robot's width (2 radius) at WAY_DISTANCE.
+    Angles as in a LaserScan (beam_angles for a LaserSpec)."""
+    half = 0.5 * WAY_AHEAD
+    centre, span = wrap(mount_yaw + 0.5 * (angle_min + angle_max)), angle_max - angle_min
+    full = beams * increment >= 2.0 * math.pi - FULL_TURN_TOLERANCE
+    if not full and abs(centre) + half > 0.5 * span:
+        return (f'its beams span {span:.3g} rad around {centre:.3g} rad; the way ahead needs at least '
+                f'{-half:.3f} to {half:.3f} rad in view')
+    distance = min(range_max, WAY_DISTANCE) if range_max > 0.0 else WAY_DISTANCE   # a message's 0 or NaN
+    width = 2.0 * math.atan(radius / distance)
+    if beams < WAY_BEAMS or increment > width / WAY_BEAMS:
+        return (f'{beams} beam{"s" if beams > 1 else ""} {increment:.3g} rad apart: a robot of radius {radius:g} '
+                f'm needs {WAY_BEAMS} across its width at {distance:g} m, {width / WAY_BEAMS:.3g} rad apart at most')
+    return ''
+
+
+def wrap(angle: float) -> float:
+    """An angle in [-pi, pi)."""
+    return (angle + math.pi) % (2.0 * math.pi) - math.pi
 
 
 def _points(value: ArrayLike | None) -> FloatArray:

@@ -76,8 +76,8 @@ def test_sensor_keys_are_optional_with_documented_defaults(tmp_path: Path) -> No
     data = v2()
     data['robots'][0]['sensor'] = {}
     assert load_scenario(write(tmp_path, data)).robots[0].sensor == LaserSpec()
-    data['robots'][0]['sensor'] = {'beams': 1, 'fov': 1.0}
-    assert load_scenario(write(tmp_path, data)).robots[0].sensor == LaserSpec(beams=1, fov=1.0)
+    data['robots'][0]['sensor'] = {'beams': 200, 'fov': 1.0}
+    assert load_scenario(write(tmp_path, data)).robots[0].sensor == LaserSpec(beams=200, fov=1.0)
 
 
 def test_diff_drive_parses_its_pose(tmp_path: Path) -> None:
@@ -123,6 +123,23 @@ BAD: list[tuple[dict[str, Any], str]] = [
     (mover(circle={'center': [5, 5.5], 'radius': 1.0}),
      "obstacles[0] (a mover) starts 0.5 m from robots[0] (r1)'s start"),
     (mover(motion={'waypoints': [[45, 25]], 'speed': 1}), "the mover passes 0 m from robots[0] (r1)'s goal"),
+]
+
+
+def sensing(**sensor: Any) -> dict[str, Any]:
+    data = v2()
+    data['robots'][0]['sensor'] = sensor
+    return data
+
+
+# Issue "Faults", item 3: these loaded, and the robot drove into an unknown circle its scans returned dead ahead.
+BAD += [
+    (sensing(fov=0.01, beams=100), "robots[0].sensor cannot see the robot's way: its beams span 0.01 rad around 0 "
+                                   'rad; the way ahead needs at least -0.464 to 0.464 rad in view'),
+    (sensing(fov=1e-12, beams=1), "robots[0].sensor cannot see the robot's way: its beams span 0 rad"),
+    (sensing(fov=3.0, beams=2), "robots[0].sensor cannot see the robot's way: 2 beams 3 rad apart"),
+    (sensing(fov=3.0, beams=100, mount=[0, 0, 3.0]), 'its beams span 3 rad around 3 rad'),
+    (sensing(fov=6.2832, beams=30), '30 beams 0.209 rad apart: a robot of radius'),
 ]
 
 

@@ -117,6 +117,23 @@ def test_a_scan_that_is_not_one_is_ignored_with_a_reason(context: Any) -> None:
         node.destroy_node()
 
 
+def test_a_scanner_that_cannot_see_the_way_is_used_and_said_so(context: Any) -> None:
+    """Issue "Faults", item 3, on the node: a user's narrow or sparse scanner is not refused (its returns still stop
+    the robot: the guard reads them), but status says it cannot see the robot's way."""
+    node = make(context)
+    try:
+        node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+        node.on_odom(convert.state_to_odometry([3.0, 10.0]))
+        narrow = LaserSpec(range=8.0, fov=0.01, beams=100, noise=0.0)
+        node.on_scan(convert.scan_to_laser_scan(scan(narrow, (3.0, 10.0, 0.0), np.random.default_rng(0))))
+        assert node.scan_problem.startswith("the scan cannot see the robot's way: its beams span 0.01 rad")
+        assert node.scan_perception.scans == 1
+        node.on_scan(convert.scan_to_laser_scan(scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0))))
+        assert node.scan_problem == ''
+    finally:
+        node.destroy_node()
+
+
 def placed_at(node: PlannerNode) -> list[tuple[float, ...]]:
     """The poses the node's scans are placed at from now on (filled as they are perceived)."""
     poses: list[tuple[float, ...]] = []
