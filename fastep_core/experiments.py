@@ -35,7 +35,7 @@ import multiprocessing
 import os
 import time
 from dataclasses import asdict, dataclass
-from typing import Iterable, Sequence
+from typing import Iterable, Sequence, overload
 
 import numpy as np
 
@@ -49,7 +49,7 @@ from fastep_core.simulator import Run, simulate
 
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
-    'tasks', 'drives_scenario', 'run_task', 'run_batch', 'pool_context', 'summarise', 'compare', 'enhancement',
+    'Tasks', 'tasks', 'drives_scenario', 'run_task', 'run_batch', 'pool_context', 'summarise', 'compare', 'enhancement',
     'optimal_lengths', 'straight_lengths', 'markdown_report', 'metric_values', 'cached_scenario', 'ExamplePaths',
     'example_paths',
 ]
@@ -108,14 +108,43 @@ class Record:
 Task = tuple[str, str, int]
 
 
-def tasks(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0: int = 0) -> list[Task]:
-    """Every (scenario, algorithm, seed) simulate call of a batch; deterministic algorithms get one seed.
+class Tasks(Sequence[Task]):
+    """Every (scenario, algorithm, seed) simulate call of a batch, made when asked for: a batch of a million runs
+    built every task first (1.8 GB after 60 s of `--runs 3000000`, no result). Deterministic algorithms get one
+    seed; an algorithm is left out of a scenario with a robot it cannot drive (dwa and a tractor-trailer): its row
+    is missing from the report, the rest of the batch runs."""
 
-    An algorithm is left out of a scenario with a robot it cannot drive (dwa and a tractor-trailer): its row is
-    missing from the report, the rest of the batch runs.
-    """
-    return [(s, a, seed) for s in scenarios for a in algorithms if drives_scenario(a, s)
-            for seed in range(seed0, seed0 + (1 if a in DETERMINISTIC else runs))]
+    def __init__(self, scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0: int = 0) -> None:
+        self.seed0 = seed0
+        self.blocks = [(s, a, 1 if a in DETERMINISTIC else runs) for s in scenarios for a in algorithms
+                       if drives_scenario(a, s)]
+        self.ends = np.cumsum([count for _, _, count in self.blocks], dtype=np.int64)
+
+    def __len__(self) -> int:
+        return int(self.ends[-1]) if len(self.ends) else 0
+
+    @overload
+    def __getitem__(self, index: int) -> Task: ...
+
+    @overload
+    def __getitem__(self, index: slice) -> list[Task]: ...
+
+    def __getitem__(self, index: int | slice) -> Task | list[Task]:
+        if isinstance(index, slice):
+            return [self[i] for i in range(*index.indices(len(self)))]
+        if index < 0:
+            index += len(self)
+        if not 0 <= index < len(self):
+            raise IndexError(f'task {index} of {len(self)}')
+        block = int(np.searchsorted(self.ends, index, side='right'))
+        source, algorithm, _ = self.blocks[block]
+        first = int(self.ends[block - 1]) if block else 0
+        return source, algorithm, self.seed0 + index - first
+
+
+def tasks(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, seed0: int = 0) -> list[Task]:
+    """Every task of a batch (Tasks), as a list."""
+    return list(Tasks(scenarios, algorithms, runs, seed0))
 
 
 def drives_scenario(algorithm: str, source: str) -> bool:
@@ -168,25 +197,27 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     """
     if runs < 1:
         raise ParameterError(f'runs must be >= 1, got {runs}')
-    todo = tasks(scenarios, algorithms, runs, seed0)
+    every = Tasks(scenarios, algorithms, runs, seed0)
     # A shuffled order spreads whatever else loads the machine evenly over planners and scenarios (in
-    # scenario-major order one planner's runs would share one stretch of background load).
-    todo = [todo[k] for k in np.random.default_rng(seed0).permutation(len(todo))]
+    # scenario-major order one planner's runs would share one stretch of background load). Made as they are
+    # handed out: the pool's pipe, not a list, holds those not started.
+    order = np.random.default_rng(seed0).permutation(len(every))
+    todo = (every[int(k)] for k in order)
     frozen = tuple(sorted((overrides or {}).items()))
     job = functools.partial(run_task, overrides=frozen, realtime=realtime)
     out: list[Record] = []
-    with progress_bar(len(todo), label, progress) as bar:
-        if workers <= 1 or len(todo) == 1:
+    with progress_bar(len(every), label, progress) as bar:
+        if workers <= 1 or len(every) == 1:
             for task in todo:
                 out.extend(job(task))
                 bar.update()
         else:
-            with pool_context().Pool(min(workers, len(todo))) as pool:
+            with pool_context().Pool(min(workers, len(every))) as pool:
                 for records in pool.imap_unordered(job, todo):
                     out.extend(records)
                     bar.update()
-    order = {(s, a): i for i, (s, a) in enumerate((s, a) for s in scenarios for a in algorithms)}
-    out.sort(key=lambda r: (order[(r.scenario, r.algorithm)], r.seed, r.robot))
+    rows = {(s, a): i for i, (s, a) in enumerate((s, a) for s in scenarios for a in algorithms)}
+    out.sort(key=lambda r: (rows[(r.scenario, r.algorithm)], r.seed, r.robot))
     return out
 
 

@@ -129,3 +129,20 @@ def test_a_tiny_search_is_seeded_and_never_worse_than_table_1():
     assert first.cost <= first.table1_cost
     assert set(first.params) == {'a', 'b', 'c', 'step_radius'}
     assert 0.1 <= first.params['a'] <= 1.0 and 1e-5 <= first.params['c'] <= 0.01
+
+
+def test_the_tasks_of_a_batch_are_made_when_asked_for() -> None:
+    """Issue "Faults", item 6: `--runs 3000000` built every task first (1.8 GB in 60 s, no result). Tasks is the
+    same list, made one task at a time."""
+    from fastep_core.experiments import Tasks
+    every = Tasks(['table2_s1', 'application'], ['fastep', 'optimal', 'aco'], 100_000, seed0=5)
+    assert len(every) == 2 * (100_000 + 1 + 100_000)
+    assert every[0] == ('table2_s1', 'fastep', 5) and every[99_999] == ('table2_s1', 'fastep', 100_004)
+    assert every[100_000] == ('table2_s1', 'optimal', 5) and every[100_001] == ('table2_s1', 'aco', 5)
+    assert every[-1] == ('application', 'aco', 100_004)
+    small = Tasks(['table2_s1', 'application'], ['fastep', 'optimal'], 3, seed0=1)
+    assert list(small) == experiments.tasks(['table2_s1', 'application'], ['fastep', 'optimal'], 3, seed0=1) == [
+        (s, a, seed) for s in ('table2_s1', 'application') for a, seeds in (('fastep', (1, 2, 3)), ('optimal', (1,)))
+        for seed in seeds]
+    with pytest.raises(IndexError):
+        every[len(every)]
