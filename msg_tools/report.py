@@ -11,13 +11,18 @@ both and the numbers can be checked against each other. Everything is measured f
   `goal_pose` log time (or, without a goal_pose, its first odom). When it began: the status' `since` value (the
   planner's time of the decision; fastep-record in lock step may take a message some ticks after it was sent),
   else its log time;
+- path_length of a robot none of whose odometry decoded: none (null; printed `path none (no odometry decoded)`);
 - min_clearance: smallest distance from an odom position to the surface of an obstacle of the file's
   `/obstacles` (a format-v2 run: of the true world in its metadata, every still obstacle where it really is and
   every mover where it was at that time), minus the robot radius (negative means it touched); min_robot_gap
   likewise against the other robots, compared at each odom time of either (fastep_core.metrics.
   trajectory_margins). The radius is, in this order: the `fastep` metadata record (fastep-sim and fastep-record
   with a scenario write it), a `robot_radius` value in the robot's status, or --radius (default 0.5);
-  `radius_source` says which;
+  `radius_source` says which. The true world (metadata `scenario_data`) is held to the limits of a scenario file
+  (fastep_core.bounded_yaml: at most MAX_BYTES, collections nested at most MAX_DEPTH deep); one that is beyond
+  them, is not JSON or is not a valid scenario is ignored with a warning, and the run is judged against its
+  `/obstacles`. Distances are measured for at most JUDGE_ELEMENTS (sample, obstacle or mover) pairs at a time,
+  so memory does not grow with odometry samples x obstacles;
 - activations: the `activations` value of the last status (how often the swarm planned a step), or else the
   number of distinct waypoints.
 
@@ -40,12 +45,14 @@ from pathlib import Path
 from typing import Any, Mapping, Sequence
 
 import numpy as np
+from numpy.typing import NDArray
 
+from fastep_core import bounded_yaml
 from fastep_core.cli import Parser, fail, guard
-from fastep_core.dynamic_world import DynamicWorld
+from fastep_core.dynamic_world import Movers, ObstacleSpec
 from fastep_core.errors import FastepError
 from fastep_core.geometry import Circle, Obstacle, Obstacles
-from fastep_core.metrics import trajectory_margins
+from fastep_core.metrics import Margins, trajectory_margins
 from fastep_core.scenario import Scenario, parse_scenario
 from msg_tools.cdr import float64_field, header_stamp, odometry_fields, twist_fields
 from msg_tools.interface import (
@@ -68,13 +75,18 @@ from msg_tools.interface import (
 )
 from msg_tools.mcap_io import Recording, open_recording
 
-__all__ = ['RecordedRun', 'RobotRecord', 'figures', 'float64_field', 'load_run', 'main', 'metrics',
-           'odometry_fields', 'twist_fields', 'write_figures', 'write_report']
+__all__ = ['RecordedRun', 'RobotRecord', 'figures', 'float64_field', 'judge', 'load_run', 'main', 'metrics',
+           'odometry_fields', 'read_scenario_data', 'twist_fields', 'write_figures', 'write_report']
 
 DEFAULT_RADIUS = 0.5
+FloatArray = NDArray[np.float64]
 MAX_COORDINATE = 1e9
 """m: positions, lengths and speeds beyond it (or not finite) are left out of a report (with a warning): a
 robot 10^6 km away is a broken message, and sums of squares of such values overflow."""
+JUDGE_ELEMENTS = 1 << 20
+"""(odometry sample, obstacle) and (odometry sample, mover segment) pairs measured in one numpy step: a few
+arrays of this many float64 (8 MiB each) at a time, whatever the numbers of samples and obstacles. Measured all
+at once, 2,000 samples against 60,000 movers took 4.9 GB (MemoryError under a 1.5 GB cap)."""
 
 
 @dataclass
@@ -116,14 +128,50 @@ class RecordedRun:
 
     def truth(self) -> Scenario | None:
         """A format-v2 run's scenario from the metadata (interface.SCENARIO_DATA): the true world it is judged
-        against; None for a v1 run (its /obstacles are the truth) or metadata that does not parse."""
+        against; None for a v1 run (its /obstacles are the truth) or metadata that is not a scenario."""
+        return self.read_truth()[0]
+
+    def read_truth(self) -> tuple[Scenario | None, str]:
+        """(truth(), '') or, when the metadata has a scenario_data that is not a scenario, (None, why not)."""
         text = self.metadata.get(SCENARIO_DATA)
         if not text:
-            return None
-        try:
-            return parse_scenario(json.loads(text))
-        except (ValueError, FastepError):
-            return None
+            return None, ''
+        return read_scenario_data(text)
+
+
+def _nested_deeper(value: Any, limit: int) -> bool:
+    """Are value's lists and dicts nested more than `limit` deep (the outermost at depth 1)? Iterative."""
+    stack = [(value, 1)]
+    while stack:
+        item, depth = stack.pop()
+        if isinstance(item, (list, dict)):
+            if depth > limit:
+                return True
+            stack.extend((v, depth + 1) for v in (item.values() if isinstance(item, dict) else item))
+    return False
+
+
+def read_scenario_data(text: str) -> tuple[Scenario | None, str]:
+    """(the scenario, '') of a recording's scenario_data (JSON of fastep_core.scenario.scenario_data), or (None,
+    one line saying why it is not one). Held to the limits of a scenario file (fastep_core.bounded_yaml): at most
+    MAX_BYTES, collections nested at most MAX_DEPTH deep; a bigger one is refused before it is parsed."""
+    size = len(text.encode('utf-8', 'replace'))
+    if size > bounded_yaml.MAX_BYTES:
+        return None, (f'it has {size} bytes, more than a scenario file may have ({bounded_yaml.MAX_BYTES} bytes, '
+                      f'{bounded_yaml.MAX_BYTES // 2 ** 20} MiB)')
+    deeper = f'collections nested deeper than a scenario file may have them ({bounded_yaml.MAX_DEPTH} levels)'
+    try:
+        data = json.loads(text)
+    except RecursionError:   # json's decoder recurses per level: a few thousand `[` reach Python's limit
+        return None, deeper
+    except ValueError as exc:   # JSONDecodeError; an integer beyond Python's int conversion limit
+        return None, f'not JSON: {" ".join(str(exc).split())[:200]}'
+    if _nested_deeper(data, bounded_yaml.MAX_DEPTH):
+        return None, deeper
+    try:
+        return parse_scenario(data, default_name='scenario_data'), ''
+    except (ValueError, FastepError) as exc:
+        return None, ' '.join(str(exc).split())[:300]
 
 
 def _robot(robots: dict[str, RobotRecord], name: str) -> RobotRecord:
@@ -393,6 +441,67 @@ def _json_ready(value: Any) -> Any:
     return value
 
 
+def _mover_groups(specs: Sequence[ObstacleSpec]) -> list[Movers]:
+    """The movers among specs as Movers, in groups of at most JUDGE_ELEMENTS vertices: Movers pads every
+    polyline to the longest, so one mover with 50,000 waypoints among 6,000 would make a 6,000 x 50,000 array."""
+    moving = sorted((s for s in specs if s.motion is not None and isinstance(s.shape, Circle)),
+                    key=lambda s: len(s.motion.waypoints) if s.motion is not None else 0)
+    groups: list[Movers] = []
+    start = 0
+    while start < len(moving):
+        end = start + 1   # sorted by length: the last of a group is its longest
+        while end < len(moving) and (end + 1 - start) * _vertices(moving[end]) <= JUDGE_ELEMENTS:
+            end += 1
+        part = moving[start:end]
+        groups.append(Movers([s.shape for s in part if isinstance(s.shape, Circle)],
+                             [s.motion for s in part if s.motion is not None]))
+        start = end
+    return groups
+
+
+def _vertices(spec: ObstacleSpec) -> int:
+    return 1 + (len(spec.motion.waypoints) if spec.motion is not None else 0)
+
+
+def _still_clearance(obstacles: Obstacles, points: FloatArray) -> float:
+    """Smallest distance from points (n, 2) to the obstacles' surfaces: at most JUDGE_ELEMENTS pairs at a time."""
+    size = max(1, JUDGE_ELEMENTS // max(1, len(obstacles)))
+    return float(min(obstacles.clearance(points[k:k + size]).min() for k in range(0, len(points), size)))
+
+
+def _mover_clearance(movers: Movers, rows: FloatArray) -> float:
+    """Smallest distance from a track's points (rows t, x, y) to the movers' surfaces at the same instants, as
+    fastep_core.metrics measures it, for at most JUDGE_ELEMENTS (sample, mover segment) pairs at a time."""
+    per_sample = len(movers) * max(1, movers.vertices.shape[1] - 1)
+    size = max(1, JUDGE_ELEMENTS // per_sample)
+    best = math.inf
+    for k in range(0, len(rows), size):
+        part = rows[k:k + size]
+        centres = movers.positions(part[:, 0])                                  # (n, m, 2)
+        gap = np.hypot(centres[..., 0] - part[:, 1, None], centres[..., 1] - part[:, 2, None]) - movers.radii
+        best = min(best, float(gap.min()))
+    return best
+
+
+def judge(tracks: Sequence[FloatArray], radii: Sequence[float], obstacles: Obstacles,
+          specs: Sequence[ObstacleSpec] = ()) -> Margins:
+    """fastep_core.metrics.trajectory_margins(tracks, radii, obstacles, movers of specs), the same numbers, in
+    bounded memory: obstacles and movers are measured against at most JUDGE_ELEMENTS pairs at a time (that
+    function holds 16,384 samples x every obstacle or mover at once)."""
+    kept = trajectory_margins(tracks, radii, Obstacles(), None)   # robot against robot: linear in the samples
+    groups = _mover_groups(specs)
+    to_obstacles = kept.obstacles.copy()
+    for i, track in enumerate(tracks):
+        rows = np.asarray(track, dtype=float).reshape(len(track), -1) if len(track) else np.zeros((0, 3))
+        if not len(rows):
+            continue
+        if len(obstacles):
+            to_obstacles[i] = _still_clearance(obstacles, rows[:, 1:3]) - radii[i]
+        for movers in groups:
+            to_obstacles[i] = min(to_obstacles[i], _mover_clearance(movers, rows) - radii[i])
+    return Margins(to_obstacles, kept.robots)
+
+
 def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[str, Any]:
     """The report as a JSON-ready dict (see the module docstring)."""
     notes = []
@@ -402,22 +511,26 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
             notes.append(problem)
     rows = []
     arrays = {name: np.array(r.odom, dtype=float).reshape(-1, 3) for name, r in run.robots.items()}
-    truth = run.truth()
+    truth, why = run.read_truth()
+    if why:
+        notes.append(f'{SCENARIO_DATA} in the metadata ignored (the run is judged against its /obstacles), it is '
+                     f'not a scenario: {why}')
     tracks = list(arrays.values())
+    specs: Sequence[ObstacleSpec] = ()
     if truth is None:
-        obstacles, movers = Obstacles(run.obstacles), None
+        obstacles = Obstacles(run.obstacles)
     else:
         # A v2 world: judged against the truth over time. The movers are placed at each odometry's own stamp
         # (the run's simulated seconds): the recorder's receive time lags it by a tick or more under lock step,
         # and a mover at 0.5 m/s moves 9 cm in 0.17 s.
-        world = DynamicWorld(truth.world.workspace, truth.obstacle_specs)
-        obstacles, movers = world.still.obstacles, world.movers
+        obstacles, specs = truth.world.obstacles, truth.obstacle_specs   # the world: every still obstacle
         tracks = [np.array(r.odom_stamped, dtype=float).reshape(-1, 3) for r in run.robots.values()]
-    kept = trajectory_margins(tracks, [float(r.radius or 0.0) for r in run.robots.values()], obstacles, movers)
+    kept = judge(tracks, [float(r.radius or 0.0) for r in run.robots.values()], obstacles, specs)
     for k, (name, robot) in enumerate(run.robots.items()):
         odom = arrays[name]
         xy = odom[:, 1:3]
-        length = float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum()) if len(xy) > 1 else 0.0
+        # None: no odometry of it decoded, so no path to measure (0 m would say it stood still)
+        length = float(np.sqrt((np.diff(xy, axis=0) ** 2).sum(axis=1)).sum()) if len(xy) else None
         start = robot.goal_time if robot.goal_time is not None else (float(odom[0, 0]) if len(odom) else None)
         arrived = [_began(t, s, start) for t, s in robot.statuses
                    if s.get('message') == 'arrived' and (start is None or t >= start)]
@@ -439,7 +552,7 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
         rows.append({
             'name': name, 'model': robot.model, 'reached': reached,
             'collided': bool(margins) and min(margins) < 0.0,
-            'path_length': round(length, 6),
+            'path_length': None if length is None else round(length, 6),
             'time_to_goal': None if time_to_goal is None else round(time_to_goal, 6),
             'min_clearance': None if clearance is None else round(clearance, 6),
             'min_robot_gap': None if gap is None else round(gap, 6),
@@ -541,7 +654,8 @@ def _line(row: dict[str, Any]) -> str:
     state = 'arrived' if row['reached'] else 'NOT arrived'
     when = f'{row["time_to_goal"]:.1f} s' if row['time_to_goal'] is not None else '-'
     clear = f'{row["min_clearance"]:.2f} m' if row['min_clearance'] is not None else '-'
-    return (f'{row["name"]}: {state}{" COLLIDED" if row["collided"] else ""}, path {row["path_length"]:.2f} m, '
+    path = f'{row["path_length"]:.2f} m' if row['path_length'] is not None else 'none (no odometry decoded)'
+    return (f'{row["name"]}: {state}{" COLLIDED" if row["collided"] else ""}, path {path}, '
             f'time {when}, min clearance {clear}, activations {row["activations"]}')
 
 
