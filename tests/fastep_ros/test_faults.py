@@ -218,7 +218,7 @@ def test_a_second_identical_latched_goal_does_not_restart_the_run(graph: Graph) 
 def test_a_second_planner_on_one_cmd_vel_stops_both_and_the_survivor_drives_on(graph: Graph) -> None:
     """Issue "Faults", item 9: two planners started in one namespace both drove cmd_vel, by turns, and nothing said
     so. Now each sees the other publisher: status ERROR `conflict` naming it, no command (the robot stays); once one
-    is stopped, the other drives the robot to its goal."""
+    is stopped, the other drives the robot."""
     h = start_robot(graph, goal=False)
     start_planner_as(graph, 'planner2')
     h.wait_status(NS, lambda s: s['message'] == 'conflict' and f'{NS}/planner' in s['reason'], 60.0,
@@ -228,7 +228,7 @@ def test_a_second_planner_on_one_cmd_vel_stops_both_and_the_survivor_drives_on(g
     h.spin_for(3.0)
     assert distance(position(h), before) < 0.05, 'two planners drove the robot'
     graph.stop('planner2')
-    wait_arrival(h)
+    h.spin_until(lambda: distance(position(h), before) > 1.0, ARRIVE, 'the remaining planner to drive the robot')
 
 
 def start_planner_as(g: Graph, label: str) -> None:

@@ -16,11 +16,11 @@ from nav_msgs.msg import Odometry
 
 from fastep_testing.graph import Graph, Helper, distance, odom_xy, write
 
-FAST = {'alpha1': 1.0, 'alpha2': 1.0, 'max_speed': 2.0, 'algorithm': 'fastep'}
+FAST = {'alpha1': 1.0, 'alpha2': 1.0, 'max_speed': 3.0, 'algorithm': 'fastep'}
 RADIUS = 0.5
 ARRIVE = 120.0   # wall seconds at most for a run (normally 10-20)
 BLOCKER = (10.0, 10.0)   # where the stalled robot stands, or the mover stood when /movers stopped
-GOAL = (18.0, 10.0)
+START, GOAL = (5.0, 10.0), (15.0, 10.0)
 EMPTY = """\
 name: open_field
 workspace: [0, 0, 20, 20]
@@ -28,8 +28,8 @@ obstacles: []
 robots:
   - name: r2
     model: point_mass
-    start: [2, 10]
-    goal: [18, 10]
+    start: [5, 10]
+    goal: [15, 10]
     radius: 0.5
 """
 
@@ -45,7 +45,8 @@ def graph(tmp_path: Path) -> Iterator[Graph]:
 
 def start_robot(g: Graph, ns: str, start: tuple[float, float]) -> None:
     g.start(f'{ns}/plant', 'plant', ns, model='point_mass', start=list(start))
-    g.start(f'{ns}/planner', 'planner', ns, model='point_mass', robot_radius=RADIUS, **FAST)
+    # Stale after 1 s rather than 3 s: the test waits for it.
+    g.start(f'{ns}/planner', 'planner', ns, model='point_mass', robot_radius=RADIUS, other_robot_timeout=1.0, **FAST)
 
 
 def drive_and_judge(h: Helper, clearance: float) -> float:
@@ -62,7 +63,7 @@ def test_a_robot_whose_plant_stalls_is_driven_around_not_through(graph: Graph) -
     other_robot_timeout, stays in r2's status as stale, and r2 goes round it."""
     graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', EMPTY)))
     start_robot(graph, '/r1', BLOCKER)
-    start_robot(graph, '/r2', (2.0, 10.0))
+    start_robot(graph, '/r2', START)
     h = graph.helper = Helper(graph.domain)
     h.record_status('/r2')
     h.record('/r2/odom', Odometry)
@@ -84,7 +85,7 @@ def test_a_known_mover_is_kept_where_last_seen_when_movers_stop(graph: Graph) ->
     from fastep_core.planning.others import OtherRobot
     from msg_tools import convert, interface
     graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', EMPTY)))
-    start_robot(graph, '/r2', (2.0, 10.0))
+    start_robot(graph, '/r2', START)
     h = graph.helper = Helper(graph.domain)
     h.record_status('/r2')
     h.record('/r2/odom', Odometry)
