@@ -37,6 +37,7 @@ setup(
         ('share/ament_index/resource_index/packages', [f'resource/{PACKAGE}']),
         (f'share/{PACKAGE}', ['package.xml']),
         (f'share/{PACKAGE}/scenarios', glob('fastep_core/scenarios/*.yaml')),
+        (f'share/{PACKAGE}/config', glob('config/*.yaml')),
     ],
     python_requires='>=3.11',
     install_requires=([] if ros_installed() else ROS_WHEELS) + [

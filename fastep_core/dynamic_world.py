@@ -6,7 +6,7 @@ never read directly: the movers' true motion, the obstacles a map leaves out, th
 Three views of one scenario:
 
 - the truth (`DynamicWorld.still`, `DynamicWorld.movers`): every still obstacle where it really is (known or
-  not), every moving circle where DESIGN.md's formula puts it at time t. Collisions, margins and scans
+  not), every moving circle where the formula of docs/scenarios.md puts it at time t. Collisions, margins and scans
   (`DynamicWorld.scan`) use it.
 - the planner's map (`DynamicWorld.planner_map`): known still obstacles only, each misplaced one moved by its
   Gaussian error, as a `World`; and the known movers, reported each tick at their current positions (plus
@@ -17,7 +17,7 @@ Three views of one scenario:
   the map's key is MAP_STREAM), so adding position_sigma to a file changes no swarm's draws, and the map of
   a seed does not depend on how many robots there are.
 
-Motion (DESIGN.md, format v2): a mover's centre runs along the polyline centre -> waypoints[0] -> ... ->
+Motion (docs/scenarios.md, format v2): a mover's centre runs along the polyline centre -> waypoints[0] -> ... ->
 waypoints[-1] at constant speed and back, forever: with L the polyline's length and s = (speed t) mod 2L, the
 centre at t is the point at arc length s when s <= L, else at 2L - s. A polyline of zero length (every
 waypoint on the centre) stands still. All movers at all times are one array computation (`Movers.positions`).

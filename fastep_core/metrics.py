@@ -7,7 +7,7 @@ with trajectory_margins, so their min_clearance numbers mean the same thing:
   samples to the nearest obstacle surface, minus its radius;
 - against another robot: the smallest centre distance over time, minus both radii;
 - against a moving circle (scenario format v2): the smallest distance from the robot's reference point to the
-  circle's centre at each of the robot's sample times (where DESIGN.md's formula puts it at that instant),
+  circle's centre at each of the robot's sample times (where the formula of docs/scenarios.md puts it at that instant),
   minus both radii; counted with the obstacles;
 - negative means the discs touched (a collision), inf that there was nothing to measure against.
 

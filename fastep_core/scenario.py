@@ -1,6 +1,6 @@
 """Scenario files (formats v1 and v2, YAML): a workspace, its obstacles, the robots and optional planner overrides.
 
-Format v2 (shared/DESIGN.md) adds moving circles (`motion`), obstacles missing from the map (`known: false`),
+Format v2 (docs/scenarios.md) adds moving circles (`motion`), obstacles missing from the map (`known: false`),
 misplaced ones (`position_sigma`), a robot's laser `sensor` and the `diff_drive` model; every v1 file loads and
 means what it did. `Scenario.world` is the true world of the still obstacles (known or not, where they really
 are); `Scenario.obstacle_specs` lists every obstacle with its v2 keys, and fastep_core/dynamic_world.py turns

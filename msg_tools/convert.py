@@ -1,6 +1,6 @@
 """Pure conversions between fastep_core types and ROS 2 messages (no node, no DDS needed).
 
-Conventions (DESIGN.md "ROS 2 interface", REP-103/105):
+Conventions (msg_tools/interface.py, REP-103/105):
 - goals, waypoints, plans and obstacles are in the `map` frame; odometry is in the robot's odom frame (REP-105;
   map -> odom is the identity in simulation, msg_tools.frames), trailer poses too; the functions take the
   frame names they are given;

@@ -1,6 +1,6 @@
 """The fastep ROS 2 interface, defined once: topic names, message types, QoS and the recording's metadata.
 
-DESIGN.md "ROS 2 interface" is the contract this module spells out; every node (fastep_ros), the launcher, the
+This module is the contract of the ROS 2 interface (docs/guide.md, "The ROS 2 graph"); every node (fastep_ros), the launcher, the
 recorder, fastep-sim's recordings (sim_mcap), replay and fastep-report take names, types and QoS from here.
 
 Topics: per robot, in the robot's namespace of one level (`/r1/odom`; nodes use the relative names below and

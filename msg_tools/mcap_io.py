@@ -2,7 +2,7 @@
 msg_tools.mcap_writer).
 
 Why our own code: rosbag2 is not on PyPI, so neither `ros2 bag record` nor rosbag2_py exist here. The files
-must still be what the ROS tools expect (reference/NOTES.md section 5), so that `ros2 bag info/play`, Foxglove
+must still be what the ROS tools expect (MCAP's ROS 2 profile), so that `ros2 bag info/play`, Foxglove
 and the `rosbags` library open them without extra files:
 
 - header profile `ros2`; channels with message encoding `cdr` (rclpy's serialize_message); schemas with

@@ -1,5 +1,5 @@
 """Writing recorded runs as MCAP files with the ROS 2 profile (msg_tools.mcap_io reads them, and says why the
-files are written this way: reference/NOTES.md section 5).
+files are written this way).
 
 - header profile `ros2`; channels with message encoding `cdr`; schemas with encoding `ros2msg` named
   `pkg/msg/Type` (msg_tools.ros2_profile writes their texts from the installed .msg files);

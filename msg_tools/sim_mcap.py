@@ -2,7 +2,7 @@
 
 Why: the report, replay and plotting tools, Foxglove and `ros2 bag play` should not care whether a run came
 from the live ROS graph (fastep-launch + fastep-record) or from the in-process simulator, and offline runs
-are fast and reproducible. So this writes what the live nodes publish (DESIGN.md "ROS 2 interface"), with the
+are fast and reproducible. So this writes what the live nodes publish (msg_tools/interface.py), with the
 conversions of msg_tools.convert:
 
 - per robot `/<name>/`: `odom` (every simulated step, and the start pose at t = 0), `cmd_vel` (every step),

@@ -1,4 +1,4 @@
-"""Tests for fastep_core.dynamic_world: movers exactly as DESIGN.md's formula says, and the planner's map."""
+"""Tests for fastep_core.dynamic_world: movers exactly as the formula of docs/scenarios.md says, and the planner's map."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ from fastep_core.sensing.laser import LaserSpec
 
 def reference_position(center: tuple[float, float], waypoints: list[tuple[float, float]], speed: float,
                        t: float) -> tuple[float, float]:
-    """DESIGN.md, written out one mover and one time at a time: s = (speed t) mod 2L; arc s or 2L - s."""
+    """docs/scenarios.md, written out one mover and one time at a time: s = (speed t) mod 2L; arc s or 2L - s."""
     path = [center, *waypoints]
     lengths = [math.dist(a, b) for a, b in zip(path, path[1:])]
     total = sum(lengths)

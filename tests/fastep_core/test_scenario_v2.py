@@ -1,4 +1,4 @@
-"""Tests for scenario format v2 (shared/DESIGN.md): movers, unknown and misplaced obstacles, sensors, diff_drive.
+"""Tests for scenario format v2 (docs/scenarios.md): movers, unknown and misplaced obstacles, sensors, diff_drive.
 
 Each bad file gives one ScenarioError line naming the key and the problem; fastep-sim turns it into exit 2.
 """

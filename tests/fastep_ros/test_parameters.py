@@ -235,3 +235,18 @@ def test_switching_use_sim_time_while_driving_keeps_the_goal(context: Any) -> No
         assert node.status()[0] == DiagnosticStatus.OK
     finally:
         services.close()
+
+
+def test_the_example_params_file_configures_a_planner_with_every_parameter_known(context: Any) -> None:
+    """config/planner.yaml (the README's "On your robot"): every key is a planner parameter, with its value."""
+    from fastep_ros.parameters import unknown_overrides
+    from fastep_testing.graph import ROOT
+    node = PlannerNode(context=context, namespace='/r1',
+                       cli_args=['--ros-args', '--params-file', str(ROOT / 'config' / 'planner.yaml')])
+    try:
+        assert unknown_overrides(node) == []
+        assert (node.algorithm, node.model, node.radius, node.obstacle_source, node.laser_mount) == \
+            ('fastep_route', 'diff_drive', 0.22, 'map', (0.0, 0.0, 0.0))
+        assert node.localization_topic == '/r1/amcl_pose' and node.params.max_speed == 0.5
+    finally:
+        node.destroy_node()
