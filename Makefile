@@ -25,9 +25,9 @@ demo: $(STAMP)
 	$(BIN)/fastep-report $(OUT)/demo.mcap --out $(OUT)/demo_report
 
 # Linter and type checker first (ruff.toml; [mypy] in setup.cfg), so a lint or type error fails make test.
-# Then two workers: the tests on a live ROS graph run one after another on one of them, the rest spread over
-# both (tests/conftest.py says why). TEST_WORKERS=0 runs everything in this process, in file order.
-TEST_WORKERS ?= 2
+# Then three workers: the tests on a live ROS graph in two units, each run one after another on one of them, the
+# rest spread over all three (tests/conftest.py says why). TEST_WORKERS=0 runs everything in this process.
+TEST_WORKERS ?= 3
 test: $(STAMP) lint
 	$(BIN)/python -m pytest -q -n $(TEST_WORKERS) --dist loadgroup tests
 

@@ -4,13 +4,15 @@ Hypothesis: `ci` (the default, what `make test` runs) is derandomised, so every 
 a red build means the code changed, not the draw. `explore` (`make fuzz`): fresh random examples each run, to
 find new counterexamples by hand; add any it finds to the test as an `@example`.
 
-xdist (`make test` runs `-n 2 --dist loadgroup`): every test under tests/fastep_ros/ runs ROS 2 nodes on a live
-DDS graph, and they all form one work unit, run one after another on one worker, while the other worker takes
-the tests that need no graph one by one. Each graph has its own DDS domain, so two could run side by side, but
-on a 2-core machine two graphs at once plus CPU-bound tests starve the nodes and timing tests (replay rates,
-lock-step clock holds) turn flaky. xdist hands out the largest unit first, so the graph tests start at once and
-the rest fills the other core. The unit is chosen here by folder, not with `xdist_group` marks: on pytest 9.2
-xdist 3.8 silently ignores those marks (it renames node ids, which pytest 9.2 no longer lets it do).
+xdist (`make test` runs `-n 3 --dist loadgroup`): every test under tests/fastep_ros/ runs ROS 2 nodes on a live
+DDS graph. They form two work units, each run one after another on one worker: the tests that drive robots on wall
+time and judge where they went (DRIVING_FILES: faults, stalled nodes; they wait for what they check and time
+nothing themselves), and the rest (lock step, fastep-launch, the recorder, replay: the timing tests). The third
+worker takes the tests that need no graph one by one. The graphs mostly wait for wall time, so two of them and
+the CPU-bound tests share 2 cores: `make test` took 3:43 of tests (1935) instead of 5:55 with one unit on -n 2.
+xdist hands out the largest units first, so the graph tests start at once. The units are chosen here by file,
+not with `xdist_group` marks: on pytest 9.2 xdist 3.8 silently ignores those marks (it renames node ids, which
+pytest 9.2 no longer lets it do).
 
 Signals: a node's main() (fastep_ros.common.node_main) ignores SIGINT and SIGTERM once it has stopped, as the
 process it is meant to be the main of should while it exits. Called in a test, that would stay in the worker
@@ -52,23 +54,31 @@ for _signum, _default in ((signal.SIGINT, signal.default_int_handler), (signal.S
 
 
 GRAPH_TESTS = Path(__file__).resolve().parent / 'fastep_ros'
-# Live-graph tests outside tests/fastep_ros/ that join its group: the robot harness runs real node processes too.
+# Live-graph tests outside tests/fastep_ros/ that join a group: the robot harness runs real node processes too.
 GRAPH_FILES = (Path(__file__).resolve().parent / 'fastep_testing' / 'test_robot_harness.py',)
-GRAPH_GROUP = 'ros_graph'
+# The graph tests that drive robots on wall time and judge where they went (faults, a stalled node): they wait for
+# what they check, with long timeouts, and need no timing of their own; their own group, beside the other one.
+DRIVING_FILES = tuple(GRAPH_TESTS / name for name in (
+    'test_faults.py', 'test_stale_inputs.py', 'test_single_robot.py', 'test_two_robots.py',
+    'test_diff_drive_graph.py', 'test_robots.py', 'test_diagnostics.py')) + GRAPH_FILES
+GRAPH_GROUP, DRIVING_GROUP = 'ros_graph', 'ros_driving'
 
 
 @pytest.hookimpl(optionalhook=True)  # an xdist hook: pytest without xdist never calls it
 def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
-    """--dist loadgroup, with every test of tests/fastep_ros/ (and of GRAPH_FILES) in one group."""
+    """--dist loadgroup, with the tests of tests/fastep_ros/ (and GRAPH_FILES) in two groups: DRIVING_FILES, and the
+    rest (lock step, launch, recorder, replay: the timing tests)."""
     if config.getvalue('dist') != 'loadgroup':
         return None
     from xdist.scheduler import LoadGroupScheduling
 
-    prefixes = (GRAPH_TESTS.relative_to(config.rootpath).as_posix() + '/',
-                *(path.relative_to(config.rootpath).as_posix() + '::' for path in GRAPH_FILES))
+    graph = GRAPH_TESTS.relative_to(config.rootpath).as_posix() + '/'
+    driving = tuple(path.relative_to(config.rootpath).as_posix() + '::' for path in DRIVING_FILES)
 
     class GraphGroupScheduling(LoadGroupScheduling):
         def _split_scope(self, nodeid: str) -> str:
-            return GRAPH_GROUP if nodeid.startswith(prefixes) else super()._split_scope(nodeid)
+            if nodeid.startswith(driving):
+                return DRIVING_GROUP
+            return GRAPH_GROUP if nodeid.startswith(graph) else super()._split_scope(nodeid)
 
     return GraphGroupScheduling(config, log)
