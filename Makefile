@@ -6,7 +6,7 @@ BIN := $(VENV)/bin
 STAMP := $(VENV)/.installed
 OUT ?= out
 
-.PHONY: demo test lint lint-counts fuzz venv bench clean
+.PHONY: demo test lint lint-counts fuzz venv bench clean docs
 
 venv: $(STAMP)
 
@@ -23,6 +23,12 @@ demo: $(STAMP)
 	ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST $(BIN)/fastep-launch case_study_1 --algorithm fastep --rtf 50 --seed 0 \
 		--record $(OUT)/demo.mcap --json $(OUT)/demo.json --plot $(OUT)/demo.png
 	$(BIN)/fastep-report $(OUT)/demo.mcap --out $(OUT)/demo_report
+
+# The documentation site in out/site: the reference pages generated from the code, then MkDocs with every warning
+# an error (mkdocs.yml). make test checks that the committed pages are current and that the site builds.
+docs: $(STAMP)
+	$(BIN)/python -m fastep_ros.reference docs/reference
+	$(BIN)/mkdocs build --strict
 
 # Linter and type checker first (ruff.toml; [mypy] in setup.cfg), so a lint or type error fails make test.
 # Then three workers: the tests on a live ROS graph in two units, each run one after another on one of them, the

@@ -42,3 +42,13 @@ def test_no_file_refers_outside_the_repository() -> None:
     found = [name for name in files if name.endswith(('.py', '.md', '.txt', '.cfg', '.toml', '.yaml', '.xml'))
              and name != 'tests/test_docs.py' and outside.search((ROOT / name).read_text(errors='replace'))]
     assert not found, found
+
+
+def test_the_documentation_site_builds_with_every_warning_an_error(tmp_path: Path) -> None:
+    """mkdocs.yml: every page of the navigation, the Python API from docstrings (mkdocstrings)."""
+    import sys
+    done = subprocess.run([sys.executable, '-m', 'mkdocs', 'build', '--strict', '--site-dir', str(tmp_path / 'site')],
+                          cwd=ROOT, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-3000:]
+    api = (tmp_path / 'site' / 'reference' / 'api' / 'index.html').read_text()
+    assert 'load_scenario' in api and 'simulate' in api

@@ -1,0 +1,202 @@
+"""The documentation's reference pages, generated from the code so that they cannot drift from it.
+
+- parameters.md: every node's parameters, from the descriptors the node declares (type, default, range or
+  constraints, read-only, description);
+- topics.md: every node's publishers and subscriptions as the node makes them (name, type, QoS);
+- commands.md: every command line's --help, from its argument parser.
+
+    python -m fastep_ros.reference docs/reference      (make docs; tests/fastep_ros/test_reference.py checks that
+                                                       the pages in the repository are what this writes)
+
+The nodes are built in a context of their own, on no DDS traffic (ROS_AUTOMATIC_DISCOVERY_RANGE is not needed:
+they are destroyed before they hear anything).
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+import math
+import os
+import sys
+from pathlib import Path
+from typing import Any, Callable, Sequence
+
+from rcl_interfaces.msg import ParameterDescriptor, ParameterType
+
+__all__ = ['NODES', 'COMMANDS', 'main', 'pages']
+
+ROBOT_NS = '/r1'
+NODES: tuple[tuple[str, str, str, str, dict[str, Any]], ...] = (
+    # (executable, module, class, namespace, parameters it needs to start: their defaults are shown, not these)
+    ('fastep-planner', 'fastep_ros.planner', 'PlannerNode', ROBOT_NS, {}),
+    ('fastep-plant', 'fastep_ros.plant', 'PlantNode', ROBOT_NS, {}),
+    ('fastep-map', 'fastep_ros.map_server', 'MapNode', '/', {'scenario': 'crossing_movers'}),
+    ('fastep-clock', 'fastep_ros.clock', 'ClockNode', '/', {}),
+    ('fastep-record', 'fastep_ros.recorder', 'RecorderNode', '/', {'output': '{tmp}/reference.mcap'}),
+)
+DEFAULTS = {('fastep-map', 'scenario'): '', ('fastep-record', 'output'): ''}   # what the nodes declare
+COMMANDS: tuple[tuple[str, str, str], ...] = (
+    # (command, module, function taking argv)
+    ('fastep-sim', 'msg_tools.sim_cli', 'main'),
+    ('fastep-bench', 'msg_tools.bench_cli', 'main'),
+    ('fastep-tune', 'fastep_core.tuning', 'main'),
+    ('fastep-launch', 'fastep_ros.launch', 'main'),
+    ('fastep-report', 'msg_tools.report', 'main'),
+    ('fastep-replay', 'fastep_ros.replay', 'main'),
+    ('fastep-recover', 'msg_tools.recover', 'main'),
+)
+TYPE_NAMES = {ParameterType.PARAMETER_BOOL: 'bool', ParameterType.PARAMETER_INTEGER: 'int',
+              ParameterType.PARAMETER_DOUBLE: 'double', ParameterType.PARAMETER_STRING: 'string',
+              ParameterType.PARAMETER_BYTE_ARRAY: 'byte[]', ParameterType.PARAMETER_BOOL_ARRAY: 'bool[]',
+              ParameterType.PARAMETER_INTEGER_ARRAY: 'int[]', ParameterType.PARAMETER_DOUBLE_ARRAY: 'double[]',
+              ParameterType.PARAMETER_STRING_ARRAY: 'string[]'}
+HELP_WIDTH = '110'   # COLUMNS for argparse: the same wrapping on every terminal
+SKIPPED = ('use_sim_time', 'start_type_description_service')   # rclpy's own, on every node
+
+
+def _cell(text: str) -> str:
+    return ' '.join(str(text).split()).replace('|', '\\|')
+
+
+def _number(value: float) -> str:
+    return '-inf' if value == -math.inf else 'inf' if value >= sys.float_info.max or value == math.inf else f'{value:g}'
+
+
+def _limits(d: ParameterDescriptor) -> str:
+    if d.floating_point_range:
+        r = d.floating_point_range[0]
+        return f'[{_number(r.from_value)}, {_number(r.to_value)}]'
+    if d.integer_range:
+        r = d.integer_range[0]
+        return f'[{r.from_value}, {r.to_value}]'
+    return d.additional_constraints
+
+
+def _value(value: Any) -> str:
+    if isinstance(value, str):
+        return f'`{value!r}`'
+    if isinstance(value, (list, tuple)) or type(value).__name__ == 'array':
+        return f'`{list(value)}`'
+    return f'`{value}`'
+
+
+def _node(module: str, cls: str, namespace: str, params: dict[str, Any], context: Any) -> Any:
+    import importlib
+
+    from rclpy.parameter import Parameter
+    node_class = getattr(importlib.import_module(module), cls)
+    return node_class(context=context, namespace=namespace,
+                      parameter_overrides=[Parameter(k, value=v) for k, v in params.items()])
+
+
+def _shown_name(topic: str) -> str:
+    return '`<ns>' + topic[len(ROBOT_NS):] + '`' if topic.startswith(ROBOT_NS + '/') else f'`{topic}`'
+
+
+def _qos(profile: Any) -> str:
+    reliability = 'reliable' if profile.reliability.name == 'RELIABLE' else profile.reliability.name.lower()
+    durability = 'transient-local' if profile.durability.name == 'TRANSIENT_LOCAL' else profile.durability.name.lower()
+    return f'{reliability}, {durability}, depth {profile.depth}'
+
+
+def _type_name(msg_type: Any) -> str:
+    module = msg_type.__module__.split('.')
+    return f'{module[0]}/{module[1]}/{msg_type.__name__}'
+
+
+def node_pages(context: Any, tmp: str) -> tuple[str, str]:
+    """(parameters.md, topics.md) of every node of NODES; `tmp`: a folder for what they write (the recorder)."""
+    params = ['# Node parameters', '',
+              'Generated from the descriptors each node declares (`python -m fastep_ros.reference`); set them with '
+              '`-p name:=value` or `--params-file`. Read-only ones are fixed when the node starts; the others '
+              'change while it runs (docs/parameters.md says how each is applied). A range `[a, b]` is enforced on '
+              'every set.', '']
+    topics = ['# Topics', '',
+              'Generated from the publishers and subscriptions each node makes (`python -m fastep_ros.reference`), '
+              'for a robot in namespace `<ns>` (names are relative, so `-r __ns:=/r1` puts them under `/r1`). '
+              'The planner subscribes to other robots\' `<other>/odom` and `<other>/footprint` as it finds them on '
+              'the graph (docs/robots_and_goals.md).', '']
+    for executable, module, cls, namespace, needed in NODES:
+        needed = {k: v.format(tmp=tmp) if isinstance(v, str) else v for k, v in needed.items()}
+        node = _node(module, cls, namespace, needed, context)
+        try:
+            names = sorted(n for n in node.list_parameters([], 0).names if n not in SKIPPED)
+            params += [f'## {executable}', '', '| parameter | type | default | range | read-only | description |',
+                       '|---|---|---|---|---|---|']
+            for name, descriptor in zip(names, node.describe_parameters(names)):
+                default = DEFAULTS.get((executable, name), node.get_parameter(name).value)
+                params.append(f'| `{name}` | {TYPE_NAMES.get(descriptor.type, "?")} | {_cell(_value(default))} | '
+                              f'{_cell(_limits(descriptor))} | {"yes" if descriptor.read_only else ""} | '
+                              f'{_cell(descriptor.description)} |')
+            params.append('')
+            rows = [(_shown_name(p.topic_name), 'publishes', _type_name(p.msg_type), _qos(p.qos_profile))
+                    for p in node.publishers]
+            rows += [(_shown_name(s.topic_name), 'subscribes', _type_name(s.msg_type), _qos(s.qos_profile))
+                     for s in node.subscriptions]
+            rows = sorted({r for r in rows if not r[0].startswith(('`/parameter_events', '`/rosout'))})
+            topics += [f'## {executable}', '', '| topic | | type | QoS |', '|---|---|---|---|',
+                       *(f'| {name} | {kind} | {kind_type} | {qos} |' for name, kind, kind_type, qos in rows), '']
+        finally:
+            node.destroy_node()
+    return '\n'.join(params), '\n'.join(topics)
+
+
+def _help(module: str, function: str) -> str:
+    import importlib
+    main: Callable[[Sequence[str]], int] = getattr(importlib.import_module(module), function)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        try:
+            main(['--help'])
+        except SystemExit:
+            pass
+    return out.getvalue().rstrip()
+
+
+def commands_page() -> str:
+    lines = ['# Command lines', '',
+             'Generated from each command\'s argument parser (`python -m fastep_ros.reference`). Bad input is one '
+             'line on stderr and exit 2; Ctrl-C is exit 130 (fastep-launch: 1, after stopping every node).', '']
+    before = os.environ.get('COLUMNS')
+    os.environ['COLUMNS'] = HELP_WIDTH
+    try:
+        for command, module, function in COMMANDS:
+            lines += [f'## {command}', '', '```text', _help(module, function), '```', '']
+    finally:
+        if before is None:
+            del os.environ['COLUMNS']
+        else:
+            os.environ['COLUMNS'] = before
+    return '\n'.join(lines)
+
+
+def pages() -> dict[str, str]:
+    """Every generated page, by file name."""
+    import tempfile
+
+    import rclpy
+    from rclpy.context import Context
+    from rclpy.signals import SignalHandlerOptions
+    context = Context()
+    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
+    try:
+        with tempfile.TemporaryDirectory() as tmp:
+            params, topics = node_pages(context, tmp)
+    finally:
+        rclpy.try_shutdown(context=context)
+    return {'parameters.md': params, 'topics.md': topics, 'commands.md': commands_page()}
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = list(sys.argv[1:] if argv is None else argv)
+    folder = Path(args[0] if args else 'docs/reference')
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, text in pages().items():
+        (folder / name).write_text(text + '\n')
+        print(f'wrote {folder / name}')
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
