@@ -1,7 +1,8 @@
 """The fastep ROS 2 interface, defined once: topic names, message types, QoS and the recording's metadata.
 
-This module is the contract of the ROS 2 interface (docs/guide.md, "The ROS 2 graph"); every node (fastep_ros), the launcher, the
-recorder, fastep-sim's recordings (sim_mcap), replay and fastep-report take names, types and QoS from here.
+This module is the contract of the ROS 2 interface (docs/guide.md, "The ROS 2 graph"); every node (fastep_ros),
+the launcher, the recorder, fastep-sim's recordings (sim_mcap), replay and fastep-report take names, types and QoS
+from here.
 
 Topics: per robot, in the robot's namespace of one level (`/r1/odom`; nodes use the relative names below and
 are started with `__ns:=/r1`), and three shared ones in the root namespace (/obstacles, /map, /clock).

@@ -118,7 +118,8 @@ def track_name(track_id: int) -> str:
 
 
 def heading(model: str, state: Sequence[float] | FloatArray) -> float:
-    """The scanner's heading (docs/scenarios.md, sensor): a point mass looks along +x; the others along theta (state[2])."""
+    """The scanner's heading (docs/scenarios.md, sensor): a point mass looks along +x; the others along theta
+    (state[2])."""
     return 0.0 if model == 'point_mass' else float(state[2])
 
 

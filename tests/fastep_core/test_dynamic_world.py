@@ -1,4 +1,5 @@
-"""Tests for fastep_core.dynamic_world: movers exactly as the formula of docs/scenarios.md says, and the planner's map."""
+"""Tests for fastep_core.dynamic_world: movers exactly as the formula of docs/scenarios.md says, and the planner's
+map."""
 
 from __future__ import annotations
 

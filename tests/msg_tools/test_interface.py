@@ -13,7 +13,8 @@ from fastep_core.scenario import load_scenario
 from msg_tools import interface
 from msg_tools.ros2_profile import message_class, qos_dict
 
-# The ROS 2 interface (docs/guide.md, "The ROS 2 graph"): the contract, written out again on purpose so a change to the module shows here.
+# The ROS 2 interface (docs/guide.md, "The ROS 2 graph"): the contract,
+# written out again on purpose so a change to the module shows here.
 DESIGN = {
     'odom': 'nav_msgs/msg/Odometry', 'cmd_vel': 'geometry_msgs/msg/Twist', 'goal_pose': 'geometry_msgs/msg/PoseStamped',
     'waypoint': 'geometry_msgs/msg/PoseStamped', 'plan': 'nav_msgs/msg/Path', 'cost': 'std_msgs/msg/Float64',
