@@ -3,7 +3,8 @@
     fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco|optimal|dwa] [--seed N]
                   [--json OUT] [--plot OUT.png] [--no-clock | --realtime] [--layout node|robot|graph|cores]
                   [--executor events|single] [--step-iterations K]
-                  [--foxglove PORT] [--no-progress] [--verbose]   (fastep_ros.foxglove_bridge, fastep_ros.progress)
+                  [--foxglove PORT] [--no-progress] [--verbose]
+                  (fastep_ros.foxglove_bridge, fastep_ros.launch_progress)
 
 Starts, in the processes --layout says (fastep_ros.layouts: each node in its own, `python -m fastep_ros.<node>
 --ros-args ...`; a robot's plant and planner in one fastep-container; every node in one; or one per CPU core;
@@ -47,13 +48,13 @@ from fastep_core.scenario import RobotSpec, Scenario, builtin_names, load_scenar
 from fastep_ros.dds_profile import PROFILE_ENV, use_discovery_profile
 from fastep_ros.errors import GraphConflict, LaunchError
 from fastep_ros.executors import DEFAULT_EXECUTOR, EXECUTOR_ENV, EXECUTORS
+from fastep_ros.launch_progress import Progress
 from fastep_ros.launch_report import report
 from fastep_ros.layouts import GRAPH_ROBOTS, LAYOUTS, Member, default_layout, usable_cores
 from fastep_ros.layouts import command as layout_command
 from fastep_ros.limits import RATE_RANGE, RTF_RANGE, graph_problem, robot_name_problem
 from fastep_ros.monitor import STOP, Monitor, RobotLive, watched_topics
 from fastep_ros.processes import Processes, ros_value
-from fastep_ros.progress import Progress
 
 __all__ = ['main']
 

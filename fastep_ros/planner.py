@@ -122,9 +122,9 @@ from fastep_ros.common import (
     shown,
 )
 from fastep_ros.diagnostics import Diagnostics
-from fastep_ros.frames import LOCALIZATION_QOS
 from fastep_ros.goals import GoalSubscription
 from fastep_ros.latched import LatchedSubscription
+from fastep_ros.live_tf import LOCALIZATION_QOS
 from fastep_ros.lock_step import LockStep
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.perception import ScanPerception

@@ -14,7 +14,7 @@ odometry twist are odom-frame velocities too.
 A simulated robot's odometry does not drift: map -> odom is the identity, published on /tf_static (unless
 publish_map_to_odom is false, e.g. when a localization node publishes it); odom -> base_link goes on /tf with
 every odometry message (and odom -> `<ns>/trailer_link`). TF is published only where tf2_msgs is installed (a
-full ROS install; the log says so once when it is not): fastep_ros.frames.
+full ROS install; the log says so once when it is not): fastep_ros.live_tf.
 
 Time: the model is integrated in fixed steps of 1 / rate_hz seconds of the node's clock (simulated time with
 use_sim_time, wall time otherwise) up to "now", on a timer and before each new command takes effect (a
@@ -79,8 +79,8 @@ from fastep_ros.common import (
 )
 from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.executors import MessageInfoCallback
-from fastep_ros.frames import TfBroadcaster
 from fastep_ros.lifecycle import ManagedNode
+from fastep_ros.live_tf import TfBroadcaster
 from fastep_ros.lock_step import LOCK_WAIT, STAMP_EPS
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.sim_time import SimTimeWatch

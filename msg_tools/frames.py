@@ -19,7 +19,7 @@ Frames (REP-105), per robot namespace `<ns>` (names never start with a slash; in
 TF in recordings: tf2_msgs is not in the PyPI ROS wheels, so no rclpy class exists for TFMessage here. The
 recordings (fastep-record, fastep-sim --mcap) serialise it with rosbags' typestore (tf_message_cdr) and take its
 schema text from there too (msg_tools.ros2_profile). Nodes publish TF live only where tf2_msgs is importable
-(fastep_ros.frames).
+(fastep_ros.live_tf).
 
 Poses are (x, y, yaw) tuples; angles in radians, wrapped to (-pi, pi].
 """

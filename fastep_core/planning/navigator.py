@@ -15,7 +15,7 @@ FAStep-Kinematic (`FAStepKinematic.choose_target`, at the end of this module):
 Other algorithms (planning/algorithms.py) differ only in `choose_target`. The safety nets, each in its own
 module: the guard (guard.py); 'no valid path' for a goal nothing reaches (exact_path.py); the progress checker
 and trap detector (progress.py); the way out of a trap (escape.py) or, for a robot that cannot turn in place,
-a manoeuvre (manoeuvring.py); the hold breaker and backing up when the guard keeps a robot stopped
+a manoeuvre (manoeuvre_driver.py); the hold breaker and backing up when the guard keeps a robot stopped
 (recovery.py). Detection (2.), with the answers it may reuse, is detection.py; a step's problem, swarm run and
 fitness are step.py.
 """
@@ -36,7 +36,7 @@ from fastep_core.planning.detection import RunDetector
 from fastep_core.planning.escape import ESCAPING, TrapEscape
 from fastep_core.planning.exact_path import BLOCKED_RETRY, blocked_reason, no_path_reason, parked_world, robot_path
 from fastep_core.planning.guard import Guard
-from fastep_core.planning.manoeuvring import ManoeuvreDriver
+from fastep_core.planning.manoeuvre_driver import ManoeuvreDriver
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, OtherRobots, robot_arrays, robots_on_run
 from fastep_core.planning.params import PlannerParams
@@ -625,7 +625,7 @@ class Navigator:
 
     # ------------------------------------------------ recoveries
     def start_manoeuvre(self, state: FloatArray, t: float, others: Sequence[OtherRobot]) -> bool:
-        """Search a manoeuvre (planning/manoeuvring.py) round the obstacles and parked robots; True if found."""
+        """Search a manoeuvre (planning/manoeuvre_driver.py) round the obstacles and parked robots; True if found."""
         assert self.goal is not None and self.manoeuvring is not None
         world = parked_world(self.world, others, self.goal, self.radius, self.params) or self.world
         if not self.manoeuvring.plan(world, state, self.goal, t):

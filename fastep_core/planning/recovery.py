@@ -7,7 +7,7 @@
   moving restarted both timers every other tick, and two differential-drive robots face to face turned and
   twitched for minutes without either backing up (docs/clutter.md, "Differential-drive bases").
 - Stuck: stopped HOLD_BEFORE_STEP seconds at a wall, or three times that at a robot (the hold breaker's step
-  has had its chance). A robot that cannot turn in place first tries a manoeuvre (planning/manoeuvring.py);
+  has had its chance). A robot that cannot turn in place first tries a manoeuvre (planning/manoeuvre_driver.py);
   otherwise, or when none is found, it backs up for BACKUP_TIME seconds (Nav2's backup recovery):
   a holonomic robot straight away from what is nearest; a steered one the move (back or forward, straight or at
   full lock) that gains the most room without folding its trailer. The guard still checks every tick of it,

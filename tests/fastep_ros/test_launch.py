@@ -300,7 +300,7 @@ def test_nodes_refuse_bad_parameters_with_one_line(tmp_path: Path, module: str, 
 
 
 def test_a_trapped_tractor_trailer_manoeuvres_out_on_the_live_graph(tmp_path: Path) -> None:
-    # The navigator's manoeuvre (planning/manoeuvre.py) replayed through the plant over DDS: commands a tick
+    # The navigator's manoeuvre (planning/manoeuvre_search.py) replayed through the plant over DDS: commands a tick
     # late on a real graph must not throw it off its planned states for good.
     import yaml
 

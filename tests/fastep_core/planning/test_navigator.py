@@ -6,8 +6,8 @@ import pytest
 from fastep_core.errors import GoalError
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import TractorTrailer
-from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator, manoeuvring
-from fastep_core.planning.manoeuvre import Manoeuvre
+from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator, manoeuvre_driver
+from fastep_core.planning.manoeuvre_search import Manoeuvre
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World
 
@@ -149,7 +149,7 @@ def test_a_manoeuvre_that_did_not_help_is_followed_by_one_all_the_way_to_the_goa
         s = np.asarray(state, dtype=float)
         return Manoeuvre(np.zeros((1, 2)), np.array([s, s]), 1, 0, 1)
 
-    monkeypatch.setattr(manoeuvring, 'plan_manoeuvre', fake_plan)
+    monkeypatch.setattr(manoeuvre_driver, 'plan_manoeuvre', fake_plan)
     spec = RobotSpec('r1', 'tractor_trailer', (5.0, 5.0, 0.0, 0.0), (45.0, 5.0), 0.5)
     nav = make_navigator('fastep', spec, 0.5, World.from_obstacles([0, 0, 50, 50], []), PlannerParams(), 0)
     assert isinstance(nav.model, TractorTrailer)

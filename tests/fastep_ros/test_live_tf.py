@@ -1,4 +1,4 @@
-"""REP-105 frames on the nodes (fastep_ros.frames and the frame hooks of the plant and the planner), built in this
+"""REP-105 frames on the nodes (fastep_ros.live_tf and the frame hooks of the plant and the planner), built in this
 process with their callbacks called directly."""
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from geometry_msgs.msg import PoseWithCovarianceStamped, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
 
-from fastep_ros.frames import TfBroadcaster
+from fastep_ros.live_tf import TfBroadcaster
 from fastep_ros.planner import PlannerNode
 from fastep_ros.plant import PlantNode
 from fastep_testing.published import keep_published

@@ -1,10 +1,10 @@
-"""fastep-launch's progress display (fastep_ros.progress), driven by a fake wall clock: no ROS, no waiting."""
+"""fastep-launch's progress display (fastep_ros.launch_progress), driven by a fake wall clock: no ROS, no waiting."""
 
 from __future__ import annotations
 
 import io
 
-from fastep_ros.progress import Progress
+from fastep_ros.launch_progress import Progress
 
 
 class FakeClock:

@@ -1,13 +1,13 @@
-"""Driving a manoeuvre (planning/manoeuvring.py): replay, drift, holds and retries."""
+"""Driving a manoeuvre (planning/manoeuvre_driver.py): replay, drift, holds and retries."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from fastep_core.kinematics import TractorTrailer
-from fastep_core.planning import PlannerParams, manoeuvring
-from fastep_core.planning.manoeuvre import Manoeuvre
-from fastep_core.planning.manoeuvring import OFF_MANOEUVRE, RETRY_MANOEUVRE, ManoeuvreDriver
+from fastep_core.planning import PlannerParams, manoeuvre_driver
+from fastep_core.planning.manoeuvre_driver import OFF_MANOEUVRE, RETRY_MANOEUVRE, ManoeuvreDriver
+from fastep_core.planning.manoeuvre_search import Manoeuvre
 from fastep_core.world import World
 
 WORLD = World.from_obstacles([0, 0, 50, 50], [])
@@ -21,7 +21,7 @@ def two_ticks(*_args, **_kwargs):
 
 
 def test_a_manoeuvre_is_replayed_tick_by_tick_and_ends_where_it_ends(monkeypatch):
-    monkeypatch.setattr(manoeuvring, 'plan_manoeuvre', two_ticks)
+    monkeypatch.setattr(manoeuvre_driver, 'plan_manoeuvre', two_ticks)
     m = ManoeuvreDriver(TractorTrailer(), 0.5, PlannerParams())
     assert m.plan(WORLD, START, GOAL, 0.0) and m.count == 1 and 'manoeuvring: 1 arcs' in m.status
 
@@ -37,7 +37,7 @@ def test_a_manoeuvre_is_replayed_tick_by_tick_and_ends_where_it_ends(monkeypatch
 
 
 def test_a_robot_off_its_manoeuvre_or_held_three_seconds_searches_again(monkeypatch):
-    monkeypatch.setattr(manoeuvring, 'plan_manoeuvre', two_ticks)
+    monkeypatch.setattr(manoeuvre_driver, 'plan_manoeuvre', two_ticks)
     m = ManoeuvreDriver(TractorTrailer(), 0.5, PlannerParams())
     m.plan(WORLD, START, GOAL, 0.0)
     asked = []
@@ -57,7 +57,7 @@ def test_a_robot_off_its_manoeuvre_or_held_three_seconds_searches_again(monkeypa
 
 def test_no_search_for_a_while_after_one_found_nothing(monkeypatch):
     calls = []
-    monkeypatch.setattr(manoeuvring, 'plan_manoeuvre', lambda *a, **k: calls.append(1))
+    monkeypatch.setattr(manoeuvre_driver, 'plan_manoeuvre', lambda *a, **k: calls.append(1))
     m = ManoeuvreDriver(TractorTrailer(), 0.5, PlannerParams())
     assert not m.plan(WORLD, START, GOAL, 10.0) and not m.plan(WORLD, START, GOAL, 10.0 + RETRY_MANOEUVRE - 0.1)
     assert len(calls) == 1

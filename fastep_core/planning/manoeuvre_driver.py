@@ -2,7 +2,7 @@
 
 A forward-steered vehicle cannot follow a point path out of a tight corner. A trapped tractor-trailer, or one
 the guard keeps stopped (planning/recovery.py), drives a manoeuvre instead: a hybrid-A* search over its own
-forward and reverse arcs (planning/manoeuvre.py) to where the goal is in clear sight ahead. Its commands are
+forward and reverse arcs (planning/manoeuvre_search.py) to where the goal is in clear sight ahead. Its commands are
 replayed open loop while the robot is where the manoeuvre expects it; off by more than OFF_MANOEUVRE (a late
 command on a real graph) or held by the guard for 3 s (a robot in the way), it is searched again from where
 the robot is. A failed search is not repeated for RETRY_MANOEUVRE seconds.
@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 from fastep_core.errors import ParameterError
 from fastep_core.kinematics.model import RobotModel
 from fastep_core.kinematics.tractor_trailer import TractorTrailer, wrap_angle
-from fastep_core.planning.manoeuvre import Manoeuvre, plan_manoeuvre
+from fastep_core.planning.manoeuvre_search import Manoeuvre, plan_manoeuvre
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.recovery import HOLD_BEFORE_STEP
 from fastep_core.world import World

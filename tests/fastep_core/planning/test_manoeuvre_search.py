@@ -11,8 +11,8 @@ import pytest
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import TractorTrailer
 from fastep_core.kinematics.tractor_trailer import hitch_angle, wrap_angle
-from fastep_core.planning import manoeuvre
-from fastep_core.planning.manoeuvre import DistanceField, plan_manoeuvre
+from fastep_core.planning import manoeuvre_search
+from fastep_core.planning.manoeuvre_search import DistanceField, plan_manoeuvre
 from fastep_core.world import World
 
 MODEL = TractorTrailer(1.0, 1.0, 0.0)
@@ -85,8 +85,8 @@ def test_the_replay_may_fold_the_trailer_only_hitch_slack_past_the_limit(monkeyp
     start, goal = [2.0, 9.0, 3.0, 3.25], [45.0, 45.0]
     found = plan_manoeuvre(MODEL, world, start, goal, 0.65, DT, max_expansions=1500)
     assert found is not None
-    assert 1.0 < max(abs(hitch_angle(s)) for s in found.states) <= 1.0 + manoeuvre.HITCH_SLACK
-    monkeypatch.setattr(manoeuvre, 'HITCH_SLACK', 0.0)
+    assert 1.0 < max(abs(hitch_angle(s)) for s in found.states) <= 1.0 + manoeuvre_search.HITCH_SLACK
+    monkeypatch.setattr(manoeuvre_search, 'HITCH_SLACK', 0.0)
     assert plan_manoeuvre(MODEL, world, start, goal, 0.65, DT, max_expansions=1500) is None
 
 
