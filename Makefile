@@ -10,11 +10,13 @@ OUT ?= out
 
 venv: $(STAMP)
 
-$(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml
+# nav2_msgs and tf2_msgs are built from their definitions (interfaces/build.sh): the registry has no wheel of them.
+$(STAMP): requirements.txt requirements-test.txt setup.py setup.cfg package.xml $(wildcard interfaces/*/* interfaces/*/*/* interfaces/*.*)
 	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 	$(BIN)/python -m pip install --quiet -r requirements-test.txt
 	$(BIN)/python -m pip install --quiet --no-build-isolation -e '.[ros-wheels,test]'
+	sh interfaces/build.sh $(VENV)
 	touch $(STAMP)
 
 # The two-robot case study on the live ROS 2 graph (separate node processes over DDS, simulated clock).

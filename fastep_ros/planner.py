@@ -126,6 +126,7 @@ from fastep_ros.goals import GoalSubscription
 from fastep_ros.latched import LatchedSubscription
 from fastep_ros.live_tf import LOCALIZATION_QOS
 from fastep_ros.lock_step import LockStep
+from fastep_ros.navigate_actions import NavigateActions
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.perception import ScanPerception
 from fastep_ros.planner_inputs import Body, PlannerInputs
@@ -286,6 +287,7 @@ class PlannerNode(PlannerInputs):
         self.world: World | None = None
         self.navigator: Navigator | None = None
         self.pending_goal: PoseStamped | None = None
+        self.goal_msg: PoseStamped | None = None   # the message of the goal driven to (navigate_actions)
         self.goal: tuple[float, float] | None = None
         self.odom: frames.StampedPose | None = None
         self.odom_received = -math.inf
@@ -381,6 +383,8 @@ class PlannerNode(PlannerInputs):
         self.dynamic = DynamicParameters(self, (*PlannerParams.names(), *TUNABLE), self.apply_parameters)
         self.get_logger().info(f'{self.algorithm} planner for a {self.model} of radius {self.radius:g} m, '
                                f'control at {self.control_rate_hz:g} Hz')
+        # Nav2's navigate_to_pose and navigate_through_poses (fastep_ros.navigate_actions), where nav2_msgs is.
+        self.actions = NavigateActions.make(self)
         self.start_lifecycle()   # autostart: active at once (fastep_ros.lifecycle)
 
     # ------------------------------------------------------------------------------------------- lifecycle
@@ -510,20 +514,16 @@ class PlannerNode(PlannerInputs):
             self.goal_info(f'goal ({point[0]:g}, {point[1]:g}) received; waiting for the world')
             self.publish_status()
             return
-        frame = msg.header.frame_id
         nav = self.navigator
         if self.goal is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING) and \
                 tuple(float(v) for v in point) == self.goal and same_heading(heading, nav.goal_heading):
-            return   # the goal driven to already (a latched goal seen twice, or sent again): nothing changes
+            self.goal_msg = msg   # the goal driven to already (a latched goal seen twice, or sent again)
+            return
         try:
-            if frame not in ('', 'map', self.frame_id):
-                raise GoalError(f'goal frame {shown(frame)} is not {self.frame_id!r} (no transforms here)')
-            if self.occupied is not None and self.occupied(point):
-                # Inside an occupied region of /map, far from its outline: the walls alone would not say so.
-                raise GoalError(f'goal ({point[0]:g}, {point[1]:g}) is occupied: an occupied cell of /map')
-            if isinstance(heading, str):
-                raise GoalError(heading)
-            self.navigator.set_goal(point, self.now(), heading)
+            problem = self.goal_problem(msg)
+            if problem:
+                raise GoalError(problem)
+            self.navigator.set_goal(point, self.now(), None if isinstance(heading, str) else heading)
         except GoalError as exc:
             self.goal_refused = f'goal ({point[0]:g}, {point[1]:g}) refused: {exc}'
             self.goal_warning(self.goal_refused)
@@ -534,11 +534,44 @@ class PlannerNode(PlannerInputs):
         else:
             self.goal_refused = ''
             self.goal = (float(point[0]), float(point[1]))
+            self.goal_msg = msg
             if self.planning is not None:
                 self.planning.drop_plan()   # no more driving toward the last goal's target: brake until the new plan
             self.goal_info(f'new goal ({point[0]:g}, {point[1]:g})')
         self.publish_plan(force=True)
         self.publish_status()
+
+    def goal_problem(self, msg: PoseStamped) -> str:
+        """Why a goal cannot be driven to ('' when it can, as far as the world known now says): its frame, an
+        occupied cell of /map, a heading that is not finite, a point outside the map, inside an obstacle or not
+        finite."""
+        point = convert.pose_stamped_to_point(msg)
+        frame = msg.header.frame_id
+        heading = self.goal_heading_of(msg)
+        if frame not in ('', 'map', self.frame_id):
+            return f'goal frame {shown(frame)} is not {self.frame_id!r} (no transforms here)'
+        if isinstance(heading, str):
+            return heading
+        nav = self.navigator
+        try:
+            if nav is not None:
+                nav.world.check_point(point, nav.radius)
+        except GoalError as exc:
+            return str(exc)
+        if self.occupied is not None and self.occupied(point):
+            # Inside an occupied region of /map, far from its outline: the walls alone would not say so.
+            return f'goal ({point[0]:g}, {point[1]:g}) is occupied: an occupied cell of /map'
+        return ''
+
+    def drop_goal(self, reason: str) -> None:
+        """Forget the goal (a cancel): the robot brakes to a stop within its limits, status idle with `reason`."""
+        def drop() -> None:
+            if self.navigator is not None:
+                self.navigator.cancel(reason)
+            if self.planning is not None:
+                self.planning.drop_plan()
+        self.goal, self.goal_msg, self.pending_goal = None, None, None
+        self.change(drop)
 
     def goal_heading_of(self, msg: PoseStamped) -> float | str | None:
         """The heading a goal asks a robot that turns in place to end in (its orientation's yaw; None for other
@@ -561,6 +594,9 @@ class PlannerNode(PlannerInputs):
         self.robots.take()
 
     def destroy_node(self) -> None:
+        actions = getattr(self, 'actions', None)   # not made when the node failed to start
+        if actions is not None:
+            actions.destroy()
         if self.planning is not None:
             self.planning.stop()
         self.robots.destroy()
@@ -644,6 +680,8 @@ class PlannerNode(PlannerInputs):
                 command = self.navigate(nav, t, state, self.other_robots(t))
         self.publish_command(command, at)
         self.last_command = command
+        if self.actions is not None:
+            self.actions.check()
         if nav is not None:
             self.cost_pub.publish(cdr.float64_cdr(float(nav.cost)))
             self.publish_target()
@@ -810,6 +848,8 @@ class PlannerNode(PlannerInputs):
         self.goal_sub.look()
         for sub in self.world_subs:
             sub.look()
+        if self.actions is not None:
+            self.actions.check()   # also while no control tick runs (inactive: an action goal is aborted)
         self.take_others()   # while simulated time holds (no control ticks), `others` in the status still fills
         self.lock_try()      # an input waited for too long is given up on
         # A launcher waits for cmd_vel's readers (the plant, the clock) before it starts the run: told at once.

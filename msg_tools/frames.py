@@ -278,9 +278,10 @@ def tf_message_cdr(transforms: Sequence[TransformStamped]) -> bytes:
 
 
 def tf_message_class() -> type | None:
-    """rclpy's tf2_msgs/msg/TFMessage where tf2_msgs is installed (a full ROS install), else None."""
+    """rclpy's tf2_msgs/msg/TFMessage where tf2_msgs is installed (built by interfaces/build.sh, or a ROS install), else
+    None."""
     try:
-        from tf2_msgs.msg import TFMessage  # type: ignore[import-not-found]  # not in the PyPI ROS wheels
+        from tf2_msgs.msg import TFMessage
     except ImportError:
         return None
     cls: type = TFMessage

@@ -191,6 +191,12 @@ class Navigator:
         if self.manoeuvring is not None:
             self.manoeuvring.reset()
 
+    def cancel(self, reason: str = 'goal canceled') -> None:
+        """Drop the goal: idle, no target (the controller's caller brakes to a stop)."""
+        self.goal, self.goal_heading = None, None
+        self.mode, self.reason = Mode.IDLE, reason
+        self.waypoint, self._target, self.cost = None, None, 0.0
+
     def fail(self, reason: str) -> None:
         self.mode, self.reason = Mode.FAILED, reason
         self.waypoint, self._target, self.cost = None, None, 0.0

@@ -1,0 +1,233 @@
+"""Nav2's navigation actions, served by the planner: `navigate_to_pose` and `navigate_through_poses`.
+
+nav2_msgs/action/NavigateToPose and NavigateThroughPoses with Nav2 Jazzy's definitions (interfaces/nav2_msgs, or
+the distribution's nav2_msgs on a ROS install), in the planner's namespace, so that a client written for Nav2
+(nav2_simple_commander's BasicNavigator: goToPose, goThroughPoses, isTaskComplete, getFeedback, cancelTask,
+getResult; RViz's Nav2 panel) commands a fastep robot unchanged:
+
+- a goal is accepted only while the node is active (lifecycle), else rejected, as Nav2 does;
+- a goal accepted preempts the one under way, whose result is ABORTED with "preempted by a new goal";
+- feedback every FEEDBACK_PERIOD wall seconds: the map pose, the time since the goal was accepted, the time
+  remaining at the speed driven (max_speed while slower), the recoveries (trap escapes, manoeuvres), the
+  distance remaining along the plan (to the waypoint driven to, then to the goal, then through the poses left);
+- the result: SUCCEEDED on arrival at the last pose; ABORTED with one of Nav2's error codes (ERROR_CODES) and
+  the planner's reason; CANCELED on a cancel: the robot brakes to a stop within its limits and the goal is
+  dropped.
+
+A goal on the `goal_pose` topic goes the same way (the planner's take_goal); one that comes while an action goal
+is under way preempts it. Without nav2_msgs the planner runs without these servers and says so once.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any, Callable
+
+from geometry_msgs.msg import PoseStamped
+
+if TYPE_CHECKING:
+    from fastep_ros.planner import PlannerNode
+
+__all__ = ['ERROR_CODES', 'FEEDBACK_PERIOD', 'NavigateActions', 'error_code']
+
+FEEDBACK_PERIOD = 0.1   # wall seconds between feedback messages (Nav2's navigator sends one per tree tick)
+
+# Nav2 Jazzy's error codes (nav2_msgs ComputePathToPose and FollowPath), by what the planner's reason says.
+ERROR_CODES: tuple[tuple[str, int], ...] = (
+    ('no valid path', 208),            # ComputePathToPose.NO_VALID_PATH
+    ('occupied', 206),                 # GOAL_OCCUPIED
+    ('inside an obstacle', 206),
+    ('outside the map', 204),          # GOAL_OUTSIDE_MAP
+    ('frame', 202),                    # TF_ERROR
+    ('failed to make progress', 105),  # FollowPath.FAILED_TO_MAKE_PROGRESS
+)
+UNKNOWN_PLANNING = 200   # ComputePathToPose.UNKNOWN: a goal the planner refused for another reason
+UNKNOWN_DRIVING = 100    # FollowPath.UNKNOWN: stopped on the way for another reason
+
+
+def error_code(reason: str, refused: bool = False) -> int:
+    """Nav2's error code for a planner's failure reason."""
+    for words, code in ERROR_CODES:
+        if words in reason:
+            return code
+    return UNKNOWN_PLANNING if refused else UNKNOWN_DRIVING
+
+
+@dataclass
+class Run:
+    """One action goal under way: its poses, the one driven to, and how it ended."""
+
+    handle: Any
+    poses: list[PoseStamped]
+    through: bool                      # navigate_through_poses (feedback counts the poses left)
+    accepted: float                    # wall time
+    index: int = 0
+    sent: PoseStamped | None = None    # the pose handed to the planner (identity: the planner took it or not)
+    taken: bool = False                # the planner has made `sent` its goal
+    result: Any = None
+    done: Any = None                   # an rclpy Future, set when the run ends
+    ended: list[str] = field(default_factory=list)
+
+
+class NavigateActions:
+    """The planner's navigate_to_pose and navigate_through_poses servers (see the module docstring)."""
+
+    def __init__(self, node: PlannerNode) -> None:
+        from nav2_msgs.action import NavigateThroughPoses, NavigateToPose
+        from rclpy.action import ActionServer
+        self.node = node
+        self.types = {False: NavigateToPose, True: NavigateThroughPoses}
+        self.run: Run | None = None
+        self.feedback_at = -math.inf
+        self.served = {'navigate_to_pose': NavigateToPose, 'navigate_through_poses': NavigateThroughPoses}
+        self.servers = [ActionServer(node, kind, name, self._execute(kind is NavigateThroughPoses),
+                                     goal_callback=self.on_goal_request, cancel_callback=self.on_cancel_request)
+                        for name, kind in self.served.items()]
+
+    @staticmethod
+    def make(node: PlannerNode) -> NavigateActions | None:
+        """The servers, or None (said once) where nav2_msgs cannot be imported."""
+        try:
+            return NavigateActions(node)
+        except ImportError as exc:
+            node.get_logger().info(f'nav2_msgs is not installed ({exc}): no navigate_to_pose action server '
+                                   f'(goals on goal_pose only)')
+            return None
+
+    # ------------------------------------------------------------------------------------------ requests
+    def on_goal_request(self, request: Any) -> Any:
+        from rclpy.action import GoalResponse
+        if not self.node.is_active:
+            self.node.get_logger().warning('navigation goal rejected: the planner is not active (lifecycle)')
+            return GoalResponse.REJECT
+        return GoalResponse.ACCEPT
+
+    def on_cancel_request(self, goal_handle: Any) -> Any:
+        from rclpy.action import CancelResponse
+        return CancelResponse.ACCEPT
+
+    def _execute(self, through: bool) -> Callable[[Any], Any]:
+        async def execute(goal_handle: Any) -> Any:
+            from rclpy.task import Future
+            request = goal_handle.request
+            poses = list(request.poses) if through else [request.pose]
+            if self.run is not None:
+                self.finish(self.run, 'aborted', 'preempted by a new goal', UNKNOWN_DRIVING)
+            run = self.run = Run(goal_handle, poses, through, time.monotonic(), done=Future())
+            if not poses:
+                self.finish(run, 'aborted', 'no poses to navigate through', UNKNOWN_PLANNING)
+            else:
+                self.send(run)
+            await run.done
+            return run.result
+        return execute
+
+    # ------------------------------------------------------------------------------------------ progress
+    def send(self, run: Run) -> None:
+        """Hand the run's next pose to the planner (as a goal on goal_pose would be), or end it if refused."""
+        pose = run.poses[run.index]
+        problem = self.node.goal_problem(pose)
+        if problem:
+            self.finish(run, 'aborted', f'goal refused: {problem}', error_code(problem, refused=True))
+            return
+        run.sent, run.taken = pose, False
+        self.node.on_goal(pose)
+
+    def check(self) -> None:
+        """On every control tick: feedback, and the end of the run when the planner says it ended."""
+        run = self.run
+        if run is None:
+            return
+        node, nav = self.node, self.node.navigator
+        if run.handle.is_cancel_requested:
+            node.drop_goal('goal canceled')
+            self.finish(run, 'canceled', 'canceled', 0)
+            return
+        if not node.is_active:
+            self.finish(run, 'aborted', 'the planner was deactivated', UNKNOWN_DRIVING)
+            return
+        if nav is None:
+            return
+        if node.goal_msg is run.sent:
+            run.taken = True
+        elif run.taken:
+            self.finish(run, 'aborted', 'preempted by a goal on goal_pose', UNKNOWN_DRIVING)
+            return
+        else:
+            return   # the planner has not taken it yet (the planning thread takes it between two passes)
+        mode = nav.mode.value
+        if mode == 'failed':
+            self.finish(run, 'aborted', nav.reason, error_code(nav.reason))
+            return
+        if mode == 'arrived':
+            if run.index + 1 < len(run.poses):
+                run.index += 1
+                self.send(run)
+            else:
+                self.finish(run, 'succeeded', '', 0)
+            return
+        now = time.monotonic()
+        if now - self.feedback_at >= FEEDBACK_PERIOD:
+            self.feedback_at = now
+            self.publish_feedback(run, now)
+
+    def publish_feedback(self, run: Run, now: float) -> None:
+        from builtin_interfaces.msg import Duration
+
+        from msg_tools import convert
+        node, nav = self.node, self.node.navigator
+        state, _ = node.state(node.now())
+        if state is None or nav is None:
+            return
+        feedback = self.types[run.through].Feedback()
+        position = (float(state[0]), float(state[1]))
+        feedback.current_pose = convert.point_to_pose_stamped(position, node.stamp(), node.frame_id)
+        remaining, at = 0.0, position
+        ahead = [] if nav.target is None else [(float(nav.target[0]), float(nav.target[1]))]
+        for pose in run.poses[run.index:]:
+            ahead.append((pose.pose.position.x, pose.pose.position.y))
+        for point in ahead:
+            remaining += math.hypot(point[0] - at[0], point[1] - at[1])
+            at = point
+        speed = max(math.hypot(*node.last_command[:2]) if node.model == 'point_mass' else abs(node.last_command[0]),
+                    node.params.max_speed if node.params.max_speed > 0 else 1.0)
+        feedback.navigation_time = _duration(Duration, now - run.accepted)
+        feedback.estimated_time_remaining = _duration(Duration, remaining / speed)
+        feedback.number_of_recoveries = min(int(nav.escapes + nav.manoeuvres), 32767)
+        feedback.distance_remaining = float(remaining)
+        if run.through:
+            feedback.number_of_poses_remaining = len(run.poses) - run.index
+        run.handle.publish_feedback(feedback)
+
+    def finish(self, run: Run, how: str, message: str, code: int) -> None:
+        """End a run: its result (error code and message), its goal's state, its execute coroutine resumed."""
+        if run.ended:
+            return
+        run.ended.append(how)
+        result = self.types[run.through].Result()
+        result.error_code, result.error_msg = code, message
+        run.result = result
+        if how == 'succeeded':
+            run.handle.succeed()
+        elif how == 'canceled':
+            run.handle.canceled()
+        else:
+            run.handle.abort()
+            self.node.get_logger().info(f'navigation goal aborted: {message}')
+        if self.run is run:
+            self.run = None
+        run.done.set_result(True)
+
+    def destroy(self) -> None:
+        if self.run is not None:
+            self.finish(self.run, 'aborted', 'the planner is shutting down', UNKNOWN_DRIVING)
+        for server in self.servers:
+            server.destroy()
+
+
+def _duration(cls: Any, seconds: float) -> Any:
+    seconds = max(0.0, min(seconds, 2.0 ** 31 - 1))
+    whole = math.floor(seconds)
+    return cls(sec=int(whole), nanosec=min(int((seconds - whole) * 1e9), 999_999_999))

@@ -1,0 +1,119 @@
+"""Nav2's navigation actions on the planner (issue "Commanded like Nav2", item 1), over DDS with rclpy's
+ActionClient as a Nav2 client uses them: accept, feedback, result with Nav2's error codes, preemption, cancel,
+rejection while not active. nav2_msgs is built by interfaces/build.sh (make)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any, Iterator
+
+import pytest
+from nav_msgs.msg import Odometry
+
+from fastep_testing.graph import Graph, Helper, distance, odom_xy, write
+
+pytest.importorskip('nav2_msgs.action', reason='nav2_msgs is built by make (interfaces/build.sh)')
+
+NS = '/r1'
+FAST = {'alpha1': 1.0, 'alpha2': 1.0, 'max_speed': 2.0, 'algorithm': 'fastep_route', 'robot_radius': 0.5}
+WORLD = """\
+name: action_world
+workspace: [0, 0, 20, 20]
+obstacles:
+  - circle: {center: [10, 10], radius: 1.5}
+robots:
+  - {name: r1, model: point_mass, start: [2, 10], goal: [18, 10], radius: 0.5}
+"""
+SUCCEEDED, CANCELED, ABORTED = 4, 5, 6   # action_msgs/GoalStatus
+
+
+@pytest.fixture()
+def graph(tmp_path: Path) -> Iterator[Graph]:
+    g = Graph(tmp_path)
+    try:
+        yield g
+    finally:
+        g.close()
+
+
+def pose(x: float, y: float) -> Any:
+    from msg_tools.convert import point_to_pose_stamped
+    return point_to_pose_stamped((x, y))
+
+
+def send(h: Helper, client: Any, goal: Any, feedback: list[Any] | None = None) -> Any:
+    """Send a goal; its goal handle once accepted or rejected."""
+    future = client.send_goal_async(goal, feedback_callback=None if feedback is None else
+                                    (lambda msg: feedback.append(msg.feedback)))
+    h.spin_until(future.done, 30.0, 'the goal to be answered')
+    return future.result()
+
+
+def result(h: Helper, handle: Any, timeout: float = 90.0) -> Any:
+    future = handle.get_result_async()
+    h.spin_until(future.done, timeout, 'the action result')
+    return future.result()
+
+
+def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph: Graph) -> None:
+    from nav2_msgs.action import NavigateThroughPoses, NavigateToPose
+    from rclpy.action import ActionClient
+    graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', WORLD)))
+    graph.start('plant', 'plant', NS, model='point_mass', start=[2.0, 10.0])
+    graph.start('planner', 'planner', NS, model='point_mass', **FAST)
+    h = graph.helper = Helper(graph.domain)
+    h.record_status(NS)
+    odom = h.record(f'{NS}/odom', Odometry)
+    h.wait_status(NS, lambda s: s['message'] == 'idle', 60.0, 'the planner to know the world')
+    through = ActionClient(h.node, NavigateThroughPoses, f'{NS}/navigate_through_poses')
+    to_pose = ActionClient(h.node, NavigateToPose, f'{NS}/navigate_to_pose')
+    h.spin_until(lambda: through.server_is_ready() and to_pose.server_is_ready(), 30.0, 'the action servers')
+
+    # Through two poses round the circle: feedback counts the poses left, the distance shrinks; success at the last.
+    feedback: list[Any] = []
+    goal = NavigateThroughPoses.Goal(poses=[pose(10.0, 14.0), pose(18.0, 10.0)])
+    handle = send(h, through, goal, feedback)
+    assert handle.accepted
+    done = result(h, handle)
+    assert (done.status, done.result.error_code, done.result.error_msg) == (SUCCEEDED, 0, '')
+    assert distance(odom_xy(odom[-1]), (18.0, 10.0)) < 0.2
+    left = [f.number_of_poses_remaining for f in feedback]
+    assert left[0] == 2 and left[-1] == 1 and sorted(left, reverse=True) == left, left
+    assert feedback[0].distance_remaining > feedback[-1].distance_remaining >= 0.0
+    assert all(f.current_pose.header.frame_id == 'map' for f in feedback)
+    assert feedback[-1].navigation_time.sec + feedback[-1].navigation_time.nanosec * 1e-9 > 1.0
+
+    # A goal preempted by a new one: aborted, saying so; the new one is cancelled on its way: the robot stops.
+    first = send(h, to_pose, NavigateToPose.Goal(pose=pose(2.0, 10.0)))
+    h.spin_for(1.0)
+    second = send(h, to_pose, NavigateToPose.Goal(pose=pose(2.0, 6.0)))
+    preempted = result(h, first)
+    assert (preempted.status, preempted.result.error_msg) == (ABORTED, 'preempted by a new goal')
+    h.spin_for(1.0)
+    cancel = second.cancel_goal_async()
+    h.spin_until(cancel.done, 30.0, 'the cancel to be answered')
+    canceled = result(h, second)
+    assert canceled.status == CANCELED
+    h.spin_for(2.0)
+    still = odom_xy(odom[-1])
+    h.spin_for(1.0)
+    assert distance(odom_xy(odom[-1]), still) < 0.01, 'the robot kept moving after the cancel'
+    assert h.status(NS)['message'] == 'idle' and 'canceled' in h.status(NS)['reason']
+
+    # A goal inside the circle: aborted at once with Nav2's GOAL_OCCUPIED (ComputePathToPose: 206) and why.
+    refused = result(h, send(h, to_pose, NavigateToPose.Goal(pose=pose(10.0, 10.0))), 30.0)
+    assert (refused.status, refused.result.error_code) == (ABORTED, 206)
+    assert 'occupied' in refused.result.error_msg
+    assert math.isfinite(odom_xy(odom[-1])[0])
+
+
+def test_a_goal_is_rejected_while_the_planner_is_not_active(graph: Graph) -> None:
+    from nav2_msgs.action import NavigateToPose
+    from rclpy.action import ActionClient
+    graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', WORLD)))
+    graph.start('planner', 'planner', NS, model='point_mass', autostart=False, **FAST)
+    h = graph.helper = Helper(graph.domain)
+    client = ActionClient(h.node, NavigateToPose, f'{NS}/navigate_to_pose')
+    h.spin_until(client.server_is_ready, 30.0, 'the action server')
+    assert not send(h, client, NavigateToPose.Goal(pose=pose(18.0, 10.0))).accepted
