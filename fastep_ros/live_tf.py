@@ -1,9 +1,9 @@
 """Live TF for the nodes: /tf and /tf_static (tf2_msgs/msg/TFMessage) where tf2_msgs is importable.
 
-The PyPI ROS wheels this project installs have no tf2_msgs, so here a node cannot publish TF: it says so once
-in its log and goes on (recordings carry TF anyway: fastep-record and fastep-sim --mcap write it with rosbags,
-msg_tools.frames). In a full ROS install (tf2_msgs present) the same node publishes it, with the QoS of tf2_ros's
-broadcasters. The frame algebra itself is msg_tools.frames.
+The registry's ROS wheels have no tf2_msgs: make builds it into .venv (interfaces/build.sh), a ROS install has
+it. A node publishes TF with the QoS of tf2_ros's broadcasters; where tf2_msgs is missing it says so once in its
+log and goes on (recordings carry TF anyway: fastep-record and fastep-sim --mcap write it with rosbags,
+msg_tools.frames). The frame algebra itself is msg_tools.frames.
 """
 
 from __future__ import annotations

@@ -23,12 +23,9 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Callable
+from typing import Any, Callable
 
 from geometry_msgs.msg import PoseStamped
-
-if TYPE_CHECKING:
-    from fastep_ros.planner import PlannerNode
 
 __all__ = ['ERROR_CODES', 'FEEDBACK_PERIOD', 'NavigateActions', 'error_code']
 
@@ -74,7 +71,8 @@ class Run:
 class NavigateActions:
     """The planner's navigate_to_pose and navigate_through_poses servers (see the module docstring)."""
 
-    def __init__(self, node: PlannerNode) -> None:
+    def __init__(self, node: Any) -> None:
+        """`node`: the planner node (fastep_ros.planner.PlannerNode), which owns this and imports it."""
         from nav2_msgs.action import NavigateThroughPoses, NavigateToPose
         from rclpy.action import ActionServer
         self.node = node
@@ -87,7 +85,7 @@ class NavigateActions:
                         for name, kind in self.served.items()]
 
     @staticmethod
-    def make(node: PlannerNode) -> NavigateActions | None:
+    def make(node: Any) -> NavigateActions | None:
         """The servers, or None (said once) where nav2_msgs cannot be imported."""
         try:
             return NavigateActions(node)

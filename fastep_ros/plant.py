@@ -13,8 +13,8 @@ A point mass has no heading: its yaw is 0, so base_link's axes stay parallel to 
 odometry twist are odom-frame velocities too.
 A simulated robot's odometry does not drift: map -> odom is the identity, published on /tf_static (unless
 publish_map_to_odom is false, e.g. when a localization node publishes it); odom -> base_link goes on /tf with
-every odometry message (and odom -> `<ns>/trailer_link`). TF is published only where tf2_msgs is installed (a
-full ROS install; the log says so once when it is not): fastep_ros.live_tf.
+every odometry message (and odom -> `<ns>/trailer_link`). TF is published where tf2_msgs is installed (.venv, by
+make; a ROS install; the log says so once when it is not): fastep_ros.live_tf.
 
 Time: the model is integrated in fixed steps of 1 / rate_hz seconds of the node's clock (simulated time with
 use_sim_time, wall time otherwise) up to "now", on a timer and before each new command takes effect (a

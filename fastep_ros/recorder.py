@@ -20,7 +20,7 @@ after the recorder and send at once (goal_pose) are only recorded if their publi
 subscription first: wait until the publisher's subscription count includes the recorder.
 
 TF (parameter `tf`): `derive` (the default) writes /tf and /tf_static (tf2_msgs/msg/TFMessage, serialised with
-rosbags: tf2_msgs is not in the PyPI ROS wheels) derived from the odometry it records, so Foxglove draws the
+rosbags, as recordings do not depend on tf2_msgs) derived from the odometry it records, so Foxglove draws the
 robots: map -> `<robot>/odom` as the identity on /tf_static (what simulation has), `<robot>/odom` ->
 `<robot>/base_link` with every odometry message, `<robot>/odom` -> `<robot>/trailer_link` with every trailer pose
 (msg_tools.frames.TfFromOdometry); `graph` records the graph's own /tf and /tf_static instead (a full ROS

@@ -64,11 +64,12 @@ FAST = {'alpha1': 0.5, 'alpha2': 0.5, 'max_speed': 2.0, 'algorithm': 'fastep'}
 
 
 _held: dict[int, Any] = {}  # domain -> open lock file (flock released when this process exits or MAX_HELD passes)
-MAX_HELD = 30
+MAX_HELD = 20
 """Domains one process holds at most. Each test graph takes a fresh domain and kept it locked until its process
 exited: a pytest worker that had run 100 graph tests held every domain, and the other worker, holding none to
 fall back on, failed with "no free ROS domain" (CI, 2026-11-26). Beyond MAX_HELD the oldest domain nobody runs
-on (its discovery port is free) is released to the other processes."""
+on (its discovery port is free) is released to the other processes. Three workers (make test) hold 60 at most,
+leaving 40 of the 100 to whichever needs them."""
 
 
 def _port_free(domain: int) -> bool:

@@ -16,10 +16,10 @@ Frames (REP-105), per robot namespace `<ns>` (names never start with a slash; in
 - A command the planner computes in `map` (a point mass's velocity) is rotated into the body frame before it
   is sent; (v, omega) commands are body-frame quantities already.
 
-TF in recordings: tf2_msgs is not in the PyPI ROS wheels, so no rclpy class exists for TFMessage here. The
-recordings (fastep-record, fastep-sim --mcap) serialise it with rosbags' typestore (tf_message_cdr) and take its
-schema text from there too (msg_tools.ros2_profile). Nodes publish TF live only where tf2_msgs is importable
-(fastep_ros.live_tf).
+TF in recordings: tf2_msgs is not among the registry's ROS wheels (make builds it into .venv), so recordings
+(fastep-record, fastep-sim --mcap) do not depend on it: they serialise TFMessage with rosbags' typestore
+(tf_message_cdr) and take its schema text from there too (msg_tools.ros2_profile). Nodes publish TF live where
+tf2_msgs is importable (fastep_ros.live_tf).
 
 Poses are (x, y, yaw) tuples; angles in radians, wrapped to (-pi, pi].
 """
