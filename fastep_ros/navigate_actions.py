@@ -1,9 +1,9 @@
-"""Nav2's navigation actions, served by the planner: `navigate_to_pose` and `navigate_through_poses`.
+"""Nav2's navigation actions, served by the planner: `navigate_to_pose`, `navigate_through_poses`, `follow_waypoints`.
 
-nav2_msgs/action/NavigateToPose and NavigateThroughPoses with Nav2 Jazzy's definitions (interfaces/nav2_msgs, or
-the distribution's nav2_msgs on a ROS install), in the planner's namespace, so that a client written for Nav2
-(nav2_simple_commander's BasicNavigator: goToPose, goThroughPoses, isTaskComplete, getFeedback, cancelTask,
-getResult; RViz's Nav2 panel) commands a fastep robot unchanged:
+nav2_msgs/action/NavigateToPose, NavigateThroughPoses and FollowWaypoints with Nav2 Jazzy's definitions
+(interfaces/nav2_msgs, or the distribution's nav2_msgs on a ROS install), in the planner's namespace, so that a
+client written for Nav2 (nav2_simple_commander's BasicNavigator: goToPose, goThroughPoses, followWaypoints,
+isTaskComplete, getFeedback, cancelTask, getResult; RViz's Nav2 panel) commands a fastep robot unchanged:
 
 - a goal is accepted only while the node is active (lifecycle), else rejected, as Nav2 does;
 - a goal accepted preempts the one under way, whose result is ABORTED with "preempted by a new goal";
@@ -12,7 +12,11 @@ getResult; RViz's Nav2 panel) commands a fastep robot unchanged:
   distance remaining along the plan (to the waypoint driven to, then to the goal, then through the poses left);
 - the result: SUCCEEDED on arrival at the last pose; ABORTED with one of Nav2's error codes (ERROR_CODES) and
   the planner's reason; CANCELED on a cancel: the robot brakes to a stop within its limits and the goal is
-  dropped.
+  dropped;
+- follow_waypoints as Nav2's waypoint follower: from `goal_index`, each pose in turn, the list `number_of_loops`
+  more times; feedback `current_waypoint`; a waypoint that fails is a MissedWaypoint (its index, pose and error
+  code) and, with the planner's `stop_on_failure` true (Nav2's default), ends the goal ABORTED with
+  TASK_EXECUTOR_FAILED; false: the robot goes on to the next and the goal SUCCEEDS with the missed ones listed.
 
 A goal on the `goal_pose` topic goes the same way (the planner's take_goal); one that comes while an action goal
 is under way preempts it. Without nav2_msgs the planner runs without these servers and says so once.
@@ -52,15 +56,21 @@ def error_code(reason: str, refused: bool = False) -> int:
     return UNKNOWN_PLANNING if refused else UNKNOWN_DRIVING
 
 
+TO_POSE, THROUGH_POSES, WAYPOINTS = 'navigate_to_pose', 'navigate_through_poses', 'follow_waypoints'
+TASK_EXECUTOR_FAILED = 601   # FollowWaypoints: a waypoint failed (stop_on_failure)
+
+
 @dataclass
 class Run:
     """One action goal under way: its poses, the one driven to, and how it ended."""
 
     handle: Any
     poses: list[PoseStamped]
-    through: bool                      # navigate_through_poses (feedback counts the poses left)
+    kind: str                          # TO_POSE, THROUGH_POSES or WAYPOINTS
     accepted: float                    # wall time
     index: int = 0
+    loops: int = 0                     # follow_waypoints: more passes over the list to make
+    missed: list[Any] = field(default_factory=list)   # follow_waypoints: nav2_msgs MissedWaypoint
     sent: PoseStamped | None = None    # the pose handed to the planner (identity: the planner took it or not)
     taken: bool = False                # the planner has made `sent` its goal
     result: Any = None
@@ -69,20 +79,19 @@ class Run:
 
 
 class NavigateActions:
-    """The planner's navigate_to_pose and navigate_through_poses servers (see the module docstring)."""
+    """The planner's Nav2 action servers (see the module docstring)."""
 
     def __init__(self, node: Any) -> None:
         """`node`: the planner node (fastep_ros.planner.PlannerNode), which owns this and imports it."""
-        from nav2_msgs.action import NavigateThroughPoses, NavigateToPose
+        from nav2_msgs.action import FollowWaypoints, NavigateThroughPoses, NavigateToPose
         from rclpy.action import ActionServer
         self.node = node
-        self.types = {False: NavigateToPose, True: NavigateThroughPoses}
         self.run: Run | None = None
         self.feedback_at = -math.inf
-        self.served = {'navigate_to_pose': NavigateToPose, 'navigate_through_poses': NavigateThroughPoses}
-        self.servers = [ActionServer(node, kind, name, self._execute(kind is NavigateThroughPoses),
-                                     goal_callback=self.on_goal_request, cancel_callback=self.on_cancel_request)
-                        for name, kind in self.served.items()]
+        self.served = {TO_POSE: NavigateToPose, THROUGH_POSES: NavigateThroughPoses, WAYPOINTS: FollowWaypoints}
+        self.servers = [ActionServer(node, action, name, self._execute(name), goal_callback=self.on_goal_request,
+                                     cancel_callback=self.on_cancel_request)
+                        for name, action in self.served.items()]
 
     @staticmethod
     def make(node: Any) -> NavigateActions | None:
@@ -106,16 +115,18 @@ class NavigateActions:
         from rclpy.action import CancelResponse
         return CancelResponse.ACCEPT
 
-    def _execute(self, through: bool) -> Callable[[Any], Any]:
+    def _execute(self, kind: str) -> Callable[[Any], Any]:
         async def execute(goal_handle: Any) -> Any:
             from rclpy.task import Future
             request = goal_handle.request
-            poses = list(request.poses) if through else [request.pose]
+            poses = [request.pose] if kind == TO_POSE else list(request.poses)
             if self.run is not None:
                 self.finish(self.run, 'aborted', 'preempted by a new goal', UNKNOWN_DRIVING)
-            run = self.run = Run(goal_handle, poses, through, time.monotonic(), done=Future())
-            if not poses:
-                self.finish(run, 'aborted', 'no poses to navigate through', UNKNOWN_PLANNING)
+            run = self.run = Run(goal_handle, poses, kind, time.monotonic(), done=Future())
+            if kind == WAYPOINTS:
+                run.index, run.loops = int(request.goal_index), int(request.number_of_loops)
+            if not poses or run.index >= len(poses):
+                self.finish(run, 'aborted', f'no poses to navigate through from index {run.index}', UNKNOWN_PLANNING)
             else:
                 self.send(run)
             await run.done
@@ -128,10 +139,35 @@ class NavigateActions:
         pose = run.poses[run.index]
         problem = self.node.goal_problem(pose)
         if problem:
-            self.finish(run, 'aborted', f'goal refused: {problem}', error_code(problem, refused=True))
+            self.failed(run, f'goal refused: {problem}', error_code(problem, refused=True))
             return
         run.sent, run.taken = pose, False
         self.node.on_goal(pose)
+
+    def failed(self, run: Run, reason: str, code: int) -> None:
+        """The pose driven to cannot be reached: the goal ends, or (follow_waypoints without stop_on_failure) the
+        waypoint is missed and the next one is driven to."""
+        if run.kind != WAYPOINTS:
+            self.finish(run, 'aborted', reason, code)
+            return
+        from nav2_msgs.msg import MissedWaypoint
+        run.missed.append(MissedWaypoint(index=run.index, goal=run.poses[run.index], error_code=code))
+        if self.node.stop_on_failure:
+            self.finish(run, 'aborted', f'waypoint {run.index}: {reason}', TASK_EXECUTOR_FAILED)
+        else:
+            self.node.get_logger().warning(f'waypoint {run.index} missed: {reason}')
+            self.next_pose(run)
+
+    def next_pose(self, run: Run) -> None:
+        """After a pose reached (or missed): the next one, the list again (follow_waypoints' loops), or success."""
+        if run.index + 1 < len(run.poses):
+            run.index += 1
+        elif run.loops > 0:
+            run.loops, run.index = run.loops - 1, 0
+        else:
+            self.finish(run, 'succeeded', '', 0)
+            return
+        self.send(run)
 
     def check(self) -> None:
         """On every control tick: feedback, and the end of the run when the planner says it ended."""
@@ -157,14 +193,10 @@ class NavigateActions:
             return   # the planner has not taken it yet (the planning thread takes it between two passes)
         mode = nav.mode.value
         if mode == 'failed':
-            self.finish(run, 'aborted', nav.reason, error_code(nav.reason))
+            self.failed(run, nav.reason, error_code(nav.reason))
             return
         if mode == 'arrived':
-            if run.index + 1 < len(run.poses):
-                run.index += 1
-                self.send(run)
-            else:
-                self.finish(run, 'succeeded', '', 0)
+            self.next_pose(run)
             return
         now = time.monotonic()
         if now - self.feedback_at >= FEEDBACK_PERIOD:
@@ -179,7 +211,11 @@ class NavigateActions:
         state, _ = node.state(node.now())
         if state is None or nav is None:
             return
-        feedback = self.types[run.through].Feedback()
+        feedback = self.served[run.kind].Feedback()
+        if run.kind == WAYPOINTS:
+            feedback.current_waypoint = run.index
+            run.handle.publish_feedback(feedback)
+            return
         position = (float(state[0]), float(state[1]))
         feedback.current_pose = convert.point_to_pose_stamped(position, node.stamp(), node.frame_id)
         remaining, at = 0.0, position
@@ -195,7 +231,7 @@ class NavigateActions:
         feedback.estimated_time_remaining = _duration(Duration, remaining / speed)
         feedback.number_of_recoveries = min(int(nav.escapes + nav.manoeuvres), 32767)
         feedback.distance_remaining = float(remaining)
-        if run.through:
+        if run.kind == THROUGH_POSES:
             feedback.number_of_poses_remaining = len(run.poses) - run.index
         run.handle.publish_feedback(feedback)
 
@@ -204,8 +240,10 @@ class NavigateActions:
         if run.ended:
             return
         run.ended.append(how)
-        result = self.types[run.through].Result()
+        result = self.served[run.kind].Result()
         result.error_code, result.error_msg = code, message
+        if run.kind == WAYPOINTS:
+            result.missed_waypoints = run.missed
         run.result = result
         if how == 'succeeded':
             run.handle.succeed()

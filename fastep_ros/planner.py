@@ -139,7 +139,7 @@ from msg_tools.interface import LATEST, offered_qos
 __all__ = ['PlannerNode', 'main']
 
 TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radius', 'max_extrapolation',
-           'max_plan_age', 'exclusive_cmd_vel')
+           'max_plan_age', 'exclusive_cmd_vel', 'stop_on_failure')
 """The node's own parameters that change while it runs, besides every PlannerParams field."""
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots ...
 START_PERIOD = 0.05      # ... the first START_LOOKS looks (3 s) every START_PERIOD: a launcher waits for every
@@ -256,6 +256,10 @@ class PlannerNode(PlannerInputs):
                                          'commands after one zero: status ERROR `conflict` until it is gone; false: '
                                          'command anyway', read_only=False)
         self.cmd_conflict = ''   # the other publishers on cmd_vel, while there are ('' when there are none)
+        self.stop_on_failure = declare(self, 'stop_on_failure', True, 'follow_waypoints: a waypoint that fails ends '
+                                       'the goal (ABORTED, TASK_EXECUTOR_FAILED), as Nav2\'s waypoint follower by '
+                                       'default; false: it is missed and the robot goes on to the next',
+                                       read_only=False)
         realtime = declare(self, 'realtime', False, 'in lock step, plan on the planning thread as on wall time: a '
                            'pass\'s plan reaches the control loop when it is done, the simulated clock going on '
                            'meanwhile (fastep-launch --realtime: planning latency counted; not deterministic)')
@@ -487,6 +491,7 @@ class PlannerNode(PlannerInputs):
         self.max_extrapolation = changes.get('max_extrapolation', self.max_extrapolation)
         self.max_plan_age = changes.get('max_plan_age', self.max_plan_age)
         self.exclusive_cmd_vel = changes.get('exclusive_cmd_vel', self.exclusive_cmd_vel)
+        self.stop_on_failure = changes.get('stop_on_failure', self.stop_on_failure)
         self.robots.fleet.still_after = self.odom_timeout
         self.robots.override_radius = changes.get('other_robot_radius', self.robots.override_radius)
         if 'control_rate_hz' in changes:

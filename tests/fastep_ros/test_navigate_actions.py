@@ -117,3 +117,37 @@ def test_a_goal_is_rejected_while_the_planner_is_not_active(graph: Graph) -> Non
     client = ActionClient(h.node, NavigateToPose, f'{NS}/navigate_to_pose')
     h.spin_until(client.server_is_ready, 30.0, 'the action server')
     assert not send(h, client, NavigateToPose.Goal(pose=pose(18.0, 10.0))).accepted
+
+
+def test_follow_waypoints_reports_the_one_it_missed(graph: Graph) -> None:
+    """follow_waypoints with stop_on_failure false: the middle waypoint lies inside the circle (refused, Nav2's
+    GOAL_OCCUPIED), the robot goes on to the last; SUCCEEDED with that waypoint in missed_waypoints. Then, with
+    stop_on_failure true (Nav2's default), the same list ends ABORTED with TASK_EXECUTOR_FAILED at that waypoint."""
+    from nav2_msgs.action import FollowWaypoints
+    from rcl_interfaces.srv import SetParameters
+    from rclpy.action import ActionClient
+    from rclpy.parameter import Parameter
+    graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', WORLD)))
+    graph.start('plant', 'plant', NS, model='point_mass', start=[2.0, 10.0])
+    graph.start('planner', 'planner', NS, model='point_mass', stop_on_failure=False, **FAST)
+    h = graph.helper = Helper(graph.domain)
+    h.record_status(NS)
+    odom = h.record(f'{NS}/odom', Odometry)
+    h.wait_status(NS, lambda s: s['message'] == 'idle', 60.0, 'the planner to know the world')
+    client = ActionClient(h.node, FollowWaypoints, f'{NS}/follow_waypoints')
+    h.spin_until(client.server_is_ready, 30.0, 'the action server')
+    feedback: list[Any] = []
+    waypoints = [pose(6.0, 13.0), pose(10.0, 10.0), pose(14.0, 13.0)]
+    done = result(h, send(h, client, FollowWaypoints.Goal(poses=waypoints), feedback))
+    assert (done.status, done.result.error_code) == (SUCCEEDED, 0)
+    assert [(m.index, m.error_code) for m in done.result.missed_waypoints] == [(1, 206)]
+    assert distance(odom_xy(odom[-1]), (14.0, 13.0)) < 0.2
+    assert {f.current_waypoint for f in feedback} >= {0, 2}
+    set_stop = h.node.create_client(SetParameters, f'{NS}/planner/set_parameters')
+    request = SetParameters.Request(parameters=[Parameter('stop_on_failure', value=True).to_parameter_msg()])
+    h.spin_until(set_stop.service_is_ready, 30.0, 'the parameter service')
+    answer = set_stop.call_async(request)
+    h.spin_until(answer.done, 30.0, 'the parameter set')
+    stopped = result(h, send(h, client, FollowWaypoints.Goal(poses=waypoints[::-1])))
+    assert (stopped.status, stopped.result.error_code) == (ABORTED, 601)
+    assert [m.index for m in stopped.result.missed_waypoints] == [1] and 'waypoint 1' in stopped.result.error_msg
