@@ -134,7 +134,7 @@ from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
-from msg_tools.interface import LATEST, offered_qos
+from msg_tools.interface import LATEST, RELIABLE, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
@@ -367,6 +367,14 @@ class PlannerNode(PlannerInputs):
         self.movers_stamp = -math.inf
         self.movers_received = -math.inf
         self.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
+        # Nav2's speed limits (a speed filter, a fleet manager): the robot's max_speed capped by the newest.
+        self.configured_max_speed = self.params.max_speed
+        self.speed_limit: tuple[bool, float] = (False, 0.0)
+        try:
+            from nav2_msgs.msg import SpeedLimit
+            self.create_subscription(SpeedLimit, interface.SPEED_LIMIT, self.on_speed_limit, RELIABLE)
+        except ImportError:
+            pass   # no nav2_msgs: said once by navigate_actions
         self.scan_sub = self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
         self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
         self.scan_problem = ''
@@ -479,14 +487,10 @@ class PlannerNode(PlannerInputs):
         if odom_timeout <= 0.0:
             return f'parameter odom_timeout must be > 0, got {odom_timeout:g}'
         if planner:
-            def retune() -> None:
-                nav = self.navigator
-                if nav is not None:
-                    nav.retune(params, make_robot(self.body, params)[1])
-                    if self.planning is not None:
-                        self.control_tick = ControlTick(nav)
-            self.change(retune)
-            self.params = params
+            if 'max_speed' in planner:   # what the speed limit (speed_limit topic) is taken of
+                self.configured_max_speed = params.max_speed
+                params = params.with_overrides({'max_speed': self.limited_speed()})
+            self.retune(params)
         self.odom_timeout = odom_timeout
         self.max_extrapolation = changes.get('max_extrapolation', self.max_extrapolation)
         self.max_plan_age = changes.get('max_plan_age', self.max_plan_age)
@@ -500,6 +504,42 @@ class PlannerNode(PlannerInputs):
         self.sim_time.timeout = changes.get('clock_timeout', self.sim_time.timeout)
         self._status_key = None
         return ''
+
+    def retune(self, params: PlannerParams) -> None:
+        """Hand new planner parameters to the navigator between two planning passes."""
+        def retune() -> None:
+            nav = self.navigator
+            if nav is not None:
+                nav.retune(params, make_robot(self.body, params)[1])
+                if self.planning is not None:
+                    self.control_tick = ControlTick(nav)
+        self.change(retune)
+        self.params = params
+
+    def on_speed_limit(self, msg: Any) -> None:
+        """nav2_msgs/SpeedLimit, as Nav2's controller server takes it from its speed filter: a percentage of
+        max_speed, or m/s; 0 lifts it. The robot's max_speed (the parameter, unchanged) is capped by it."""
+        value = float(msg.speed_limit)
+        if not (math.isfinite(value) and value >= 0.0 and (value <= 100.0 or not msg.percentage)):
+            self.get_logger().warning(f'ignoring speed_limit {value}{" %" if msg.percentage else " m/s"}: a limit is '
+                                      f'a finite number >= 0 (a percentage at most 100)', throttle_duration_sec=5.0)
+            return
+        self.speed_limit = (bool(msg.percentage), value)
+        speed = self.limited_speed()
+        if speed != self.params.max_speed:
+            self.retune(self.params.with_overrides({'max_speed': speed}))
+            self.get_logger().info(f'speed limit: max_speed {speed:g} m/s' if value > 0.0 else
+                                   f'speed limit lifted: max_speed {speed:g} m/s')
+
+    def limited_speed(self) -> float:
+        """max_speed as configured, capped by the speed limit (0: unlimited, as max_speed 0 means)."""
+        percentage, value = self.speed_limit
+        configured = self.configured_max_speed
+        if value <= 0.0:
+            return configured
+        if percentage:
+            return configured * value / 100.0 if configured > 0.0 else configured
+        return value if configured <= 0.0 else min(configured, value)
 
     # ------------------------------------------------------------------------------------------- helpers
     def stamp_parts(self) -> tuple[int, int]:

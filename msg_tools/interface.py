@@ -35,7 +35,8 @@ if TYPE_CHECKING:
 __all__ = [
     'CLOCK', 'CLOCK_ACK', 'CMD_VEL', 'COST', 'FOOTPRINT', 'GOAL_POSE', 'LATCHED', 'LATEST', 'MAP', 'MAP_FRAME',
     'METADATA_NAME', 'MOVERS', 'OBSTACLES', 'ODOM', 'OFFERED_QOS', 'PLAN', 'RECORDING', 'RELIABLE', 'ROBOT_TOPICS',
-    'ROBOT_TOPIC_PATTERN', 'SCAN', 'SCENARIO_DATA', 'SHARED_TOPICS', 'STAMPED_CMD_VEL_TYPE', 'STATUS', 'STATUS_QOS',
+    'ROBOT_TOPIC_PATTERN', 'SCAN', 'SCENARIO_DATA', 'SHARED_TOPICS', 'SPEED_LIMIT', 'STAMPED_CMD_VEL_TYPE', 'STATUS',
+    'STATUS_QOS',
     'TRACKED_OBSTACLES', 'TRAILER_POSE', 'TYPES', 'WAYPOINT', 'is_interface_topic', 'message_type', 'metadata_key',
     'offered_qos', 'offered_qos_profiles', 'robot_topic', 'scenario_metadata', 'split_robot_topic',
 ]
@@ -56,6 +57,7 @@ ROBOT_TOPICS = (ODOM, CMD_VEL, GOAL_POSE, WAYPOINT, PLAN, COST, STATUS, TRAILER_
 # A robot's laser (any sensor_msgs/LaserScan; the planner perceives with it) and what its planner believes
 # (visualization_msgs/MarkerArray); neither is recorded yet.
 SCAN = 'scan'
+SPEED_LIMIT = 'speed_limit'   # nav2_msgs/msg/SpeedLimit into the planner (Nav2's speed filter publishes it)
 TRACKED_OBSTACLES = 'tracked_obstacles'
 # The known movers of a format-v2 world where the map puts them, at >= 10 Hz (visualization_msgs/MarkerArray,
 # reliable, volatile: only the newest matters); fastep-map publishes it, planners avoid them. Not recorded yet.
