@@ -16,7 +16,7 @@ from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPo
 
 from msg_tools import frames
 
-__all__ = ['LOCALIZATION_QOS', 'TfBroadcaster']
+__all__ = ['LOCALIZATION_QOS', 'TfBroadcaster', 'TfListener']
 
 _DYNAMIC = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
                       durability=DurabilityPolicy.VOLATILE)
@@ -60,3 +60,38 @@ class TfBroadcaster:
         self.static.extend(transforms)
         if self.static_pub is not None and self.cls is not None:
             self.static_pub.publish(self.cls(transforms=list(self.static)))
+
+
+class TfListener:
+    """What /tf and /tf_static say, in a frames.TfTree, for lookups (the planner's goals in other frames); nothing
+    where tf2_msgs is missing. /tf_static is subscribed to (latched, rare); /tf is polled, taken when a lookup
+    needs it: every robot's odometry transform at 50 Hz, N times N on a graph, costs no executor wake-up."""
+
+    def __init__(self, node: Node, message_class: Callable[[], type | None] = frames.tf_message_class) -> None:
+        from fastep_ros.polled import PolledSubscription, polled
+        self.tree = frames.TfTree()
+        self.dynamic: PolledSubscription | None = None
+        cls = message_class()
+        if cls is None:
+            return
+        static = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
+                            durability=DurabilityPolicy.TRANSIENT_LOCAL)
+        node.create_subscription(cls, frames.TF_STATIC, self.take, static)
+        self.dynamic = polled(node, cls, frames.TF, _DYNAMIC)
+        if self.dynamic is None:
+            node.create_subscription(cls, frames.TF, self.take, _DYNAMIC)
+
+    def take(self, msg: Any) -> None:
+        """A TFMessage into the tree."""
+        self.tree.add(msg.transforms)
+
+    def lookup(self, target: str, source: str) -> frames.Pose2D | None:
+        """The newest pose of frame `source` in frame `target` (after taking what /tf brought), or None."""
+        if self.dynamic is not None:
+            for msg in self.dynamic.take_all():
+                self.take(msg)
+        return self.tree.lookup(target, source)
+
+    def destroy(self) -> None:
+        if self.dynamic is not None:
+            self.dynamic.destroy()

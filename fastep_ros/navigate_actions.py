@@ -136,7 +136,10 @@ class NavigateActions:
     # ------------------------------------------------------------------------------------------ progress
     def send(self, run: Run) -> None:
         """Hand the run's next pose to the planner (as a goal on goal_pose would be), or end it if refused."""
-        pose = run.poses[run.index]
+        pose, problem = self.node.goal_in_map(run.poses[run.index])   # a pose in another frame: through TF
+        if problem:
+            self.failed(run, f'goal refused: {problem}', error_code(problem, refused=True))
+            return
         problem = self.node.goal_problem(pose)
         if problem:
             self.failed(run, f'goal refused: {problem}', error_code(problem, refused=True))

@@ -124,7 +124,7 @@ from fastep_ros.common import (
 from fastep_ros.diagnostics import Diagnostics
 from fastep_ros.goals import GoalSubscription
 from fastep_ros.latched import LatchedSubscription
-from fastep_ros.live_tf import LOCALIZATION_QOS
+from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
 from fastep_ros.lock_step import LockStep
 from fastep_ros.navigate_actions import NavigateActions
 from fastep_ros.parameters import DynamicParameters
@@ -367,6 +367,8 @@ class PlannerNode(PlannerInputs):
         self.movers_stamp = -math.inf
         self.movers_received = -math.inf
         self.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
+        # Goals in other frames: resolved through /tf and /tf_static (fastep_ros.live_tf).
+        self.tf = TfListener(self)
         # Nav2's speed limits (a speed filter, a fleet manager): the robot's max_speed capped by the newest.
         self.configured_max_speed = self.params.max_speed
         self.speed_limit: tuple[bool, float] = (False, 0.0)
@@ -548,7 +550,30 @@ class PlannerNode(PlannerInputs):
         return ns // 1_000_000_000, ns % 1_000_000_000
 
     def on_goal(self, msg: PoseStamped) -> None:
-        self.change(lambda: self.take_goal(msg))
+        resolved, _ = self.goal_in_map(msg)   # in a frame TF does not resolve: refused by take_goal, saying so
+        self.change(lambda: self.take_goal(resolved))
+
+    def goal_in_map(self, msg: PoseStamped) -> tuple[PoseStamped, str]:
+        """The goal in the map frame: as it is when given there; from any other frame /tf and /tf_static resolve
+        (odom, base_link, another robot's frame), moved with its heading; (msg, why not) when none does."""
+        frame = msg.header.frame_id.lstrip('/')
+        if frame in ('', 'map', self.frame_id):
+            return msg, ''
+        pose = self.tf.lookup(self.frame_id, frame)
+        if pose is None:
+            return msg, f'goal frame {shown(frame)}: no transform to {self.frame_id!r} on /tf or /tf_static'
+        q = msg.pose.orientation
+        has_heading = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w > 0.0
+        local = (msg.pose.position.x, msg.pose.position.y, convert.yaw_of(q.x, q.y, q.z, q.w) if has_heading else 0.0)
+        x, y, yaw = frames.compose(pose, local)
+        out = PoseStamped()
+        out.header.stamp, out.header.frame_id = msg.header.stamp, self.frame_id
+        out.pose.position.x, out.pose.position.y = x, y
+        if has_heading:
+            out.pose.orientation.z, out.pose.orientation.w = math.sin(0.5 * yaw), math.cos(0.5 * yaw)
+        else:
+            out.pose.orientation.w = 0.0   # a quaternion of zero length: no heading asked for, as given
+        return out, ''
 
     def take_goal(self, msg: PoseStamped) -> None:
         """A goal, given to the navigator (on the planning thread when there is one)."""
@@ -593,8 +618,8 @@ class PlannerNode(PlannerInputs):
         point = convert.pose_stamped_to_point(msg)
         frame = msg.header.frame_id
         heading = self.goal_heading_of(msg)
-        if frame not in ('', 'map', self.frame_id):
-            return f'goal frame {shown(frame)} is not {self.frame_id!r} (no transforms here)'
+        if frame.lstrip('/') not in ('', 'map', self.frame_id):
+            return self.goal_in_map(msg)[1] or f'goal frame {shown(frame)}: resolve it with goal_in_map first'
         if isinstance(heading, str):
             return heading
         nav = self.navigator
@@ -642,6 +667,9 @@ class PlannerNode(PlannerInputs):
         actions = getattr(self, 'actions', None)   # not made when the node failed to start
         if actions is not None:
             actions.destroy()
+        tf = getattr(self, 'tf', None)
+        if tf is not None:
+            tf.destroy()
         if self.planning is not None:
             self.planning.stop()
         self.robots.destroy()

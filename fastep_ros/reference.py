@@ -116,7 +116,8 @@ def node_pages(context: Any, tmp: str) -> tuple[str, str]:
               'Generated from the publishers and subscriptions each node makes (`python -m fastep_ros.reference`), '
               'for a robot in namespace `<ns>` (names are relative, so `-r __ns:=/r1` puts them under `/r1`). '
               'The planner subscribes to other robots\' `<other>/odom` and `<other>/footprint` as it finds them on '
-              'the graph (docs/robots_and_goals.md).', '']
+              'the graph (docs/robots_and_goals.md), and takes `/tf` when it resolves a goal in another frame (both '
+              'polled, not listed: fastep_ros.polled).', '']
     for executable, module, cls, namespace, needed in NODES:
         needed = {k: v.format(tmp=tmp) if isinstance(v, str) else v for k, v in needed.items()}
         node = _node(module, cls, namespace, needed, context)

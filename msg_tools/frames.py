@@ -41,6 +41,7 @@ from msg_tools.ros2_profile import qos_dict
 
 __all__ = [
     'IDENTITY', 'TF', 'TF_QOS', 'TF_STATIC', 'TF_STATIC_QOS', 'TF_TYPE', 'MapFromOdom', 'Pose2D', 'StampedPose',
+    'TfTree',
     'base_frame',
     'body_velocity', 'compose', 'frame_name', 'inverse', 'odom_frame', 'odometry_pose', 'odometry_transforms',
     'stamped_pose', 'state_in_frame', 'static_map_to_odom', 'tf_message_cdr', 'tf_message_class', 'trailer_frame',
@@ -94,6 +95,63 @@ def inverse(a: Pose2D) -> Pose2D:
     """The pose whose composition with a is the identity."""
     c, s = math.cos(a[2]), math.sin(a[2])
     return (-c * a[0] - s * a[1], s * a[0] - c * a[1], _wrap(-a[2]))
+
+
+class TfTree:
+    """The newest transform of every edge of a TF tree, in the plane (x, y, yaw of each child frame in its parent),
+    from /tf and /tf_static messages; lookup composes along the tree, as tf2's lookups at the latest time do.
+    Frame names without a leading '/'; a transform that is not finite, or would make a frame its own ancestor,
+    is left out."""
+
+    MAX_DEPTH = 64   # frames between a frame and its root: a deeper chain is taken for a broken tree
+
+    def __init__(self) -> None:
+        self.parents: dict[str, tuple[str, Pose2D]] = {}
+
+    def add(self, transforms: Sequence[Any]) -> None:
+        """geometry_msgs/TransformStamped messages (a TFMessage's transforms)."""
+        for t in transforms:
+            parent, child = t.header.frame_id.lstrip('/'), t.child_frame_id.lstrip('/')
+            q, v = t.transform.rotation, t.transform.translation
+            norm = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w
+            if not parent or not child or parent == child or not (math.isfinite(norm) and norm > 0.0):
+                continue
+            yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+            pose = (float(v.x), float(v.y), yaw)
+            if not all(math.isfinite(c) for c in pose) or child in self._ancestors(parent):
+                continue
+            self.parents[child] = (parent, pose)
+
+    def _ancestors(self, frame: str) -> list[str]:
+        chain = [frame]
+        while frame in self.parents and len(chain) <= self.MAX_DEPTH:
+            frame = self.parents[frame][0]
+            chain.append(frame)
+        return chain
+
+    def _in_root(self, frame: str) -> tuple[str, Pose2D]:
+        """(the root of frame's tree, frame's pose in it)."""
+        pose = IDENTITY
+        for _ in range(self.MAX_DEPTH):
+            if frame not in self.parents:
+                break
+            parent, edge = self.parents[frame]
+            pose, frame = compose(edge, pose), parent
+        return frame, pose
+
+    def lookup(self, target: str, source: str) -> Pose2D | None:
+        """The pose of frame `source` in frame `target`, or None when they are not in one tree."""
+        target, source = target.lstrip('/'), source.lstrip('/')
+        if target == source:
+            return IDENTITY
+        root_s, in_root_s = self._in_root(source)
+        root_t, in_root_t = self._in_root(target)
+        if root_s != root_t:
+            return None
+        return compose(inverse(in_root_t), in_root_s)
+
+    def frames(self) -> list[str]:
+        return sorted({*self.parents, *(parent for parent, _ in self.parents.values())})
 
 
 def state_in_frame(transform: Pose2D, state: np.ndarray) -> np.ndarray:

@@ -105,6 +105,18 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
     refused = result(h, send(h, to_pose, NavigateToPose.Goal(pose=pose(10.0, 10.0))), 30.0)
     assert (refused.status, refused.result.error_code) == (ABORTED, 206)
     assert 'occupied' in refused.result.error_msg
+
+    # A goal in the robot's own frame, 1.5 m ahead (the plant's TF: map -> r1/odom -> r1/base_link): reached there.
+    here = odom_xy(odom[-1])
+    ahead = pose(1.5, 0.0)
+    ahead.header.frame_id = 'r1/base_link'
+    reached = result(h, send(h, to_pose, NavigateToPose.Goal(pose=ahead)))
+    assert reached.status == SUCCEEDED, reached.result.error_msg
+    assert distance(odom_xy(odom[-1]), (here[0] + 1.5, here[1])) < 0.2   # a point mass's base_link faces +x
+    unknown = pose(1.0, 0.0)
+    unknown.header.frame_id = 'nowhere'
+    lost = result(h, send(h, to_pose, NavigateToPose.Goal(pose=unknown)), 30.0)
+    assert (lost.status, lost.result.error_code) == (ABORTED, 202) and "'nowhere'" in lost.result.error_msg
     assert math.isfinite(odom_xy(odom[-1])[0])
 
 

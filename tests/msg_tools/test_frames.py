@@ -183,3 +183,26 @@ def test_tf_from_odometry_bytes_is_the_messages_tf(frame: str, child: str) -> No
     odom.pose.pose.orientation.z = 0.0
     assert fast.take('/r1/odom', serialize_message(odom)) == []
     assert fast.take('/r1/odom', data[:30]) == []   # cut off: nothing (the recording keeps the message)
+
+
+def test_a_tf_tree_composes_along_the_tree_and_refuses_what_would_break_it() -> None:
+    """frames.TfTree (the planner's goals in other frames): newest transform per edge, lookups both ways."""
+    import math
+
+    from builtin_interfaces.msg import Time
+
+    from msg_tools.frames import TfTree, transform_stamped
+    tree = TfTree()
+    tree.add([transform_stamped('map', 'r1/odom', (1.0, 2.0, math.pi / 2), Time()),
+              transform_stamped('r1/odom', 'r1/base_link', (1.0, 0.0, 0.0), Time()),
+              transform_stamped('/map', 'r2/odom', (10.0, 0.0, 0.0), Time())])
+    x, y, yaw = tree.lookup('map', 'r1/base_link')
+    assert (x, y, yaw) == pytest.approx((1.0, 3.0, math.pi / 2))
+    x, y, _ = tree.lookup('r2/odom', 'r1/base_link')
+    assert (x, y) == pytest.approx((-9.0, 3.0))
+    assert tree.lookup('map', 'elsewhere') is None and tree.lookup('map', 'map') == (0.0, 0.0, 0.0)
+    tree.add([transform_stamped('r1/base_link', 'map', (0.0, 0.0, 0.0), Time()),     # a cycle: left out
+              transform_stamped('map', 'bad', (math.nan, 0.0, 0.0), Time())])        # not finite: left out
+    assert tree.lookup('map', 'r1/base_link') is not None and tree.lookup('map', 'bad') is None
+    tree.add([transform_stamped('map', 'r1/odom', (0.0, 0.0, 0.0), Time())])          # the newest one counts
+    assert tree.lookup('map', 'r1/base_link') == pytest.approx((1.0, 0.0, 0.0))
