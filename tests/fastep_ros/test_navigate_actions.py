@@ -5,6 +5,7 @@ rejection while not active. nav2_msgs is built by interfaces/build.sh (make)."""
 from __future__ import annotations
 
 import math
+import time
 from pathlib import Path
 from typing import Any, Iterator
 
@@ -163,3 +164,56 @@ def test_follow_waypoints_reports_the_one_it_missed(graph: Graph) -> None:
     stopped = result(h, send(h, client, FollowWaypoints.Goal(poses=waypoints[::-1])))
     assert (stopped.status, stopped.result.error_code) == (ABORTED, 601)
     assert [m.index for m in stopped.result.missed_waypoints] == [1] and 'waypoint 1' in stopped.result.error_msg
+
+
+def test_the_navigation_client_drives_a_robot_with_basic_navigator_s_verbs(graph: Graph,
+                                                                             monkeypatch: pytest.MonkeyPatch) -> None:
+    """fastep_ros.navigation_client: go_to_pose, is_task_complete with feedback, get_result; a cancel_task."""
+    from fastep_ros.navigation_client import NavigationClient
+    graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', WORLD)))
+    graph.start('plant', 'plant', NS, model='point_mass', start=[2.0, 10.0])
+    graph.start('planner', 'planner', NS, model='point_mass', **FAST)
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    nav = NavigationClient(namespace=NS, domain_id=graph.domain, server_timeout=60.0)
+    try:
+        assert nav.go_to_pose(18.0, 10.0)
+        seen = []
+        deadline = time.monotonic() + 90.0
+        while not nav.is_task_complete() and time.monotonic() < deadline:
+            if nav.get_feedback() is not None:
+                seen.append(nav.get_feedback().distance_remaining)
+        assert nav.get_result() == 'succeeded' and nav.result_message() == ''
+        assert seen and seen[0] > seen[-1]
+        assert nav.go_to_pose(2.0, 14.0)
+        for _ in range(10):
+            nav.is_task_complete()
+        assert nav.cancel_task()
+        deadline = time.monotonic() + 30.0
+        while not nav.is_task_complete() and time.monotonic() < deadline:
+            pass
+        assert nav.get_result() == 'canceled'
+    finally:
+        nav.close()
+
+
+def test_a_speed_limit_caps_max_speed_as_nav2_s_speed_filter_sends_it(context: Any) -> None:
+    """nav2_msgs/SpeedLimit on speed_limit: a percentage of max_speed or m/s caps the navigator's max_speed; 0
+    lifts it; the max_speed parameter stays what it was; a bad limit is ignored."""
+    from nav2_msgs.msg import SpeedLimit
+    from rclpy.parameter import Parameter
+
+    from fastep_ros.planner import PlannerNode
+    node = PlannerNode(context=context, parameter_overrides=[Parameter('max_speed', value=2.0),
+                                                             Parameter('planning_thread', value=False)])
+    try:
+        for percentage, value, expected in ((True, 25.0, 0.5), (False, 1.2, 1.2), (False, 3.0, 2.0), (True, 0.0, 2.0),
+                                            (True, 150.0, 2.0), (False, math.nan, 2.0), (False, 0.7, 0.7)):
+            node.on_speed_limit(SpeedLimit(percentage=percentage, speed_limit=value))
+            assert node.params.max_speed == pytest.approx(expected), (percentage, value)
+        assert node.get_parameter('max_speed').value == 2.0
+        node.set_parameters([Parameter('max_speed', value=0.5)])   # a new max_speed is capped by the limit kept
+        assert node.params.max_speed == 0.5 and node.configured_max_speed == 0.5
+        node.set_parameters([Parameter('max_speed', value=1.5)])
+        assert node.params.max_speed == pytest.approx(0.7)
+    finally:
+        node.destroy_node()
