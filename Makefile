@@ -29,7 +29,7 @@ demo: $(STAMP)
 # The documentation site in out/site: the reference pages generated from the code, then MkDocs with every warning
 # an error (mkdocs.yml). make test checks that the committed pages are current and that the site builds.
 docs: $(STAMP)
-	$(BIN)/python -m fastep_ros.reference docs/reference
+	$(BIN)/python -m fastep_ros.reference docs/reference config/fastep.yaml
 	$(BIN)/mkdocs build --strict
 
 # Linter and type checker first (ruff.toml; [mypy] in setup.cfg), so a lint or type error fails make test.

@@ -3,10 +3,12 @@
 - parameters.md: every node's parameters, from the descriptors the node declares (type, default, range or
   constraints, read-only, description);
 - topics.md: every node's publishers and subscriptions as the node makes them (name, type, QoS);
-- commands.md: every command line's --help, from its argument parser.
+- commands.md: every command line's --help, from its argument parser;
+- config/fastep.yaml: a params file (`--ros-args --params-file`) with every parameter of the planner and the
+  plant at its default, its description and range as a comment.
 
-    python -m fastep_ros.reference docs/reference      (make docs; tests/fastep_ros/test_reference.py checks that
-                                                       the pages in the repository are what this writes)
+    python -m fastep_ros.reference docs/reference config/fastep.yaml
+        (make docs; tests/fastep_ros/test_reference.py checks that the files in the repository are what it writes)
 
 The nodes are built in a context of their own, on no DDS traffic (ROS_AUTOMATIC_DISCOVERY_RANGE is not needed:
 they are destroyed before they hear anything).
@@ -16,6 +18,7 @@ from __future__ import annotations
 
 import contextlib
 import io
+import json
 import math
 import os
 import sys
@@ -51,6 +54,7 @@ TYPE_NAMES = {ParameterType.PARAMETER_BOOL: 'bool', ParameterType.PARAMETER_INTE
               ParameterType.PARAMETER_BYTE_ARRAY: 'byte[]', ParameterType.PARAMETER_BOOL_ARRAY: 'bool[]',
               ParameterType.PARAMETER_INTEGER_ARRAY: 'int[]', ParameterType.PARAMETER_DOUBLE_ARRAY: 'double[]',
               ParameterType.PARAMETER_STRING_ARRAY: 'string[]'}
+PARAMS_FILE = 'fastep.yaml'
 HELP_WIDTH = '110'   # COLUMNS for argparse: the same wrapping on every terminal
 SKIPPED = ('use_sim_time', 'start_type_description_service')   # rclpy's own, on every node
 
@@ -105,8 +109,31 @@ def _type_name(msg_type: Any) -> str:
     return f'{module[0]}/{module[1]}/{msg_type.__name__}'
 
 
-def node_pages(context: Any, tmp: str) -> tuple[str, str]:
-    """(parameters.md, topics.md) of every node of NODES; `tmp`: a folder for what they write (the recorder)."""
+PARAMS_FILE_NODES = {'fastep-planner': 'planner', 'fastep-plant': 'plant'}   # executable: node name
+
+
+def _yaml(value: Any) -> str | None:
+    """A parameter's value as YAML the rcl parser reads with the parameter's type; None for an empty array (its
+    type cannot be told from `[]`)."""
+    if isinstance(value, bool):
+        return 'true' if value else 'false'
+    if isinstance(value, float):
+        return '.inf' if value == math.inf else '-.inf' if value == -math.inf else repr(value)
+    if isinstance(value, str):
+        return json.dumps(value)
+    if isinstance(value, (list, tuple)) or type(value).__name__ == 'array':
+        items = [_yaml(v) for v in value]
+        return None if not items else '[' + ', '.join(str(i) for i in items) + ']'
+    return str(value)
+
+
+def node_pages(context: Any, tmp: str) -> tuple[str, str, str]:
+    """(parameters.md, topics.md, the params file) of every node of NODES; `tmp`: a folder for what they write
+    (the recorder)."""
+    config = ['# Every parameter of fastep-planner and fastep-plant at its default, with its description and range:',
+              '#   fastep-planner --ros-args -r __ns:=/r1 --params-file config/fastep.yaml',
+              '# (ros2 run fastep_ros fastep-planner ... on a ROS install). Change what differs on your robot and',
+              '# delete the rest. Generated from the nodes\' declarations: python -m fastep_ros.reference.']
     params = ['# Node parameters', '',
               'Generated from the descriptors each node declares (`python -m fastep_ros.reference`); set them with '
               '`-p name:=value` or `--params-file`. Read-only ones are fixed when the node starts; the others '
@@ -131,6 +158,14 @@ def node_pages(context: Any, tmp: str) -> tuple[str, str]:
                               f'{_cell(_limits(descriptor))} | {"yes" if descriptor.read_only else ""} | '
                               f'{_cell(descriptor.description)} |')
             params.append('')
+            if executable in PARAMS_FILE_NODES:
+                config += ['', f'/**/{PARAMS_FILE_NODES[executable]}:', '  ros__parameters:']
+                for name, descriptor in zip(names, node.describe_parameters(names)):
+                    limits = _limits(descriptor)
+                    config.append(f'    # {" ".join(descriptor.description.split())}'
+                                  f'{f" ({limits})" if limits else ""}{"; read-only" if descriptor.read_only else ""}')
+                    value = _yaml(node.get_parameter(name).value)
+                    config.append(f'    {name}: {value}' if value is not None else f'    # {name}: [] (none)')
             rows = [(_shown_name(p.topic_name), 'publishes', _type_name(p.msg_type), _qos(p.qos_profile))
                     for p in node.publishers]
             rows += [(_shown_name(s.topic_name), 'subscribes', _type_name(s.msg_type), _qos(s.qos_profile))
@@ -144,7 +179,7 @@ def node_pages(context: Any, tmp: str) -> tuple[str, str]:
                        *(f'| {name} | {kind} | {kind_type} | {qos} |' for name, kind, kind_type, qos in rows), '']
         finally:
             node.destroy_node()
-    return '\n'.join(params), '\n'.join(topics)
+    return '\n'.join(params), '\n'.join(topics), '\n'.join(config)
 
 
 def _help(module: str, function: str) -> str:
@@ -177,7 +212,7 @@ def commands_page() -> str:
 
 
 def pages() -> dict[str, str]:
-    """Every generated page, by file name."""
+    """Every generated file, by name: the reference pages and PARAMS_FILE (the params file)."""
     import tempfile
 
     import rclpy
@@ -187,19 +222,21 @@ def pages() -> dict[str, str]:
     rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
     try:
         with tempfile.TemporaryDirectory() as tmp:
-            params, topics = node_pages(context, tmp)
+            params, topics, config = node_pages(context, tmp)
     finally:
         rclpy.try_shutdown(context=context)
-    return {'parameters.md': params, 'topics.md': topics, 'commands.md': commands_page()}
+    return {'parameters.md': params, 'topics.md': topics, 'commands.md': commands_page(), PARAMS_FILE: config}
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     folder = Path(args[0] if args else 'docs/reference')
+    config = Path(args[1] if len(args) > 1 else 'config/fastep.yaml')
     folder.mkdir(parents=True, exist_ok=True)
     for name, text in pages().items():
-        (folder / name).write_text(text + '\n')
-        print(f'wrote {folder / name}')
+        path = config if name == PARAMS_FILE else folder / name
+        path.write_text(text + '\n')
+        print(f'wrote {path}')
     return 0
 
 

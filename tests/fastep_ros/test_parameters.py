@@ -250,3 +250,23 @@ def test_the_example_params_file_configures_a_planner_with_every_parameter_known
         assert node.localization_topic == '/r1/amcl_pose' and node.params.max_speed == 0.5
     finally:
         node.destroy_node()
+
+
+@pytest.mark.parametrize('cls', [PlannerNode, PlantNode])
+def test_the_full_params_file_sets_every_parameter_to_its_default(context: Any, cls: type) -> None:
+    """config/fastep.yaml (generated: fastep_ros.reference): every key a parameter of the node, at its default."""
+    from fastep_ros.parameters import unknown_overrides
+    from fastep_testing.graph import ROOT
+    path = str(ROOT / 'config' / 'fastep.yaml')
+    plain, loaded = cls(context=context, namespace='/r1'), cls(context=context, namespace='/r1',
+                                                                 cli_args=['--ros-args', '--params-file', path])
+    try:
+        assert unknown_overrides(loaded) == []
+        names = [n for n in plain.list_parameters([], 0).names if n != 'use_sim_time']
+        assert [list(v) if hasattr(v, '__len__') and not isinstance(v, str) else v
+                for v in (loaded.get_parameter(n).value for n in names)] == \
+            [list(v) if hasattr(v, '__len__') and not isinstance(v, str) else v
+             for v in (plain.get_parameter(n).value for n in names)]
+    finally:
+        loaded.destroy_node()
+        plain.destroy_node()

@@ -5,15 +5,15 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from fastep_ros.reference import pages
+from fastep_ros.reference import PARAMS_FILE, pages
 
 ROOT = Path(__file__).resolve().parents[2]
 
 
-def test_the_generated_reference_pages_are_current() -> None:
-    stale = [name for name, text in pages().items()
-             if (ROOT / 'docs' / 'reference' / name).read_text() != text + '\n']
-    assert not stale, f'docs/reference/{", ".join(stale)} differ from the code: run `make docs` and commit them'
+def test_the_generated_reference_pages_and_params_file_are_current() -> None:
+    where = {name: ROOT / ('config' if name == PARAMS_FILE else 'docs/reference') / name for name in pages()}
+    stale = [where[name] for name, text in pages().items() if where[name].read_text() != text + '\n']
+    assert not stale, f'{", ".join(map(str, stale))} differ from the code: run `make docs` and commit them'
 
 
 def test_the_reference_has_every_node_and_command() -> None:
