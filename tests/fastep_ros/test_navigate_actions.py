@@ -92,6 +92,7 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
     preempted = result(h, first)
     assert (preempted.status, preempted.result.error_msg) == (ABORTED, 'preempted by a new goal')
     h.spin_for(1.0)
+    before = len(odom)
     cancel = second.cancel_goal_async()
     h.spin_until(cancel.done, 30.0, 'the cancel to be answered')
     canceled = result(h, second)
@@ -100,6 +101,16 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
     still = odom_xy(odom[-1])
     h.spin_for(1.0)
     assert distance(odom_xy(odom[-1]), still) < 0.01, 'the robot kept moving after the cancel'
+    # ... and it braked within its acceleration limit (max_acceleration, 2.5 m/s^2), not at once: the command steps
+    # down once a control period (0.05 s), which the point mass (50 Hz odometry) follows at once, so the speed is
+    # compared over windows, allowing one control period.
+    speeds = [(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9, math.hypot(m.twist.twist.linear.x,
+                                                                            m.twist.twist.linear.y))
+              for m in odom[before - 1:]]
+    assert max(v for _, v in speeds[:10]) > 0.5, 'the robot was not moving when cancelled'
+    for i, (t0, v0) in enumerate(speeds):
+        for t1, v1 in speeds[i + 1:]:
+            assert v0 - v1 <= 2.5 * (t1 - t0 + 0.05) + 1e-6, (t1 - t0, v0 - v1)
     assert h.status(NS)['message'] == 'idle' and 'canceled' in h.status(NS)['reason']
 
     # A goal inside the circle: aborted at once with Nav2's GOAL_OCCUPIED (ComputePathToPose: 206) and why.
