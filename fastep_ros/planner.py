@@ -243,6 +243,9 @@ class PlannerNode(PlannerInputs):
                                           '(geometry_msgs/PoseWithCovarianceStamped, the map pose of base_link, e.g. '
                                           'amcl_pose) giving map -> odom; empty: map -> odom is the identity '
                                           '(simulation)')
+        self.map_to_odom_from_tf = declare(self, 'map_to_odom_from_tf', False, 'take map -> odom from /tf and '
+                                           '/tf_static (AMCL and slam_toolbox publish it) at each control tick; '
+                                           'localization_topic, when set, is taken instead')
         lock_step = declare(self, 'lock_step', False, 'on simulated time: act once per own odometry stamp, when '
                             'the other robots\' odometry (and the scan) of that time are in, and stamp cmd_vel with '
                             'it, so a graph steps like fastep-sim (fastep-launch sets it; needs use_stamped_cmd_vel '

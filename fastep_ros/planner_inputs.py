@@ -26,6 +26,7 @@ from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
+from fastep_ros.live_tf import TfListener
 from fastep_ros.lock_step import STAMP_EPS, LockStep
 from fastep_ros.planner_status import PlannerReports
 from fastep_ros.planning_thread import PlanningThread
@@ -72,6 +73,8 @@ class PlannerInputs(PlannerReports):
     max_extrapolation: float
     known_movers: list[OtherRobot]
     movers_stamp: float
+    map_to_odom_from_tf: bool
+    tf: TfListener
     tracked_pub: Publisher
     lock_step: bool
     lock: LockStep
@@ -187,10 +190,15 @@ class PlannerInputs(PlannerReports):
         self.map_from_odom.add_localization(stamp if stamp > 0.0 else self.now(), pose)
 
     def map_to_odom(self) -> frames.Pose2D | None:
-        """map -> odom of the odometry last taken (None: not known yet, the robot holds still)."""
-        if self.odom is None or self.odom.frame_id == self.frame_id or not self.localization_topic:
+        """map -> odom of the odometry last taken (None: not known yet, the robot holds still): from the
+        localization pose topic, else from TF (map_to_odom_from_tf), else the identity (simulation)."""
+        if self.odom is None or self.odom.frame_id == self.frame_id:
             return frames.IDENTITY
-        return self.map_from_odom.transform
+        if self.localization_topic:
+            return self.map_from_odom.transform
+        if self.map_to_odom_from_tf:
+            return self.tf.lookup(self.frame_id, self.odom_frame_id)
+        return frames.IDENTITY
 
     def on_trailer(self, msg: PoseStamped) -> None:
         try:
@@ -314,7 +322,8 @@ class PlannerInputs(PlannerReports):
             return None, 'waiting for trailer_pose'
         transform = self.map_to_odom()
         if transform is None:
-            return None, f'waiting for localization on {self.localization_topic} (map -> {self.odom_frame_id})'
+            source = self.localization_topic or '/tf'
+            return None, f'waiting for localization on {source} (map -> {self.odom_frame_id})'
         try:
             state = frames.state_in_frame(transform, convert.pose_to_state(self.odom.pose, self.model, self.trailer))
             self.body_yaw = frames.compose(transform, self.odom.pose)[2]

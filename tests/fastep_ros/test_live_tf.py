@@ -242,3 +242,26 @@ def test_own_odometry_from_bytes_is_what_the_message_gives(yaw: float) -> None:
         frames.stamped_pose(serialize_message(odom))
     with pytest.raises(ValueError, match='cut off'):
         frames.stamped_pose(serialize_message(odom)[:100])
+
+
+def test_planner_takes_map_to_odom_from_tf_when_asked(context: Any) -> None:
+    """map_to_odom_from_tf (issue "Commanded like Nav2", item 3): map -> odom as AMCL or slam_toolbox publish it
+    on /tf; the robot holds still until it comes; a newer transform moves the map pose."""
+    from builtin_interfaces.msg import Time as TimeMsg
+
+    from msg_tools.frames import static_map_to_odom, transform_stamped
+    node = _planner(context, map_to_odom_from_tf=True)
+    try:
+        node.on_odom(odometry(1.0, 1.0))
+        state, problem = node.state(node.now())
+        assert state is None and problem == 'waiting for localization on /tf (map -> r1/odom)'
+        tf_message = frames.tf_message_class()
+        assert tf_message is not None
+        node.tf.take(tf_message(transforms=[static_map_to_odom('map', 'r1/odom')]))
+        state, problem = node.state(node.now())
+        assert problem == '' and state is not None and tuple(state[:2]) == (1.0, 1.0)   # the identity, exactly
+        node.tf.take(tf_message(transforms=[transform_stamped('map', 'r1/odom', (2.0, 0.5, 0.0), TimeMsg())]))
+        state, _ = node.state(node.now())
+        assert state is not None and state[:2] == pytest.approx([3.0, 1.5])
+    finally:
+        node.destroy_node()
