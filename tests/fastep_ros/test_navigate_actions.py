@@ -125,6 +125,10 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
     reached = result(h, send(h, to_pose, NavigateToPose.Goal(pose=ahead)))
     assert reached.status == SUCCEEDED, reached.result.error_msg
     assert distance(odom_xy(odom[-1]), (here[0] + 1.5, here[1])) < 0.2   # a point mass's base_link faces +x
+    in_odom = pose(here[0], here[1] - 1.0)   # the plant's map -> r1/odom is the identity (simulation)
+    in_odom.header.frame_id = 'r1/odom'
+    back = result(h, send(h, to_pose, NavigateToPose.Goal(pose=in_odom)))
+    assert back.status == SUCCEEDED and distance(odom_xy(odom[-1]), (here[0], here[1] - 1.0)) < 0.2
     unknown = pose(1.0, 0.0)
     unknown.header.frame_id = 'nowhere'
     lost = result(h, send(h, to_pose, NavigateToPose.Goal(pose=unknown)), 30.0)
