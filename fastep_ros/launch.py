@@ -168,7 +168,9 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
     spec = scenario.robots[index]
     out: dict[str, Any] = {'algorithm': algorithm, 'model': spec.model, 'robot_radius': float(spec.radius),
                            'seed': int(seed), 'seed_stream': index,
-                           'control_rate_hz': 1.0 / scenario.planner.dt, 'use_sim_time': sim_time}
+                           'control_rate_hz': 1.0 / scenario.planner.dt, 'use_sim_time': sim_time,
+                           # Its goals are in map: no planner follows /tf (every plant's 50 Hz, N x N on a graph).
+                           'goal_frames_from_tf': False}
     if sim_time:
         out.update(lock_step=True, use_stamped_cmd_vel=True)   # exact lock step (fastep_ros.lock_step)
         if realtime:

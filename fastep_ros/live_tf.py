@@ -67,7 +67,9 @@ class TfListener:
     where tf2_msgs is missing. /tf_static is subscribed to (latched, rare); /tf is polled, taken when a lookup
     needs it: every robot's odometry transform at 50 Hz, N times N on a graph, costs no executor wake-up."""
 
-    def __init__(self, node: Node, message_class: Callable[[], type | None] = frames.tf_message_class) -> None:
+    def __init__(self, node: Node, message_class: Callable[[], type | None] = frames.tf_message_class,
+                 dynamic: bool = True) -> None:
+        """`dynamic`: follow /tf too (else /tf_static only)."""
         from fastep_ros.polled import PolledSubscription, polled
         self.tree = frames.TfTree()
         self.dynamic: PolledSubscription | None = None
@@ -77,6 +79,8 @@ class TfListener:
         static = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
         node.create_subscription(cls, frames.TF_STATIC, self.take, static)
+        if not dynamic:
+            return
         self.dynamic = polled(node, cls, frames.TF, _DYNAMIC)
         if self.dynamic is None:
             node.create_subscription(cls, frames.TF, self.take, _DYNAMIC)

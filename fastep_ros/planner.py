@@ -243,6 +243,9 @@ class PlannerNode(PlannerInputs):
                                           '(geometry_msgs/PoseWithCovarianceStamped, the map pose of base_link, e.g. '
                                           'amcl_pose) giving map -> odom; empty: map -> odom is the identity '
                                           '(simulation)')
+        goal_frames = declare(self, 'goal_frames_from_tf', True, 'follow /tf (polled, taken when used) to move goals '
+                              'given in other frames (odom, base_link) into map; false: only /tf_static is followed '
+                              '(fastep-launch, whose goals are in map: every plant publishes /tf at its rate)')
         self.map_to_odom_from_tf = declare(self, 'map_to_odom_from_tf', False, 'take map -> odom from /tf and '
                                            '/tf_static (AMCL and slam_toolbox publish it) at each control tick; '
                                            'localization_topic, when set, is taken instead')
@@ -371,7 +374,7 @@ class PlannerNode(PlannerInputs):
         self.movers_received = -math.inf
         self.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
         # Goals in other frames: resolved through /tf and /tf_static (fastep_ros.live_tf).
-        self.tf = TfListener(self)
+        self.tf = TfListener(self, dynamic=goal_frames or self.map_to_odom_from_tf)
         # Nav2's speed limits (a speed filter, a fleet manager): the robot's max_speed capped by the newest.
         self.configured_max_speed = self.params.max_speed
         self.speed_limit: tuple[bool, float] = (False, 0.0)
