@@ -145,6 +145,7 @@ class NavigateActions:
             self.failed(run, f'goal refused: {problem}', error_code(problem, refused=True))
             return
         run.sent, run.taken = pose, False
+        self.node.goal_refused = ''   # a refusal from before is not this goal's (check reads it)
         self.node.on_goal(pose)
 
     def failed(self, run: Run, reason: str, code: int) -> None:
@@ -191,6 +192,11 @@ class NavigateActions:
             run.taken = True
         elif run.taken:
             self.finish(run, 'aborted', 'preempted by a goal on goal_pose', UNKNOWN_DRIVING)
+            return
+        elif node.goal_refused.startswith(_refusal_of(run.sent)):
+            # Refused by the planner itself (its world changed since goal_problem looked): said on goal_refused.
+            reason = node.goal_refused.split(' refused: ', 1)[-1]
+            self.failed(run, f'goal refused: {reason}', error_code(reason, refused=True))
             return
         else:
             return   # the planner has not taken it yet (the planning thread takes it between two passes)
@@ -264,6 +270,13 @@ class NavigateActions:
             self.finish(self.run, 'aborted', 'the planner is shutting down', UNKNOWN_DRIVING)
         for server in self.servers:
             server.destroy()
+
+
+def _refusal_of(pose: PoseStamped | None) -> str:
+    """How the planner's goal_refused begins for this goal (take_goal's wording), or a text nothing begins with."""
+    if pose is None:
+        return '\0'
+    return f'goal ({pose.pose.position.x:g}, {pose.pose.position.y:g}) refused'
 
 
 def _duration(cls: Any, seconds: float) -> Any:
