@@ -25,6 +25,7 @@ from fastep_ros.layouts import command as layout_command
 __all__ = ['GRACE', 'Processes', 'ros_value']
 
 GRACE = 5.0             # wall seconds a process gets to stop after SIGINT
+GATE_GRACE = 60.0       # ... to import and leave at its gate when the launch stops before opening the gates
 
 
 def ros_value(value: Any) -> str:
@@ -115,9 +116,15 @@ class Processes:
 
     def stop(self) -> None:
         """SIGINT every process (the clock first, so time stops before the nodes do), SIGKILL after GRACE; a process
-        still at its gate is let go without starting."""
+        still at its gate is let go without starting. Before the gates opened (a launch that refuses to start) no
+        signal is sent: each process leaves at its gate once imported (SIGKILL after GATE_GRACE). A SIGINT could
+        land while a Python interpreter imports its own site module, before any of our code runs, and print
+        "Fatal Python error: init_import_site" (a loaded CI)."""
         for proc in self.processes():
             self._open(proc, go=False)
+        if not self.opened:
+            self._wait(self.processes(), GATE_GRACE)
+            return
         clocks = [proc for proc in self.processes() if self.labels[proc.pid] == 'fastep-clock']
         others = [proc for proc in reversed(self.processes()) if self.labels[proc.pid] != 'fastep-clock']
         self._interrupt(clocks, GRACE / 2)
@@ -131,6 +138,11 @@ class Processes:
                     proc.send_signal(signal.SIGINT)
                 except ProcessLookupError:
                     pass
+        Processes._wait(procs, grace)
+
+    @staticmethod
+    def _wait(procs: list[subprocess.Popen[bytes]], grace: float) -> None:
+        """Wait for the processes to exit, SIGKILL those left after `grace` seconds."""
         deadline = time.monotonic() + grace
         for proc in procs:
             try:

@@ -20,8 +20,10 @@ def test_a_process_holds_at_most_max_held_domains_and_the_released_ones_are_free
         assert taken[-1] not in held
     assert len(graph._held) <= graph.MAX_HELD            # ... but only the newest are kept
     assert taken[-1] in graph._held
-    released = [d for d in taken if d not in graph._held]
-    assert len(released) >= 10
+    # Released: those taken beyond MAX_HELD. Other test processes may hold many of the 100 domains meanwhile (the
+    # graph workers of make test), so fewer than MAX_HELD + 10 distinct ones may have been free to take.
+    released = [d for d in dict.fromkeys(taken) if d not in graph._held]
+    assert len(released) >= len(set(taken)) - graph.MAX_HELD >= 1, (len(set(taken)), released)
     lock = Path(tempfile.gettempdir()) / f'fastep-ros-test-domain-{released[0]}.lock'
     probe = ('import fcntl, sys; f = open(sys.argv[1], "a"); '
              'fcntl.flock(f, fcntl.LOCK_EX | fcntl.LOCK_NB); print("locked")')
