@@ -51,9 +51,14 @@ def send(h: Helper, client: Any, goal: Any, feedback: list[Any] | None = None) -
     return future.result()
 
 
-def result(h: Helper, handle: Any, timeout: float = 90.0) -> Any:
+def result(h: Helper, handle: Any, timeout: float = 90.0, graph: Graph | None = None) -> Any:
+    """The result of an accepted goal; on a timeout, what the planner said (status, its log's end)."""
     future = handle.get_result_async()
-    h.spin_until(future.done, timeout, 'the action result')
+
+    def what() -> str:
+        log = graph.log('planner')[-2000:] if graph is not None else ''
+        return f'the action result (last status {h.status(NS)}; planner log: {log!r})'
+    h.spin_until(future.done, timeout, what)
     return future.result()
 
 
@@ -76,7 +81,7 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
     goal = NavigateThroughPoses.Goal(poses=[pose(10.0, 14.0), pose(18.0, 10.0)])
     handle = send(h, through, goal, feedback)
     assert handle.accepted
-    done = result(h, handle)
+    done = result(h, handle, graph=graph)
     assert (done.status, done.result.error_code, done.result.error_msg) == (SUCCEEDED, 0, '')
     assert distance(odom_xy(odom[-1]), (18.0, 10.0)) < 0.2
     left = [f.number_of_poses_remaining for f in feedback]
@@ -89,13 +94,13 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
     first = send(h, to_pose, NavigateToPose.Goal(pose=pose(2.0, 10.0)))
     h.spin_for(1.0)
     second = send(h, to_pose, NavigateToPose.Goal(pose=pose(2.0, 6.0)))
-    preempted = result(h, first)
+    preempted = result(h, first, graph=graph)
     assert (preempted.status, preempted.result.error_msg) == (ABORTED, 'preempted by a new goal')
     h.spin_for(1.0)
     before = len(odom)
     cancel = second.cancel_goal_async()
     h.spin_until(cancel.done, 30.0, 'the cancel to be answered')
-    canceled = result(h, second)
+    canceled = result(h, second, graph=graph)
     assert canceled.status == CANCELED
     h.spin_for(2.0)
     still = odom_xy(odom[-1])
@@ -122,12 +127,12 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
     here = odom_xy(odom[-1])
     ahead = pose(1.5, 0.0)
     ahead.header.frame_id = 'r1/base_link'
-    reached = result(h, send(h, to_pose, NavigateToPose.Goal(pose=ahead)))
+    reached = result(h, send(h, to_pose, NavigateToPose.Goal(pose=ahead)), graph=graph)
     assert reached.status == SUCCEEDED, reached.result.error_msg
     assert distance(odom_xy(odom[-1]), (here[0] + 1.5, here[1])) < 0.2   # a point mass's base_link faces +x
     in_odom = pose(here[0], here[1] - 1.0)   # the plant's map -> r1/odom is the identity (simulation)
     in_odom.header.frame_id = 'r1/odom'
-    back = result(h, send(h, to_pose, NavigateToPose.Goal(pose=in_odom)))
+    back = result(h, send(h, to_pose, NavigateToPose.Goal(pose=in_odom)), graph=graph)
     assert back.status == SUCCEEDED and distance(odom_xy(odom[-1]), (here[0], here[1] - 1.0)) < 0.2
     unknown = pose(1.0, 0.0)
     unknown.header.frame_id = 'nowhere'
