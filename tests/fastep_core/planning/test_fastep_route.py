@@ -64,7 +64,9 @@ def test_u_trap_where_plain_fastep_wanders_is_driven_round_on_the_route():
     assert route.reached and not route.collided and route.escapes == 0 and route.activations == 0
     assert fastep.reached and fastep.escapes == 1   # fastep walks into the U and escapes along the exact path
     assert ratio(scenario, route, scenario.robots[0]) <= 1.03
-    assert route.path_length < 0.9 * fastep.path_length and route.compute_time < fastep.compute_time
+    # Shorter, and in less simulated time; which one costs less CPU is a benchmark's to say (docs/fastep_route.md):
+    # compared in wall seconds here it failed with three test workers on two cores.
+    assert route.path_length < 0.9 * fastep.path_length and route.sim_time < fastep.sim_time
 
 
 @pytest.mark.parametrize('seed', [0, 1, 2])
