@@ -1,13 +1,14 @@
-"""Fixtures shared by the tests that build nodes in this process."""
+"""Fixtures shared by the tests that build nodes in this process (context) or run node processes (graph)."""
 
 from __future__ import annotations
 
 import os
+from pathlib import Path
 from typing import Any, Iterator
 
 import pytest
 
-from fastep_testing.graph import free_domain
+from fastep_testing.graph import Graph, free_domain
 
 
 @pytest.fixture
@@ -29,3 +30,13 @@ def context() -> Iterator[Any]:
         yield ctx
     finally:
         rclpy.try_shutdown(context=ctx)
+
+
+@pytest.fixture
+def graph(tmp_path: Path) -> Iterator[Graph]:
+    """Node processes on a domain of their own (fastep_testing.graph.Graph), every one stopped at the end."""
+    g = Graph(tmp_path)
+    try:
+        yield g
+    finally:
+        g.close()

@@ -15,10 +15,8 @@ from __future__ import annotations
 
 import math
 import signal
-from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
-import pytest
 from nav_msgs.msg import Odometry
 
 from fastep_testing.graph import Graph, Helper, distance, odom_xy, write
@@ -39,15 +37,6 @@ obstacles:
     goal: [18, 10.5]
     radius: 0.5
 """
-
-
-@pytest.fixture()
-def graph(tmp_path: Path) -> Iterator[Graph]:
-    g = Graph(tmp_path)
-    try:
-        yield g
-    finally:
-        g.close()
 
 
 def stamp(msg: Odometry) -> float:

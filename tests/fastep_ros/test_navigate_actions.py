@@ -6,8 +6,7 @@ from __future__ import annotations
 
 import math
 import time
-from pathlib import Path
-from typing import Any, Iterator
+from typing import Any
 
 import pytest
 from nav_msgs.msg import Odometry
@@ -27,15 +26,6 @@ robots:
   - {name: r1, model: point_mass, start: [2, 10], goal: [18, 10], radius: 0.5}
 """
 SUCCEEDED, CANCELED, ABORTED = 4, 5, 6   # action_msgs/GoalStatus
-
-
-@pytest.fixture()
-def graph(tmp_path: Path) -> Iterator[Graph]:
-    g = Graph(tmp_path)
-    try:
-        yield g
-    finally:
-        g.close()
 
 
 def pose(x: float, y: float) -> Any:

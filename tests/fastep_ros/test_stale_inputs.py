@@ -8,10 +8,7 @@ odom_timeout. Both are now kept where they were last seen, reported stale, and d
 from __future__ import annotations
 
 import signal
-from pathlib import Path
-from typing import Iterator
 
-import pytest
 from nav_msgs.msg import Odometry
 
 from fastep_testing.graph import Graph, Helper, distance, odom_xy, write
@@ -32,15 +29,6 @@ robots:
     goal: [15, 10]
     radius: 0.5
 """
-
-
-@pytest.fixture()
-def graph(tmp_path: Path) -> Iterator[Graph]:
-    g = Graph(tmp_path)
-    try:
-        yield g
-    finally:
-        g.close()
 
 
 def start_robot(g: Graph, ns: str, start: tuple[float, float]) -> None:
