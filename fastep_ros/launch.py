@@ -61,7 +61,8 @@ __all__ = ['main']
 PROG = 'fastep-launch'
 STARTUP_TIMEOUT = 60.0  # wall seconds for every node to come up and see the world and the other robots
 END_WAIT = 5.0          # wall seconds the report waits at most for odometry up to the end of each robot's run
-STALL = 30.0            # wall seconds without simulated time advancing before the run is given up
+STALL = 45.0            # wall seconds without simulated time advancing before the run is given up: longer than the
+                        # clock's wait_timeout (30 s): a clock that gives up on a node that never answered runs on first
 INTERRUPT_WAIT = 1.0    # wall seconds a Ctrl-C'd run waits at most for the recorder to reach the time it was stopped at
 OBSERVER_LAG = 20       # ticks the observers (this monitor, fastep-record) may lag behind the lock step ...
 ACK_TICKS = 5           # ... acknowledging every ACK_TICKS ticks: each tick waited for both (and for an

@@ -71,7 +71,9 @@ class LockStep:
 class AckPacer:
     """When an observer of the lock step (fastep-launch's monitor, fastep-record) acknowledges a /clock time it has
     taken: once every `period` simulated seconds (the clock lets it lag its observer_lag ticks behind), and a time
-    said again at once (the clock holds it: whoever waits for the observer to reach it waits no longer)."""
+    said again each time it is said again (the clock holds it, waiting for an observer: its repeats come every
+    HOLD_PERIOD of wall time). Said only once, an acknowledgement sent before the clock's end of the reliable
+    connection had matched was lost, and the clock waited 30 s for one that never came again."""
 
     period: float = 0.0
     acked: float = -math.inf   # the time acknowledged last
@@ -80,7 +82,7 @@ class AckPacer:
     def due(self, t: float) -> bool:
         """Take /clock time `t`; True if it is to be acknowledged now."""
         again, self.seen = t == self.seen, t
-        if t >= self.acked + self.period - STAMP_EPS or (again and t > self.acked):
+        if t >= self.acked + self.period - STAMP_EPS or (again and t >= self.acked - STAMP_EPS):
             self.acked = t
             return True
         return False
