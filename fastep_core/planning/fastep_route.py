@@ -324,6 +324,9 @@ class FAStepRoute(FAStepKinematic):
     replans = 0                  # routes planned after the first one
     route_time = 0.0             # wall seconds spent in exact paths (the first route, replans, escapes)
     replan_log: list[tuple[float, str]]   # (t, reason) of every replan
+    # What set_goal sets, read before any goal too (a planning pass of an idle planner node asks for speed_law).
+    _vertex: FloatArray | None = None
+    _aim: FloatArray | None = None
 
     def set_goal(self, goal: Sequence[float], t: float = 0.0, heading: float | None = None) -> None:
         super().set_goal(goal, t, heading)
@@ -479,7 +482,8 @@ class FAStepRoute(FAStepKinematic):
         assert route is not None
         looked = self._looked_at
         if self._vertex is not None and looked is not None and self._aim is not None and self._target is self._aim \
-                and math.hypot(position[0] - looked[0], position[1] - looked[1]) < self._look_after:
+                and math.hypot(position[0] - looked[0], position[1] - looked[1]) < self._look_after \
+                and not self._past_goal(position):
             return self._vertex
         index = route.in_sight(position, self.radius, self.params.clearance_margin)
         if index is None:
@@ -496,6 +500,16 @@ class FAStepRoute(FAStepKinematic):
         self._looked_at = position.copy()
         self._look_after = self.next_look(position, self._vertex)
         return self._vertex
+
+    def _past_goal(self, position: FloatArray) -> bool:
+        """Has the robot gone past the goal it is aimed beyond? Then it is aimed afresh from where it is: the speed
+        law allows nothing past the goal, and a robot a late control tick carried past it (on a loaded computer)
+        stood there for good, 0.3 m from its goal."""
+        aim, vertex, route = self._aim, self._vertex, self.route
+        if aim is None or vertex is None or route is None or vertex is not route.vertices[-1]:
+            return False
+        return float((vertex[0] - position[0]) * (aim[0] - position[0])
+                     + (vertex[1] - position[1]) * (aim[1] - position[1])) <= 0.0
 
     def next_look(self, position: FloatArray, vertex: FloatArray) -> float:
         """Metres of travel before the farthest vertex in sight is looked for again.

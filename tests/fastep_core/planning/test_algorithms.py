@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import numpy as np
 import pytest
 
 from fastep_core.errors import FastepError, ParameterError
@@ -22,6 +23,15 @@ def test_every_registered_algorithm_builds_a_navigator_named_after_it(algorithm)
     nav = make_navigator(algorithm, POINT, 0.5, WORLD, PlannerParams(), 0)
     assert type(nav) is NAVIGATORS[algorithm] and nav.method == algorithm
     assert algorithm_name(algorithm) != algorithm   # a display name of its own (FAStep-Kinematic, FAStep-Route ...)
+
+
+@pytest.mark.parametrize('algorithm', ALGORITHMS)
+def test_a_navigator_without_a_goal_has_no_speed_law_and_a_plan_of_it_says_so(algorithm):
+    """An idle planner node's planning pass (on wall time) asks before any goal: FAStep-Route raised there."""
+    from fastep_core.planning.control import Plan
+    nav = make_navigator(algorithm, POINT, 0.5, WORLD, PlannerParams(), 0)
+    assert nav.speed_law() is None
+    assert Plan.of(nav, 0.0, np.zeros(2), []).speed is None
 
 
 def test_an_unknown_algorithm_or_model_is_a_one_line_fastep_error():

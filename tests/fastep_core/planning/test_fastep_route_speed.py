@@ -70,7 +70,7 @@ def test_speed_allowed_slows_for_a_bend_ahead_and_a_tight_gap() -> None:
     assert nav.speed_allowed(squeezed, p.dt) <= max(p.min_approach_speed, p.max_speed * room / p.clearance_margin)
 
 
-def test_a_plan_aimed_past_the_goal_allows_nothing_once_the_robot_is_past_it() -> None:
+def test_a_plan_aimed_past_the_goal_allows_nothing_past_it_and_a_robot_past_it_is_aimed_back() -> None:
     p = PlannerParams()
     world = World.from_obstacles((0.0, 0.0, 40.0, 20.0), [Circle((30.0, 18.0), 0.5)])
     spec = RobotSpec('r1', 'point_mass', (5.0, 10.0), (20.0, 10.0), 0.3)
@@ -81,6 +81,11 @@ def test_a_plan_aimed_past_the_goal_allows_nothing_once_the_robot_is_past_it() -
     assert nav.target is not None and nav.target[0] > 20.0   # aimed beyond the goal: no slow-down before it
     assert command[0] > 0.0
     assert nav.speed_allowed(np.array([20.5, 10.0]), p.dt) == 0.0
+    # ... and a robot that went past it all the same (a late control tick) is aimed back at it from there, not
+    # held where it stands.
+    back = nav.update(p.dt, np.array([20.4, 10.0]), ())
+    assert nav.target is not None and nav.target[0] < 20.0
+    assert back[0] < 0.0 and nav.speed_allowed(np.array([20.4, 10.0]), p.dt) > 0.0
 
 
 def test_a_steered_robot_slowed_keeps_its_curvature() -> None:
