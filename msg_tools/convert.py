@@ -694,10 +694,17 @@ def _value_text(value: Any) -> str:
     if value is None:
         return ''
     if isinstance(value, float):
-        return f'{value:.6g}'
+        return _float_text(value)
     if isinstance(value, (list, tuple, np.ndarray)):
-        return ','.join(f'{float(v):.6g}' for v in value)
+        return ','.join(_float_text(float(v)) for v in value)
     return str(value)
+
+
+def _float_text(value: float) -> str:
+    """Six significant digits, but never coarser than a millisecond below 1e12: a wall-clock time (1.8e9 s) keeps
+    its milliseconds (as 1.79588e+09 a status's `t` and `since` moved in steps of 10,000 s, and fastep-launch
+    --no-clock timed every run 0.0 s)."""
+    return f'{value:.3f}' if 1e3 <= abs(value) < 1e12 else f'{value:.6g}'
 
 
 def diagnostic_to_dict(msg: DiagnosticStatus) -> dict[str, Any]:

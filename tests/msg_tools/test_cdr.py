@@ -182,6 +182,16 @@ def test_status_values_are_make_status_s_texts() -> None:
     assert convert.status_values(None) == []
 
 
+def test_a_wall_clock_time_in_a_status_keeps_its_milliseconds() -> None:
+    """A planner on wall time says `t` and `since` as seconds since 1970: at six significant digits they moved in
+    steps of 10,000 s, and fastep-launch --no-clock timed every run 0.0 s."""
+    from msg_tools import convert
+    start, end = 1795880005.4586, 1795880068.3191
+    pairs = dict(convert.status_values({'t': end, 'since': start, 'small': 12.3456789, 'huge': 3e15}))
+    assert float(pairs['t']) - float(pairs['since']) == pytest.approx(end - start, abs=1e-3)
+    assert pairs['small'] == '12.3457' and pairs['huge'] == '3e+15'
+
+
 @pytest.mark.parametrize('frame', FRAMES)
 def test_our_bytes_and_rclpy_s_decode_alike(frame: str) -> None:
     """rclpy's own serialisation of convert's message and our bytes decode to equal messages (the bytes themselves
