@@ -54,7 +54,7 @@ from fastep_ros.layouts import GRAPH_ROBOTS, LAYOUTS, Member, default_layout, us
 from fastep_ros.layouts import command as layout_command
 from fastep_ros.limits import RATE_RANGE, RTF_RANGE, graph_problem, robot_name_problem
 from fastep_ros.monitor import STOP, Monitor, RobotLive, watched_topics
-from fastep_ros.processes import Processes, ros_value
+from fastep_ros.processes import Placement, Processes, ros_value
 
 __all__ = ['main']
 
@@ -277,14 +277,15 @@ def not_ready(name: str, robot: RobotLive, goal_readers: int, goal_readers_neede
     return ''
 
 
-def run(args: argparse.Namespace, scenario: Scenario) -> int:
+def run(args: argparse.Namespace, scenario: Scenario, placement: Placement | None = None) -> int:
     from msg_tools.interface import CMD_VEL, GOAL_POSE, robot_topic
 
     sim_time = not args.no_clock
     timeout = args.timeout if args.timeout is not None else scenario.planner.max_sim_time
     # Before any participant of this launch exists: the launcher's own (the monitor's) and its processes'.
     profile = use_discovery_profile()
-    procs = Processes(args.verbose, args.layout or default_layout(sim_time, len(scenario.robots)), args.executor)
+    procs = Processes(args.verbose, args.layout or default_layout(sim_time, len(scenario.robots)), args.executor,
+                      placement)
     budget, note = step_budget(len(scenario.robots), usable_cores(), sim_time, args.algorithm, scenario.planner,
                                args.step_iterations)
     if note:
@@ -526,11 +527,12 @@ def _request_stop(signum: int, frame: Any) -> None:
     STOP.set()
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    return guard(PROG, lambda: _main(argv))
+def main(argv: Sequence[str] | None = None, placement: Placement | None = None) -> int:
+    """fastep-launch with `argv`; `placement` puts processes on other computers (fastep_ros.processes)."""
+    return guard(PROG, lambda: _main(argv, placement))
 
 
-def _main(argv: Sequence[str] | None) -> int:
+def _main(argv: Sequence[str] | None, placement: Placement | None = None) -> int:
     parser = _parser()
     args = parser.parse_args(argv)
     if not RTF_RANGE[0] <= args.rtf <= RTF_RANGE[1]:
@@ -563,7 +565,7 @@ def _main(argv: Sequence[str] | None) -> int:
     STOP.clear()
     previous = {sig: signal.signal(sig, _request_stop) for sig in (signal.SIGINT, signal.SIGTERM)}
     try:
-        return run(args, scenario)
+        return run(args, scenario, placement)
     finally:
         for sig, handler in previous.items():
             signal.signal(sig, handler)

@@ -15,14 +15,18 @@ import signal
 import subprocess
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable, Sequence
 
 from fastep_ros.common import GATE_ENV
 from fastep_ros.executors import EXECUTOR_ENV
 from fastep_ros.layouts import Member, group
 from fastep_ros.layouts import command as layout_command
 
-__all__ = ['GRACE', 'Processes', 'ros_value']
+__all__ = ['GRACE', 'Placement', 'Processes', 'ros_value']
+
+Placement = Callable[[Sequence[Member]], Sequence[str]]
+"""Where a process of nodes runs: the command prefix that puts it there (e.g. `ip netns exec HOST`, `ssh HOST`), from
+the nodes it runs; [] for this computer (benchmarks.multi_host puts robots on other hosts)."""
 
 GRACE = 5.0             # wall seconds a process gets to stop after SIGINT
 GATE_GRACE = 60.0       # ... to import and leave at its gate when the launch stops before opening the gates
@@ -50,9 +54,11 @@ class Processes:
     starts every process of the layout (fastep_ros.layouts). `items` has one (label, process) per node, so a node
     shares its container's process with the others in it."""
 
-    def __init__(self, verbose: bool, layout: str = 'node', executor: str | None = None) -> None:
+    def __init__(self, verbose: bool, layout: str = 'node', executor: str | None = None,
+                 placement: Placement | None = None) -> None:
         self.verbose = verbose
         self.layout = layout
+        self.placement = placement
         self.items: list[tuple[str, subprocess.Popen[bytes]]] = []
         self.pending: list[Member] = []
         self.opened = False   # open_gates() was called
@@ -79,6 +85,8 @@ class Processes:
         pending, self.pending = self.pending, []
         for label, members in group(self.layout, pending):
             cmd = layout_command(members, 'info' if self.verbose else 'warn', ros_value)
+            if self.placement is not None:
+                cmd = [*self.placement(members), *cmd]
             # A new session: Ctrl-C in a terminal reaches only the launcher, which then stops the nodes in order.
             proc = subprocess.Popen(cmd, env=self.env, stdin=subprocess.PIPE, start_new_session=True)
             self.labels[proc.pid] = label

@@ -61,24 +61,27 @@ GRAPH_FILES = (Path(__file__).resolve().parent / 'fastep_testing' / 'test_robot_
 DRIVING_FILES = tuple(GRAPH_TESTS / name for name in (
     'test_faults.py', 'test_stale_inputs.py', 'test_single_robot.py', 'test_two_robots.py',
     'test_diff_drive_graph.py', 'test_robots.py', 'test_diagnostics.py')) + GRAPH_FILES
+# Live-graph tests outside tests/fastep_ros/ in the other group: robots on hosts of their own (network namespaces).
+HOST_FILES = (Path(__file__).resolve().parent / 'benchmarks' / 'test_multi_host.py',)
 GRAPH_GROUP, DRIVING_GROUP = 'ros_graph', 'ros_driving'
 
 
 @pytest.hookimpl(optionalhook=True)  # an xdist hook: pytest without xdist never calls it
 def pytest_xdist_make_scheduler(config: pytest.Config, log: Any) -> Any:
-    """--dist loadgroup, with the tests of tests/fastep_ros/ (and GRAPH_FILES) in two groups: DRIVING_FILES, and the
-    rest (lock step, launch, recorder, replay: the timing tests)."""
+    """--dist loadgroup, with the tests of tests/fastep_ros/ (and GRAPH_FILES, HOST_FILES) in two groups:
+    DRIVING_FILES, and the rest (lock step, launch, recorder, replay: the timing tests; robots on other hosts)."""
     if config.getvalue('dist') != 'loadgroup':
         return None
     from xdist.scheduler import LoadGroupScheduling
 
     graph = GRAPH_TESTS.relative_to(config.rootpath).as_posix() + '/'
     driving = tuple(path.relative_to(config.rootpath).as_posix() + '::' for path in DRIVING_FILES)
+    hosts = tuple(path.relative_to(config.rootpath).as_posix() + '::' for path in HOST_FILES)
 
     class GraphGroupScheduling(LoadGroupScheduling):
         def _split_scope(self, nodeid: str) -> str:
             if nodeid.startswith(driving):
                 return DRIVING_GROUP
-            return GRAPH_GROUP if nodeid.startswith(graph) else super()._split_scope(nodeid)
+            return GRAPH_GROUP if nodeid.startswith((graph, *hosts)) else super()._split_scope(nodeid)
 
     return GraphGroupScheduling(config, log)
