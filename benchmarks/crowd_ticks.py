@@ -25,10 +25,10 @@ from typing import Any, Iterator
 import numpy as np
 import yaml
 
-from benchmarks.graph_scaling import scenario_yaml
 from fastep_core.planning.navigator import Navigator
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
+from fastep_testing.runs import circle_yaml
 
 SLOWEST = 3   # a robot's ticks whose make-up is reported: its p99 over 200 ticks lies between the 2nd and 3rd
 
@@ -76,7 +76,7 @@ def make_up(tick: Tick) -> str:
 
 def run(robots: int, algorithm: str, seed: int, window: tuple[float, float],
         step_iterations: int = 0) -> dict[str, Any]:
-    scenario = parse_scenario(yaml.safe_load(scenario_yaml(robots, 20.0, 2.0, step_iterations)))
+    scenario = parse_scenario(yaml.safe_load(circle_yaml(robots, 20.0, 2.0, step_iterations)))
     cpu = time.process_time()
     with timed_updates() as timing:
         result = simulate(scenario, algorithm, seed)

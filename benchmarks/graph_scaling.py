@@ -58,6 +58,7 @@ from fastep_ros.executors import EXECUTORS
 from fastep_ros.layouts import LAYOUTS, Member, command, group
 from fastep_ros.processes import ros_value
 from fastep_testing.graph import Graph, Helper, free_domain, isolated_env, stop_process
+from fastep_testing.runs import circle_yaml
 
 ROOT = Path(__file__).resolve().parents[1]
 PERIOD = 0.05            # control period of the planners (s)
@@ -93,22 +94,6 @@ def machine_cpu() -> tuple[float, float]:
     return sum(values) - idle, sum(values)
 
 
-def scenario_yaml(n: int, radius: float, max_speed: float, step_iterations: int = 0) -> str:
-    """n point-mass robots on a circle swapping sides; step_iterations: PlannerParams' (0, the default, left out)."""
-    lines = [f'name: circle_swap_{n}',
-             f'description: {n} point-mass robots on a circle of radius {radius:g} m swapping to the opposite side',
-             'workspace: [0, 0, 50, 50]', 'robots:']
-    for k in range(n):
-        a = 2.0 * math.pi * k / n
-        dx, dy = radius * math.cos(a), radius * math.sin(a)
-        lines += [f'  - name: r{k + 1}', '    model: point_mass',
-                  f'    start: [{25 + dx:.4f}, {25 + dy:.4f}]', f'    goal: [{25 - dx:.4f}, {25 - dy:.4f}]',
-                  '    radius: 0.5']
-    budget = f', step_iterations: {step_iterations}' if step_iterations else ''
-    lines += [f'planner: {{max_speed: {max_speed!r}{budget}}}']
-    return '\n'.join(lines) + '\n'
-
-
 def period_stats(times: list[float], seconds: float) -> dict[str, float]:
     t = np.asarray(times, dtype=float)
     gaps = np.diff(t)
@@ -126,7 +111,7 @@ def run_n(n: int, args: argparse.Namespace, tmp: Path) -> dict[str, Any]:
     from fastep_ros import launch
 
     path = tmp / f'circle_{n}.yaml'
-    path.write_text(scenario_yaml(n, args.radius, args.max_speed, args.step_iterations))
+    path.write_text(circle_yaml(n, args.radius, args.max_speed, args.step_iterations))
     scenario = load_scenario(str(path))
     stamped = not args.unstamped
     graph = Graph(tmp)

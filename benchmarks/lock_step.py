@@ -28,20 +28,7 @@ from typing import Any
 
 from fastep_core.scenario import load_scenario
 from fastep_core.simulator import simulate
-
-
-def compare(live: list[dict[str, Any]], sim: list[dict[str, Any]]) -> tuple[bool, float]:
-    """(same outcome to the rounding of --json, largest position difference at common trajectory times)."""
-    same, worst = True, 0.0
-    for a, b in zip(live, sim):
-        same &= a['reached'] == b['reached'] and a['sim_time'] == b['sim_time'] and \
-            abs(a['path_length'] - b['path_length']) <= 2e-6 and abs(a['min_clearance'] - b['min_clearance']) <= 2e-6
-        rows = {round(r[0], 3): r[1:3] for r in b['trajectory']}
-        for r in a['trajectory']:
-            other = rows.get(round(r[0], 3))
-            if other is not None:
-                worst = max(worst, abs(r[1] - other[0]), abs(r[2] - other[1]))
-    return same and worst <= 2e-6, worst
+from fastep_testing.runs import circle_yaml, compare
 
 
 def run(scenario: str, algorithm: str, layout: str, executor: str, rtf: float, record: bool,
@@ -91,9 +78,8 @@ def main(argv: list[str] | None = None) -> int:
     out = Path(tempfile.mkdtemp(prefix='lock_step_'))
     scenario = args.scenario
     if args.robots:
-        from benchmarks.graph_scaling import scenario_yaml
         scenario = str(out / f'circle_{args.robots}.yaml')
-        Path(scenario).write_text(scenario_yaml(args.robots, 20.0, 2.0, args.step_iterations))
+        Path(scenario).write_text(circle_yaml(args.robots, 20.0, 2.0, args.step_iterations))
     reference = simulate(load_scenario(scenario), args.algorithm, 0).to_json()['robots']
     rows = []
     for executor in args.executors:

@@ -62,7 +62,7 @@ DRIVING_FILES = tuple(GRAPH_TESTS / name for name in (
     'test_faults.py', 'test_stale_inputs.py', 'test_single_robot.py', 'test_two_robots.py',
     'test_diff_drive_graph.py', 'test_robots.py', 'test_diagnostics.py')) + GRAPH_FILES
 # Live-graph tests outside tests/fastep_ros/ in the other group: robots on hosts of their own (network namespaces).
-HOST_FILES = (Path(__file__).resolve().parent / 'benchmarks' / 'test_multi_host.py',)
+HOST_FILES = (Path(__file__).resolve().parent / 'fastep_testing' / 'test_multi_host.py',)
 GRAPH_GROUP, DRIVING_GROUP = 'ros_graph', 'ros_driving'
 
 

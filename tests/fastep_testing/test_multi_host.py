@@ -1,4 +1,4 @@
-"""Robots on separate computers (benchmarks.multi_host): hosts as network namespaces on a bridge, DDS between them."""
+"""Robots on separate computers (fastep_testing.multi_host): hosts as network namespaces on a bridge."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from pathlib import Path
 
 import pytest
 
-from benchmarks.hosts import Hosts, HostsError, remove_stale
 from fastep_testing.graph import free_domain, isolated_env, stop_process
+from fastep_testing.hosts import Hosts, HostsError, remove_stale
 
 pytestmark = pytest.mark.skipif(os.geteuid() != 0 or shutil.which('ip') is None,
                                 reason='network namespaces need root and iproute2')
@@ -70,7 +70,7 @@ def test_namespaces_of_a_harness_that_died_are_removed_and_bad_counts_are_one_li
 def _harness(tmp_path: Path, *args: str, timeout: float = 240.0) -> tuple[int, str, dict]:
     out = tmp_path / 'run.json'
     env = isolated_env(free_domain(), tmp_path / 'roslog')
-    proc = subprocess.Popen([sys.executable, '-m', 'benchmarks.multi_host', *args, '--json', str(out)], env=env,
+    proc = subprocess.Popen([sys.executable, '-m', 'fastep_testing.multi_host', *args, '--json', str(out)], env=env,
                             stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, stdin=subprocess.DEVNULL)
     try:
         stdout, _ = proc.communicate(timeout=timeout)
