@@ -211,6 +211,9 @@ def commands_page() -> str:
     return '\n'.join(lines)
 
 
+DISCOVERY_ENV = ('ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS', 'ROS_LOCALHOST_ONLY')
+
+
 def pages() -> dict[str, str]:
     """Every generated file, by name: the reference pages and PARAMS_FILE (the params file)."""
     import tempfile
@@ -219,7 +222,17 @@ def pages() -> dict[str, str]:
     from rclpy.context import Context
     from rclpy.signals import SignalHandlerOptions
     context = Context()
-    rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
+    # Discovery off: the nodes see only themselves. With another graph on the domain (a test running beside make
+    # docs), the recorder subscribed to that graph's topics and they went into topics.md.
+    saved = {name: os.environ.pop(name, None) for name in DISCOVERY_ENV}
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'OFF'
+    try:
+        rclpy.init(args=[], context=context, signal_handler_options=SignalHandlerOptions.NO)
+    finally:
+        for name, value in saved.items():
+            os.environ.pop(name, None)
+            if value is not None:
+                os.environ[name] = value
     try:
         with tempfile.TemporaryDirectory() as tmp:
             params, topics, config = node_pages(context, tmp)

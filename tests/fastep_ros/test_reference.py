@@ -12,8 +12,38 @@ ROOT = Path(__file__).resolve().parents[2]
 
 def test_the_generated_reference_pages_and_params_file_are_current() -> None:
     where = {name: ROOT / ('config' if name == PARAMS_FILE else 'docs/reference') / name for name in pages()}
-    stale = [where[name] for name, text in pages().items() if where[name].read_text() != text + '\n']
-    assert not stale, f'{", ".join(map(str, stale))} differ from the code: run `make docs` and commit them'
+    import difflib
+    generated = pages()
+    stale = [name for name, text in generated.items() if where[name].read_text() != text + '\n']
+    diff = ''.join(line for name in stale for line in list(difflib.unified_diff(
+        where[name].read_text().splitlines(True), (generated[name] + '\n').splitlines(True), str(where[name]),
+        'generated'))[:30])
+    assert not stale, f'{", ".join(stale)} differ from the code: run `make docs` and commit them\n{diff}'
+
+
+def test_the_reference_is_generated_apart_from_any_graph_on_the_domain() -> None:
+    """A graph on the same domain (a test beside make docs) put its topics into topics.md: the recorder there
+    subscribed to them. Discovery is off while the pages are made."""
+    import os
+    import subprocess
+    import sys
+    import time
+    intruder = subprocess.Popen([sys.executable, '-c', (
+        'import rclpy, time\n'
+        'from nav_msgs.msg import Odometry\n'
+        'rclpy.init(); node = rclpy.create_node("intruder", namespace="/r9")\n'
+        'pub = node.create_publisher(Odometry, "odom", 10)\n'
+        'print("up", flush=True)\n'
+        'while True:\n'
+        '    pub.publish(Odometry()); time.sleep(0.05)\n')],
+        env=dict(os.environ, ROS_AUTOMATIC_DISCOVERY_RANGE='LOCALHOST'), stdout=subprocess.PIPE, text=True)
+    try:
+        assert intruder.stdout is not None and intruder.stdout.readline().strip() == 'up'
+        time.sleep(1.0)   # discovered by then by anyone who looks (it needs no more than DDS's first announcements)
+        assert '/r9/' not in pages()['topics.md']
+    finally:
+        intruder.kill()
+        intruder.wait()
 
 
 def test_the_reference_has_every_node_and_command() -> None:
