@@ -24,7 +24,25 @@ from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
 
-__all__ = ['RATE_SHORTFALL', 'RATE_WINDOW', 'PlannerReports']
+__all__ = ['RATE_SHORTFALL', 'RATE_WINDOW', 'STATUS_MESSAGES', 'PlannerReports']
+
+# Every `status` message the planner says (PlannerReports.status), its levels and what it means: the reference's
+# status page (fastep_ros.reference) is made from it, and a test checks that status() says nothing else.
+STATUS_MESSAGES: tuple[tuple[str, str, str], ...] = (
+    ('inactive', 'OK', 'lifecycle: not active; no commands are sent (activate to drive)'),
+    ('waiting', 'WARN', 'waiting for the world (/obstacles, /map), for localization, or for a robot in the way '
+                        '(the reason says which); no commands while the world is missing'),
+    ('idle', 'OK', 'no goal: none given yet, or cancelled (the reason says so)'),
+    ('kinematic', 'OK / WARN', 'driving to the goal (or the route vertex in sight) by the kinematic controller; '
+                               'WARN while inputs are stale (kept where last seen) or a newer goal was refused'),
+    ('avoiding', 'OK / WARN', 'driving to a swarm waypoint, escaping a trap, manoeuvring or yielding to a mover; '
+                              'WARN as for kinematic'),
+    ('arrived', 'OK', 'the goal is reached (within goal_tolerance, and facing its heading if it has one)'),
+    ('failed', 'ERROR', 'the goal failed; the reason says why (the failure reasons below)'),
+    ('stale', 'WARN / ERROR', 'held still: own odometry missing, old, rejected or not finite, or the clock stands '
+                              'still (WARN); planning stalled, the plan older than max_plan_age (ERROR)'),
+    ('conflict', 'ERROR', 'another node publishes on cmd_vel: not commanding (exclusive_cmd_vel)'),
+)
 
 RATE_WINDOW = 2.0        # s of node time over which the control loop's achieved rate is measured
 RATE_SHORTFALL = 0.9     # an achieved rate below this share of control_rate_hz is a missed rate (WARN)

@@ -4,14 +4,16 @@
   constraints, read-only, description);
 - topics.md: every node's publishers and subscriptions as the node makes them (name, type, QoS);
 - commands.md: every command line's --help, from its argument parser;
+- status.md: the planner's status messages (fastep_ros.planner_status.STATUS_MESSAGES) and its failure reasons
+  with the Nav2 error codes its actions answer them with (fastep_ros.navigate_actions.ERROR_CODES);
 - config/fastep.yaml: a params file (`--ros-args --params-file`) with every parameter of the planner and the
   plant at its default, its description and range as a comment.
 
     python -m fastep_ros.reference docs/reference config/fastep.yaml
         (make docs; tests/fastep_ros/test_reference.py checks that the files in the repository are what it writes)
 
-The nodes are built in a context of their own, on no DDS traffic (ROS_AUTOMATIC_DISCOVERY_RANGE is not needed:
-they are destroyed before they hear anything).
+The nodes are built in a context of their own with discovery off: another graph on the domain stays out of the
+pages.
 """
 
 from __future__ import annotations
@@ -214,6 +216,27 @@ def commands_page() -> str:
 DISCOVERY_ENV = ('ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS', 'ROS_LOCALHOST_ONLY')
 
 
+def status_page() -> str:
+    from fastep_ros.navigate_actions import ERROR_CODES, TASK_EXECUTOR_FAILED, UNKNOWN_DRIVING, UNKNOWN_PLANNING
+    from fastep_ros.planner_status import STATUS_MESSAGES
+    lines = ['# Status and failure reasons', '',
+             'Generated from the planner\'s tables (`python -m fastep_ros.reference`). The planner publishes '
+             '`<ns>/status` (diagnostic_msgs/DiagnosticStatus, latched): `message` is one of these, `level` its '
+             'level, the value `reason` says why, in words; /diagnostics carries the same (docs/parameters.md).', '',
+             '| message | level | meaning |', '|---|---|---|',
+             *(f'| `{message}` | {level} | {_cell(meaning)} |' for message, level, meaning in STATUS_MESSAGES), '',
+             '## Failure reasons and Nav2 error codes', '',
+             'A goal that fails, or is refused, ends its action (navigate_to_pose, navigate_through_poses, '
+             'follow_waypoints) ABORTED with the error code of the first of these phrases its reason contains:', '',
+             '| the reason contains | error code |', '|---|---|',
+             *(f'| {words} | {code} |' for words, code in ERROR_CODES),
+             f'| anything else, for a goal refused | {UNKNOWN_PLANNING} (ComputePathToPose UNKNOWN) |',
+             f'| anything else, on the way | {UNKNOWN_DRIVING} (FollowPath UNKNOWN) |', '',
+             f'follow_waypoints with stop_on_failure ends at a failed waypoint with {TASK_EXECUTOR_FAILED} '
+             '(TASK_EXECUTOR_FAILED); without, the waypoint goes into missed_waypoints with its code.']
+    return '\n'.join(lines)
+
+
 def pages() -> dict[str, str]:
     """Every generated file, by name: the reference pages and PARAMS_FILE (the params file)."""
     import tempfile
@@ -238,7 +261,8 @@ def pages() -> dict[str, str]:
             params, topics, config = node_pages(context, tmp)
     finally:
         rclpy.try_shutdown(context=context)
-    return {'parameters.md': params, 'topics.md': topics, 'commands.md': commands_page(), PARAMS_FILE: config}
+    return {'parameters.md': params, 'topics.md': topics, 'commands.md': commands_page(), 'status.md': status_page(),
+            PARAMS_FILE: config}
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -56,3 +56,24 @@ def test_the_reference_has_every_node_and_command() -> None:
     for command in ('fastep-sim', 'fastep-bench', 'fastep-tune', 'fastep-launch', 'fastep-report', 'fastep-replay',
                     'fastep-recover'):
         assert f'## {command}\n\n```text\nusage: {command}' in generated['commands.md'], command
+
+
+def test_the_status_table_holds_every_message_the_planner_says() -> None:
+    """STATUS_MESSAGES (the status page) against the code: each message PlannerReports.status and
+    navigation_status return as a literal, and every navigator mode."""
+    import ast
+    import inspect
+    import textwrap
+
+    from fastep_core.planning.navigator import Mode
+    from fastep_ros.planner_status import STATUS_MESSAGES, PlannerReports
+    said = set()
+    for method in (PlannerReports.status, PlannerReports.navigation_status):
+        tree = ast.parse(textwrap.dedent(inspect.getsource(method)))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Return) and isinstance(node.value, ast.Tuple) and len(node.value.elts) == 3:
+                message = node.value.elts[1]
+                said |= {c.value for c in ast.walk(message) if isinstance(c, ast.Constant) and isinstance(c.value, str)}
+    said |= {mode.value for mode in Mode}
+    assert said == {message for message, _, _ in STATUS_MESSAGES}
+    assert 'status.md' in pages() and '| `conflict` | ERROR |' in pages()['status.md']
