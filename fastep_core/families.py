@@ -24,7 +24,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import asdict, dataclass
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -33,6 +33,9 @@ from fastep_core.errors import ParameterError
 from fastep_core.experiments import Record
 from fastep_core.planning.algorithms import algorithm_name
 from fastep_core.random_scenarios import ALL_FAMILIES, FAMILY_SEED0, family_source, parse_family_source
+
+if TYPE_CHECKING:
+    from fastep_core.cluster import ClusterSpec, Engine
 
 __all__ = ['FAMILY_NAMES', 'Row', 'Summary', 'family_sources', 'run_families', 'rows_of', 'summarise',
            'worst_runs', 'markdown_report', 'load_average']
@@ -55,14 +58,17 @@ def family_sources(families: Sequence[str], worlds: int) -> list[str]:
 
 def run_families(families: Sequence[str], algorithms: Sequence[str], worlds: int, runs: int = 1,
                  workers: int = 2, *, seed0: int = 0, progress: bool | None = False, label: str = 'families',
-                 overrides: dict[str, float] | None = None, realtime: float | None = None) -> list[Record]:
+                 overrides: dict[str, float] | None = None, realtime: float | None = None,
+                 cluster: ClusterSpec | Engine | str | None = None) -> list[Record]:
     """Every planner on `worlds` worlds per family, run seeds seed0..seed0+runs-1 (deterministic planners once);
-    `realtime`: fastep_core.simulator.simulate's latency factor (None: lock step)."""
+    `realtime`: fastep_core.simulator.simulate's latency factor (None: lock step); `cluster`: run on Dask
+    (experiments.run_batch)."""
     for family in families:
         if family not in ALL_FAMILIES:
             raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
     return experiments.run_batch(family_sources(families, worlds), algorithms, runs, workers, seed0=seed0,
-                                 progress=progress, label=label, overrides=overrides, realtime=realtime)
+                                 progress=progress, label=label, overrides=overrides, realtime=realtime,
+                                 cluster=cluster)
 
 
 @dataclass(frozen=True)

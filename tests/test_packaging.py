@@ -114,6 +114,16 @@ def test_pip_brings_the_ros_wheels_only_where_no_ros_is_installed(tmp_path: Path
     assert [line for line in fresh[''] if not line.startswith('ros-')] == sourced['']
 
 
+def test_dask_is_an_extra_that_make_test_pins(tmp_path: Path) -> None:
+    """--cluster's engine is optional: the extra `cluster`, not install_requires; requirements-test.txt pins it so
+    make test runs tests/fastep_core/test_cluster.py."""
+    found = requirements(tmp_path / 'setup')
+    assert found['cluster'] == ['dask[distributed]>=2026.1']
+    assert not any(line.startswith(('dask', 'distributed')) for line in found[''])
+    pinned = (ROOT / 'requirements-test.txt').read_text().splitlines()
+    assert {'dask==2026.8.0', 'distributed==2026.8.0'} <= set(pinned)
+
+
 def sourced(install: Path, script: str, **environ: str) -> subprocess.CompletedProcess[str]:
     """Run a bash script after `source install/setup.bash`, as a ROS user does, with none of this checkout on
     PYTHONPATH (so the product is imported from the install)."""
