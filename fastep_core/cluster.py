@@ -106,23 +106,30 @@ class Engine:
 
     def map_unordered(self, job: Callable[[T], R], items: Iterable[T], name: str = 'fastep',
                       window: int | None = None) -> Iterator[R]:
-        """job(item) for every item, in the order they finish; at most `window` (default WINDOW_PER_WORKER x
-        worker threads) submitted and not yet yielded, the next item taken from `items` as one ends."""
+        """job(item) for every item, in the order they finish; at most `window` submitted and not yet yielded
+        (default WINDOW_PER_WORKER x the worker threads, counted again as results come: workers may join or
+        leave), the next items taken from `items` as they end."""
         distributed = _distributed()
         todo = iter(items)
         keys = self._keys(name)
-        window = window or WINDOW_PER_WORKER * self.threads
+        size = window or WINDOW_PER_WORKER * self.threads
         running = distributed.as_completed(loop=self.client.loop)
+        in_flight = done = 0
 
         def feed(n: int) -> None:
-            for item in itertools.islice(todo, n):
+            nonlocal in_flight
+            for item in itertools.islice(todo, max(n, 0)):
                 running.add(self.client.submit(job, item, key=next(keys), retries=self.retries))
+                in_flight += 1
 
-        feed(window)
+        feed(size)
         for future in running:
             result = self._result(future)
             future.release()
-            feed(1)
+            in_flight, done = in_flight - 1, done + 1
+            if window is None and done % size == 0:
+                size = WINDOW_PER_WORKER * self.threads
+            feed(size - in_flight)
             yield result
 
     def map(self, job: Callable[[T], R], items: Iterable[T], name: str = 'fastep') -> list[R]:

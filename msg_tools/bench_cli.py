@@ -113,7 +113,7 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
     overrides = dict(args.planner_set)
     PlannerParams().with_overrides(overrides)   # an unknown name or a bad value: one line before any run starts
     command = ' '.join([prog, *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
-    if args.workers is None:
+    if args.workers is None and args.cluster is None:
         args.workers = 2
     if args.families is not None:
         return _run_families(args, prog, report_name, overrides, command)
@@ -121,7 +121,8 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
         builtin_names() if args.scenarios == ['all'] else list(dict.fromkeys(args.scenarios))
     for name in scenarios:  # a bad one is a FastepError: one line before any run starts
         load_scenario(name)
-    records = experiments.run_batch(scenarios, args.algorithms, args.runs or 30, args.workers, seed0=args.seed,
+    records = experiments.run_batch(scenarios, args.algorithms, args.runs or 30, args.workers or 2,
+                                    seed0=args.seed,
                                     progress=True if args.progress else None, label=prog, overrides=overrides,
                                     realtime=args.realtime, cluster=args.cluster)
     optimal = {s: experiments.optimal_lengths(s) for s in scenarios}
@@ -154,7 +155,7 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
     chosen = list(dict.fromkeys(args.families)) or list(FAMILIES)
     worlds, runs = args.worlds or 30, args.runs or 1
     load_before, wall = families.load_average(), time.perf_counter()
-    records = families.run_families(chosen, args.algorithms, worlds, runs, args.workers, seed0=args.seed,
+    records = families.run_families(chosen, args.algorithms, worlds, runs, args.workers or 2, seed0=args.seed,
                                     progress=True if args.progress else None, label=prog, overrides=overrides,
                                     realtime=args.realtime, cluster=args.cluster)
     rows = families.rows_of(records)

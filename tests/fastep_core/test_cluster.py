@@ -5,10 +5,12 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import operator
 import os
 import subprocess
 import sys
 from pathlib import Path
+from typing import Iterator
 
 import pytest
 
@@ -56,6 +58,22 @@ def test_a_batch_on_a_local_cluster_gives_the_records_of_the_pool() -> None:
     assert [(r.scenario, r.algorithm, r.seed) for r in clustered] == [(r.scenario, r.algorithm, r.seed)
                                                                        for r in pooled]
     assert without_times(clustered) == without_times(pooled)
+
+
+def test_a_bounded_window_of_tasks_is_in_flight_and_map_keeps_the_order() -> None:
+    pulled = []
+
+    def items() -> Iterator[int]:
+        for i in range(40):
+            pulled.append(i)
+            yield i
+    with open_cluster('local:1') as engine:
+        out = []
+        for result in engine.map_unordered(operator.neg, items(), window=3):
+            out.append(result)
+            assert len(pulled) - len(out) <= 3      # taken from the iterator and not back yet
+        assert sorted(out) == sorted(-i for i in range(40))
+        assert engine.map(operator.neg, range(25)) == [-i for i in range(25)] and engine.map(abs, []) == []
 
 
 class DieOnce:
