@@ -4,9 +4,9 @@ Why a module of pure functions: the paper's Table 2 (30 runs per planner and sce
 percentages) is the project's main claim, so regenerating it must be one reproducible call, usable from the
 `fastep-bench` console script, from `benchmarks/table2.py`, from tuning and from tests alike:
 
-- `run_batch` spreads (scenario, algorithm, seed) simulate calls over a process pool (one task = one run;
-  every run draws only from its own seed, so the records do not depend on the number of workers or on the
-  order the pool finishes them in; they are returned sorted);
+- `run_batch` spreads (scenario, algorithm, seed) simulate calls over a process pool, or a Dask cluster
+  (fastep_core.cluster), one task = one run; every run draws only from its own seed, so the records do not
+  depend on the engine, the number of workers or the order they finish in; they are returned sorted;
 - `summarise` gives mean and sample standard deviation (ddof = 1) per scenario, planner and robot of path
   length and simulated time to goal (over the runs that arrived without collision) and of compute time (all
   runs);

@@ -7,8 +7,9 @@ differential-drive bases in circles + walls and 1-4 at a time (fastep_core.rando
 
 - Worlds: world k of a family is `random_family_data(family, FAMILY_SEED0 + k)`, named by its source
   'FAMILY:SEED' (random_scenarios.family_source), solvable by construction. The runs are
-  fastep_core.experiments.run_batch over those sources (seeded runs, spread over a process pool, records
-  sorted: the records do not depend on the number of workers, only the times in them do).
+  fastep_core.experiments.run_batch over those sources (seeded runs, spread over a process pool or a Dask
+  cluster, records sorted: the records do not depend on the engine or the number of workers, only the times in
+  them do).
 - Collisions: the simulator's judgement, from every robot's positions after each step against the true world
   and the other robots (fastep_core.metrics.trajectory_margins: geometry of its own, not the planner's).
 - Optimum: per robot, alone in the world, the exact shortest path keeping radius + clearance_margin
