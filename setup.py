@@ -53,6 +53,8 @@ setup(
         'rosbags>=0.10',
     ],
     extras_require={'ros-wheels': ROS_WHEELS,
+                    # fastep-bench / fastep-tune --cluster (fastep_core.cluster): Dask's distributed scheduler
+                    'cluster': ['dask[distributed]>=2026.1'],
                     'test': ['pytest>=8', 'pytest-xdist>=3.8', 'hypothesis>=6.100', 'websockets>=13', 'protobuf>=5',
                              'colcon-core>=0.21', 'colcon-ros>=0.5', 'colcon-python-setup-py>=0.2',
                              'colcon-bash>=0.5']},

@@ -4,9 +4,9 @@ Why a module of pure functions: the paper's Table 2 (30 runs per planner and sce
 percentages) is the project's main claim, so regenerating it must be one reproducible call, usable from the
 `fastep-bench` console script, from `benchmarks/table2.py`, from tuning and from tests alike:
 
-- `run_batch` spreads (scenario, algorithm, seed) simulate calls over a process pool (one task = one run;
-  every run draws only from its own seed, so the records do not depend on the number of workers or on the
-  order the pool finishes them in; they are returned sorted);
+- `run_batch` spreads (scenario, algorithm, seed) simulate calls over a process pool, or a Dask cluster
+  (fastep_core.cluster), one task = one run; every run draws only from its own seed, so the records do not
+  depend on the engine, the number of workers or the order they finish in; they are returned sorted;
 - `summarise` gives mean and sample standard deviation (ddof = 1) per scenario, planner and robot of path
   length and simulated time to goal (over the runs that arrived without collision) and of compute time (all
   runs);
@@ -29,13 +29,14 @@ clearance_margin, the rule that planned waypoints follow.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import math
 import multiprocessing
 import os
 import time
 from dataclasses import asdict, dataclass
-from typing import Iterable, Sequence, overload
+from typing import TYPE_CHECKING, Iterable, Sequence, overload
 
 import numpy as np
 
@@ -46,6 +47,9 @@ from fastep_core.planning.optimal import OptimalPath, shortest_path
 from fastep_core.random_scenarios import parse_family_source, random_family_data
 from fastep_core.scenario import Scenario, load_scenario, parse_scenario
 from fastep_core.simulator import Run, simulate
+
+if TYPE_CHECKING:
+    from fastep_core.cluster import ClusterSpec, Engine
 
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
@@ -189,11 +193,14 @@ def pool_context() -> multiprocessing.context.BaseContext:
 
 def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, workers: int = 2, *,
               seed0: int = 0, progress: bool | None = False, label: str = 'runs',
-              overrides: dict[str, float] | None = None, realtime: float | None = None) -> list[Record]:
+              overrides: dict[str, float] | None = None, realtime: float | None = None,
+              cluster: ClusterSpec | Engine | str | None = None) -> list[Record]:
     """Simulate every scenario with every algorithm for seeds seed0..seed0+runs-1; records sorted.
 
     workers <= 1 runs in this process. `progress`: a progress bar titled `label` on stderr, None when stderr
-    is a terminal, True always, False never (fastep_core.cli.progress_bar).
+    is a terminal, True always, False never (fastep_core.cli.progress_bar). `cluster` (fastep_core.cluster:
+    'local:N', a scheduler address, or an open Engine) runs the tasks there instead, `workers` unused; the
+    records are the same.
     """
     if runs < 1:
         raise ParameterError(f'runs must be >= 1, got {runs}')
@@ -207,7 +214,14 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     job = functools.partial(run_task, overrides=frozen, realtime=realtime)
     out: list[Record] = []
     with progress_bar(len(every), label, progress) as bar:
-        if workers <= 1 or len(every) == 1:
+        if cluster is not None:
+            from fastep_core.cluster import Engine, open_cluster  # Dask only when a cluster is asked for
+            with contextlib.ExitStack() as stack:
+                engine = cluster if isinstance(cluster, Engine) else stack.enter_context(open_cluster(cluster))
+                for records in engine.map_unordered(job, todo, name=label):
+                    out.extend(records)
+                    bar.update()
+        elif workers <= 1 or len(every) == 1:
             for task in todo:
                 out.extend(job(task))
                 bar.update()

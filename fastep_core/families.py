@@ -7,8 +7,9 @@ differential-drive bases in circles + walls and 1-4 at a time (fastep_core.rando
 
 - Worlds: world k of a family is `random_family_data(family, FAMILY_SEED0 + k)`, named by its source
   'FAMILY:SEED' (random_scenarios.family_source), solvable by construction. The runs are
-  fastep_core.experiments.run_batch over those sources (seeded runs, spread over a process pool, records
-  sorted: the records do not depend on the number of workers, only the times in them do).
+  fastep_core.experiments.run_batch over those sources (seeded runs, spread over a process pool or a Dask
+  cluster, records sorted: the records do not depend on the engine or the number of workers, only the times in
+  them do).
 - Collisions: the simulator's judgement, from every robot's positions after each step against the true world
   and the other robots (fastep_core.metrics.trajectory_margins: geometry of its own, not the planner's).
 - Optimum: per robot, alone in the world, the exact shortest path keeping radius + clearance_margin
@@ -24,7 +25,7 @@ from __future__ import annotations
 import math
 import os
 from dataclasses import asdict, dataclass
-from typing import Any, Sequence
+from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
@@ -33,6 +34,9 @@ from fastep_core.errors import ParameterError
 from fastep_core.experiments import Record
 from fastep_core.planning.algorithms import algorithm_name
 from fastep_core.random_scenarios import ALL_FAMILIES, FAMILY_SEED0, family_source, parse_family_source
+
+if TYPE_CHECKING:
+    from fastep_core.cluster import ClusterSpec, Engine
 
 __all__ = ['FAMILY_NAMES', 'Row', 'Summary', 'family_sources', 'run_families', 'rows_of', 'summarise',
            'worst_runs', 'markdown_report', 'load_average']
@@ -55,14 +59,17 @@ def family_sources(families: Sequence[str], worlds: int) -> list[str]:
 
 def run_families(families: Sequence[str], algorithms: Sequence[str], worlds: int, runs: int = 1,
                  workers: int = 2, *, seed0: int = 0, progress: bool | None = False, label: str = 'families',
-                 overrides: dict[str, float] | None = None, realtime: float | None = None) -> list[Record]:
+                 overrides: dict[str, float] | None = None, realtime: float | None = None,
+                 cluster: ClusterSpec | Engine | str | None = None) -> list[Record]:
     """Every planner on `worlds` worlds per family, run seeds seed0..seed0+runs-1 (deterministic planners once);
-    `realtime`: fastep_core.simulator.simulate's latency factor (None: lock step)."""
+    `realtime`: fastep_core.simulator.simulate's latency factor (None: lock step); `cluster`: run on Dask
+    (experiments.run_batch)."""
     for family in families:
         if family not in ALL_FAMILIES:
             raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
     return experiments.run_batch(family_sources(families, worlds), algorithms, runs, workers, seed0=seed0,
-                                 progress=progress, label=label, overrides=overrides, realtime=realtime)
+                                 progress=progress, label=label, overrides=overrides, realtime=realtime,
+                                 cluster=cluster)
 
 
 @dataclass(frozen=True)

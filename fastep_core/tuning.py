@@ -22,7 +22,9 @@ evaluations of 6 runs each, spread over 2 worker processes: about 3 minutes on 2
 case_study_2, application (tractor-trailers) and open_field, seeds 100-109.
 
     fastep-tune [--train ...] [--test ...] [--seeds 2] [--test-seeds 10] [--popsize 5] [--maxiter 3]
-                [--workers 2] [--seed 0] [--out FILE.md] [--json FILE]
+                [--workers 2 | --cluster ADDRESS|local:N] [--seed 0] [--out FILE.md] [--json FILE]
+
+--cluster scores each generation's candidates on a Dask cluster (fastep_core.cluster), the same result.
 
 Exit 0 after a search, 2 with one line on stderr for bad input.
 """
@@ -30,6 +32,7 @@ Exit 0 after a search, 2 with one line on stderr for bad input.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import functools
 import json
 import math
@@ -45,6 +48,7 @@ from numpy.typing import NDArray
 
 from fastep_core import experiments
 from fastep_core.cli import MAX_ITERATIONS, MAX_POPSIZE, MAX_RUNS, MAX_WORKERS, Parser, count, fail, guard, seed
+from fastep_core.cluster import CLUSTER_HELP, ClusterSpec, Engine, cluster_spec, open_cluster
 from fastep_core.planning.params import PlannerParams
 
 __all__ = ['PARAMETERS', 'PENALTY', 'TRAIN', 'TEST', 'TuningResult', 'cost', 'decode', 'tune', 'evaluate',
@@ -105,8 +109,10 @@ class TuningResult:
 
 def tune(train: Sequence[str] = TRAIN, seeds: Sequence[int] = (0, 1), *, popsize: int = 5, maxiter: int = 3,
          workers: int = 2, seed: int = 0, algorithm: str = 'fastep',
-         log: Callable[[str], None] | None = None) -> TuningResult:
-    """Differential evolution over PARAMETERS (Table 1 in the initial population); returns the best found."""
+         log: Callable[[str], None] | None = None, cluster: ClusterSpec | Engine | str | None = None) -> TuningResult:
+    """Differential evolution over PARAMETERS (Table 1 in the initial population); returns the best found.
+    `cluster` (fastep_core.cluster): each generation's candidates are scored there instead of on `workers`
+    processes, the same result."""
     from scipy.optimize import Bounds, differential_evolution
     fun = functools.partial(cost, train=tuple(train), seeds=tuple(seeds), algorithm=algorithm)
     bounds = Bounds(*np.array(list(PARAMETERS.values()), dtype=float).T)
@@ -123,7 +129,11 @@ def tune(train: Sequence[str] = TRAIN, seeds: Sequence[int] = (0, 1), *, popsize
     kwargs: dict[str, Any] = dict(popsize=popsize, maxiter=maxiter, x0=x0, init='latinhypercube', polish=False,
                                   tol=0.0, atol=0.0, updating='deferred', rng=np.random.default_rng(seed),
                                   callback=callback)
-    if workers > 1:
+    if cluster is not None:
+        with contextlib.ExitStack() as stack:
+            engine = cluster if isinstance(cluster, Engine) else stack.enter_context(open_cluster(cluster))
+            result = differential_evolution(fun, bounds, workers=functools.partial(engine.map, name=PROG), **kwargs)
+    elif workers > 1:
         with experiments.pool_context().Pool(workers) as pool:
             result = differential_evolution(fun, bounds, workers=pool.map, **kwargs)
     else:
@@ -134,9 +144,10 @@ def tune(train: Sequence[str] = TRAIN, seeds: Sequence[int] = (0, 1), *, popsize
 
 
 def evaluate(scenarios: Sequence[str], overrides: dict[str, float] | None, runs: int, seed0: int,
-             workers: int) -> list[experiments.Record]:
+             workers: int, cluster: ClusterSpec | Engine | str | None = None) -> list[experiments.Record]:
     """FAStep-Kinematic runs of the scenarios with planner overrides (None: each scenario's own values)."""
-    return experiments.run_batch(scenarios, ['fastep'], runs, workers, seed0=seed0, overrides=overrides)
+    return experiments.run_batch(scenarios, ['fastep'], runs, workers, seed0=seed0, overrides=overrides,
+                                 cluster=cluster)
 
 
 def report(result: TuningResult, test: Sequence[str], baseline: Sequence[experiments.Record],
@@ -181,7 +192,9 @@ def _parser() -> argparse.ArgumentParser:
     p.add_argument('--test-seeds', type=count(MAX_RUNS), default=10, help='held-out seeds 100..100+N-1 (default 10)')
     p.add_argument('--popsize', type=count(MAX_POPSIZE), default=5, help='DE population = popsize x 4 (default 5)')
     p.add_argument('--maxiter', type=count(MAX_ITERATIONS), default=3, help='DE generations (default 3)')
-    p.add_argument('--workers', type=count(MAX_WORKERS), default=2, help='worker processes (default 2)')
+    engine = p.add_mutually_exclusive_group()
+    engine.add_argument('--workers', type=count(MAX_WORKERS), help='worker processes (default 2)')
+    engine.add_argument('--cluster', type=cluster_spec, metavar='ADDRESS|local:N', help=CLUSTER_HELP)
     p.add_argument('--seed', type=seed, default=0, help='seed of the search (default 0)')
     p.add_argument('--out', type=Path, metavar='FILE.md', help='also write the Markdown report here')
     p.add_argument('--json', type=Path, metavar='FILE', help='write the tuned parameters as JSON')
@@ -207,11 +220,14 @@ def _run(argv: Sequence[str] | None) -> int:
     def log(text: str) -> None:
         print(text, file=sys.stderr, flush=True)
 
-    result = tune(args.train, tuple(range(args.seeds)), popsize=args.popsize, maxiter=args.maxiter,
-                  workers=args.workers, seed=args.seed, log=log)
-    log(f'fastep-tune: checking on held-out scenarios {", ".join(args.test)}')
-    baseline = evaluate(args.test, None, args.test_seeds, 100, args.workers)
-    tuned = evaluate(args.test, result.params, args.test_seeds, 100, args.workers)
+    workers = args.workers or 2
+    with contextlib.ExitStack() as stack:   # one cluster (if any) for the search and both checks
+        cluster: Engine | None = None if args.cluster is None else stack.enter_context(open_cluster(args.cluster))
+        result = tune(args.train, tuple(range(args.seeds)), popsize=args.popsize, maxiter=args.maxiter,
+                      workers=workers, seed=args.seed, log=log, cluster=cluster)
+        log(f'fastep-tune: checking on held-out scenarios {", ".join(args.test)}')
+        baseline = evaluate(args.test, None, args.test_seeds, 100, workers, cluster)
+        tuned = evaluate(args.test, result.params, args.test_seeds, 100, workers, cluster)
     command = ' '.join([PROG, *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
     text = report(result, args.test, baseline, tuned, command)
     print(text)

@@ -2,7 +2,8 @@
 every planner on random world families.
 
     fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal dwa]
-                 [--workers 2] [--seed 0] [--out docs/] [--report table2] [--json FILE] [--no-figures]
+                 [--workers 2 | --cluster ADDRESS|local:N] [--seed 0] [--out docs/] [--report table2]
+                 [--json FILE] [--no-figures]
                  [--progress] [--planner-set NAME=VALUE ...]
     fastep-bench --families [FAMILY ...] [--worlds 30] [--runs 1] [--algorithms ...] [--seed 0] [--out DIR]
                  [--report families] [--json FILE] [--planner-set NAME=VALUE ...] ...
@@ -17,7 +18,8 @@ lives in msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is
 runs per world and planner; it writes OUT/REPORT.md (the family table), OUT/REPORT.json (or --json: per-run
 rows and the per family and planner summary) and OUT/figures/REPORT_{path_opt,cpu,worst}.png (--worst-of ALG:
 that planner's worst worlds). --planner-set overrides planner parameters (PlannerParams) for every planner in
-either mode. Exit 0 when the runs were made, 2 with one line on stderr for bad input.
+either mode. --cluster runs the same tasks on a Dask cluster instead of the process pool (fastep_core.cluster):
+the same records. Exit 0 when the runs were made, 2 with one line on stderr for bad input.
 """
 
 from __future__ import annotations
@@ -33,6 +35,7 @@ from typing import Sequence
 
 from fastep_core import experiments, families
 from fastep_core.cli import MAX_RUNS, MAX_WORKERS, REALTIME_HELP, Parser, count, fail, guard, realtime_factor, seed
+from fastep_core.cluster import CLUSTER_HELP, cluster_spec
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
 from fastep_core.random_scenarios import ALL_FAMILIES, FAMILIES, FAMILY_SEED0
@@ -61,7 +64,9 @@ def _parser(prog: str) -> argparse.ArgumentParser:
                    'scenarios with a tractor-trailer)')
     p.add_argument('--planner-set', nargs='+', default=[], type=_override, metavar='NAME=VALUE',
                    help='planner parameter overrides for every planner, e.g. stuck_steps=1 plan_horizon=2')
-    p.add_argument('--workers', type=count(MAX_WORKERS), default=2, help='worker processes (default 2)')
+    engine = p.add_mutually_exclusive_group()
+    engine.add_argument('--workers', type=count(MAX_WORKERS), help='worker processes (default 2)')
+    engine.add_argument('--cluster', type=cluster_spec, metavar='ADDRESS|local:N', help=CLUSTER_HELP)
     p.add_argument('--realtime', type=realtime_factor, nargs='?', const=1.0, default=None, metavar='FACTOR',
                    help=REALTIME_HELP)
     p.add_argument('--seed', type=seed, default=0, help='first run seed (default 0)')
@@ -108,15 +113,18 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
     overrides = dict(args.planner_set)
     PlannerParams().with_overrides(overrides)   # an unknown name or a bad value: one line before any run starts
     command = ' '.join([prog, *map(shlex.quote, sys.argv[1:] if argv is None else argv)])
+    if args.workers is None and args.cluster is None:
+        args.workers = 2
     if args.families is not None:
         return _run_families(args, prog, report_name, overrides, command)
     scenarios = list(experiments.TABLE2) if args.scenarios is None else \
         builtin_names() if args.scenarios == ['all'] else list(dict.fromkeys(args.scenarios))
     for name in scenarios:  # a bad one is a FastepError: one line before any run starts
         load_scenario(name)
-    records = experiments.run_batch(scenarios, args.algorithms, args.runs or 30, args.workers, seed0=args.seed,
+    records = experiments.run_batch(scenarios, args.algorithms, args.runs or 30, args.workers or 2,
+                                    seed0=args.seed,
                                     progress=True if args.progress else None, label=prog, overrides=overrides,
-                                    realtime=args.realtime)
+                                    realtime=args.realtime, cluster=args.cluster)
     optimal = {s: experiments.optimal_lengths(s) for s in scenarios}
     title = 'Table 2 regenerated' if scenarios == list(experiments.TABLE2) else \
         'FAStep-Kinematic, ACO-Kinematic and the optimum'
@@ -147,16 +155,17 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
     chosen = list(dict.fromkeys(args.families)) or list(FAMILIES)
     worlds, runs = args.worlds or 30, args.runs or 1
     load_before, wall = families.load_average(), time.perf_counter()
-    records = families.run_families(chosen, args.algorithms, worlds, runs, args.workers, seed0=args.seed,
+    records = families.run_families(chosen, args.algorithms, worlds, runs, args.workers or 2, seed0=args.seed,
                                     progress=True if args.progress else None, label=prog, overrides=overrides,
-                                    realtime=args.realtime)
+                                    realtime=args.realtime, cluster=args.cluster)
     rows = families.rows_of(records)
     wall = time.perf_counter() - wall
     load_after = families.load_average()
+    where = f'with {args.workers} worker(s)' if args.cluster is None else f'on the Dask cluster {args.cluster}'
     run_cpu = sum({(r.scenario, r.algorithm, r.seed): r.cpu_time for r in records}.values())
     notes = [f'Worlds per family: {worlds} (seeds {FAMILY_SEED0}-{FAMILY_SEED0 + worlds - 1}); '
              f'runs per world: {runs} (seeds {args.seed}-{args.seed + runs - 1}; deterministic planners once). '
-             f'Wall time {wall:.0f} s with {args.workers} worker(s), CPU in the runs {run_cpu:.0f} s; load average '
+             f'Wall time {wall:.0f} s {where}, CPU in the runs {run_cpu:.0f} s; load average '
              f'(1 min) {load_before:.2f} at the start, {load_after:.2f} at the end.' +
              (f' Planner overrides: {", ".join(f"{k}={v:g}" for k, v in overrides.items())}.' if overrides else '') +
              ('' if args.realtime is None else f' Realtime x{args.realtime:g}: planning latency counted '
@@ -171,8 +180,8 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
         out_json.parent.mkdir(parents=True, exist_ok=True)
         out_json.write_text(json.dumps({
             'command': command, 'families': chosen, 'worlds': worlds, 'runs': runs, 'algorithms': args.algorithms,
-            'overrides': overrides, 'workers': args.workers, 'realtime': args.realtime, 'wall_time': wall,
-            'load_average': [load_before, load_after],
+            'overrides': overrides, 'workers': args.workers, 'cluster': args.cluster and str(args.cluster),
+            'realtime': args.realtime, 'wall_time': wall, 'load_average': [load_before, load_after],
             'summary': [s.to_json() for s in summary], 'rows': [r.to_json() for r in rows]}, indent=1) + '\n')
         written = [report, out_json]
         if not args.no_figures:

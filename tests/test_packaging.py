@@ -37,6 +37,9 @@ PYTHON_KEYS = {
     'foxglove': 'python3-foxglove-sdk-pip',
 }
 
+# Imported only for an optional extra of setup.py, so no exec_depend: a robot never needs them.
+OPTIONAL = {'distributed': 'cluster'}   # fastep_core/cluster.py: fastep-bench / fastep-tune --cluster
+
 
 def console_scripts() -> list[str]:
     tree = ast.parse((ROOT / 'setup.py').read_text())
@@ -68,7 +71,7 @@ def package_xml_keys(tag: str) -> set[str]:
 
 
 def test_package_xml_exec_depends_are_exactly_the_runtime_imports() -> None:
-    imports = third_party_imports()
+    imports = third_party_imports() - set(OPTIONAL)
     unknown = sorted(name for name in imports if name not in PYTHON_KEYS and not is_ros_package(name))
     assert unknown == [], 'imported by the product, no rosdep key known: add it to PYTHON_KEYS and package.xml'
     needed = {PYTHON_KEYS.get(name, name) for name in imports}
@@ -112,6 +115,16 @@ def test_pip_brings_the_ros_wheels_only_where_no_ros_is_installed(tmp_path: Path
     assert ros_wheels(sourced['']) == []
     assert fresh['ros-wheels'] == sourced['ros-wheels'] == ros_wheels(fresh[''])
     assert [line for line in fresh[''] if not line.startswith('ros-')] == sourced['']
+
+
+def test_dask_is_an_extra_that_make_test_pins(tmp_path: Path) -> None:
+    """--cluster's engine is optional: the extra `cluster`, not install_requires; requirements-test.txt pins it so
+    make test runs tests/fastep_core/test_cluster.py."""
+    found = requirements(tmp_path / 'setup')
+    assert found['cluster'] == ['dask[distributed]>=2026.1']
+    assert not any(line.startswith(('dask', 'distributed')) for line in found[''])
+    pinned = (ROOT / 'requirements-test.txt').read_text().splitlines()
+    assert {'dask==2026.8.0', 'distributed==2026.8.0'} <= set(pinned)
 
 
 def sourced(install: Path, script: str, **environ: str) -> subprocess.CompletedProcess[str]:
