@@ -34,7 +34,8 @@ import yaml
 from fastep_core.planning import algorithms
 from fastep_core.planning import step as step_module
 from fastep_core.planning.aco_kinematic import ACOKinematic
-from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode, Navigator
+from fastep_core.planning.fastep_kinematic import FAStepKinematic
+from fastep_core.planning.navigator import FloatArray, Mode, Navigator
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.others import OtherRobot
 from fastep_core.random_scenarios import CIRCLES, circle_field_data

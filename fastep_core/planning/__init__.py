@@ -3,7 +3,8 @@ the safety nets around them. `algorithms` is the registry by name; `navigator` t
 
 from fastep_core.planning.aco_kinematic import ACOKinematic
 from fastep_core.planning.algorithms import ALGORITHMS, make_navigator, make_robot
-from fastep_core.planning.navigator import FAStepKinematic, FAStepPaper, Mode, Navigator
+from fastep_core.planning.fastep_kinematic import FAStepKinematic, FAStepPaper
+from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams

@@ -16,8 +16,9 @@ from fastep_core.kinematics.diff_drive import DiffDrive, DiffDriveController
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.aco_kinematic import ACOKinematic
 from fastep_core.planning.dwa import DynamicWindow
+from fastep_core.planning.fastep_kinematic import FAStepKinematic, FAStepPaper
 from fastep_core.planning.fastep_route import FAStepRoute
-from fastep_core.planning.navigator import FAStepKinematic, FAStepPaper, Navigator
+from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World

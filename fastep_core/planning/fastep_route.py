@@ -58,7 +58,8 @@ from numpy.typing import NDArray
 from fastep_core.geometry import Circle, Obstacle, Obstacles, point_segment_distance
 from fastep_core.planning.escape import ADOPT_REACH  # as far ahead as an escape path is checked
 from fastep_core.planning.exact_path import PARKED_SPEED, robot_path
-from fastep_core.planning.navigator import FAStepKinematic, FloatArray, Mode
+from fastep_core.planning.fastep_kinematic import FAStepKinematic
+from fastep_core.planning.navigator import FloatArray, Mode
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, other_arrays, robots_on_run
 from fastep_core.planning.params import PlannerParams
