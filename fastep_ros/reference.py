@@ -222,7 +222,8 @@ def status_page() -> str:
     lines = ['# Status and failure reasons', '',
              'Generated from the planner\'s tables (`python -m fastep_ros.reference`). The planner publishes '
              '`<ns>/status` (diagnostic_msgs/DiagnosticStatus, latched): `message` is one of these, `level` its '
-             'level, the value `reason` says why, in words; /diagnostics carries the same (docs/parameters.md).', '',
+             'level, the value `reason` says why, in words; /diagnostics carries the same '
+             '([Parameters, diagnostics, lifecycle](../parameters.md)).', '',
              '| message | level | meaning |', '|---|---|---|',
              *(f'| `{message}` | {level} | {_cell(meaning)} |' for message, level, meaning in STATUS_MESSAGES), '',
              '## Failure reasons and Nav2 error codes', '',
