@@ -1,30 +1,15 @@
 """Batch experiments: many seeded runs of several planners on several scenarios, and their statistics.
 
-Why a module of pure functions: the paper's Table 2 (30 runs per planner and scenario, means, "enhancement"
-percentages) is the project's main claim, so regenerating it must be one reproducible call, usable from the
-`fastep-bench` console script, from `benchmarks/table2.py`, from tuning and from tests alike:
-
-- `run_batch` spreads (scenario, algorithm, seed) simulate calls over a process pool, or a Dask cluster
-  (fastep_core.cluster), one task = one run; every run draws only from its own seed, so the records do not
-  depend on the engine, the number of workers or the order they finish in; they are returned sorted;
-- `summarise` gives mean and sample standard deviation (ddof = 1) per scenario, planner and robot of path
-  length and simulated time to goal (over the runs that arrived without collision) and of compute time (all
-  runs);
-- `compare` puts two planners side by side on one metric: means, the paper's "enhancement"
-  (ACO - FAStep) / ACO * 100 and a two-sided Mann-Whitney U test (scipy.stats.mannwhitneyu), which assumes
-  no distribution: compute times are skewed and path lengths bounded below by the optimum;
-- `optimal_lengths` gives the exact shortest path (planning.optimal) per robot, the yardstick for the
-  optimality ratio path length / optimal length;
-- `markdown_report` writes what docs/table2.md shows; `example_paths` gives the runs and exact paths its paths
-  figure draws (the figures themselves are drawn one layer up, by msg_tools.plots.bench_figures: this package
-  imports no plotting library).
-
-'optimal' (the exact path driven by the kinematic controller) draws no random numbers, so a batch runs it
-once, with the first seed, whatever `runs` says.
-
-Note on the ratio: a run ends within `goal_tolerance` (0.1 m) of the goal and the robot cuts the corners
-of its waypoints, so a ratio a little below 1 is possible; the optimum keeps clearance radius +
-clearance_margin, the rule that planned waypoints follow.
+Why pure functions: the paper's Table 2 is the project's main claim, so regenerating it must be one reproducible call
+from `fastep-bench`, `benchmarks/table2.py`, tuning and tests alike. `run_batch` spreads (scenario, algorithm, seed)
+runs over a process pool or a Dask cluster (fastep_core.cluster); every run draws only from its own seed, so records
+(returned sorted) do not depend on the engine, workers or finishing order. `summarise`: mean and sample std (ddof 1)
+per scenario, planner and robot of path length and time to goal (runs that arrived without collision) and compute
+time (all runs). `compare`: two planners on one metric, the paper's enhancement (ACO - FAStep) / ACO * 100 and a
+two-sided Mann-Whitney U test (no distribution assumed: compute times are skewed, lengths bounded by the optimum).
+`optimal_lengths`: the exact shortest path per robot, for the ratio path / optimum (a little below 1 is possible: runs
+end within goal_tolerance and cut corners). `markdown_report` writes docs/table2.md; `example_paths` feeds its figure,
+drawn one layer up (msg_tools.plots). 'optimal' draws no random numbers, so a batch runs it once, with the first seed.
 """
 
 from __future__ import annotations

@@ -1,37 +1,17 @@
 """Random solvable scenarios: circles, wall segments and U-shaped traps, 1-4 robots of either model.
 
-Why: hand-made scenarios show what their author thought of. A soak over hundreds of random worlds finds
-what nobody did: a trap the escape cannot leave, a pair of robots that deadlock, a tractor-trailer that
-cannot turn where a point mass could. Every scenario is built as a scenario mapping (the YAML format of
-docs/scenarios.md) and validated by `parse_scenario`, so any one of them can be written to a file and rerun
-with `fastep-sim`.
+    python -m fastep_core.random_scenarios [SEED] [--family FAMILY]     (prints the scenario as YAML)
 
-"Solvable" is decided by the exact planner, not by running a navigator: each robot has a path from its start
-to its goal that keeps `radius + clearance_margin` from every obstacle and from the border, with the robots
-parked at the other goals counted as obstacles (robots stay at their goals, so a goal in another robot's only
-corridor would make that robot's task impossible).
-
-U-shaped traps are what greedy steps fall into: three walls around a pocket whose open side faces a robot's
-start, placed across the straight line to its goal, so the goal lies behind the pocket's back wall.
-
-World families (`FAMILIES`, `random_family_data(family, seed)`), what the families benchmark
-(`fastep-bench --families`, docs/clutter.md) runs every planner on:
-
-- circle_field: one point mass across a 50 x 50 m field of 20-35 circles (`circle_field_data`);
-- circles_walls: one point mass, 10-20 circles and 4-10 straight walls in a 50 x 50 m workspace, no traps;
-- u_trap: one point mass and a U-shaped trap across its straight line (`u_trap_scenario_data`);
-- multi_robot: 2-4 robots, point masses and tractor-trailers, circles, walls and traps (`random_scenario_data`);
-- tractor_trailer: one tractor-trailer among circles, walls and perhaps a trap (`random_scenario_data`);
-- diff_drive_walls: circles_walls' world with a differential-drive base instead of the point mass (same
-  radius), facing a random heading (`diff_drive_data`);
-- diff_drive_robots: 1-4 differential-drive bases among circles, walls and traps: random_scenario_data's
-  worlds with point masses only, each made a diff_drive facing a random heading (`diff_drive_data`).
-- crossing_movers, unknown_obstacles, misplaced_obstacles, dynamic_mix: v2 worlds that move and that the map
-  gets wrong, every robot with a laser scanner (fastep_core/dynamic_families.py). Named with --families; the
-  families benchmark runs the static five (FAMILIES) when none is named.
-
-Benchmarks draw their worlds from seeds FAMILY_SEED0 + k, far above every seed the tests use (0-500), so the
-benchmark's worlds are ones no test, and no tuning, has seen.
+Why: hand-made scenarios show what their author thought of; a soak over random worlds finds what nobody did (a trap
+the escape cannot leave, robots that deadlock). Each is a scenario mapping (docs/scenarios.md) validated by
+`parse_scenario`, so it can be saved and rerun with `fastep-sim`. "Solvable" is decided by the exact planner: each
+robot has a path keeping radius + clearance_margin from obstacles and border, robots parked at the other goals
+counted as obstacles. A U-trap is three walls round a pocket facing a robot's start, across its line to the goal.
+Families (`FAMILIES`, `random_family_data`; fastep-bench --families, docs/clutter.md): circle_field (one point mass,
+50 x 50 m, 20-35 circles), circles_walls (10-20 circles, 4-10 walls, no traps), u_trap, multi_robot (2-4 robots),
+tractor_trailer, diff_drive_walls and diff_drive_robots (those worlds with differential-drive bases at random
+headings), and the v2 families of dynamic_families.py; the static five run when none is named. Benchmarks use seeds
+FAMILY_SEED0 + k, far above the tests' (0-500), so no test or tuning has seen their worlds.
 """
 
 from __future__ import annotations

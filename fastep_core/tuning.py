@@ -1,31 +1,16 @@
 """fastep-tune: choose the step fitness weights a, b, c and the step radius by optimisation, not by hand.
 
-Why: the paper sets a, b and c by brute force and names "a principled way to set a, b, c" as future work.
-Here they are searched, with the step radius, by scipy's differential evolution (seeded), minimising over a
-set of training scenarios and seeds
-
-    J = mean over runs and robots of (path length + PENALTY if the robot collided or did not arrive)
-
-(PENALTY = 1000 m, far more than any path, so a setting that fails anywhere loses against any that does
-not). The search box is the paper's ranges, a, b in [0.1, 1] and c in [1e-5, 0.01] (searched as log10 c in
-[-5, -2], since c spans three decades), and step_radius in [1, 4] m. The Table 1 setting (a = b = 0.18,
-c = 0.01, step_radius 2) is one member of the initial population, so the result is never worse than it on
-the training runs. Every candidate is scored on the same seeds (common random numbers), so J is a fixed
-function of the parameters and candidates are compared on equal terms.
-
-The tuned values are then checked on held-out scenarios (never used in the search) and on other seeds,
-against Table 1: mean path length, arrivals and collisions.
-
-Default budget: training on table2_s2, table2_s3 and case_study_1 (circles, walls, two robots so that b
-matters) with seeds 0-1; DE with popsize 5 (20 candidates) for 3 generations, i.e. 80 candidate
-evaluations of 6 runs each, spread over 2 worker processes: about 3 minutes on 2 cores. Held out: table2_s1,
-case_study_2, application (tractor-trailers) and open_field, seeds 100-109.
-
     fastep-tune [--train ...] [--test ...] [--seeds 2] [--test-seeds 10] [--popsize 5] [--maxiter 3]
                 [--workers 2 | --cluster ADDRESS|local:N] [--seed 0] [--out FILE.md] [--json FILE]
 
---cluster scores each generation's candidates on a Dask cluster (fastep_core.cluster), the same result.
-
+Why: the paper sets a, b, c by brute force and names a principled way as future work. Seeded differential evolution
+(scipy) minimises J = mean over runs and robots of (path length + PENALTY if it collided or did not arrive), PENALTY
+= 1000 m so a setting that fails anywhere loses, over a, b in [0.1, 1], log10 c in [-5, -2] (c spans three decades)
+and step_radius in [1, 4] m, the paper's ranges. Table 1's setting is in the initial population, so the result is
+never worse on the training runs; every candidate is scored on the same seeds (common random numbers), so J is a
+fixed function. The result is checked against Table 1 on held-out scenarios and seeds. Default: train on table2_s2,
+table2_s3, case_study_1, seeds 0-1, popsize 5 for 3 generations on 2 workers; held out table2_s1, case_study_2,
+application, open_field, seeds 100-109. --cluster scores each generation on Dask (fastep_core.cluster), same result.
 Exit 0 after a search, 2 with one line on stderr for bad input.
 """
 

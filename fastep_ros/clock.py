@@ -2,39 +2,16 @@
 
     fastep-clock --ros-args -p rtf:=10.0 [-p step:=0.05] [-p max_rate_hz:=400.0]
 
-Every tick (a steady wall-clock timer) the simulated time advances by a fixed increment and is published as
-rosgraph_msgs/Clock. The tick period is step / rtf wall seconds, but never shorter than 1 / max_rate_hz; the
-increment is rtf times the period, so simulated time runs rtf times faster than wall time. With the default
-step of 0.05 s (the planners' control period, 1 / control_rate_hz): rtf 1 -> 20 ticks/s, rtf 10 -> 200
-ticks/s, rtf 20 -> 400 ticks/s, beyond that the increment grows (except in lock step, where a tick is
-always one step and rtf beyond max_rate_hz * step is not reached). A finer step costs CPU in every node (each
-one handles every tick) without changing the results: plants integrate in their own fixed steps (1/rate_hz)
-whatever the tick size, and planners act once per control period. If the machine cannot keep up, ticks come
-late and simulated time simply runs slower: it never jumps.
-
-Plants and planners started with use_sim_time:=true integrate and decide on this time; started without it
-they run on wall time with the same code. With wait_for_subscribers N the clock holds the start time until
-its publisher has matched N /clock subscriptions (fastep-launch passes the number of nodes it started), so that
-no node misses the beginning of the run because DDS discovery took a while. DDS matches the two ends of a
-connection each on its own (under load, seconds apart), so a subscriber may still miss the first ticks: see
-lock step.
-
-Lock step (sync_topics, with step = the planners' control period): each tick waits, up to sync_timeout wall seconds
-(default 5), until every listed topic has delivered a message that answers it since the previous tick: a message
-with a stamp (a header's, or a rosgraph_msgs/Clock's time) answers it if stamped after the tick before, one without
-a stamp whatever tick is current. fastep-launch lists every planner's cmd_vel (TwistStamped, stamped with the tick
-it was decided for: a planner in lock step acts on its plant's odometry of the tick, so its command also says that
-the plant has integrated) and, as observer_topics, the `clock_ack` of its observers (its own monitor, fastep-
-record: each says the /clock time it has taken, so neither falls further behind the graph than observer_lag ticks
-and loses messages from its queue; they take no part in a tick, so a tick need not wait for them), and runs plants
-and planners in lock step (fastep_ros.lock_step): the live graph then steps exactly like fastep-sim, whatever the
-machine's load and the order DDS delivers messages in, and rtf is an upper bound. A topic that timed out (its node
-died) is not waited for again until it publishes again. The timeout is long because a loaded machine starves a node
-for a second or two at times, and with 1 s the clock then ran on without it (a planner stopped for 2.5 s let 6 s of
-simulated time pass); a dead node costs those 5 s once. A topic that has not answered once since the run started is
-waited for up to wait_timeout: a node still being matched is late, not dead. /clock is best effort, so while the
-clock waits it says the current time again every HOLD_PERIOD: a node that lost a tick's message, or was matched
-after it, still gets it.
+Every tick of a steady wall timer, period step / rtf but at least 1 / max_rate_hz, time advances by rtf x the period
+(in lock step always by one step); a machine that cannot keep up makes time run slower, never jump. A finer step only
+costs CPU: plants integrate in their own steps and planners act once per control period. wait_for_subscribers holds
+the start until that many /clock subscriptions match, so no node misses the beginning. Lock step (sync_topics, step =
+the control period): each tick waits, up to sync_timeout, until every listed topic (fastep-launch: each planner's
+cmd_vel, stamped with its tick) has answered since the tick before (a stamped message stamped after it, an unstamped
+one at all); observer_topics (clock_ack of the launcher's monitor and fastep-record) may lag observer_lag ticks. The
+timeout is 5 s because a loaded machine starves a node for a second or two; a topic that timed out is not waited for
+until it publishes again, and one never heard waits up to wait_timeout. /clock is best effort, so while waiting the
+clock repeats the current time every HOLD_PERIOD. Parameters: docs/reference/parameters.md; docs/guide.md.
 """
 
 from __future__ import annotations

@@ -4,35 +4,14 @@
                     [-p scenario:=table2_s2] [-p robot_radius:=0.5]
     fastep-launch SCENARIO --foxglove 8765        (the same, started with the graph)
 
-Serves the Foxglove WebSocket protocol (the foxglove-sdk library); in Foxglove: Open connection -> Foxglove
-WebSocket -> ws://localhost:8765. Channels (protobuf, the foxglove schemas):
-
-- /fastep/obstacles (foxglove.SceneUpdate): circles (cylinders) and walls (lines) from /obstacles, when it changes;
-- /fastep/robots (SceneUpdate): per robot (entity id = its name) a disc of its radius at its odometry pose, a
-  heading arrow, a line to where its velocity takes it in a second, its name, and for a tractor-trailer the
-  trailer (from trailer_pose) on its drawbar;
-- /fastep/plans (SceneUpdate): per robot (entity `<name>/plan`) the planned waypoints and the goal as a line;
-- /fastep/waypoints (SceneUpdate): per robot (entity `<name>/waypoint`) the point it drives to now;
-- /tf (foxglove.FrameTransforms): map -> `<name>/base_link` of every robot, from its odometry;
-- /<name>/scan (foxglove.LaserScan): a robot's `scan` (sensor_msgs/LaserScan) when it has one, in the map frame at
-  the robot's odometry pose (zero angle along its heading), so it needs no transform lookup.
-
-Robots are discovered from the graph as fastep-record does: every `/<name>/odom` topic of type nav_msgs/Odometry
-(looked for every `discovery_period` wall seconds); trailer_pose and scan are taken when they appear. Sizes come
-from `scenario` when given (radius per robot), else `robot_radius`; the scenario's robots with a `sensor` have
-their scan channels from the start (a channel added while a viewer is connected can be refused to it under load,
-a foxglove-sdk race: see FoxgloveNode.__init__; such a viewer gets it on its next connection).
-
-Cheap by construction: the ROS subscriptions (keep-last 1) belong to an inner node that no executor spins, so
-a message arriving costs no Python wake-up (about 1 ms of CPU each in rclpy); every 1 / scene_rate_hz wall
-seconds the node takes the newest message of each topic and, only if a Foxglove client listens, sends one
-SceneUpdate per channel and one FrameTransforms (of the robots whose drawing changed). 16 robots at 50 Hz
-odometry thus cost scene_rate_hz x 16 takes per second, not 800 callbacks (docs/benchmarks.md, "Live view").
-Obstacles, plans and waypoints are sent when they change, and all of them again when a client subscribes (the
-protocol keeps nothing for late joiners). The node runs on wall time (no /clock subscription: it is not part of
-the lock step); messages carry the stamps of the ROS messages they come from (simulated time under fastep-launch).
-
-A port that cannot be bound (in use, not allowed) or a bad parameter: one line on stderr, exit 2.
+Serves the Foxglove WebSocket protocol (foxglove-sdk, protobuf): /fastep/obstacles, /fastep/robots (entity = robot
+name), /fastep/plans (`<name>/plan`), /fastep/waypoints (`<name>/waypoint`) as SceneUpdates, /tf (map ->
+`<name>/base_link`) and /<name>/scan as a foxglove.LaserScan in the map frame. Robots are found as fastep-record finds
+them; sizes from `scenario`, else `robot_radius`. Cheap by construction: the subscriptions belong to an inner node no
+executor spins, so a message costs no Python wake-up; every 1 / scene_rate_hz the newest of each is taken and sent
+only if a client listens, what changes rarely again when a client subscribes (the protocol keeps nothing for late
+joiners). Wall time, not in the lock step. A scan channel added while a viewer is connected can be refused to it (a
+foxglove-sdk race: FoxgloveNode.__init__). A port that cannot be bound or a bad parameter: one line, exit 2.
 """
 
 from __future__ import annotations

@@ -2,28 +2,16 @@
 
     fastep-launch SCENARIO [--rtf X] [--timeout S] [--algorithm fastep|aco|optimal|dwa] [--seed N]
                   [--json OUT] [--plot OUT.png] [--no-clock | --realtime] [--layout node|robot|graph|cores]
-                  [--executor events|single] [--step-iterations K]
-                  [--foxglove PORT] [--no-progress] [--verbose]
-                  (fastep_ros.foxglove_bridge, fastep_ros.launch_progress)
+                  [--executor events|single] [--step-iterations K] [--foxglove PORT] [--no-progress] [--verbose]
 
-Starts, in the processes --layout says (fastep_ros.layouts: each node in its own, `python -m fastep_ros.<node>
---ros-args ...`; a robot's plant and planner in one fastep-container; every node in one; or one per CPU core;
-fastep_ros.processes), gated until it has seen no other graph on the domain: the map, then a plant and a planner
-per robot in the robot's namespace with its parameters from the scenario (the scenario's planner overrides
-included), and waits until every planner knows the world and the other robots. It then sends each goal on
-`/<name>/goal_pose`, starts the clock (simulated time at --rtf, in exact lock step: the run is the run fastep-sim
-makes, tick for tick, fastep_ros.lock_step; --realtime counts planning latency in it, the planners driving on
-their newest plan as on a robot; --no-clock runs every node on wall time instead), follows every
-`status` and `odom`, and prints one line per robot: arrived or not, the path length measured from its odometry, the
-time taken. The default layout is `graph` in lock step for up to 4 robots, `cores` otherwise (fastep_ros.layouts).
-On wall time with more than WALL_ROBOTS_PER_CORE robots per CPU core, planners whose scenario sets no
-step_iterations get WALL_STEP_ITERATIONS (step_budget). Its view of the graph is fastep_ros.monitor. Every process
-it started is stopped at the end (SIGINT, then SIGKILL after a grace period), also on Ctrl-C.
-
-Exit 0 if every robot arrived (without colliding, as measured from the odometry), 1 otherwise, 2 with one
-line on stderr for bad input, checked before anything starts: --rtf outside [0.001, 10000], a robot name ROS
-cannot take (with '__', or longer than 200 characters), a --json / --plot / --record file that cannot be
-written (or --json / --plot failing after the run).
+Starts, in the processes --layout says (fastep_ros.layouts, fastep_ros.processes), gated until it has seen no other
+graph on the domain, the map and a plant and a planner per robot with the scenario's parameters; waits until every
+planner knows the world and the other robots; sends the goals, starts the clock (exact lock step at --rtf, so the run
+is fastep-sim's tick for tick; --realtime counts planning latency; --no-clock runs on wall time), follows status and
+odom (fastep_ros.monitor) and prints one line per robot: arrived, path length, time. On wall time with more than
+WALL_ROBOTS_PER_CORE robots per core, planners without step_iterations get WALL_STEP_ITERATIONS. Every process it
+started is stopped at the end, also on Ctrl-C. Exit 0 if every robot arrived without colliding, 1 otherwise, 2 with
+one line for bad input checked first (--rtf outside [0.001, 10000], a bad robot name, an unwritable output file).
 """
 
 from __future__ import annotations

@@ -1,34 +1,17 @@
 """Process layouts of fastep-launch: which of the graph's nodes share a process (and its executor).
 
     node   one process per node (map, each plant, each planner, clock, recorder), as on separate computers
-    robot  one process per robot (its plant and planner, fastep_ros.container), and the map, clock and recorder
-           each in its own
-    graph  every node of the simulated graph (map, plants, planners, clock) in one process, on one executor; the
-           observers keep their own: the recorder, writing a file with an exit code of its own (1: the file is
-           incomplete), and the Foxglove bridge
-    cores  the simulated graph in one process per CPU core this process may use: the robots dealt in turn (a
-           robot's plant and planner together), the map and the clock in the first; the observers as in `graph`
+    robot  one process per robot (its plant and planner, fastep_ros.container); map, clock and recorder each alone
+    graph  the simulated graph (map, plants, planners, clock) in one process on one executor; the observers (the
+           recorder, with an exit code of its own, and the Foxglove bridge) in their own
+    cores  the simulated graph in one process per usable CPU core, robots dealt in turn, map and clock in the first
 
-The nodes, their names, namespaces, parameters and topics are the same in every layout: a container builds each
-node from the very arguments its own process would get (fastep_ros.container). What changes is what it costs:
-each rclpy process pays its executor's work per wake-up and its own DDS participant (discovery traffic grows
-with the square of the participants), so fewer processes cost less CPU, while one process uses one core at most.
-docs/benchmarks.md ("Executors and process layouts", "Exact lock step", "A cheaper tick, a quicker start") measures
-them. On the
-EventsExecutor (the default) `graph` costs least, and in lock step (simulated time) it is also the fastest for a
-few robots: a tick is a chain of messages through every node, cheapest inside one process. With more robots the
-work of a tick is shared by the cores: the whole launch command, 2026-11-26 (benchmarks.lock_step, fastep_route):
-
-    robots   graph     cores
-    2        4.4 s     5.4 s      (make demo's case_study_1, fastep; 24x and 20x real time)
-    4        3.5 s     3.6 s
-    6        5.3 s     4.9 s
-    16       28.4 s    21.7 s     (2.6x and 3.3x real time; `robot`, 19 processes, ran at 0.6x and starved nodes)
-
-On wall time one process is one core at most, and a control period in which several robots plan a step delays the
-others: 16 robots were late in 1.5 % of their periods in `graph` (median of 6 runs), 4.3-7.5 % in `robot` (2x the
-CPU), 0.67 % in `cores` (median of 11 runs, 0-2 % each). So default_layout is `graph` in lock step up to
-GRAPH_ROBOTS robots, and `cores` otherwise.
+Nodes, names, namespaces, parameters and topics are the same in every layout: a container builds each node from the
+arguments its own process would get. Only the cost differs: each rclpy process pays its executor's work per wake-up
+and a DDS participant (discovery grows with the square of participants), while one process uses one core at most.
+In lock step a tick is a chain of messages through every node, cheapest inside one process, so default_layout is
+`graph` in lock step up to GRAPH_ROBOTS robots and `cores` otherwise (on wall time several robots planning in one
+process delay the others). Measured in docs/benchmarks.md, "Executors and process layouts".
 """
 
 from __future__ import annotations

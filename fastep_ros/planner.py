@@ -1,78 +1,17 @@
-"""fastep-planner: FAStep-Kinematic (or ACO-Kinematic, Optimal-Kinematic, DWA) planning and control for one robot.
+"""fastep-planner: FAStep-Kinematic (or ACO-Kinematic, Optimal-Kinematic, DWA, FAStep-Route) planning and control
+for one robot, the fastep_core Navigator on the live graph.
 
     fastep-planner --ros-args -r __ns:=/r1 -p algorithm:=fastep -p model:=point_mass -p robot_radius:=0.5
 
-Every planner parameter of fastep_core (PlannerParams: Table 1 of the paper plus tolerances, speed limit,
-progress checker...) is a ROS parameter of the same name, default and description.
-
-Inputs: `odom` (and `trailer_pose` for tractor-trailers) of its own robot; `goal_pose`; `/obstacles`
-(MarkerArray -> circles and segments) and `/map` (OccupancyGrid: only its extent, the workspace, is used,
-unless the `workspace` parameter gives it), both transient-local; with `obstacle_source:=map`, no
-`/obstacles`: the obstacles are the outline of `/map`'s occupied cells (as Nav2's map_server publishes it), so
-a user with a map and no scenario file needs nothing else; and the `odom` of every other robot that
-announces itself: it publishes its `footprint` (as this planner does, latched) from a node of its namespace, and
-its odometry has a publisher; looked for every 0.25 s of wall time, and kept where last seen (stale) when its
-odometry stops (fastep_ros.robots).
-Frames (REP-105, msg_tools.frames): own odometry must be in the map frame (`frame_id`) or in the robot's odom
-frame (`odom_frame_id`, default `<ns>/odom`; root namespace `odom`); any other frame is refused (status `stale`,
-reason "odometry rejected: frame ..."). The map pose is the odometry composed with map -> odom: the identity
-(simulation) unless `localization_topic` is set (e.g. `amcl_pose`, geometry_msgs/PoseWithCovarianceStamped, the
-map pose of base_link): then map -> odom = that pose o inverse(the odometry pose nearest to its stamp), updated
-with every localization pose, and until the first one has come the robot is held still (status `waiting`,
-"waiting for localization ..."). Commands computed in the map frame (a point mass's velocity) are rotated into
-the body frame (base_link) before they are sent; TwistStamped commands are stamped base_link
-(`<ns>/base_link`, never with a leading slash). Other robots' odometry is taken as map poses (map -> odom the
-identity, exact in simulation).
-Odometry is predicted forward from its stamp to the control time (at most max_extrapolation seconds) to make
-up for the transport delay. Own odometry stamped longer ago than that (an unset stamp counts as its arrival)
-is not acted on: the robot is held still (zero cmd_vel, `stale`) until fresher odometry comes, because a
-command decided and guarded at a position the robot has left can drive it into an obstacle (docs/robustness.md,
-"A loaded machine").
-
-Planning runs on a thread of its own (`planning_thread`, fastep_ros.planning_thread): each control tick hands it
-the tick's state and drives on the newest plan it has made (fastep_core.planning.control: the controller toward
-the plan's target, mover yielding and the guard every tick, then the velocity smoother: acceleration limits, the
-guard's stop braking at emergency_deceleration, no reversing into space no recent scan saw free), so the control
-loop never waits for an exact path, a route, an escape or a swarm; scans are perceived by the next pass. A plan
-older than `max_plan_age` (in control periods) is not driven on: the robot brakes to a stop, status ERROR `stale`,
-"planning stalled ...". A diff_drive goal's orientation is the heading to end in (parameter goal_heading; status
-reason "rotating to the goal heading"; a quaternion of zero length says none). Lock step, and
-planning_thread:=false, plan on every tick and send the navigator's command as it is.
-
-Outputs, on a control timer of the node clock (simulated time with use_sim_time): `cmd_vel`, `cost`; and when
-they change (and once a wall second): `waypoint` (the point driven to now), `plan` (the waypoints planned so
-far and the goal) and `status` (diagnostic_msgs/DiagnosticStatus: name = the namespace, message = mode, values
-reason / activations / escapes / manoeuvres / waypoint / goal / cost / algorithm / t / odom_lag / obstacles,
-and for a launcher: others (the robots followed now), cmd_vel_readers (subscriptions matched to
-cmd_vel) and odom_heard (own odometry messages taken); and control_ms and control_cpu_ms: the wall time and the
-CPU time of this node's thread over the last CONTROL_TIMES control callbacks, "p50 / p99 / max" in milliseconds
-(wall time also counts the moments the operating system ran another process instead: on a loaded machine the
-difference is the wait, the CPU time is the planner's own work); control_hz (the control loop's achieved rate over
-the last RATE_WINDOW seconds of node time), plan_age (seconds since the tick the plan in use was planned from) and
-planning_ms (the planning passes' "p50 / p99 / max"). /diagnostics adds a `control` task: OK "on time", WARN "late"
-when the achieved rate is below RATE_SHORTFALL of control_rate_hz (also logged, as Nav2's controller server warns),
-ERROR "stalled" while the plan is too old.
-
-status.message is the navigator mode (idle, kinematic, avoiding, arrived, failed) or, when the planner cannot
-run it, `waiting` (world or odometry not received yet) or `stale` (no odometry for odom_timeout, odometry
-stamped more than max_extrapolation before the control time or more than odom_timeout after it, received
-before the clock went back, or not finite; zero cmd_vel is sent). Levels: OK
-(idle, kinematic, avoiding, arrived), WARN (waiting, stale, and a refused goal while the goal before it is
-still driven to: kinematic or avoiding with the refusal as reason), ERROR (failed, which includes a refused goal
-when none is under way: reason is the goal check's message, e.g. "... is occupied ...").
-Goals: one subscription that volatile and latched publishers both reach (fastep_ros.goals).
-On simulated time with no /clock for clock_timeout wall seconds: WARN, reason "no /clock ...", `stale` for a robot
-under way (a zero cmd_vel is sent). Not active (lifecycle, fastep_ros.lifecycle): OK, `inactive`. Another
-publisher on cmd_vel (exclusive_cmd_vel): ERROR, `conflict`, naming it; no commands. Avoiding what went quiet
-(another robot's odometry, /movers: fastep_ros.robots): the mode at WARN, reason "stale: ...", value `stale`.
-Also `/diagnostics` (fastep_ros.diagnostics); status and /diagnostics are worked out in fastep_ros.planner_status.
-The tunable parameters change at runtime (docs/parameters.md).
-Lock step (`lock_step`, on simulated time; fastep-launch sets it): instead of on the control timer, the planner
-acts once on each odometry stamp t of its robot, when every other robot's odometry stamped t (and its laser's scan
-stamped t) is in, as of the node time t, and stamps cmd_vel t: the live graph then steps exactly like fastep-sim
-(fastep_ros.lock_step). Should its own odometry fall a whole control period behind the clock (its plant died),
-it acts on the control timer as without lock step. With `realtime` (fastep-launch --realtime) the lock step's tick
-drives on the newest plan of the planning thread instead of planning in it: the clock goes on while a pass runs.
+Every PlannerParams field (Table 1 of the paper and the rest) is a ROS parameter of the same name and default.
+Odometry, goals, the world (/obstacles and /map, or /map alone with obstacle_source:=map), scans and the other robots
+come in; cmd_vel, cost, waypoint, plan, status and /diagnostics go out. Planning runs on a thread of its own
+(fastep_ros.planning_thread) and each control tick drives on its newest plan (fastep_core.planning.control), so the
+control loop never waits for an exact path, a route or a swarm; a plan older than max_plan_age is not driven on.
+Own odometry older than max_extrapolation is not acted on, because a command guarded at a position the robot has
+left can drive it into an obstacle. In lock step (fastep_ros.lock_step) it acts once per odometry stamp instead.
+Inputs, outputs, status values and timing: docs/guide.md, "The planner node", docs/real_time.md and
+docs/reference/status.md; frames: docs/frames.md; other robots and goals: docs/robots_and_goals.md.
 """
 
 from __future__ import annotations

@@ -3,45 +3,14 @@
     fastep-plant --ros-args -r __ns:=/r1 -p model:=point_mass -p start:=[5.0,25.0] [-p use_sim_time:=true]
     fastep-plant --ros-args -r __ns:=/d1 -p model:=diff_drive -p start:=[5.0,25.0,1.57]
 
-Subscribes `cmd_vel` (geometry_msgs/Twist, or TwistStamped when `use_stamped_cmd_vel` is true), in the body
-frame: for a point mass linear.x/y are the velocity (vx, vy); for a tractor-trailer and a diff-drive base
-linear.x is the speed v and angular.z the yaw rate omega (a diff-drive base saturates them at max_speed and
-max_turn_rate, as ros2_control's diff_drive_controller does). Publishes `odom` (nav_msgs/Odometry: the pose of
-`<ns>/base_link` in `<ns>/odom`, REP-105, root namespace `odom` -> `base_link`; its twist in base_link) and,
-for tractor-trailers, `trailer_pose` (geometry_msgs/PoseStamped in `<ns>/odom`, the trailer axle, yaw theta1).
-A point mass has no heading: its yaw is 0, so base_link's axes stay parallel to odom's and its cmd_vel and
-odometry twist are odom-frame velocities too.
-A simulated robot's odometry does not drift: map -> odom is the identity, published on /tf_static (unless
-publish_map_to_odom is false, e.g. when a localization node publishes it); odom -> base_link goes on /tf with
-every odometry message (and odom -> `<ns>/trailer_link`). TF is published where tf2_msgs is installed (.venv, by
-make; a ROS install; the log says so once when it is not): fastep_ros.live_tf.
-
-Time: the model is integrated in fixed steps of 1 / rate_hz seconds of the node's clock (simulated time with
-use_sim_time, wall time otherwise) up to "now", on a timer and before each new command takes effect (a
-zero-order hold: a command acts from the step after it arrived). Odometry is stamped with the integrated
-time, which is always a whole number of steps, so the odometry of several plants lines up. Until simulated time
-has started (the clock holds time 0, or has not been heard), the plant publishes its start state stamped 0 once
-every AT_REST_PERIOD wall seconds, from when its cmd_vel subscription has matched a publisher: odometry and
-commands are volatile, and DDS matches the two ends of a connection each on its own (under load, seconds apart),
-so this is how its planner and a launcher learn, before the run begins, that both ends of both paths are up
-(docs/robustness.md, "A loaded machine").
-A command older than cmd_timeout, or one that is not finite, counts as zero. Its age counts from when it was
-sent, not from when this node took it, so a command that waited while the plant was descheduled does not act
-for a fresh cmd_timeout after it (docs/robustness.md, "A loaded machine"): sent is the header stamp of a
-TwistStamped, and for a Twist the DDS source timestamp (the sender's system clock, hence on wall time only; on
-simulated time lock step holds the clock while a node is late, and a Twist's age counts from when it is taken).
-A robot with a `sensor` ([range, fov, beams, noise], a scenario robot's) scans the true world of `scenario`
-(fastep_core.dynamic_world: every still obstacle, known or not, where it really is; every mover where it is at
-the integrated time) scan_rate_hz times a second of integrated time, and publishes it on `scan`
-(sensor_msgs/LaserScan in base_link, stamped with the integrated time, sensor-data QoS), its noise drawn from
-the run's `seed` stream `robot_index`, as fastep-sim draws it. Other robots are not in the scan (their
-planners know them from their odometry).
-Lock step (`lock_step`, on simulated time; fastep-launch sets it with rate_hz = the planners' control rate): the
-step from t to t + 1/rate_hz is integrated with the command stamped t, the one its planner computed from the
-odometry stamped t, and waits for it if it has not come (up to LOCK_WAIT wall seconds; then, and until a command
-comes again, the planner is taken for gone and the held command acts as above). The first step starts at time 0,
-from the start state, once simulated time runs: so the robot moves exactly as fastep-sim moves it, whatever order
-DDS delivers /clock and the commands in (docs/benchmarks.md, "Exact lock step").
+Subscribes `cmd_vel` (body frame), publishes `odom` (REP-105), `trailer_pose` for tractor-trailers, TF (map -> odom
+the identity unless publish_map_to_odom is false, odom -> base_link; fastep_ros.live_tf) and, for a robot with a
+`sensor`, `scan` of the true world. The model is integrated in fixed steps of 1 / rate_hz on the node clock and
+odometry stamped with the integrated time, so several plants line up. Until simulated time starts it repeats its
+start state once cmd_vel has a publisher, because DDS matches the two ends of a link each on its own and a launcher
+must see both ends up (docs/robustness.md, "A loaded machine"). A command's age counts from when it was sent, so a
+command that waited while the plant was descheduled does not act for a fresh cmd_timeout. In lock step the robot
+moves exactly as fastep-sim moves it. Details: docs/guide.md, "The plant node"; frames: docs/frames.md.
 """
 
 from __future__ import annotations

@@ -4,45 +4,13 @@
                   [-p use_sim_time:=true]
     python -m fastep_ros.recorder --ros-args -p output:=run.mcap ...     (the same, e.g. from fastep-launch)
 
-Why our own recorder: rosbag2 is not on PyPI. This node writes what `ros2 bag record -s mcap` would (see
-msg_tools.mcap_io): the ROS 2 profile, schemas from the installed .msg files, and each topic's offered QoS in
-the channel metadata, so /map and /obstacles replay latched.
-
-Topics: the `topics` parameter (names, relative ones resolved in the node's namespace), or when it is empty
-every topic of the fastep interface: /obstacles, /map, /clock and /<robot>/{odom, cmd_vel, goal_pose, waypoint,
-plan, cost, status, trailer_pose}. The graph is polled every `discovery_period` seconds (wall time), so robots
-that start later are recorded from when they appear. Subscriptions are generic (raw CDR bytes are written
-as received, never deserialised) and ask for the QoS the publishers offer, like rosbag2: reliable and
-transient-local when every publisher offers it (so latched /map and /obstacles are received even though they
-were published before the recorder started). A topic seen before any publisher (e.g. goal_pose, known from
-the planner's subscription) is subscribed with the QoS the fastep nodes offer on it. Publishers that start
-after the recorder and send at once (goal_pose) are only recorded if their publisher matched the recorder's
-subscription first: wait until the publisher's subscription count includes the recorder.
-
-TF (parameter `tf`): `derive` (the default) writes /tf and /tf_static (tf2_msgs/msg/TFMessage, serialised with
-rosbags, as recordings do not depend on tf2_msgs) derived from the odometry it records, so Foxglove draws the
-robots: map -> `<robot>/odom` as the identity on /tf_static (what simulation has), `<robot>/odom` ->
-`<robot>/base_link` with every odometry message, `<robot>/odom` -> `<robot>/trailer_link` with every trailer pose
-(msg_tools.frames.TfFromOdometry); `graph` records the graph's own /tf and /tf_static instead (a full ROS
-install, e.g. with AMCL's map -> odom); `none` records no TF.
-
-Status: `~/recording` (diagnostic_msgs/DiagnosticStatus, latched): values = the file and, per topic received,
-its message count; sent when a topic first delivers and once per flush. fastep-launch waits, before it starts
-the clock, until it counts every robot's odometry (plants publish their start state while time holds at 0).
-
-Time: log_time = publish_time = the receive time on the node's clock, i.e. simulated time with
-use_sim_time:=true (what fastep-launch uses; 0 until the first /clock arrives), wall time otherwise.
-
-Crash safety: data is written in chunks (`chunk_size`, 256 KiB) and the chunk in progress is flushed to the
-file every `flush_period` wall seconds. SIGINT or SIGTERM finish the file (summary, footer); after a SIGKILL
-everything up to the last flushed chunk is recovered by msg_tools.mcap_io.open_recording (the reader) and
-rewritten as a complete file by `fastep-recover IN.mcap OUT.mcap`.
-
-A full disk (or a file size limit, an I/O error) while writing stops the recording: one line on stderr
-(`fastep-record: error: cannot write run.mcap: No space left on device; ...`), exit 1. The file keeps every
-chunk written before; `fastep-recover` rewrites it as a complete file.
-
-Parameters are read-only; a bad one (or an output that cannot be created) is one line on stderr, exit 2.
+Why our own recorder: rosbag2 is not on PyPI. It writes what `ros2 bag record -s mcap` would (msg_tools.mcap_io):
+the ROS 2 profile, schemas from the installed .msg files and each topic's offered QoS, so /map and /obstacles
+replay latched. Subscriptions are generic (CDR bytes written as received) and take the QoS the publishers offer.
+TF (`tf`): `derive` writes /tf and /tf_static from the recorded odometry (msg_tools.frames.TfFromOdometry), `graph`
+records the graph's own, `none` none. Crash safety: chunks are flushed every `flush_period`; SIGINT or SIGTERM finish
+the file, after a SIGKILL or a full disk (one line, exit 1) `fastep-recover` rewrites what was written.
+Which topics, QoS, time stamps, the `~/recording` status: docs/guide.md, "The recorder node"; TF: docs/frames.md.
 """
 
 from __future__ import annotations

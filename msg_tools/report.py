@@ -2,36 +2,16 @@
 
     fastep-report FILE.mcap [--out DIR] [--radius R]
 
-Why from the recording and not from the simulator: a live run (fastep-launch / fastep-record) has no
-simulator object to ask, and offline recordings (fastep-sim --mcap) use the same topics, so one tool reports
-both and the numbers can be checked against each other. Everything is measured from the messages:
-
-- path_length: sum of the distances between consecutive `odom` positions (log-time order);
-- reached / time_to_goal: the first `status` whose message is `arrived`, when it began minus the robot's first
-  `goal_pose` log time (or, without a goal_pose, its first odom). When it began: the status' `since` value (the
-  planner's time of the decision; fastep-record in lock step may take a message some ticks after it was sent),
-  else its log time;
-- path_length of a robot none of whose odometry decoded: none (null; printed `path none (no odometry decoded)`);
-- min_clearance: smallest distance from an odom position to the surface of an obstacle of the file's
-  `/obstacles` (a format-v2 run: of the true world in its metadata, every still obstacle where it really is and
-  every mover where it was at that time), minus the robot radius (negative means it touched); min_robot_gap
-  likewise against the other robots, compared at each odom time of either (fastep_core.metrics.
-  trajectory_margins). The radius is, in this order: the `fastep` metadata record (fastep-sim and fastep-record
-  with a scenario write it), a `robot_radius` value in the robot's status, or --radius (default 0.5);
-  `radius_source` says which. The true world (metadata `scenario_data`) is held to the limits of a scenario file
-  (fastep_core.bounded_yaml: at most MAX_BYTES, collections nested at most MAX_DEPTH deep); one that is beyond
-  them, is not JSON or is not a valid scenario is ignored with a warning, and the run is judged against its
-  `/obstacles`. Distances are measured for at most JUDGE_ELEMENTS (sample, obstacle or mover) pairs at a time,
-  so memory does not grow with odometry samples x obstacles;
-- activations: the `activations` value of the last status (how often the swarm planned a step), or else the
-  number of distinct waypoints.
-
-Writes DIR/report.json and three PNG figures: paths.png (paths among the obstacles with the planned waypoints,
-start and goal; Fig. 2/5/8), cost.png (cost over time; Fig. 3/6/9) and velocity.png (the controller's
-commands from cmd_vel, or the odometry twist; Fig. 4). Times on the figures are seconds since the first goal.
-DIR defaults to <FILE without .mcap>_report next to the file. Exit 0 when the report was written (also from
-the recovered part of a truncated file, with a warning line), 2 with one line on stderr when the file cannot
-be read or holds no robot.
+Why from the recording: a live run has no simulator object to ask, and offline recordings (fastep-sim --mcap) use
+the same topics, so one tool reports both and the numbers can be checked against each other. Per robot: path_length
+(odom positions in log-time order; null when no odometry decoded), reached and time_to_goal (the first `arrived`
+status, from its `since` value or log time, minus the first goal_pose or odom), min_clearance (to the surfaces of
+/obstacles, or of a v2 run's true world in its metadata, minus the radius: negative means touched), min_robot_gap,
+activations (the last status' value, else distinct waypoints). Radius: the `fastep` metadata, a status'
+robot_radius, or --radius (`radius_source` says which). A true world beyond the scenario file limits or invalid is
+ignored with a warning; distances are taken JUDGE_ELEMENTS pairs at a time so memory stays bounded. Writes
+DIR/report.json, paths.png (Fig. 2/5/8), cost.png (Fig. 3/6/9), velocity.png (Fig. 4); DIR defaults to
+<FILE without .mcap>_report. Exit 0 (also from a truncated file, with a warning), 2 with one line on bad input.
 """
 
 from __future__ import annotations

@@ -1,28 +1,15 @@
 """`fastep-sim --mcap`: an in-process run written with the same topics, types and QoS as a live recording.
 
-Why: the report, replay and plotting tools, Foxglove and `ros2 bag play` should not care whether a run came
-from the live ROS graph (fastep-launch + fastep-record) or from the in-process simulator, and offline runs
-are fast and reproducible. So this writes what the live nodes publish (msg_tools/interface.py), with the
-conversions of msg_tools.convert:
-
-- per robot `/<name>/`: `odom` (every simulated step, and the start pose at t = 0), `cmd_vel` (every step),
-  `cost` (every step), `waypoint` (when the point driven to changes), `plan` (when it changes; the goal is its
-  last pose), `status` (when level, mode or reason change; the values the planner node sends plus
-  `robot_radius`), `trailer_pose` with every odom of a tractor-trailer, `goal_pose` at t = 0;
-- `/obstacles` and `/map` at t = 0 (transient-local) and `/clock` at every simulated step;
-- TF (REP-105, msg_tools.frames) so Foxglove draws the robots: `/tf_static` at t = 0, map -> `<name>/odom` (the
-  identity: simulated odometry does not drift), and `/tf` with every odometry message, `<name>/odom` ->
-  `<name>/base_link` (and `<name>/odom` -> `<name>/trailer_link` from the trailer pose). Odometry and trailer
-  poses are in `<name>/odom`; goals, waypoints and plans in `map`.
-
-Time base: log_time = publish_time = header.stamp = simulated seconds since the start of the run (t = 0 is
-1970-01-01T00:00:00 as a ROS time), exactly what a live graph on simulated time (fastep-clock starts at 0)
-records. A decision made at time t (cmd_vel, cost, waypoint, plan, status) is logged at t; the odometry it
-leads to at t + dt, as the live planner and plant do. Messages are buffered during the run and written in
-log-time order when it ends (the run is held in memory anyway).
-
-A metadata record `fastep` holds what a report cannot get from the topics alone: scenario, algorithm, seed and
-each robot's model and radius.
+Why: report, replay, Foxglove and `ros2 bag play` should not care whether a run came from the live graph or the
+in-process simulator, and offline runs are fast and reproducible. So this writes what the live nodes publish
+(msg_tools/interface.py, converted by msg_tools.convert): per robot odom (every step and the start pose at t = 0),
+cmd_vel and cost (every step), waypoint and plan (when they change), status (when level, mode or reason change, with
+the planner's values plus robot_radius), trailer_pose, goal_pose at t = 0; /obstacles and /map at t = 0 and /clock
+every step; TF as in docs/frames.md (/tf_static map -> <name>/odom, the identity; /tf odom -> base_link, trailer_link).
+Time: log_time = publish_time = header.stamp = simulated seconds since the start (t = 0 is the ROS time 0), as a live
+graph on simulated time records; a decision at t (cmd_vel, cost, waypoint, plan, status) is logged at t, the odometry
+it leads to at t + dt, as the live planner and plant do. Messages are buffered and written in log-time order at the
+end. A metadata record `fastep` holds what the topics do not: scenario, algorithm, seed, each robot's model and radius.
 """
 
 from __future__ import annotations

@@ -1,74 +1,17 @@
 """Differential-drive base (a unicycle) and its point-to-point controller with a convergence proof.
 
-The model
----------
-State (x, y, theta): the midpoint of the wheel axle and the heading; command (v, omega): forward speed and turn
-rate in the body frame, what a geometry_msgs/Twist carries as linear.x and angular.z (a TurtleBot-class base):
+    python -m fastep_core.kinematics.diff_drive     # drives a base facing away from its target
 
-    x' = v cos(theta),   y' = v sin(theta),   theta' = omega.
-
-`integrate` holds the command over dt (a zero-order hold) and moves the robot exactly along the arc it drives:
-with u = omega dt, the chord has length v dt sin(u/2)/(u/2) and the direction theta + u/2, so
-
-    x+ = x + v dt sinc(u/2) cos(theta + u/2),   y+ = y + v dt sinc(u/2) sin(theta + u/2),   theta+ = theta + u,
-
-which is the closed-form solution (no integration error; sinc by its series near 0, so a straight run is exact
-too). The heading is returned in (-pi, pi].
-
-Limits, as a real base has them (defaults: PlannerParams max_speed 1 m/s, max_turn_rate 2 rad/s,
-max_acceleration 2.5 m/s^2, max_turn_acceleration 3.2 rad/s^2; the accelerations are Nav2's TurtleBot3 DWB
-limits, the turn rate a TurtleBot3's 1.8-2.8 rad/s):
-- speed |v| <= max_speed and turn rate |omega| <= max_turn_rate: the base saturates each (as ros2_control's
-  diff_drive_controller does); the model does the same in `integrate` and `velocity` (0 means unlimited);
-- acceleration |dv/dt| <= max_acceleration and |domega/dt| <= max_turn_acceleration: the controller's
-  commands respect them (a base cannot change speed at once; its own limiter would only lag the command). The
-  guard's stop (planning/guard.py) is an emergency stop and does not wait for them, as Nav2's collision monitor
-  stops a robot after the velocity smoother.
-It declares (kinematics/model.py): holonomic False (it moves along its heading only), turns_in_place True
-(omega with v = 0), reverses True (the base drives backwards: the backing-up recovery uses it; the controller
-below drives forward only), trailer False.
-
-The controller
---------------
-The polar-coordinate Lyapunov law for the unicycle (Aicardi, Casalino, Bicchi & Balestrino, "Closed loop
-steering of unicycle-like vehicles via Lyapunov techniques", IEEE Robotics & Automation Magazine 2(1), 1995;
-Siciliano, Sciavicco, Villani & Oriolo, "Robotics: Modelling, Planning and Control", Springer 2009, section
-11.6.2, with the final heading left free since a waypoint has none). With rho the distance to the target and
-alpha = wrap(atan2(y1 - y, x1 - x) - theta) the heading error, the unicycle obeys
-
-    rho' = -v cos(alpha),   alpha' = -omega + v sin(alpha) / rho.
-
-The law:  v = g cos(alpha),   omega = k2 alpha + g sin(alpha) cos(alpha) / rho,
-with k2 = turn_gain > 0 and the approach speed g >= 0
-    g = min(max(k1 rho, min(min_speed, rho / dt)), max_speed) * h(alpha),
-    h(alpha) = max(0, 1 - |alpha| / drive_within),
-k1 = speed_gain (the book's g = k1 rho, h = 1, is the case drive_within = inf, max_speed = 0, min_speed = 0).
-h makes the base turn on the spot first and drive once it faces the target within drive_within (0.5 rad by
-default), so it leaves the straight run to the target by at most about max_speed drive_within / (2 k2) sideways
-(0.125 m with the defaults) where the plain law drifts metres; it also keeps v >= 0 (drive_within < pi/2).
-Then, when the command exceeds max_turn_rate, (v, omega) is scaled down by the one factor
-s = max(1, |omega| / max_turn_rate): the path's curvature omega / v is unchanged, only the time along it.
-
-Theorem (in the spirit of the paper's Theorem 1). For any start (rho > 0, any heading) the closed loop brings
-the base to the target: rho -> 0, and the heading error alpha -> 0 exponentially.
-Proof. Substituting the law, with the scale s:
-    alpha' = -(k2 alpha + g sin(alpha) cos(alpha) / rho) / s + (g cos(alpha) / s) sin(alpha) / rho = -k2 alpha / s,
-so V_alpha = alpha^2 / 2 has V_alpha' = -k2 alpha^2 / s <= -k2 alpha^2 / s_max < 0 for alpha != 0: s is bounded
-(|alpha| <= pi, g / rho <= max(k1, 1 / dt)), hence |alpha(t)| <= |alpha(0)| exp(-k2 t / s_max): exponential.
-And V = rho^2 / 2 has V' = -rho g cos(alpha)^2 / s <= 0: the distance never grows (the Lyapunov function of
-Theorem 1 for the point mass, here for the unicycle). After the finite time T at which |alpha| <= drive_within / 2,
-h >= 1/2 and cos(alpha)^2 >= cos(drive_within / 2)^2 > 0, so rho' <= -c min(k1 rho, max_speed) with
-c = cos(drive_within / 2)^2 / (2 s_max) > 0: rho decreases at least linearly while k1 rho > max_speed and then
-exponentially, rho -> 0. (With min_speed > 0 the floor min(min_speed, rho / dt) only makes g larger: the same
-argument, and the base covers the last metres at min_speed instead of slowing down as k1 rho.)
-The proof is for continuous time; the controller runs sampled with the exact arc integration of the model, at
-k2 dt = 0.1 rad with the defaults, and the floor rho / dt never overshoots the target in one tick. The
-acceleration limits act as a rate limiter on top: the command moves from the one last applied toward the law's
-at most max_acceleration dt (and max_turn_acceleration dt) per tick, along the straight line between the two in
-(v, omega) space (so it stays within the speed and turn limits); once it has caught up it is the law's command.
-The tests drive the sampled loop with every limit on from a grid of starts and headings (the target straight
-behind included) and check V non-increasing up to the rate limiter's lag and arrival (tests/fastep_core/
-kinematics/test_diff_drive.py).
+State (x, y, theta): the wheel axle's midpoint and the heading; command (v, omega): forward speed and turn rate in the
+body frame (a Twist's linear.x, angular.z). `integrate` holds the command over dt and moves along the exact arc
+(closed form), heading in (-pi, pi]. Limits as a real base has them: |v| <= max_speed and |omega| <= max_turn_rate
+saturate (0: unlimited) and the controller's commands keep max_acceleration and max_turn_acceleration; the guard's
+stop does not wait for them. Declares: not holonomic, turns in place, reverses (for backing up; the controller drives
+forward only), no trailer. Controller: the polar-coordinate Lyapunov law (Aicardi et al. 1995; Siciliano et al. 2009,
+11.6.2, final heading free), v = g cos(alpha), omega = k2 alpha + g sin(alpha) cos(alpha) / rho, with a turn-first
+factor h(alpha) in g so the base turns on the spot before it drives; commands over max_turn_rate are scaled keeping
+the curvature. Theorem: rho -> 0 and alpha -> 0 exponentially from any start. Model, law and proof in full:
+docs/architecture.md, "The differential-drive base and its controller" (tests/.../test_diff_drive.py checks it).
 """
 
 from __future__ import annotations

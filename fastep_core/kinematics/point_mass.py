@@ -1,35 +1,15 @@
 """Point-mass robot and its kinematic controller (eq. 12 of the paper).
 
-The controller dx/dt = alpha1 (x1 - x), dy/dt = alpha2 (y1 - y) drives the robot to the target (x1, y1);
-Theorem 1 shows V = ((x1 - x)^2 + (y1 - y)^2) / 2 decreases along it. An optional speed limit scales the
-velocity vector as a whole, so the direction of motion (and with equal gains, the straight path) is kept and
-dV/dt stays negative.
-
-Eq. 12 alone only converges exponentially: the speed is the gain times the distance, so with Table 1's gain
-0.1 a robot 2 m from a waypoint starts at 0.2 m/s and needs ln(2 / 0.3) / 0.1 = 19 s to come within 0.3 m
-of it, and 30 s to come within 0.1 m of a goal. An optional minimum speed m (`min_speed`, the planner's
-`min_approach_speed`) makes the arrival time finite, as follows.
-
-The command. With e = (x1 - x, y1 - y), d = |e| and u = (alpha1 e_x, alpha2 e_y) (eq. 12): when 0 < |u| < f,
-with f = min(m, d / dt), u is scaled up to speed f; then, as before, scaled down to max_speed if above it.
-So the speed is max(|u|, min(m, d / dt)), capped at max_speed: never above max_speed, never below
-min(m, max_speed, d / dt), and the direction is eq. 12's, scaled by a positive factor lambda. m = 0 is eq. 12
-exactly (bit for bit: the scaling is skipped).
-
-Theorem 1 still holds: dV/dt = -e . u = -lambda (alpha1 e_x^2 + alpha2 e_y^2) < 0 for e != 0.
-
-Finite time (continuous time). Let a = min(alpha1, alpha2), A = max(alpha1, alpha2) and s = min(m, max_speed)
-(s = m when the speed is unlimited). Since e . u >= lambda a d^2 and |u| <= lambda A d,
-    dd/dt = -(e . u) / d <= -(a / A) |u| <= -(a / A) s,
-so the robot is at the target after at most T = (A / a) d0 / s from distance d0: 10 s for 2 m with equal gains
-and m = 0.2 m/s, where eq. 12 alone never gets there.
-
-Finite time (the discrete controller, equal gains alpha, alpha dt <= 1, integrated exactly over each tick as
-PointMass.integrate does). u points straight at the target and |u| dt <= d (alpha d dt <= d; min(m, d / dt) dt
-<= d), so each tick moves the robot |u| dt closer without overshooting: d' = d - |u| dt. If d <= s dt the
-speed is d / dt and the tick ends on the target; otherwise |u| >= s and d drops by at least s dt. The robot is
-therefore within a tolerance tol >= 0 of the target after at most ceil((d0 - tol) / (s dt)) ticks, i.e. within
-(d0 - tol) / s + dt seconds. tests/fastep_core/kinematics/test_point_mass.py checks both bounds.
+The controller dx/dt = alpha1 (x1 - x), dy/dt = alpha2 (y1 - y) drives the robot to the target; Theorem 1 shows
+V = |e|^2 / 2 decreases along it. A speed limit scales the velocity vector as a whole, keeping its direction.
+Eq. 12 alone converges only exponentially (with Table 1's gain 0.1, 30 s to come within 0.1 m of a goal 2 m away),
+so an optional minimum speed m (`min_speed`, the planner's `min_approach_speed`) makes arrival finite: with
+u = (alpha1 e_x, alpha2 e_y) and f = min(m, d / dt), u is scaled up to f when 0 < |u| < f, then down to max_speed;
+m = 0 is eq. 12 bit for bit. Theorem 1 still holds (dV/dt = -lambda (alpha1 e_x^2 + alpha2 e_y^2) < 0).
+Finite time, continuous: with a, A the smaller and larger gain and s = min(m, max_speed), dd/dt <= -(a / A) s, so
+arrival within T = (A / a) d0 / s. Discrete (equal gains, alpha dt <= 1, exact integration): each tick moves |u| dt
+closer without overshooting, at least s dt unless it ends on the target, so within tol after at most
+ceil((d0 - tol) / (s dt)) ticks. tests/fastep_core/kinematics/test_point_mass.py checks both bounds.
 """
 
 from __future__ import annotations

@@ -1,41 +1,17 @@
 """Tractor-trailer robot (eq. 13 of the paper) and its steering controller.
 
-State (x, y, theta0, theta1): the tractor's mid-axle point, the tractor heading and the trailer heading.
-The paper's inputs are speed v and steering angle phi; here the model takes (v, omega) with
-omega = v tan(phi) / L, the tractor's yaw rate, because that is what a geometry_msgs/Twist carries
-(linear.x, angular.z) and it stays well defined at v = 0. With tan(phi) = omega L / v, eq. 13 becomes
-
-    x'      = v cos(theta0) - (L omega / 2) sin(theta0)
-    y'      = v sin(theta0) + (L omega / 2) cos(theta0)
-    theta0' = omega
-    theta1' = (v sin(theta0 - theta1) - c omega cos(theta0 - theta1)) / Lt
-
-Steering law (paper): v = alpha * distance to the target, phi = (7/9) atan(xi + beta / cos|theta0 - theta1|),
-beta = max{0, 0.5 - cos|theta1 - theta0|} sign(theta1 - theta0). |phi| < 70 degrees always. beta acts only
-once the hitch angle passes 60 degrees and steers the tractor back under its trailer (anti-jack-knife).
-
-The ODE for xi is garbled in the text; what is legible is xi(0) = bearing - theta0(0) (the heading error e)
-and a right-hand side built from sin(e) and e. We choose the first-order filter
-    xi' = k_xi (K e - xi),   xi(0) = K e(0),
-i.e. xi tracks the heading error e = wrap(atan2(y1 - y, x1 - x) - theta0), scaled by a heading gain K, with
-time constant 1/k_xi. It converges: for a fixed e the filter is exponentially stable, and since
-sign(phi) = sign(xi) -> sign(e) the tractor turns toward the target, which decreases |e| (V = e^2 / 2 has
-V' = -e (v/L) tan(phi) + e * bearing' < 0 while the turning rate beats the bearing rate). K = 1 (the paper's
-xi(0) = e(0)) steers so gently that a target closer than the turning circle is orbited forever at ~0.7 m;
-K = 3 turns about 2.5x tighter and reaches it (measured on a target 2 m abeam: K = 1 orbits at 1.3 m, K = 3
-arrives in 29 s), with the hitch angle still under 60 degrees. Tests check arrival and that the hitch angle
-stays far from 90 degrees.
-
-Minimum speed (`min_speed`, the planner's `min_approach_speed`), as for the point mass (kinematics/point_mass.py):
-v = max(speed_gain * distance, min(min_speed, distance / dt)), then capped at max_speed; 0 is the paper's law
-exactly. It changes neither the sign of v nor the steering angle phi, so the path's curvature tan(phi) / L is
-the law's at every point; only the heading filter xi, a function of time, runs over fewer metres (its time
-constant 1/k_xi = 0.5 s is 0.1 m at 0.2 m/s). With omega = v tan(phi) / L, x' and y' are v times a function of
-the state and phi, so the distance d to the target changes at d' = -v g(state, phi): v sets how fast d falls,
-g whether it falls, and v >= min(min_speed, max_speed) while d > min_speed dt. Where the law closes in on the
-target (g > 0: the heading error well under 90 degrees) it does so at least that fast instead of slowing
-down exponentially. Unlike the point mass there is no proof that g stays positive (a target inside the turning
-circle can be orbited at any speed), which the tests measure instead.
+State (x, y, theta0, theta1): the tractor's mid-axle point and the tractor and trailer headings. The model takes
+(v, omega), omega = v tan(phi) / L, rather than the paper's steering angle phi, because a Twist carries it and it is
+defined at v = 0: x' = v cos(theta0) - (L omega / 2) sin(theta0), y' = v sin(theta0) + (L omega / 2) cos(theta0),
+theta0' = omega, theta1' = (v sin(theta0 - theta1) - c omega cos(theta0 - theta1)) / Lt.
+Steering law (paper): v = alpha * distance, phi = (7/9) atan(xi + beta / cos|theta0 - theta1|),
+beta = max{0, 0.5 - cos|theta1 - theta0|} sign(theta1 - theta0) (anti-jack-knife past 60 degrees; |phi| < 70 deg).
+The paper's ODE for xi is garbled; we use the filter xi' = k_xi (K e - xi), xi(0) = K e(0), e the heading error,
+stable and turning the tractor toward the target; K = 3, not the paper's 1, which orbits a target closer than the
+turning circle forever. Minimum speed (`min_speed`, the planner's min_approach_speed) as for the point mass:
+v = max(speed_gain d, min(min_speed, d / dt)), capped at max_speed (0: the paper's law); it changes neither the sign
+of v nor phi, so the path's curvature is the law's. No proof of arrival (a target inside the turning circle can be
+orbited), so the tests check arrival and that the hitch angle stays far from 90 degrees.
 """
 
 from __future__ import annotations

@@ -1,74 +1,17 @@
 """The Stepping Ahead Firefly algorithm (FAStep, Nand et al. 2021), vectorised.
 
-Why FAStep: the FAStep-Kinematic planner calls this once per planned waypoint, so it must be fast (about two
-milliseconds for the paper's 50 fireflies on a cheap 2-D objective) and reproducible (one seeded Generator,
-same seed -> same bits). The standard firefly algorithm stalls once a firefly's attraction moves stop paying
-off; FAStep then tries a second move, *stepping ahead* of the brightest firefly, under a preference rule that
-tolerates a slightly worse position, which helps the swarm leave local minima (paper section IV-C).
-
-One iteration, with alpha_t = alpha * alpha_damping^t, span = high - low, r measured in box diagonals and
-every candidate clipped into the box:
-
-0. Rank the swarm brightest first (stable sort; this orders the work, it changes no move).
-1. Attraction (eq. 3), exactly as in the standard algorithm (`firefly.Swarm.attraction`): for every pair
-   (i, j) with f_j < f_i the candidate x_i + beta0 exp(-gamma r_ij^2) (x_j - x_i) + alpha_t eps_ij span, eps
-   uniform in [-0.5, 0.5]^d; a firefly nobody outshines makes a random walk x_i + alpha_t eps span. All pair
-   candidates are evaluated in one call and each firefly keeps its best one. If that is strictly better than
-   the firefly's current value, the firefly moves there (paper: "if the new location has a greater
-   attraction value, the firefly will relocate. Otherwise, the firefly will remain where it is").
-2. Stepping ahead (eq. 4) for every firefly whose best attraction candidate was not better: with x_b the
-   brightest firefly after step 1,
-       s_i = x_b + beta0 exp(-gamma r_ib^2) (x_i - x_b) + alpha_t eps_i span,
-   i.e. start from the brightest firefly and step ahead of it, past x_i. All s_i are evaluated in one call.
-3. Preference rule (our exact choice; the paper only names the rule): firefly i moves to s_i when
-       f(s_i) <= f_i + Q min(|f_i|, 1e300),   Q = PREFERENCE_TOLERANCE = 0.01,
-   that is when s_i is better, equal, or at most 1 % worse. A deterministic threshold needs no extra random
-   draws and means the same at every objective scale; the cap keeps f_i + Q |f_i| from overflowing, and from
-   f_i = +inf any candidate qualifies. The brightest firefly x_b is exempt from the tolerance: it moves only
-   to strictly better points. Otherwise the firefly stays.
-4. Elitism and damping: because the brightest firefly never gets worse, the swarm's best value never
-   increases and the best point ever evaluated stays in the swarm; it is also recorded apart.
-   alpha_t is multiplied by alpha_damping.
-
-The run stops after `max_iter` iterations or after `patience` consecutive iterations in which the best value
-did not strictly decrease.
-
-Where the authors' MATLAB code differs (project notes, section 3), we follow the paper's text: stepping ahead
-is tried per firefly whenever its own attraction move failed (their code switches it on after the whole swarm
-stagnates), and a firefly is replaced only by its own candidates (their template merges, sorts and truncates
-the whole population). The defaults are the paper's Table 1 (alpha damping 0.8; their code uses 0.98).
-
-Random draws, in order, from the one Generator: the initial population (`rng.uniform(low, high, (n, d))`),
-then per iteration one `rng.random((d, m))` block for the m attraction pairs (column p: the p-th pair in
-row-major order of the ranked swarm) and one `rng.random((d, k))` block for the k stepping-ahead fireflies
-(ascending index). `fastep_testing/fastep_loop.py` makes the same moves and draws with plain Python loops, and
-returns the same result bit for bit.
-
-Departure from the paper, off by default: `attraction_sample=k` attracts each firefly to at most k of the
-fireflies brighter than it, drawn uniformly without replacement every iteration, instead of to all of them
-(step 1 above; a firefly with k or fewer brighter ones still gets all of them, the brightest still walks).
-The paper's attraction makes n (n - 1) / 2 + 1 = 1,226 candidates per iteration for 50 fireflies, which is
-what keeps one planned step above a millisecond; with k = 5 it makes at most n k = 250. Everything else
-(stepping ahead, the preference rule, elitism, damping, stopping) is unchanged. Its draws: per iteration one
-`rng.random((n, n))` block of sampling keys before the attraction block (`firefly.Swarm.sampled`), so its
-runs differ from the paper's even when no firefly has more than k brighter ones. Measured in
-docs/optimizers.md ("Attraction to a sample") and docs/benchmarks.md (step latency).
-
-Departure from the paper, off by default: `merged_moves=True` evaluates each iteration's attraction and
-stepping-ahead candidates in ONE objective call. Stepping ahead (step 2) then starts from the brightest firefly
-at the iteration's start (x_0 after ranking) instead of the brightest after the attraction moves, and is built
-for every firefly, from the positions at the iteration's start, before anyone knows whose attraction move will
-fail; a firefly whose attraction candidate is strictly better moves there as before, and the others apply the
-preference rule to their stepping-ahead candidate (x_0 exempt from the tolerance, as x_b is). The brightest
-value still never increases. Why: the fitness of one planned step costs tens of microseconds per call whatever
-the batch (numpy's per-operation overhead), so two calls per iteration were a third of a plan; one call costs
-n more candidates (the steps of the fireflies that moved, wasted) and saves a call. Its draws: per iteration one
-`rng.random((d, m + n))` block, the m attraction pairs' columns first, then the n fireflies' steps in ranked
-order. Measured in docs/optimizers.md ("Merged moves") and docs/benchmarks.md (step latency).
-
-Objective values are only compared, never subtracted, so +inf and huge values (the planner scores an
-infeasible candidate 1e6 + violation) raise no floating-point warnings; NaN counts as +inf. The objective
-receives (m, d) arrays in Fortran order (see `firefly.Swarm`).
+Why FAStep: the FAStep-Kinematic planner calls this once per planned waypoint, so it must be fast (a few milliseconds
+for the paper's 50 fireflies) and reproducible (one seeded Generator, same seed -> same bits). Where the standard
+firefly algorithm stalls, FAStep tries a second move, stepping ahead of the brightest firefly, under a preference rule
+that tolerates a slightly worse position (within PREFERENCE_TOLERANCE, 1 %), which helps the swarm leave local minima
+(paper section IV-C). One iteration: attraction (eq. 3) as in `firefly.Swarm.attraction`, a firefly moving only to a
+strictly better candidate; stepping ahead (eq. 4) for the others; the preference rule; elitism (the brightest never
+gets worse) and damping of alpha. Stops after `max_iter` iterations or `patience` without improvement. Where the
+authors' MATLAB code differs we follow the paper's text; defaults are its Table 1. `fastep_testing/fastep_loop.py`
+makes the same moves and random draws with plain loops, bit for bit. Two departures, off by default, make a planned
+step cheaper: `attraction_sample=k` and `merged_moves=True`. Objective values are only compared, so +inf and huge
+values raise no warnings (NaN counts as +inf); the objective receives (m, d) arrays in Fortran order. In full (each
+step, the order of random draws, the departures): docs/architecture.md, "The FAStep optimizer, step by step".
 """
 
 from __future__ import annotations

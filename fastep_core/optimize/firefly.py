@@ -1,36 +1,17 @@
 """The standard firefly algorithm (Yang 2008), vectorised: the baseline FAStep builds on.
 
-Why it is here: FAStep (`fastep.py`) is the standard algorithm plus the stepping-ahead move and a preference
-rule, so the machinery both share (`Swarm`: ranking, the attraction move, candidate generation) lives in this
-module, and `firefly()` lets a benchmark show what the stepping-ahead part adds.
-
-The attraction move (the paper's eq. 3, with the sign of the pull corrected: as printed, (x_i - x_j) would
-push firefly i away from the brighter firefly j, contradicting the text around it):
-
-    c_ij = x_i + beta0 * exp(-gamma * r_ij^2) * (x_j - x_i) + alpha_t * eps_ij * span
-
-is generated for every ordered pair (i, j) in which j is strictly brighter (lower objective) than i. Following
-the authors' firefly template, r_ij is the Euclidean distance divided by the diagonal of the search box, so
-gamma means the same in every box; span = high - low scales the random term to the box, and eps_ij is uniform
-in [-0.5, 0.5]^d. A firefly that nobody outshines (the brightest, and any firefly tied with it) makes a pure
-random walk x_i + alpha_t * eps * span instead; this is simply the pair (i, i), where the pull vanishes.
-Candidates are clipped into the box. alpha_t = alpha * alpha_damping^t shrinks the random term every iteration.
-
-Each iteration first ranks the swarm brightest first (a stable sort; the authors' template sorts too). This
-changes no move, only the order of the fireflies, and with distinct values it makes the pairs a fixed lower
-triangle that is computed once. All pair candidates are then built from the positions at the start of the
-iteration (a synchronous update) and evaluated in ONE call of the vectorised objective; each firefly keeps
-its best candidate (the first in j order among equal values).
-
-Update (Yang's classic behaviour, "fireflies move toward brighter ones"): every firefly *moves* to its best
-candidate, even when that is worse than where it was; there is no selection. (Yang's own code moves firefly
-i toward each brighter j in turn; evaluating every such move and taking the best is the batch form the
-authors' template uses.) The best point ever evaluated is kept apart (elitism), so the reported result and
-history never get worse.
-
-Random draws, in order, from the one Generator: the initial population (`rng.uniform(low, high, (n, d))`),
-then per iteration one `rng.random((d, m))` block for the m attraction candidates, column p belonging to the
-p-th pair in row-major (i, then j) order of the ranked swarm.
+Why it is here: FAStep (`fastep.py`) is this algorithm plus stepping ahead and a preference rule, so the shared
+machinery (`Swarm`: ranking, the attraction move, candidate generation) lives here, and `firefly()` lets a benchmark
+show what stepping ahead adds. The attraction move is the paper's eq. 3 with the sign of the pull corrected (as
+printed it pushes firefly i away from the brighter j): c_ij = x_i + beta0 exp(-gamma r_ij^2) (x_j - x_i) +
+alpha_t eps_ij span, for every pair with j strictly brighter; r_ij is measured in box diagonals so gamma means the
+same in every box, eps is uniform in [-0.5, 0.5]^d, and a firefly nobody outshines walks randomly (the pair (i, i)).
+Candidates are clipped into the box; alpha_t = alpha alpha_damping^t. Each iteration ranks the swarm (a stable sort,
+changing no move), builds all candidates from the iteration's start positions and evaluates them in ONE objective
+call; each firefly moves to its best candidate even when worse (Yang's classic behaviour, no selection), while the
+best point ever evaluated is kept apart (elitism). Random draws, in order: the initial population
+(`rng.uniform(low, high, (n, d))`), then per iteration one `rng.random((d, m))` block, column p the p-th pair in
+row-major order of the ranked swarm.
 """
 
 from __future__ import annotations

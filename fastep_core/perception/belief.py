@@ -1,31 +1,15 @@
 """What a robot believes about its world, kept apart from the truth, and the perception loop that updates it.
 
-A robot with a sensor starts believing its map (the known obstacles, misplaced ones where the map says). Each
-control tick it scans the true world (the simulator, or a LaserScan on a real robot) and `Perception.update`:
-
-1. turns the readings into map-frame points (segmentation.scan_points);
-2. drops from the belief every obstacle the scan sees through (fusion.seen_through: a misplaced obstacle's
-   ghost, or a mover once taken for a still obstacle);
-3. sets aside the points a believed obstacle, another robot (its odometry) or a known mover explains
-   (fusion.explained), but not those IN_FRONT or more in front of the believed surface on their beam (a surface
-   the belief lacks: `_in_front`);
-4. clusters the rest along the beam order (segmentation.segment) and fits circles (none whose disc this scan's
-   beams pass through), or walls where no circle fits and the cluster is within WALL_RANGE of the range
-   (shapes.shapes; a wall is believed at its nearest return);
-5. tracks the circles with a constant-velocity Kalman filter (tracking.Tracker);
-6. believes in still obstacles: walls at once (straight walls merged with the collinear pieces it already
-   has; not a piece on a moving track, which is movers seen merged: the track coasts, kept alive by the
-   points near it), a confirmed track's circle at once while it has not been found moving (`_update_standing`;
-   kept where last seen when it goes out of sight), and for good once it has stood still (speed below
-   STILL_SPEED) for STILL_TIME seconds on end (such a circle overlapping a map circle of about its size replaces
-   it: the map's was misplaced);
-7. reports as movers the confirmed tracks found moving, on consistent evidence only (gone MOVER_DISTANCE from
-   where they were confirmed, into space earlier scans saw free: `_came_into_free_space`):
-   OtherRobot('track K', position, velocity, radius), the way known movers and other robots reach planners.
-
-The result is a `Belief`: a World for the navigator (changed, as a new object, only when the still obstacles
-it believes in change, so planners replan only then) and the tracked movers. Nothing here draws random
-numbers: the scanner's noise is drawn by whoever scans (the simulator: `sensor_generator`).
+A robot with a sensor starts believing its map. Each tick `Perception.update` turns the scan into map-frame points
+(segmentation.scan_points); drops believed obstacles the scan sees through (fusion.seen_through); sets aside points a
+believed obstacle, robot or known mover explains, unless IN_FRONT of the believed surface (`_in_front`); clusters the
+rest (segmentation.segment) and fits circles, or walls within WALL_RANGE (shapes.shapes); tracks circles with a
+constant-velocity Kalman filter (tracking.Tracker); believes walls at once and a confirmed track's circle while not
+found moving, for good after STILL_TIME below STILL_SPEED (replacing a map circle of its size it overlaps); and
+reports as movers only tracks gone MOVER_DISTANCE into space earlier scans saw free (`_came_into_free_space`), as
+OtherRobot('track K', ...). The result is a `Belief`: a World, a new object only when the still obstacles change (so
+planners replan only then), and the tracked movers. No random numbers are drawn here (the scanner's noise is drawn
+by whoever scans). Why shapes and not a grid, and the costmap-like rules: docs/architecture.md, "What a laser shows".
 """
 
 from __future__ import annotations

@@ -1,87 +1,16 @@
-"""DWA: the Dynamic Window Approach (Fox, Burgard & Thrun, "The Dynamic Window Approach to Collision
-Avoidance", IEEE Robotics & Automation Magazine 4(1), 1997), for the differential-drive base it was made for
-and adapted to the holonomic point mass.
+"""DWA: the Dynamic Window Approach (Fox, Burgard & Thrun 1997) for the holonomic point mass and a differential-drive
+base (kinematics/diff_drive.py); a tractor-trailer is refused when the navigator is made.
 
-Why it is here: it is the local planner a ROS user would pick instead of FAStep-Kinematic (Nav2's DWB
-controller descends from it), so it is the yardstick, run in the same harness (the shared Navigator loop, its
-guard, its 'no valid path' check and progress checker; planning/navigator.py).
-
-Every control tick, as in the paper:
-1. The search space. Velocities (vx, vy) on a `dwa_samples` x `dwa_samples` grid
-   over the dynamic window, the velocities reachable within one tick from the current one under the
-   acceleration limit `dwa_acceleration`, minus those faster than `max_speed` (the paper's V_s). A holonomic
-   robot's acceleration is a vector, so the window is a disc: a square one (a limit per axis) would let the
-   velocity term favour its corners, and a robot starting from rest would veer off the straight line. The
-   grid's axes lie along and across the bearing to the goal, for the same reason: on axes of the map a grid
-   point just off a diagonal bearing is faster than the one on it, and the robot veered.
-   The current velocity is the command last sent (the point mass's plant follows its command exactly), or
-   rest after a gap of more than two ticks (a planner node that held the robot still).
-2. The rollout: each sample is held for `dwa_horizon` seconds, in `dwa_rollout_steps` straight segments, and
-   checked against the obstacles (circles, segments), the workspace walls and the other robots, which move
-   on at their last known velocities (moving obstacles). A segment "hits" when it comes within the robot's
-   clearance (radius + `clearance_margin`, the distance every planned waypoint of the other planners keeps)
-   of an obstacle or wall, or within both radii plus `clearance_margin` of another robot, and nearer than
-   the robot is now (a robot already that near may still move away, as the guard allows). Without the
-   margin, the objective's pull to the goal makes the robot skim obstacles at exactly its radius.
-3. Admissible velocities (the paper's V_a): those the robot can stop on before the first hit, braking at
-   `dwa_acceleration` after one tick at the sampled speed: dt + speed / (2 a) <= time of the hit (the start
-   of the first hitting segment, which errs on the safe side; with no hit, the end of the horizon, the only
-   stretch known to be free). The others are discarded. With none left, the robot brakes as hard as allowed.
-4. The objective (the paper's G, without its smoothing), maximised over the admissible samples:
-       G(v) = dwa_heading * progress(v) + dwa_clearance * clearance(v) + dwa_velocity * velocity(v)
-   - progress: how much closer to the goal the rollout ends, over max_speed * horizon (in [-1, 1]). The
-     paper's heading term scores the angle to the goal of a robot that must turn first; a holonomic robot
-     has no heading to turn, so the goal progress takes its place, and it slows the robot down at the goal;
-   - clearance: the smallest margin the rollout keeps from any obstacle, wall or robot (beyond the contact
-     distance of step 2), capped at `dwa_clearance_cap` and divided by it. The paper's dist term is the free
-     run along the trajectory, which in a straight-line rollout is what the admissibility already uses; so
-     the score here rewards keeping away, like DWB's obstacle critic. The margin is not floored at zero: a
-     rollout that would cut less deep into another robot's way (admissible, as it could still stop) scores
-     better, so the robot swerves for an oncoming one instead of driving on until it must brake;
-   - velocity: speed / max_speed (the paper's vel term).
-   The terms are scaled by fixed bounds, not by the spread of the samples (a tick where all the samples are
-   alike would otherwise blow up noise), and the paper's smoothing of G over the window is left out. The
-   best sample, ties broken by grid order, is the command: no random numbers are drawn.
-
-Vectorised over the samples, the rollout steps and the obstacles: one tick is a few dozen numpy operations
-on arrays of samples x steps x obstacles, only over the obstacles the rollouts can reach.
-
-What it does not do: it is a local planner. In a U-shaped trap facing the robot it drives into the pocket and
-stays where no admissible velocity brings it closer to the goal; FAStep-Kinematic and ACO-Kinematic leave
-such traps along the exact path (the navigator's trap escape), which DWA deliberately does not get. The
-progress checker then ends the run: "failed to make progress ... (DWA: a local minimum)", with ", another
-robot in the way" when one is within sensing_range (two robots face to face in a corridor hold each
-other). With `dwa_escape` = 1 it gets that escape too: after trap_timeout without progress, the target
-whose progress DWA scores is the exact path's carrot instead of the goal, until the robot has left the trap
-(the yardstick with the same safety net as the others; what a Nav2 user gets from a global planner above
-DWB).
-
-Robot models: the holonomic point mass (above) and a differential-drive base (a unicycle, the paper's own
-robot; kinematics/diff_drive.py), which the model tells apart by what it declares (not holonomic, turns in place,
-no trailer). For the unicycle, as in the paper:
-- the window is the rectangle of commands (v, omega) reachable within one tick from the current one, v within
-  max_acceleration * dt and omega within max_turn_acceleration * dt (the base's limits; dwa_acceleration, and
-  twice it per second for omega, where those are 0), cut to 0 <= v <= max_speed (forward only, as Nav2's
-  DWB with min_vel_x = 0) and |omega| <= max_turn_rate, `dwa_samples` values per axis;
-- the rollout holds (v, omega) and follows the exact arc (kinematics/diff_drive.py's closed form), checked as
-  `dwa_rollout_steps` chords;
-- admissible: v can brake to rest at max_acceleration before the first hit;
-- the objective adds two terms. The paper's heading term, dwa_heading * HEADING_SHARE * (1 - e / (pi - f))
-  with e the angle by which the heading at the rollout's end points more than f away from the bearing from
-  there to the goal (0 within f): the goal progress alone scores a base facing away from its goal at rest
-  (every sample is slow) nearly equally for every turn rate. f is 90 degrees while the rollout ends farther
-  from the goal than max_speed * dwa_horizon, narrowing in proportion to nothing at the goal. Flat within 90
-  degrees because a base facing an obstacle on the way must be free to turn away from the goal to skirt it: a
-  term that pulled it back to the goal held it there (diff_drive_walls: stuck 0.2 m from the first circle, 'a
-  local minimum'); narrowing near the goal because there a base 0.2 m beside its goal, facing across, had no
-  reason left to turn toward it and stood there (every forward arc ends farther away);
-  And a look-ahead term, the paper's dist in spirit: dwa_clearance times the room beyond the clearance at
-  dwa_clearance_cap metres ahead of the rollout's end along its final heading (capped at +-dwa_clearance_cap,
-  over it): of the turns on the spot, whose rollouts all keep the same clearance, it picks the one that faces
-  free room, so a base that drove up to an obstacle turns toward the side it can pass on;
-- braking lowers v and omega toward 0 at their accelerations.
-A tractor-trailer (steered, not turning in place) is refused when the navigator is made (one line, from
-`make_navigator`).
+It is the yardstick: the local planner a ROS user would pick instead of FAStep-Kinematic (Nav2's DWB descends from
+it), run in the same harness (the shared Navigator loop, its guard, 'no valid path' check and progress checker).
+Every tick it samples velocities in the dynamic window (`dwa_samples` per axis, within one tick's acceleration),
+rolls each out for `dwa_horizon` s against obstacles, walls and robots moving on, keeps those it can stop from
+before the first hit (the paper's V_a), and takes the best of G = dwa_heading * progress + dwa_clearance *
+clearance + dwa_velocity * velocity, ties in grid order (no random numbers). Vectorised over samples x rollout
+steps x the obstacles the rollouts can reach. Being local it stays in a U-trap ("failed to make progress ...
+(DWA: a local minimum)") unless `dwa_escape` = 1 gives it the exact-path trap escape.
+Why each step departs from the paper (a disc window on goal-aligned axes, progress for heading, the unicycle's
+heading and look-ahead terms): docs/architecture.md, "DWA, the yardstick".
 """
 
 from __future__ import annotations

@@ -1,48 +1,16 @@
-"""FAStep-Route: FAStep-Kinematic guided by the exact shortest route over what the robot knows (issue 12, item 2).
+"""FAStep-Route: FAStep-Kinematic guided by the exact shortest route over what the robot knows.
 
-Why: FAStep-Kinematic measures d in eq. 10 to the goal, so its steps are greedy: in clutter they lead into
-wedges and U-traps whose way out lies behind the robot, and its path is on average 10 % longer than the
-optimum (44 % in the worst world, issue 12). What the robot knows of the world - the map it was given and the
-robots standing still - already fixes the shortest way; only what moves is left for the swarm to decide.
-
-Algorithm 1 with a route in place of the goal (`FAStepRoute.choose_target`, every tick):
-1. The route is the exact shortest path (planning/optimal.py through `Navigator.exact_path`: radius + margin
-   from every obstacle where there is room, less through a narrow gap, more for a robot that cannot turn in
-   place) from the robot to its goal. It is planned when the goal is set (the base class's first-tick path,
-   which checks the goal anyway, is the first route) and again only when `replan_reason` gives a reason: the
-   world given to the navigator changed, another robot has stood on the route ahead for BLOCK_TIME (the new
-   route goes round the robots standing still), a robot the route was planned round has moved away, or no
-   route vertex is in sight any more (after a swarm step, a backup or a manoeuvre). `replan` is the one
-   method that plans; a future trigger (moving or sensed obstacles) adds a reason to `replan_reason`.
-2. The route target is the farthest route vertex in sight: the straight run to it keeps the route's clearance
-   (a hair less: half the margin) from the world the route was planned in. It is the goal of Algorithm 1:
-3. when no other robot within sensing range lies on the straight run to it (eq. 11, with both radii), the
-   kinematic controller drives there (eq. 12 / 13); the run is free of obstacles by construction;
-4. otherwise the swarm plans one step (eq. 3-10) with d measured to the route target, and the robot drives to
-   that waypoint as FAStep-Kinematic does (the lead of `aim`, the hold breaker, recoveries: planning/navigator.py).
-Static obstacles therefore never start the swarm (the route knows them, and a changed world is replanned at
-once): it plans only round other robots.
-5. Before a one-lane passage on the route (where another robot could not pass beside it: planning/passage.py)
-   the robot stands while another robot comes through it towards this one, or comes towards its far end and is
-   nearer to it (ties by name), at most PASSAGE_WAIT seconds: `wait_before_passage`. Two robots meeting inside
-   one could neither pass nor keep right.
-
-Speed: the kinematic controllers slow down in proportion to the distance to their target (eq. 12: alpha1 x
-distance; eq. 13: speed_gain x distance). The route target only sets a direction, so the controller is aimed
-`lead` beyond it on the ray from the robot: max_speed / gain when the speed is limited (the controller then
-commands full speed; 10 m with Table 1's gains), else `waypoint_lead`. A point mass drives that ray exactly, so
-its path is the same straight run; a tractor-trailer steers onto it as it would onto the vertex. The goal
-itself is aimed at directly (the paper's approach). A robot that cannot turn in place takes the route with
-turn room (planning/exact_path.py) only when it is at most TURN_ROOM_SLACK longer than the usual one.
-
-Progress along the route (a shorter way left, not a smaller distance to the goal) restarts the progress
-checker and the trap detector: a route that leads away from the goal round a long wall is not a trap. The
-trap escape stays as the safety net (robots that block the way for trap_timeout).
-
-Cost: one exact path per goal and per replan, never per tick (two for a robot that cannot turn in place: with
-and without turn room); the farthest vertex in sight is tested every `detection_interval` of travel (less often
-for a holonomic robot far from it: `next_look`) against at most SIGHT_VERTICES vertices within SIGHT metres of
-route. docs/fastep_route.md has the numbers.
+Why: FAStep-Kinematic measures d in eq. 10 to the goal, so its steps are greedy and lead into wedges and U-traps
+whose way out lies behind the robot. What the robot knows (its map, the robots standing still) already fixes the
+shortest way; only what moves is left for the swarm. Algorithm 1 with a route in place of the goal
+(`FAStepRoute.choose_target`): the route (planning/optimal.py via `Navigator.exact_path`) is planned when the goal is
+set and again only when `replan_reason` gives a reason (`replan` is the one method that plans); the target is the
+farthest route vertex in sight; the kinematic controller drives there (eq. 12 / 13) unless another robot lies on the
+run (eq. 11), when the swarm plans a step (eq. 3-10) with d measured to that vertex. Static obstacles therefore never
+start the swarm. Before a one-lane passage (planning/passage.py) the robot waits while another comes through
+(`wait_before_passage`, at most PASSAGE_WAIT). The controller is aimed `lead` beyond the vertex so it keeps full
+speed; progress along the route (a shorter way left) restarts the progress checker and trap detector. Cost: one exact
+path per goal and replan, never per tick. Details and measurements: docs/fastep_route.md, "What it does".
 """
 
 from __future__ import annotations

@@ -1,30 +1,16 @@
 """Manoeuvres for a tractor-trailer: a hybrid-A* search over short forward and reverse arcs.
 
-Why: a forward-steered vehicle pinned in a tight corner (inside a U-shaped trap, a wall alongside) cannot
-follow a point path: it has to back up and turn, sometimes more than once (a three-point turn). Pure pursuit
-of the exact path plus a fixed menu of backup moves finds such a manoeuvre only most of the time
-(docs/robustness.md). Hybrid A* (Dolgov, Thrun, Montemerlo and Diebel, 2008) searches the vehicle's own
-motions instead:
-
-- From a state (x, y, theta0, theta1) an expansion drives each of ten arcs, forward or in reverse, straight or
-  at half or full steering lock either way, for `arc_ticks` control ticks, integrating eq. 13 the way the
-  plant does (RK4, four sub-steps per arc in the search; the found arcs are replayed tick by tick).
-- An arc is kept if the reference point stays `keep` from every obstacle and from the border and the trailer
-  does not fold past `max_hitch` (past 90 degrees the steering law's anti-jack-knife term folds it further);
-  the replay, integrated every tick, may part from the search's sub-steps by 2 cm and 0.02 rad, no more.
-  A robot already nearer than `keep` (held at a wall) may not come more than a millimetre nearer on an arc,
-  and with a `floor` (the robot's radius) no tick of the replay may end below it while getting nearer: that
-  is the navigator's guard, which would stop the manoeuvre there.
-- States are merged on a grid of (x, y, theta0, hitch angle); the cost is the distance driven, reverse
-  driving and changes of direction costing extra, as they do for a truck.
-- The heuristic is the shortest grid distance to the goal round the obstacles (Dijkstra on an 8-connected
-  grid, scipy.sparse.csgraph), so the search follows the corridor out of a trap instead of pushing into its
-  back wall.
-
-The search stops at a state from which plain kinematic driving arrives: the goal within `reach`, or straight
-ahead in clear sight (heading within 30 degrees of it, trailer nearly straight). The result lists the command
-of every control tick and the states they lead through, for the navigator to replay and to check against the
-odometry.
+Why: a forward-steered vehicle pinned in a tight corner must back up and turn, sometimes more than once, which pure
+pursuit plus a fixed menu of backups does not always find; hybrid A* (Dolgov, Thrun, Montemerlo and Diebel 2008)
+searches the vehicle's own motions. An expansion drives ten arcs (forward or reverse; straight, half or full lock
+either way) for `arc_ticks` ticks, integrating eq. 13 (RK4, four sub-steps; the found arcs are replayed tick by tick,
+parting by at most 2 cm and 0.02 rad). An arc is kept if the reference point stays `keep` from obstacles and border
+and the hitch stays within `max_hitch`; a robot already nearer than `keep` may come at most a millimetre nearer, and
+no replayed tick may end below `floor` while getting nearer (the guard would stop it there). States merge on a grid
+of (x, y, theta0, hitch); cost is distance, reverse and direction changes costing extra. The heuristic is the grid
+distance round the obstacles (Dijkstra, scipy.sparse.csgraph), so the search follows the corridor out of a trap. It
+stops where plain driving arrives (goal within `reach`, or in clear sight ahead, trailer nearly straight) and returns
+each tick's command and state, for the navigator to replay and check against odometry.
 """
 
 from __future__ import annotations

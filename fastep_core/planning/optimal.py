@@ -1,40 +1,16 @@
 """The exact reference: the shortest path that keeps a clearance r from every obstacle and the border.
 
-Why: FAStep-Kinematic and ACO-Kinematic are judged by path length, and the paper compares them only with
-each other and with the straight line. A straight line is a poor yardstick once something is in the way; the
-true optimum (for a point that must stay r away from every obstacle surface) says how much shorter any
-planner could possibly be. With circles and line segments only, it has a closed form.
-
-The method (a tangent visibility graph, exact for discs; Chen & Wang's "shortest paths among disks"):
-- Inflate every obstacle by r. A circle of radius rho becomes a disc of radius rho + r. A segment becomes a
-  capsule: its two end-cap discs of radius r plus the strip of half-width r between them. A shortest path
-  bends only where it wraps around an obstacle's convex boundary; the straight sides of a capsule are the
-  common tangents of its two end caps, so the caps alone (as circles) generate every bend, and the capsule
-  enters only as a constraint: no straight edge and no arc may come closer than r to the segment.
-- Nodes are start, goal and the tangent points of every common tangent between two circles (four per pair:
-  two outer, two inner when they are apart) and between start or goal and a circle (two each). A tangent
-  edge is kept when the core's own `Obstacles.path_clearance` of it is at least r (minus TOL) and both of its
-  ends lie in the workspace shrunk by the border margin (convex, so the whole edge then does). The test
-  measures each edge only against the obstacles near it (ObstacleGrid, obstacle_grid.py) and in blocks, so memory stays
-  bounded (the full edge-by-obstacle matrix grew as N^3: 500 circles 9.4 GB); the decisions are the same.
-- Arc edges join consecutive nodes along each circle (either way round, as long as the arc is free). The
-  free part of a circle is computed in closed form: the angles where it enters another inflated disc, the
-  strip of a capsule, or leaves the shrunk workspace are intervals of the form {A cos t + B sin t < h}.
-- The search (planning/tangent_search.py) makes the graph only where it looks: A* (heapq; heuristic: the
-  straight line to the goal) expands a node by making the free tangents and arcs of its circle, for that
-  circle at once, the first time; then Dijkstra over the expanded nodes picks, among equally short paths, the
-  one Dijkstra over the whole graph picks (fastep_testing/optimal_eager.py builds the whole graph, the tests
-  compare). The path's length is exact (tangent lengths plus R * angle).
-
-The border: planned waypoints keep `clearance` from it too (as the step planner's rule does), except that a
-start or goal that is nearer the border lowers that margin to its own distance, so it is never excluded.
-A start or goal closer than `clearance` to an obstacle has no valid path (None).
-
-The polyline: arcs are replaced by a circumscribed polygon (vertices R / cos(delta / 2) from the centre,
-spaced at most `spacing` along the arc), whose every chord stays outside the inflated circle, so the polyline
-keeps clearance r everywhere, not only at its vertices; each chord is checked with `path_clearance` and
-refined where a neighbouring obstacle is tighter than the polygon's bulge. Its length exceeds the exact length
-by a factor of about 1 + delta^2 / 12 on arcs (0.06 % at 0.25 m spacing on a 3 m circle).
+Why: planners are judged by path length, and a straight line is a poor yardstick once something is in the way; the
+true optimum says how much shorter any planner could be. With circles and segments only it has a closed form: a
+tangent visibility graph, exact for discs (Chen & Wang, "shortest paths among disks"). Obstacles are inflated by r
+(a segment becomes a capsule whose end caps generate every bend, its strip only a constraint); nodes are start, goal
+and the tangent points of the common tangents, kept when `Obstacles.path_clearance` is at least r (less TOL) and in
+the workspace shrunk by the border margin; arcs join nodes along each circle where it is free (closed form). Edges
+are tested only against nearby obstacles (ObstacleGrid) and in blocks so memory stays bounded. The search
+(planning/tangent_search.py) builds the graph lazily with A*, then picks the path the whole graph's Dijkstra would
+(fastep_testing/optimal_eager.py checks it); its length is exact. The border margin drops to a start's or goal's own
+distance so it is never excluded; a start or goal within `clearance` of an obstacle has no path (None). The polyline
+replaces arcs by circumscribed polygons (spacing `spacing`) so every chord keeps r, about 1 + delta^2 / 12 longer.
 """
 
 from __future__ import annotations

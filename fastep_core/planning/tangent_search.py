@@ -1,31 +1,15 @@
 """The search of the exact shortest path (planning/optimal.py): A* over the tangent visibility graph, made lazily.
 
-Why: the graph has about 2 N^2 candidate tangents among N circles. Building it whole, every free tangent and
-arc as a Python edge, took 0.6 s for 150 circles (16k edges), and a crowd of 100 robots asks for hundreds of
-such paths (each robot's goal check, trap escapes round the parked robots). A shortest path only ever looks
-at a thin band round the straight line to the goal; A* looks there first and stops at the goal.
-
-The graph is the one optimal.py's docstring describes, with the same nodes and edges:
-- Nodes: start, goal, and both ends of every free tangent (a tangent point is a node of its own tangent: two
-  tangents touching a circle at the same point are two nodes, joined by an arc of length 0).
-- A node's edges: its tangent (a line to the other end) and the arcs along its circle to the neighbouring
-  nodes in angle order, where the arc is free. The neighbours need every free tangent touching that circle:
-  they are made and tested for the whole circle at once (vectorised), the first time a node on it is
-  expanded, and kept for the query. The start's edges are its tangents to every circle and the straight run.
-  The start's and the goal's tangents to every circle are made and tested in one batch each, at the first need
-  (every circle's nodes include its tangents to both: one batch per circle cost more in small calls).
-- A* explores, with the straight-line distance to the goal as the heuristic, lowered by a rounding slack so
-  that it stays below the rest of any path as floating point adds it up (nodes are reopened when a shorter
-  way to them turns up). When the goal leaves the heap, every node of every shortest path has been expanded.
-- Dijkstra then runs over the expanded nodes only, with the keys the whole graph's Dijkstra uses: (distance,
-  node number). A node's rank here is its number there (start, goal, then the free candidate tangents'
-  ends in the order they are made: start's, goal's, then each pair of circles i < j, outer then inner, the
-  end on circle i first), so it settles the nodes in the same order and picks the same path, also where
-  several paths are equally long (symmetric worlds): the distances are the same floating-point sums and the
-  first equally short way into a node is kept. The exploration costs the time; this pass is small.
-
-fastep_testing/optimal_eager.py keeps the whole-graph construction and Dijkstra as the reference; the tests
-(tests/fastep_core/planning/test_tangent_search.py) check that both give the same paths on many worlds.
+Why: the graph has about 2 N^2 candidate tangents among N circles, and a crowd asks for hundreds of paths; a shortest
+path only looks at a thin band round the straight line to the goal, which A* explores first, stopping at the goal.
+Same nodes and edges as optimal.py: start, goal and both ends of every free tangent (two tangents touching a circle at
+one point are two nodes joined by a zero arc); a node's edges are its tangent and the free arcs to its neighbours on
+its circle, so a circle's tangents are made and tested at once (vectorised) the first time a node on it is expanded;
+the start's and goal's tangents to every circle in one batch each. The heuristic (straight-line distance) is lowered
+by a rounding slack so it stays admissible in floating point; nodes reopen when a shorter way turns up. Dijkstra then
+runs over the expanded nodes with the whole graph's keys (distance, node number, the same numbering), so it picks the
+path the whole graph's Dijkstra would, also among equally long ones. fastep_testing/optimal_eager.py keeps the eager
+construction as the reference; tests/fastep_core/planning/test_tangent_search.py compares them on many worlds.
 """
 
 from __future__ import annotations

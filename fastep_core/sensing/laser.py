@@ -1,29 +1,15 @@
 """A planar laser scanner: ray casting against circles and segments, with sensor_msgs/LaserScan semantics.
 
-One scan is a fan of `beams` rays from the scanner's position (a robot's reference point), centred on its
-heading. Each ray's true range is the distance to the nearest surface it meets: a circle (a still obstacle,
-a moving one placed where it is at the scan's time, another robot as a circle of its radius) or a segment (a
-wall of zero thickness). All beams against all obstacles are one numpy computation, no Python loop over
-either: a scan casts each obstacle only on the beams within the angle it subtends from the scanner (fan_hits:
-a few beams for a far one instead of all of them), with the same ranges, bit for bit, as casting all beams x
-all obstacles (cast, hit_distances).
-
-Beam placement (what `angle_min`, `angle_max`, `angle_increment` say, relative to the heading):
-
-- fov < 2 pi: the beams span the fov with both edges included, `angle_min = -fov / 2`,
-  `angle_increment = fov / (beams - 1)`, `angle_max = +fov / 2`; an odd number of beams has one straight ahead.
-- fov = 2 pi (a full turn; any fov within FULL_TURN_TOLERANCE of 2 pi, e.g. 6.2832, counts as one): the
-  beams divide the turn evenly with no beam twice (-pi and +pi are one direction): `angle_min = -pi`,
-  `angle_increment = 2 pi / beams`, `angle_max = pi - angle_increment`; an even number has one straight ahead.
-- one beam: straight ahead, `angle_min = angle_max = 0`, `angle_increment = fov`.
-
-Ranges: `range_min` is 0 (the scanner sees from its own centre); a beam with no surface within `range_max`
-reads +inf. A scanner inside a circle reads 0 on every beam (the disc covers it), one on a segment reads 0
-on the beams along it and the segment's other side elsewhere. A beam that grazes a circle (tangent) or ends
-exactly on a segment's end counts as a hit. Noise: each hit reading gets Gaussian noise of standard deviation
-`noise`, drawn from the Generator the caller passes (one draw per beam, hit or not, so the stream does not
-depend on the world), then is clipped into [range_min, range_max]: noise never makes a reading negative, never
-makes a hit a miss, and a miss (+inf) stays a miss.
+A scan is a fan of `beams` rays from the scanner's position, centred on its heading; each ray's range is the distance
+to the nearest circle (obstacle, mover where it is at the scan's time, robot) or segment (a wall of zero thickness).
+All beams against all obstacles are one numpy computation; each obstacle is cast only on the beams within its angle
+(fan_hits), with the same ranges, bit for bit, as all beams x all obstacles (cast, hit_distances). Beams: for
+fov < 2 pi both edges included, angle_min = -fov / 2, angle_increment = fov / (beams - 1); for a full turn (within
+FULL_TURN_TOLERANCE of 2 pi) no beam twice, angle_min = -pi, angle_increment = 2 pi / beams, angle_max = pi -
+angle_increment; one beam: straight ahead, increment = fov. range_min is 0; a beam with no surface within range_max
+reads +inf; a scanner inside a circle reads 0; grazing a circle or ending on a segment's end counts as a hit. Noise:
+Gaussian `noise` from the caller's Generator, one draw per beam hit or not (so the stream does not depend on the
+world), clipped into [range_min, range_max]: never negative, never turning a hit into a miss, and a miss stays one.
 """
 
 from __future__ import annotations
