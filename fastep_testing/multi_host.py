@@ -1,6 +1,6 @@
 """Robots on separate computers: fastep-launch with its hosts in Linux network namespaces (fastep_testing.hosts).
 
-    python -m benchmarks.multi_host --hosts 2 --robots 4            # as root
+    python -m benchmarks.multi_host --hosts 2 --robots 4 [--radius 20]   # as root
     python -m benchmarks.multi_host --hosts 3 --robots 4 --peers    # discovery by ROS_STATIC_PEERS, multicast off
     python -m benchmarks.multi_host --hosts 3 --robots 4 --no-clock --drop 2 --drop-for 3   # a link drops out
 
@@ -73,6 +73,7 @@ def _parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(prog='python -m benchmarks.multi_host', description=__doc__.split('\n')[0])
     p.add_argument('--hosts', type=int, default=2, help='hosts (network namespaces), the map on the first (default 2)')
     p.add_argument('--robots', type=int, default=4, help='robots of the circle scenario (default 4)')
+    p.add_argument('--radius', type=float, default=20.0, help='radius of the circle the robots cross (m, default 20)')
     p.add_argument('--scenario', help='a built-in name or scenario file instead of the circle')
     p.add_argument('--algorithm', default='fastep_route', help='planner (default fastep_route)')
     p.add_argument('--seed', type=int, default=0)
@@ -94,6 +95,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         return _inside(json.loads(args.inside))
     if args.hosts < 1 or args.robots < 1:
         parser.error('--hosts and --robots must be >= 1')
+    if not 1.0 <= args.radius <= 24.0:
+        parser.error(f'--radius must be in [1, 24] m (the circle lies in a 50 m square), got {args.radius:g}')
     if args.drop is not None and not 0 <= args.drop < args.hosts:
         parser.error(f'--drop must be a host in 0..{args.hosts - 1}, got {args.drop}')
     from fastep_core.scenario import load_scenario
@@ -104,7 +107,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         else:
             from fastep_testing.runs import circle_yaml
             source = str(Path(tmp) / f'circle_{args.robots}.yaml')
-            Path(source).write_text(circle_yaml(args.robots, 20.0, 2.0))
+            Path(source).write_text(circle_yaml(args.robots, args.radius, 2.0))
         try:
             scenario = load_scenario(source)
         except Exception as exc:   # a FastepError: its own line
