@@ -304,7 +304,7 @@ def test_plant_counts_a_commands_age_from_when_it_was_sent(context: Any) -> None
 
 
 def test_plant_reads_when_a_twist_was_sent_from_dds(context: Any) -> None:
-    """Through DDS (in this process): the subscription gets the message info, and a Twist taken 0.3 s after it
+    """Through DDS (in this process): the subscription gets the message info, and a Twist taken 0.6 s after it
     was published counts its age from the publishing."""
     import rclpy
     from rclpy.executors import SingleThreadedExecutor
@@ -319,12 +319,14 @@ def test_plant_reads_when_a_twist_was_sent_from_dds(context: Any) -> None:
             time.sleep(0.01)
         sent = plant.now()
         pub.publish(convert.command_to_twist([0.5, 0.0]))
-        time.sleep(0.3)
+        time.sleep(0.6)
         plant.timer.cancel()   # only the subscription is served below
         while plant.command_time is None and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.05)
         assert plant.command.tolist() == [0.5, 0.0]
-        assert plant.command_time == pytest.approx(sent, abs=0.1)   # not when it was taken (>= 0.3 s later)
+        # When it was published, not when it was taken (>= 0.6 s later); a loaded machine may pause this test a
+        # while between reading the clock and publishing.
+        assert plant.command_time is not None and sent - 0.01 <= plant.command_time <= sent + 0.3
     finally:
         executor.shutdown()
         sender.destroy_node()
