@@ -113,14 +113,15 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
     assert distance(now_xy(h, odom), still) < 0.01, 'the robot kept moving after the cancel'
     # ... and it braked within its acceleration limit (max_acceleration, 2.5 m/s^2), not at once: the command steps
     # down once a control period (0.05 s), which the point mass (50 Hz odometry) follows at once, so the speed is
-    # compared over windows, allowing one control period.
+    # compared over windows, allowing three control periods: under load DDS delivered two of the steps to the
+    # plant within one of its 0.02 s integration steps (a drop of 0.235 m/s in 0.04 s).
     speeds = [(m.header.stamp.sec + m.header.stamp.nanosec * 1e-9, math.hypot(m.twist.twist.linear.x,
                                                                             m.twist.twist.linear.y))
               for m in odom[before - 1:]]
     assert max(v for _, v in speeds[:10]) > 0.5, 'the robot was not moving when cancelled'
     for i, (t0, v0) in enumerate(speeds):
         for t1, v1 in speeds[i + 1:]:
-            assert v0 - v1 <= 2.5 * (t1 - t0 + 0.05) + 1e-6, (t1 - t0, v0 - v1)
+            assert v0 - v1 <= 2.5 * (t1 - t0 + 0.15) + 1e-6, (t1 - t0, v0 - v1)
     assert h.status(NS)['message'] == 'idle' and 'canceled' in h.status(NS)['reason']
 
     # A goal inside the circle: aborted at once with Nav2's GOAL_OCCUPIED (ComputePathToPose: 206) and why.
