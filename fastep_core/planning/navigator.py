@@ -42,6 +42,7 @@ from fastep_core.planning.recovery import (
     reverse_free,
 )
 from fastep_core.planning.step import StepProblem, StepRun, step_run
+from fastep_core.planning.step_planning import StepPlanning
 from fastep_core.planning.yielding import Yield, Yielding
 from fastep_core.world import World
 
@@ -49,8 +50,6 @@ __all__ = ['Mode', 'Navigator', 'OtherRobot', 'SpeedLaw']
 
 FloatArray = NDArray[np.float64]
 ROTATING = 'rotating to the goal heading'
-RETRY_AFTER = 0.5   # seconds between step-planning attempts while no feasible step exists
-PENDING_FOR = 0.5   # seconds a step plan left unfinished (params.step_iterations) may be continued, at most
 
 
 class SpeedLaw(Protocol):
@@ -117,14 +116,9 @@ class Navigator:
         self._last_t: float | None = None
         self._path_checked = False                # has the goal been checked for a path
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
-        self._retry_at = -math.inf                # no step planning before this time (after a failed attempt)
         self._ticks = 0                           # control ticks so far
-        self._rule_gave_up = -1                   # the tick whose plan could not keep right (plan_next_step)
         self._hold_broken = -1                    # the tick whose hold breaker's plan could not keep right
-        self._pending: StepRun | None = None      # a step plan to be finished next tick (params.step_iterations)
-        self._pending_tick = -1                   # ... the tick that left it unfinished
-        self._pending_t = -math.inf               # ... and its time
-        self._idle_tick = -1                      # the last tick whose step plan was given no iteration
+        self.steps = StepPlanning()               # what step planning carries from tick to tick
         self.detector = RunDetector(self.radius)  # what lies on the run to the target, with its proofs
         self._stuck = 0                           # planned steps in a row that ended within waypoint_tolerance
         self.guard_check = Guard(model, self.radius, p)
@@ -173,8 +167,8 @@ class Navigator:
         self.mode, self.reason = Mode.KINEMATIC, 'goal accepted'
         self.waypoint, self.plan, self.cost, self._target = None, [], 0.0, None
         self.reference, self._path_checked, self._committed = None, False, False
-        self._stuck, self._rule_gave_up, self._hold_broken = 0, -1, -1
-        self._pending, self._pending_tick = None, -1
+        self._stuck, self._hold_broken = 0, -1
+        self.steps.new_goal()
         self._blocked_since = self._no_path_in = None
         self.progress.reset(t)
         self.trap.reset(t)
@@ -222,7 +216,7 @@ class Navigator:
         """
         self.check_params(params)
         self.params = params
-        self._pending = None   # an unfinished step plan: planned afresh with the new values
+        self.steps.pending = None   # an unfinished step plan: planned afresh with the new values
         self.guard_check.params = params
         self.yielding = self._yielding(params)
         if self.manoeuvring is not None:
@@ -248,9 +242,8 @@ class Navigator:
         checker and made the guard look a tick of that length ahead.
         """
         self._last_t = None
-        self._retry_at = -math.inf
-        self._rule_gave_up = self._hold_broken = self._pending_tick = -1
-        self._pending = None
+        self.steps.restart_clock()
+        self._hold_broken = -1
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -373,7 +366,7 @@ class Navigator:
                 target = self.choose_target(position, others)
         if target is None:
             if self.step_deferred and self._target is not None and \
-                    not (self._hold_broken == self._ticks and self._pending_tick == self._ticks):
+                    not (self._hold_broken == self._ticks and self.steps.pending_tick == self._ticks):
                 # The plain step is planned next tick; meanwhile the robot drives on as it did, guarded,
                 # rather than stopping for one tick in the middle of a crowd. Not while the hold breaker's step
                 # is still being planned: that would drive at what holds the robot, and the guard, stopping it
@@ -437,47 +430,33 @@ class Navigator:
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists.
 
-        With robots ahead the step first keeps right of them (planning/step.py, step_run). When that gives up, the
-        step without the rule is planned on the next tick, not in this one (`step_deferred`), and `tick` drives
-        on meanwhile: two swarm runs in one tick were the slowest control ticks of a crowd (docs/benchmarks.md).
-        With params.step_iterations a plan that needs more swarm iterations is finished on the next ticks the
-        same way (it plans from where the robot was when it began), as the same activation: continued only on the
-        very next tick, within PENDING_FOR seconds and in the same world (else planned afresh, and after a world
-        change whole, so that a world changing every tick cannot keep a plan from ending).
+        With robots ahead the step first keeps right of them (planning/step.py, step_run). When that gives up, or
+        the plan needs more swarm iterations than a tick has (params.step_iterations), the step is finished on the
+        next tick (`step_deferred`; planning/step_planning.py), and `tick` drives on meanwhile.
         """
         assert self.goal is not None
-        if self._last_t is not None and self._last_t < self._retry_at:
+        steps, tick = self.steps, self._ticks
+        if steps.waiting(self._last_t):
             return None
-        run, whole = self._pending, False
-        if run is not None and (self._pending_tick != self._ticks - 1 or self._last_t is None or
-                                self._last_t - self._pending_t > PENDING_FOR):
-            run = None            # not continued on the very next tick: the robots it went round have moved
-        elif run is not None and run.problem.world is not self.world:
-            run, whole = None, True   # the world changed under it (a new obstacle): planned afresh, whole
-        self._pending, self._pending_tick = None, -1
+        run, whole = steps.resumed(tick, self._last_t, self.world)
         if run is None:
             run = self.start_step(position, others)
-        budget = None if whole else self.step_budget()
-        if budget == 0:
-            if self._idle_tick == self._ticks - 1:   # no iteration at most one tick in a row: every plan ends
-                budget = self.params.step_iterations
-            else:
-                self._idle_tick = self._ticks
+        budget = steps.budget(tick, None if whole else self.step_budget(), self.params.step_iterations)
         start = time.perf_counter()
         done = run.advance(budget)
         self.plan_time += time.perf_counter() - start
         if not done:
-            self._pending, self._pending_tick, self._pending_t = run, self._ticks, self._last_t or 0.0
+            steps.unfinished(run, tick, self._last_t or 0.0)
             self.mode, self.reason = Mode.AVOIDING, 'planning a step (finished on the next tick)'
             return None
         step = run.plan
         if step is None and len(run.problem.pass_on_right):
-            self._rule_gave_up = self._ticks
+            steps.rule_gave_up = tick
             self.mode, self.reason = Mode.AVOIDING, 'cannot keep right; planning the step without it'
             return None
         if step is None:
             # Nothing feasible now; other robots may move away. Retry later rather than every tick.
-            self._retry_at = (self._last_t or 0.0) + RETRY_AFTER
+            steps.retry_later(self._last_t or 0.0)
             self.mode, self.reason, self.waypoint, self.cost = Mode.AVOIDING, 'no valid step; waiting', None, 0.0
             return None
         self.mode, self.reason = Mode.AVOIDING, 'stepping around an obstacle'
@@ -493,7 +472,7 @@ class Navigator:
         """The step problem of this tick (eq. 10 toward step_target, the robots as they are and as yielding predicts
         them) and its swarm run, keeping right of the robots ahead unless the rule gave up last tick (then this
         plan continues that activation)."""
-        plain = self._rule_gave_up == self._ticks - 1
+        plain = self.steps.plain(self._ticks)
         target = self.step_target()
         centres, sums = robot_arrays(others, self.radius)
         centres, sums = self.yielding.with_predictions(position, others, centres, sums,
@@ -513,7 +492,7 @@ class Navigator:
     def step_deferred(self) -> bool:
         """This tick's step is not planned yet: it could not keep right of the robots ahead (the step without that
         rule comes next tick), or it needs more swarm iterations than a tick has (params.step_iterations)."""
-        return self._rule_gave_up == self._ticks or self._pending_tick == self._ticks
+        return self.steps.deferred(self._ticks)
 
     def step_target(self) -> FloatArray:
         """The point d in eq. 10 is measured to: the goal (FAStep-Route: the route vertex it aims at)."""
