@@ -15,7 +15,7 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-from fastep_core.planning.navigator import RETRY_AFTER, FloatArray, Mode, Navigator
+from fastep_core.planning.navigator import FloatArray, Mode, Navigator
 from fastep_core.planning.others import OtherRobot
 
 __all__ = ['FAStepKinematic', 'FAStepPaper']
@@ -90,7 +90,7 @@ class FAStepKinematic(Navigator):
             return
         if any(math.hypot(o.position[0] - position[0], o.position[1] - position[1]) - o.radius - self.radius
                < self.params.sensing_range for o in others):
-            self._retry_at = (self._last_t or 0.0) + RETRY_AFTER
+            self.steps.retry_later(self._last_t or 0.0)
             return
         self._stuck += 1
         if self._stuck >= self.stuck_steps:

@@ -2,20 +2,16 @@
 
 A navigator is called once per control tick with the robot's state and the other robots it knows of, and
 returns the command for the robot's kinematic model, in `fastep-sim` and in the ROS planner node alike. The
-algorithms (planning/algorithms.py; FAStep-Kinematic, the paper's Algorithm 1, is planning/fastep_kinematic.py)
-differ only in `choose_target`: the point to drive to this tick. Around it, in order: arrival, the goal's path
-check (exact_path.py: 'no valid path' for a goal nothing reaches), the progress checker and trap detector
-(progress.py), the way out of a trap (escape.py) or, for a robot that cannot turn in place, a manoeuvre
-(manoeuvre_driver.py), backing up and the hold breaker when the guard keeps a robot stopped (recovery.py), and on
-every command yielding to movers (yielding.py) and the guard (guard.py). A step's problem, swarm run and fitness
-are step.py; detection of what lies on the way is detection.py.
+algorithms (planning/algorithms.py) differ only in `choose_target`: the point to drive to this tick. Around it
+the behaviours of `tick`, in order of priority (behaviours.py), and on every command yielding to movers
+(yielding.py) and the guard (guard.py). Step planning over ticks is step_planning.py, a step's swarm run step.py,
+detection of what lies on the way detection.py.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from enum import Enum
 from typing import Callable, Protocol, Sequence
 
 import numpy as np
@@ -23,34 +19,32 @@ from numpy.typing import NDArray
 
 from fastep_core.errors import GoalError
 from fastep_core.kinematics.model import Controller, RobotModel
+from fastep_core.planning import behaviours
+from fastep_core.planning.behaviours import ROTATING, HoldBreaker, PathCheck, Tick
 from fastep_core.planning.detection import RunDetector
-from fastep_core.planning.escape import ESCAPING, TrapEscape
-from fastep_core.planning.exact_path import BLOCKED_RETRY, blocked_reason, no_path_reason, parked_world, robot_path
+from fastep_core.planning.escape import TrapEscape
+from fastep_core.planning.exact_path import BLOCKED_RETRY, blocked_reason, no_path_reason, robot_path
 from fastep_core.planning.guard import Guard
 from fastep_core.planning.manoeuvre_driver import ManoeuvreDriver
+from fastep_core.planning.mode import Mode
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, OtherRobots, robot_arrays, robots_on_run
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
 from fastep_core.planning.recovery import (
-    REVERSE_HORIZON,
     BackUp,
     SeenFree,
     StopTimer,
     backup_speed,
-    free_room,
-    reverse_free,
 )
 from fastep_core.planning.step import StepProblem, StepRun, step_run
+from fastep_core.planning.step_planning import StepPlanning
 from fastep_core.planning.yielding import Yield, Yielding
 from fastep_core.world import World
 
-__all__ = ['Mode', 'Navigator', 'OtherRobot', 'SpeedLaw']
+__all__ = ['ROTATING', 'Mode', 'Navigator', 'OtherRobot', 'SpeedLaw']
 
 FloatArray = NDArray[np.float64]
-ROTATING = 'rotating to the goal heading'
-RETRY_AFTER = 0.5   # seconds between step-planning attempts while no feasible step exists
-PENDING_FOR = 0.5   # seconds a step plan left unfinished (params.step_iterations) may be continued, at most
 
 
 class SpeedLaw(Protocol):
@@ -58,16 +52,6 @@ class SpeedLaw(Protocol):
 
     def regulate(self, state: FloatArray, command: FloatArray, dt: float,
                  last: FloatArray | None = None) -> FloatArray: ...
-
-
-class Mode(str, Enum):
-    """What a navigator is doing; the value is what the ROS status topic reports."""
-
-    IDLE = 'idle'            # no goal yet
-    KINEMATIC = 'kinematic'  # driving straight to the goal by the kinematic equations
-    AVOIDING = 'avoiding'    # driving to a waypoint planned by the swarm (or escaping, manoeuvring)
-    ARRIVED = 'arrived'
-    FAILED = 'failed'
 
 
 class Navigator:
@@ -115,16 +99,11 @@ class Navigator:
         self._no_path_at = -math.inf
         self._speed = 0.0   # of the last command (m/s)
         self._last_t: float | None = None
-        self._path_checked = False                # has the goal been checked for a path
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
-        self._retry_at = -math.inf                # no step planning before this time (after a failed attempt)
         self._ticks = 0                           # control ticks so far
-        self._rule_gave_up = -1                   # the tick whose plan could not keep right (plan_next_step)
-        self._hold_broken = -1                    # the tick whose hold breaker's plan could not keep right
-        self._pending: StepRun | None = None      # a step plan to be finished next tick (params.step_iterations)
-        self._pending_tick = -1                   # ... the tick that left it unfinished
-        self._pending_t = -math.inf               # ... and its time
-        self._idle_tick = -1                      # the last tick whose step plan was given no iteration
+        self.steps = StepPlanning()               # what step planning carries from tick to tick
+        self.path_check = PathCheck()             # the behaviours that keep state of their own (tick)
+        self.hold_breaker = HoldBreaker()
         self.detector = RunDetector(self.radius)  # what lies on the run to the target, with its proofs
         self._stuck = 0                           # planned steps in a row that ended within waypoint_tolerance
         self.guard_check = Guard(model, self.radius, p)
@@ -172,9 +151,9 @@ class Navigator:
         self.goal_heading = None if heading is None else math.atan2(math.sin(heading), math.cos(heading))
         self.mode, self.reason = Mode.KINEMATIC, 'goal accepted'
         self.waypoint, self.plan, self.cost, self._target = None, [], 0.0, None
-        self.reference, self._path_checked, self._committed = None, False, False
-        self._stuck, self._rule_gave_up, self._hold_broken = 0, -1, -1
-        self._pending, self._pending_tick = None, -1
+        self.reference, self.path_check.checked, self._committed = None, False, False
+        self._stuck, self.hold_breaker.broken = 0, -1
+        self.steps.new_goal()
         self._blocked_since = self._no_path_in = None
         self.progress.reset(t)
         self.trap.reset(t)
@@ -204,7 +183,7 @@ class Navigator:
             self.fail(no_path_reason(self.radius, position, self.goal))
             return
         self._blocked_since = since
-        self.waypoint, self._target, self.cost, self._path_checked = None, None, 0.0, False
+        self.waypoint, self._target, self.cost, self.path_check.checked = None, None, 0.0, False
         self.reason = blocked_reason(self.world, position, self.goal, self.radius, t - since,
                                      self.params.blocked_timeout)
 
@@ -222,7 +201,7 @@ class Navigator:
         """
         self.check_params(params)
         self.params = params
-        self._pending = None   # an unfinished step plan: planned afresh with the new values
+        self.steps.pending = None   # an unfinished step plan: planned afresh with the new values
         self.guard_check.params = params
         self.yielding = self._yielding(params)
         if self.manoeuvring is not None:
@@ -248,9 +227,8 @@ class Navigator:
         checker and made the guard look a tick of that length ahead.
         """
         self._last_t = None
-        self._retry_at = -math.inf
-        self._rule_gave_up = self._hold_broken = self._pending_tick = -1
-        self._pending = None
+        self.steps.restart_clock()
+        self.hold_breaker.broken = -1
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -279,109 +257,35 @@ class Navigator:
             abs(float(command[0]))
         return command
 
-    def turn_to_heading(self, state: FloatArray, dt: float) -> FloatArray | None:
-        """At the goal's position: the turn in place toward the goal's heading, within the turn rate and its
-        acceleration from the last command; None when there is nothing to turn (no heading, a robot without one
-        or that cannot turn in place, params.goal_heading 0, or facing it within yaw_goal_tolerance)."""
-        p = self.params
-        if self.goal_heading is None or not p.goal_heading or self.model.holonomic or \
-                not self.model.turns_in_place or len(state) < 3:
-            return None
-        error = math.atan2(math.sin(self.goal_heading - state[2]), math.cos(self.goal_heading - state[2]))
-        if abs(error) <= p.yaw_goal_tolerance:
-            return None
-        omega = p.turn_gain * error
-        if p.max_turn_rate > 0.0:
-            omega = max(-p.max_turn_rate, min(p.max_turn_rate, omega))
-        last = getattr(self.controller, 'last', None)
-        if last is not None and p.max_turn_acceleration > 0.0:
-            step = p.max_turn_acceleration * dt
-            omega = max(float(last[1]) - step, min(float(last[1]) + step, omega))
-        return np.array([0.0, omega])
-
     def stand_clear(self, state: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
-        """A robot standing still (no valid step, held, waiting) that a mover would run into gets out of its
-        way (planning/yielding.py); zeros otherwise."""
-        stop = np.zeros(2)
-        state = np.asarray(state, dtype=float)
-        if not np.isfinite(state).all():
-            return stop
-        yielded = self.yield_to_movers(state, stop, self.params.dt, others)
-        if yielded.kind != 'evading':
-            return stop
-        self.yield_kind, self.reason = yielded.kind, yielded.reason
-        return yielded.command
+        """A robot standing still that a mover would run into gets out of its way (planning/behaviours.py)."""
+        return behaviours.stand_clear(self, state, others)
 
     def tick(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
-        """The command of one control tick (`update` without telling the controller)."""
-        stop = np.zeros(2)
+        """The command of one control tick (`update` without telling the controller): the first behaviour that
+        answers (planning/behaviours.py), in this order of priority."""
         self.yield_kind = ''   # what yielding to movers did this tick (planning/yielding.py), '' for nothing
         self.driven = None
         self._ticks += 1
         dt = self.params.dt if self._last_t is None or t <= self._last_t else t - self._last_t
         self._last_t = t
         if self.goal is None or self.mode in (Mode.ARRIVED, Mode.FAILED):
-            return stop
+            return np.zeros(2)
         state = np.asarray(state, dtype=float)
         if not all(map(math.isfinite, state)):
             self.reason = 'robot state is not finite; holding still'
-            return stop
+            return np.zeros(2)
         position = state[:2]
         if not (isinstance(others, OtherRobots) and others.finite):
             others = [o for o in others if math.isfinite(o.position[0]) and math.isfinite(o.position[1])]
-        distance = math.hypot(self.goal[0] - position[0], self.goal[1] - position[1])
-        if distance <= self.params.goal_tolerance:
-            self.waypoint, self.cost, self._target = None, 0.0, None
-            turn = self.turn_to_heading(state, dt)
-            if turn is None:
-                self.mode, self.reason = Mode.ARRIVED, 'goal reached'
-                return stop
-            self.mode, self.reason = Mode.KINEMATIC, ROTATING
-            self.progress.made_progress(t)
-            return self.guard(state, turn, dt, others)
-        if not self._path_checked:
-            self._path_checked = True
-            self.reference = self.exact_path(position)
-            if self.reference is None:
-                self.fail_no_path(position)
-                return stop
-        if self.progress.stalled(t, distance):
-            self.fail(self.progress.reason)
-            return stop
-        if self.trapped(t, distance):   # a robot that cannot turn in place manoeuvres out if it can
-            if self.manoeuvring is not None and self.start_manoeuvre(state, t, others):
-                self.escapes += 1
-            elif not self.start_escape(position, distance, t, others):
-                return stop
-        if self.manoeuvring is not None and self.manoeuvring.active:
-            command = self.drive_manoeuvre(state, t, dt, distance, others)
+        now = Tick(self._ticks, t, dt, state, position, others,
+                   math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]))
+        for behaviour in (behaviours.arrival, self.path_check, behaviours.progress_check, behaviours.trap_check,
+                          behaviours.manoeuvre, behaviours.backing_up, self.hold_breaker, behaviours.escape):
+            command = behaviour(self, now)
             if command is not None:
                 return command
-        if self.backup.active(t):
-            return self.back_up(state, dt, others)
-        if self.stops.hold_breaker_due(t) or self._hold_broken == self._ticks - 1:
-            # The hold breaker comes once; a step of it that could not keep right is planned plainly next tick,
-            # one that needs more swarm iterations than a tick has (params.step_iterations) goes on next tick.
-            target = self.plan_next_step(position, others)
-            self._committed = target is not None
-            self._hold_broken = self._ticks if self.step_deferred else -1
-        else:
-            target = self.follow_escape(position, distance, t, others) if self.escape.active else None
-            if self.failed:   # no way out of the trap
-                return stop
-            if not self.escape.active:
-                target = self.choose_target(position, others)
-        if target is None:
-            if self.step_deferred and self._target is not None and \
-                    not (self._hold_broken == self._ticks and self._pending_tick == self._ticks):
-                # The plain step is planned next tick; meanwhile the robot drives on as it did, guarded,
-                # rather than stopping for one tick in the middle of a crowd. Not while the hold breaker's step
-                # is still being planned: that would drive at what holds the robot, and the guard, stopping it
-                # again, would call the hold breaker a second time.
-                return self.drive_to(state, self._target, t, dt, others)
-            self._target = None
-            return stop
-        return self.drive_to(state, target, t, dt, others)
+        return behaviours.algorithm(self, now)
 
     def drive_to(self, state: FloatArray, target: FloatArray, t: float, dt: float,
                  others: Sequence[OtherRobot]) -> FloatArray:
@@ -437,47 +341,33 @@ class Navigator:
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists.
 
-        With robots ahead the step first keeps right of them (planning/step.py, step_run). When that gives up, the
-        step without the rule is planned on the next tick, not in this one (`step_deferred`), and `tick` drives
-        on meanwhile: two swarm runs in one tick were the slowest control ticks of a crowd (docs/benchmarks.md).
-        With params.step_iterations a plan that needs more swarm iterations is finished on the next ticks the
-        same way (it plans from where the robot was when it began), as the same activation: continued only on the
-        very next tick, within PENDING_FOR seconds and in the same world (else planned afresh, and after a world
-        change whole, so that a world changing every tick cannot keep a plan from ending).
+        With robots ahead the step first keeps right of them (planning/step.py, step_run). When that gives up, or
+        the plan needs more swarm iterations than a tick has (params.step_iterations), the step is finished on the
+        next tick (`step_deferred`; planning/step_planning.py), and `tick` drives on meanwhile.
         """
         assert self.goal is not None
-        if self._last_t is not None and self._last_t < self._retry_at:
+        steps, tick = self.steps, self._ticks
+        if steps.waiting(self._last_t):
             return None
-        run, whole = self._pending, False
-        if run is not None and (self._pending_tick != self._ticks - 1 or self._last_t is None or
-                                self._last_t - self._pending_t > PENDING_FOR):
-            run = None            # not continued on the very next tick: the robots it went round have moved
-        elif run is not None and run.problem.world is not self.world:
-            run, whole = None, True   # the world changed under it (a new obstacle): planned afresh, whole
-        self._pending, self._pending_tick = None, -1
+        run, whole = steps.resumed(tick, self._last_t, self.world)
         if run is None:
             run = self.start_step(position, others)
-        budget = None if whole else self.step_budget()
-        if budget == 0:
-            if self._idle_tick == self._ticks - 1:   # no iteration at most one tick in a row: every plan ends
-                budget = self.params.step_iterations
-            else:
-                self._idle_tick = self._ticks
+        budget = steps.budget(tick, None if whole else self.step_budget(), self.params.step_iterations)
         start = time.perf_counter()
         done = run.advance(budget)
         self.plan_time += time.perf_counter() - start
         if not done:
-            self._pending, self._pending_tick, self._pending_t = run, self._ticks, self._last_t or 0.0
+            steps.unfinished(run, tick, self._last_t or 0.0)
             self.mode, self.reason = Mode.AVOIDING, 'planning a step (finished on the next tick)'
             return None
         step = run.plan
         if step is None and len(run.problem.pass_on_right):
-            self._rule_gave_up = self._ticks
+            steps.rule_gave_up = tick
             self.mode, self.reason = Mode.AVOIDING, 'cannot keep right; planning the step without it'
             return None
         if step is None:
             # Nothing feasible now; other robots may move away. Retry later rather than every tick.
-            self._retry_at = (self._last_t or 0.0) + RETRY_AFTER
+            steps.retry_later(self._last_t or 0.0)
             self.mode, self.reason, self.waypoint, self.cost = Mode.AVOIDING, 'no valid step; waiting', None, 0.0
             return None
         self.mode, self.reason = Mode.AVOIDING, 'stepping around an obstacle'
@@ -493,7 +383,7 @@ class Navigator:
         """The step problem of this tick (eq. 10 toward step_target, the robots as they are and as yielding predicts
         them) and its swarm run, keeping right of the robots ahead unless the rule gave up last tick (then this
         plan continues that activation)."""
-        plain = self._rule_gave_up == self._ticks - 1
+        plain = self.steps.plain(self._ticks)
         target = self.step_target()
         centres, sums = robot_arrays(others, self.radius)
         centres, sums = self.yielding.with_predictions(position, others, centres, sums,
@@ -513,7 +403,7 @@ class Navigator:
     def step_deferred(self) -> bool:
         """This tick's step is not planned yet: it could not keep right of the robots ahead (the step without that
         rule comes next tick), or it needs more swarm iterations than a tick has (params.step_iterations)."""
-        return self._rule_gave_up == self._ticks or self._pending_tick == self._ticks
+        return self.steps.deferred(self._ticks)
 
     def step_target(self) -> FloatArray:
         """The point d in eq. 10 is measured to: the goal (FAStep-Route: the route vertex it aims at)."""
@@ -561,103 +451,17 @@ class Navigator:
             self._blocked_since = self._no_path_in = None
         return path
 
-    def trapped(self, t: float, distance: float) -> bool:
-        """Has the robot failed to come closer to the goal for trap_timeout seconds (outside an escape)?"""
-        if not self.escapes_traps or self.escape.active or (self.manoeuvring is not None and self.manoeuvring.active):
-            return False
-        return self.trap.trapped(t, distance)
-
     def start_escape(self, position: FloatArray, distance: float, t: float,
                      others: Sequence[OtherRobot] = ()) -> bool:
-        """Leave a trap along the exact shortest path (planning/escape.py); False (and failed) if there is none."""
-        assert self.goal is not None
-        path = self.exact_path(position, others)
-        if path is None:
-            self.fail_no_path(position)
-            return False
-        self.escapes += 1
-        self.escape.start(path, self.path_world, t, min(distance, self.trap.best) - self.params.progress_distance,
-                          self.world)
-        self.waypoint, self._committed = None, False
-        self.progress.made_progress(t)
-        self.mode, self.reason = Mode.AVOIDING, ESCAPING
-        return True
-
-    def follow_escape(self, position: FloatArray, distance: float, t: float,
-                      others: Sequence[OtherRobot]) -> FloatArray | None:
-        """The escape's target; None once the robot has left the trap, or failed with no path left.
-
-        A step around another robot (the hold breaker) leaves the path, which is planned again after it; so does a
-        change of the world the robot knows (a sensed obstacle) that brings an obstacle within radius + a quarter
-        margin of the rest of the path (the path was planned round what the robot knew then).
-        """
-        assert self.goal is not None
-        if self.escape.left(distance):
-            self.trap.reset(t, distance)
-            return None
-        replan = self._committed
-        path = self.escape.path
-        assert path is not None   # escaping
-        if self.escape.known is not self.world:
-            parked = parked_world(self.world, others, self.goal, self.radius, self.params) or self.world
-            keep = min(path.keep, self.radius + 0.25 * self.params.clearance_margin) - 1e-6
-            replan = not self.escape.adopt(self.world, parked, keep) or replan
-        if self._committed:
-            if self.keep_waypoint(position, others):
-                return self.waypoint
-            self._committed = False
-
-        def plan() -> tuple[OptimalPath, World] | None:
-            path = self.exact_path(position, others)
-            return None if path is None else (path, self.path_world)
-
-        target, progressed = self.escape.next_target(position, t, plan, self.radius, self.params, replan, self.world)
-        if target is None:
-            self.fail_no_path(position)
-            return None
-        if progressed:
-            self.progress.made_progress(t)
-        self.mode, self.reason = Mode.AVOIDING, ESCAPING
-        return target
+        """Leave a trap along the exact shortest path (planning/behaviours.py); False (and failed) if there is none."""
+        return behaviours.start_escape(self, position, distance, t, others)
 
     # ------------------------------------------------ recoveries
     def start_manoeuvre(self, state: FloatArray, t: float, others: Sequence[OtherRobot]) -> bool:
-        """Search a manoeuvre (planning/manoeuvre_driver.py) round the obstacles and parked robots; True if found."""
-        assert self.goal is not None and self.manoeuvring is not None
-        world = parked_world(self.world, others, self.goal, self.radius, self.params) or self.world
-        if not self.manoeuvring.plan(world, state, self.goal, t):
-            return False
-        self.escape.stop()
-        self.backup.stop()
-        self.waypoint, self._committed, self._target = None, False, None
-        self.progress.made_progress(t)
-        self.mode, self.reason = Mode.AVOIDING, self.manoeuvring.status
-        return True
+        """Search a manoeuvre round the obstacles and parked robots (planning/behaviours.py); True if found."""
+        return behaviours.start_manoeuvre(self, state, t, others)
 
     def drive_manoeuvre(self, state: FloatArray, t: float, dt: float, distance: float,
                         others: Sequence[OtherRobot]) -> FloatArray | None:
-        """The manoeuvre's command for this tick, guarded; None once it is over (the usual loop takes over)."""
-        m = self.manoeuvring
-        assert m is not None
-        command, ended = m.drive(state, t, distance, lambda c: self.guard(state, c, dt, others),
-                                 lambda: self.start_manoeuvre(state, t, others))
-        if ended:
-            self.trap.reset(t, distance)
-            self.progress.made_progress(t)
-        elif command is not None and m.held_since is None:
-            self.mode, self.reason = Mode.AVOIDING, m.status
-        return command
-
-    def back_up(self, state: FloatArray, dt: float, others: Sequence[OtherRobot]) -> FloatArray:
-        """The backing-up recovery's command (planning/recovery.py), guarded; it ends where the guard stops it."""
-        seen = self.seen
-        free = None if seen is None else (
-            lambda command: reverse_free(self.model, state, self.radius, command, REVERSE_HORIZON, self.world, seen,
-                                         (), self.guard_check.obstacle_margin))
-        guarded = self.backup.drive(state, dt, lambda points: free_room(self.world, points, others),
-                                    lambda command: self.guard(state, command, dt, others), free)
-        if self.backup.looking:
-            self.reason = 'backing up: stuck; turning to see the space behind (no scan has seen it free)'
-        elif self.backup.until > -math.inf:
-            self.reason = 'backing up: stuck'
-        return guarded
+        """The manoeuvre's command for this tick, guarded; None once it is over (planning/behaviours.py)."""
+        return behaviours.drive_manoeuvre(self, state, t, dt, distance, others)
