@@ -25,10 +25,8 @@ from fastep_core.world import World
 if TYPE_CHECKING:   # scenario.py imports planning (params): only for the annotation
     from fastep_core.scenario import Scenario
 
-__all__ = ['BACK_OUT', 'BLOCKED_RETRY', 'PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'backed_out', 'blocked_reason',
-           'exact_path', 'no_path_reason',
-           'parked_world', 'robot_path',
-           'solvable']
+__all__ = ['BACK_OUT', 'BLOCKED_RETRY', 'PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'NoPathHold', 'backed_out',
+           'blocked_reason', 'exact_path', 'no_path_reason', 'parked_world', 'robot_path', 'solvable']
 
 FloatArray = NDArray[np.float64]
 PATH_SPACING = 0.25   # metres between exact-path vertices along arcs (escape paths, the optimal reference)
@@ -151,6 +149,39 @@ def blocked_reason(world: World, position: FloatArray, goal: FloatArray, radius:
                 f'a wall from ({item.start[0]:.2f}, {item.start[1]:.2f}) to ({item.end[0]:.2f}, {item.end[1]:.2f})')
     return (f'blocked: no way to the goal in what the laser shows; in the way: {what}; planning again '
             f'({waited:.1f} of {timeout:g} s)')
+
+
+class NoPathHold:
+    """A robot planning in what its laser shows and finding no way to the goal: since when, and where it last
+    looked. A belief can be wrong for a moment, so the goal fails only after blocked_timeout (Navigator.fail_no_path);
+    meanwhile the search runs again on each new belief, at least every BLOCKED_RETRY s."""
+
+    def __init__(self) -> None:
+        self.since: float | None = None       # since when no path was found (None: a path was, or not looking)
+        self._searched: World | None = None   # the world the last search found no path in, and when
+        self._searched_at = -math.inf
+
+    def reset(self) -> None:
+        self.since = self._searched = None
+
+    def skip_search(self, world: World, t: float) -> bool:
+        """Held, the belief unchanged and the last search recent: no new search."""
+        return self.since is not None and self._searched is world and t - self._searched_at < BLOCKED_RETRY
+
+    def searched(self, world: World, t: float, found: bool) -> None:
+        if found:
+            self.reset()
+        else:
+            self._searched, self._searched_at = world, t
+
+    def waited(self, t: float, timeout: float, from_scans: bool) -> float | None:
+        """How long the robot has held for a path, now that none was found; None: the goal fails."""
+        since = t if self.since is None else self.since
+        if not from_scans or timeout <= 0.0 or t - since >= timeout:
+            self.since = None
+            return None
+        self.since = since
+        return t - since
 
 
 def no_path_reason(radius: float, position: FloatArray, goal: FloatArray) -> str:

@@ -11,7 +11,6 @@ detection of what lies on the way detection.py.
 from __future__ import annotations
 
 import math
-import time
 from typing import Callable, Protocol, Sequence
 
 import numpy as np
@@ -19,26 +18,19 @@ from numpy.typing import NDArray
 
 from fastep_core.errors import GoalError
 from fastep_core.kinematics.model import Controller, RobotModel
-from fastep_core.planning import behaviours
+from fastep_core.planning import behaviours, step_planning
 from fastep_core.planning.behaviours import ROTATING, HoldBreaker, PathCheck, Tick
 from fastep_core.planning.detection import RunDetector
 from fastep_core.planning.escape import TrapEscape
-from fastep_core.planning.exact_path import BLOCKED_RETRY, blocked_reason, no_path_reason, robot_path
+from fastep_core.planning.exact_path import NoPathHold, blocked_reason, no_path_reason, robot_path
 from fastep_core.planning.guard import Guard
 from fastep_core.planning.manoeuvre_driver import ManoeuvreDriver
 from fastep_core.planning.mode import Mode
 from fastep_core.planning.optimal import OptimalPath
-from fastep_core.planning.others import OtherRobot, OtherRobots, robot_arrays, robots_on_run
+from fastep_core.planning.others import OtherRobot, OtherRobots, robots_on_run
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
-from fastep_core.planning.recovery import (
-    BackUp,
-    SeenFree,
-    StopTimer,
-    backup_speed,
-)
-from fastep_core.planning.step import StepProblem, StepRun, step_run
-from fastep_core.planning.step_planning import StepPlanning
+from fastep_core.planning.recovery import BackUp, SeenFree, StopTimer, backup_speed
 from fastep_core.planning.yielding import Yield, Yielding
 from fastep_core.world import World
 
@@ -94,14 +86,12 @@ class Navigator:
         # Whether the world is what the robot's laser shows (fastep_core/perception): a belief that can be wrong
         # for a moment, so no path in it holds the robot a while before the goal fails (fail_no_path).
         self.from_scans = False
-        self._blocked_since: float | None = None   # since when no path was found in what the laser shows
-        self._no_path_in: World | None = None      # the world the last search found no path in, and when
-        self._no_path_at = -math.inf
+        self.no_path = NoPathHold()
         self._speed = 0.0   # of the last command (m/s)
         self._last_t: float | None = None
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
         self._ticks = 0                           # control ticks so far
-        self.steps = StepPlanning()               # what step planning carries from tick to tick
+        self.steps = step_planning.StepPlanning()   # what step planning carries from tick to tick
         self.path_check = PathCheck()             # the behaviours that keep state of their own (tick)
         self.hold_breaker = HoldBreaker()
         self.detector = RunDetector(self.radius)  # what lies on the run to the target, with its proofs
@@ -154,7 +144,7 @@ class Navigator:
         self.reference, self.path_check.checked, self._committed = None, False, False
         self._stuck, self.hold_breaker.broken = 0, -1
         self.steps.new_goal()
-        self._blocked_since = self._no_path_in = None
+        self.no_path.reset()
         self.progress.reset(t)
         self.trap.reset(t)
         self.escape.stop()
@@ -176,16 +166,12 @@ class Navigator:
         shows (`from_scans`) and has not been blocked for blocked_timeout yet; then it holds, says what blocks, and
         looks for a path again (exact_path: on each new belief, at least every BLOCKED_RETRY s)."""
         assert self.goal is not None
-        t = self._last_t or 0.0
-        since = t if self._blocked_since is None else self._blocked_since
-        if not self.from_scans or self.params.blocked_timeout <= 0.0 or t - since >= self.params.blocked_timeout:
-            self._blocked_since = None
+        waited = self.no_path.waited(self._last_t or 0.0, self.params.blocked_timeout, self.from_scans)
+        if waited is None:
             self.fail(no_path_reason(self.radius, position, self.goal))
             return
-        self._blocked_since = since
         self.waypoint, self._target, self.cost, self.path_check.checked = None, None, 0.0, False
-        self.reason = blocked_reason(self.world, position, self.goal, self.radius, t - since,
-                                     self.params.blocked_timeout)
+        self.reason = blocked_reason(self.world, position, self.goal, self.radius, waited, self.params.blocked_timeout)
 
     # ------------------------------------------------------- while running
     @classmethod
@@ -339,65 +325,13 @@ class Navigator:
         return self.detector.blocked(self.world, self.params, position, target, others, sensing_range, horizon)
 
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
-        """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists.
-
-        With robots ahead the step first keeps right of them (planning/step.py, step_run). When that gives up, or
-        the plan needs more swarm iterations than a tick has (params.step_iterations), the step is finished on the
-        next tick (`step_deferred`; planning/step_planning.py), and `tick` drives on meanwhile.
-        """
-        assert self.goal is not None
-        steps, tick = self.steps, self._ticks
-        if steps.waiting(self._last_t):
-            return None
-        run, whole = steps.resumed(tick, self._last_t, self.world)
-        if run is None:
-            run = self.start_step(position, others)
-        budget = steps.budget(tick, None if whole else self.step_budget(), self.params.step_iterations)
-        start = time.perf_counter()
-        done = run.advance(budget)
-        self.plan_time += time.perf_counter() - start
-        if not done:
-            steps.unfinished(run, tick, self._last_t or 0.0)
-            self.mode, self.reason = Mode.AVOIDING, 'planning a step (finished on the next tick)'
-            return None
-        step = run.plan
-        if step is None and len(run.problem.pass_on_right):
-            steps.rule_gave_up = tick
-            self.mode, self.reason = Mode.AVOIDING, 'cannot keep right; planning the step without it'
-            return None
-        if step is None:
-            # Nothing feasible now; other robots may move away. Retry later rather than every tick.
-            steps.retry_later(self._last_t or 0.0)
-            self.mode, self.reason, self.waypoint, self.cost = Mode.AVOIDING, 'no valid step; waiting', None, 0.0
-            return None
-        self.mode, self.reason = Mode.AVOIDING, 'stepping around an obstacle'
-        self.waypoint, self.cost = step.waypoint, step.cost
-        self.plan.append(step.waypoint)
-        return step.waypoint
+        """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists or
+        the step is finished on a later tick (planning/step_planning.py, plan_next_step)."""
+        return step_planning.plan_next_step(self, position, others)
 
     def step_budget(self) -> int | None:
         """Swarm iterations this tick's step plan may run: params.step_iterations, None (to the end) for 0."""
         return self.params.step_iterations or None
-
-    def start_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> StepRun:
-        """The step problem of this tick (eq. 10 toward step_target, the robots as they are and as yielding predicts
-        them) and its swarm run, keeping right of the robots ahead unless the rule gave up last tick (then this
-        plan continues that activation)."""
-        plain = self.steps.plain(self._ticks)
-        target = self.step_target()
-        centres, sums = robot_arrays(others, self.radius)
-        centres, sums = self.yielding.with_predictions(position, others, centres, sums,
-                                                       self.params.step_radius / max(self.params.max_speed, 1e-6))
-        problem = StepProblem(self.world, position, target, self.clearance, self.params.step_radius,
-                              self.params.a, self.params.b, self.params.c, centres,
-                              sums + self.params.clearance_margin)
-        offset = centres - position
-        ahead = (np.hypot(*offset.T) - sums < self.params.sensing_range) & (offset @ (target - position) > 0)
-        if plain:
-            ahead[:] = False
-        else:
-            self.activations += 1
-        return step_run(problem, self.params, self.rng, self.step_method, offset[ahead])
 
     @property
     def step_deferred(self) -> bool:
@@ -441,14 +375,11 @@ class Navigator:
         blocked (fail_no_path), None without a search until the belief changes or BLOCKED_RETRY s have passed."""
         assert self.goal is not None
         t = self._last_t or 0.0
-        if self._blocked_since is not None and self._no_path_in is self.world and t - self._no_path_at < BLOCKED_RETRY:
+        if self.no_path.skip_search(self.world, t):
             return None
         path, self.path_world = robot_path(self.world, others, position, self.goal, self.radius, self.params,
                                            turn_room=not self.model.turns_in_place)
-        if path is None:
-            self._no_path_in, self._no_path_at = self.world, t
-        else:
-            self._blocked_since = self._no_path_in = None
+        self.no_path.searched(self.world, t, path is not None)
         return path
 
     def start_escape(self, position: FloatArray, distance: float, t: float,

@@ -9,17 +9,30 @@ runs in them (docs/benchmarks.md). So:
   very next tick, within PENDING_FOR seconds and in the same world (else planned afresh, and after a world change
   whole, so that a world changing every tick cannot keep a plan from ending);
 - a tick given no iteration (step_budget 0) comes at most once in a row: every plan ends.
-The step problem and its swarm run are step.py; the navigator (navigator.py, plan_next_step) drives this.
+With robots ahead a step first keeps right of them (step.py, step_run). The step problem and its swarm run are
+step.py; `plan_next_step` is the navigator's (navigator.py) step of one tick.
 """
 
 from __future__ import annotations
 
 import math
+import time
+from typing import TYPE_CHECKING, Sequence
 
-from fastep_core.planning.step import StepRun
+import numpy as np
+from numpy.typing import NDArray
+
+from fastep_core.planning.mode import Mode
+from fastep_core.planning.others import OtherRobot, robot_arrays
+from fastep_core.planning.step import StepProblem, StepRun, step_run
 from fastep_core.world import World
 
-__all__ = ['PENDING_FOR', 'RETRY_AFTER', 'StepPlanning']
+if TYPE_CHECKING:   # navigator.py imports this module
+    from fastep_core.planning.navigator import Navigator
+
+__all__ = ['PENDING_FOR', 'RETRY_AFTER', 'StepPlanning', 'plan_next_step', 'start_step']
+
+FloatArray = NDArray[np.float64]
 
 RETRY_AFTER = 0.5   # seconds between step-planning attempts while no feasible step exists
 PENDING_FOR = 0.5   # seconds a step plan left unfinished (params.step_iterations) may be continued, at most
@@ -84,3 +97,58 @@ class StepPlanning:
     def retry_later(self, t: float) -> None:
         """No feasible step now: the next attempt waits RETRY_AFTER."""
         self.retry_at = t + RETRY_AFTER
+
+
+def plan_next_step(nav: Navigator, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+    """The navigator's step of this tick (eq. 3-10): its waypoint; None (and a status reason) when no feasible step
+    exists, or when the step is finished on the next tick (`deferred`; the navigator drives on meanwhile)."""
+    assert nav.goal is not None
+    steps, tick = nav.steps, nav._ticks
+    if steps.waiting(nav._last_t):
+        return None
+    run, whole = steps.resumed(tick, nav._last_t, nav.world)
+    if run is None:
+        run = start_step(nav, position, others)
+    budget = steps.budget(tick, None if whole else nav.step_budget(), nav.params.step_iterations)
+    start = time.perf_counter()
+    done = run.advance(budget)
+    nav.plan_time += time.perf_counter() - start
+    if not done:
+        steps.unfinished(run, tick, nav._last_t or 0.0)
+        nav.mode, nav.reason = Mode.AVOIDING, 'planning a step (finished on the next tick)'
+        return None
+    step = run.plan
+    if step is None and len(run.problem.pass_on_right):
+        steps.rule_gave_up = tick
+        nav.mode, nav.reason = Mode.AVOIDING, 'cannot keep right; planning the step without it'
+        return None
+    if step is None:
+        # Nothing feasible now; other robots may move away. Retry later rather than every tick.
+        steps.retry_later(nav._last_t or 0.0)
+        nav.mode, nav.reason, nav.waypoint, nav.cost = Mode.AVOIDING, 'no valid step; waiting', None, 0.0
+        return None
+    nav.mode, nav.reason = Mode.AVOIDING, 'stepping around an obstacle'
+    nav.waypoint, nav.cost = step.waypoint, step.cost
+    nav.plan.append(step.waypoint)
+    return step.waypoint
+
+
+def start_step(nav: Navigator, position: FloatArray, others: Sequence[OtherRobot]) -> StepRun:
+    """The step problem of this tick (eq. 10 toward the navigator's step_target, the robots as they are and as
+    yielding predicts them) and its swarm run, keeping right of the robots ahead unless the rule gave up last tick
+    (then this plan continues that activation)."""
+    p = nav.params
+    plain = nav.steps.plain(nav._ticks)
+    target = nav.step_target()
+    centres, sums = robot_arrays(others, nav.radius)
+    centres, sums = nav.yielding.with_predictions(position, others, centres, sums,
+                                                  p.step_radius / max(p.max_speed, 1e-6))
+    problem = StepProblem(nav.world, position, target, nav.clearance, p.step_radius, p.a, p.b, p.c, centres,
+                          sums + p.clearance_margin)
+    offset = centres - position
+    ahead = (np.hypot(*offset.T) - sums < p.sensing_range) & (offset @ (target - position) > 0)
+    if plain:
+        ahead[:] = False
+    else:
+        nav.activations += 1
+    return step_run(problem, p, nav.rng, nav.step_method, offset[ahead])

@@ -7,6 +7,7 @@ from fastep_core.errors import GoalError
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import TractorTrailer
 from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator, manoeuvre_driver
+from fastep_core.planning.exact_path import BLOCKED_RETRY, NoPathHold
 from fastep_core.planning.manoeuvre_search import Manoeuvre
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World
@@ -401,3 +402,33 @@ def test_no_path_in_what_the_laser_shows_holds_the_robot_and_it_goes_on_once_the
     for k in range(30):
         patient.update(0.05 * k, state)
     assert patient.failed and patient.reason.startswith('no valid path')
+
+
+def test_the_no_path_hold_keeps_its_own_time_apart_from_fastep_routes_route_wait():
+    """FAStep-Route's wait for a robot standing on its route and the no-path hold are two timers: a path found does
+    not restart the route's wait, and the wait's start is not taken as when the hold began."""
+    world = World.from_obstacles([0, 0, 20, 20], [Circle((10.0, 10.0), 1.0)])
+    nav = make_navigator('fastep_route', SPEC, 0.5, world, PlannerParams(), 0)
+    nav.from_scans = True
+    nav.set_goal((15.0, 10.0))
+    nav.update(3.0, np.array([5.0, 10.0]))
+    nav._blocked_since = 1.0   # a robot has stood on the route since t = 1
+    assert nav.exact_path(np.array([5.0, 10.0])) is not None
+    assert nav._blocked_since == 1.0 and nav.no_path.since is None
+    nav.fail_no_path(np.array([5.0, 10.0]))   # held from now (t = 3), not from the route's t = 1
+    assert not nav.failed and nav.no_path.since == 3.0 and nav._blocked_since == 1.0
+
+
+def test_a_no_path_hold_searches_again_on_a_new_belief_or_after_the_retry_time():
+    hold = NoPathHold()
+    believed, newer = World.from_obstacles([0, 0, 20, 20], []), World.from_obstacles([0, 0, 20, 20], [])
+    hold.searched(believed, 0.0, found=False)
+    assert hold.waited(0.0, 10.0, from_scans=True) == 0.0
+    assert hold.skip_search(believed, 0.5) and not hold.skip_search(newer, 0.5)
+    assert not hold.skip_search(believed, BLOCKED_RETRY)
+    assert hold.waited(4.0, 10.0, from_scans=True) == 4.0 and hold.waited(10.0, 10.0, from_scans=True) is None
+    assert hold.waited(0.0, 10.0, from_scans=False) is None and hold.since is None
+    hold.searched(newer, 1.0, found=False)
+    hold.waited(1.0, 10.0, from_scans=True)
+    hold.searched(newer, 2.0, found=True)
+    assert hold.since is None and not hold.skip_search(newer, 2.1)
