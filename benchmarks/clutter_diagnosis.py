@@ -2,19 +2,13 @@
 
     python -m benchmarks.clutter_diagnosis --worlds 8 --workers 2 [--algorithms fastep aco] [--out out/clutter.json]
 
-Worlds: `random_scenarios.circle_field_data(seed)`, seeds 0..N-1: a 50 x 50 m workspace, 20-35 circles of
-radius 0.5-2.5 m placed uniformly, one point-mass robot (radius 0.5) whose start and goal are uniform in
-[3, 47]^2 and at least 35 m apart; circles within radius + clearance_margin + 0.5 m of the start or goal are dropped
-(random_scenarios._clear_of_robots) and the layout is kept only if the exact planner finds a path keeping
-radius + clearance_margin (random_scenarios.solvable). The world's generator is seeded 10_000 + seed; the run
-seed is the world seed.
+Worlds: `random_scenarios.circle_field_data(seed)`, seeds 0..N-1: 20-35 circles in a 50 x 50 m workspace, one
+point mass whose start and goal are at least 35 m apart, kept only if the exact planner finds a path; the run
+seed is the world seed. `--world table2_s1` (or any built-in scenario) runs that scenario instead.
 
-`--world table2_s1` (or any built-in scenario) runs that scenario instead, one run per seed.
-
-Per run: arrival, collisions (judged from the trajectory against the true world by the simulator), swarm
-activations, activations per metre, step-optimizer time (plan_time), compute time, path / exact optimum
-(planning/optimal.shortest_path keeping radius + clearance_margin), trap escapes. For navigators that plan
-steps the activations are classified by what led to them (see `classify`).
+Per run: arrival, collisions, swarm activations (also per metre), step-optimizer and compute time, path / exact
+optimum, trap escapes. For navigators that plan steps the activations are classified by what led to them
+(see `classify`).
 """
 
 from __future__ import annotations

@@ -1,23 +1,16 @@
-"""FAStep-Route against its targets (issue 12): arrival, collisions, path / optimum, compute per run against ACO's.
+"""FAStep-Route against its targets: arrival, collisions, path / optimum, compute per run against ACO's.
 
     python -m benchmarks.fastep_route --worlds 8 --workers 2 --out /tmp/route/families.json
     python -m benchmarks.fastep_route --families table2_s1 table2_s2 table2_s3 --worlds 10 --out /tmp/route/t2.json
-    python -m benchmarks.fastep_route --families multi --algorithms fastep_route --planner waypoint_lead=2 ...
     python -m benchmarks.fastep_route --markdown /tmp/route/families.json /tmp/route/t2.json
     python -m benchmarks.fastep_route --figure multi 2 docs/figures/fastep_route_worst.png
 
-Families (world seed = run seed = 0..N-1, so every planner meets the same worlds with the same seeds):
-- sparse, dense: `benchmarks.clutter_diagnosis.circle_field_data` with 20-35 / 40-60 circles (50 x 50 m);
-- walls: `random_scenario_data(seed, n_robots=1, tractor_share=0)`: circles, line walls, U-traps at times;
-- u_traps: `u_trap_scenario_data(seed)`, a U-trap across the straight run, open toward the robot;
-- multi: `random_scenario_data(seed, n_robots=2 + seed % 3, tractor_share=0)`, 2-4 point masses;
-- tractor: one tractor-trailer, `u_trap_scenario_data(seed, 'tractor_trailer')` for even seeds,
-  `random_scenario_data(seed, n_robots=1, tractor_share=1)` for odd ones;
-- any built-in scenario by name (table2_s1 ...): the same world for every seed.
-Path / optimum: `planning/optimal.shortest_path` keeping radius + clearance_margin from the robot's start (as
-docs/optimality.md), per robot. CPU: process time of the whole `simulate` call (load-proof); compute: the
-simulator's wall seconds inside the navigators, summed over the robots. This is a small measuring tool for
-docs/fastep_route.md, not the families benchmark (`fastep-bench --families`).
+Families: sparse and dense circle fields, walls, u_traps, multi (2-4 point masses), tractor (tractor-trailers),
+or any built-in scenario by name; world seed = run seed = 0..N-1, so every planner meets the same worlds.
+Path / optimum: the exact shortest path keeping radius + clearance_margin (docs/optimality.md), per robot.
+CPU: process time of the whole `simulate` call (load-proof); compute: the simulator's wall seconds inside the
+navigators, summed over the robots. A small measuring tool for docs/fastep_route.md, not the families benchmark
+(`fastep-bench --families`).
 """
 
 from __future__ import annotations

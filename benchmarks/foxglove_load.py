@@ -3,18 +3,13 @@
     python -m benchmarks.foxglove_load [--robots 2,16] [--seconds 30] [--odom-rate 50] [--scene-rate 10]
     python -m benchmarks.foxglove_load --launch case_study_1 [--rtf 5]
 
-For each N, on an isolated DDS domain (fastep_testing.graph: a free ROS_DOMAIN_ID, localhost only), three
-processes: a synthetic graph (`--publish N`: one node whose 50 Hz timer publishes /r1/odom .. /rN/odom, each robot
-driving round a circle, and each robot's plan and waypoint once a second, plus the latched /obstacles of
-table2_s2), fastep-foxglove (`-p scene_rate_hz:=--scene-rate`), and for comparison a plain callback subscriber of
-the same odometry topics (`--listen N`, keep-last 1: what a node that takes every message through the executor
-pays, i.e. a bridge built like the other nodes). A WebSocket client in this process subscribes to every channel
-fastep-foxglove advertises and counts what it receives. After a 5 s warm-up, the CPU time (utime + stime from
-/proc/<pid>/stat) of each process over --seconds wall seconds, as a percentage of one core, with the load
-average. Every process is stopped (SIGINT, then SIGKILL) at the end.
+For each N, on an isolated DDS domain: a synthetic graph publishing N robots' odometry (plus plans, waypoints
+and the latched obstacles), fastep-foxglove, and for comparison a plain callback subscriber of the same topics.
+A WebSocket client here subscribes to every channel fastep-foxglove advertises. After a 5 s warm-up, the CPU
+time of each process (/proc) over --seconds, as a percentage of one core, with the load average.
 
---launch SCENARIO: `fastep-launch SCENARIO --rtf X --foxglove PORT` on a free domain with the same client
-watching; fastep-foxglove's CPU (/proc, sampled every 0.5 s while it lives) from its first to its last sample.
+--launch SCENARIO: fastep-foxglove's CPU during `fastep-launch SCENARIO --rtf X --foxglove PORT` with the same
+client watching.
 """
 
 from __future__ import annotations

@@ -3,35 +3,15 @@
     python -m benchmarks.graph_latency [--seconds 20] [--scenario table2_s3] [--motion follow|line|stand]
                                        [--phase both|process|inprocess] [--stamped] [--profile] [--json OUT]
 
-The planner does not act on odometry arrival: it keeps the newest odometry (LATEST QoS, depth 1) and decides on
-a control timer (control_rate_hz, 20 Hz). "Odom-to-cmd_vel latency" therefore has two parts, measured here:
-
-(a) processing: the wall time of the planner's control callback (PlannerNode.on_control: state from the
-    odometry, Navigator.update, publishing cmd_vel, cost, waypoint, plan, status), and inside it of
-    Navigator.update alone. Measured on a subclass of PlannerNode (planner.py is not edited) whose on_control is
-    wrapped with time.perf_counter (wall) and time.thread_time (its CPU time, which leaves out the time the
-    thread was preempted by other processes), running in this process's own executor (phase `inprocess`).
-    Ticks on which the navigator planned a FAStep step (its activation count went up) are reported apart.
-(b) end-to-end age of the odometry used for each command: cmd_vel receipt time minus the publish time of the
-    latest odometry published before it (both taken with perf_counter in this process). It contains the phase
-    between the driver's 20 Hz odometry timer and the planner's 20 Hz control timer: two steady timers keep
-    about the same phase for a whole run, anywhere in [0, 50) ms from one run to the next, so (b) mostly
-    measures that phase. The inprocess phase therefore also splits (b) into odometry transport, wait for the
-    tick, processing and cmd_vel transport, and reports the sum without the wait (the planner's real latency).
-
-Graph: on an isolated DDS domain (fastep_testing.graph.free_domain, ROS_AUTOMATIC_DISCOVERY_RANGE=
-LOCALHOST) a map node process (the scenario's world) and, in phase `process`, one unmodified planner process
-(`python -m fastep_ros.planner`, namespace /r1, parameters as fastep-launch gives them, wall time). A driver
-node in this process publishes nav_msgs/Odometry on /r1/odom at 20 Hz (--motion follow: a point mass that
-integrates the received cmd_vel, i.e. a 20 Hz plant in the loop, so the planner plans steps around the
-scenario's obstacles; line: moving at --speed along the start-goal line whatever the commands; stand: at the
-start), sends the goal (and sends the robot back and forth when it arrives) and records /r1/cmd_vel. Phase
-`inprocess` replaces the planner process with the instrumented subclass in the driver's executor (same
-context, one thread: no GIL contention inside the measured callback). --profile runs cProfile around every
-control callback of the inprocess phase and prints where the time goes. --stamped makes the planner publish
-TwistStamped (use_stamped_cmd_vel): the cmd_vel transport across processes is then read from its stamp.
-Every process started is stopped (SIGINT, then SIGKILL) at the end. The load average is printed with the
-numbers: the machine may be shared.
+The planner keeps the newest odometry and decides on its 20 Hz control timer, so the latency has two parts:
+(a) processing, the wall and thread CPU time of the control callback and of Navigator.update inside it, measured
+on an instrumented PlannerNode subclass in this process (phase `inprocess`; ticks that planned a FAStep step
+reported apart); (b) the age of the odometry each command was computed from, which is mostly the phase between
+the driver's and the planner's 20 Hz timers, so `inprocess` also splits it into transport, wait and processing.
+A driver node publishes /r1/odom at 20 Hz (--motion follow: a point mass integrating the commands) to a map
+process and, in phase `process`, an unmodified planner process, all on an isolated DDS domain. --profile runs
+cProfile around every inprocess callback; --stamped reads the cmd_vel transport from TwistStamped stamps.
+The load average is printed with the numbers: the machine may be shared.
 """
 
 from __future__ import annotations

@@ -3,38 +3,15 @@
     python -m benchmarks.graph_scaling [--max-robots 12] [--counts 1,2,4,6,8,10,12] [--seconds 20] [--json OUT]
     python -m benchmarks.graph_scaling --fan-in 0,3,7,11 [--seconds 20]
     python -m benchmarks.graph_scaling --demo-rtf [--demo case_study_1] [--rtf 50] [--seed 0]
-    every mode: [--layout node|robot|graph] [--executor single|events]   (default: node, single: as before them)
+    every mode: [--layout node|robot|graph] [--executor single|events]
 
-Scaling: for each N, a generated scenario (a temporary YAML, format of docs/scenarios.md): N point-mass robots
-of radius 0.5 m spread evenly on a circle of radius --radius (20 m) around (25, 25) in a 50 x 50 m workspace
-without obstacles, each with its goal diametrically opposite, so that they all meet in the middle and must
-avoid each other; planner overrides: max_speed --max-speed (2 m/s, so that the meeting falls inside the
-window). On an isolated DDS domain (fastep_testing.graph.free_domain, ROS_AUTOMATIC_DISCOVERY_RANGE=
-LOCALHOST), the map, N plants and N planners are started as separate processes on wall time (no clock), with the
-parameters fastep-launch gives them (fastep_ros.launch.plant_params / planner_params); fastep-launch --no-clock
-itself is not used because it reports arrivals, not command rates or CPU, and adds its own odometry recorder.
-Planners publish TwistStamped (use_stamped_cmd_vel, plants subscribe the same) unless --unstamped, so that a
-late command can be told from a late monitor.
-
-A monitor node in this process waits until every planner knows the world and all the other robots, sends the
-goals, and then for --seconds records the receipt time (and stamp) of every /rK/cmd_vel. Per robot: the achieved
-cmd_vel rate (target 20 Hz) and the fraction of control periods longer than 1.5 x 50 ms (late), from receipt
-times (and from stamps, i.e. when the planner published). CPU per process from /proc/<pid>/stat (utime + stime)
-over the window, the machine's total CPU use from /proc/stat, and the load average. N passes when every robot
-keeps >= 19 Hz and < 5 % late periods (receipt times); the answer is the largest passing N. Every process is
-stopped (SIGINT, then SIGKILL) after each N.
-
---fan-in: what makes a planner's CPU grow with N. Each planner follows the odometry of every other robot (the
-plants publish it at 50 Hz), so the graph's CPU grows like N^2. One planner process (open_field's r1, goal
-sent) and, from a thread of this process, its own odometry and K other robots' odometry at 50 Hz each (topics
-/o1/odom ..., robots standing off its way): staggered (evenly spaced, as K independent plant processes do, so
-the planner wakes up for each message) or in bursts (all at once: one wake-up handles K + 1 messages). The
-planner's CPU (/proc) for each K, and a linear fit per mode.
-
---demo-rtf: runs `python -m fastep_ros.launch case_study_1 --rtf 50 --seed 0` (on its own free domain) and
-reports RTF = simulated time of the run (the last robot's arrival time, printed by the launcher) / wall time
-of the whole command (time.perf_counter around it), and also over the run alone (from the launcher's "on their
-way" line to its first result line), which leaves out start-up and shutdown.
+Scaling: N point masses on a circle swap places in an empty 50 x 50 m world; the map, N plants and N planners run
+as separate processes on wall time on an isolated DDS domain. A monitor records every /rK/cmd_vel for --seconds:
+rate (target 20 Hz), late control periods (> 1.5 x 50 ms), CPU per process (/proc) and the load average. N passes
+when every robot keeps >= 19 Hz and < 5 % late periods; the answer is the largest passing N.
+--fan-in: one planner's CPU against the number K of other robots whose 50 Hz odometry it follows, the messages
+staggered or in bursts. --demo-rtf: real-time factor of `fastep_ros.launch case_study_1 --rtf 50`, over the whole
+command and over the run alone.
 """
 
 from __future__ import annotations

@@ -1,34 +1,17 @@
 """Benchmark: FAStep against the standard firefly algorithm, niapy's FireflyAlgorithm and differential evolution.
 
-Why: the paper credits FAStep's stepping-ahead move with escaping local minima better than the standard
-firefly algorithm. Here the optimizers meet on the usual test functions (sphere, Rastrigin, Ackley,
-Rosenbrock, Griewank; all with minimum 0) in 2-D and 10-D at the SAME number of objective evaluations,
-over 30 seeds: median best value and median wall time per run.
+The paper credits FAStep's stepping-ahead move with escaping local minima better than the standard firefly
+algorithm. Here the optimizers meet on sphere, Rastrigin, Ackley, Rosenbrock and Griewank (minimum 0) in 2-D and
+10-D at the SAME number of objective evaluations, over 30 seeds: median best value and median wall time per run.
+Every objective goes through `Budget`, which counts evaluated points, scores points beyond the budget +inf and
+stops the optimizer; each is given iteration limits it cannot reach first, and its result is the best value
+`Budget` saw. Contenders: FAStep and the firefly algorithm with the paper's Table 1 parameters (and 'n20' variants
+with niapy's population and damping, 'FAStep k5' with attraction_sample=5, 'FAStep merged' with merged_moves),
+niapy's FireflyAlgorithm with its defaults, and scipy's differential_evolution (best1bin, no polishing).
+niapy evaluates one point per Python call, so its wall times say more about the implementation than the algorithm.
 
-Equal budgets: every objective goes through `Budget`, which counts evaluated points, evaluates only what is
-left of the budget in a batch (the rest scores +inf and is never the best) and raises `BudgetExhausted` on
-the next call; each optimizer is given limits it cannot reach first (max_iter and patience 10^6 for FAStep
-and the firefly algorithm, maxiter 10^6 and tol = atol = 0 for scipy's differential_evolution, max_evals for
-niapy's Task), and its result is the best value `Budget` saw, so every optimizer is scored the same way on
-exactly `--budget` evaluations (fewer only if it stopped by itself: DE when its population collapsed).
+    python -m benchmarks.optimizers [--budget 20000] [--seeds 30] [--dims 2 10] [--workers 2] [--out FILE]
 
-The contenders, each with its own defaults:
-- FAStep (fastep_core.optimize.fastep) and the standard firefly algorithm (fastep_core.optimize.firefly): the
-  paper's Table 1, n = 50, gamma = 1, beta0 = 2, alpha = 0.2, damping 0.8; both evaluate every attraction
-  pair, n (n - 1) / 2 + 1 = 1226 candidates per iteration, so 20,000 evaluations are about 15 iterations.
-  'FAStep n20' and 'firefly n20' are the same code with niapy's population (20) and damping (0.97): 191
-  candidates per iteration, about 100 iterations within the budget. 'FAStep k5' is FAStep with
-  attraction_sample=5 (each firefly attracted to at most 5 brighter ones, a departure from the paper): at most
-  250 candidates per iteration, about 75 iterations. 'FAStep merged' is FAStep with merged_moves (an
-  iteration's attraction and stepping-ahead candidates in one call, also a departure): 1276 per iteration.
-- niapy.algorithms.basic.FireflyAlgorithm (the firefly algorithm, not "FA" = fireworks): niapy's defaults,
-  population 20, alpha 1, beta0 1, gamma 0.01, theta 0.97; one evaluation per move, up to 400 per iteration.
-- scipy.optimize.differential_evolution: best1bin, popsize 15 (x d individuals), Latin hypercube start,
-  no polishing (polishing would spend evaluations outside the budget), vectorised.
-Wall times: ours and DE evaluate whole populations with numpy; niapy calls the objective once per point in a
-Python loop, so its times say more about the implementation than about the algorithm.
-
-Run: `python -m benchmarks.optimizers [--budget 20000] [--seeds 30] [--dims 2 10] [--workers 2] [--out FILE]`
 (needs niapy, a test/bench-only dependency pinned in requirements-test.txt).
 """
 

@@ -3,19 +3,15 @@
     python -m benchmarks.scale robots [--counts 10 20 40 100] [--seed 0] [--max-sim-time 300]
     python -m benchmarks.scale obstacles [--counts 200 500 1000] [--side 50] [--seed 0]
 
-robots: one in-process `simulate` (what `fastep-sim` runs) of N point-mass robots (radius 0.5 m) in a square
-world of side max(50, 10 sqrt(N)) m with N / 2 random circles (radius 0.5-2 m), starts and goals drawn at least
-3 m from each other and half the side apart, obstacles kept clear of them (as fastep_core.random_scenarios
-does); fixed seeds. Prints wall and CPU time (this process; less sensitive to the machine's load),
-simulated time, arrivals and collisions per N.
+robots: one in-process `simulate` (what `fastep-sim` runs) of N point-mass robots in a square world of side
+max(50, 10 sqrt(N)) m with N / 2 random circles, fixed seeds. Prints wall and CPU time, simulated time,
+arrivals and collisions per N.
 
-obstacles: the exact shortest path (fastep_core.planning.optimal.shortest_path, what the trap escape, the
-"no valid path" check and Optimal-Kinematic run) from (2, 2) to the far corner through N random circles (radius
-0.2-0.8 m) in a square of side --side, clearance 0.6 m. Prints wall and CPU time, the peak of traced memory
-(tracemalloc, which numpy reports to), the size of the graph the search generated (nodes reached, edges made)
-and the path length.
+obstacles: the exact shortest path (fastep_core.planning.optimal.shortest_path) from (2, 2) to the far corner
+through N random circles in a square of side --side. Prints wall and CPU time, peak traced memory
+(tracemalloc), the size of the search graph and the path length.
 
-Wall times depend on the machine's load: say it (the script prints the load average) with the numbers.
+Wall times depend on the machine's load: the script prints the load average to go with the numbers.
 """
 
 from __future__ import annotations

@@ -3,20 +3,11 @@ the attraction sample, and against a plain-Python-loop FAStep.
 
     python -m benchmarks.step_latency [--seeds 20] [--sample 5] [--crowd 40] [--no-loop]
 
-Step problems: the ones FAStep-Kinematic poses in a table2_s2 run (real positions, circles and walls, the
-clearance rule), and with --crowd N those of the first 30 s of benchmarks.scale's crowd of N robots (N / 2
-circles, every other robot in eq. 10's f2 and in the clearance rule). Each problem is solved with seeds
-0..S-1, the variants interleaved per seed (in turn first) so they share the machine's load:
-- before: the vectorised `fastep` on the plain step fitness (fastep_testing/step_reference.py, StepProblem's
-  terms as they were before they were made fast; the swarm is the same code);
-- after: `fastep` on StepProblem.fitness. Same moves and floats: the waypoints must be identical;
-- sample k: `fastep(..., attraction_sample=k)` on StepProblem.fitness (a departure from the paper, off by
-  default; its fitness reached is compared with the paper's);
-- merged: `fastep(..., merged_moves=True)` on StepProblem.fitness (a departure from the paper, off by default: one
-  objective call per iteration; its fitness reached is compared with the paper's);
-- loop: fastep_testing/fastep_loop.py (seed 0 only), the same algorithm with loops over fireflies and pairs.
-Wall time (perf_counter) and CPU time (process_time) per plan, medians, and the load average: the machine is
-shared, say it with the numbers.
+Step problems: those FAStep-Kinematic poses in a table2_s2 run, and with --crowd N those of the first 30 s of
+benchmarks.scale's crowd of N robots. Each is solved with seeds 0..S-1, the variants interleaved per seed so
+they share the machine's load: before (the plain step fitness, fastep_testing/step_reference.py), after
+(StepProblem.fitness; waypoints must be identical), sample k (attraction_sample=k), merged (merged_moves) and
+loop (fastep_testing/fastep_loop.py, seed 0 only). Wall and CPU time per plan (medians) and the load average.
 """
 
 from __future__ import annotations

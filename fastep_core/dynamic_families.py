@@ -1,23 +1,16 @@
 """Random v2 worlds for the families benchmark: crossing movers, unknown obstacles, misplaced obstacles, and
-all three at once with 2-4 robots (issue 13, item 6). Every robot carries a laser scanner (SENSOR).
+all three at once with 2-4 robots. Every robot carries a laser scanner (SENSOR).
 
-Each world is a 50 x 50 m field of known still circles (radius 0.5-2.5 m) and what its family adds:
-
-- crossing_movers: one point mass (start and goal >= 35 m apart) and 2-4 movers (radius 0.4-1.2 m,
-  0.3-0.8 m/s) going back and forth across its straight run on 12-24 m tracks within 30 degrees of square to
-  it; each known (on the map, as a tracker would report it) or not (only the scan shows it), even odds;
-- unknown_obstacles: one point mass; 3-6 circles (radius 0.5-2 m) and 1-2 walls (3-8 m, roughly across the
-  run) near its straight run that are not on the map (known: false);
-- misplaced_obstacles: one point mass; every obstacle (circles, 3-6 of them near the run, and 2-5 walls) on
-  the map displaced by position_sigma 0.3-1.0 m;
-- dynamic_mix: 2-4 point masses (starts and goals >= 25 m apart, 3 m from each other's), 1-3 movers across
-  robots' runs (known or not), 2-4 unknown circles near runs, and a third of the known ones misplaced.
+Each world is a 50 x 50 m field of known still circles and what its family adds: crossing_movers (2-4 movers
+going back and forth across a point mass's straight run, known or not), unknown_obstacles (circles and walls
+near the run that are not on the map), misplaced_obstacles (every obstacle on the map displaced by
+position_sigma 0.3-1.0 m), dynamic_mix (2-4 robots with some of each). The exact sizes are in the code below and
+docs/dynamic_world.md.
 
 Solvable from the truth: every robot has an exact path keeping radius + clearance_margin from every still
-obstacle where it really is (as random_scenarios.solvable: the others parked at their goals). Movers' tracks and
-misplaced obstacles keep clear of every start and goal (a mover never crosses a robot standing at its start or
-goal; a map error of 3 sigma never covers one), so a robot's goal is never refused on the map.
-Same family and seed, same world: each family's Generator is seeded FAMILY_OFFSET[family] + seed.
+obstacle where it really is. Movers' tracks and misplaced obstacles keep clear of every start and goal, so a
+robot's goal is never refused on the map. Same family and seed, same world: each family's Generator is seeded
+FAMILY_OFFSET[family] + seed.
 """
 
 from __future__ import annotations

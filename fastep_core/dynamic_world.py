@@ -1,26 +1,17 @@
 """The world of scenario format v2 over time: what is true, and what a planner is given as its map.
 
-Why a module of its own rather than more of world.py: `World` is the static map every planner consumes (the
-workspace and obstacles that never move); this module holds what v2 adds around it and that planners must
-never read directly: the movers' true motion, the obstacles a map leaves out, the error of misplaced ones.
-Three views of one scenario:
+Why a module of its own rather than more of world.py: `World` is the static map every planner consumes; this
+module holds what v2 adds around it and that planners must never read directly. Three views of one scenario:
 
-- the truth (`DynamicWorld.still`, `DynamicWorld.movers`): every still obstacle where it really is (known or
-  not), every moving circle where the formula of docs/scenarios.md puts it at time t. Collisions, margins and scans
-  (`DynamicWorld.scan`) use it.
-- the planner's map (`DynamicWorld.planner_map`): known still obstacles only, each misplaced one moved by its
-  Gaussian error, as a `World`; and the known movers, reported each tick at their current positions (plus
-  their map error) and velocities as `OtherRobot`s named 'mover K' (K: the obstacle's index in the file),
-  the interface through which planners already see other robots.
-- the draws: every map error comes from `map_generator(seed)`, a numpy Generator on a stream of the run's
-  seed that no swarm uses (the swarms' streams are SeedSequence(seed).spawn(n_robots), keys (0,)..(n-1,);
-  the map's key is MAP_STREAM), so adding position_sigma to a file changes no swarm's draws, and the map of
-  a seed does not depend on how many robots there are.
+- the truth (`DynamicWorld.still`, `DynamicWorld.movers`): every still obstacle where it really is, every moving
+  circle where docs/scenarios.md puts it at time t. Collisions, margins and scans (`DynamicWorld.scan`) use it.
+- the planner's map (`DynamicWorld.planner_map`): known still obstacles only, misplaced ones moved by their
+  error, and the known movers reported each tick as `OtherRobot`s named 'mover K'.
+- the draws: map errors come from `map_generator(seed)`, a stream of the run's seed no swarm uses, so adding
+  position_sigma changes no swarm's draws and a seed's map does not depend on the number of robots.
 
-Motion (docs/scenarios.md, format v2): a mover's centre runs along the polyline centre -> waypoints[0] -> ... ->
-waypoints[-1] at constant speed and back, forever: with L the polyline's length and s = (speed t) mod 2L, the
-centre at t is the point at arc length s when s <= L, else at 2L - s. A polyline of zero length (every
-waypoint on the centre) stands still. All movers at all times are one array computation (`Movers.positions`).
+A mover's centre runs along its polyline at constant speed and back, forever (docs/scenarios.md); all movers at
+all times are one array computation (`Movers.positions`).
 """
 
 from __future__ import annotations

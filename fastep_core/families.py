@@ -1,23 +1,17 @@
 """The families benchmark: every planner on many unseen random worlds of each family, judged against the optimum.
 
 Why: Table 2's three worlds are the ones the paper (and every tuning) looked at. A planner's worth is what it
-does on worlds nobody picked: circle fields, circles + walls, U-traps, 2-4 robots, tractor-trailers, and
-differential-drive bases in circles + walls and 1-4 at a time (fastep_core.random_scenarios.FAMILIES).
-`fastep-bench --families` runs this module; docs/clutter.md shows its tables.
+does on worlds nobody picked (fastep_core.random_scenarios.FAMILIES). `fastep-bench --families` runs this
+module; docs/clutter.md shows its tables.
 
-- Worlds: world k of a family is `random_family_data(family, FAMILY_SEED0 + k)`, named by its source
-  'FAMILY:SEED' (random_scenarios.family_source), solvable by construction. The runs are
-  fastep_core.experiments.run_batch over those sources (seeded runs, spread over a process pool or a Dask
-  cluster, records sorted: the records do not depend on the engine or the number of workers, only the times in
-  them do).
-- Collisions: the simulator's judgement, from every robot's positions after each step against the true world
-  and the other robots (fastep_core.metrics.trajectory_margins: geometry of its own, not the planner's).
-- Optimum: per robot, alone in the world, the exact shortest path keeping radius + clearance_margin
-  (experiments.optimal_lengths, planning/optimal.py), as in docs/optimality.md. Path / optimum is taken over
-  the robots that arrived without collision.
-- Compute per run: the wall seconds the robots spent planning and being simulated (their compute_time,
-  summed) and the CPU seconds of the whole simulate call (cpu_time: not inflated by other load); per metre:
-  divided by the metres the robots drove. Activations per metre: swarm (or ant colony) runs per metre driven.
+- Worlds: world k of a family is `random_family_data(family, FAMILY_SEED0 + k)`, named 'FAMILY:SEED', solvable
+  by construction; the runs are experiments.run_batch over them, and the records do not depend on the engine or
+  the number of workers (only the times in them do).
+- Collisions: the simulator's judgement against the true world (fastep_core.metrics.trajectory_margins).
+- Optimum: per robot, alone, the exact shortest path keeping radius + clearance_margin (docs/optimality.md);
+  path / optimum over the robots that arrived without collision.
+- Compute: wall seconds spent planning and simulating, and CPU seconds of the whole simulate call (not
+  inflated by other load), also per metre driven; activations per metre: swarm (or ant colony) runs per metre.
 """
 
 from __future__ import annotations

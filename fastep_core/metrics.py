@@ -1,21 +1,14 @@
 """How close robots came to the obstacles and to each other along their trajectories: the one margin function.
 
-fastep-sim (simulator.py), fastep-launch (from odometry) and fastep-report (from a recording) all measure
-with trajectory_margins, so their min_clearance numbers mean the same thing:
+fastep-sim, fastep-launch (from odometry) and fastep-report (from a recording) all measure with
+trajectory_margins, so their min_clearance numbers mean the same thing: the smallest distance from a robot's
+reference point to an obstacle surface, or to a moving circle where it was at that sample time, minus the radii;
+against another robot the smallest centre distance minus both radii. Negative means the discs touched (a
+collision), inf that there was nothing to measure against.
 
-- against the obstacles: the smallest distance from a robot's reference point (the state's x, y) at one of its
-  samples to the nearest obstacle surface, minus its radius;
-- against another robot: the smallest centre distance over time, minus both radii;
-- against a moving circle (scenario format v2): the smallest distance from the robot's reference point to the
-  circle's centre at each of the robot's sample times (where the formula of docs/scenarios.md puts it at that instant),
-  minus both radii; counted with the obstacles;
-- negative means the discs touched (a collision), inf that there was nothing to measure against.
-
-Time alignment (robot against robot): two robots are compared at every time at which either of them has a
-sample (the union of their sample times). Between its samples a robot's position is interpolated linearly;
-before its first sample it is held at its first position (it had not moved yet) and after its last at its last
-(it stopped there). When both tracks have the same sample times (the in-process simulator; plants integrating
-on one simulated clock) this compares exactly the sampled positions, with no interpolation.
+Robot against robot is compared at the union of both robots' sample times, each position interpolated linearly
+between samples and held before the first and after the last. With equal sample times (the in-process simulator,
+plants on one simulated clock) this compares exactly the sampled positions.
 """
 
 from __future__ import annotations

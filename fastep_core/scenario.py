@@ -1,19 +1,15 @@
 """Scenario files (formats v1 and v2, YAML): a workspace, its obstacles, the robots and optional planner overrides.
 
-Format v2 (docs/scenarios.md) adds moving circles (`motion`), obstacles missing from the map (`known: false`),
-misplaced ones (`position_sigma`), a robot's laser `sensor` and the `diff_drive` model; every v1 file loads and
-means what it did. `Scenario.world` is the true world of the still obstacles (known or not, where they really
-are); `Scenario.obstacle_specs` lists every obstacle with its v2 keys, and fastep_core/dynamic_world.py turns
-them into the truth over time and the planner's map.
+Format v2 adds moving circles, obstacles missing from the map, misplaced ones, a robot's laser and the
+`diff_drive` model; every v1 file loads and means what it did. `Scenario.world` is the true world of the still
+obstacles; `Scenario.obstacle_specs` lists every obstacle with its v2 keys, and fastep_core/dynamic_world.py
+turns them into the truth over time and the planner's map.
 
-A scenario is loaded from a path or from a built-in name (the ``fastep_core/scenarios/*.yaml`` files that ship
-with the package), parsed with PyYAML's safe loader within bounds (:mod:`fastep_core.bounded_yaml`: size,
-nesting, aliases; YAML 1.1 numbers that do not mean what their digits say are refused), and validated
-strictly: unknown keys are an error at every level, every coordinate must be a real finite number, and starts
-and goals must be free. Every problem raises :class:`~fastep_core.errors.ScenarioError` with a one-line
-message that names the file (or scenario) and the offending key path, e.g.
-``scenario 'x.yaml': robots[1].radius must be > 0, got -1``. Messages show at most a few dozen characters of
-an offending value, however large it is.
+A scenario is loaded from a path or a built-in name (``fastep_core/scenarios/*.yaml``), parsed with PyYAML's
+safe loader within bounds (:mod:`fastep_core.bounded_yaml`), and validated strictly: unknown keys are an error at
+every level, coordinates must be finite numbers, starts and goals must be free. Every problem raises
+:class:`~fastep_core.errors.ScenarioError` with a one-line message naming the file and the key path, e.g.
+``scenario 'x.yaml': robots[1].radius must be > 0, got -1``.
 
 The format is documented in ``docs/scenarios.md``.
 """

@@ -3,17 +3,13 @@
     fastep-container [--ros-args --log-level warn] --node plant --ros-args -r __ns:=/r1 -p start:=[5.0, 25.0] \\
                      --node planner --ros-args -r __ns:=/r1 -p robot_radius:=0.5 ...
 
-Each `--node KIND ...` builds one node from what follows it up to the next `--node`: exactly the arguments that
-`python -m fastep_ros.KIND` takes as its own process (its namespace as `-r __ns:=...`, its parameters as `-p`),
-given to the node as its own command-line arguments (rclpy Node(cli_args=...)), so a node's name, namespace,
-parameters and topics are the same in a container as in a process of its own. KIND is one of plant, planner,
-map_server, clock, recorder. Arguments before the first `--node` are the process's (rclpy.init: e.g. the log level).
-
+Each `--node KIND ...` builds one node from the arguments up to the next `--node`, exactly those `python -m
+fastep_ros.KIND` takes, given as the node's own cli_args, so a node is the same in a container as alone. KIND is
+one of plant, planner, map_server, clock, recorder; arguments before the first `--node` are the process's.
 fastep-launch --layout robot runs each robot's plant and planner in one container, --layout graph every node in
-one (docs/benchmarks.md, "Executors and process layouts"). It behaves like a single node's process (node_main):
-Ctrl-C / SIGTERM stop every node, exit 0; a node that cannot start with its parameters is one line on stderr
-naming it, exit 2, and the nodes built before it are destroyed; a recorder that could not write its file makes
-the exit code 1. The executor is FASTEP_EXECUTOR's (fastep_ros.executors).
+one. Like a single node's process: Ctrl-C / SIGTERM stop every node, exit 0; a node that cannot start is one
+line on stderr, exit 2; a recorder that could not write its file makes the exit code 1. The executor is
+FASTEP_EXECUTOR's (fastep_ros.executors).
 """
 
 from __future__ import annotations

@@ -2,19 +2,14 @@
 
     FASTEP_EXECUTOR=events|single   (environment; fastep-launch --executor sets it for every node it starts)
 
-`single` is rclpy's SingleThreadedExecutor: a Python loop that rebuilds a wait set of every subscription, timer
-and guard condition on each wake-up and looks for the ready one in Python, about 1 ms of CPU per wake-up on this
-project's machine (docs/benchmarks.md). `events` is rclpy.experimental.EventsExecutor (rclpy >= 7.1 in Jazzy's
-wheels): a C++ event queue fed by the middleware's listener callbacks and a timer manager of its own, so a
-message costs the callback and the conversion, not a wait-set rebuild. docs/benchmarks.md ("Executors and
-process layouts") measures both for every node and in each fastep-launch layout. The EventsExecutor costs less
-everywhere (40-75 % less CPU per robot; `make demo` in half the wall time), so it is DEFAULT_EXECUTOR. Lock-step
-runs on it once did not always step like fastep-sim (a robot 6-32 s of simulated time late in 5 of 10 runs of
-case_study_1): lock step depended on the order callbacks ran in. Exact lock step (fastep_ros.lock_step) does
-not, and runs equal fastep-sim's on both executors (tests/fastep_ros/test_layouts.py).
+`single` is rclpy's SingleThreadedExecutor: a Python loop that rebuilds a wait set on every wake-up. `events`
+is rclpy.experimental.EventsExecutor: a C++ event queue fed by the middleware's listeners, so a message costs the
+callback and the conversion, not a wait-set rebuild. It costs less CPU for every node and layout
+(docs/benchmarks.md, "Executors and process layouts"), so it is DEFAULT_EXECUTOR; exact lock step
+(fastep_ros.lock_step) does not depend on the order callbacks run in, so runs equal fastep-sim's on both.
 
-Both are driven by fastep_ros.common's spin loop (spin_once with its stop-race handling); timers on simulated
-time (use_sim_time) and the /clock guard (common.guard_clock) work on both (tests/fastep_ros/test_executors.py).
+Both are driven by fastep_ros.common's spin loop; timers on simulated time and the /clock guard
+(common.guard_clock) work on both (tests/fastep_ros/test_executors.py).
 """
 
 from __future__ import annotations

@@ -1,23 +1,16 @@
 """The planner's one goal subscription: volatile publishers (RViz's 2D Goal Pose, `ros2 topic pub`) and latched
 ones (fastep-launch) alike, without an incompatible-QoS warning on either side.
 
-DDS matches a transient-local subscription only with transient-local publishers: a volatile publisher is
-"incompatible" and both ends warn. A volatile subscription matches every publisher but receives no history:
-a planner started after a latched goal was sent would never get it (fastep-launch relies on that to resume a
-restarted planner). ROS's own answer, QoSDurabilityPolicy.BEST_AVAILABLE, resolves once, when the subscription
-is created, against the publishers discovered by then (rmw_dds_common: transient-local only if every one is,
-and with none yet, transient-local), and never again: a volatile publisher discovered later is incompatible.
+DDS matches a transient-local subscription only with transient-local publishers, while a volatile one receives
+no history: a planner started after a latched goal was sent would never get it (fastep-launch relies on it to
+resume a restarted planner). QoSDurabilityPolicy.BEST_AVAILABLE resolves only once, at creation, so a volatile
+publisher discovered later is still incompatible.
 
-So the durability is chosen here, again at every look at the graph (every 0.25 s, the planner's wall tick),
-by the rule `wanted`: the subscription is volatile, except while it catches up with the history of latched
-publishers it has not caught up with yet, and only while no volatile publisher is known. Catching up with a
-publisher ends when the goals sent during catch-up are at least as many as the publishers being caught up with
-(each latched publisher with a goal sends it at once), or CATCH_UP wall seconds after it began (a latched
-publisher that has sent nothing yet: its later goals reach the volatile subscription). When the rule changes
-the durability, the subscription is replaced (the new one first, so no goal falls between). A volatile
-publisher that appears during a catch-up is matched once by the transient-local subscription before the next
-look: that event is handled here (the subscription becomes volatile at once, logged at info level, no warning),
-though the publisher's side may report it once.
+So the durability is chosen here at every look at the graph (the planner's 0.25 s wall tick) by the rule
+`wanted`: volatile, except while catching up with the history of latched publishers and while no volatile
+publisher is known. A catch-up ends when those publishers have each sent their goal, or after CATCH_UP wall
+seconds. When the rule changes the durability the subscription is replaced, the new one first so no goal falls
+between. Details: docs/robots_and_goals.md.
 """
 
 from __future__ import annotations

@@ -1,20 +1,14 @@
 """A subscription to a latched (transient-local) topic that subscribes again when a new publisher's history does
 not arrive.
 
-A latched publisher (fastep-map's /obstacles and /map, Nav2's map_server) publishes once: a subscription that
-matches it later gets that message from the writer's history. Fast DDS, the rmw of the PyPI wheels and ROS's
-default, sometimes never delivers that history to a reader (eProsima/Fast-DDS#3822, open: "intermittent failure to
-deliver messages to late-joining datareaders"). Seen here in tests/fastep_ros/test_faults.py, about one run in a
-hundred: a map server killed and started again, and its /obstacles never reached the planner in 30 s, so the
-planner would have driven through the new obstacle. A new reader is matched afresh and is sent the history again.
+A latched publisher (fastep-map's /obstacles and /map, Nav2's map_server) publishes once: a later subscription
+gets the message from the writer's history. Fast DDS sometimes never delivers that history to a reader
+(eProsima/Fast-DDS#3822); a planner would then drive without a restarted map server's obstacles. A new reader
+is matched afresh and is sent the history again.
 
-So when the subscription's matched publishers grow (a publisher appeared) and no message comes within
-RESEND_AFTER wall seconds (beyond the heartbeat that repairs an ordinary loss), the subscription is made anew
-(the new one first, then the old one destroyed; a message that both receive is taken twice, which a latched
-world's handler does not mind), once per appearance: a latched publisher that has published nothing yet costs
-one extra subscription, not one every few seconds. The publishers matched again by the new subscription are not
-new ones. A message taken up to RESEND_AFTER before the look that sees its publisher matched counts too: the
-count is updated on a DDS thread. Looking costs one matched count, no graph query.
+So when the subscription's matched publishers grow and no message comes within RESEND_AFTER wall seconds, the
+subscription is made anew (the new one first; a message taken twice does not matter to a latched world's
+handler), once per appearance of a publisher. Looking costs one matched count, no graph query.
 """
 
 from __future__ import annotations

@@ -1,19 +1,15 @@
 """Exact lock step: when a planner acts, so that a live graph steps exactly like fastep-sim.
 
-fastep-sim's tick at time t: every planner decides from every robot's state at t (its own and the others'), then
-every robot moves for one control period with its planner's command. On the graph the same three hops make a
-tick, whatever order DDS delivers messages in:
+fastep-sim's tick at time t: every planner decides from every robot's state at t, then every robot moves for
+one control period. On the graph the same three hops make a tick, whatever order DDS delivers messages in:
 
-1. the clock says t (fastep-clock, which waits for every planner's cmd_vel stamped t - dt before it does);
-2. each plant integrates the step from t - dt to t with the command stamped t - dt (it waits for it if that
-   command has not come: `fastep_ros.plant`, `lock_step`) and publishes its odometry stamped t;
-3. each planner acts once on its own odometry stamped t, when the odometry stamped t of every other robot it
-   follows (and, if its robot has a laser, the scan stamped t) is in too, and stamps its cmd_vel t.
+1. the clock says t (fastep-clock waits for every planner's cmd_vel stamped t - dt first);
+2. each plant integrates from t - dt to t with the command stamped t - dt and publishes its odometry stamped t;
+3. each planner acts once, when its own odometry stamped t and that of every robot it follows (and its scan)
+   are in, and stamps its cmd_vel t.
 
-The first tick starts at time 0, once time runs: the plant's start state, stamped 0, is acted on when the clock
-first says a later time (while the clock holds 0 before the run, goals are still coming). An input that does not
-come within `wait` wall seconds (its node died or starves) is given up on, and not waited for again until a
-newer stamp of it comes, so a dead robot costs the wait once, not every tick.
+The first tick starts at time 0 once time runs. An input that does not come within `wait` wall seconds is given
+up on until a newer stamp of it comes, so a dead robot costs the wait once, not every tick.
 
 LockStep is the bookkeeping, without ROS (unit-tested alone); the planner node feeds it. AckPacer paces an
 observer's acknowledgements.

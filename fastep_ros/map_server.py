@@ -2,21 +2,16 @@
 
     fastep-map --ros-args -p scenario:=table2_s2 [-p resolution:=0.1] [-p seed:=0]
 
-Publishes `obstacles` and `map` (relative names: `/obstacles` and `/map` in the root namespace):
-visualization_msgs/MarkerArray with a CYLINDER per circle and one LINE_LIST for all segments, and a
-nav_msgs/OccupancyGrid covering the workspace (100 in obstacles, 0 free). Both are reliable +
-transient-local in the `map` frame, so nodes that start later still receive them.
-The grid has at most msg_tools.convert.MAX_GRID_CELLS cells (4 million): `resolution` 0 (the default) is 0.1 m,
-or coarser for a workspace larger than 200 m x 200 m (what `fastep-sim --mcap` writes too); a resolution whose
-grid would be larger is refused. A bad scenario or resolution logs one line and exits with code 2.
+Publishes `obstacles` (visualization_msgs/MarkerArray) and `map` (nav_msgs/OccupancyGrid, 100 in obstacles,
+0 free) in the root namespace, reliable + transient-local in the `map` frame, so nodes that start later still
+receive them. The grid has at most msg_tools.convert.MAX_GRID_CELLS cells: `resolution` 0 (the default) is 0.1 m
+or coarser for a large workspace; a finer one that would exceed it is refused. A bad scenario or resolution logs
+one line and exits with code 2.
 
-A format-v2 world: what the robots' map knows, as fastep-sim gives its planners. `/obstacles` and `/map` hold
-the known still obstacles only, misplaced ones where the map puts them (errors drawn from `seed`, the run's
-seed, as fastep-sim draws them: fastep_core.dynamic_world.map_generator); unknown obstacles are on neither.
-The known movers go on `/movers` (MarkerArray, msg_tools.convert.movers_to_marker_array: where the map puts
-them, with their velocities), `movers_rate_hz` times a second of the node clock (20; simulated time with
-use_sim_time), their motion the file's (the world simulation: each mover's place is a function of time, so
-every node that needs the truth, a plant's scanner, computes it from the scenario at its own clock's time).
+A format-v2 world is published as the robots' map knows it, as fastep-sim gives its planners: known still
+obstacles only, misplaced ones where the map puts them (errors drawn from `seed`); the known movers go on
+`/movers` `movers_rate_hz` times a second of the node clock. Nodes that need the truth (a plant's scanner)
+compute it from the scenario at their own clock's time.
 """
 
 from __future__ import annotations

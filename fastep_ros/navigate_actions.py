@@ -1,25 +1,15 @@
 """Nav2's navigation actions, served by the planner: `navigate_to_pose`, `navigate_through_poses`, `follow_waypoints`.
 
-nav2_msgs/action/NavigateToPose, NavigateThroughPoses and FollowWaypoints with Nav2 Jazzy's definitions
-(interfaces/nav2_msgs, or the distribution's nav2_msgs on a ROS install), in the planner's namespace, so that a
-client written for Nav2 (nav2_simple_commander's BasicNavigator: goToPose, goThroughPoses, followWaypoints,
-isTaskComplete, getFeedback, cancelTask, getResult; RViz's Nav2 panel) commands a fastep robot unchanged:
+nav2_msgs/action/NavigateToPose, NavigateThroughPoses and FollowWaypoints with Nav2 Jazzy's definitions, in the
+planner's namespace, so that a client written for Nav2 (nav2_simple_commander's BasicNavigator, RViz's Nav2
+panel) commands a fastep robot unchanged. As in Nav2: goals are accepted only while the node is active; a new
+goal preempts the one under way (ABORTED, "preempted by a new goal"); feedback comes every FEEDBACK_PERIOD wall
+seconds; the result is SUCCEEDED, ABORTED with one of Nav2's error codes (ERROR_CODES) and the planner's reason,
+or CANCELED (the robot brakes to a stop). follow_waypoints follows Nav2's waypoint follower (goal_index,
+number_of_loops, missed waypoints, `stop_on_failure`). Behaviour in full: docs/robots_and_goals.md.
 
-- a goal is accepted only while the node is active (lifecycle), else rejected, as Nav2 does;
-- a goal accepted preempts the one under way, whose result is ABORTED with "preempted by a new goal";
-- feedback every FEEDBACK_PERIOD wall seconds: the map pose, the time since the goal was accepted, the time
-  remaining at the speed driven (max_speed while slower), the recoveries (trap escapes, manoeuvres), the
-  distance remaining along the plan (to the waypoint driven to, then to the goal, then through the poses left);
-- the result: SUCCEEDED on arrival at the last pose; ABORTED with one of Nav2's error codes (ERROR_CODES) and
-  the planner's reason; CANCELED on a cancel: the robot brakes to a stop within its limits and the goal is
-  dropped;
-- follow_waypoints as Nav2's waypoint follower: from `goal_index`, each pose in turn, the list `number_of_loops`
-  more times; feedback `current_waypoint`; a waypoint that fails is a MissedWaypoint (its index, pose and error
-  code) and, with the planner's `stop_on_failure` true (Nav2's default), ends the goal ABORTED with
-  TASK_EXECUTOR_FAILED; false: the robot goes on to the next and the goal SUCCEEDS with the missed ones listed.
-
-A goal on the `goal_pose` topic goes the same way (the planner's take_goal); one that comes while an action goal
-is under way preempts it. Without nav2_msgs the planner runs without these servers and says so once.
+A goal on the `goal_pose` topic goes the same way (the planner's take_goal) and preempts an action goal under
+way. Without nav2_msgs the planner runs without these servers and says so once.
 """
 
 from __future__ import annotations

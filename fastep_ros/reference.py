@@ -1,13 +1,10 @@
 """The documentation's reference pages, generated from the code so that they cannot drift from it.
 
-- parameters.md: every node's parameters, from the descriptors the node declares (type, default, range or
-  constraints, read-only, description);
+- parameters.md: every node's parameters, from the descriptors the node declares;
 - topics.md: every node's publishers and subscriptions as the node makes them (name, type, QoS);
 - commands.md: every command line's --help, from its argument parser;
-- status.md: the planner's status messages (fastep_ros.planner_status.STATUS_MESSAGES) and its failure reasons
-  with the Nav2 error codes its actions answer them with (fastep_ros.navigate_actions.ERROR_CODES);
-- config/fastep.yaml: a params file (`--ros-args --params-file`) with every parameter of the planner and the
-  plant at its default, its description and range as a comment.
+- status.md: the planner's status messages and failure reasons with their Nav2 error codes;
+- config/fastep.yaml: a params file with every parameter of the planner and the plant at its default.
 
     python -m fastep_ros.reference docs/reference config/fastep.yaml
         (make docs; tests/fastep_ros/test_reference.py checks that the files in the repository are what it writes)

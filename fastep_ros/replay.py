@@ -4,25 +4,12 @@
                   [--wait-subscribers N] [--ros-args ...]
 
 Why: to look at a recorded or simulated run again in RViz/Foxglove, or to feed it to nodes, without rosbag2
-(not on PyPI). Messages are published as recorded (raw CDR bytes, never deserialised) in log-time order, the
-gap between two messages being their log-time difference divided by --rate. Each topic is published with the
-QoS its recorded publishers offered (channel metadata `offered_qos_profiles`): reliable / transient-local only
-if all of them were, keep-last with the recorded depth (10 when unknown), so /map and /obstacles are latched
-again and late subscribers still get them while the replay runs.
-
---clock publishes rosgraph_msgs/Clock on /clock from the log times: at each message and HZ times per wall
-second in between (default 100), so nodes with use_sim_time follow the replay (--rate scales it). A recorded
-/clock topic is then not replayed (there would be two time sources).
---delay waits that many wall seconds after creating the publishers (DDS discovery) before the first message;
---wait-subscribers N waits (at most 30 s) until every replayed volatile topic has N matched subscriptions
-(transient-local ones reach late subscribers anyway).
-
-Exit 0 at the end of the recording (or on Ctrl-C / SIGTERM, also during a long gap between two messages: the
-waits are cut in slices of 0.1 s); 2 with one line on stderr for a file that cannot be read or bad options
-(--delay over an hour, --clock over 10 kHz, --clock with log times past 2^31 s, unknown --ros-args or a bad
-remap). A truncated file is replayed up to its last complete chunk, and a corrupt chunk is skipped, each with
-a warning line. Topics that cannot be published are not replayed, with a warning line (an error if named in
---topics): a name ROS refuses, messages not CDR-encoded (e.g. JSON), a type that is not installed.
+(not on PyPI). Messages are published as recorded (raw CDR bytes, never deserialised) in log-time order, with
+each topic's recorded QoS (`offered_qos_profiles`), so /map and /obstacles are latched again. --clock publishes
+/clock from the log times for nodes with use_sim_time (a recorded /clock is then not replayed).
+A truncated file is replayed up to its last complete chunk and a corrupt chunk is skipped, each with a warning;
+topics that cannot be published (a refused name, a non-CDR encoding, a type not installed) are left out with a
+warning. Exit codes and options: docs/reference/commands.md.
 """
 
 from __future__ import annotations

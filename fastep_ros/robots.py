@@ -1,25 +1,12 @@
 """The other robots a planner avoids: which robots of the graph count, their odometry, and when they stop counting.
 
-A robot of this graph announces itself: its planner publishes its footprint (msg_tools.footprint: the safety
-circle as geometry_msgs/PolygonStamped in `<ns>/base_link`, latched) on `<ns>/footprint`. A planner follows
-the robot of namespace `<ns>` (subscribes to `<ns>/odom` and avoids it) only while
-
-- `<ns>/footprint` has a publisher that is a node of namespace `<ns>` (a robot's own planner; a replay or
-  another tool republishing the topic from elsewhere does not make a robot); checked at every look at the graph
-  until it holds, then every GRAPH_CHECK_TICKS looks,
-- `<ns>/odom` has a publisher (a planner whose plant is not running announces nothing that moves: its own
-  subscription makes the topic appear, with no publisher); asked until the odometry is subscribed to, after
-  which the odometry's freshness (below) tells whether it still has one,
-- `<ns>` is neither the planner's own namespace nor below it (its own base may publish more odometry, such as
-  ros2_control's `/d1/diff_drive_controller/odom`: never another robot),
-- its odometry has come once while it was announced. From then on it is avoided for as long as the planner runs,
-  even when its odometry stops or its node leaves the graph (a robot whose computer stalls or dies stands where it
-  was; DDS cannot tell a stalled node from one that left): older than `still_after` it is avoided where it was last
-  seen, its radius widened by how far it could have coasted at its last speed in `timeout`; older than `timeout`
-  it is also reported stale. Fresh odometry makes it a moving robot again.
-
-The radius avoided is the `override` when one is given (> 0), else the announced footprint's radius, else the
-planner's own radius (until the footprint message arrives).
+A robot announces itself by publishing its footprint on `<ns>/footprint` from a node of namespace `<ns>`. A
+planner follows that robot (subscribes to `<ns>/odom` and avoids it) once the footprint and the odometry have a
+publisher, `<ns>` is neither its own namespace nor below it, and odometry has come. From then on the robot is
+avoided for as long as the planner runs, since DDS cannot tell a stalled node from one that left: with old
+odometry it is avoided where it was last seen, its radius widened by how far it could have coasted; older than
+`timeout` it is also reported stale. The radius avoided is the override, else the footprint's, else the
+planner's own. The rules in full: docs/robots_and_goals.md.
 
 Fleet is the bookkeeping without ROS (unit-tested alone); RobotFollower is its ROS side in the planner node.
 """

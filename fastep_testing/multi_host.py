@@ -4,17 +4,12 @@
     python -m benchmarks.multi_host --hosts 3 --robots 4 --peers    # discovery by ROS_STATIC_PEERS, multicast off
     python -m benchmarks.multi_host --hosts 3 --robots 4 --no-clock --drop 2 --drop-for 3   # a link drops out
 
-Host 0 runs fastep-launch itself (its monitor), the map, the clock and, with --record, the recorder; each robot's
-plant and planner (one process a robot: --layout robot) run on host 1 + i mod (hosts - 1), so with two hosts the
-map is on one and every robot on the other. Between hosts DDS goes over the bridge and UDP only
-(FASTDDS_BUILTIN_TRANSPORTS=UDPv4: Fast DDS would otherwise pass messages through shared memory, which namespaces
-share), found by multicast or, with --peers, through ROS_STATIC_PEERS with multicast off on every link. The
-scenario is --scenario (a built-in name or a file) or the circle of --robots robots swapping places
-(fastep_testing.runs.circle_yaml). In lock step (the default) the run is compared with fastep-sim's tick for tick
-(fastep_testing.runs.compare). --drop K takes host K's link down --drop-at wall seconds after the robots set off,
-for --drop-for seconds (on wall time, --no-clock: in lock step the clock would wait for the host it lost).
-Prints fastep-launch's closing lines and one line of its own; exit 0 only if every robot arrived (and, in lock step,
-the run is fastep-sim's), 2 with one line for what cannot be set up (not root, no `ip`).
+Host 0 runs fastep-launch, the map, the clock and the recorder; each robot's plant and planner run on host
+1 + i mod (hosts - 1). Between hosts DDS goes over the bridge and UDP only (no shared memory), found by multicast
+or, with --peers, through ROS_STATIC_PEERS. In lock step (the default) the run is compared with fastep-sim's tick
+for tick. --drop K takes host K's link down for --drop-for seconds (on wall time, --no-clock). Exit 0 only if
+every robot arrived (and, in lock step, the run is fastep-sim's), 2 for what cannot be set up (not root, no `ip`).
+Details: docs/multi_host.md.
 """
 
 from __future__ import annotations

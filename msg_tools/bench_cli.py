@@ -2,24 +2,14 @@
 every planner on random world families.
 
     fastep-bench [--runs 30] [--scenarios table2_s1 table2_s2 table2_s3 | all] [--algorithms fastep aco optimal dwa]
-                 [--workers 2 | --cluster ADDRESS|local:N] [--seed 0] [--out docs/] [--report table2]
-                 [--json FILE] [--no-figures]
-                 [--progress] [--planner-set NAME=VALUE ...]
-    fastep-bench --families [FAMILY ...] [--worlds 30] [--runs 1] [--algorithms ...] [--seed 0] [--out DIR]
-                 [--report families] [--json FILE] [--planner-set NAME=VALUE ...] ...
+                 [--workers 2 | --cluster ADDRESS|local:N] [--seed 0] [--out docs/] [--report table2] ...
+    fastep-bench --families [FAMILY ...] [--worlds 30] [--runs 1] [--algorithms ...] [--seed 0] [--out DIR] ...
 
-Writes OUT/REPORT.md (the Markdown tables) and OUT/figures/REPORT_{path_length,compute_time,paths}.png (box
-plots and example paths, drawn by msg_tools.plots), prints the Markdown on stdout and a progress bar on stderr
-(when stderr is a terminal, or with --progress). The engine is `fastep_core.experiments` (why this command
-lives in msg_tools: fastep_core draws nothing); `python -m benchmarks.table2` is the same command.
-
---families (the static ones when none is named; the v2 ones by name) runs the families benchmark instead
-(fastep_core.families, docs/clutter.md, docs/dynamic_world.md): WORLDS unseen worlds per family, RUNS seeded
-runs per world and planner; it writes OUT/REPORT.md (the family table), OUT/REPORT.json (or --json: per-run
-rows and the per family and planner summary) and OUT/figures/REPORT_{path_opt,cpu,worst}.png (--worst-of ALG:
-that planner's worst worlds). --planner-set overrides planner parameters (PlannerParams) for every planner in
-either mode. --cluster runs the same tasks on a Dask cluster instead of the process pool (fastep_core.cluster):
-the same records. Exit 0 when the runs were made, 2 with one line on stderr for bad input.
+Writes OUT/REPORT.md (Markdown tables), OUT/figures/REPORT_*.png (drawn by msg_tools.plots) and, with --families,
+OUT/REPORT.json (per-run rows and summaries); prints the Markdown on stdout. The engine is `fastep_core.experiments`
+(the command lives in msg_tools because fastep_core draws nothing); `python -m benchmarks.table2` is the same
+command. --cluster runs the same tasks on a Dask cluster (fastep_core.cluster) with the same records.
+Exit 0 when the runs were made, 2 with one line on stderr for bad input. Options: docs/reference/commands.md.
 """
 
 from __future__ import annotations

@@ -1,19 +1,14 @@
 """Fast reads and writes of the high-rate message types as CDR bytes, without building rclpy messages.
 
-rclpy's deserialize_message builds a full Python message (an Odometry is ~15 objects, each importing its field
-types in __init__, and two covariance arrays: ~50 us here), which made reading a 10-minute recording take half a
-minute, and a planner following 15 other robots spend most of a lock-step tick building their odometry. These
-read only the needed float64 fields of little-endian CDR (encapsulation 00 01) with struct. Alignment is relative
-to the payload after the 4-byte encapsulation header. Tests compare them with rclpy (tests/msg_tools/test_cdr.py).
-A message shorter than the whole type (cut off) raises CdrError, as rclpy's decoder refuses it; bytes that are
-not little-endian CDR give None (left to rclpy).
+Why: rclpy's deserialize_message builds a full Python message (an Odometry is ~15 objects), which made reading
+long recordings slow and a planner following many robots spend most of a lock-step tick building their
+odometry. These read only the needed float64 fields of little-endian CDR with struct (alignment relative to the
+payload after the 4-byte encapsulation header). A cut-off message raises CdrError, as rclpy's decoder refuses
+it; bytes that are not little-endian CDR give None (left to rclpy).
 
-The writers make the bytes of the message (little-endian CDR with zero padding, where rclpy's serializer leaves
-padding bytes as it finds them; the tests decode them with rclpy), which a publisher sends as they are: rclpy
-publishes bytes without building a message. A
-plant's odometry and a planner's cmd_vel, once per robot and lock-step tick, cost ~35 us each as messages
-(building one, then converting it for the middleware) and a few us as bytes; a planner's waypoint, plan and
-status (a DiagnosticStatus of 20 key/values, ~0.4 ms of CPU a publish as a message, live) likewise.
+The writers make the message's bytes (zero padding), which a publisher sends as they are: odometry, cmd_vel,
+waypoint, plan and status cost a few microseconds each instead of building a message. Tests compare both
+directions with rclpy (tests/msg_tools/test_cdr.py).
 """
 
 from __future__ import annotations

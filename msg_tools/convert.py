@@ -1,17 +1,13 @@
 """Pure conversions between fastep_core types and ROS 2 messages (no node, no DDS needed).
 
-Conventions (msg_tools/interface.py, REP-103/105):
-- goals, waypoints, plans and obstacles are in the `map` frame; odometry is in the robot's odom frame (REP-105;
-  map -> odom is the identity in simulation, msg_tools.frames), trailer poses too; the functions take the
-  frame names they are given;
-- a point mass has yaw 0, so its `base_link` axes are parallel to odom's and its twist (vx, vy) is both the
-  child-frame and the odom-frame velocity; its command is a Twist with linear.x = vx, linear.y = vy (body frame);
-- a tractor-trailer's yaw is the tractor heading theta0; its command is (v, omega) = (linear.x, angular.z);
-  its odometry twist is the reference point's velocity in the tractor frame: linear.x = v,
-  linear.y = L * omega / 2 (the mid-axle point slides sideways while turning, eq. 13) and angular.z = omega;
-  the trailer heading theta1 travels on `trailer_pose` (the trailer axle point, yaw theta1);
-- a diff_drive's yaw is its heading theta; its command is (v, omega) = (linear.x, angular.z) in the body frame,
-  and so is its odometry twist (linear.x = v, angular.z = omega: the axle midpoint does not slide sideways).
+Conventions (msg_tools/interface.py, REP-103/105; the frames in docs/frames.md):
+- goals, waypoints, plans and obstacles are in the `map` frame; odometry and trailer poses in the robot's odom
+  frame; the functions take the frame names they are given;
+- a point mass has yaw 0; its command and odometry twist are (vx, vy) in linear.x, linear.y;
+- a tractor-trailer's yaw is the tractor heading theta0; its command is (v, omega) = (linear.x, angular.z); its
+  odometry twist is the reference point's velocity in the tractor frame, linear.y = L * omega / 2 (eq. 13);
+  the trailer heading theta1 travels on `trailer_pose`;
+- a diff_drive's command and odometry twist are (v, omega) = (linear.x, angular.z) in the body frame.
 
 Functions that read messages raise ValueError (with a one-line reason) for values that are not finite or
 malformed; the nodes turn that into a status message instead of crashing.

@@ -1,27 +1,15 @@
 """REP-105 frames: planar pose algebra, the map -> odom transform, and TF messages (tf2_msgs/msg/TFMessage).
 
-Frames (REP-105), per robot namespace `<ns>` (names never start with a slash; in the root namespace plain
-`odom`, `base_link`):
+Per robot namespace `<ns>` (no leading slash; plain `odom`, `base_link` in the root namespace):
 
     map  ->  <ns>/odom  ->  <ns>/base_link          (and <ns>/odom -> <ns>/trailer_link for tractor-trailers)
 
-- The plant's odometry is the pose of `<ns>/base_link` in `<ns>/odom`, its twist in `<ns>/base_link` (the body
-  frame). A point mass has no heading: its odometry yaw is 0, so its base_link axes stay parallel to odom's and
-  its body-frame velocity is its odom-frame velocity.
-- The planner works in `map`. Its pose of the robot is the odometry composed with map -> odom: the identity in
-  simulation (the simulated odometry does not drift), and on a real robot the transform that makes a
-  localization pose (AMCL's `amcl_pose`: the map pose of base_link at a stamp) agree with the odometry at that
-  stamp: map->odom = localization pose o inverse(odometry pose at, or nearest to, the localization's stamp)
-  (what AMCL itself broadcasts on /tf). MapFromOdom keeps that transform.
-- A command the planner computes in `map` (a point mass's velocity) is rotated into the body frame before it
-  is sent; (v, omega) commands are body-frame quantities already.
-
-TF in recordings: tf2_msgs is not among the registry's ROS wheels (make builds it into .venv), so recordings
-(fastep-record, fastep-sim --mcap) do not depend on it: they serialise TFMessage with rosbags' typestore
-(tf_message_cdr) and take its schema text from there too (msg_tools.ros2_profile). Nodes publish TF live where
-tf2_msgs is importable (fastep_ros.live_tf).
-
-Poses are (x, y, yaw) tuples; angles in radians, wrapped to (-pi, pi].
+The plant's odometry is base_link in odom; the planner works in `map`, composing the odometry with map -> odom
+(the identity in simulation; on a robot the transform that makes a localization pose agree with the odometry
+at its stamp, kept by MapFromOdom). Map-frame commands are rotated into the body frame before they are sent.
+Recordings serialise TFMessage with rosbags' typestore, so they do not depend on tf2_msgs (not among the
+registry's ROS wheels); nodes publish TF live where tf2_msgs is importable (fastep_ros.live_tf).
+Details: docs/frames.md. Poses are (x, y, yaw) tuples; angles in radians, wrapped to (-pi, pi].
 """
 
 from __future__ import annotations

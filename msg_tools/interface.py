@@ -4,19 +4,12 @@ This module is the contract of the ROS 2 interface (docs/guide.md, "The ROS 2 gr
 the launcher, the recorder, fastep-sim's recordings (sim_mcap), replay and fastep-report take names, types and QoS
 from here.
 
-Topics: per robot, in the robot's namespace of one level (`/r1/odom`; nodes use the relative names below and
-are started with `__ns:=/r1`), and three shared ones in the root namespace (/obstacles, /map, /clock).
-
-QoS: each topic has the one profile its publishers in the fastep graph offer (OFFERED_QOS); a recording's
-`offered_qos_profiles` are derived from these profiles (offered_qos_profiles), so a replay re-creates them.
-Liveliness is written out as AUTOMATIC, the middleware's default that a publisher with SYSTEM_DEFAULT gets
-anyway (the graph reports AUTOMATIC for it), so the recorded profile is the profile in effect.
-
-Recording metadata: one MCAP metadata record named METADATA_NAME with string values (scenario_metadata):
-`scenario`, `robots` (names, comma-separated, in the scenario's order), `workspace` (xmin,ymin,xmax,ymax) and
-per robot `model/<name>`, `radius/<name>`, `start/<name>`, `goal/<name>` and for tractor-trailers
-`length/<name>`, and for a format-v2 world `scenario_data` (the whole scenario as JSON); fastep-sim adds
-`algorithm`, `seed`, `source`, `time_base`, fastep-record `source`, `time_base`.
+Topics: per robot in a one-level namespace (`/r1/odom`; nodes use relative names and are started with
+`__ns:=/r1`), and /obstacles, /map, /clock in the root namespace. QoS: each topic has the one profile its
+publishers offer (OFFERED_QOS), from which a recording's `offered_qos_profiles` are derived so a replay
+re-creates them (liveliness written out as AUTOMATIC, the profile in effect). Recording metadata: one MCAP
+metadata record named METADATA_NAME with string values (scenario_metadata): the scenario, its robots and their
+models, radii, starts and goals, and for a v2 world the whole scenario as JSON.
 """
 
 from __future__ import annotations

@@ -2,26 +2,15 @@
 msg_tools.mcap_writer).
 
 Why our own code: rosbag2 is not on PyPI, so neither `ros2 bag record` nor rosbag2_py exist here. The files
-must still be what the ROS tools expect (MCAP's ROS 2 profile), so that `ros2 bag info/play`, Foxglove
-and the `rosbags` library open them without extra files:
+must still be what the ROS tools expect (MCAP's ROS 2 profile: `cdr` channels, `ros2msg` schemas built from the
+installed .msg files, rosbag2's `offered_qos_profiles` channel metadata, chunked zstd data with a summary), so
+that `ros2 bag info/play`, Foxglove and the `rosbags` library open them without extra files. Schema texts and
+QoS metadata come from msg_tools.ros2_profile.
 
-- header profile `ros2`; channels with message encoding `cdr` (rclpy's serialize_message); schemas with
-  encoding `ros2msg` named `pkg/msg/Type` whose text is the type's .msg file followed, for every nested type
-  (depth first, each once), by a line of 80 `=`, a line `MSG: pkg/Type` and that type's .msg file. The
-  texts come from the .msg files installed with the message packages (`<prefix>/share/<pkg>/msg/`), the same
-  source rosbag2 uses, so they match the CDR the installed rclpy writes;
-- channel metadata `offered_qos_profiles`: a YAML list in rosbag2's (metadata version 9) format, so a player
-  re-creates latched (transient-local) topics such as /map and /obstacles as latched;
-- chunked, compressed (zstd) data with a summary and a Statistics record (the `mcap` Writer writes those).
-Schema texts and QoS metadata come from msg_tools.ros2_profile.
-
-Reading deserialises with rclpy (the message classes are imported by name). A file that was cut off (a killed
-recorder leaves no summary and no footer) is read linearly up to the last complete chunk: everything before
-it is recovered and the Recording says how much. A corrupt chunk (bad compression or CRC: a bad sector, a
-bad copy) is skipped, with one line saying how many messages it held; the chunks before and after it are
-read. Files of other tools (JSON, ros1, protobuf channels, channels without schema) are read and copied as
-they are. Problems raise msg_tools.errors.RecordingError subclasses with a one-line message; a write that
-fails (a full disk) raises WriteFailedError.
+Reading deserialises with rclpy. A cut-off file (a killed recorder leaves no summary or footer) is read up to
+its last complete chunk, and a corrupt chunk is skipped with one line saying how many messages it held. Files
+of other tools (JSON, ros1, protobuf, channels without schema) are read and copied as they are. Problems raise
+msg_tools.errors.RecordingError subclasses with a one-line message (WriteFailedError for a failed write).
 """
 
 from __future__ import annotations

@@ -2,20 +2,15 @@
 
     fastep-recover IN.mcap OUT.mcap
 
-Why: a recorder that was killed (SIGKILL, power loss, a crashed launcher) leaves a file without summary and
-footer. Our reader recovers it on the fly, but other tools (`ros2 bag info`, Foxglove, indexed readers)
-want a complete file. Every message up to the last complete chunk is copied, in log-time order, and a summary
-with statistics is written. A chunk that is corrupt (bad compression or CRC) is skipped and the chunks after it
-are read. A complete input is simply copied (re-chunked).
+Why: a killed recorder leaves a file without summary and footer. Our reader recovers it on the fly, but other
+tools (`ros2 bag info`, Foxglove, indexed readers) want a complete file. Every message up to the last complete
+chunk is copied in log-time order and a summary with statistics is written; a corrupt chunk is skipped. The copy
+keeps everything of any tool's file (profile, schemas, channels, metadata, attachments), except a channel whose
+schema record was lost, left out with a warning.
 
-The copy is faithful to files of any tool: the header's profile, every schema and channel as they were
-(message encodings such as json or ros1, schema encodings, binary schemas, channels without a schema), channel
-metadata (QoS), sequence numbers, metadata records and attachments. A channel whose schema record was lost
-(it was in a corrupt or missing part) cannot be: it is left out, with a warning line.
-
-Exit 0 with one line on stdout saying how many messages were kept, and one warning line on stderr for each
-loss (truncation, corrupt chunks, a channel left out); 2 with one line on stderr when IN is not MCAP or holds
-no complete message, or OUT cannot be written. OUT must differ from IN.
+Exit 0 with one line on stdout saying how many messages were kept and one warning line on stderr for each loss;
+2 with one line on stderr when IN is not MCAP or holds no complete message, or OUT cannot be written.
+OUT must differ from IN.
 """
 
 from __future__ import annotations

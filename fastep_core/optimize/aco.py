@@ -3,25 +3,15 @@
 Why ACO_R: the paper compares FAStep-Kinematic with ACO-Kinematic, whose text was not available; a fair
 stand-in plans each step with the standard continuous ACO on the same fitness, so only the optimizer differs.
 
-The "pheromone" is an archive of the k best solutions found, sorted by value. The solution of rank l
-(l = 1..k) gets the weight
+The "pheromone" is an archive of the k best solutions, the one of rank l weighted
+w_l = exp(-(l - 1)^2 / (2 q^2 k^2)) (small q favours the best). Each iteration every one of the m ants picks a
+kernel l with probability w_l / sum(w) and samples each coordinate from a normal centred on s_l with
+sigma_l^i = xi * sum_e |s_e^i - s_l^i| / (k - 1), so the search narrows as the archive converges. Samples are
+clipped into the box, all ants are evaluated in one call, and archive and ants are merged, sorted (stably,
+archive first on ties) and cut to k: the best value never increases.
 
-    w_l = exp(-(l - 1)^2 / (2 q^2 k^2))
-
-(the normalising factor 1 / (q k sqrt(2 pi)) cancels when the weights are turned into probabilities); small
-q favours the best solutions, large q spreads the search. Each iteration, every one of the m ants picks a
-kernel l with probability w_l / sum(w) and samples each coordinate i from a normal distribution centred on
-s_l with
-
-    sigma_l^i = xi * sum_e |s_e^i - s_l^i| / (k - 1),
-
-the mean distance from s_l to the other archive members, so the search narrows as the archive converges
-(xi plays the role of the pheromone evaporation rate). Samples are clipped into the box. All m ants are
-evaluated in one call; archive and ants are merged, sorted (stably, archive first on ties) and truncated to k.
-The archive's best value never increases.
-
-Random draws, in order, from the one Generator: the initial archive (k x d uniforms, `rng.uniform`), then
-per iteration m uniforms choosing the kernels followed by m x d standard normals.
+Random draws, in order, from the one Generator: the initial archive (k x d uniforms), then per iteration m
+uniforms choosing the kernels followed by m x d standard normals.
 """
 
 from __future__ import annotations

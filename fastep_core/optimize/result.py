@@ -1,21 +1,18 @@
 """The result every optimizer in this package returns, and the plumbing they all share.
 
-All optimizers here (FAStep, the standard firefly algorithm, ACO_R) solve the same kind of problem the same
-way: minimise a *vectorised* objective over a box, with every random draw taken from one
-`numpy.random.Generator` so that a seed reproduces a run bit for bit. What they share is kept in this module,
-next to `OptimizeResult`, much as scipy keeps its result type next to its common helpers:
+All optimizers here (FAStep, the standard firefly algorithm, ACO_R) minimise a *vectorised* objective over a box,
+with every random draw taken from one `numpy.random.Generator` so that a seed reproduces a run bit for bit. What
+they share is kept next to `OptimizeResult`, much as scipy keeps its result type next to its common helpers:
 
 - `check_problem` turns `bounds`, `rng` and `x0` into arrays and a Generator, rejecting malformed input with a
-  `ParameterError` (the caller's mistake, reported in one line);
-- `Objective` wraps the user's function: it counts evaluated points (`nfev`), checks that one value comes back
-  per candidate, and maps NaN to +inf so that a broken candidate simply loses every comparison. The batches
-  it passes on are (m, d) float arrays, not necessarily C-contiguous (the firefly optimizers pass Fortran-order
-  views for speed): objectives must not depend on the memory layout;
+  one-line `ParameterError`;
+- `Objective` wraps the user's function: counts evaluated points (`nfev`), checks one value per candidate and
+  maps NaN to +inf. Its batches are (m, d) float arrays, not necessarily C-contiguous: objectives must not
+  depend on the memory layout;
 - `initial_population` draws the uniform start population and lets `x0` replace its first rows.
 
-Objective values may be +inf or huge (the planner scores infeasible candidates 1e6 + violation). The
-optimizers only ever *compare* objective values (never subtract them), so such values need no special care
-and raise no floating-point warnings.
+The optimizers only *compare* objective values, never subtract them, so +inf or huge values (the planner
+scores infeasible candidates 1e6 + violation) need no special care.
 """
 
 from __future__ import annotations

@@ -1,19 +1,15 @@
 """The control loop's bounded tick: drive on the latest plan while planning runs elsewhere.
 
-A planning pass is one `Navigator.update` on a snapshot of the robot's state and the robots around it: the
-algorithm, exact paths and routes, escapes, manoeuvres, the swarm. It can take seconds (an exact path across a big
-map, a swarm over its budget), and a robot's clock does not stop meanwhile. `ControlTick.command` turns the
-latest `Plan` into this tick's command from the robot's current state, in well under a millisecond: the
-controller toward the plan's target (or the plan's own command: backing up, a manoeuvre's arc, standing still),
-then yielding to movers and the guard against the newest robots and the plan's world, as `Navigator.drive_to`
-does, looking as far ahead as the robot needs to brake; then the velocity smoother (planning/smoother.py: speed
-and acceleration limits, the guard's stop braking at emergency_deceleration) and, for a steered robot backing
-up, its swept disc checked against the world and the free space recent scans saw (recovery.reverse_free). Nav2
-splits its planner and controller servers, and ends with its velocity_smoother, for the same reasons.
+A planning pass (`Navigator.update`: exact paths, escapes, manoeuvres, the swarm) can take seconds, and a
+robot's clock does not stop meanwhile. `ControlTick.command` turns the latest `Plan` into this tick's command
+from the robot's current state in well under a millisecond: the controller toward the plan's target (or the
+plan's own command), then yielding to movers and the guard against the newest robots, looking as far ahead as
+the robot needs to brake; then the velocity smoother (planning/smoother.py) and, for a steered robot backing up,
+its swept disc checked against the world and the free space recent scans saw. Nav2 splits its planner and
+controller servers, and ends with its velocity_smoother, for the same reasons.
 
 Used by the planner node's control timer while a thread plans (fastep_ros/planner.py) and by `fastep-sim
---realtime` (fastep_core/simulator.py: `PlanLatency` hands a pass's plan to the control loop only after the wall
-time it took, times a factor). Lock-step runs use neither: the navigator's own command is the tick's, as before.
+--realtime` (`PlanLatency` delays a pass's plan by the wall time it took). Lock-step runs use neither.
 """
 
 from __future__ import annotations

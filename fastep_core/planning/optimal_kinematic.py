@@ -1,23 +1,15 @@
 """Optimal-Kinematic: the exact shortest path, planned once, driven by the same kinematic controller.
 
 Why: to tell how much of FAStep-Kinematic's extra path length comes from its step-by-step swarm and how much
-from simply driving a kinematic robot through waypoints, the reference must be driven the same way. This
-navigator plans `planning.optimal.shortest_path` (clearance = radius + clearance_margin, the rule planned
-waypoints follow) once per goal, on its first tick (the base class learns the robot's position only then,
-so the planning time is part of the run's compute time), and then steers to the polyline's vertices in
-turn: a vertex counts as passed within `waypoint_tolerance`, like any planned waypoint. Arcs become vertices
-at most `ARC_SPACING` apart on a circumscribed polygon, so every chord keeps the clearance (checked with the
-core's `Obstacles.path_clearance` when the path is built); the robot cuts the corners at the vertices by a
-few centimetres, well inside the 0.2 m margin.
+from driving a kinematic robot through waypoints, the reference must be driven the same way. This navigator
+plans `planning.optimal.shortest_path` (clearance = radius + clearance_margin) once per goal, on its first tick
+(so the planning time counts in the run's compute time), and steers to the polyline's vertices in turn. Arcs
+become vertices at most `ARC_SPACING` apart on a circumscribed polygon, so every chord keeps the clearance.
 
-It knows static obstacles only: other robots are left to the navigator's guard (which stops the robot rather
-than let it close in) and to the base class's hold breaker, which after a while plans one step around the
-other robot; that step is planned by the FAStep swarm (`step_method`), and once it is done the exact path is
-planned again from where the robot is. So it is a reference for single-robot runs, not a multi-robot
-planner. The path keeps the clearance from the border as well (`Navigator.exact_path`); where the only way
-through is narrower, it keeps the radius alone, and a goal with no path at all fails with 'no valid path'.
-A robot already closer than the clearance to an obstacle (after a side step, or a corner cut) plans with the
-clearance it has, never less than its radius.
+It knows static obstacles only: other robots are left to the guard and the hold breaker, whose step is planned
+by the FAStep swarm before the exact path is planned again, so it is a reference for single-robot runs. Where
+the only way through is narrower than the clearance it keeps the radius alone; a robot already closer plans with
+the clearance it has, never less than its radius; a goal with no path fails with 'no valid path'.
 """
 
 from __future__ import annotations

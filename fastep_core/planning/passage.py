@@ -1,22 +1,16 @@
-"""One-lane passages on a route, and who waits before one (FAStep-Route; issue 12).
+"""One-lane passages on a route, and who waits before one (FAStep-Route).
 
-Why: two robots that meet head-on where only one fits can neither pass nor keep right. They stand face to face
-until one goes round the other, the long way: multi_robot:1000010's r1 drove 1.128 x its optimum round the upper
-U-shape while r2 came through the gap between the two (docs/clutter.md, "Where FAStep-Route is worst"). Traffic's
-rule is older: whoever comes later waits before the narrow part until the other is through.
+Why: two robots that meet head-on where only one fits can neither pass nor keep right; they stand face to face
+until one goes the long way round. Traffic's rule is older: whoever comes later waits before the narrow part.
 
-- A point of the route is *narrow* when neither side of it has room for the other robot beside this one: the
-  points `radius + other_radius + margin` away along the route's normal, on both sides, are nearer than
-  `max(radius, other_radius) + 2 margin` to an obstacle or to the workspace border (`World.room`; the larger
-  radius, so that two robots of different sizes judge a place alike). A *passage* is a run of narrow points,
-  the route sampled every STEP metres on a grid fixed along it (`passages`, a window of the route at a time).
-- The robot waits before a passage ahead (`Passage.conflict`) while another robot comes through it towards
-  this one (in it and moving this way), comes towards its far end nearer to it than this robot is to its entry
-  (straight lines, which both robots measure alike; within TIE metres the name that sorts first goes first),
-  or, for a robot already waiting, stands waiting at its far end with a name that sorts first (two robots that
-  each took the other for the nearer one would otherwise both stand, see each other standing, both go, and
-  stand again). Other robots
-  standing still are not waited for: the route goes round them (planning/fastep_route.py, BLOCK_TIME).
+- A point of the route is *narrow* when neither side of it has room for the other robot beside this one
+  (`World.room`, judged with the larger radius so both robots agree). A *passage* is a run of narrow points,
+  the route sampled every STEP metres on a grid fixed along it (`passages`).
+- The robot waits before a passage ahead (`Passage.conflict`) while another robot comes through it towards this
+  one, or comes towards its far end nearer to it than this robot is to its entry (within TIE metres the name
+  that sorts first goes first), or already stands waiting at its far end with a name that sorts first (else two
+  robots could both stand, both go and stand again). Robots standing still are not waited for: the route goes
+  round them (planning/fastep_route.py, BLOCK_TIME).
 """
 
 from __future__ import annotations

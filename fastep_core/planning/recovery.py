@@ -1,23 +1,17 @@
 """What a navigator does when the guard keeps its robot stopped: the hold breaker, and backing up.
 
-- The hold breaker: two robots the guard holds for each other wait forever if each still sees its own way as
-  clear. After HOLD_BEFORE_STEP seconds held for another robot, the held robot plans a step round it.
-- A robot counts as stopped until it is HOLD_RELEASE metres from where the guard first stopped it: a command
-  the guard lets through (a turn in place, a step of a few centimetres) is not a way out. Counting those as
-  moving restarted both timers every other tick, and two differential-drive robots face to face turned and
-  twitched for minutes without either backing up (docs/clutter.md, "Differential-drive bases").
-- Stuck: stopped HOLD_BEFORE_STEP seconds at a wall, or three times that at a robot (the hold breaker's step
-  has had its chance). A robot that cannot turn in place first tries a manoeuvre (planning/manoeuvre_driver.py);
-  otherwise, or when none is found, it backs up for BACKUP_TIME seconds (Nav2's backup recovery):
-  a holonomic robot straight away from what is nearest; a steered one the move (back or forward, straight or at
-  full lock) that gains the most room without folding its trailer. The guard still checks every tick of it,
-  and the recovery ends where the guard stops it. It moves at BACKUP_SPEED, or max_reverse_speed when that is
-  lower (`backup_speed`).
-- Evidence (issue 30): a robot never reverses into space it has no evidence is free. `reverse_free` sweeps the
-  robot's disc along a command's path and checks it against the map (obstacles, other robots, the workspace) and,
-  for a robot with a laser, against what recent scans saw (`SeenFree`: the space their beams passed through; a
-  270-degree laser is blind in the rear 90 degrees, so only where an earlier scan looked counts). BackUp given
-  such a check (`free`) moves only while the next REVERSE_HORIZON seconds of its move pass it.
+- The hold breaker: two robots the guard holds for each other wait forever if each sees its own way as clear.
+  After HOLD_BEFORE_STEP seconds held for another robot, the held robot plans a step round it.
+- A robot counts as stopped until it is HOLD_RELEASE metres from where the guard first stopped it: a turn in
+  place or a step of a few centimetres is not a way out, and counting it as one kept two face-to-face
+  differential-drive robots twitching instead of backing up.
+- Stuck: stopped HOLD_BEFORE_STEP seconds at a wall, or three times that at a robot. A robot that cannot turn in
+  place first tries a manoeuvre (planning/manoeuvre_driver.py); otherwise it backs up for BACKUP_TIME seconds at
+  `backup_speed` (Nav2's backup recovery), the move that gains the most room, checked by the guard every tick.
+- Evidence: a robot never reverses into space it has no evidence is free. `reverse_free` sweeps the robot's disc
+  along a command's path against the map and, with a laser, against the space recent scans saw (`SeenFree`: a
+  270-degree laser is blind behind); BackUp given such a check (`free`) moves only while the next
+  REVERSE_HORIZON seconds of its move pass it.
 """
 
 from __future__ import annotations

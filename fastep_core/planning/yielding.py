@@ -1,25 +1,18 @@
 """Yielding to movers: the robot's speed checked against where moving obstacles will be, not where they are.
 
-Movers (a v2 world's moving obstacles, obstacles a robot tracks) do not plan and do not give way: a mover
-crossing the robot's path keeps crossing it, and one coming at a robot that stands still runs into it. The
-guard (planning/guard.py) looks one tick ahead, too short to see either coming. So every tick, when a mover
-could come within reach over the next `mover_horizon` seconds, the command is checked over that horizon,
-the robot driven by it (the model's arc: a constant command moves any of the models along a circle or a
-line) and each mover at its velocity, and the first of these that keeps `clearance` from every mover wins:
+Movers do not plan and do not give way, and the guard (planning/guard.py) looks one tick ahead, too short to see
+one coming. So every tick a mover could come within reach over the next `mover_horizon` seconds, the command is
+checked over that horizon (the robot on its model's arc, each mover at its velocity) and the first of these
+that keeps `clearance` from every mover wins:
 
-1. the command itself (returned as the same object, so nothing changes where no mover comes near);
-2. the command slowed to 3/4, 1/2 or 1/4 of it: *yielding* (the robot lets the mover pass ahead of it);
+1. the command itself (the same object, so nothing changes where no mover comes near);
+2. the command slowed to 3/4, 1/2 or 1/4: *yielding*;
 3. standing still: *waiting* for the mover to pass;
-4. none of those: *getting out of the way*: of a fan of moves at full and half speed (any heading for a
-   holonomic robot; forward and, where the model reverses, backward arcs for a steered one) the one nearest to
-   the command (map-frame velocity) among those that keep clear, or when none does, the one that keeps the
-   most room (standing still if none keeps more than that).
+4. *getting out of the way*: the move of a fan nearest to the command that keeps clear, else the roomiest.
 
-The guard still checks whatever is chosen against the still obstacles and the other robots. Other robots are
-not movers here: they plan, give way (the guard, the hold breaker) and would be predicted wrongly by a
-straight line through a swerve. Used by every navigator (fastep, fastep_route, aco; planning/navigator.py).
-The distances are exact for the straight relative motion between samples (closest approach per interval),
-vectorised over candidate commands, sample times and movers.
+The guard still checks the choice against still obstacles and robots. Other robots are not movers here: they
+plan and give way, and a straight-line prediction of them would be wrong. Used by every navigator; the distance
+checks are exact between samples and vectorised over commands, times and movers.
 """
 
 from __future__ import annotations
