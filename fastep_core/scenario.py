@@ -6,10 +6,10 @@ obstacles; `Scenario.obstacle_specs` lists every obstacle with its v2 keys, and 
 turns them into the truth over time and the planner's map.
 
 A scenario is loaded from a path or a built-in name (``fastep_core/scenarios/*.yaml``), parsed with PyYAML's
-safe loader within bounds (:mod:`fastep_core.bounded_yaml`), and validated strictly: unknown keys are an error at
-every level, coordinates must be finite numbers, starts and goals must be free. Every problem raises
-:class:`~fastep_core.errors.ScenarioError` with a one-line message naming the file and the key path, e.g.
-``scenario 'x.yaml': robots[1].radius must be > 0, got -1``.
+safe loader within bounds (:mod:`fastep_core.bounded_yaml`), and validated strictly (values read through
+:mod:`fastep_core.yaml_checks`): unknown keys are an error at every level, coordinates must be finite numbers,
+starts and goals must be free. Every problem raises :class:`~fastep_core.errors.ScenarioError` with a one-line
+message naming the file and the key path, e.g. ``scenario 'x.yaml': robots[1].radius must be > 0, got -1``.
 
 The format is documented in ``docs/scenarios.md``.
 """
@@ -29,6 +29,7 @@ import numpy as np
 import yaml
 
 from fastep_core import bounded_yaml
+from fastep_core import yaml_checks as check
 from fastep_core.dynamic_world import Motion, ObstacleSpec
 from fastep_core.errors import GoalError, ParameterError, ScenarioError
 from fastep_core.geometry import Circle, Obstacle, Segment, point_segment_distance
@@ -59,14 +60,10 @@ _TRACTOR_KEYS = ('length', 'trailer_length', 'width', 'hitch_offset')
 _ROBOT_NAME = re.compile(r'[A-Za-z_][A-Za-z0-9_]*')
 _IGNORED_PREFIX = 'x_'
 _SUFFIX = '.yaml'
-# Numbers PyYAML (YAML 1.1) leaves as text: an exponent without a dot in the mantissa or a sign ('1e-3', '5.0e1').
-_TEXT_EXPONENT = re.compile(r'([-+]?)([0-9]+\.?[0-9]*|\.[0-9]+)[eE]([-+]?)([0-9]+)')
 # Relative slack when comparing a tractor-trailer's radius with its clearance sqrt(L^2 + b^2) / 2.
 _CLEARANCE_RTOL = 1e-9
 # Start headings beyond one turn either way are normalised into (-pi, pi]; within it they are kept as written.
 _HEADING_TURN = math.tau
-# _show renders a value at most this deep (and cuts it at its length limit), whatever its size.
-_SHOW_DEPTH = 8
 
 
 @dataclass(frozen=True)
@@ -110,224 +107,41 @@ class Scenario:
         return all(o.v1 for o in self.obstacle_specs)
 
 
-class _Invalid(Exception):
-    """Raised by the validators below; turned into a ScenarioError prefixed with the scenario's label."""
-
-
-# ----------------------------------------------------------------------------------------------- messages
-
-def _one_line(text: str) -> str:
-    return ' '.join(text.split())
-
-
-def _show(value: Any, limit: int = 60) -> str:
-    """A short, single-line rendering of an offending value: its repr, cut at ``limit`` characters.
-
-    Never the repr of the whole value: a "billion laughs" list (10^9 items sharing a few lists) has a repr
-    that takes hours and more memory than the machine has; this walks only as far as the limit.
-    """
-    text = 'null' if value is None else _one_line(_bounded_repr(value, limit + 1))
-    return text if len(text) <= limit else text[:limit - 3] + '...'
-
-
-def _bounded_repr(value: Any, budget: int) -> str:
-    """repr(value) up to about ``budget`` characters (as repr writes it, for the values YAML gives)."""
-    parts: list[str] = []
-    used = 0
-
-    def emit(text: str) -> None:
-        nonlocal used
-        parts.append(text)
-        used += len(text)
-
-    def items(opening: str, entries: Any, closing: str, depth: int, pairs: bool = False) -> None:
-        emit(opening)
-        for i, entry in enumerate(entries):
-            if used > budget:
-                return
-            if i:
-                emit(', ')
-            if pairs:
-                walk(entry[0], depth + 1)
-                emit(': ')
-                walk(entry[1], depth + 1)
-            else:
-                walk(entry, depth + 1)
-        emit(closing)
-
-    def walk(item: Any, depth: int) -> None:
-        if used > budget:
-            return
-        if depth > _SHOW_DEPTH:
-            emit('...')
-        elif isinstance(item, dict):
-            items('{', item.items(), '}', depth, pairs=True)
-        elif isinstance(item, list):
-            items('[', item, ']', depth)
-        elif isinstance(item, tuple):
-            items('(', item, ',)' if len(item) == 1 else ')', depth)
-        elif isinstance(item, (set, frozenset)) and item:
-            items('{', item, '}', depth)
-        elif isinstance(item, (str, bytes)):
-            emit(repr(item[:budget]))
-        elif isinstance(item, int) and not isinstance(item, bool) and item.bit_length() > 4 * budget:
-            emit(f'an integer of {_digit_count(item)} digits')
-        else:
-            emit(repr(item))
-
-    walk(value, 0)
-    return ''.join(parts)
-
-
-def _digit_count(value: int) -> str:
-    """'400', or 'about 5000' beyond the digits Python converts (repr raises ValueError there)."""
-    try:
-        return str(len(str(abs(value))))
-    except ValueError:
-        return f'about {int(value.bit_length() * math.log10(2)) + 1}'
-
-
 def _fail(label: str, message: str) -> ScenarioError:
-    return ScenarioError(_one_line(f'scenario {label!r}: {message}'))
-
-
-def _key_path(path: str, key: str) -> str:
-    return f'{path}.{key}' if path else key
-
-
-# ----------------------------------------------------------------------------------------------- primitives
-
-def _mapping(value: Any, path: str) -> Mapping[str, Any]:
-    if not isinstance(value, dict):
-        raise _Invalid(f'{path} must be a mapping, got {_show(value)}')
-    for key in value:
-        if not isinstance(key, str):
-            raise _Invalid(f'{path}: keys must be strings, got {_show(key)}')
-    return value
-
-
-def _check_keys(data: Mapping[str, Any], path: str, allowed: Sequence[str], required: Sequence[str]) -> None:
-    for key in data:
-        if key not in allowed:
-            raise _Invalid(f'{path}: unknown key {_show(key)} (allowed: {", ".join(allowed)})')
-    for key in required:
-        if key not in data:
-            raise _Invalid(f'{path}: missing required key {key!r}')
-
-
-def _list(value: Any, path: str) -> list[Any]:
-    if not isinstance(value, list):
-        raise _Invalid(f'{path} must be a list, got {_show(value)}')
-    return value
-
-
-def _finite(value: Any) -> float | None:
-    """value as a float if it is a real, finite number (not a bool, a string, null, .nan or .inf), else None."""
-    if isinstance(value, (int, float)) and not isinstance(value, bool):
-        try:
-            number = float(value)
-        except OverflowError:   # an integer beyond 1.8e308
-            return None
-        if math.isfinite(number):
-            return number
-    return None
-
-
-def _number(value: Any, path: str) -> float:
-    """A real, finite number (bool, strings, null, .nan and .inf are rejected)."""
-    number = _finite(value)
-    if isinstance(value, bounded_yaml.MisreadNumber):
-        raise _Invalid(f'{path} is {_show(str(value)).strip(chr(39))}, which YAML 1.1 reads as {value.reading}: '
-                       f'{value.fix}')
-    if number is None:
-        raise _Invalid(f'{path} must be a finite number, got {_show(value)}{_text_number_hint(value)}')
-    return number
-
-
-def _text_number_hint(value: Any) -> str:
-    """Why a number-looking string is text: YAML 1.1 wants 1.0e-3 (a dot and a signed exponent), or quotes;
-    045 and 50:00 mean 37 and 3000 in YAML 1.1, and 08 is text (bounded_yaml.MisreadNumber)."""
-    if isinstance(value, bounded_yaml.MisreadNumber):
-        return f' ({value.advice})'   # _number has its own message for these; other callers use the hint
-    if not isinstance(value, str) or len(value) > 100:
-        return ''
-    match = _TEXT_EXPONENT.fullmatch(value.strip())
-    if match:
-        sign, mantissa, exp_sign, digits = match.groups()
-        fixed = f'{sign}{mantissa if "." in mantissa else mantissa + ".0"}e{exp_sign or "+"}{digits}'
-        if fixed.lower() != value.strip().lower():
-            return f' (YAML 1.1 reads exponents without a dot and a sign as text: write {fixed})'
-    try:
-        float(value)
-    except ValueError:
-        return ''
-    return ' (text, not a number: drop the quotes)'
-
-
-def _positive(value: Any, path: str) -> float:
-    number = _number(value, path)
-    if number <= 0.0:
-        raise _Invalid(f'{path} must be > 0, got {_show(value)}')
-    return number
-
-
-def _non_negative(value: Any, path: str) -> float:
-    number = _number(value, path)
-    if number < 0.0:
-        raise _Invalid(f'{path} must be >= 0, got {_show(value)}')
-    return number
-
-
-def _numbers(value: Any, path: str, count: int, what: str) -> tuple[float, ...]:
-    if not isinstance(value, list) or len(value) != count:
-        raise _Invalid(f'{path} must be a list of {count} numbers {what}, got {_show(value)}')
-    return tuple(_number(v, f'{path}[{i}]') for i, v in enumerate(value))
-
-
-def _point(value: Any, path: str) -> tuple[float, float]:
-    x, y = _numbers(value, path, 2, '[x, y]')
-    return x, y
+    return ScenarioError(check.one_line(f'scenario {label!r}: {message}'))
 
 
 def _goal(value: Any, path: str, model: str) -> tuple[tuple[float, float], float | None]:
     """A goal [x, y], or for a robot that turns in place (diff_drive) also [x, y, theta]: where to end, facing."""
     if model == 'diff_drive' and isinstance(value, list) and len(value) == 3:
-        x, y, theta = _numbers(value, path, 3, '[x, y, theta]')
+        x, y, theta = check.numbers(value, path, 3, '[x, y, theta]')
         return (x, y), _heading(theta)
-    return _point(value, path), None
-
-
-def _text(value: Any, path: str) -> str:
-    if not isinstance(value, str) or not value.strip():
-        raise _Invalid(f'{path} must be a non-empty string, got {_show(value)}')
-    if '\n' in value or '\r' in value:
-        raise _Invalid(f'{path} must be a single line, got {_show(value)}')
-    return str(value)   # a plain str, also for a MisreadNumber (name: 045 is the text '045')
+    return check.point(value, path), None
 
 
 # ----------------------------------------------------------------------------------------------- sections
 
 def _workspace(value: Any) -> tuple[float, float, float, float]:
-    xmin, ymin, xmax, ymax = _numbers(value, 'workspace', 4, '[xmin, ymin, xmax, ymax]')
+    xmin, ymin, xmax, ymax = check.numbers(value, 'workspace', 4, '[xmin, ymin, xmax, ymax]')
     if not xmin < xmax:
-        raise _Invalid(f'workspace needs xmin < xmax, got xmin={xmin:g}, xmax={xmax:g}')
+        raise check.Invalid(f'workspace needs xmin < xmax, got xmin={xmin:g}, xmax={xmax:g}')
     if not ymin < ymax:
-        raise _Invalid(f'workspace needs ymin < ymax, got ymin={ymin:g}, ymax={ymax:g}')
+        raise check.Invalid(f'workspace needs ymin < ymax, got ymin={ymin:g}, ymax={ymax:g}')
     return xmin, ymin, xmax, ymax
 
 
 def _circle(value: Any, path: str) -> Circle:
-    body = _mapping(value, path)
-    _check_keys(body, path, ('center', 'radius'), ('center', 'radius'))
-    return Circle(_point(body['center'], f'{path}.center'), _positive(body['radius'], f'{path}.radius'))
+    body = check.mapping(value, path)
+    check.keys(body, path, ('center', 'radius'), ('center', 'radius'))
+    return Circle(check.point(body['center'], f'{path}.center'), check.positive(body['radius'], f'{path}.radius'))
 
 
 def _segment(value: Any, path: str) -> Segment:
-    body = _mapping(value, path)
-    _check_keys(body, path, ('start', 'end'), ('start', 'end'))
-    start, end = _point(body['start'], f'{path}.start'), _point(body['end'], f'{path}.end')
+    body = check.mapping(value, path)
+    check.keys(body, path, ('start', 'end'), ('start', 'end'))
+    start, end = check.point(body['start'], f'{path}.start'), check.point(body['end'], f'{path}.end')
     if start == end:
-        raise _Invalid(f'{path}: start and end must differ, both are [{start[0]:g}, {start[1]:g}]')
+        raise check.Invalid(f'{path}: start and end must differ, both are [{start[0]:g}, {start[1]:g}]')
     return Segment(start, end)
 
 
@@ -335,37 +149,38 @@ _OBSTACLE_PARSERS: dict[str, Callable[[Any, str], Obstacle]] = {'circle': _circl
 
 
 def _obstacle(value: Any, path: str) -> ObstacleSpec:
-    entry = _mapping(value, path)
+    entry = check.mapping(value, path)
     kinds = ', '.join(_OBSTACLE_PARSERS)
     for key in entry:
         if key not in _OBSTACLE_PARSERS and key not in _OBSTACLE_EXTRAS:
-            raise _Invalid(f'{path}: unknown key {_show(key)} (allowed: {kinds}, {", ".join(_OBSTACLE_EXTRAS)})')
+            raise check.Invalid(f'{path}: unknown key {check.show(key)} '
+                                f'(allowed: {kinds}, {", ".join(_OBSTACLE_EXTRAS)})')
     shapes = [key for key in entry if key in _OBSTACLE_PARSERS]
     if len(shapes) != 1:
-        raise _Invalid(f'{path} must have exactly one key ({kinds}) besides {", ".join(_OBSTACLE_EXTRAS)}, '
-                       f'got {_show(sorted(entry))}')
+        raise check.Invalid(f'{path} must have exactly one key ({kinds}) besides {", ".join(_OBSTACLE_EXTRAS)}, '
+                            f'got {check.show(sorted(entry))}')
     kind = shapes[0]
     shape = _OBSTACLE_PARSERS[kind](entry[kind], f'{path}.{kind}')
     motion = None
     if 'motion' in entry:
         if not isinstance(shape, Circle):
-            raise _Invalid(f'{path}.motion: only circles move, this obstacle is a {kind}')
+            raise check.Invalid(f'{path}.motion: only circles move, this obstacle is a {kind}')
         motion = _motion(entry['motion'], f'{path}.motion')
-    known = _boolean(entry['known'], f'{path}.known') if 'known' in entry else True
-    sigma = _non_negative(entry['position_sigma'], f'{path}.position_sigma') if 'position_sigma' in entry else 0.0
+    known = check.boolean(entry['known'], f'{path}.known') if 'known' in entry else True
+    sigma = check.non_negative(entry['position_sigma'], f'{path}.position_sigma') if 'position_sigma' in entry else 0.0
     spec = ObstacleSpec(shape, motion, known, sigma)
     _check_motion_length(spec, path)
     return spec
 
 
 def _motion(value: Any, path: str) -> Motion:
-    body = _mapping(value, path)
-    _check_keys(body, path, _MOTION_KEYS, _MOTION_KEYS)
+    body = check.mapping(value, path)
+    check.keys(body, path, _MOTION_KEYS, _MOTION_KEYS)
     points = body['waypoints']
     if not isinstance(points, list) or not points:
-        raise _Invalid(f'{path}.waypoints must be a non-empty list of [x, y] points, got {_show(points)}')
-    waypoints = tuple(_point(p, f'{path}.waypoints[{i}]') for i, p in enumerate(points))
-    return Motion(waypoints, _positive(body['speed'], f'{path}.speed'))
+        raise check.Invalid(f'{path}.waypoints must be a non-empty list of [x, y] points, got {check.show(points)}')
+    waypoints = tuple(check.point(p, f'{path}.waypoints[{i}]') for i, p in enumerate(points))
+    return Motion(waypoints, check.positive(body['speed'], f'{path}.speed'))
 
 
 def _check_sigmas(obstacles: Sequence[ObstacleSpec], workspace: tuple[float, float, float, float]) -> None:
@@ -374,8 +189,8 @@ def _check_sigmas(obstacles: Sequence[ObstacleSpec], workspace: tuple[float, flo
     side = max(workspace[2] - workspace[0], workspace[3] - workspace[1])
     for i, spec in enumerate(obstacles):
         if spec.position_sigma > side:
-            raise _Invalid(f'obstacles[{i}].position_sigma must be at most the workspace\'s larger side ({side:g} m), '
-                           f'got {spec.position_sigma:g}')
+            raise check.Invalid(f'obstacles[{i}].position_sigma must be at most the workspace\'s larger side '
+                                f'({side:g} m), got {spec.position_sigma:g}')
 
 
 def _check_motion_length(spec: ObstacleSpec, path: str) -> None:
@@ -386,60 +201,44 @@ def _check_motion_length(spec: ObstacleSpec, path: str) -> None:
     with np.errstate(over='ignore', invalid='ignore'):
         length = float(np.sqrt((np.diff(vertices, axis=0) ** 2).sum(axis=1)).sum())
     if not math.isfinite(length):
-        raise _Invalid(f'{path}.motion.waypoints: the path is too long to measure (its length overflows)')
-
-
-def _boolean(value: Any, path: str) -> bool:
-    """true or false (YAML 1.1's yes/no/on/off load as booleans too); text, numbers and null are refused."""
-    if not isinstance(value, bool):
-        raise _Invalid(f'{path} must be true or false, got {_show(value)}')
-    return value
-
-
-def _integer(value: Any, path: str, low: int, high: int) -> int:
-    if isinstance(value, bounded_yaml.MisreadNumber) or (isinstance(value, str) and _text_number_hint(value)):
-        _number(value, path)   # a misread or quoted number: its own message
-    if isinstance(value, bool) or not isinstance(value, int):
-        raise _Invalid(f'{path} must be a whole number in [{low}, {high}], got {_show(value)}')
-    if not low <= value <= high:
-        raise _Invalid(f'{path} must be in [{low}, {high}], got {_show(value)}')
-    return int(value)
+        raise check.Invalid(f'{path}.motion.waypoints: the path is too long to measure (its length overflows)')
 
 
 def _obstacles(value: Any) -> tuple[ObstacleSpec, ...]:
     if value is None:
         return ()
-    return tuple(_obstacle(v, f'obstacles[{i}]') for i, v in enumerate(_list(value, 'obstacles')))
+    return tuple(_obstacle(v, f'obstacles[{i}]') for i, v in enumerate(check.as_list(value, 'obstacles')))
 
 
 def _sensor(value: Any, path: str) -> LaserSpec:
     """A robot's laser scanner: every key optional (defaults: fastep_core/sensing/laser.py's LaserSpec)."""
-    body = _mapping(value if value is not None else {}, path)
-    _check_keys(body, path, _SENSOR_KEYS, ())
+    body = check.mapping(value if value is not None else {}, path)
+    check.keys(body, path, _SENSOR_KEYS, ())
     defaults = LaserSpec()
-    rng = _positive(body['range'], f'{path}.range') if 'range' in body else defaults.range
+    rng = check.positive(body['range'], f'{path}.range') if 'range' in body else defaults.range
     fov = defaults.fov
     if 'fov' in body:
-        fov = _number(body['fov'], f'{path}.fov')
+        fov = check.number(body['fov'], f'{path}.fov')
         if not 0.0 < fov <= 2.0 * math.pi + FULL_TURN_TOLERANCE:
-            raise _Invalid(f'{path}.fov must be in (0, 2 pi] radians (6.2832 is a full turn), got {_show(body["fov"])}')
+            raise check.Invalid(f'{path}.fov must be in (0, 2 pi] radians (6.2832 is a full turn), '
+                                f'got {check.show(body["fov"])}')
         fov = min(fov, 2.0 * math.pi)
-    beams = _integer(body['beams'], f'{path}.beams', 1, MAX_BEAMS) if 'beams' in body else defaults.beams
-    noise = _non_negative(body['noise'], f'{path}.noise') if 'noise' in body else defaults.noise
-    mount = _numbers(body['mount'], f'{path}.mount', 3, '[x, y, yaw]') if 'mount' in body else defaults.mount
+    beams = check.integer(body['beams'], f'{path}.beams', 1, MAX_BEAMS) if 'beams' in body else defaults.beams
+    noise = check.non_negative(body['noise'], f'{path}.noise') if 'noise' in body else defaults.noise
+    mount = check.numbers(body['mount'], f'{path}.mount', 3, '[x, y, yaw]') if 'mount' in body else defaults.mount
     return LaserSpec(rng, fov, beams, noise, (mount[0], mount[1], mount[2]))
 
 
 def _robot_name(value: Any, path: str) -> str:
     if not isinstance(value, str) or not _ROBOT_NAME.fullmatch(value):
-        raise _Invalid(f'{path} must match [A-Za-z_][A-Za-z0-9_]* (it becomes a ROS namespace), '
-                       f'got {_show(value)}')
+        raise check.Invalid(f'{path} must match [A-Za-z_][A-Za-z0-9_]* (it becomes a ROS namespace), '
+                            f'got {check.show(value)}')
     return value
 
 
 def _model(value: Any, path: str) -> str:
     if not isinstance(value, str) or value not in SCENARIO_MODELS:
-        raise _Invalid(f'{path} must be one of {", ".join(SCENARIO_MODELS)}, got {_show(value)}')
+        raise check.Invalid(f'{path} must be one of {", ".join(SCENARIO_MODELS)}, got {check.show(value)}')
     return str(value)
 
 
@@ -447,41 +246,41 @@ def _tractor_dimensions(data: Mapping[str, Any], path: str) -> dict[str, float]:
     dims = {}
     for key in ('length', 'trailer_length', 'width'):
         if key in data:
-            dims[key] = _positive(data[key], _key_path(path, key))
+            dims[key] = check.positive(data[key], check.key_path(path, key))
     if 'hitch_offset' in data:
-        dims['hitch_offset'] = _non_negative(data['hitch_offset'], _key_path(path, 'hitch_offset'))
+        dims['hitch_offset'] = check.non_negative(data['hitch_offset'], check.key_path(path, 'hitch_offset'))
     return dims
 
 
 def _robot(value: Any, path: str) -> RobotSpec:
-    data = _mapping(value, path)
-    _check_keys(data, path, _ROBOT_KEYS + _TRACTOR_KEYS + _OPTIONAL_ROBOT_KEYS, _ROBOT_KEYS)
+    data = check.mapping(value, path)
+    check.keys(data, path, _ROBOT_KEYS + _TRACTOR_KEYS + _OPTIONAL_ROBOT_KEYS, _ROBOT_KEYS)
     name = _robot_name(data['name'], f'{path}.name')
     model = _model(data['model'], f'{path}.model')
     if model != 'tractor_trailer':
         for key in _TRACTOR_KEYS:
             if key in data:
-                raise _Invalid(f'{path}.{key} is only valid for model tractor_trailer, not {model}')
+                raise check.Invalid(f'{path}.{key} is only valid for model tractor_trailer, not {model}')
     n = _START_LENGTH[model]
-    start = _numbers(data['start'], f'{path}.start', n, _START_FORM[n])
+    start = check.numbers(data['start'], f'{path}.start', n, _START_FORM[n])
     start = start[:2] + tuple(_heading(theta) for theta in start[2:])
     goal, heading = _goal(data['goal'], f'{path}.goal', model)
     robot = RobotSpec(name=name, model=model, start=start, goal=goal, goal_heading=heading,
-                      radius=_positive(data['radius'], f'{path}.radius'),
+                      radius=check.positive(data['radius'], f'{path}.radius'),
                       sensor=_sensor(data['sensor'], f'{path}.sensor') if 'sensor' in data else None,
                       **_tractor_dimensions(data, path))
     if model == 'tractor_trailer':
         _check_tractor_radius(robot, path)
     if robot.sensor is not None and math.hypot(*robot.sensor.mount[:2]) > robot.radius:
-        raise _Invalid(f'{path}.sensor.mount must lie on the robot: within its radius {robot.radius:g} m of its '
-                       f'reference point, got {list(robot.sensor.mount)}')
+        raise check.Invalid(f'{path}.sensor.mount must lie on the robot: within its radius {robot.radius:g} m of its '
+                            f'reference point, got {list(robot.sensor.mount)}')
     if robot.sensor is not None:
         spec = robot.sensor
         angle_min, increment, angles = beam_angles(spec)
         problem = way_problem(angle_min, float(angles[-1]), increment, spec.beams, spec.range, spec.mount[2],
                               robot.radius)
         if problem:
-            raise _Invalid(f'{path}.sensor cannot see the robot\'s way: {problem}')
+            raise check.Invalid(f'{path}.sensor cannot see the robot\'s way: {problem}')
     return robot
 
 
@@ -500,19 +299,20 @@ def _check_tractor_radius(robot: RobotSpec, path: str) -> None:
     """The paper's clearance (section VII-C): the safety radius must cover the tractor, sqrt(L^2 + b^2) / 2."""
     needed = math.hypot(robot.length, robot.width) / 2.0
     if robot.radius < needed * (1.0 - _CLEARANCE_RTOL):
-        raise _Invalid(f'{path}.radius must be >= sqrt(length^2 + width^2)/2 = {needed:.4g} for a '
-                       f'tractor_trailer, got {robot.radius:g}')
+        raise check.Invalid(f'{path}.radius must be >= sqrt(length^2 + width^2)/2 = {needed:.4g} for a '
+                            f'tractor_trailer, got {robot.radius:g}')
 
 
 def _robots(value: Any) -> tuple[RobotSpec, ...]:
-    items = _list(value, 'robots')
+    items = check.as_list(value, 'robots')
     if not items:
-        raise _Invalid('robots must list at least one robot, got []')
+        raise check.Invalid('robots must list at least one robot, got []')
     robots = tuple(_robot(v, f'robots[{i}]') for i, v in enumerate(items))
     seen: dict[str, int] = {}
     for i, robot in enumerate(robots):
         if robot.name in seen:
-            raise _Invalid(f'robots[{i}].name {_show(robot.name)} is already used by robots[{seen[robot.name]}]')
+            raise check.Invalid(f'robots[{i}].name {check.show(robot.name)} is already used by '
+                                f'robots[{seen[robot.name]}]')
         seen[robot.name] = i
     return robots
 
@@ -523,18 +323,19 @@ def _planner(value: Any) -> PlannerParams:
     defaults = PlannerParams()
     if value is None:
         return defaults
-    overrides = _mapping(value, 'planner')
+    overrides = check.mapping(value, 'planner')
     names = PlannerParams.names()
     unknown = sorted(key for key in overrides if key not in names)
     if unknown:
-        listed = ', '.join(_show(key, 40).strip("'") for key in unknown[:10])
+        listed = ', '.join(check.show(key, 40).strip("'") for key in unknown[:10])
         more = f', ... ({len(unknown)} in all)' if len(unknown) > 10 else ''
-        raise _Invalid(f'planner: unknown planner parameter(s): {listed}{more}')
+        raise check.Invalid(f'planner: unknown planner parameter(s): {listed}{more}')
     for key, item in overrides.items():
-        if _text_number_hint(item):
-            _number(item, f'planner.{key}')   # raises, with the hint
-        if _finite(item) is None:
-            raise _Invalid(f'planner.{key}: planner parameter {key} must be a finite number, got {_show(item)}')
+        if check.text_number_hint(item):
+            check.number(item, f'planner.{key}')   # raises, with the hint
+        if check.finite(item) is None:
+            raise check.Invalid(f'planner.{key}: planner parameter {key} must be a finite number, '
+                                f'got {check.show(item)}')
         _apply(defaults, {key: item}, f'planner.{key}')
     return _apply(defaults, overrides, 'planner')
 
@@ -543,12 +344,12 @@ def _apply(params: PlannerParams, overrides: Mapping[str, Any], path: str) -> Pl
     try:
         return params.with_overrides(overrides)
     except ParameterError as exc:
-        raise _Invalid(f'{path}: {exc}') from None
+        raise check.Invalid(f'{path}: {exc}') from None
 
 
 def _description(value: Any) -> str:
     if not isinstance(value, str):
-        raise _Invalid(f'description must be a string, got {_show(value)}')
+        raise check.Invalid(f'description must be a string, got {check.show(value)}')
     return str(value)
 
 
@@ -561,7 +362,7 @@ def _check_placement(world: World, robots: Sequence[RobotSpec]) -> None:
             try:
                 world.check_point(point, robot.radius, what=what)
             except GoalError as exc:
-                raise _Invalid(f'robots[{i}] ({robot.name}): {exc}') from None
+                raise check.Invalid(f'robots[{i}] ({robot.name}): {exc}') from None
 
 
 def _check_pairs(robots: Sequence[RobotSpec]) -> None:
@@ -573,8 +374,8 @@ def _check_pairs(robots: Sequence[RobotSpec]) -> None:
             for what, p, q in (('starts', first.start, second.start), ('goals', first.goal, second.goal)):
                 gap = math.hypot(p[0] - q[0], p[1] - q[1])
                 if gap < reach:
-                    raise _Invalid(f'robots[{i}] ({first.name}) and robots[{j}] ({second.name}): {what} are '
-                                   f'{gap:.3g} m apart, closer than the sum of their radii {reach:g} m')
+                    raise check.Invalid(f'robots[{i}] ({first.name}) and robots[{j}] ({second.name}): {what} are '
+                                        f'{gap:.3g} m apart, closer than the sum of their radii {reach:g} m')
 
 
 def _check_movers(obstacles: Sequence[ObstacleSpec], robots: Sequence[RobotSpec]) -> None:
@@ -590,34 +391,34 @@ def _check_movers(obstacles: Sequence[ObstacleSpec], robots: Sequence[RobotSpec]
             reach = spec.shape.radius + robot.radius
             gap = math.hypot(spec.shape.center[0] - robot.start[0], spec.shape.center[1] - robot.start[1])
             if gap < reach:
-                raise _Invalid(f'obstacles[{k}] (a mover) starts {gap:.3g} m from robots[{i}] ({robot.name})\'s '
-                               f'start, closer than the sum of their radii {reach:g} m')
+                raise check.Invalid(f'obstacles[{k}] (a mover) starts {gap:.3g} m from robots[{i}] ({robot.name})\'s '
+                                    f'start, closer than the sum of their radii {reach:g} m')
             goal = np.array(robot.goal, dtype=float)
             near = float(point_segment_distance(goal, a, b).min())
             if near < reach:
-                raise _Invalid(f'obstacles[{k}].motion: the mover passes {near:.3g} m from robots[{i}] '
-                               f'({robot.name})\'s goal, closer than the sum of their radii {reach:g} m (an '
-                               f'arrived robot waits there)')
+                raise check.Invalid(f'obstacles[{k}].motion: the mover passes {near:.3g} m from robots[{i}] '
+                                    f'({robot.name})\'s goal, closer than the sum of their radii {reach:g} m (an '
+                                    f'arrived robot waits there)')
 
 
 # ----------------------------------------------------------------------------------------------- parsing
 
 def _scenario_name(data: Mapping[str, Any], default_name: str) -> str:
-    return _text(data['name'], 'name') if 'name' in data else default_name
+    return check.text(data['name'], 'name') if 'name' in data else default_name
 
 
 def _build(data: Any, default_name: str) -> Scenario:
     if not isinstance(data, dict):
-        what = 'an empty document' if data is None else f'{type(data).__name__} {_show(data)}'
-        raise _Invalid(f'the top level must be a mapping, got {what}')
-    top = _mapping(data, 'top level')
+        what = 'an empty document' if data is None else f'{type(data).__name__} {check.show(data)}'
+        raise check.Invalid(f'the top level must be a mapping, got {what}')
+    top = check.mapping(data, 'top level')
     for key in top:
         if key not in _TOP_KEYS and not key.startswith(_IGNORED_PREFIX):
-            raise _Invalid(f'unknown top-level key {_show(key)} (allowed: {", ".join(_TOP_KEYS)}, '
-                           f'and keys starting with {_IGNORED_PREFIX!r}, which are ignored)')
+            raise check.Invalid(f'unknown top-level key {check.show(key)} (allowed: {", ".join(_TOP_KEYS)}, '
+                                f'and keys starting with {_IGNORED_PREFIX!r}, which are ignored)')
     for key in ('workspace', 'robots'):
         if key not in top:
-            raise _Invalid(f'missing required top-level key {key!r}')
+            raise check.Invalid(f'missing required top-level key {key!r}')
     name = _scenario_name(top, default_name)
     description = _description(top.get('description', ''))
     obstacles = _obstacles(top.get('obstacles'))
@@ -638,7 +439,7 @@ def _build(data: Any, default_name: str) -> Scenario:
 def _parse(data: Any, default_name: str, label: str) -> Scenario:
     try:
         return _build(data, default_name)
-    except _Invalid as exc:
+    except check.Invalid as exc:
         raise _fail(label, str(exc)) from None
 
 
@@ -709,7 +510,7 @@ def _yaml_error(exc: yaml.YAMLError) -> str:
         parts = [p for p in (exc.context, exc.problem) if p]
         where = f' at line {mark.line + 1}, column {mark.column + 1}' if mark is not None else ''
         return f'{what}{where}: {"; ".join(parts) or type(exc).__name__}'
-    return f'{what}: {_one_line(str(exc))[:200]}'
+    return f'{what}: {check.one_line(str(exc))[:200]}'
 
 
 def _too_big(size: int) -> str:
