@@ -8,7 +8,8 @@ that `ros2 bag info/play`, Foxglove and the `rosbags` library open them without 
 QoS metadata come from msg_tools.ros2_profile.
 
 Reading deserialises with rclpy. A cut-off file (a killed recorder leaves no summary or footer) is read up to
-its last complete chunk, and a corrupt chunk is skipped with one line saying how many messages it held. Files
+its last complete chunk (msg_tools/mcap_scan.py), and a corrupt chunk is skipped with one line saying how many
+messages it held. Files
 of other tools (JSON, ros1, protobuf, channels without schema) are read and copied as they are. Problems raise
 msg_tools.errors.RecordingError subclasses with a one-line message (WriteFailedError for a failed write).
 """
@@ -18,19 +19,16 @@ from __future__ import annotations
 import functools
 import heapq
 import os
-import struct
-import zlib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import IO, Any, Callable, Iterable, Iterator, Mapping, NamedTuple
 
 from mcap.data_stream import ReadDataStream
-from mcap.exceptions import EndOfFile
 from mcap.reader import SeekingReader
-from mcap.records import Attachment, Channel, Chunk, Footer, Header, Message, MessageIndex, Metadata, Schema
-from mcap.stream_reader import StreamReader, breakup_chunk
+from mcap.records import Attachment, Channel, Message, MessageIndex, Schema
 
 from msg_tools.errors import NotMcapError, RecordingError, TruncatedRecordingError
+from msg_tools.mcap_scan import OP_MESSAGE_INDEX, RECORD, SkippedChunk, chunk_messages, one_line, scan_file
 from msg_tools.mcap_writer import DEFAULT_CHUNK_SIZE, MESSAGE_ENCODING, McapWriter, WriteFailedError
 from msg_tools.ros2_profile import (
     message_class,
@@ -86,206 +84,6 @@ class RecordedMessage(NamedTuple):
     type: str
     log_time: int
     message: Any
-
-
-@dataclass(frozen=True)
-class SkippedChunk:
-    """A chunk that could not be read (bad compression, CRC, record structure) and was skipped.
-
-    lost: messages per channel id, from the chunk's message indexes (None when they are unreadable too)."""
-
-    offset: int
-    lost: Mapping[int, int] | None
-    start_time: int | None
-    end_time: int | None
-    reason: str
-    record: str = 'chunk'   # or the kind of another record whose content was corrupt (its framing intact)
-
-    @property
-    def messages(self) -> int | None:
-        return None if self.lost is None else sum(self.lost.values())
-
-    def describe(self) -> str:
-        lost = 'an unknown number of messages' if self.messages is None else f'{self.messages} messages'
-        when = ('' if self.start_time is None or self.end_time is None else
-                f', log time {self.start_time * 1e-9:.3f}-{self.end_time * 1e-9:.3f} s')
-        return f'skipped a corrupt {self.record} at byte {self.offset} ({lost} lost{when}): {self.reason}'
-
-
-_RECORD = struct.Struct('<BQ')       # opcode, length
-_MESSAGE = struct.Struct('<HIQQ')    # channel id, sequence, log time, publish time
-_CHUNK = struct.Struct('<QQQI')      # start time, end time, uncompressed size, uncompressed crc
-_U32 = struct.Struct('<I')
-_U64 = struct.Struct('<Q')
-_OP_MESSAGE, _OP_CHUNK, _OP_MESSAGE_INDEX = 0x05, 0x06, 0x07
-
-
-def _chunk_messages(record: bytes) -> list[tuple[int, int, int, int, bytes]]:
-    """(channel id, sequence, log time, publish time, data) of every Message in a Chunk record (opcode and
-    length included), in the order they were written. Raises (RecordingError, struct.error, a decompressor's
-    error) for a chunk that is cut off or corrupt.
-
-    Hand-written rather than mcap's Chunk.read + breakup_chunk because it is 4 times faster (0.65 against
-    2.6 us a message, measured on a fastep-sim recording), which is most of fastep-report's reading time; the
-    linear read of a damaged file uses mcap's parser."""
-    opcode, length = _RECORD.unpack_from(record, 0)
-    if opcode != _OP_CHUNK:
-        raise RecordingError(f'expected a chunk record, found opcode {opcode:#x}')
-    if 9 + length > len(record):
-        raise RecordingError('the chunk is cut off')
-    _, _, size, crc = _CHUNK.unpack_from(record, 9)
-    pos = 9 + _CHUNK.size
-    length = _U32.unpack_from(record, pos)[0]
-    compression = record[pos + 4:pos + 4 + length].decode()
-    pos += 4 + length
-    length = _U64.unpack_from(record, pos)[0]
-    payload = record[pos + 8:pos + 8 + length]
-    if compression == 'zstd':
-        import zstandard
-        payload = zstandard.decompress(payload, size)
-    elif compression == 'lz4':
-        import lz4.frame
-        payload = lz4.frame.decompress(payload)
-    elif compression:
-        raise RecordingError(f'unsupported chunk compression {compression!r}')
-    if crc and zlib.crc32(payload) != crc:
-        raise RecordingError('the chunk fails its CRC check')
-    out = []
-    view = memoryview(payload)
-    i, end = 0, len(payload)
-    while i + 9 <= end:
-        opcode, length = _RECORD.unpack_from(view, i)
-        body = i + 9
-        if body + length > end:
-            raise RecordingError('a record inside the chunk runs past its end')
-        if opcode == _OP_MESSAGE:
-            channel_id, sequence, log_time, publish_time = _MESSAGE.unpack_from(view, body)
-            out.append((channel_id, sequence, log_time, publish_time, bytes(view[body + _MESSAGE.size:body + length])))
-        i = body + length
-    return out
-
-
-def _one_line(exc: BaseException) -> str:
-    text = ' '.join(str(exc).split())
-    return f'{type(exc).__name__}: {text}' if text else type(exc).__name__
-
-
-@dataclass
-class _Scan:
-    """What a linear read of a file found before it ended or broke."""
-
-    header: Header | None = None
-    schemas: dict[int, Schema] = field(default_factory=dict)
-    channels: dict[int, Channel] = field(default_factory=dict)
-    metadata: list[Metadata] = field(default_factory=list)
-    attachments: list[Attachment] = field(default_factory=list)
-    messages: list[Message] = field(default_factory=list)
-    skipped: list[SkippedChunk] = field(default_factory=list)
-    orphans: int = 0          # messages of channels whose Channel record was lost (in a corrupt chunk)
-    complete: bool = False
-    problem: str = ''
-    readable_bytes: int = 0
-
-
-def _scan(path: Path, size: int) -> _Scan:
-    """Read every record in file order with mcap's StreamReader. A chunk that fails to decompress, its CRC
-    or its parsing is skipped (its message indexes, which follow it, say how many messages it held), and so is
-    any other record whose framing (opcode, length) is intact but whose content is not; the read stops at the
-    first record that is cut off or whose length is impossible.
-    """
-    out = _Scan()
-    messages: list[Message] = []
-    pending: dict[str, Any] | None = None   # the chunk skipped last, while its message indexes follow
-
-    def settle() -> None:
-        nonlocal pending
-        if pending is not None:
-            out.skipped.append(SkippedChunk(**pending))
-            pending = None
-
-    with open(path, 'rb') as f:
-        pos, first = 0, True
-        while True:
-            f.seek(pos)
-            reader = StreamReader(f, skip_magic=not first, emit_chunks=True, record_size_limit=max(size, 1))
-            try:
-                for record in reader.records:
-                    if isinstance(record, MessageIndex):
-                        if pending is not None and pending['lost'] is not None:
-                            pending['lost'][record.channel_id] = len(record.records)
-                    else:
-                        settle()
-                    if isinstance(record, Chunk):
-                        try:
-                            inner = breakup_chunk(record, validate_crc=True)
-                        except Exception as exc:
-                            pending = {'offset': pos, 'lost': {}, 'start_time': record.message_start_time,
-                                       'end_time': record.message_end_time, 'reason': _one_line(exc)}
-                            inner = []
-                        for item in inner:
-                            if isinstance(item, Schema):
-                                out.schemas[item.id] = item
-                            elif isinstance(item, Channel):
-                                out.channels[item.id] = item
-                            elif isinstance(item, Message):
-                                messages.append(item)
-                    elif isinstance(record, Header):
-                        out.header = record
-                    elif isinstance(record, Schema):
-                        out.schemas[record.id] = record
-                    elif isinstance(record, Channel):
-                        out.channels[record.id] = record
-                    elif isinstance(record, Metadata):
-                        out.metadata.append(record)
-                    elif isinstance(record, Attachment):
-                        out.attachments.append(record)
-                    elif isinstance(record, Message):
-                        messages.append(record)
-                    elif isinstance(record, Footer):
-                        out.complete = True
-                    pos = out.readable_bytes = f.tell()
-                break
-            except Exception as exc:  # the record at pos is cut off or corrupt
-                settle()
-                first = False
-                rest = size - pos
-                framing = _framing(f, pos, size) if out.header is not None else None
-                if framing is not None and not isinstance(exc, EndOfFile):
-                    opcode, length = framing
-                    if opcode == _OP_CHUNK:
-                        pending = {'offset': pos, 'lost': {}, 'start_time': None, 'end_time': None,
-                                   'reason': _one_line(exc)}
-                    else:
-                        out.skipped.append(SkippedChunk(pos, {}, None, None, _one_line(exc),
-                                                        record=f'record (opcode {opcode:#x})'))
-                    pos += 9 + length
-                    continue
-                if isinstance(exc, EndOfFile) and rest <= 0:
-                    out.problem = 'it ends before its footer'
-                else:
-                    out.problem = f'it ends with {rest} bytes of an incomplete or corrupt record ({_one_line(exc)})'
-                break
-        settle()
-    for m in messages:
-        if m.channel_id in out.channels:
-            out.messages.append(m)
-        else:
-            out.orphans += 1
-    out.messages.sort(key=lambda m: m.log_time)
-    return out
-
-
-def _framing(f: IO[bytes], pos: int, size: int) -> tuple[int, int] | None:
-    """(opcode, length) of the record at pos when they are plausible (a known opcode, the record ends inside
-    the file), so that the reader can step over a record whose content is corrupt; else None."""
-    f.seek(pos)
-    head = f.read(9)
-    if len(head) < 9:
-        return None
-    opcode, length = _RECORD.unpack(head)
-    if not 0x01 <= opcode <= 0x0F or pos + 9 + length > size:
-        return None
-    return opcode, length
 
 
 class Recording:
@@ -344,7 +142,7 @@ class Recording:
         try:
             self._open_indexed()
         except Exception as exc:  # no footer/summary (cut off), or a broken summary: read linearly
-            self._open_linear(size, _one_line(exc))
+            self._open_linear(size, one_line(exc))
 
     def _open_indexed(self) -> None:
         with open(self.path, 'rb') as f:
@@ -367,7 +165,7 @@ class Recording:
         self.start_time, self.end_time = stats.message_start_time, stats.message_end_time
 
     def _open_linear(self, size: int, reason: str) -> None:
-        scan = _scan(self.path, size)
+        scan = scan_file(self.path, size)
         if scan.header is None:
             raise TruncatedRecordingError(f'{self.path} is truncated or corrupt before its first record '
                                           f'({scan.problem or reason}): nothing to recover')
@@ -447,7 +245,7 @@ class Recording:
             with open(self.path, 'rb') as f:
                 return list(SeekingReader(f).iter_attachments())
         except Exception as exc:
-            raise RecordingError(f'{self.path}: cannot read its attachments: {_one_line(exc)}') from None
+            raise RecordingError(f'{self.path}: cannot read its attachments: {one_line(exc)}') from None
 
     def _skip(self, chunk: SkippedChunk, counted: bool = True) -> None:
         """Note a corrupt chunk (once); counted: its messages are in the statistics' counts (indexed files)."""
@@ -497,7 +295,7 @@ class Recording:
         except RecordingError:
             raise
         except OSError as exc:
-            raise RecordingError(f'{self.path}: cannot read messages: {_one_line(exc)}') from None
+            raise RecordingError(f'{self.path}: cannot read messages: {one_line(exc)}') from None
 
     def _read_chunk(self, f: IO[bytes], index: Any,
                     ids: Mapping[int, Any]) -> list[tuple[int, int, int, int, bytes]]:
@@ -505,12 +303,12 @@ class Recording:
         `ids`, in file order; [] (and the chunk recorded as skipped) when it is corrupt."""
         try:
             f.seek(index.chunk_start_offset)
-            found = _chunk_messages(f.read(index.chunk_length))
+            found = chunk_messages(f.read(index.chunk_length))
         except OSError:
             raise
         except Exception as exc:
             self._skip(SkippedChunk(index.chunk_start_offset, self._index_counts(f, index), index.message_start_time,
-                                    index.message_end_time, _one_line(exc)))
+                                    index.message_end_time, one_line(exc)))
             return []
         return [m for m in found if m[0] in ids]
 
@@ -521,8 +319,8 @@ class Recording:
         try:
             for channel_id, offset in index.message_index_offsets.items():
                 f.seek(offset)
-                opcode, _ = _RECORD.unpack(f.read(9))
-                if opcode != _OP_MESSAGE_INDEX:
+                opcode, _ = RECORD.unpack(f.read(9))
+                if opcode != OP_MESSAGE_INDEX:
                     return None
                 out[channel_id] = len(MessageIndex.read(ReadDataStream(f)).records)
         except Exception:
@@ -554,7 +352,7 @@ class Recording:
                     yield RawMessage(channel.topic, self.channels[channel.id].type, m.log_time, m.publish_time,
                                      m.data, channel.id, m.sequence)
         except Exception as exc:
-            raise RecordingError(f'{self.path}: cannot read messages: {_one_line(exc)}') from None
+            raise RecordingError(f'{self.path}: cannot read messages: {one_line(exc)}') from None
 
     def messages(self, topics: Iterable[str] | None = None) -> Iterator[RecordedMessage]:
         """Every message deserialised with rclpy, in log-time order: (topic, type, log_time, message). A type
@@ -573,7 +371,7 @@ class Recording:
                 message = decode(raw.data)
             except Exception as exc:
                 raise RecordingError(f'{self.path}: cannot decode a {raw.type} message on {raw.topic} at log time '
-                                     f'{raw.log_time * 1e-9:.3f} s: {_one_line(exc)}') from None
+                                     f'{raw.log_time * 1e-9:.3f} s: {one_line(exc)}') from None
             yield RecordedMessage(raw.topic, raw.type, raw.log_time, message)
 
 
