@@ -20,7 +20,7 @@ import collections
 import math
 import time
 import traceback
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
@@ -36,9 +36,7 @@ from visualization_msgs.msg import MarkerArray
 from fastep_core.errors import GoalError, ParameterError
 from fastep_core.planning.algorithms import (
     ALGORITHMS,
-    DEFAULT_ALGORITHM,
     NAVIGATORS,
-    algorithm_name,
     check_drives,
     make_robot,
 )
@@ -49,12 +47,11 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
 from fastep_ros.common import (
-    PERIOD_RANGE,
     RATE_RANGE,
     RepeatedLine,
     StartupError,
     check_range,
-    declare,
+    declare_table,
     guard_clock,
     node_main,
     quiet_at_stop,
@@ -69,6 +66,7 @@ from fastep_ros.navigate_actions import NavigateActions
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.perception import ScanPerception
 from fastep_ros.planner_inputs import Body, PlannerInputs
+from fastep_ros.planner_params import PARAMETERS, TUNABLE
 from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
@@ -77,9 +75,6 @@ from msg_tools.interface import LATEST, RELIABLE, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
-TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radius', 'max_extrapolation',
-           'max_plan_age', 'exclusive_cmd_vel', 'stop_on_failure')
-"""The node's own parameters that change while it runs, besides every PlannerParams field."""
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots ...
 START_PERIOD = 0.05      # ... the first START_LOOKS looks (3 s) every START_PERIOD: a launcher waits for every
 START_LOOKS = 60         # planner to see the others and its cmd_vel's readers (make demo's start waited 0.2-0.5 s)
@@ -122,95 +117,29 @@ class PlannerNode(PlannerInputs):
     def __init__(self, node_name: str = 'planner', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
         clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
-        self.params = self._declare_planner_params()
-        self.algorithm = declare(self, 'algorithm', DEFAULT_ALGORITHM,
-                                 'planner: ' + ', '.join(f'{a} ({algorithm_name(a)})' for a in ALGORITHMS),
-                                 constraints=' | '.join(ALGORITHMS))
-        self.model = declare(self, 'model', 'point_mass', 'robot model: ' + ' | '.join(MODELS),
-                             constraints=' | '.join(MODELS))
-        self.radius = declare(self, 'robot_radius', 0.5, 'safety radius: centre-to-obstacle-surface distance '
-                              'that counts as collision (m)', constraints='> 0')
-        length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)')
-        trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)')
-        hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
-        self.seed = declare(self, 'seed', 0, 'seed of the swarm\'s random numbers')
-        self.seed_stream = declare(self, 'seed_stream', -1, 'if >= 0: use stream k of SeedSequence(seed).spawn, '
-                                   'as fastep-sim does for the k-th robot of a scenario; -1: default_rng(seed)')
-        self.control_rate_hz = declare(self, 'control_rate_hz', 20.0, 'control ticks per second of the node '
-                                       'clock (1 / dt of the in-process simulator)', value_range=RATE_RANGE,
-                                       unit=' Hz', read_only=False)
-        self.odom_timeout = declare(self, 'odom_timeout', 1.0, 'odometry older than this (s, node clock) is '
-                                    'stale: the robot is stopped', constraints='> 0', read_only=False)
-        clock_timeout = declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
-                                'seconds is a warning on status and /diagnostics, and the robot is stopped',
-                                value_range=PERIOD_RANGE, unit=' s', read_only=False)
-        stamped = declare(self, 'use_stamped_cmd_vel', False, 'publish cmd_vel as TwistStamped, not Twist')
-        other_radius = declare(self, 'other_robot_radius', 0.0, 'safety radius assumed for other robots (m); '
-                               '0: the radius each announces (its footprint), robot_radius until it is heard',
-                               value_range=(0.0, math.inf), read_only=False)
-        other_timeout = declare(self, 'other_robot_timeout', 3.0, 'another robot whose odometry has not come for '
-                                'this long (s, node clock) is stale (status `stale`); from odom_timeout on it is '
-                                'avoided where last seen, widened by its last speed times up to this long',
-                                constraints='> 0')
+        values = declare_table(self, PARAMETERS)
+        try:
+            self.params = PlannerParams().with_overrides({name: values[name] for name in PlannerParams.names()})
+        except ParameterError as exc:
+            raise StartupError(str(exc)) from None
+        self.algorithm, self.model, self.radius = values['algorithm'], values['model'], values['robot_radius']
+        length, trailer_length, hitch_offset = values['length'], values['trailer_length'], values['hitch_offset']
+        self.seed, self.seed_stream = values['seed'], values['seed_stream']
+        self.control_rate_hz, self.odom_timeout = values['control_rate_hz'], values['odom_timeout']
+        clock_timeout, stamped = values['clock_timeout'], values['use_stamped_cmd_vel']
+        other_radius, other_timeout = values['other_robot_radius'], values['other_robot_timeout']
         if not other_timeout > 0.0:
             raise StartupError(f'parameter other_robot_timeout must be > 0, got {other_timeout:g}')
-        self.max_extrapolation = declare(
-            self, 'max_extrapolation', 0.25, 'latency compensation: odometry (own and other robots\') is '
-            'predicted forward from its stamp to the control time by at most this much (s); own odometry stamped '
-            'longer ago is stale: the robot is held still; 0 disables both', value_range=(0.0, math.inf),
-            read_only=False)
-        workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
-        laser_mount = declare(self, 'laser_mount', None, '[x (m), y (m), yaw (rad)]: where the scanner sits in '
-                              'base_link, for scans in a frame of their own (the static transform base_link -> '
-                              'the scan\'s frame; /tf_static is not read here); empty: scans must be in base_link')
-        self.obstacle_source = declare(self, 'obstacle_source', 'markers', 'where the obstacles come from: markers '
-                                       '(the /obstacles MarkerArray of fastep-map: circles and walls) | map (the '
-                                       'occupied cells of the /map OccupancyGrid, as Nav2\'s map_server publishes '
-                                       'it: their outline, as walls)', constraints='markers | map')
-        scan_noise = declare(self, 'scan_noise', 0.01, 'standard deviation of the laser\'s range noise (m), which a '
-                             'LaserScan does not carry: the perception of `scan` clusters and fits with it',
-                             value_range=(0.0, 1.0), unit=' m')
-        self.occupied_threshold = declare(self, 'occupied_threshold', convert.OCCUPIED_THRESHOLD,
-                                          'with obstacle_source map: a cell is occupied from this value (0-100) on; '
-                                          'unknown cells (-1) are free (map_server\'s occupied_thresh 0.65)',
-                                          value_range=(1, 100))
-        self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans')
-        odom_frame_id = declare(self, 'odom_frame_id', '', 'the robot\'s odometry frame (REP-105); empty: <ns>/odom '
-                                '(root namespace: odom). Odometry in it or in frame_id is taken, in any other '
-                                'frame refused')
-        self.localization_topic = declare(self, 'localization_topic', '', 'localization pose topic '
-                                          '(geometry_msgs/PoseWithCovarianceStamped, the map pose of base_link, e.g. '
-                                          'amcl_pose) giving map -> odom; empty: map -> odom is the identity '
-                                          '(simulation)')
-        goal_frames = declare(self, 'goal_frames_from_tf', True, 'follow /tf (polled, taken when used) to move goals '
-                              'given in other frames (odom, base_link) into map; false: only /tf_static is followed '
-                              '(fastep-launch, whose goals are in map: every plant publishes /tf at its rate)')
-        self.map_to_odom_from_tf = declare(self, 'map_to_odom_from_tf', False, 'take map -> odom from /tf and '
-                                           '/tf_static (AMCL and slam_toolbox publish it) at each control tick; '
-                                           'localization_topic, when set, is taken instead')
-        lock_step = declare(self, 'lock_step', False, 'on simulated time: act once per own odometry stamp, when '
-                            'the other robots\' odometry (and the scan) of that time are in, and stamp cmd_vel with '
-                            'it, so a graph steps like fastep-sim (fastep-launch sets it; needs use_stamped_cmd_vel '
-                            'and plants in lock step)')
-        threaded = declare(self, 'planning_thread', True, 'plan on a thread of its own, so that the control loop never '
-                           'waits for planning (it drives on the newest plan, guarded every tick); false: every '
-                           'control tick plans, the clock of a simulation waiting for it. Lock step plans on the '
-                           'tick (unless realtime)')
-        self.exclusive_cmd_vel = declare(self, 'exclusive_cmd_vel', True, 'another publisher on cmd_vel (a second '
-                                         'planner started in this namespace, a teleop) stops this planner\'s '
-                                         'commands after one zero: status ERROR `conflict` until it is gone; false: '
-                                         'command anyway', read_only=False)
+        self.max_extrapolation, workspace = values['max_extrapolation'], values['workspace']
+        laser_mount, self.obstacle_source = values['laser_mount'], values['obstacle_source']
+        scan_noise, self.occupied_threshold = values['scan_noise'], values['occupied_threshold']
+        self.frame_id, odom_frame_id = values['frame_id'], values['odom_frame_id']
+        self.localization_topic, goal_frames = values['localization_topic'], values['goal_frames_from_tf']
+        self.map_to_odom_from_tf, lock_step = values['map_to_odom_from_tf'], values['lock_step']
+        threaded, self.exclusive_cmd_vel = values['planning_thread'], values['exclusive_cmd_vel']
         self.cmd_conflict = ''   # the other publishers on cmd_vel, while there are ('' when there are none)
-        self.stop_on_failure = declare(self, 'stop_on_failure', True, 'follow_waypoints: a waypoint that fails ends '
-                                       'the goal (ABORTED, TASK_EXECUTOR_FAILED), as Nav2\'s waypoint follower by '
-                                       'default; false: it is missed and the robot goes on to the next',
-                                       read_only=False)
-        realtime = declare(self, 'realtime', False, 'in lock step, plan on the planning thread as on wall time: a '
-                           'pass\'s plan reaches the control loop when it is done, the simulated clock going on '
-                           'meanwhile (fastep-launch --realtime: planning latency counted; not deterministic)')
-        self.max_plan_age = declare(self, 'max_plan_age', 2.0, 'a plan older than this (s, node clock) is not driven '
-                                    'on: the robot stops, status ERROR, until a planning pass ends (planning_thread)',
-                                    value_range=(0.1, 60.0), unit=' s', read_only=False)
+        self.stop_on_failure, realtime = values['stop_on_failure'], values['realtime']
+        self.max_plan_age = values['max_plan_age']
         self._check(length, trailer_length, hitch_offset, other_radius, workspace)
         self.lock_step = bool(lock_step)
         self.lock = LockStep()
@@ -339,12 +268,12 @@ class PlannerNode(PlannerInputs):
         self.diagnostics = Diagnostics(self)
         # Tunable while running (docs/parameters.md); the robot's body, the algorithm, the seed, the topics and
         # frames are what the node was built with and stay read-only.
-        self.dynamic = DynamicParameters(self, (*PlannerParams.names(), *TUNABLE), self.apply_parameters)
+        self.dynamic = DynamicParameters(self, TUNABLE, self.apply_parameters)
         self.get_logger().info(f'{self.algorithm} planner for a {self.model} of radius {self.radius:g} m, '
                                f'control at {self.control_rate_hz:g} Hz')
         # Nav2's navigate_to_pose and navigate_through_poses (fastep_ros.navigate_actions), where nav2_msgs is.
         self.actions = NavigateActions.make(self)
-        self.start_lifecycle()   # autostart: active at once (fastep_ros.lifecycle)
+        self.lifecycle.start(values['autostart'])   # autostart: active at once (fastep_ros.lifecycle)
 
     # ------------------------------------------------------------------------------------------- lifecycle
     def activate(self) -> None:
@@ -382,18 +311,6 @@ class PlannerNode(PlannerInputs):
             self.planning.call(work)
 
     # ------------------------------------------------------------------------------------------- setup
-    def _declare_planner_params(self) -> PlannerParams:
-        defaults = PlannerParams()
-        values = {}
-        for f in fields(PlannerParams):
-            low, high = f.metadata['range']
-            values[f.name] = declare(self, f.name, getattr(defaults, f.name), f.metadata['description'],
-                                     value_range=(low, high), read_only=False)
-        try:
-            return defaults.with_overrides(values)
-        except ParameterError as exc:
-            raise StartupError(str(exc)) from None
-
     def _check(self, length: float, trailer_length: float, hitch_offset: float, other_radius: float,
                workspace: list[float]) -> None:
         if self.algorithm not in ALGORITHMS:
