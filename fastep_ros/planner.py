@@ -16,7 +16,6 @@ docs/reference/status.md; frames: docs/frames.md; other robots and goals: docs/r
 
 from __future__ import annotations
 
-import collections
 import math
 import time
 import traceback
@@ -24,7 +23,6 @@ from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
-from diagnostic_msgs.msg import DiagnosticStatus
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from nav_msgs.msg import OccupancyGrid, Odometry, Path
 from rclpy.clock import Clock, ClockType
@@ -57,7 +55,6 @@ from fastep_ros.common import (
     quiet_at_stop,
     shown,
 )
-from fastep_ros.diagnostics import Diagnostics
 from fastep_ros.goals import GoalSubscription
 from fastep_ros.latched import LatchedSubscription
 from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
@@ -67,6 +64,7 @@ from fastep_ros.parameters import DynamicParameters
 from fastep_ros.perception import ScanPerception
 from fastep_ros.planner_inputs import Body, PlannerInputs
 from fastep_ros.planner_params import PARAMETERS, TUNABLE
+from fastep_ros.planner_status import PlannerReports
 from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sim_time import SimTimeWatch
@@ -79,7 +77,6 @@ DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other rob
 START_PERIOD = 0.05      # ... the first START_LOOKS looks (3 s) every START_PERIOD: a launcher waits for every
 START_LOOKS = 60         # planner to see the others and its cmd_vel's readers (make demo's start waited 0.2-0.5 s)
 HEARTBEAT = 1.0          # wall seconds between re-publications of status, waypoint and plan
-CONTROL_TIMES = 200      # control callbacks (10 s at 20 Hz) whose wall times status' control_ms sums up
 
 
 @dataclass(frozen=True)
@@ -172,10 +169,6 @@ class PlannerNode(PlannerInputs):
         self.odom_stamp = -math.inf   # its header stamp; when it arrived if that is unset (zero)
         self.odom_problem = ''
         self.odom_heard = 0            # own odometry messages taken
-        self.cmd_vel_readers = 0       # cmd_vel's matched readers when status last told them
-        self.control_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
-        self.control_cpu_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
-        self.control_stamps: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)   # node times
         # Planning off the control path (fastep_ros.planning_thread), unless every tick plans (lock step, or asked).
         self.planning: PlanningThread[PlanSnapshot, Plan] | None = None
         self.control_tick: ControlTick | None = None   # the control loop's part of the navigator, with the thread
@@ -190,9 +183,6 @@ class PlannerNode(PlannerInputs):
         self.goal_refused = ''  # why the last goal was refused, while the goal before it is driven to
         self.last_command = np.zeros(2)
         self.odom_lag = 0.0
-        # What was last published.
-        self._status_key: tuple[Any, ...] | None = None
-        self._status_since = 0.0
         self._stale_logged: list[str] = []
         # Goals may come at any rate: their log lines at most once a second (fastep_ros.common.RepeatedLine). A
         # call site of its own for each severity: rclpy refuses two severities from one line of code.
@@ -206,7 +196,7 @@ class PlannerNode(PlannerInputs):
         self.waypoint_pub = self.create_publisher(PoseStamped, interface.WAYPOINT, offered_qos(interface.WAYPOINT))
         self.plan_pub = self.create_publisher(Path, interface.PLAN, offered_qos(interface.PLAN))
         self.cost_pub = self.create_publisher(Float64, interface.COST, offered_qos(interface.COST))
-        self.status_pub = self.create_publisher(DiagnosticStatus, interface.STATUS, offered_qos(interface.STATUS))
+        self.reports = PlannerReports(self)   # status, /diagnostics, control timings (fastep_ros.planner_status)
         # Taken as bytes (frames.stamped_pose): once a tick, and an Odometry message costs ~50 us to build.
         self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST, raw=True)
         if self.model == 'tractor_trailer':
@@ -225,7 +215,7 @@ class PlannerNode(PlannerInputs):
         self.own_odom_topic = self.odom_sub.topic_name
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
         self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
-                                    lambda: self.publish_status(force=True),
+                                    lambda: self.reports.publish(force=True),
                                     on_odometry=self.lock_try if self.lock_step else None)
         if self.localization_topic:
             # Best available durability: AMCL offers amcl_pose transient-local (then its last pose comes at once);
@@ -265,7 +255,7 @@ class PlannerNode(PlannerInputs):
         self.update_world()
         self.sim_time = SimTimeWatch(self, clock_guard, clock_timeout)
         self.clock_problem = ''   # why this node's time stands still ('' when it does not)
-        self.diagnostics = Diagnostics(self)
+        self.reports.make_diagnostics()
         # Tunable while running (docs/parameters.md); the robot's body, the algorithm, the seed, the topics and
         # frames are what the node was built with and stay read-only.
         self.dynamic = DynamicParameters(self, TUNABLE, self.apply_parameters)
@@ -286,13 +276,13 @@ class PlannerNode(PlannerInputs):
                 self.planning.drop_plan()         # planned before the pause: not driven on after it
         self.change(restart)
         self.control_timer.reset()
-        self._status_key = None
+        self.reports.changed()
 
     def deactivate(self) -> None:
         self.control_timer.cancel()
         self.last_command = np.zeros(2)
         self.publish_command(self.last_command)
-        self._status_key = None
+        self.reports.changed()
 
     def cleanup(self) -> None:
         """A fresh navigator: the goal is forgotten (the world, latched, is kept)."""
@@ -366,7 +356,7 @@ class PlannerNode(PlannerInputs):
             self.control_rate_hz = changes['control_rate_hz']
             self.control_timer.timer_period_ns = int(round(1e9 / self.control_rate_hz))
         self.sim_time.timeout = changes.get('clock_timeout', self.sim_time.timeout)
-        self._status_key = None
+        self.reports.changed()
         return ''
 
     def retune(self, params: PlannerParams) -> None:
@@ -444,7 +434,7 @@ class PlannerNode(PlannerInputs):
         if self.navigator is None:
             self.pending_goal = msg
             self.goal_info(f'goal ({point[0]:g}, {point[1]:g}) received; waiting for the world')
-            self.publish_status()
+            self.reports.publish()
             return
         nav = self.navigator
         if self.goal is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING) and \
@@ -471,7 +461,7 @@ class PlannerNode(PlannerInputs):
                 self.planning.drop_plan()   # no more driving toward the last goal's target: brake until the new plan
             self.goal_info(f'new goal ({point[0]:g}, {point[1]:g})')
         self.publish_plan(force=True)
-        self.publish_status()
+        self.reports.publish()
 
     def goal_problem(self, msg: PoseStamped) -> str:
         """Why a goal cannot be driven to ('' when it can, as far as the world known now says): its frame, an
@@ -592,15 +582,14 @@ class PlannerNode(PlannerInputs):
         try:
             self.control(at)
         finally:
-            self.control_times.append(time.perf_counter() - began)
-            self.control_cpu_times.append(time.thread_time() - began_cpu)
+            self.reports.timed(time.perf_counter() - began, time.thread_time() - began_cpu)
 
     def control(self, at: float | None = None) -> None:
         """on_control's work."""
         if self.sim_time.switched():
             self.on_clock_switched()
         t = self.now() if at is None else at
-        self.control_stamps.append(t)
+        self.reports.control_stamps.append(t)
         self.take_others()
         nav = self.navigator
         command = np.zeros(2)
@@ -621,7 +610,7 @@ class PlannerNode(PlannerInputs):
             self.cost_pub.publish(cdr.float64_cdr(float(nav.cost)))
             self.publish_target()
             self.publish_plan()
-        self.publish_status(at=t)
+        self.reports.publish(at=t)
 
     def drive_on_plan(self, t: float) -> np.ndarray:
         """With the planning thread: hand it this tick's snapshot and drive on the newest plan it has made
@@ -789,16 +778,16 @@ class PlannerNode(PlannerInputs):
         self.lock_try()      # an input waited for too long is given up on
         # A launcher waits for cmd_vel's readers (the plant, the clock) before it starts the run: told at once.
         readers = self.cmd_pub.get_subscription_count()
-        if found or readers != self.cmd_vel_readers or heartbeat:
-            self.cmd_vel_readers = readers
-            self.publish_status(force=True)
+        if found or readers != self.reports.cmd_vel_readers or heartbeat:
+            self.reports.cmd_vel_readers = readers
+            self.reports.publish(force=True)
         else:
-            self.publish_status()
+            self.reports.publish()
         if heartbeat:
             self.publish_target(force=True)
             self.publish_plan(force=True)
-            self.diagnostics.publish(self.diagnostic_tasks())
-            late = self.rate_problem()
+            self.reports.publish_diagnostics()
+            late = self.reports.rate_problem()
             if late and self.is_active:
                 self.get_logger().warning(late, throttle_duration_sec=10.0)
 
@@ -839,7 +828,7 @@ class PlannerNode(PlannerInputs):
         self.last_command = np.zeros(2)
         self.publish_command(self.last_command)
         self.clock_problem = self.sim_time.problem()   # the silence counts from the switch
-        self._status_key = None
+        self.reports.changed()
 
 
 def main(args: Sequence[str] | None = None) -> int:

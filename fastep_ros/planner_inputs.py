@@ -22,16 +22,20 @@ from visualization_msgs.msg import MarkerArray
 from fastep_core.perception.belief import heading
 from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.control import ControlTick, Plan
+from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
+from fastep_ros.lifecycle import ManagedNode
 from fastep_ros.live_tf import TfListener
 from fastep_ros.lock_step import STAMP_EPS, LockStep
+from fastep_ros.perception import ScanPerception
 from fastep_ros.planner_status import PlannerReports
 from fastep_ros.planning_thread import PlanningThread
-from fastep_ros.robots import robot_name
-from msg_tools import convert, frames
+from fastep_ros.robots import RobotFollower, robot_name
+from fastep_ros.sim_time import SimTimeWatch
+from msg_tools import convert, frames, interface
 
 __all__ = ['Body', 'PlannerInputs']
 
@@ -46,7 +50,7 @@ class Body:
     hitch_offset: float
 
 
-class PlannerInputs(PlannerReports):
+class PlannerInputs(ManagedNode):
     """The input handlers and the robot's state of the planner node (fastep_ros.planner.PlannerNode derives from it)."""
 
     # What the handlers read and set, set up by PlannerNode.
@@ -83,6 +87,63 @@ class PlannerInputs(PlannerReports):
     planning: PlanningThread[Any, Plan] | None
     control_tick: ControlTick | None
     latest_scan: LaserScan | None
+    algorithm: str
+    navigator: Navigator | None
+    goal: tuple[float, float] | None
+    hold: str                      # why the robot is held still although it has a goal ('' when it is not)
+    cmd_conflict: str              # the other publishers on cmd_vel ('' when there are none)
+    exclusive_cmd_vel: bool
+    goal_refused: str              # why the last goal was refused, while the goal before it is driven to
+    clock_problem: str             # why this node's time stands still ('' when it does not)
+    obstacles: list[Any] | None
+    workspace_param: tuple[float, float, float, float] | None
+    map_workspace: tuple[float, float, float, float] | None
+    odom: frames.StampedPose | None
+    odom_received: float
+    odom_timeout: float
+    odom_problem: str
+    odom_heard: int
+    odom_lag: float
+    own_odom_topic: str
+    control_rate_hz: float
+    plan_problem: str              # why the plan is not driven on ('' when it is)
+    control_count: int
+    plan_tick: int
+    robots: RobotFollower
+    cmd_pub: Publisher
+    scan_perception: ScanPerception
+    scan_problem: str
+    sim_time: SimTimeWatch
+    movers_received: float
+    _stale_logged: list[str]
+    reports: PlannerReports
+
+    def now(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def movers_stale(self, t: float) -> bool:
+        """Whether the known movers are older than odom_timeout (the map node stopped or stalled), or stamped
+        further than that ahead of this node's clock."""
+        return bool(self.known_movers) and not (t - self.movers_received <= self.odom_timeout and
+                                                -self.odom_timeout <= t - self.movers_stamp <= self.odom_timeout)
+
+    def stale_inputs(self, t: float) -> list[tuple[str, float]]:
+        """What this robot avoids on data that stopped coming, and how old that data is: other robots whose
+        odometry stopped (by name; fastep_ros.robots), the known movers ('/movers'). Logged when that changes."""
+        stale = [(r.name, t - r.received) for r in self.robots.fleet.stale(t)]
+        if self.movers_stale(t):
+            stale.append((interface.MOVERS, t - self.movers_received))
+        names = [name for name, _ in stale]
+        if names != self._stale_logged:
+            went, back = [n for n in names if n not in self._stale_logged], \
+                [n for n in self._stale_logged if n not in names]
+            if went:
+                self.get_logger().warning(f'stale: {", ".join(went)}; avoided where last seen, the reach widening '
+                                          f'at the last speed known, until fresh data comes')
+            if back:
+                self.get_logger().info(f'fresh again: {", ".join(back)}')
+            self._stale_logged = names
+        return stale
 
     def lock_try(self) -> None:
         """Lock step: act once every input of the newest odometry's time is in (PlannerNode's)."""
@@ -146,11 +207,11 @@ class PlannerInputs(PlannerReports):
             else:
                 self.navigator.world = world
                 self.get_logger().info(f'world updated: {count} obstacles')
-            self._status_key = None   # the obstacle count is part of the status
+            self.reports.changed()   # the obstacle count is part of the status
             if self.pending_goal is not None:
                 goal, self.pending_goal = self.pending_goal, None
                 self.on_goal(goal)
-            self.publish_status()
+            self.reports.publish()
         self.change(adopt)
 
     # ------------------------------------------------------------------------------------------- inputs
@@ -174,7 +235,7 @@ class PlannerInputs(PlannerReports):
         self.map_from_odom.add_odometry(self.odom_stamp, pose)
         self.odom_heard += 1
         if self.odom_heard == 1:
-            self.publish_status(force=True)   # a launcher waits for the odometry path to be up
+            self.reports.publish(force=True)   # a launcher waits for the odometry path to be up
         self.lock_try()
 
     def on_localization(self, msg: PoseWithCovarianceStamped) -> None:

@@ -34,7 +34,7 @@ def test_planner_node_follows_the_route_and_replans_when_the_map_changes(context
         node.on_control()
         nav = node.navigator
         assert isinstance(nav, FAStepRoute) and nav.route is not None
-        assert node.status()[1] == 'kinematic' and np.any(node.last_command != 0.0)
+        assert node.reports.status()[1] == 'kinematic' and np.any(node.last_command != 0.0)
         node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 2.0), Circle((4.0, 6.0), 1.0)]))
         assert node.navigator is nav and nav.world is node.world   # the same navigator, told the new world
         node.on_control()
@@ -64,7 +64,7 @@ def test_planner_node_reports_no_valid_path_for_fastep_route(context: Any) -> No
         node.on_odom(convert.state_to_odometry([1.0, 1.0]))
         node.on_goal(convert.point_to_pose_stamped((7.0, 7.0)))
         node.on_control()
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and reason.startswith('no valid path'), reason
     finally:
         node.destroy_node()

@@ -69,18 +69,18 @@ def test_a_refused_goal_leaves_the_goal_under_way_alone_and_says_why(context: An
         node.on_odom(convert.state_to_odometry([1.0, 1.0]))
         node.on_goal(convert.point_to_pose_stamped((8.0, 2.0)))
         node.on_control()
-        assert node.status()[:2] == (DiagnosticStatus.OK, 'kinematic')
+        assert node.reports.status()[:2] == (DiagnosticStatus.OK, 'kinematic')
         for goal, frame, words in (((math.nan, 1.0), 'map', 'not finite'), ((5.0, 5.0), 'map', 'inside an obstacle'),
                                    ((3.0, 3.0), 'odom', "frame 'odom'")):
             node.on_goal(convert.point_to_pose_stamped(goal, frame_id=frame))
             node.on_control()
-            level, message, reason = node.status()
+            level, message, reason = node.reports.status()
             assert (level, message) == (DiagnosticStatus.WARN, 'kinematic'), reason
             assert words in reason and 'still driving to (8, 2)' in reason, reason
             assert node.goal == (8.0, 2.0) and np.any(node.last_command != 0.0)
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))   # a good one is taken, the warning is gone
         node.on_control()
-        assert node.status()[:2] == (DiagnosticStatus.OK, 'kinematic') and node.goal == (8.0, 8.0)
+        assert node.reports.status()[:2] == (DiagnosticStatus.OK, 'kinematic') and node.goal == (8.0, 8.0)
     finally:
         node.destroy_node()
 
@@ -90,7 +90,7 @@ def test_a_refused_goal_with_none_under_way_is_a_failure_as_before(context: Any)
     try:
         node.on_obstacles(convert.obstacles_to_marker_array([]))
         node.on_goal(convert.point_to_pose_stamped((50.0, 5.0)))
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and 'outside the map' in reason
     finally:
         node.destroy_node()
@@ -112,7 +112,7 @@ def test_goals_at_any_rate_log_a_line_a_second_and_a_long_frame_is_not_echoed_wh
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))
         assert lines[1] == 'new goal (8, 8) (499 more such lines left out before it)'
         node.on_goal(convert.point_to_pose_stamped((3.0, 3.0), frame_id='x' * 10_000))
-        reason = node.status()[2]
+        reason = node.reports.status()[2]
         assert len(reason) < 300 and "goal frame 'xxxx" in reason and '(10000 characters)' in reason, reason
     finally:
         node.destroy_node()
@@ -229,7 +229,7 @@ def test_a_diff_drive_goal_s_orientation_is_the_heading_to_end_in(context: Any) 
         bad.pose.orientation.z = math.nan
         node.on_goal(bad)
         node.on_control()
-        level, _, reason = node.status()
+        level, _, reason = node.reports.status()
         assert level == DiagnosticStatus.WARN and 'goal orientation' in reason and node.goal == (8.0, 3.0)
     finally:
         node.destroy_node()

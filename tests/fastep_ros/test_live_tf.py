@@ -148,13 +148,13 @@ def test_planner_refuses_odometry_in_a_frame_that_is_neither_map_nor_its_odom(co
     try:
         node.on_odom(odometry(1.0, 1.0, frame=frame))
         node.on_control()
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.WARN, 'stale')
         assert f'odometry rejected: frame {frame!r} is neither the map frame' in reason and "'r1/odom'" in reason
         assert np.all(node.last_command == 0.0)
         node.on_odom(odometry(1.0, 1.0, frame='r1/odom'))   # its own odom frame: taken (map -> odom the identity)
         node.on_control()
-        assert node.status()[1] == 'kinematic' and np.any(node.last_command != 0.0)
+        assert node.reports.status()[1] == 'kinematic' and np.any(node.last_command != 0.0)
         node.on_odom(odometry(1.0, 1.0, frame='map'))       # the map frame: taken as it is
         assert node.odom_problem == ''
     finally:
@@ -171,7 +171,7 @@ def test_planner_composes_odometry_with_map_to_odom_from_the_localization_pose(c
         assert node.localization_topic == '/r1/amcl_pose'
         node.on_odom(odometry(1.0, 1.0))
         node.on_control()
-        assert node.status() == (DiagnosticStatus.WARN, 'waiting',
+        assert node.reports.status() == (DiagnosticStatus.WARN, 'waiting',
                                  'waiting for localization on /r1/amcl_pose (map -> r1/odom)')
         assert (sent[-1].linear.x, sent[-1].linear.y) == (0.0, 0.0)
         # AMCL: base_link is at (3, 2) in the map, heading +y (odometry said (1, 1), heading +x).
@@ -185,7 +185,7 @@ def test_planner_composes_odometry_with_map_to_odom_from_the_localization_pose(c
         state, problem = node.state(node.now())
         assert problem == '' and state is not None and state[:2] == pytest.approx([3.0, 2.0], abs=1e-6)
         node.on_control()
-        assert node.status()[1] == 'kinematic'
+        assert node.reports.status()[1] == 'kinematic'
         # The goal (3, 12) is straight ahead along the map's +y, which is base_link's +x.
         assert node.last_command[0] == pytest.approx(0.0, abs=1e-6) and node.last_command[1] > 0.0
         assert sent[-1].linear.x == pytest.approx(node.last_command[1]) and sent[-1].linear.y == pytest.approx(0.0)

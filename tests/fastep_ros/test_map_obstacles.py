@@ -47,13 +47,13 @@ def test_a_robot_drives_through_the_doorway_of_a_map_it_was_given_as_an_occupanc
             clock.set_ros_time_override(Time(nanoseconds=int(round(k * dt * 1e9)), clock_type=clock.clock_type))
             node.on_odom(convert.state_to_odometry(state, convert.seconds_to_stamp(k * dt)))
             node.on_control()
-            if node.status()[1] == 'arrived':
+            if node.reports.status()[1] == 'arrived':
                 break
             before, state = state, state + node.last_command * dt
             if before[0] < 6.0 <= state[0]:
                 crossed.append(float(state[1]))
             closest = min(closest, float(ROOM.obstacles.clearance(state)))   # against the true room
-        assert node.status()[1] == 'arrived', node.status()
+        assert node.reports.status()[1] == 'arrived', node.reports.status()
         assert np.hypot(*(state - goal)) <= 0.1
         assert closest >= 0.3   # never within its radius of the true walls ...
         assert len(crossed) == 1 and 4.2 + 0.3 <= crossed[0] <= 5.8 - 0.3   # ... it went through the doorway
@@ -67,7 +67,7 @@ def test_a_goal_inside_an_occupied_region_far_from_its_outline_is_refused(contex
         node.on_map(convert.world_to_occupancy_grid(ROOM, 0.1))
         node.on_odom(convert.state_to_odometry([2.0, 2.0]))
         node.on_goal(convert.point_to_pose_stamped((9.0, 7.0)))   # the pillar's centre: 0.8 m from its outline
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert message == 'failed' and 'occupied: an occupied cell of /map' in reason, reason
         node.on_goal(convert.point_to_pose_stamped((9.0, 8.5)))   # beside it: taken
         assert node.goal == (9.0, 8.5)

@@ -68,8 +68,8 @@ def _world_messages(node: PlannerNode, world: World) -> None:
 def test_planner_waits_for_the_world_then_takes_a_pending_goal(context: Any) -> None:
     node = make(PlannerNode, context)
     try:
-        assert node.status()[:2] == (DiagnosticStatus.WARN, 'waiting')
-        assert '/obstacles' in node.status()[2] and '/map' in node.status()[2]
+        assert node.reports.status()[:2] == (DiagnosticStatus.WARN, 'waiting')
+        assert '/obstacles' in node.reports.status()[2] and '/map' in node.reports.status()[2]
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))
         assert node.navigator is None and node.pending_goal is not None
         _world_messages(node, World.from_obstacles([0, 0, 10, 10], [Circle((5.0, 5.0), 1.0)]))
@@ -77,7 +77,7 @@ def test_planner_waits_for_the_world_then_takes_a_pending_goal(context: Any) -> 
         assert node.world.workspace == (0.0, 0.0, 10.0, 10.0)
         assert node.goal == (8.0, 8.0) and node.navigator.mode.value == 'kinematic'
         node.on_control()  # no odometry yet: hold still, say why
-        assert node.status() == (DiagnosticStatus.WARN, 'waiting', 'waiting for odometry on /odom')
+        assert node.reports.status() == (DiagnosticStatus.WARN, 'waiting', 'waiting for odometry on /odom')
     finally:
         node.destroy_node()
 
@@ -109,7 +109,7 @@ def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) ->
         bad.pose.pose.position.x = math.nan
         node.on_odom(bad)
         node.on_control()
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.WARN, 'stale') and 'not finite' in reason
         assert np.all(node.last_command == 0.0)
         node.on_odom(convert.state_to_odometry([1.0, 1.0]))
@@ -117,7 +117,7 @@ def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) ->
         node.on_control()
         goal = convert.point_to_pose_stamped((5.0, 5.0), frame_id='odom')
         node.on_goal(goal)   # refused; the goal under way stays (tests/fastep_ros/test_goals.py)
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.WARN, 'kinematic') and "frame 'odom'" in reason
         assert node.goal == (8.0, 8.0)
     finally:
@@ -141,12 +141,12 @@ def test_planner_survives_bad_messages_from_unknown_robots_and_bad_goals(context
                             ((math.nan, 1.0), 'not finite'), ((5.0, 6.2), 'occupied')):
             node.on_goal(convert.point_to_pose_stamped(goal))
             node.on_control()
-            level, message, reason = node.status()
+            level, message, reason = node.reports.status()
             assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and words in reason, reason
             assert np.all(node.last_command == 0.0)
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))   # a good goal after bad ones is taken
         node.on_control()
-        assert node.status()[1] in ('kinematic', 'avoiding') and np.any(node.last_command != 0.0)
+        assert node.reports.status()[1] in ('kinematic', 'avoiding') and np.any(node.last_command != 0.0)
     finally:
         node.destroy_node()
 
@@ -161,7 +161,7 @@ def test_planner_reports_no_valid_path_for_a_walled_in_goal(context: Any) -> Non
         node.on_odom(convert.state_to_odometry([1.0, 1.0]))
         node.on_goal(convert.point_to_pose_stamped((7.0, 7.0)))
         node.on_control()
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and reason.startswith('no valid path'), reason
         assert np.all(node.last_command == 0.0)
     finally:
@@ -503,7 +503,7 @@ def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: A
     sent: dict[str, list[Any]] = {'waypoint': [], 'plan': [], 'status': []}
     keep_published(node.waypoint_pub, sent['waypoint'].append)
     keep_published(node.plan_pub, sent['plan'].append)
-    keep_published(node.status_pub, sent['status'].append)
+    keep_published(node.reports.status_pub, sent['status'].append)
     try:
         node.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0), frame_id='world_frame'))
@@ -518,7 +518,7 @@ def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: A
         assert waypoint.header.stamp.sec > 0
         points = [*(tuple(p) for p in nav.plan), (8.0, 8.0)]
         assert plan == convert.waypoints_to_path(points, plan.header.stamp, 'world_frame')
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (status.level, status.name, status.message, status.hardware_id) == (level, '/', message, '')
         values = {kv.key: kv.value for kv in status.values}
         assert list(values) == [kv.key for kv in status.values] == [
@@ -535,19 +535,19 @@ def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: A
 def test_status_tells_how_long_the_control_callback_takes(context: Any) -> None:
     """status' control_ms and control_cpu_ms: p50 / p99 / max wall and thread-CPU milliseconds of the recent control
     callbacks (what benchmarks read at 16 robots), '' before the first."""
-    from fastep_ros.planner import CONTROL_TIMES
+    from fastep_ros.planner_status import CONTROL_TIMES
     node = make(PlannerNode, context)
     try:
-        assert node.control_ms() == '' and node.control_ms(cpu=True) == ''
+        assert node.reports.control_ms() == '' and node.reports.control_ms(cpu=True) == ''
         for _ in range(CONTROL_TIMES + 5):
             node.on_control()
-        assert len(node.control_times) == len(node.control_cpu_times) == CONTROL_TIMES
-        p50, p99, top = (float(v) for v in node.control_ms().split(' / '))
+        assert len(node.reports.control_times) == len(node.reports.control_cpu_times) == CONTROL_TIMES
+        p50, p99, top = (float(v) for v in node.reports.control_ms().split(' / '))
         assert 0.0 < p50 <= p99 <= top
-        cpu = [float(v) for v in node.control_ms(cpu=True).split(' / ')]
+        cpu = [float(v) for v in node.reports.control_ms(cpu=True).split(' / ')]
         assert cpu == sorted(cpu) and cpu[0] >= 0.0
         # A callback's thread cannot spend more CPU than the wall time it took (the clocks' resolution aside).
-        assert all(c <= w + 1e-4 for c, w in zip(node.control_cpu_times, node.control_times))
-        node.publish_status(force=True)   # with it among the values (a status that fails to build raises here)
+        assert all(c <= w + 1e-4 for c, w in zip(node.reports.control_cpu_times, node.reports.control_times))
+        node.reports.publish(force=True)   # with it among the values (a status that fails to build raises here)
     finally:
         node.destroy_node()

@@ -195,15 +195,16 @@ def test_no_clock_on_simulated_time_is_a_warning_and_stops_the_robot(context: An
     try:
         _with_world_and_goal(node)
         node.last_command = np.array([0.5, 0.0])   # as if it had been driving
-        assert services.spin_until(lambda: node.status()[0] == DiagnosticStatus.WARN, 5.0), node.status()
-        level, message, reason = node.status()
+        reports = node.reports
+        assert services.spin_until(lambda: reports.status()[0] == DiagnosticStatus.WARN, 5.0), reports.status()
+        level, message, reason = node.reports.status()
         assert message == 'stale' and 'no /clock' in reason
         assert not np.any(node.last_command)        # a zero cmd_vel went out
-        tasks = {t.task: t for t in node.diagnostic_tasks()}
+        tasks = {t.task: t for t in node.reports.diagnostic_tasks()}
         assert tasks['clock'].level == DiagnosticStatus.WARN
         # The clock comes: the warning goes.
-        assert services.spin_until(lambda: (_clock(services, 5), 'no /clock' not in node.status()[2])[1], 5.0)
-        assert {t.task: t for t in node.diagnostic_tasks()}['clock'].level == DiagnosticStatus.OK
+        assert services.spin_until(lambda: (_clock(services, 5), 'no /clock' not in node.reports.status()[2])[1], 5.0)
+        assert {t.task: t for t in node.reports.diagnostic_tasks()}['clock'].level == DiagnosticStatus.OK
     finally:
         services.close()
 
@@ -219,20 +220,21 @@ def test_switching_use_sim_time_while_driving_keeps_the_goal(context: Any) -> No
         assert node.navigator is not None and node.navigator.mode is Mode.KINEMATIC
         (result,) = services.set(use_sim_time=True)
         assert result.successful
-        assert services.spin_until(lambda: node.status()[0] == DiagnosticStatus.WARN, 5.0), node.status()
-        assert 'no /clock' in node.status()[2]
+        reports = node.reports
+        assert services.spin_until(lambda: reports.status()[0] == DiagnosticStatus.WARN, 5.0), reports.status()
+        assert 'no /clock' in node.reports.status()[2]
         assert services.spin_until(lambda: (_clock(services, 100), node.now())[1] >= 100.0, 5.0)
         node.on_odom(convert.state_to_odometry(np.array([1.5, 1.5]), convert.seconds_to_stamp(100.0)))
         node.on_control()
-        assert node.navigator.mode is Mode.KINEMATIC and np.any(node.last_command), node.status()
+        assert node.navigator.mode is Mode.KINEMATIC and np.any(node.last_command), node.reports.status()
         (result,) = services.set(use_sim_time=False)
         assert result.successful and node.now() > 1e9
         node.on_control()   # the switch is seen: odometry from the simulated clock is not used
-        assert node.status()[1] == 'waiting' and not np.any(node.last_command)
+        assert node.reports.status()[1] == 'waiting' and not np.any(node.last_command)
         node.on_odom(convert.state_to_odometry(np.array([1.6, 1.6]), convert.seconds_to_stamp(0.0)))
         node.on_control()
-        assert node.navigator.mode is Mode.KINEMATIC and np.any(node.last_command), node.status()
-        assert node.status()[0] == DiagnosticStatus.OK
+        assert node.navigator.mode is Mode.KINEMATIC and np.any(node.last_command), node.reports.status()
+        assert node.reports.status()[0] == DiagnosticStatus.OK
     finally:
         services.close()
 

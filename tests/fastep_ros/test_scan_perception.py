@@ -56,7 +56,7 @@ def drive(node: PlannerNode, scans: bool, mover: tuple[np.ndarray, np.ndarray] |
             reading = scan(SPEC, (state[0], state[1], 0.0), rng, t, np.array(circles), np.array(radii))
             node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(t)))
         node.on_control()
-        if node.status()[1] == 'arrived':
+        if node.reports.status()[1] == 'arrived':
             break
         state = state + node.last_command * dt
         gaps = np.hypot(*(np.array(circles) - state).T) - np.array(radii)
@@ -74,7 +74,7 @@ def test_an_obstacle_missing_from_the_map_is_seen_in_the_scans_and_avoided(conte
     node = make(context, algorithm='fastep_route')
     try:
         end, closest, published = drive(node, scans=True)
-        assert node.status()[1] == 'arrived' and np.hypot(*(end - (21.0, 10.0))) <= 0.1
+        assert node.reports.status()[1] == 'arrived' and np.hypot(*(end - (21.0, 10.0))) <= 0.1
         assert closest >= 0.0
         assert node.scan_perception.scans > 100
         believed = convert.marker_array_to_obstacles(published[-1])
@@ -89,7 +89,7 @@ def test_a_mover_missing_from_the_map_is_tracked_and_shown(context: Any) -> None
     try:
         # Crossing the robot's run at x = 17, upwards at 0.4 m/s, on the robot's line at about t = 15 s.
         end, closest, published = drive(node, scans=True, mover=(np.array([17.0, 4.0]), np.array([0.0, 0.4])))
-        assert node.status()[1] == 'arrived' and closest >= 0.0
+        assert node.reports.status()[1] == 'arrived' and closest >= 0.0
         tracks = [m for msg in published for m in msg.markers if m.ns == convert.TRACKS_NS]
         assert tracks, 'the mover was never tracked'
         arrows = [m for msg in published for m in msg.markers if m.ns == convert.TRACK_VELOCITIES_NS]

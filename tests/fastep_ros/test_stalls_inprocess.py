@@ -132,7 +132,8 @@ class Bench:
         odom = self.planner.odom
         age = np.inf if odom is None else self.now() - odom.stamp
         command = self.planner.last_command
-        self.ticks.append(Tick(self.now(), age, (float(command[0]), float(command[1])), self.planner.status()[1]))
+        message = self.planner.reports.status()[1]
+        self.ticks.append(Tick(self.now(), age, (float(command[0]), float(command[1])), message))
 
     def stalled(self, name: str) -> bool:
         t = self.now()
@@ -242,19 +243,19 @@ def test_planner_acts_on_odometry_stamped_within_max_extrapolation_only(context:
         planner.on_goal(convert.point_to_pose_stamped(GOAL))
         planner.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.8)))
         planner.on_control()
-        assert planner.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
+        assert planner.reports.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
         planner.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.7)))
         planner.on_control()
-        _, message, reason = planner.status()
+        _, message, reason = planner.reports.status()
         assert message == 'stale' and reason.startswith('odometry stale: stamped 0.30 s ago'), reason
         assert np.all(planner.last_command == 0.0)
         planner.on_odom(convert.state_to_odometry(START))   # unset stamp: as old as since it arrived
         now[0] = 50.2
         planner.on_control()
-        assert planner.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
+        assert planner.reports.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
         now[0] = 50.3
         planner.on_control()
-        assert planner.status()[1] == 'stale'
+        assert planner.reports.status()[1] == 'stale'
     finally:
         planner.destroy_node()
 

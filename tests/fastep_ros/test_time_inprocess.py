@@ -128,12 +128,12 @@ def test_after_a_clock_jump_the_plant_goes_on_and_the_planner_never_acts_on_a_po
         planner_at(3.02)
         planner.on_odom(sent[-1])   # odometry from the far time, at the planner's old time
         planner.on_control()
-        assert planner.status()[1] == 'stale' and 'ahead of this node\'s clock' in planner.status()[2]
+        assert planner.reports.status()[1] == 'stale' and 'ahead of this node\'s clock' in planner.reports.status()[2]
         planner_at(far)
         planner.on_odom(sent[-1])
         planner_at(3.04)   # the clock went back after the odometry came
         planner.on_control()
-        assert planner.status()[1] == 'stale' and 'clock went back' in planner.status()[2]
+        assert planner.reports.status()[1] == 'stale' and 'clock went back' in planner.reports.status()[2]
         assert plant.advance(3.04), 'back at the old time the plant goes on'
         assert plant.tick is not None and abs(plant.tick * plant.step - 3.04) < 1e-9
         plant.on_cmd_vel(convert.command_to_twist(np.array([1.0, 0.0]), 'point_mass'))
@@ -143,7 +143,7 @@ def test_after_a_clock_jump_the_plant_goes_on_and_the_planner_never_acts_on_a_po
         planner_at(3.5)
         planner.on_odom(sent[-1])
         planner.on_control()
-        assert planner.status()[1] in ('kinematic', 'avoiding'), planner.status()
+        assert planner.reports.status()[1] in ('kinematic', 'avoiding'), planner.reports.status()
     finally:
         planner.destroy_node()
         plant.destroy_node()
