@@ -207,7 +207,7 @@ class NavigateActions:
 
         from msg_tools import convert
         node, nav = self.node, self.node.navigator
-        state, _ = node.state(node.now())
+        state, _ = node.inputs.state(node.now())
         if state is None or nav is None:
             return
         feedback = self.served[run.kind].Feedback()

@@ -23,21 +23,14 @@ from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
-from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
-from nav_msgs.msg import OccupancyGrid, Odometry, Path
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
-from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float64
-from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import GoalError, ParameterError
-from fastep_core.planning.algorithms import (
-    ALGORITHMS,
-    NAVIGATORS,
-    check_drives,
-    make_robot,
-)
+from fastep_core.planning.algorithms import ALGORITHMS, NAVIGATORS, check_drives, make_navigator, make_robot
 from fastep_core.planning.control import ControlTick, Plan
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
@@ -56,20 +49,19 @@ from fastep_ros.common import (
     shown,
 )
 from fastep_ros.goals import GoalSubscription
-from fastep_ros.latched import LatchedSubscription
-from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
+from fastep_ros.lifecycle import ManagedNode
+from fastep_ros.live_tf import TfListener
 from fastep_ros.lock_step import LockStep
 from fastep_ros.navigate_actions import NavigateActions
 from fastep_ros.parameters import DynamicParameters
-from fastep_ros.perception import ScanPerception
 from fastep_ros.planner_inputs import Body, PlannerInputs
 from fastep_ros.planner_params import PARAMETERS, TUNABLE
 from fastep_ros.planner_status import PlannerReports
 from fastep_ros.planning_thread import PlanningThread
-from fastep_ros.robots import RobotFollower
+from fastep_ros.robots import RobotFollower, robot_name
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
-from msg_tools.interface import LATEST, RELIABLE, offered_qos
+from msg_tools.interface import RELIABLE, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
@@ -107,7 +99,7 @@ def stream_rng(seed: int, stream: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(stream,)))
 
 
-class PlannerNode(PlannerInputs):
+class PlannerNode(ManagedNode):
     """One robot's navigator (fastep_core) between its odometry and its cmd_vel; what it hears is
     fastep_ros.planner_inputs, what it tells of itself fastep_ros.planner_status."""
 
@@ -127,63 +119,37 @@ class PlannerNode(PlannerInputs):
         other_radius, other_timeout = values['other_robot_radius'], values['other_robot_timeout']
         if not other_timeout > 0.0:
             raise StartupError(f'parameter other_robot_timeout must be > 0, got {other_timeout:g}')
-        self.max_extrapolation, workspace = values['max_extrapolation'], values['workspace']
-        laser_mount, self.obstacle_source = values['laser_mount'], values['obstacle_source']
-        scan_noise, self.occupied_threshold = values['scan_noise'], values['occupied_threshold']
-        self.frame_id, odom_frame_id = values['frame_id'], values['odom_frame_id']
-        self.localization_topic, goal_frames = values['localization_topic'], values['goal_frames_from_tf']
-        self.map_to_odom_from_tf, lock_step = values['map_to_odom_from_tf'], values['lock_step']
+        self.max_extrapolation, self.frame_id = values['max_extrapolation'], values['frame_id']
+        goal_frames, lock_step = values['goal_frames_from_tf'], values['lock_step']
         threaded, self.exclusive_cmd_vel = values['planning_thread'], values['exclusive_cmd_vel']
         self.cmd_conflict = ''   # the other publishers on cmd_vel, while there are ('' when there are none)
         self.stop_on_failure, realtime = values['stop_on_failure'], values['realtime']
         self.max_plan_age = values['max_plan_age']
-        self._check(length, trailer_length, hitch_offset, other_radius, workspace)
+        self._check(length, trailer_length, hitch_offset, other_radius, values['workspace'], values['obstacle_source'])
         self.lock_step = bool(lock_step)
-        self.lock = LockStep()
-        self.pending_scan: LaserScan | None = None   # lock step: the newest scan, perceived when acted on
+        self.lock = LockStep()   # lock step's bookkeeping (fastep_ros.lock_step)
         self.body = Body(self.model, length, trailer_length, hitch_offset)
         self.stamped = stamped
-        self.workspace_param: tuple[float, float, float, float] | None = (
-            tuple(workspace) if workspace else None)
         self.rng = stream_rng(self.seed, self.seed_stream)
-        self.odom_frame_id = odom_frame_id or frames.odom_frame(self.get_namespace())
         self.base_frame_id = frames.base_frame(self.get_namespace())
-        if laser_mount and (len(laser_mount) != 3 or not all(math.isfinite(v) for v in laser_mount)):
-            raise StartupError(f'parameter laser_mount must be [x, y, yaw], three finite numbers, got {laser_mount}')
-        self.laser_mount: frames.Pose2D | None = \
-            (float(laser_mount[0]), float(laser_mount[1]), float(laser_mount[2])) if laser_mount else None
-        self.map_from_odom = frames.MapFromOdom()
-        self.body_yaw = 0.0   # map-frame heading of base_link at the last state: turns map commands into body ones
+        # What it hears, and the robot's state made of it (fastep_ros.planner_inputs).
+        self.inputs = PlannerInputs(self, values)
 
-        # What the planner knows.
-        self.obstacles: list[Any] | None = None
-        self.map_workspace: tuple[float, float, float, float] | None = None
-        self.occupied: Callable[[Sequence[float]], bool] | None = None   # obstacle_source map: is a point occupied
-        self.world: World | None = None
+        # What the planner decides.
         self.navigator: Navigator | None = None
         self.pending_goal: PoseStamped | None = None
         self.goal_msg: PoseStamped | None = None   # the message of the goal driven to (navigate_actions)
         self.goal: tuple[float, float] | None = None
-        self.odom: frames.StampedPose | None = None
-        self.odom_received = -math.inf
-        self.odom_stamp = -math.inf   # its header stamp; when it arrived if that is unset (zero)
-        self.odom_problem = ''
-        self.odom_heard = 0            # own odometry messages taken
         # Planning off the control path (fastep_ros.planning_thread), unless every tick plans (lock step, or asked).
         self.planning: PlanningThread[PlanSnapshot, Plan] | None = None
         self.control_tick: ControlTick | None = None   # the control loop's part of the navigator, with the thread
-        self.latest_scan: LaserScan | None = None      # with the thread: the newest scan, perceived by the next pass
         self.plan_problem = ''                         # why the plan is not driven on ('' when it is)
         self.control_count = 0                         # control ticks so far
         self.plan_tick = 0                             # the control tick the newest plan was planned from
-        self.trailer: float | None = None
-        self.trailer_stamp = -math.inf
         self.fault_logged = False
         self.hold = ''  # why the robot is held still although it has a goal ('' when it is not)
         self.goal_refused = ''  # why the last goal was refused, while the goal before it is driven to
         self.last_command = np.zeros(2)
-        self.odom_lag = 0.0
-        self._stale_logged: list[str] = []
         # Goals may come at any rate: their log lines at most once a second (fastep_ros.common.RepeatedLine). A
         # call site of its own for each severity: rclpy refuses two severities from one line of code.
         self.goal_info = RepeatedLine(lambda text: self.get_logger().info(text))
@@ -197,42 +163,16 @@ class PlannerNode(PlannerInputs):
         self.plan_pub = self.create_publisher(Path, interface.PLAN, offered_qos(interface.PLAN))
         self.cost_pub = self.create_publisher(Float64, interface.COST, offered_qos(interface.COST))
         self.reports = PlannerReports(self)   # status, /diagnostics, control timings (fastep_ros.planner_status)
-        # Taken as bytes (frames.stamped_pose): once a tick, and an Odometry message costs ~50 us to build.
-        self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST, raw=True)
-        if self.model == 'tractor_trailer':
-            self.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
+        self.inputs.subscribe()
         # Goals from anyone (volatile, as RViz and `ros2 topic pub` send them) and from latched publishers
         # (fastep-launch: a planner restarted mid-run gets the goal it was driving to again): fastep_ros.goals.
         self.goal_sub = GoalSubscription(self, self.on_goal)
-        # The latched world, subscribed again if a new publisher's message does not come (fastep_ros.latched).
-        self.world_subs: list[LatchedSubscription] = []
-        if self.obstacle_source == 'markers':
-            self.world_subs.append(LatchedSubscription(self, MarkerArray, interface.OBSTACLES, self.on_obstacles,
-                                                       offered_qos(interface.OBSTACLES)))
-        if self.workspace_param is None or self.obstacle_source == 'map':
-            self.world_subs.append(LatchedSubscription(self, OccupancyGrid, interface.MAP, self.on_map,
-                                                       offered_qos(interface.MAP)))
-        self.own_odom_topic = self.odom_sub.topic_name
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
         self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
                                     lambda: self.reports.publish(force=True),
                                     on_odometry=self.lock_try if self.lock_step else None)
-        if self.localization_topic:
-            # Best available durability: AMCL offers amcl_pose transient-local (then its last pose comes at once);
-            # a volatile publisher matches too, without incompatible-QoS warnings.
-            sub = self.create_subscription(PoseWithCovarianceStamped, self.localization_topic, self.on_localization,
-                                           LOCALIZATION_QOS)
-            self.localization_topic = sub.topic_name
-        # Any LaserScan on `scan` (sensor-data QoS: a best-effort subscription matches reliable publishers too):
-        # the planner perceives with it (fastep_ros.perception) and shows its belief on `tracked_obstacles`.
-        self.scan_perception = ScanPerception(scan_noise)
-        # The known movers of a v2 world (fastep-map's /movers, where the map puts them), avoided and yielded to.
-        self.known_movers: list[OtherRobot] = []
-        self.movers_stamp = -math.inf
-        self.movers_received = -math.inf
-        self.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
         # Goals in other frames: resolved through /tf and /tf_static (fastep_ros.live_tf).
-        self.tf = TfListener(self, dynamic=goal_frames or self.map_to_odom_from_tf)
+        self.tf = TfListener(self, dynamic=goal_frames or self.inputs.map_to_odom_from_tf)
         # Nav2's speed limits (a speed filter, a fleet manager): the robot's max_speed capped by the newest.
         self.configured_max_speed = self.params.max_speed
         self.speed_limit: tuple[bool, float] = (False, 0.0)
@@ -241,9 +181,6 @@ class PlannerNode(PlannerInputs):
             self.create_subscription(SpeedLimit, interface.SPEED_LIMIT, self.on_speed_limit, RELIABLE)
         except ImportError:
             pass   # no nav2_msgs: said once by navigate_actions
-        self.scan_sub = self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
-        self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
-        self.scan_problem = ''
         if threaded and (not self.lock_step or realtime):
             self.planning = PlanningThread(self.plan_pass, self.get_logger().error)
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control_tick)
@@ -293,6 +230,33 @@ class PlannerNode(PlannerInputs):
             self.update_world()
         self.change(forget)
 
+    def update_world(self) -> None:
+        workspace = self.inputs.workspace_param or self.inputs.map_workspace
+        if self.inputs.obstacles is None or workspace is None:
+            return
+        self.inputs.world = world = World.from_obstacles(workspace, self.inputs.obstacles)
+        count = len(self.inputs.obstacles)
+
+        def adopt() -> None:
+            self.inputs.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
+            if self.navigator is None:
+                self.navigator = nav = make_navigator(self.algorithm, self.body, self.radius, world, self.params,
+                                                      self.rng)
+                nav.name = robot_name(self.get_namespace())   # as the other robots' planners name it
+                if self.planning is not None:
+                    self.planning.drop_plan()
+                    self.control_tick = ControlTick(nav)
+                self.get_logger().info(f'world known: {count} obstacles in {workspace}')
+            else:
+                self.navigator.world = world
+                self.get_logger().info(f'world updated: {count} obstacles')
+            self.reports.changed()   # the obstacle count is part of the status
+            if self.pending_goal is not None:
+                goal, self.pending_goal = self.pending_goal, None
+                self.on_goal(goal)
+            self.reports.publish()
+        self.change(adopt)
+
     def change(self, work: Callable[[], Any]) -> None:
         """Change the navigator: between two passes on the planning thread, or at once without one."""
         if self.planning is None:
@@ -302,7 +266,7 @@ class PlannerNode(PlannerInputs):
 
     # ------------------------------------------------------------------------------------------- setup
     def _check(self, length: float, trailer_length: float, hitch_offset: float, other_radius: float,
-               workspace: list[float]) -> None:
+               workspace: list[float], obstacle_source: str) -> None:
         if self.algorithm not in ALGORITHMS:
             raise StartupError(f'parameter algorithm must be one of {", ".join(ALGORITHMS)}, '
                                f'got {self.algorithm!r}')
@@ -320,8 +284,8 @@ class PlannerNode(PlannerInputs):
         if self.seed < 0 or self.seed_stream < -1:
             raise StartupError(f'parameter seed must be >= 0 and seed_stream >= -1, got {self.seed} and '
                                f'{self.seed_stream}')
-        if self.obstacle_source not in ('markers', 'map'):
-            raise StartupError(f'parameter obstacle_source must be markers or map, got {self.obstacle_source!r}')
+        if obstacle_source not in ('markers', 'map'):
+            raise StartupError(f'parameter obstacle_source must be markers or map, got {obstacle_source!r}')
         if hitch_offset < 0.0 or other_radius < 0.0 or self.max_extrapolation < 0.0:
             raise StartupError('parameters hitch_offset, other_robot_radius and max_extrapolation must be >= 0')
         if workspace and (len(workspace) != 4 or not (workspace[0] < workspace[2] and workspace[1] < workspace[3])):
@@ -396,6 +360,16 @@ class PlannerNode(PlannerInputs):
         return value if configured <= 0.0 else min(configured, value)
 
     # ------------------------------------------------------------------------------------------- helpers
+    def now(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def locked(self) -> bool:
+        """Lock step is on: asked for, and the node runs on simulated time."""
+        return self.lock_step and self.sim_time.active
+
+    def stamp(self) -> Any:
+        return self.get_clock().now().to_msg()
+
     def stamp_parts(self) -> tuple[int, int]:
         """(sec, nanosec) of stamp(), for the writers of msg_tools.cdr."""
         ns = self.get_clock().now().nanoseconds
@@ -480,7 +454,7 @@ class PlannerNode(PlannerInputs):
                 nav.world.check_point(point, nav.radius)
         except GoalError as exc:
             return str(exc)
-        if self.occupied is not None and self.occupied(point):
+        if self.inputs.occupied is not None and self.inputs.occupied(point):
             # Inside an occupied region of /map, far from its outline: the walls alone would not say so.
             return f'goal ({point[0]:g}, {point[1]:g}) is occupied: an occupied cell of /map'
         return ''
@@ -532,17 +506,17 @@ class PlannerNode(PlannerInputs):
     def lock_try(self) -> None:
         """Lock step: act on the newest own odometry stamp once every input of its time is in (fastep_ros.lock_step).
         Called whenever one of them comes, on the control timer, and on the wall timer (inputs given up on)."""
-        if not self.locked() or self.odom is None or not self.is_active:
+        if not self.locked() or self.inputs.odom is None or not self.is_active:
             return
-        stamp, lock, now = self.odom_stamp, self.lock, self.now()
+        stamp, lock, now = self.inputs.odom_stamp, self.lock, self.now()
         if not lock.due(stamp, now):
             return
         inputs = {robot.name: robot.stamp for robot in self.robots.fleet.fresh(now)}
         if self.model == 'tractor_trailer':
-            inputs['trailer_pose'] = self.trailer_stamp   # the state of its time is odometry and trailer pose
-        if self.scan_sub.get_publisher_count() > 0:
-            inputs['scan'] = -math.inf if self.pending_scan is None else \
-                convert.stamp_to_seconds(self.pending_scan.header.stamp)
+            inputs['trailer_pose'] = self.inputs.trailer_stamp   # the state of its time is odometry and trailer pose
+        if self.inputs.scan_sub.get_publisher_count() > 0:
+            inputs['scan'] = -math.inf if self.inputs.pending_scan is None else \
+                convert.stamp_to_seconds(self.inputs.pending_scan.header.stamp)
         wall = self.wall_clock.now().nanoseconds * 1e-9
         if lock.late(stamp, inputs, wall):
             return
@@ -554,11 +528,11 @@ class PlannerNode(PlannerInputs):
         # differs in its last bit decides a timer that runs out exactly on a tick differently.
         period = 1.0 / self.control_rate_hz
         t = round(stamp / period) * period
-        scan, self.pending_scan = self.pending_scan, None
+        scan, self.inputs.pending_scan = self.inputs.pending_scan, None
         if scan is not None and self.planning is not None:
-            self.latest_scan = scan   # perceived by the next planning pass (realtime)
+            self.inputs.latest_scan = scan   # perceived by the next planning pass (realtime)
         elif scan is not None:
-            self.perceive(scan, t, at=t)
+            self.inputs.perceive(scan, t, at=t)
         self.on_control(t)
 
     @quiet_at_stop
@@ -569,7 +543,7 @@ class PlannerNode(PlannerInputs):
             self.on_control()
             return
         now, period = self.now(), 1.0 / self.control_rate_hz
-        if self.odom_stamp < now - 1.5 * period and self.lock.acted < now - 0.5 * period:
+        if self.inputs.odom_stamp < now - 1.5 * period and self.lock.acted < now - 0.5 * period:
             self.lock.acted = now
             self.on_control()
         else:
@@ -596,12 +570,12 @@ class PlannerNode(PlannerInputs):
         if self.planning is not None:
             command = self.drive_on_plan(t)
         elif nav is not None:
-            state, problem = self.state(t)
+            state, problem = self.inputs.state(t)
             if state is None:
                 self.hold = problem
             else:
                 self.hold = ''
-                command = self.navigate(nav, t, state, self.other_robots(t))
+                command = self.navigate(nav, t, state, self.inputs.other_robots(t))
         self.publish_command(command, at)
         self.last_command = command
         if self.actions is not None:
@@ -623,12 +597,12 @@ class PlannerNode(PlannerInputs):
         period = 1.0 / self.control_rate_hz
         if not np.array_equal(self.last_command, control.smoother.velocity):
             control.reset(self.last_command)   # a stop sent past the control tick (inactive, no clock)
-        state, problem = self.state(t)
+        state, problem = self.inputs.state(t)
         self.hold = problem
         if state is None:
             return control.stop(t, period)
-        told = self.told_others(t)
-        scan, self.latest_scan = self.latest_scan, None
+        told = self.inputs.told_others(t)
+        scan, self.inputs.latest_scan = self.inputs.latest_scan, None
         self.control_count += 1
         self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan))
         plan = self.planning.plan
@@ -658,8 +632,8 @@ class PlannerNode(PlannerInputs):
             return None
         t, state = snapshot.t, snapshot.state
         if snapshot.scan is not None:
-            self.perceive(snapshot.scan, t, state=state, told=snapshot.others)
-        tracked = self.scan_perception.movers(t)
+            self.inputs.perceive(snapshot.scan, t, state=state, told=snapshot.others)
+        tracked = self.inputs.scan_perception.movers(t)
         command = self.navigate(nav, t, state, [*snapshot.others, *tracked])
         self.plan_tick = snapshot.tick
         return Plan.of(nav, t, command, tracked)
@@ -718,7 +692,7 @@ class PlannerNode(PlannerInputs):
         if self.cmd_conflict and self.exclusive_cmd_vel:
             return
         if self.model == 'point_mass':
-            command = np.asarray(frames.body_velocity(command, self.body_yaw), dtype=float)
+            command = np.asarray(frames.body_velocity(command, self.inputs.body_yaw), dtype=float)
         # Sent as its bytes (msg_tools.cdr), once a tick: convert.command_to_twist's message, not built.
         linear, angular = convert.command_twist_values(command, self.model)
         if self.stamped:
@@ -770,7 +744,7 @@ class PlannerNode(PlannerInputs):
         self.check_clock()
         found = self.discover() | self.check_cmd_vel()
         self.goal_sub.look()
-        for sub in self.world_subs:
+        for sub in self.inputs.world_subs:
             sub.look()
         if self.actions is not None:
             self.actions.check()   # also while no control tick runs (inactive: an action goal is aborted)
@@ -815,7 +789,8 @@ class PlannerNode(PlannerInputs):
         t = self.now()
         self.get_logger().warning(f'use_sim_time is now {str(self.sim_time.active).lower()} (time {t:.3f} s): '
                                   'odometry and timers restart on this clock')
-        self.odom, self.odom_received, self.odom_stamp, self.odom_problem = None, -math.inf, -math.inf, ''
+        inputs = self.inputs
+        inputs.odom, inputs.odom_received, inputs.odom_stamp, inputs.odom_problem = None, -math.inf, -math.inf, ''
         for robot in self.robots.fleet.robots.values():
             if robot.received > -math.inf:   # kept where last heard, as if heard now: still avoided
                 robot.received = robot.stamp = t

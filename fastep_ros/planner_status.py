@@ -91,8 +91,9 @@ class PlannerReports:
     def navigation_status(self) -> tuple[bytes, str, str]:
         nav = self.node.navigator
         if nav is None:
-            missing = [name for name, have in ((interface.OBSTACLES, self.node.obstacles is not None),
-                                               (interface.MAP, self.node.workspace_param or self.node.map_workspace))
+            inputs = self.node.inputs
+            missing = [name for name, have in ((interface.OBSTACLES, inputs.obstacles is not None),
+                                               (interface.MAP, inputs.workspace_param or inputs.map_workspace))
                        if not have]
             return DiagnosticStatus.WARN, 'waiting', f'waiting for the world ({" and ".join(missing)})'
         mode = nav.mode
@@ -109,7 +110,7 @@ class PlannerReports:
         if self.node.goal_refused and self.node.goal is not None:
             return DiagnosticStatus.WARN, mode.value, f'{self.node.goal_refused}; still driving to ' \
                                                      f'({self.node.goal[0]:g}, {self.node.goal[1]:g})'
-        stale = self.node.stale_inputs(self.node.now())
+        stale = self.node.inputs.stale_inputs(self.node.now())
         if stale:
             kept = f'stale: {", ".join(name for name, _ in stale)} (kept where last seen, the reach widening)'
             return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {kept}' if nav.reason else kept
@@ -187,24 +188,24 @@ class PlannerReports:
             'cost': 0.0 if nav is None else float(nav.cost),
             'others': ' '.join(self.node.robots.fleet.names(self.node.now())),
             # What is avoided on data that stopped coming: robots by name, '/movers' (stale_inputs).
-            'stale': ' '.join(name for name, _ in self.node.stale_inputs(self.node.now())),
+            'stale': ' '.join(name for name, _ in self.node.inputs.stale_inputs(self.node.now())),
             'algorithm': self.node.algorithm,
             't': self.node.now(),
             # When the message (mode) began: a monitor that missed that status (keep-last at a high rtf) and
             # hears a later one, re-published, still knows when the robot arrived.
             'since': self._status_since,
-            'odom_lag': self.node.odom_lag,
-            'obstacles': -1 if self.node.obstacles is None else len(self.node.obstacles),
+            'odom_lag': self.node.inputs.odom_lag,
+            'obstacles': -1 if self.node.inputs.obstacles is None else len(self.node.inputs.obstacles),
             # Who hears cmd_vel (the plant; the clock's lock step): the readers this writer has matched. DDS
             # matches each end on its own, so that the plant's end is matched too is told by ...
             'cmd_vel_readers': self.node.cmd_pub.get_subscription_count(),
             # ... its odometry having reached this planner: while simulated time holds at 0 a plant publishes
             # its start state once its cmd_vel reader is matched (odometry is volatile: a match is not a delivery).
-            'odom_heard': self.node.odom_heard,
+            'odom_heard': self.node.inputs.odom_heard,
             # Perception of `scan`: scans taken, movers tracked now, and why the last scan was not (if it was not).
-            'scans': self.node.scan_perception.scans,
-            'tracks': len(self.node.scan_perception.movers(self.node.now())),
-            'scan_problem': self.node.scan_problem,
+            'scans': self.node.inputs.scan_perception.scans,
+            'tracks': len(self.node.inputs.scan_perception.movers(self.node.now())),
+            'scan_problem': self.node.inputs.scan_problem,
         }
         values['control_ms'], values['control_cpu_ms'] = self.control_ms_both()
         rate = self.control_rate()
@@ -228,18 +229,18 @@ class PlannerReports:
         tasks = [Task('navigation', level, message, {'reason': reason, 'goal': self.node.goal,
                                                      'algorithm': self.node.algorithm})]
         t = self.node.now()
-        topic = self.node.own_odom_topic
-        if self.node.odom_problem:
-            odometry = Task('odometry', DiagnosticStatus.ERROR, 'rejected', {'reason': self.node.odom_problem})
-        elif self.node.odom is None:
+        topic = self.node.inputs.own_odom_topic
+        if self.node.inputs.odom_problem:
+            odometry = Task('odometry', DiagnosticStatus.ERROR, 'rejected', {'reason': self.node.inputs.odom_problem})
+        elif self.node.inputs.odom is None:
             odometry = Task('odometry', DiagnosticStatus.WARN, 'waiting', {'reason': f'no odometry on {topic} yet'})
-        elif t - self.node.odom_received > self.node.odom_timeout or self.node.hold.startswith('odometry stale'):
+        elif t - self.node.inputs.odom_received > self.node.odom_timeout or self.node.hold.startswith('odometry stale'):
             why = self.node.hold if self.node.hold.startswith('odometry stale') else \
-                f'none for {t - self.node.odom_received:.2f} s (odom_timeout {self.node.odom_timeout:g} s)'
+                f'none for {t - self.node.inputs.odom_received:.2f} s (odom_timeout {self.node.odom_timeout:g} s)'
             odometry = Task('odometry', DiagnosticStatus.STALE, 'stale', {'reason': why, 'topic': topic})
         else:
-            odometry = Task('odometry', DiagnosticStatus.OK, 'fresh', {'topic': topic, 'lag': self.node.odom_lag,
-                                                                       'heard': self.node.odom_heard})
+            odometry = Task('odometry', DiagnosticStatus.OK, 'fresh', {'topic': topic, 'lag': self.node.inputs.odom_lag,
+                                                                       'heard': self.node.inputs.odom_heard})
         rate, late = self.control_rate(), self.rate_problem()
         level = DiagnosticStatus.ERROR if self.node.plan_problem else \
             DiagnosticStatus.WARN if late else DiagnosticStatus.OK
@@ -250,7 +251,7 @@ class PlannerReports:
         kind = 'simulated time' if self.node.sim_time.active else 'wall time'
         clock = Task('clock', DiagnosticStatus.WARN if self.node.clock_problem else DiagnosticStatus.OK, kind,
                      {'reason': self.node.clock_problem, 't': t})
-        stale = self.node.stale_inputs(t)
+        stale = self.node.inputs.stale_inputs(t)
         others = Task('others', DiagnosticStatus.WARN, 'stale', {
             'reason': 'kept where last seen, the reach widening at the last speed known, until fresh data comes',
             **{name: f'{age:.1f} s old' for name, age in stale}}) if stale else \

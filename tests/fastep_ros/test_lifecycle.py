@@ -29,9 +29,9 @@ def make(cls: type, context: Any, **params: Any) -> Any:
 
 def _drive(node: PlannerNode) -> None:
     world = World.from_obstacles([0, 0, 10, 10], [Circle((5.0, 2.0), 0.5)])
-    node.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
-    node.on_map(convert.world_to_occupancy_grid(world, 0.5))
-    node.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
+    node.inputs.on_map(convert.world_to_occupancy_grid(world, 0.5))
+    node.inputs.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
     node.on_goal(convert.point_to_pose_stamped((9.0, 9.0)))
 
 

@@ -114,9 +114,9 @@ def make(context: Any, **params: Any) -> PlannerNode:
 
 
 def start_driving(node: PlannerNode) -> None:
-    node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 16.0), 1.0)]))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 16.0), 1.0)]))
     node.on_goal(convert.point_to_pose_stamped((18.0, 10.0)))
-    node.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(node.now())))
+    node.inputs.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(node.now())))
 
 
 def drive_on_first_plan(node: PlannerNode) -> None:
@@ -135,7 +135,7 @@ def test_the_control_tick_drives_on_the_last_plan_while_a_pass_is_stuck_then_sto
 
     def tick() -> None:
         now[0] += 0.05
-        node.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(now[0])))
+        node.inputs.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(now[0])))
         node.on_control()
     try:
         assert node.planning is not None
@@ -226,12 +226,12 @@ class Base:
     def __init__(self, node: PlannerNode) -> None:
         self.node, self.now, self.state = node, 100.0, np.array([1.0, 10.0, 0.0])
         node.now = lambda: self.now   # type: ignore[method-assign]  # the test's clock
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         node.on_goal(convert.point_to_pose_stamped((95.0, 10.0)))   # far: the law's speed (gain x distance) is higher
 
     def tick(self) -> float:
         node = self.node
-        node.on_odom(convert.state_to_odometry(self.state, convert.seconds_to_stamp(self.now)))
+        node.inputs.on_odom(convert.state_to_odometry(self.state, convert.seconds_to_stamp(self.now)))
         node.on_control()
         v, omega = (float(c) for c in node.last_command)
         self.state = self.state + 0.05 * np.array([v * np.cos(self.state[2]), v * np.sin(self.state[2]), omega])

@@ -117,8 +117,8 @@ class Bench:
         self.planner.cmd_pub.publish = self._sender('plant')   # type: ignore[method-assign]  # the bench delivers
         self.plant.odom_pub.publish = self._sender('planner')  # type: ignore[method-assign]  # the bench delivers
         world = World.from_obstacles((0.0, 0.0, 20.0, 20.0), CIRCLES)
-        self.planner.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
-        self.planner.on_map(convert.world_to_occupancy_grid(world, 0.5))
+        self.planner.inputs.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
+        self.planner.inputs.on_map(convert.world_to_occupancy_grid(world, 0.5))
         self.planner.on_goal(convert.point_to_pose_stamped(GOAL))
 
     def now(self) -> float:
@@ -129,7 +129,7 @@ class Bench:
 
     def _control(self) -> None:
         self.planner.on_control()
-        odom = self.planner.odom
+        odom = self.planner.inputs.odom
         age = np.inf if odom is None else self.now() - odom.stamp
         command = self.planner.last_command
         message = self.planner.reports.status()[1]
@@ -239,17 +239,17 @@ def test_planner_acts_on_odometry_stamped_within_max_extrapolation_only(context:
     now = [50.0]
     planner.now = lambda: now[0]   # type: ignore[method-assign]  # the test's clock
     try:
-        planner.on_obstacles(convert.obstacles_to_marker_array([]))
+        planner.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         planner.on_goal(convert.point_to_pose_stamped(GOAL))
-        planner.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.8)))
+        planner.inputs.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.8)))
         planner.on_control()
         assert planner.reports.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
-        planner.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.7)))
+        planner.inputs.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.7)))
         planner.on_control()
         _, message, reason = planner.reports.status()
         assert message == 'stale' and reason.startswith('odometry stale: stamped 0.30 s ago'), reason
         assert np.all(planner.last_command == 0.0)
-        planner.on_odom(convert.state_to_odometry(START))   # unset stamp: as old as since it arrived
+        planner.inputs.on_odom(convert.state_to_odometry(START))   # unset stamp: as old as since it arrived
         now[0] = 50.2
         planner.on_control()
         assert planner.reports.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
