@@ -26,6 +26,7 @@ import numpy as np
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float64
 
@@ -49,7 +50,7 @@ from fastep_ros.common import (
     shown,
 )
 from fastep_ros.goals import GoalSubscription
-from fastep_ros.lifecycle import ManagedNode
+from fastep_ros.lifecycle import Lifecycle
 from fastep_ros.live_tf import TfListener
 from fastep_ros.lock_step import LockStep
 from fastep_ros.navigate_actions import NavigateActions
@@ -99,12 +100,16 @@ def stream_rng(seed: int, stream: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(stream,)))
 
 
-class PlannerNode(ManagedNode):
-    """One robot's navigator (fastep_core) between its odometry and its cmd_vel; what it hears is
-    fastep_ros.planner_inputs, what it tells of itself fastep_ros.planner_status."""
+class PlannerNode(LifecycleNode):
+    """One robot's navigator (fastep_core) between its odometry and its cmd_vel. Its members: `inputs` (what it
+    hears, fastep_ros.planner_inputs), `reports` (what it tells of itself, fastep_ros.planner_status), `lock` (lock
+    step, fastep_ros.lock_step) and `lifecycle` (its transitions, fastep_ros.lifecycle); its parameters are
+    fastep_ros.planner_params.PARAMETERS."""
 
     def __init__(self, node_name: str = 'planner', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        # Its transitions (fastep_ros.lifecycle): rclpy calls on_configure, on_activate, ... below, the member's.
+        self.lifecycle = Lifecycle(self, self.activate, self.deactivate, self.cleanup)
         clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         values = declare_table(self, PARAMETERS)
         try:
@@ -256,6 +261,25 @@ class PlannerNode(ManagedNode):
                 self.on_goal(goal)
             self.reports.publish()
         self.change(adopt)
+
+    # rclpy's transition callbacks: the lifecycle member's.
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_configure(state)
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_cleanup(state)
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_shutdown(state)
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_error(state)
 
     def change(self, work: Callable[[], Any]) -> None:
         """Change the navigator: between two passes on the planning thread, or at once without one."""
@@ -506,7 +530,7 @@ class PlannerNode(ManagedNode):
     def lock_try(self) -> None:
         """Lock step: act on the newest own odometry stamp once every input of its time is in (fastep_ros.lock_step).
         Called whenever one of them comes, on the control timer, and on the wall timer (inputs given up on)."""
-        if not self.locked() or self.inputs.odom is None or not self.is_active:
+        if not self.locked() or self.inputs.odom is None or not self.lifecycle.is_active:
             return
         stamp, lock, now = self.inputs.odom_stamp, self.lock, self.now()
         if not lock.due(stamp, now):
@@ -674,7 +698,7 @@ class PlannerNode(ManagedNode):
         if conflict == self.cmd_conflict:
             return False
         if conflict and not self.cmd_conflict:
-            if self.exclusive_cmd_vel and self.is_active:
+            if self.exclusive_cmd_vel and self.lifecycle.is_active:
                 self.publish_command(np.zeros(2))
             then = 'this planner stops commanding' if self.exclusive_cmd_vel else \
                 'commanding anyway (exclusive_cmd_vel false)'
@@ -762,7 +786,7 @@ class PlannerNode(ManagedNode):
             self.publish_plan(force=True)
             self.reports.publish_diagnostics()
             late = self.reports.rate_problem()
-            if late and self.is_active:
+            if late and self.lifecycle.is_active:
                 self.get_logger().warning(late, throttle_duration_sec=10.0)
 
     # ------------------------------------------------------------------------------------------- time

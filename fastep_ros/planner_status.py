@@ -76,7 +76,7 @@ class PlannerReports:
         self.control_cpu_times.append(cpu)
 
     def status(self) -> tuple[bytes, str, str]:
-        if not self.node.is_active:
+        if not self.node.lifecycle.is_active:
             return DiagnosticStatus.OK, 'inactive', 'lifecycle: not active (no commands); activate to drive'
         if self.node.cmd_conflict and self.node.exclusive_cmd_vel:
             return DiagnosticStatus.ERROR, 'conflict', f'{self.node.cmd_conflict}: not commanding while another node ' \
