@@ -12,6 +12,7 @@ import os
 import signal
 import sys
 import time
+from dataclasses import Field, dataclass
 from typing import Any, Callable, Sequence
 
 import rclpy
@@ -29,8 +30,9 @@ from fastep_ros.executors import make_executor
 from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-exported for the nodes
 from fastep_ros.parameters import warn_unknown_overrides
 
-__all__ = ['CLOCK_JUMP_LIMIT', 'GATE_ENV', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'StartupError', 'check_range',
-           'declare', 'declare_empty_array', 'declare_strings', 'guard_clock', 'node_main', 'quiet_at_stop']
+__all__ = ['CLOCK_JUMP_LIMIT', 'GATE_ENV', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'Param', 'StartupError',
+           'check_range', 'declare', 'declare_empty_array', 'declare_strings', 'declare_table', 'guard_clock',
+           'node_main', 'quiet_at_stop']
 
 
 INT64_MAX = 2**63 - 1
@@ -136,6 +138,34 @@ def declare(node: Node, name: str, default: Any, description: str, *, read_only:
     if isinstance(value, list) and not all(math.isfinite(v) for v in value if isinstance(v, float)):
         raise StartupError(f'parameter {name} must be finite, got {value}')
     return value
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter of a node's table: what `declare` is given (a node declares its table in one loop)."""
+
+    name: str
+    default: Any
+    description: str
+    constraints: str = ''
+    value_range: tuple[float, float] | None = None
+    unit: str = ''
+    read_only: bool = True
+
+    @classmethod
+    def of_field(cls, f: Field[Any], default: Any) -> Param:
+        """A dataclass field with `description` and `range` metadata (fastep_core PlannerParams): tunable."""
+        low, high = f.metadata['range']
+        return cls(f.name, default, f.metadata['description'], value_range=(low, high), read_only=False)
+
+    def declare(self, node: Node) -> Any:
+        return declare(node, self.name, self.default, self.description, read_only=self.read_only,
+                       constraints=self.constraints, value_range=self.value_range, unit=self.unit)
+
+
+def declare_table(node: Node, table: Sequence[Param]) -> dict[str, Any]:
+    """Declare every parameter of `table` in its order; their values by name."""
+    return {param.name: param.declare(node) for param in table}
 
 
 def check_range(name: str, value: float, low: float, high: float, unit: str = '') -> None:

@@ -96,7 +96,7 @@ class NavigateActions:
     # ------------------------------------------------------------------------------------------ requests
     def on_goal_request(self, request: Any) -> Any:
         from rclpy.action import GoalResponse
-        if not self.node.is_active:
+        if not self.node.lifecycle.is_active:
             self.node.get_logger().warning('navigation goal rejected: the planner is not active (lifecycle)')
             return GoalResponse.REJECT
         return GoalResponse.ACCEPT
@@ -173,7 +173,7 @@ class NavigateActions:
             node.drop_goal('goal canceled')
             self.finish(run, 'canceled', 'canceled', 0)
             return
-        if not node.is_active:
+        if not node.lifecycle.is_active:
             self.finish(run, 'aborted', 'the planner was deactivated', UNKNOWN_DRIVING)
             return
         if nav is None:
@@ -207,7 +207,7 @@ class NavigateActions:
 
         from msg_tools import convert
         node, nav = self.node, self.node.navigator
-        state, _ = node.state(node.now())
+        state, _ = node.inputs.state(node.now())
         if state is None or nav is None:
             return
         feedback = self.served[run.kind].Feedback()

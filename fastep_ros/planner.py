@@ -16,32 +16,22 @@ docs/reference/status.md; frames: docs/frames.md; other robots and goals: docs/r
 
 from __future__ import annotations
 
-import collections
 import math
 import time
 import traceback
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
 import numpy as np
-from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
-from nav_msgs.msg import OccupancyGrid, Odometry, Path
+from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
-from rclpy.qos import qos_profile_sensor_data
+from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float64
-from visualization_msgs.msg import MarkerArray
 
 from fastep_core.errors import GoalError, ParameterError
-from fastep_core.planning.algorithms import (
-    ALGORITHMS,
-    DEFAULT_ALGORITHM,
-    NAVIGATORS,
-    algorithm_name,
-    check_drives,
-    make_robot,
-)
+from fastep_core.planning.algorithms import ALGORITHMS, NAVIGATORS, check_drives, make_navigator, make_robot
 from fastep_core.planning.control import ControlTick, Plan
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
@@ -49,42 +39,37 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
 from fastep_ros.common import (
-    PERIOD_RANGE,
     RATE_RANGE,
     RepeatedLine,
     StartupError,
     check_range,
-    declare,
+    declare_table,
     guard_clock,
     node_main,
     quiet_at_stop,
     shown,
 )
-from fastep_ros.diagnostics import Diagnostics
 from fastep_ros.goals import GoalSubscription
-from fastep_ros.latched import LatchedSubscription
-from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
+from fastep_ros.lifecycle import Lifecycle
+from fastep_ros.live_tf import TfListener
 from fastep_ros.lock_step import LockStep
 from fastep_ros.navigate_actions import NavigateActions
 from fastep_ros.parameters import DynamicParameters
-from fastep_ros.perception import ScanPerception
 from fastep_ros.planner_inputs import Body, PlannerInputs
+from fastep_ros.planner_params import PARAMETERS, TUNABLE
+from fastep_ros.planner_status import PlannerReports
 from fastep_ros.planning_thread import PlanningThread
-from fastep_ros.robots import RobotFollower
+from fastep_ros.robots import RobotFollower, robot_name
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
-from msg_tools.interface import LATEST, RELIABLE, offered_qos
+from msg_tools.interface import RELIABLE, offered_qos
 
 __all__ = ['PlannerNode', 'main']
 
-TUNABLE = ('control_rate_hz', 'odom_timeout', 'clock_timeout', 'other_robot_radius', 'max_extrapolation',
-           'max_plan_age', 'exclusive_cmd_vel', 'stop_on_failure')
-"""The node's own parameters that change while it runs, besides every PlannerParams field."""
 DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other robots ...
 START_PERIOD = 0.05      # ... the first START_LOOKS looks (3 s) every START_PERIOD: a launcher waits for every
 START_LOOKS = 60         # planner to see the others and its cmd_vel's readers (make demo's start waited 0.2-0.5 s)
 HEARTBEAT = 1.0          # wall seconds between re-publications of status, waypoint and plan
-CONTROL_TIMES = 200      # control callbacks (10 s at 20 Hz) whose wall times status' control_ms sums up
 
 
 @dataclass(frozen=True)
@@ -115,156 +100,61 @@ def stream_rng(seed: int, stream: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(stream,)))
 
 
-class PlannerNode(PlannerInputs):
-    """One robot's navigator (fastep_core) between its odometry and its cmd_vel; what it hears is
-    fastep_ros.planner_inputs, what it tells of itself fastep_ros.planner_status."""
+class PlannerNode(LifecycleNode):
+    """One robot's navigator (fastep_core) between its odometry and its cmd_vel. Its members: `inputs` (what it
+    hears, fastep_ros.planner_inputs), `reports` (what it tells of itself, fastep_ros.planner_status), `lock` (lock
+    step, fastep_ros.lock_step) and `lifecycle` (its transitions, fastep_ros.lifecycle); its parameters are
+    fastep_ros.planner_params.PARAMETERS."""
 
     def __init__(self, node_name: str = 'planner', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
+        # Its transitions (fastep_ros.lifecycle): rclpy calls on_configure, on_activate, ... below, the member's.
+        self.lifecycle = Lifecycle(self, self.activate, self.deactivate, self.cleanup)
         clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
-        self.params = self._declare_planner_params()
-        self.algorithm = declare(self, 'algorithm', DEFAULT_ALGORITHM,
-                                 'planner: ' + ', '.join(f'{a} ({algorithm_name(a)})' for a in ALGORITHMS),
-                                 constraints=' | '.join(ALGORITHMS))
-        self.model = declare(self, 'model', 'point_mass', 'robot model: ' + ' | '.join(MODELS),
-                             constraints=' | '.join(MODELS))
-        self.radius = declare(self, 'robot_radius', 0.5, 'safety radius: centre-to-obstacle-surface distance '
-                              'that counts as collision (m)', constraints='> 0')
-        length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)')
-        trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)')
-        hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
-        self.seed = declare(self, 'seed', 0, 'seed of the swarm\'s random numbers')
-        self.seed_stream = declare(self, 'seed_stream', -1, 'if >= 0: use stream k of SeedSequence(seed).spawn, '
-                                   'as fastep-sim does for the k-th robot of a scenario; -1: default_rng(seed)')
-        self.control_rate_hz = declare(self, 'control_rate_hz', 20.0, 'control ticks per second of the node '
-                                       'clock (1 / dt of the in-process simulator)', value_range=RATE_RANGE,
-                                       unit=' Hz', read_only=False)
-        self.odom_timeout = declare(self, 'odom_timeout', 1.0, 'odometry older than this (s, node clock) is '
-                                    'stale: the robot is stopped', constraints='> 0', read_only=False)
-        clock_timeout = declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
-                                'seconds is a warning on status and /diagnostics, and the robot is stopped',
-                                value_range=PERIOD_RANGE, unit=' s', read_only=False)
-        stamped = declare(self, 'use_stamped_cmd_vel', False, 'publish cmd_vel as TwistStamped, not Twist')
-        other_radius = declare(self, 'other_robot_radius', 0.0, 'safety radius assumed for other robots (m); '
-                               '0: the radius each announces (its footprint), robot_radius until it is heard',
-                               value_range=(0.0, math.inf), read_only=False)
-        other_timeout = declare(self, 'other_robot_timeout', 3.0, 'another robot whose odometry has not come for '
-                                'this long (s, node clock) is stale (status `stale`); from odom_timeout on it is '
-                                'avoided where last seen, widened by its last speed times up to this long',
-                                constraints='> 0')
+        values = declare_table(self, PARAMETERS)
+        try:
+            self.params = PlannerParams().with_overrides({name: values[name] for name in PlannerParams.names()})
+        except ParameterError as exc:
+            raise StartupError(str(exc)) from None
+        self.algorithm, self.model, self.radius = values['algorithm'], values['model'], values['robot_radius']
+        length, trailer_length, hitch_offset = values['length'], values['trailer_length'], values['hitch_offset']
+        self.seed, self.seed_stream = values['seed'], values['seed_stream']
+        self.control_rate_hz, self.odom_timeout = values['control_rate_hz'], values['odom_timeout']
+        clock_timeout, stamped = values['clock_timeout'], values['use_stamped_cmd_vel']
+        other_radius, other_timeout = values['other_robot_radius'], values['other_robot_timeout']
         if not other_timeout > 0.0:
             raise StartupError(f'parameter other_robot_timeout must be > 0, got {other_timeout:g}')
-        self.max_extrapolation = declare(
-            self, 'max_extrapolation', 0.25, 'latency compensation: odometry (own and other robots\') is '
-            'predicted forward from its stamp to the control time by at most this much (s); own odometry stamped '
-            'longer ago is stale: the robot is held still; 0 disables both', value_range=(0.0, math.inf),
-            read_only=False)
-        workspace = declare(self, 'workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map')
-        laser_mount = declare(self, 'laser_mount', None, '[x (m), y (m), yaw (rad)]: where the scanner sits in '
-                              'base_link, for scans in a frame of their own (the static transform base_link -> '
-                              'the scan\'s frame; /tf_static is not read here); empty: scans must be in base_link')
-        self.obstacle_source = declare(self, 'obstacle_source', 'markers', 'where the obstacles come from: markers '
-                                       '(the /obstacles MarkerArray of fastep-map: circles and walls) | map (the '
-                                       'occupied cells of the /map OccupancyGrid, as Nav2\'s map_server publishes '
-                                       'it: their outline, as walls)', constraints='markers | map')
-        scan_noise = declare(self, 'scan_noise', 0.01, 'standard deviation of the laser\'s range noise (m), which a '
-                             'LaserScan does not carry: the perception of `scan` clusters and fits with it',
-                             value_range=(0.0, 1.0), unit=' m')
-        self.occupied_threshold = declare(self, 'occupied_threshold', convert.OCCUPIED_THRESHOLD,
-                                          'with obstacle_source map: a cell is occupied from this value (0-100) on; '
-                                          'unknown cells (-1) are free (map_server\'s occupied_thresh 0.65)',
-                                          value_range=(1, 100))
-        self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans')
-        odom_frame_id = declare(self, 'odom_frame_id', '', 'the robot\'s odometry frame (REP-105); empty: <ns>/odom '
-                                '(root namespace: odom). Odometry in it or in frame_id is taken, in any other '
-                                'frame refused')
-        self.localization_topic = declare(self, 'localization_topic', '', 'localization pose topic '
-                                          '(geometry_msgs/PoseWithCovarianceStamped, the map pose of base_link, e.g. '
-                                          'amcl_pose) giving map -> odom; empty: map -> odom is the identity '
-                                          '(simulation)')
-        goal_frames = declare(self, 'goal_frames_from_tf', True, 'follow /tf (polled, taken when used) to move goals '
-                              'given in other frames (odom, base_link) into map; false: only /tf_static is followed '
-                              '(fastep-launch, whose goals are in map: every plant publishes /tf at its rate)')
-        self.map_to_odom_from_tf = declare(self, 'map_to_odom_from_tf', False, 'take map -> odom from /tf and '
-                                           '/tf_static (AMCL and slam_toolbox publish it) at each control tick; '
-                                           'localization_topic, when set, is taken instead')
-        lock_step = declare(self, 'lock_step', False, 'on simulated time: act once per own odometry stamp, when '
-                            'the other robots\' odometry (and the scan) of that time are in, and stamp cmd_vel with '
-                            'it, so a graph steps like fastep-sim (fastep-launch sets it; needs use_stamped_cmd_vel '
-                            'and plants in lock step)')
-        threaded = declare(self, 'planning_thread', True, 'plan on a thread of its own, so that the control loop never '
-                           'waits for planning (it drives on the newest plan, guarded every tick); false: every '
-                           'control tick plans, the clock of a simulation waiting for it. Lock step plans on the '
-                           'tick (unless realtime)')
-        self.exclusive_cmd_vel = declare(self, 'exclusive_cmd_vel', True, 'another publisher on cmd_vel (a second '
-                                         'planner started in this namespace, a teleop) stops this planner\'s '
-                                         'commands after one zero: status ERROR `conflict` until it is gone; false: '
-                                         'command anyway', read_only=False)
+        self.max_extrapolation, self.frame_id = values['max_extrapolation'], values['frame_id']
+        goal_frames, lock_step = values['goal_frames_from_tf'], values['lock_step']
+        threaded, self.exclusive_cmd_vel = values['planning_thread'], values['exclusive_cmd_vel']
         self.cmd_conflict = ''   # the other publishers on cmd_vel, while there are ('' when there are none)
-        self.stop_on_failure = declare(self, 'stop_on_failure', True, 'follow_waypoints: a waypoint that fails ends '
-                                       'the goal (ABORTED, TASK_EXECUTOR_FAILED), as Nav2\'s waypoint follower by '
-                                       'default; false: it is missed and the robot goes on to the next',
-                                       read_only=False)
-        realtime = declare(self, 'realtime', False, 'in lock step, plan on the planning thread as on wall time: a '
-                           'pass\'s plan reaches the control loop when it is done, the simulated clock going on '
-                           'meanwhile (fastep-launch --realtime: planning latency counted; not deterministic)')
-        self.max_plan_age = declare(self, 'max_plan_age', 2.0, 'a plan older than this (s, node clock) is not driven '
-                                    'on: the robot stops, status ERROR, until a planning pass ends (planning_thread)',
-                                    value_range=(0.1, 60.0), unit=' s', read_only=False)
-        self._check(length, trailer_length, hitch_offset, other_radius, workspace)
+        self.stop_on_failure, realtime = values['stop_on_failure'], values['realtime']
+        self.max_plan_age = values['max_plan_age']
+        self._check(length, trailer_length, hitch_offset, other_radius, values['workspace'], values['obstacle_source'])
         self.lock_step = bool(lock_step)
-        self.lock = LockStep()
-        self.pending_scan: LaserScan | None = None   # lock step: the newest scan, perceived when acted on
+        self.lock = LockStep()   # lock step's bookkeeping (fastep_ros.lock_step)
         self.body = Body(self.model, length, trailer_length, hitch_offset)
         self.stamped = stamped
-        self.workspace_param: tuple[float, float, float, float] | None = (
-            tuple(workspace) if workspace else None)
         self.rng = stream_rng(self.seed, self.seed_stream)
-        self.odom_frame_id = odom_frame_id or frames.odom_frame(self.get_namespace())
         self.base_frame_id = frames.base_frame(self.get_namespace())
-        if laser_mount and (len(laser_mount) != 3 or not all(math.isfinite(v) for v in laser_mount)):
-            raise StartupError(f'parameter laser_mount must be [x, y, yaw], three finite numbers, got {laser_mount}')
-        self.laser_mount: frames.Pose2D | None = \
-            (float(laser_mount[0]), float(laser_mount[1]), float(laser_mount[2])) if laser_mount else None
-        self.map_from_odom = frames.MapFromOdom()
-        self.body_yaw = 0.0   # map-frame heading of base_link at the last state: turns map commands into body ones
+        # What it hears, and the robot's state made of it (fastep_ros.planner_inputs).
+        self.inputs = PlannerInputs(self, values)
 
-        # What the planner knows.
-        self.obstacles: list[Any] | None = None
-        self.map_workspace: tuple[float, float, float, float] | None = None
-        self.occupied: Callable[[Sequence[float]], bool] | None = None   # obstacle_source map: is a point occupied
-        self.world: World | None = None
+        # What the planner decides.
         self.navigator: Navigator | None = None
         self.pending_goal: PoseStamped | None = None
         self.goal_msg: PoseStamped | None = None   # the message of the goal driven to (navigate_actions)
         self.goal: tuple[float, float] | None = None
-        self.odom: frames.StampedPose | None = None
-        self.odom_received = -math.inf
-        self.odom_stamp = -math.inf   # its header stamp; when it arrived if that is unset (zero)
-        self.odom_problem = ''
-        self.odom_heard = 0            # own odometry messages taken
-        self.cmd_vel_readers = 0       # cmd_vel's matched readers when status last told them
-        self.control_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
-        self.control_cpu_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
-        self.control_stamps: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)   # node times
         # Planning off the control path (fastep_ros.planning_thread), unless every tick plans (lock step, or asked).
         self.planning: PlanningThread[PlanSnapshot, Plan] | None = None
         self.control_tick: ControlTick | None = None   # the control loop's part of the navigator, with the thread
-        self.latest_scan: LaserScan | None = None      # with the thread: the newest scan, perceived by the next pass
         self.plan_problem = ''                         # why the plan is not driven on ('' when it is)
         self.control_count = 0                         # control ticks so far
         self.plan_tick = 0                             # the control tick the newest plan was planned from
-        self.trailer: float | None = None
-        self.trailer_stamp = -math.inf
         self.fault_logged = False
         self.hold = ''  # why the robot is held still although it has a goal ('' when it is not)
         self.goal_refused = ''  # why the last goal was refused, while the goal before it is driven to
         self.last_command = np.zeros(2)
-        self.odom_lag = 0.0
-        # What was last published.
-        self._status_key: tuple[Any, ...] | None = None
-        self._status_since = 0.0
-        self._stale_logged: list[str] = []
         # Goals may come at any rate: their log lines at most once a second (fastep_ros.common.RepeatedLine). A
         # call site of its own for each severity: rclpy refuses two severities from one line of code.
         self.goal_info = RepeatedLine(lambda text: self.get_logger().info(text))
@@ -277,43 +167,17 @@ class PlannerNode(PlannerInputs):
         self.waypoint_pub = self.create_publisher(PoseStamped, interface.WAYPOINT, offered_qos(interface.WAYPOINT))
         self.plan_pub = self.create_publisher(Path, interface.PLAN, offered_qos(interface.PLAN))
         self.cost_pub = self.create_publisher(Float64, interface.COST, offered_qos(interface.COST))
-        self.status_pub = self.create_publisher(DiagnosticStatus, interface.STATUS, offered_qos(interface.STATUS))
-        # Taken as bytes (frames.stamped_pose): once a tick, and an Odometry message costs ~50 us to build.
-        self.odom_sub = self.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST, raw=True)
-        if self.model == 'tractor_trailer':
-            self.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
+        self.reports = PlannerReports(self)   # status, /diagnostics, control timings (fastep_ros.planner_status)
+        self.inputs.subscribe()
         # Goals from anyone (volatile, as RViz and `ros2 topic pub` send them) and from latched publishers
         # (fastep-launch: a planner restarted mid-run gets the goal it was driving to again): fastep_ros.goals.
         self.goal_sub = GoalSubscription(self, self.on_goal)
-        # The latched world, subscribed again if a new publisher's message does not come (fastep_ros.latched).
-        self.world_subs: list[LatchedSubscription] = []
-        if self.obstacle_source == 'markers':
-            self.world_subs.append(LatchedSubscription(self, MarkerArray, interface.OBSTACLES, self.on_obstacles,
-                                                       offered_qos(interface.OBSTACLES)))
-        if self.workspace_param is None or self.obstacle_source == 'map':
-            self.world_subs.append(LatchedSubscription(self, OccupancyGrid, interface.MAP, self.on_map,
-                                                       offered_qos(interface.MAP)))
-        self.own_odom_topic = self.odom_sub.topic_name
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
         self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
-                                    lambda: self.publish_status(force=True),
+                                    lambda: self.reports.publish(force=True),
                                     on_odometry=self.lock_try if self.lock_step else None)
-        if self.localization_topic:
-            # Best available durability: AMCL offers amcl_pose transient-local (then its last pose comes at once);
-            # a volatile publisher matches too, without incompatible-QoS warnings.
-            sub = self.create_subscription(PoseWithCovarianceStamped, self.localization_topic, self.on_localization,
-                                           LOCALIZATION_QOS)
-            self.localization_topic = sub.topic_name
-        # Any LaserScan on `scan` (sensor-data QoS: a best-effort subscription matches reliable publishers too):
-        # the planner perceives with it (fastep_ros.perception) and shows its belief on `tracked_obstacles`.
-        self.scan_perception = ScanPerception(scan_noise)
-        # The known movers of a v2 world (fastep-map's /movers, where the map puts them), avoided and yielded to.
-        self.known_movers: list[OtherRobot] = []
-        self.movers_stamp = -math.inf
-        self.movers_received = -math.inf
-        self.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
         # Goals in other frames: resolved through /tf and /tf_static (fastep_ros.live_tf).
-        self.tf = TfListener(self, dynamic=goal_frames or self.map_to_odom_from_tf)
+        self.tf = TfListener(self, dynamic=goal_frames or self.inputs.map_to_odom_from_tf)
         # Nav2's speed limits (a speed filter, a fleet manager): the robot's max_speed capped by the newest.
         self.configured_max_speed = self.params.max_speed
         self.speed_limit: tuple[bool, float] = (False, 0.0)
@@ -322,9 +186,6 @@ class PlannerNode(PlannerInputs):
             self.create_subscription(SpeedLimit, interface.SPEED_LIMIT, self.on_speed_limit, RELIABLE)
         except ImportError:
             pass   # no nav2_msgs: said once by navigate_actions
-        self.scan_sub = self.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
-        self.tracked_pub = self.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
-        self.scan_problem = ''
         if threaded and (not self.lock_step or realtime):
             self.planning = PlanningThread(self.plan_pass, self.get_logger().error)
         self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control_tick)
@@ -336,15 +197,15 @@ class PlannerNode(PlannerInputs):
         self.update_world()
         self.sim_time = SimTimeWatch(self, clock_guard, clock_timeout)
         self.clock_problem = ''   # why this node's time stands still ('' when it does not)
-        self.diagnostics = Diagnostics(self)
+        self.reports.make_diagnostics()
         # Tunable while running (docs/parameters.md); the robot's body, the algorithm, the seed, the topics and
         # frames are what the node was built with and stay read-only.
-        self.dynamic = DynamicParameters(self, (*PlannerParams.names(), *TUNABLE), self.apply_parameters)
+        self.dynamic = DynamicParameters(self, TUNABLE, self.apply_parameters)
         self.get_logger().info(f'{self.algorithm} planner for a {self.model} of radius {self.radius:g} m, '
                                f'control at {self.control_rate_hz:g} Hz')
         # Nav2's navigate_to_pose and navigate_through_poses (fastep_ros.navigate_actions), where nav2_msgs is.
         self.actions = NavigateActions.make(self)
-        self.start_lifecycle()   # autostart: active at once (fastep_ros.lifecycle)
+        self.lifecycle.start(values['autostart'])   # autostart: active at once (fastep_ros.lifecycle)
 
     # ------------------------------------------------------------------------------------------- lifecycle
     def activate(self) -> None:
@@ -357,13 +218,13 @@ class PlannerNode(PlannerInputs):
                 self.planning.drop_plan()         # planned before the pause: not driven on after it
         self.change(restart)
         self.control_timer.reset()
-        self._status_key = None
+        self.reports.changed()
 
     def deactivate(self) -> None:
         self.control_timer.cancel()
         self.last_command = np.zeros(2)
         self.publish_command(self.last_command)
-        self._status_key = None
+        self.reports.changed()
 
     def cleanup(self) -> None:
         """A fresh navigator: the goal is forgotten (the world, latched, is kept)."""
@@ -374,6 +235,52 @@ class PlannerNode(PlannerInputs):
             self.update_world()
         self.change(forget)
 
+    def update_world(self) -> None:
+        workspace = self.inputs.workspace_param or self.inputs.map_workspace
+        if self.inputs.obstacles is None or workspace is None:
+            return
+        self.inputs.world = world = World.from_obstacles(workspace, self.inputs.obstacles)
+        count = len(self.inputs.obstacles)
+
+        def adopt() -> None:
+            self.inputs.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
+            if self.navigator is None:
+                self.navigator = nav = make_navigator(self.algorithm, self.body, self.radius, world, self.params,
+                                                      self.rng)
+                nav.name = robot_name(self.get_namespace())   # as the other robots' planners name it
+                if self.planning is not None:
+                    self.planning.drop_plan()
+                    self.control_tick = ControlTick(nav)
+                self.get_logger().info(f'world known: {count} obstacles in {workspace}')
+            else:
+                self.navigator.world = world
+                self.get_logger().info(f'world updated: {count} obstacles')
+            self.reports.changed()   # the obstacle count is part of the status
+            if self.pending_goal is not None:
+                goal, self.pending_goal = self.pending_goal, None
+                self.on_goal(goal)
+            self.reports.publish()
+        self.change(adopt)
+
+    # rclpy's transition callbacks: the lifecycle member's.
+    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_configure(state)
+
+    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_activate(state)
+
+    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_deactivate(state)
+
+    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_cleanup(state)
+
+    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_shutdown(state)
+
+    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
+        return self.lifecycle.on_error(state)
+
     def change(self, work: Callable[[], Any]) -> None:
         """Change the navigator: between two passes on the planning thread, or at once without one."""
         if self.planning is None:
@@ -382,20 +289,8 @@ class PlannerNode(PlannerInputs):
             self.planning.call(work)
 
     # ------------------------------------------------------------------------------------------- setup
-    def _declare_planner_params(self) -> PlannerParams:
-        defaults = PlannerParams()
-        values = {}
-        for f in fields(PlannerParams):
-            low, high = f.metadata['range']
-            values[f.name] = declare(self, f.name, getattr(defaults, f.name), f.metadata['description'],
-                                     value_range=(low, high), read_only=False)
-        try:
-            return defaults.with_overrides(values)
-        except ParameterError as exc:
-            raise StartupError(str(exc)) from None
-
     def _check(self, length: float, trailer_length: float, hitch_offset: float, other_radius: float,
-               workspace: list[float]) -> None:
+               workspace: list[float], obstacle_source: str) -> None:
         if self.algorithm not in ALGORITHMS:
             raise StartupError(f'parameter algorithm must be one of {", ".join(ALGORITHMS)}, '
                                f'got {self.algorithm!r}')
@@ -413,8 +308,8 @@ class PlannerNode(PlannerInputs):
         if self.seed < 0 or self.seed_stream < -1:
             raise StartupError(f'parameter seed must be >= 0 and seed_stream >= -1, got {self.seed} and '
                                f'{self.seed_stream}')
-        if self.obstacle_source not in ('markers', 'map'):
-            raise StartupError(f'parameter obstacle_source must be markers or map, got {self.obstacle_source!r}')
+        if obstacle_source not in ('markers', 'map'):
+            raise StartupError(f'parameter obstacle_source must be markers or map, got {obstacle_source!r}')
         if hitch_offset < 0.0 or other_radius < 0.0 or self.max_extrapolation < 0.0:
             raise StartupError('parameters hitch_offset, other_robot_radius and max_extrapolation must be >= 0')
         if workspace and (len(workspace) != 4 or not (workspace[0] < workspace[2] and workspace[1] < workspace[3])):
@@ -449,7 +344,7 @@ class PlannerNode(PlannerInputs):
             self.control_rate_hz = changes['control_rate_hz']
             self.control_timer.timer_period_ns = int(round(1e9 / self.control_rate_hz))
         self.sim_time.timeout = changes.get('clock_timeout', self.sim_time.timeout)
-        self._status_key = None
+        self.reports.changed()
         return ''
 
     def retune(self, params: PlannerParams) -> None:
@@ -489,6 +384,16 @@ class PlannerNode(PlannerInputs):
         return value if configured <= 0.0 else min(configured, value)
 
     # ------------------------------------------------------------------------------------------- helpers
+    def now(self) -> float:
+        return self.get_clock().now().nanoseconds * 1e-9
+
+    def locked(self) -> bool:
+        """Lock step is on: asked for, and the node runs on simulated time."""
+        return self.lock_step and self.sim_time.active
+
+    def stamp(self) -> Any:
+        return self.get_clock().now().to_msg()
+
     def stamp_parts(self) -> tuple[int, int]:
         """(sec, nanosec) of stamp(), for the writers of msg_tools.cdr."""
         ns = self.get_clock().now().nanoseconds
@@ -527,7 +432,7 @@ class PlannerNode(PlannerInputs):
         if self.navigator is None:
             self.pending_goal = msg
             self.goal_info(f'goal ({point[0]:g}, {point[1]:g}) received; waiting for the world')
-            self.publish_status()
+            self.reports.publish()
             return
         nav = self.navigator
         if self.goal is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING) and \
@@ -554,7 +459,7 @@ class PlannerNode(PlannerInputs):
                 self.planning.drop_plan()   # no more driving toward the last goal's target: brake until the new plan
             self.goal_info(f'new goal ({point[0]:g}, {point[1]:g})')
         self.publish_plan(force=True)
-        self.publish_status()
+        self.reports.publish()
 
     def goal_problem(self, msg: PoseStamped) -> str:
         """Why a goal cannot be driven to ('' when it can, as far as the world known now says): its frame, an
@@ -573,7 +478,7 @@ class PlannerNode(PlannerInputs):
                 nav.world.check_point(point, nav.radius)
         except GoalError as exc:
             return str(exc)
-        if self.occupied is not None and self.occupied(point):
+        if self.inputs.occupied is not None and self.inputs.occupied(point):
             # Inside an occupied region of /map, far from its outline: the walls alone would not say so.
             return f'goal ({point[0]:g}, {point[1]:g}) is occupied: an occupied cell of /map'
         return ''
@@ -625,17 +530,17 @@ class PlannerNode(PlannerInputs):
     def lock_try(self) -> None:
         """Lock step: act on the newest own odometry stamp once every input of its time is in (fastep_ros.lock_step).
         Called whenever one of them comes, on the control timer, and on the wall timer (inputs given up on)."""
-        if not self.locked() or self.odom is None or not self.is_active:
+        if not self.locked() or self.inputs.odom is None or not self.lifecycle.is_active:
             return
-        stamp, lock, now = self.odom_stamp, self.lock, self.now()
+        stamp, lock, now = self.inputs.odom_stamp, self.lock, self.now()
         if not lock.due(stamp, now):
             return
         inputs = {robot.name: robot.stamp for robot in self.robots.fleet.fresh(now)}
         if self.model == 'tractor_trailer':
-            inputs['trailer_pose'] = self.trailer_stamp   # the state of its time is odometry and trailer pose
-        if self.scan_sub.get_publisher_count() > 0:
-            inputs['scan'] = -math.inf if self.pending_scan is None else \
-                convert.stamp_to_seconds(self.pending_scan.header.stamp)
+            inputs['trailer_pose'] = self.inputs.trailer_stamp   # the state of its time is odometry and trailer pose
+        if self.inputs.scan_sub.get_publisher_count() > 0:
+            inputs['scan'] = -math.inf if self.inputs.pending_scan is None else \
+                convert.stamp_to_seconds(self.inputs.pending_scan.header.stamp)
         wall = self.wall_clock.now().nanoseconds * 1e-9
         if lock.late(stamp, inputs, wall):
             return
@@ -647,11 +552,11 @@ class PlannerNode(PlannerInputs):
         # differs in its last bit decides a timer that runs out exactly on a tick differently.
         period = 1.0 / self.control_rate_hz
         t = round(stamp / period) * period
-        scan, self.pending_scan = self.pending_scan, None
+        scan, self.inputs.pending_scan = self.inputs.pending_scan, None
         if scan is not None and self.planning is not None:
-            self.latest_scan = scan   # perceived by the next planning pass (realtime)
+            self.inputs.latest_scan = scan   # perceived by the next planning pass (realtime)
         elif scan is not None:
-            self.perceive(scan, t, at=t)
+            self.inputs.perceive(scan, t, at=t)
         self.on_control(t)
 
     @quiet_at_stop
@@ -662,7 +567,7 @@ class PlannerNode(PlannerInputs):
             self.on_control()
             return
         now, period = self.now(), 1.0 / self.control_rate_hz
-        if self.odom_stamp < now - 1.5 * period and self.lock.acted < now - 0.5 * period:
+        if self.inputs.odom_stamp < now - 1.5 * period and self.lock.acted < now - 0.5 * period:
             self.lock.acted = now
             self.on_control()
         else:
@@ -675,27 +580,26 @@ class PlannerNode(PlannerInputs):
         try:
             self.control(at)
         finally:
-            self.control_times.append(time.perf_counter() - began)
-            self.control_cpu_times.append(time.thread_time() - began_cpu)
+            self.reports.timed(time.perf_counter() - began, time.thread_time() - began_cpu)
 
     def control(self, at: float | None = None) -> None:
         """on_control's work."""
         if self.sim_time.switched():
             self.on_clock_switched()
         t = self.now() if at is None else at
-        self.control_stamps.append(t)
+        self.reports.control_stamps.append(t)
         self.take_others()
         nav = self.navigator
         command = np.zeros(2)
         if self.planning is not None:
             command = self.drive_on_plan(t)
         elif nav is not None:
-            state, problem = self.state(t)
+            state, problem = self.inputs.state(t)
             if state is None:
                 self.hold = problem
             else:
                 self.hold = ''
-                command = self.navigate(nav, t, state, self.other_robots(t))
+                command = self.navigate(nav, t, state, self.inputs.other_robots(t))
         self.publish_command(command, at)
         self.last_command = command
         if self.actions is not None:
@@ -704,7 +608,7 @@ class PlannerNode(PlannerInputs):
             self.cost_pub.publish(cdr.float64_cdr(float(nav.cost)))
             self.publish_target()
             self.publish_plan()
-        self.publish_status(at=t)
+        self.reports.publish(at=t)
 
     def drive_on_plan(self, t: float) -> np.ndarray:
         """With the planning thread: hand it this tick's snapshot and drive on the newest plan it has made
@@ -717,12 +621,12 @@ class PlannerNode(PlannerInputs):
         period = 1.0 / self.control_rate_hz
         if not np.array_equal(self.last_command, control.smoother.velocity):
             control.reset(self.last_command)   # a stop sent past the control tick (inactive, no clock)
-        state, problem = self.state(t)
+        state, problem = self.inputs.state(t)
         self.hold = problem
         if state is None:
             return control.stop(t, period)
-        told = self.told_others(t)
-        scan, self.latest_scan = self.latest_scan, None
+        told = self.inputs.told_others(t)
+        scan, self.inputs.latest_scan = self.inputs.latest_scan, None
         self.control_count += 1
         self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan))
         plan = self.planning.plan
@@ -752,8 +656,8 @@ class PlannerNode(PlannerInputs):
             return None
         t, state = snapshot.t, snapshot.state
         if snapshot.scan is not None:
-            self.perceive(snapshot.scan, t, state=state, told=snapshot.others)
-        tracked = self.scan_perception.movers(t)
+            self.inputs.perceive(snapshot.scan, t, state=state, told=snapshot.others)
+        tracked = self.inputs.scan_perception.movers(t)
         command = self.navigate(nav, t, state, [*snapshot.others, *tracked])
         self.plan_tick = snapshot.tick
         return Plan.of(nav, t, command, tracked)
@@ -794,7 +698,7 @@ class PlannerNode(PlannerInputs):
         if conflict == self.cmd_conflict:
             return False
         if conflict and not self.cmd_conflict:
-            if self.exclusive_cmd_vel and self.is_active:
+            if self.exclusive_cmd_vel and self.lifecycle.is_active:
                 self.publish_command(np.zeros(2))
             then = 'this planner stops commanding' if self.exclusive_cmd_vel else \
                 'commanding anyway (exclusive_cmd_vel false)'
@@ -812,7 +716,7 @@ class PlannerNode(PlannerInputs):
         if self.cmd_conflict and self.exclusive_cmd_vel:
             return
         if self.model == 'point_mass':
-            command = np.asarray(frames.body_velocity(command, self.body_yaw), dtype=float)
+            command = np.asarray(frames.body_velocity(command, self.inputs.body_yaw), dtype=float)
         # Sent as its bytes (msg_tools.cdr), once a tick: convert.command_to_twist's message, not built.
         linear, angular = convert.command_twist_values(command, self.model)
         if self.stamped:
@@ -864,7 +768,7 @@ class PlannerNode(PlannerInputs):
         self.check_clock()
         found = self.discover() | self.check_cmd_vel()
         self.goal_sub.look()
-        for sub in self.world_subs:
+        for sub in self.inputs.world_subs:
             sub.look()
         if self.actions is not None:
             self.actions.check()   # also while no control tick runs (inactive: an action goal is aborted)
@@ -872,17 +776,17 @@ class PlannerNode(PlannerInputs):
         self.lock_try()      # an input waited for too long is given up on
         # A launcher waits for cmd_vel's readers (the plant, the clock) before it starts the run: told at once.
         readers = self.cmd_pub.get_subscription_count()
-        if found or readers != self.cmd_vel_readers or heartbeat:
-            self.cmd_vel_readers = readers
-            self.publish_status(force=True)
+        if found or readers != self.reports.cmd_vel_readers or heartbeat:
+            self.reports.cmd_vel_readers = readers
+            self.reports.publish(force=True)
         else:
-            self.publish_status()
+            self.reports.publish()
         if heartbeat:
             self.publish_target(force=True)
             self.publish_plan(force=True)
-            self.diagnostics.publish(self.diagnostic_tasks())
-            late = self.rate_problem()
-            if late and self.is_active:
+            self.reports.publish_diagnostics()
+            late = self.reports.rate_problem()
+            if late and self.lifecycle.is_active:
                 self.get_logger().warning(late, throttle_duration_sec=10.0)
 
     # ------------------------------------------------------------------------------------------- time
@@ -909,7 +813,8 @@ class PlannerNode(PlannerInputs):
         t = self.now()
         self.get_logger().warning(f'use_sim_time is now {str(self.sim_time.active).lower()} (time {t:.3f} s): '
                                   'odometry and timers restart on this clock')
-        self.odom, self.odom_received, self.odom_stamp, self.odom_problem = None, -math.inf, -math.inf, ''
+        inputs = self.inputs
+        inputs.odom, inputs.odom_received, inputs.odom_stamp, inputs.odom_problem = None, -math.inf, -math.inf, ''
         for robot in self.robots.fleet.robots.values():
             if robot.received > -math.inf:   # kept where last heard, as if heard now: still avoided
                 robot.received = robot.stamp = t
@@ -922,7 +827,7 @@ class PlannerNode(PlannerInputs):
         self.last_command = np.zeros(2)
         self.publish_command(self.last_command)
         self.clock_problem = self.sim_time.problem()   # the silence counts from the switch
-        self._status_key = None
+        self.reports.changed()
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -38,7 +38,7 @@ def test_planner_publishes_diagnostics_with_stale_odometry(context: Any) -> None
     services = Services(context, node)
     try:
         heard = _listen(services)
-        node.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
+        node.inputs.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
         names = {'r1/planner: navigation', 'r1/planner: odometry', 'r1/planner: clock'}
         assert services.spin_until(lambda: names <= set(heard), 10.0), heard
         assert all(heard[n].hardware_id == 'r1' for n in names)
@@ -50,7 +50,7 @@ def test_planner_publishes_diagnostics_with_stale_odometry(context: Any) -> None
         values = {kv.key: kv.value for kv in heard['r1/planner: odometry'].values}
         assert 'odom_timeout 0.3 s' in values['reason'] and values['topic'] == '/r1/odom'
         assert services.set(odom_timeout=30.0)[0].successful
-        node.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
+        node.inputs.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
         assert services.spin_until(lambda: heard['r1/planner: odometry'].level == DiagnosticStatus.OK, 10.0)
     finally:
         services.close()

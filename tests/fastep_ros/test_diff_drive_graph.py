@@ -91,11 +91,12 @@ def test_planner_drives_a_diff_drive_base_with_speed_and_turn_rate(context: Any)
     keep_published(node.cmd_pub, sent.append)
     try:
         assert 'diff_drive' in node.describe_parameter('model').additional_constraints
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
-        node.on_odom(convert.state_to_odometry([2.0, 2.0, math.pi], frame_id='d1/odom', child_frame_id='d1/base_link'))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_odom(convert.state_to_odometry([2.0, 2.0, math.pi], frame_id='d1/odom',
+                                                      child_frame_id='d1/base_link'))
         node.on_goal(convert.point_to_pose_stamped((15.0, 2.0)))   # straight behind it: it turns first
         node.on_control()
-        assert node.status()[1] == 'kinematic'
+        assert node.reports.status()[1] == 'kinematic'
         v, omega = node.last_command
         assert abs(omega) > 0.0 and v == pytest.approx(0.0, abs=1e-9)
         assert (sent[-1].linear.x, sent[-1].linear.y, sent[-1].angular.z) == (v, 0.0, omega)

@@ -28,15 +28,16 @@ def test_planner_node_follows_the_route_and_replans_when_the_map_changes(context
         descriptor = node.describe_parameter('algorithm')
         assert 'fastep_route (FAStep-Route)' in descriptor.description
         assert 'fastep_route' in descriptor.additional_constraints
-        node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 2.0)]))
-        node.on_odom(convert.state_to_odometry([2.0, 2.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 2.0)]))
+        node.inputs.on_odom(convert.state_to_odometry([2.0, 2.0]))
         node.on_goal(convert.point_to_pose_stamped((18.0, 18.0)))
         node.on_control()
         nav = node.navigator
         assert isinstance(nav, FAStepRoute) and nav.route is not None
-        assert node.status()[1] == 'kinematic' and np.any(node.last_command != 0.0)
-        node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 2.0), Circle((4.0, 6.0), 1.0)]))
-        assert node.navigator is nav and nav.world is node.world   # the same navigator, told the new world
+        assert node.reports.status()[1] == 'kinematic' and np.any(node.last_command != 0.0)
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 2.0),
+                                                                   Circle((4.0, 6.0), 1.0)]))
+        assert node.navigator is nav and nav.world is node.inputs.world   # the same navigator, told the new world
         node.on_control()
         assert [reason for _, reason in nav.replan_log] == ['the world changed']
     finally:
@@ -49,7 +50,7 @@ def test_the_navigator_knows_its_robot_by_the_name_the_other_planners_use(contex
     node = PlannerNode(context=context, namespace='/r7',
                        parameter_overrides=[Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0])])
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 2.0)]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 2.0)]))
         assert node.navigator is not None and node.navigator.name == 'r7'
     finally:
         node.destroy_node()
@@ -60,11 +61,11 @@ def test_planner_node_reports_no_valid_path_for_fastep_route(context: Any) -> No
     try:
         box = [Segment((6.0, 6.0), (8.0, 6.0)), Segment((8.0, 6.0), (8.0, 8.0)), Segment((8.0, 8.0), (6.0, 8.0)),
                Segment((6.0, 8.0), (6.0, 6.0))]
-        node.on_obstacles(convert.obstacles_to_marker_array(box))
-        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array(box))
+        node.inputs.on_odom(convert.state_to_odometry([1.0, 1.0]))
         node.on_goal(convert.point_to_pose_stamped((7.0, 7.0)))
         node.on_control()
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and reason.startswith('no valid path'), reason
     finally:
         node.destroy_node()

@@ -65,22 +65,22 @@ def make(context: Any, **params: Any) -> PlannerNode:
 def test_a_refused_goal_leaves_the_goal_under_way_alone_and_says_why(context: Any) -> None:
     node = make(context)
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
-        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
+        node.inputs.on_odom(convert.state_to_odometry([1.0, 1.0]))
         node.on_goal(convert.point_to_pose_stamped((8.0, 2.0)))
         node.on_control()
-        assert node.status()[:2] == (DiagnosticStatus.OK, 'kinematic')
+        assert node.reports.status()[:2] == (DiagnosticStatus.OK, 'kinematic')
         for goal, frame, words in (((math.nan, 1.0), 'map', 'not finite'), ((5.0, 5.0), 'map', 'inside an obstacle'),
                                    ((3.0, 3.0), 'odom', "frame 'odom'")):
             node.on_goal(convert.point_to_pose_stamped(goal, frame_id=frame))
             node.on_control()
-            level, message, reason = node.status()
+            level, message, reason = node.reports.status()
             assert (level, message) == (DiagnosticStatus.WARN, 'kinematic'), reason
             assert words in reason and 'still driving to (8, 2)' in reason, reason
             assert node.goal == (8.0, 2.0) and np.any(node.last_command != 0.0)
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))   # a good one is taken, the warning is gone
         node.on_control()
-        assert node.status()[:2] == (DiagnosticStatus.OK, 'kinematic') and node.goal == (8.0, 8.0)
+        assert node.reports.status()[:2] == (DiagnosticStatus.OK, 'kinematic') and node.goal == (8.0, 8.0)
     finally:
         node.destroy_node()
 
@@ -88,9 +88,9 @@ def test_a_refused_goal_leaves_the_goal_under_way_alone_and_says_why(context: An
 def test_a_refused_goal_with_none_under_way_is_a_failure_as_before(context: Any) -> None:
     node = make(context)
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         node.on_goal(convert.point_to_pose_stamped((50.0, 5.0)))
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and 'outside the map' in reason
     finally:
         node.destroy_node()
@@ -103,8 +103,8 @@ def test_goals_at_any_rate_log_a_line_a_second_and_a_long_frame_is_not_echoed_wh
     lines: list[str] = []
     node.goal_info.log = node.goal_warning.log = lines.append
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
-        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_odom(convert.state_to_odometry([1.0, 1.0]))
         for i in range(500):
             node.on_goal(convert.point_to_pose_stamped((2.0 + i * 0.01, 2.0)))
         assert lines == ['new goal (2, 2)'] and node.goal == (6.99, 2.0)   # every goal taken, one line
@@ -112,7 +112,7 @@ def test_goals_at_any_rate_log_a_line_a_second_and_a_long_frame_is_not_echoed_wh
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))
         assert lines[1] == 'new goal (8, 8) (499 more such lines left out before it)'
         node.on_goal(convert.point_to_pose_stamped((3.0, 3.0), frame_id='x' * 10_000))
-        reason = node.status()[2]
+        reason = node.reports.status()[2]
         assert len(reason) < 300 and "goal frame 'xxxx" in reason and '(10000 characters)' in reason, reason
     finally:
         node.destroy_node()
@@ -149,8 +149,8 @@ def test_volatile_and_latched_goal_publishers_without_incompatible_qos_events(co
         latched.publish(convert.point_to_pose_stamped((8.0, 8.0)))
         planner = make(context)
         executor.add_node(planner)
-        planner.on_obstacles(convert.obstacles_to_marker_array([]))
-        planner.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        planner.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
+        planner.inputs.on_odom(convert.state_to_odometry([1.0, 1.0]))
         spin_until(executor, lambda: planner.goal == (8.0, 8.0), 30.0, 'the latched goal')
         # Caught up: the subscription is volatile again, as it stays while nothing is left to catch up with.
         spin_until(executor, lambda: planner.goal_sub.durability == DurabilityPolicy.VOLATILE, 30.0,
@@ -191,8 +191,8 @@ def test_a_volatile_publisher_that_comes_during_a_catch_up_ends_it(context: Any)
         user.create_publisher(PoseStamped, '/goal_pose', LATCHED)   # sends nothing
         planner = make(context)
         executor.add_node(planner)
-        planner.on_obstacles(convert.obstacles_to_marker_array([]))
-        planner.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        planner.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
+        planner.inputs.on_odom(convert.state_to_odometry([1.0, 1.0]))
         spin_until(executor, lambda: planner.goal_sub.durability == DurabilityPolicy.TRANSIENT_LOCAL, 30.0,
                    'the catch-up')
         volatile = user.create_publisher(PoseStamped, '/goal_pose', RELIABLE)
@@ -214,8 +214,8 @@ def test_a_volatile_publisher_that_comes_during_a_catch_up_ends_it(context: Any)
 def test_a_diff_drive_goal_s_orientation_is_the_heading_to_end_in(context: Any) -> None:
     node = make(context, model='diff_drive', robot_radius=0.3)
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
-        node.on_odom(convert.state_to_odometry([1.0, 1.0, 0.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_odom(convert.state_to_odometry([1.0, 1.0, 0.0]))
         node.on_goal(convert.point_to_pose_stamped((8.0, 2.0), yaw=2.5))
         nav = node.navigator
         assert nav is not None and nav.goal_heading is not None and math.isclose(nav.goal_heading, 2.5)
@@ -229,7 +229,7 @@ def test_a_diff_drive_goal_s_orientation_is_the_heading_to_end_in(context: Any) 
         bad.pose.orientation.z = math.nan
         node.on_goal(bad)
         node.on_control()
-        level, _, reason = node.status()
+        level, _, reason = node.reports.status()
         assert level == DiagnosticStatus.WARN and 'goal orientation' in reason and node.goal == (8.0, 3.0)
     finally:
         node.destroy_node()
@@ -238,7 +238,7 @@ def test_a_diff_drive_goal_s_orientation_is_the_heading_to_end_in(context: Any) 
 def test_a_point_mass_goal_has_no_heading(context: Any) -> None:
     node = make(context)
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         node.on_goal(convert.point_to_pose_stamped((8.0, 2.0), yaw=2.5))
         assert node.navigator is not None and node.navigator.goal_heading is None
     finally:

@@ -111,12 +111,12 @@ def test_a_planner_avoids_the_known_movers_of_movers_predicted_to_now(context: A
     try:
         mover = OtherRobot('mover 1', (25.0, 40.0), (0.0, -0.5), 1.0, mover=True)
         now = node.now()   # one time for the whole test: a loaded machine let 0.07 s pass between two calls
-        node.on_movers(convert.movers_to_marker_array([mover], convert.seconds_to_stamp(now - 0.1)))
-        seen = node.other_robots(now)
+        node.inputs.on_movers(convert.movers_to_marker_array([mover], convert.seconds_to_stamp(now - 0.1)))
+        seen = node.inputs.other_robots(now)
         assert len(seen) == 1 and seen[0].mover and seen[0].name == 'mover 1'
         assert seen[0].position[1] == pytest.approx(40.0 - 0.05, abs=0.02)   # predicted 0.1 s on
         # The map node went quiet: kept where last seen, its reach widened by 0.5 m/s (issue "Faults", item 2).
-        [stale] = node.other_robots(now + 10.0)
+        [stale] = node.inputs.other_robots(now + 10.0)
         assert stale.position == (25.0, 40.0) and stale.velocity == (0.0, 0.0)
         assert stale.radius == pytest.approx(1.0 + 0.5 * 10.1, abs=0.02)
     finally:

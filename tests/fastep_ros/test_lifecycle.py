@@ -29,9 +29,9 @@ def make(cls: type, context: Any, **params: Any) -> Any:
 
 def _drive(node: PlannerNode) -> None:
     world = World.from_obstacles([0, 0, 10, 10], [Circle((5.0, 2.0), 0.5)])
-    node.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
-    node.on_map(convert.world_to_occupancy_grid(world, 0.5))
-    node.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
+    node.inputs.on_map(convert.world_to_occupancy_grid(world, 0.5))
+    node.inputs.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
     node.on_goal(convert.point_to_pose_stamped((9.0, 9.0)))
 
 
@@ -54,17 +54,17 @@ def test_a_lifecycle_manager_drives_the_planner(context: Any) -> None:
     services.client.create_subscription(Twist, '/cmd_vel', commands.append, 10)
     try:
         assert services.state() == 'unconfigured'
-        assert node.control_timer.is_canceled() and node.status()[1] == 'inactive'
+        assert node.control_timer.is_canceled() and node.reports.status()[1] == 'inactive'
         _drive(node)
         assert services.change_state('configure') and services.state() == 'inactive'
         assert node.control_timer.is_canceled()
         assert services.change_state('activate') and services.state() == 'active'
         assert not node.control_timer.is_canceled()
         assert services.spin_until(lambda: any(c.linear.x != 0.0 for c in commands), 10.0)   # it drives
-        assert node.status()[1] == Mode.KINEMATIC.value
+        assert node.reports.status()[1] == Mode.KINEMATIC.value
         commands.clear()
         assert services.change_state('deactivate') and services.state() == 'inactive'
-        assert node.control_timer.is_canceled() and node.status()[1] == 'inactive'
+        assert node.control_timer.is_canceled() and node.reports.status()[1] == 'inactive'
         assert services.spin_until(lambda: bool(commands), 10.0)
         assert commands[-1].linear.x == 0.0 and commands[-1].linear.y == 0.0   # a zero cmd_vel stopped it
         assert services.change_state('cleanup') and services.state() == 'unconfigured'

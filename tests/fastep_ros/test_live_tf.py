@@ -136,7 +136,7 @@ def test_stamped_cmd_vel_of_a_root_namespace_tractor_trailer_is_in_base_link_wit
 
 def _planner(context: Any, **params: Any) -> PlannerNode:
     node = make(PlannerNode, context, '/r1', workspace=[0.0, 0.0, 20.0, 20.0], **params)
-    node.on_obstacles(convert.obstacles_to_marker_array([]))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
     node.on_goal(convert.point_to_pose_stamped((3.0, 12.0)))
     return node
 
@@ -146,17 +146,17 @@ def test_planner_refuses_odometry_in_a_frame_that_is_neither_map_nor_its_odom(co
     """Finding: odometry stamped `odom` (here not this robot's odom frame) was used as a map pose."""
     node = _planner(context)
     try:
-        node.on_odom(odometry(1.0, 1.0, frame=frame))
+        node.inputs.on_odom(odometry(1.0, 1.0, frame=frame))
         node.on_control()
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.WARN, 'stale')
         assert f'odometry rejected: frame {frame!r} is neither the map frame' in reason and "'r1/odom'" in reason
         assert np.all(node.last_command == 0.0)
-        node.on_odom(odometry(1.0, 1.0, frame='r1/odom'))   # its own odom frame: taken (map -> odom the identity)
+        node.inputs.on_odom(odometry(1.0, 1.0, frame='r1/odom'))   # its own odom frame: taken (map -> odom identity)
         node.on_control()
-        assert node.status()[1] == 'kinematic' and np.any(node.last_command != 0.0)
-        node.on_odom(odometry(1.0, 1.0, frame='map'))       # the map frame: taken as it is
-        assert node.odom_problem == ''
+        assert node.reports.status()[1] == 'kinematic' and np.any(node.last_command != 0.0)
+        node.inputs.on_odom(odometry(1.0, 1.0, frame='map'))       # the map frame: taken as it is
+        assert node.inputs.odom_problem == ''
     finally:
         node.destroy_node()
 
@@ -168,10 +168,10 @@ def test_planner_composes_odometry_with_map_to_odom_from_the_localization_pose(c
     sent: list[Any] = []
     keep_published(node.cmd_pub, sent.append)
     try:
-        assert node.localization_topic == '/r1/amcl_pose'
-        node.on_odom(odometry(1.0, 1.0))
+        assert node.inputs.localization_topic == '/r1/amcl_pose'
+        node.inputs.on_odom(odometry(1.0, 1.0))
         node.on_control()
-        assert node.status() == (DiagnosticStatus.WARN, 'waiting',
+        assert node.reports.status() == (DiagnosticStatus.WARN, 'waiting',
                                  'waiting for localization on /r1/amcl_pose (map -> r1/odom)')
         assert (sent[-1].linear.x, sent[-1].linear.y) == (0.0, 0.0)
         # AMCL: base_link is at (3, 2) in the map, heading +y (odometry said (1, 1), heading +x).
@@ -179,19 +179,19 @@ def test_planner_composes_odometry_with_map_to_odom_from_the_localization_pose(c
         pose.header.frame_id = 'map'
         pose.pose.pose.position.x, pose.pose.pose.position.y = 3.0, 2.0
         pose.pose.pose.orientation = convert.yaw_to_quaternion(math.pi / 2)
-        node.on_localization(pose)
-        assert node.map_from_odom.transform == pytest.approx((4.0, 1.0, math.pi / 2))
-        node.on_odom(odometry(1.0, 1.0))
-        state, problem = node.state(node.now())
+        node.inputs.on_localization(pose)
+        assert node.inputs.map_from_odom.transform == pytest.approx((4.0, 1.0, math.pi / 2))
+        node.inputs.on_odom(odometry(1.0, 1.0))
+        state, problem = node.inputs.state(node.now())
         assert problem == '' and state is not None and state[:2] == pytest.approx([3.0, 2.0], abs=1e-6)
         node.on_control()
-        assert node.status()[1] == 'kinematic'
+        assert node.reports.status()[1] == 'kinematic'
         # The goal (3, 12) is straight ahead along the map's +y, which is base_link's +x.
         assert node.last_command[0] == pytest.approx(0.0, abs=1e-6) and node.last_command[1] > 0.0
         assert sent[-1].linear.x == pytest.approx(node.last_command[1]) and sent[-1].linear.y == pytest.approx(0.0)
         pose.header.frame_id = 'r1/odom'   # a localization pose must be a map pose
-        node.on_localization(pose)
-        assert node.map_from_odom.localizations == 1
+        node.inputs.on_localization(pose)
+        assert node.inputs.map_from_odom.localizations == 1
     finally:
         node.destroy_node()
 
@@ -200,11 +200,12 @@ def test_planner_turns_a_tractor_trailers_headings_by_map_to_odom(context: Any) 
     node = make(PlannerNode, context, '/r1', model='tractor_trailer', robot_radius=0.6, localization_topic='amcl_pose',
                 workspace=[0.0, 0.0, 20.0, 20.0])
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
-        node.on_odom(odometry(2.0, 0.0, yaw=0.25))
-        node.on_trailer(convert.trailer_pose([2.0, 0.0, 0.25, 0.5], 1.0, 0.0, None, 'r1/odom'))
-        node.map_from_odom.add_localization(node.odom_stamp, (5.0, 5.0, 0.25 + 0.5))  # map->odom turns by +0.5
-        state, problem = node.state(node.now())
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_odom(odometry(2.0, 0.0, yaw=0.25))
+        node.inputs.on_trailer(convert.trailer_pose([2.0, 0.0, 0.25, 0.5], 1.0, 0.0, None, 'r1/odom'))
+        # map -> odom turns by +0.5
+        node.inputs.map_from_odom.add_localization(node.inputs.odom_stamp, (5.0, 5.0, 0.25 + 0.5))
+        state, problem = node.inputs.state(node.now())
         assert problem == '' and state is not None
         assert state == pytest.approx([5.0, 5.0, 0.75, 1.0], abs=1e-6)
     finally:
@@ -252,16 +253,16 @@ def test_planner_takes_map_to_odom_from_tf_when_asked(context: Any) -> None:
     from msg_tools.frames import static_map_to_odom, transform_stamped
     node = _planner(context, map_to_odom_from_tf=True)
     try:
-        node.on_odom(odometry(1.0, 1.0))
-        state, problem = node.state(node.now())
+        node.inputs.on_odom(odometry(1.0, 1.0))
+        state, problem = node.inputs.state(node.now())
         assert state is None and problem == 'waiting for localization on /tf (map -> r1/odom)'
         tf_message = frames.tf_message_class()
         assert tf_message is not None
         node.tf.take(tf_message(transforms=[static_map_to_odom('map', 'r1/odom')]))
-        state, problem = node.state(node.now())
+        state, problem = node.inputs.state(node.now())
         assert problem == '' and state is not None and tuple(state[:2]) == (1.0, 1.0)   # the identity, exactly
         node.tf.take(tf_message(transforms=[transform_stamped('map', 'r1/odom', (2.0, 0.5, 0.0), TimeMsg())]))
-        state, _ = node.state(node.now())
+        state, _ = node.inputs.state(node.now())
         assert state is not None and state[:2] == pytest.approx([3.0, 1.5])
     finally:
         node.destroy_node()

@@ -79,19 +79,19 @@ def test_a_planner_in_lock_step_acts_once_per_stamp_when_the_others_odometry_of_
     planner.now = lambda: now[0]
     try:
         assert planner.locked()
-        planner.on_obstacles(convert.obstacles_to_marker_array([]))
+        planner.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         planner.robots.fleet.add('/r2')
         planner.robots.fleet.judge('/r2', True)
         planner.robots.on_odom('/r2', convert.state_to_odometry([15.0, 15.0], convert.seconds_to_stamp(0.0)))
         planner.on_goal(convert.point_to_pose_stamped((10.0, 2.0)))
-        planner.on_odom(convert.state_to_odometry([2.0, 2.0], convert.seconds_to_stamp(0.0)))
+        planner.inputs.on_odom(convert.state_to_odometry([2.0, 2.0], convert.seconds_to_stamp(0.0)))
         assert sent == []                            # the clock holds 0: goals may still be coming
         now[0] = 0.05
         planner.on_control_tick()                    # time runs: the start state is acted on, at 0
         assert [convert.stamp_to_seconds(m.header.stamp) for m in sent] == [0.0] and sent[0].twist.linear.x > 0
         planner.on_control_tick()
         assert len(sent) == 1                        # once
-        planner.on_odom(convert.state_to_odometry([2.1, 2.0], convert.seconds_to_stamp(0.05)))
+        planner.inputs.on_odom(convert.state_to_odometry([2.1, 2.0], convert.seconds_to_stamp(0.05)))
         assert len(sent) == 1                        # r2's odometry of 0.05 is not in yet
         planner.robots.on_odom('/r2', convert.state_to_odometry([15.0, 14.9], convert.seconds_to_stamp(0.05)))
         assert [convert.stamp_to_seconds(m.header.stamp) for m in sent] == [0.0, 0.05]

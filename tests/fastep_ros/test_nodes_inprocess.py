@@ -61,23 +61,23 @@ def test_planner_declares_every_planner_parameter_with_its_description(context: 
 
 
 def _world_messages(node: PlannerNode, world: World) -> None:
-    node.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
-    node.on_map(convert.world_to_occupancy_grid(world, 0.5))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
+    node.inputs.on_map(convert.world_to_occupancy_grid(world, 0.5))
 
 
 def test_planner_waits_for_the_world_then_takes_a_pending_goal(context: Any) -> None:
     node = make(PlannerNode, context)
     try:
-        assert node.status()[:2] == (DiagnosticStatus.WARN, 'waiting')
-        assert '/obstacles' in node.status()[2] and '/map' in node.status()[2]
+        assert node.reports.status()[:2] == (DiagnosticStatus.WARN, 'waiting')
+        assert '/obstacles' in node.reports.status()[2] and '/map' in node.reports.status()[2]
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))
         assert node.navigator is None and node.pending_goal is not None
         _world_messages(node, World.from_obstacles([0, 0, 10, 10], [Circle((5.0, 5.0), 1.0)]))
-        assert node.navigator is not None and node.world is not None
-        assert node.world.workspace == (0.0, 0.0, 10.0, 10.0)
+        assert node.navigator is not None and node.inputs.world is not None
+        assert node.inputs.world.workspace == (0.0, 0.0, 10.0, 10.0)
         assert node.goal == (8.0, 8.0) and node.navigator.mode.value == 'kinematic'
         node.on_control()  # no odometry yet: hold still, say why
-        assert node.status() == (DiagnosticStatus.WARN, 'waiting', 'waiting for odometry on /odom')
+        assert node.reports.status() == (DiagnosticStatus.WARN, 'waiting', 'waiting for odometry on /odom')
     finally:
         node.destroy_node()
 
@@ -90,7 +90,7 @@ def test_planner_runs_dwa_and_refuses_it_for_a_tractor_trailer(context: Any) -> 
     try:
         constraints = node.describe_parameter('algorithm').additional_constraints
         assert constraints == 'fastep | fastep_paper | aco | optimal | dwa | fastep_route'
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         assert isinstance(node.navigator, DynamicWindow)
     finally:
         node.destroy_node()
@@ -102,22 +102,22 @@ def test_planner_runs_dwa_and_refuses_it_for_a_tractor_trailer(context: Any) -> 
 def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) -> None:
     node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0])
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         assert node.navigator is not None  # the workspace parameter stands in for /map
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))
         bad = convert.state_to_odometry([1.0, 1.0])
         bad.pose.pose.position.x = math.nan
-        node.on_odom(bad)
+        node.inputs.on_odom(bad)
         node.on_control()
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.WARN, 'stale') and 'not finite' in reason
         assert np.all(node.last_command == 0.0)
-        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
-        assert node.odom_problem == ''
+        node.inputs.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        assert node.inputs.odom_problem == ''
         node.on_control()
         goal = convert.point_to_pose_stamped((5.0, 5.0), frame_id='odom')
         node.on_goal(goal)   # refused; the goal under way stays (tests/fastep_ros/test_goals.py)
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.WARN, 'kinematic') and "frame 'odom'" in reason
         assert node.goal == (8.0, 8.0)
     finally:
@@ -127,8 +127,8 @@ def test_planner_rejects_nan_odometry_and_goals_in_other_frames(context: Any) ->
 def test_planner_survives_bad_messages_from_unknown_robots_and_bad_goals(context: Any) -> None:
     node = make(PlannerNode, context, workspace=[0.0, 0.0, 10.0, 10.0])
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
-        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
+        node.inputs.on_odom(convert.state_to_odometry([1.0, 1.0]))
         # Announced robots: one sends NaN, one infinity, one a sound pose.
         for name, x in (('ghost', math.nan), ('far', math.inf), ('known', 3.0)):
             node.robots.fleet.add(f'/{name}')
@@ -136,17 +136,17 @@ def test_planner_survives_bad_messages_from_unknown_robots_and_bad_goals(context
             msg = convert.state_to_odometry([3.0, 3.0])
             msg.pose.pose.position.x = x
             node.robots.on_odom(f'/{name}', msg)
-        assert [o.name for o in node.other_robots(node.now())] == ['known']
+        assert [o.name for o in node.inputs.other_robots(node.now())] == ['known']
         for goal, words in (((50.0, 5.0), 'outside the map'), ((5.0, 5.0), 'inside an obstacle'),
                             ((math.nan, 1.0), 'not finite'), ((5.0, 6.2), 'occupied')):
             node.on_goal(convert.point_to_pose_stamped(goal))
             node.on_control()
-            level, message, reason = node.status()
+            level, message, reason = node.reports.status()
             assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and words in reason, reason
             assert np.all(node.last_command == 0.0)
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0)))   # a good goal after bad ones is taken
         node.on_control()
-        assert node.status()[1] in ('kinematic', 'avoiding') and np.any(node.last_command != 0.0)
+        assert node.reports.status()[1] in ('kinematic', 'avoiding') and np.any(node.last_command != 0.0)
     finally:
         node.destroy_node()
 
@@ -157,11 +157,11 @@ def test_planner_reports_no_valid_path_for_a_walled_in_goal(context: Any) -> Non
     try:
         box = [Segment((6.0, 6.0), (8.0, 6.0)), Segment((8.0, 6.0), (8.0, 8.0)), Segment((8.0, 8.0), (6.0, 8.0)),
                Segment((6.0, 8.0), (6.0, 6.0))]
-        node.on_obstacles(convert.obstacles_to_marker_array(box))
-        node.on_odom(convert.state_to_odometry([1.0, 1.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array(box))
+        node.inputs.on_odom(convert.state_to_odometry([1.0, 1.0]))
         node.on_goal(convert.point_to_pose_stamped((7.0, 7.0)))
         node.on_control()
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.ERROR, 'failed') and reason.startswith('no valid path'), reason
         assert np.all(node.last_command == 0.0)
     finally:
@@ -210,15 +210,15 @@ def test_before_time_starts_the_plant_publishes_its_start_once_it_hears_commands
         assert heard == [], 'no commander yet: the plant does not say it is ready'
         plant.destroy_subscription(listener)
         planner = make(PlannerNode, context, use_sim_time=True, workspace=[0.0, 0.0, 10.0, 10.0])
-        assert planner.odom_heard == 0
+        assert planner.inputs.odom_heard == 0
         executor.add_node(planner)
         deadline = time.monotonic() + 20.0
-        while planner.odom_heard < 2 and time.monotonic() < deadline:
+        while planner.inputs.odom_heard < 2 and time.monotonic() < deadline:
             executor.spin_once(timeout_sec=0.1)
-        assert planner.odom_heard >= 2 and planner.cmd_pub.get_subscription_count() == 1
-        assert planner.odom is not None and plant.tick is None   # simulated time has not started
-        assert planner.odom.pose[:2] == (2.0, 3.0)
-        assert planner.odom.stamp == 0.0
+        assert planner.inputs.odom_heard >= 2 and planner.cmd_pub.get_subscription_count() == 1
+        assert planner.inputs.odom is not None and plant.tick is None   # simulated time has not started
+        assert planner.inputs.odom.pose[:2] == (2.0, 3.0)
+        assert planner.inputs.odom.stamp == 0.0
         # Once time runs, the plant publishes integrated steps only.
         plant.get_clock().set_ros_time_override(Time(nanoseconds=50_000_000, clock_type=plant.get_clock().clock_type))
         plant.on_timer()
@@ -503,11 +503,11 @@ def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: A
     sent: dict[str, list[Any]] = {'waypoint': [], 'plan': [], 'status': []}
     keep_published(node.waypoint_pub, sent['waypoint'].append)
     keep_published(node.plan_pub, sent['plan'].append)
-    keep_published(node.status_pub, sent['status'].append)
+    keep_published(node.reports.status_pub, sent['status'].append)
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((5.0, 5.0), 1.0)]))
         node.on_goal(convert.point_to_pose_stamped((8.0, 8.0), frame_id='world_frame'))
-        node.on_odom(convert.state_to_odometry([1.0, 1.0], convert.seconds_to_stamp(node.now()),
+        node.inputs.on_odom(convert.state_to_odometry([1.0, 1.0], convert.seconds_to_stamp(node.now()),
                                                frame_id='world_frame'))
         node.on_control()
         nav = node.navigator
@@ -518,7 +518,7 @@ def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: A
         assert waypoint.header.stamp.sec > 0
         points = [*(tuple(p) for p in nav.plan), (8.0, 8.0)]
         assert plan == convert.waypoints_to_path(points, plan.header.stamp, 'world_frame')
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert (status.level, status.name, status.message, status.hardware_id) == (level, '/', message, '')
         values = {kv.key: kv.value for kv in status.values}
         assert list(values) == [kv.key for kv in status.values] == [
@@ -535,19 +535,19 @@ def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: A
 def test_status_tells_how_long_the_control_callback_takes(context: Any) -> None:
     """status' control_ms and control_cpu_ms: p50 / p99 / max wall and thread-CPU milliseconds of the recent control
     callbacks (what benchmarks read at 16 robots), '' before the first."""
-    from fastep_ros.planner import CONTROL_TIMES
+    from fastep_ros.planner_status import CONTROL_TIMES
     node = make(PlannerNode, context)
     try:
-        assert node.control_ms() == '' and node.control_ms(cpu=True) == ''
+        assert node.reports.control_ms() == '' and node.reports.control_ms(cpu=True) == ''
         for _ in range(CONTROL_TIMES + 5):
             node.on_control()
-        assert len(node.control_times) == len(node.control_cpu_times) == CONTROL_TIMES
-        p50, p99, top = (float(v) for v in node.control_ms().split(' / '))
+        assert len(node.reports.control_times) == len(node.reports.control_cpu_times) == CONTROL_TIMES
+        p50, p99, top = (float(v) for v in node.reports.control_ms().split(' / '))
         assert 0.0 < p50 <= p99 <= top
-        cpu = [float(v) for v in node.control_ms(cpu=True).split(' / ')]
+        cpu = [float(v) for v in node.reports.control_ms(cpu=True).split(' / ')]
         assert cpu == sorted(cpu) and cpu[0] >= 0.0
         # A callback's thread cannot spend more CPU than the wall time it took (the clocks' resolution aside).
-        assert all(c <= w + 1e-4 for c, w in zip(node.control_cpu_times, node.control_times))
-        node.publish_status(force=True)   # with it among the values (a status that fails to build raises here)
+        assert all(c <= w + 1e-4 for c, w in zip(node.reports.control_cpu_times, node.reports.control_times))
+        node.reports.publish(force=True)   # with it among the values (a status that fails to build raises here)
     finally:
         node.destroy_node()

@@ -46,9 +46,9 @@ def make(cls: type, context: Any, **params: Any) -> Any:
 def _with_world_and_goal(node: PlannerNode, start: tuple[float, float] = (1.0, 1.0),
                          goal: tuple[float, float] = (9.0, 9.0)) -> None:
     world = World.from_obstacles([0, 0, 10, 10], [Circle((5.0, 2.0), 0.5)])
-    node.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
-    node.on_map(convert.world_to_occupancy_grid(world, 0.5))
-    node.on_odom(convert.state_to_odometry(np.array(start), convert.seconds_to_stamp(0.0)))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
+    node.inputs.on_map(convert.world_to_occupancy_grid(world, 0.5))
+    node.inputs.on_odom(convert.state_to_odometry(np.array(start), convert.seconds_to_stamp(0.0)))
     node.on_goal(convert.point_to_pose_stamped(goal))
 
 
@@ -71,7 +71,7 @@ def test_planner_tunables_set_through_the_service_reach_the_running_navigator(co
         assert (nav.controller.alpha1, nav.controller.max_speed) == (0.3, 0.25)
         assert node.odom_timeout == 2.0 and node.control_timer.timer_period_ns == 100_000_000
         assert services.set(other_robot_radius=0.7)[0].successful and node.robots.override_radius == 0.7
-        node.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
+        node.inputs.on_odom(convert.state_to_odometry(np.array([1.0, 1.0]), convert.seconds_to_stamp(0.0)))
         node.on_control()
         assert math.isclose(float(np.hypot(*node.last_command)), 0.25)   # the new speed limit drives the robot
         assert [v.double_value for v in services.get('a', 'max_speed')] == [0.5, 0.25]
@@ -195,15 +195,16 @@ def test_no_clock_on_simulated_time_is_a_warning_and_stops_the_robot(context: An
     try:
         _with_world_and_goal(node)
         node.last_command = np.array([0.5, 0.0])   # as if it had been driving
-        assert services.spin_until(lambda: node.status()[0] == DiagnosticStatus.WARN, 5.0), node.status()
-        level, message, reason = node.status()
+        reports = node.reports
+        assert services.spin_until(lambda: reports.status()[0] == DiagnosticStatus.WARN, 5.0), reports.status()
+        level, message, reason = node.reports.status()
         assert message == 'stale' and 'no /clock' in reason
         assert not np.any(node.last_command)        # a zero cmd_vel went out
-        tasks = {t.task: t for t in node.diagnostic_tasks()}
+        tasks = {t.task: t for t in node.reports.diagnostic_tasks()}
         assert tasks['clock'].level == DiagnosticStatus.WARN
         # The clock comes: the warning goes.
-        assert services.spin_until(lambda: (_clock(services, 5), 'no /clock' not in node.status()[2])[1], 5.0)
-        assert {t.task: t for t in node.diagnostic_tasks()}['clock'].level == DiagnosticStatus.OK
+        assert services.spin_until(lambda: (_clock(services, 5), 'no /clock' not in node.reports.status()[2])[1], 5.0)
+        assert {t.task: t for t in node.reports.diagnostic_tasks()}['clock'].level == DiagnosticStatus.OK
     finally:
         services.close()
 
@@ -219,20 +220,21 @@ def test_switching_use_sim_time_while_driving_keeps_the_goal(context: Any) -> No
         assert node.navigator is not None and node.navigator.mode is Mode.KINEMATIC
         (result,) = services.set(use_sim_time=True)
         assert result.successful
-        assert services.spin_until(lambda: node.status()[0] == DiagnosticStatus.WARN, 5.0), node.status()
-        assert 'no /clock' in node.status()[2]
+        reports = node.reports
+        assert services.spin_until(lambda: reports.status()[0] == DiagnosticStatus.WARN, 5.0), reports.status()
+        assert 'no /clock' in node.reports.status()[2]
         assert services.spin_until(lambda: (_clock(services, 100), node.now())[1] >= 100.0, 5.0)
-        node.on_odom(convert.state_to_odometry(np.array([1.5, 1.5]), convert.seconds_to_stamp(100.0)))
+        node.inputs.on_odom(convert.state_to_odometry(np.array([1.5, 1.5]), convert.seconds_to_stamp(100.0)))
         node.on_control()
-        assert node.navigator.mode is Mode.KINEMATIC and np.any(node.last_command), node.status()
+        assert node.navigator.mode is Mode.KINEMATIC and np.any(node.last_command), node.reports.status()
         (result,) = services.set(use_sim_time=False)
         assert result.successful and node.now() > 1e9
         node.on_control()   # the switch is seen: odometry from the simulated clock is not used
-        assert node.status()[1] == 'waiting' and not np.any(node.last_command)
-        node.on_odom(convert.state_to_odometry(np.array([1.6, 1.6]), convert.seconds_to_stamp(0.0)))
+        assert node.reports.status()[1] == 'waiting' and not np.any(node.last_command)
+        node.inputs.on_odom(convert.state_to_odometry(np.array([1.6, 1.6]), convert.seconds_to_stamp(0.0)))
         node.on_control()
-        assert node.navigator.mode is Mode.KINEMATIC and np.any(node.last_command), node.status()
-        assert node.status()[0] == DiagnosticStatus.OK
+        assert node.navigator.mode is Mode.KINEMATIC and np.any(node.last_command), node.reports.status()
+        assert node.reports.status()[0] == DiagnosticStatus.OK
     finally:
         services.close()
 
@@ -245,9 +247,9 @@ def test_the_example_params_file_configures_a_planner_with_every_parameter_known
                        cli_args=['--ros-args', '--params-file', str(ROOT / 'config' / 'planner.yaml')])
     try:
         assert unknown_overrides(node) == []
-        assert (node.algorithm, node.model, node.radius, node.obstacle_source, node.laser_mount) == \
+        assert (node.algorithm, node.model, node.radius, node.inputs.obstacle_source, node.inputs.laser_mount) == \
             ('fastep_route', 'diff_drive', 0.22, 'map', (0.0, 0.0, 0.0))
-        assert node.localization_topic == '/r1/amcl_pose' and node.params.max_speed == 0.5
+        assert node.inputs.localization_topic == '/r1/amcl_pose' and node.params.max_speed == 0.5
     finally:
         node.destroy_node()
 

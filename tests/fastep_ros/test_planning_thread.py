@@ -114,9 +114,9 @@ def make(context: Any, **params: Any) -> PlannerNode:
 
 
 def start_driving(node: PlannerNode) -> None:
-    node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 16.0), 1.0)]))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 16.0), 1.0)]))
     node.on_goal(convert.point_to_pose_stamped((18.0, 10.0)))
-    node.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(node.now())))
+    node.inputs.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(node.now())))
 
 
 def drive_on_first_plan(node: PlannerNode) -> None:
@@ -135,7 +135,7 @@ def test_the_control_tick_drives_on_the_last_plan_while_a_pass_is_stuck_then_sto
 
     def tick() -> None:
         now[0] += 0.05
-        node.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(now[0])))
+        node.inputs.on_odom(convert.state_to_odometry([2.0, 10.0], convert.seconds_to_stamp(now[0])))
         node.on_control()
     try:
         assert node.planning is not None
@@ -152,27 +152,27 @@ def test_the_control_tick_drives_on_the_last_plan_while_a_pass_is_stuck_then_sto
         assert gate.entered.wait(WAIT)
         # The pass is stuck: control ticks go on, on the plan they have, and return.
         ticks = 0
-        while node.status()[0] != DiagnosticStatus.ERROR:
+        while node.reports.status()[0] != DiagnosticStatus.ERROR:
             tick()
             ticks += 1
             if ticks <= 2:   # the plan in use was planned from tick 1, 2 or 3: too old from tick 6 on
                 assert node.last_command[0] > 0.0, ticks
             assert ticks < 10
-        level, message, reason = node.status()
+        level, message, reason = node.reports.status()
         assert message == 'stale' and reason.startswith('planning stalled')
         speeds = [float(node.last_command[0])]
         while speeds[-1] > 0.0 and len(speeds) < 10:   # braking at emergency_deceleration, to a standstill
             tick()
             speeds.append(float(node.last_command[0]))
-        assert speeds[-1] == 0.0 and node.status()[1] == 'stale'
-        control = {task.task: task for task in node.diagnostic_tasks()}['control']
+        assert speeds[-1] == 0.0 and node.reports.status()[1] == 'stale'
+        control = {task.task: task for task in node.reports.diagnostic_tasks()}['control']
         assert control.level == DiagnosticStatus.ERROR and control.message == 'stalled'
         gate.open.set()
         wait_for(lambda: node.planning is not None and node.planning.busy_for == 0.0, 'the stuck pass to end')
         tick()
-        wait_for(lambda: node.planning is not None and node.plan_age() <= 0.05, 'a fresh plan')
+        wait_for(lambda: node.planning is not None and node.reports.plan_age() <= 0.05, 'a fresh plan')
         tick()
-        assert node.status()[0] == DiagnosticStatus.OK and node.last_command[0] > 0.0
+        assert node.reports.status()[0] == DiagnosticStatus.OK and node.last_command[0] > 0.0
     finally:
         gate.open.set()
         node.destroy_node()
@@ -205,15 +205,15 @@ def test_status_and_diagnostics_carry_the_control_loops_deadlines(context: Any) 
         for _ in range(60):   # 3 s at 20 Hz
             node.on_control()
             now[0] += 0.05
-        assert node.control_rate() is not None and abs((node.control_rate() or 0.0) - 20.0) < 1e-6
-        control = {task.task: task for task in node.diagnostic_tasks()}['control']
+        assert node.reports.control_rate() is not None and abs((node.reports.control_rate() or 0.0) - 20.0) < 1e-6
+        control = {task.task: task for task in node.reports.diagnostic_tasks()}['control']
         assert control.level == DiagnosticStatus.OK and control.message == 'on time'
         for _ in range(60):   # a loop that runs at 10 Hz where 20 are asked for
             node.on_control()
             now[0] += 0.1
-        assert abs((node.control_rate() or 0.0) - 10.0) < 1e-6
-        assert node.rate_problem().startswith('control loop missed its rate: 10.0 Hz of 20 Hz')
-        control = {task.task: task for task in node.diagnostic_tasks()}['control']
+        assert abs((node.reports.control_rate() or 0.0) - 10.0) < 1e-6
+        assert node.reports.rate_problem().startswith('control loop missed its rate: 10.0 Hz of 20 Hz')
+        control = {task.task: task for task in node.reports.diagnostic_tasks()}['control']
         assert control.level == DiagnosticStatus.WARN and control.message == 'late'
         assert {'rate_hz', 'target_hz', 'tick_ms', 'plan_age', 'planning_ms'} <= set(control.values)
     finally:
@@ -226,12 +226,12 @@ class Base:
     def __init__(self, node: PlannerNode) -> None:
         self.node, self.now, self.state = node, 100.0, np.array([1.0, 10.0, 0.0])
         node.now = lambda: self.now   # type: ignore[method-assign]  # the test's clock
-        node.on_obstacles(convert.obstacles_to_marker_array([]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         node.on_goal(convert.point_to_pose_stamped((95.0, 10.0)))   # far: the law's speed (gain x distance) is higher
 
     def tick(self) -> float:
         node = self.node
-        node.on_odom(convert.state_to_odometry(self.state, convert.seconds_to_stamp(self.now)))
+        node.inputs.on_odom(convert.state_to_odometry(self.state, convert.seconds_to_stamp(self.now)))
         node.on_control()
         v, omega = (float(c) for c in node.last_command)
         self.state = self.state + 0.05 * np.array([v * np.cos(self.state[2]), v * np.sin(self.state[2]), omega])
@@ -275,8 +275,8 @@ def test_a_fault_of_the_control_tick_stops_the_robot_and_fails_the_goal_never_th
         control.command = broken   # type: ignore[method-assign]  # a fault where none is expected
         node.on_control()   # returns: the executor spins on
         assert not node.last_command.any()
-        wait_for(lambda: node.status()[1] == 'failed', 'the goal failed')
-        assert 'control fault: broken control tick' in node.status()[2]
+        wait_for(lambda: node.reports.status()[1] == 'failed', 'the goal failed')
+        assert 'control fault: broken control tick' in node.reports.status()[2]
     finally:
         node.destroy_node()
 

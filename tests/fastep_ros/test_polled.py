@@ -45,7 +45,7 @@ def test_a_planner_takes_only_the_newest_odometry_of_another_robot_when_it_uses_
             node.take_others()   # what each control tick (and each wall tick) does
             time.sleep(0.02)
         assert followed.position == (3.0, 5.0)
-        assert [o.name for o in node.other_robots(node.now())] == ['r2']
+        assert [o.name for o in node.inputs.other_robots(node.now())] == ['r2']
         node.take_others()
         assert followed.position == (3.0, 5.0)   # nothing new: the last pose stays
     finally:

@@ -91,7 +91,7 @@ class World:
         overrides = [Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0]), Parameter('max_speed', value=1.0),
                      Parameter('planning_thread', value=False), *(Parameter(k, value=v) for k, v in params.items())]
         self.planner = PlannerNode(context=context, namespace='/d1', parameter_overrides=overrides)
-        self.planner.on_obstacles(convert.obstacles_to_marker_array([]))
+        self.planner.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         self.executor = SingleThreadedExecutor(context=context)
         self.executor.add_node(self.planner)
         self.nodes: list[Any] = []
@@ -116,7 +116,7 @@ class World:
             self.executor.spin_once(timeout_sec=0.02)
 
     def others(self) -> list[str]:
-        return sorted(o.name for o in self.planner.other_robots(self.planner.now()))
+        return sorted(o.name for o in self.planner.inputs.other_robots(self.planner.now()))
 
     def close(self) -> None:
         self.executor.shutdown()
@@ -152,7 +152,7 @@ def test_its_own_base_s_odometry_is_not_another_robot_and_the_robot_drives_at_fu
     controller = world.node('controller_manager', '/d1')
     pub = controller.create_publisher(Odometry, 'diff_drive_controller/odom', RELIABLE)
     planner = world.planner
-    planner.on_odom(odometry(2.0, 2.0))
+    planner.inputs.on_odom(odometry(2.0, 2.0))
     planner.on_goal(convert.point_to_pose_stamped((15.0, 15.0)))
     heard: list[Odometry] = []
     world.node('listener', '/').create_subscription(Odometry, '/d1/diff_drive_controller/odom', heard.append,
@@ -165,7 +165,7 @@ def test_its_own_base_s_odometry_is_not_another_robot_and_the_robot_drives_at_fu
     world.spin_for(0.6)   # two more looks at the graph, with the controller still publishing
     pub.publish(odometry(2.0, 2.0))
     world.spin_for(0.1)
-    planner.on_odom(odometry(2.0, 2.0))
+    planner.inputs.on_odom(odometry(2.0, 2.0))
     planner.on_control()
     assert float(np.hypot(*planner.last_command)) == pytest.approx(1.0, abs=0.05)
     assert world.others() == []
@@ -214,12 +214,12 @@ def test_an_announced_robot_is_followed_kept_stale_when_its_odometry_stops_and_f
     heard.clear()
     world.spin_until(lambda: any(diagnostic_to_dict(m).get('stale') == 'r2' and diagnostic_to_dict(m)['others'] == ''
                                  for m in heard), 20.0, 'status to list r2 as stale')
-    [other] = world.planner.other_robots(world.planner.now())
+    [other] = world.planner.inputs.other_robots(world.planner.now())
     assert other.name == 'r2' and other.velocity == (0.0, 0.0) and other.position == pytest.approx((5.0, 5.0))
     assert other.radius == pytest.approx(0.8 + 0.5 * 1.5, abs=1e-6)   # its reach: 0.5 m/s for other_robot_timeout
     world.spin_until(followed, 20.0, 'r2 to be followed again')
     assert statuses is not None
-    [other] = world.planner.other_robots(world.planner.now())
+    [other] = world.planner.inputs.other_robots(world.planner.now())
     assert other.radius == pytest.approx(0.8, abs=1e-6) and other.velocity == (0.5, 0.0)
 
 
@@ -320,12 +320,12 @@ def test_known_movers_gone_quiet_are_kept_where_last_seen_their_reach_widening(w
     told_at = planner.get_clock().now()
     pub.publish(convert.movers_to_marker_array([OtherRobot('mover 0', (5.0, 5.0), (1.0, 0.0), 0.4, mover=True)],
                                                told_at.to_msg()))
-    world.spin_until(lambda: planner.known_movers != [], 20.0, '/movers')
+    world.spin_until(lambda: planner.inputs.known_movers != [], 20.0, '/movers')
     told = told_at.nanoseconds * 1e-9
-    [fresh] = planner.other_robots(told + 0.2)   # predicted along its velocity (max_extrapolation 0.25 s)
+    [fresh] = planner.inputs.other_robots(told + 0.2)   # predicted along its velocity (max_extrapolation 0.25 s)
     assert fresh.position == pytest.approx((5.2, 5.0)) and fresh.velocity == (1.0, 0.0) and fresh.radius == 0.4
-    later = planner.movers_received + 30.0
-    [stale] = planner.other_robots(later)
+    later = planner.inputs.movers_received + 30.0
+    [stale] = planner.inputs.other_robots(later)
     assert stale.mover and stale.position == (5.0, 5.0) and stale.velocity == (0.0, 0.0)
     assert stale.radius == pytest.approx(0.4 + 1.0 * (later - told))
-    assert planner.stale_inputs(later) == [('/movers', pytest.approx(30.0))]
+    assert planner.inputs.stale_inputs(later) == [('/movers', pytest.approx(30.0))]

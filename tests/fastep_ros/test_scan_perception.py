@@ -39,24 +39,24 @@ def drive(node: PlannerNode, scans: bool, mover: tuple[np.ndarray, np.ndarray] |
     obstacles (surface to body), and what it published on tracked_obstacles."""
     clock: Any = node.get_clock()
     published: list[MarkerArray] = []
-    node.tracked_pub.publish = published.append  # type: ignore[method-assign]  # keep what the planner believes
+    node.inputs.tracked_pub.publish = published.append  # type: ignore[method-assign]  # keep what the planner believes
     rng = np.random.default_rng(7)
-    node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
     state, dt, closest = np.array([3.0, 10.0]), 0.05, math.inf
     node.on_goal(convert.point_to_pose_stamped((21.0, 10.0)))
     for k in range(1, ticks):
         t = k * dt
         clock.set_ros_time_override(Time(nanoseconds=int(round(t * 1e9)), clock_type=clock.clock_type))
-        node.on_odom(convert.state_to_odometry(state, convert.seconds_to_stamp(t)))
+        node.inputs.on_odom(convert.state_to_odometry(state, convert.seconds_to_stamp(t)))
         circles, radii = [KNOWN.center, UNKNOWN.center], [KNOWN.radius, UNKNOWN.radius]
         if mover is not None:
             circles.append(tuple(mover[0] + mover[1] * t))
             radii.append(0.6)
         if scans:
             reading = scan(SPEC, (state[0], state[1], 0.0), rng, t, np.array(circles), np.array(radii))
-            node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(t)))
+            node.inputs.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(t)))
         node.on_control()
-        if node.status()[1] == 'arrived':
+        if node.reports.status()[1] == 'arrived':
             break
         state = state + node.last_command * dt
         gaps = np.hypot(*(np.array(circles) - state).T) - np.array(radii)
@@ -74,9 +74,9 @@ def test_an_obstacle_missing_from_the_map_is_seen_in_the_scans_and_avoided(conte
     node = make(context, algorithm='fastep_route')
     try:
         end, closest, published = drive(node, scans=True)
-        assert node.status()[1] == 'arrived' and np.hypot(*(end - (21.0, 10.0))) <= 0.1
+        assert node.reports.status()[1] == 'arrived' and np.hypot(*(end - (21.0, 10.0))) <= 0.1
         assert closest >= 0.0
-        assert node.scan_perception.scans > 100
+        assert node.inputs.scan_perception.scans > 100
         believed = convert.marker_array_to_obstacles(published[-1])
         seen = [o for o in believed if isinstance(o, Circle)]
         assert any(math.dist(o.center, UNKNOWN.center) < 0.1 and abs(o.radius - UNKNOWN.radius) < 0.1 for o in seen)
@@ -89,7 +89,7 @@ def test_a_mover_missing_from_the_map_is_tracked_and_shown(context: Any) -> None
     try:
         # Crossing the robot's run at x = 17, upwards at 0.4 m/s, on the robot's line at about t = 15 s.
         end, closest, published = drive(node, scans=True, mover=(np.array([17.0, 4.0]), np.array([0.0, 0.4])))
-        assert node.status()[1] == 'arrived' and closest >= 0.0
+        assert node.reports.status()[1] == 'arrived' and closest >= 0.0
         tracks = [m for msg in published for m in msg.markers if m.ns == convert.TRACKS_NS]
         assert tracks, 'the mover was never tracked'
         arrows = [m for msg in published for m in msg.markers if m.ns == convert.TRACK_VELOCITIES_NS]
@@ -102,17 +102,17 @@ def test_a_mover_missing_from_the_map_is_tracked_and_shown(context: Any) -> None
 def test_a_scan_that_is_not_one_is_ignored_with_a_reason(context: Any) -> None:
     node = make(context)
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
-        node.on_odom(convert.state_to_odometry([3.0, 10.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+        node.inputs.on_odom(convert.state_to_odometry([3.0, 10.0]))
         bad = convert.scan_to_laser_scan(scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0)))
         bad.angle_increment = 0.0
-        node.on_scan(bad)
-        assert node.scan_problem == 'scan ignored: laser scan angle_increment is 0'
-        assert node.scan_perception.scans == 0
+        node.inputs.on_scan(bad)
+        assert node.inputs.scan_problem == 'scan ignored: laser scan angle_increment is 0'
+        assert node.inputs.scan_perception.scans == 0
         good = convert.scan_to_laser_scan(scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0)))
         good.ranges[0] = math.nan   # one reading that is not a return: taken as none (REP-117)
-        node.on_scan(good)
-        assert node.scan_problem == '' and node.scan_perception.scans == 1
+        node.inputs.on_scan(good)
+        assert node.inputs.scan_problem == '' and node.inputs.scan_perception.scans == 1
     finally:
         node.destroy_node()
 
@@ -122,14 +122,14 @@ def test_a_scanner_that_cannot_see_the_way_is_used_and_said_so(context: Any) -> 
     the robot: the guard reads them), but status says it cannot see the robot's way."""
     node = make(context)
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
-        node.on_odom(convert.state_to_odometry([3.0, 10.0]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+        node.inputs.on_odom(convert.state_to_odometry([3.0, 10.0]))
         narrow = LaserSpec(range=8.0, fov=0.01, beams=100, noise=0.0)
-        node.on_scan(convert.scan_to_laser_scan(scan(narrow, (3.0, 10.0, 0.0), np.random.default_rng(0))))
-        assert node.scan_problem.startswith("the scan cannot see the robot's way: its beams span 0.01 rad")
-        assert node.scan_perception.scans == 1
-        node.on_scan(convert.scan_to_laser_scan(scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0))))
-        assert node.scan_problem == ''
+        node.inputs.on_scan(convert.scan_to_laser_scan(scan(narrow, (3.0, 10.0, 0.0), np.random.default_rng(0))))
+        assert node.inputs.scan_problem.startswith("the scan cannot see the robot's way: its beams span 0.01 rad")
+        assert node.inputs.scan_perception.scans == 1
+        node.inputs.on_scan(convert.scan_to_laser_scan(scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0))))
+        assert node.inputs.scan_problem == ''
     finally:
         node.destroy_node()
 
@@ -137,12 +137,12 @@ def test_a_scanner_that_cannot_see_the_way_is_used_and_said_so(context: Any) -> 
 def placed_at(node: PlannerNode) -> list[tuple[float, ...]]:
     """The poses the node's scans are placed at from now on (filled as they are perceived)."""
     poses: list[tuple[float, ...]] = []
-    update = node.scan_perception.update
+    update = node.inputs.scan_perception.update
 
     def kept(msg: Any, t: float, pose: Any, *args: Any) -> Any:
         poses.append(tuple(pose))
         return update(msg, t, pose, *args)
-    node.scan_perception.update = kept   # type: ignore[method-assign]  # see the pose the scan is placed at
+    node.inputs.scan_perception.update = kept   # type: ignore[method-assign]  # see the pose the scan is placed at
     return poses
 
 
@@ -152,15 +152,15 @@ def test_a_scan_is_placed_where_the_robot_was_at_its_stamp(context: Any) -> None
     node = make(context, model='diff_drive', robot_radius=0.3, use_sim_time=False)
     poses = placed_at(node)
     try:
-        node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
         reading = scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0), 0.0, np.array([KNOWN.center]),
                        np.array([KNOWN.radius]))
         now = node.now()
         for stamp, state in ((now - 0.2, [2.0, 10.0, 0.0]), (now - 0.1, [4.0, 10.0, 1.0])):
-            node.on_odom(convert.state_to_odometry(state, convert.seconds_to_stamp(stamp)))
-        node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(now - 0.15)))
+            node.inputs.on_odom(convert.state_to_odometry(state, convert.seconds_to_stamp(stamp)))
+        node.inputs.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(now - 0.15)))
         assert poses and poses[-1] == pytest.approx((3.0, 10.0, 0.5), abs=1e-4)   # stamps are whole ns
-        node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(now - 0.05)))
+        node.inputs.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(now - 0.05)))
         assert poses[-1] == pytest.approx((4.0, 10.0, 1.0))   # newer than the odometry: the state now
     finally:
         node.destroy_node()
@@ -174,12 +174,14 @@ def test_a_scan_in_a_frame_of_its_own_needs_laser_mount_and_is_placed_at_it(cont
         node = make(context, model='diff_drive', robot_radius=0.3, use_sim_time=False, **extra)
         poses = placed_at(node)
         try:
-            node.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
-            node.on_odom(convert.state_to_odometry([3.0, 10.0, 0.0], convert.seconds_to_stamp(node.now())))
-            node.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(node.now()), frame_id='laser'))
+            node.inputs.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+            node.inputs.on_odom(convert.state_to_odometry([3.0, 10.0, 0.0], convert.seconds_to_stamp(node.now())))
+            stamp = convert.seconds_to_stamp(node.now())
+            node.inputs.on_scan(convert.scan_to_laser_scan(reading, stamp, frame_id='laser'))
             if mount is None:
-                assert not poses and "frame 'laser'" in node.scan_problem and 'laser_mount' in node.scan_problem
+                problem = node.inputs.scan_problem
+                assert not poses and "frame 'laser'" in problem and 'laser_mount' in problem
             else:
-                assert poses[-1] == pytest.approx((3.25, 10.0, 0.0), abs=1e-6) and node.scan_problem == ''
+                assert poses[-1] == pytest.approx((3.25, 10.0, 0.0), abs=1e-6) and node.inputs.scan_problem == ''
         finally:
             node.destroy_node()

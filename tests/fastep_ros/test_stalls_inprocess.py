@@ -117,8 +117,8 @@ class Bench:
         self.planner.cmd_pub.publish = self._sender('plant')   # type: ignore[method-assign]  # the bench delivers
         self.plant.odom_pub.publish = self._sender('planner')  # type: ignore[method-assign]  # the bench delivers
         world = World.from_obstacles((0.0, 0.0, 20.0, 20.0), CIRCLES)
-        self.planner.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
-        self.planner.on_map(convert.world_to_occupancy_grid(world, 0.5))
+        self.planner.inputs.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
+        self.planner.inputs.on_map(convert.world_to_occupancy_grid(world, 0.5))
         self.planner.on_goal(convert.point_to_pose_stamped(GOAL))
 
     def now(self) -> float:
@@ -129,10 +129,11 @@ class Bench:
 
     def _control(self) -> None:
         self.planner.on_control()
-        odom = self.planner.odom
+        odom = self.planner.inputs.odom
         age = np.inf if odom is None else self.now() - odom.stamp
         command = self.planner.last_command
-        self.ticks.append(Tick(self.now(), age, (float(command[0]), float(command[1])), self.planner.status()[1]))
+        message = self.planner.reports.status()[1]
+        self.ticks.append(Tick(self.now(), age, (float(command[0]), float(command[1])), message))
 
     def stalled(self, name: str) -> bool:
         t = self.now()
@@ -238,23 +239,23 @@ def test_planner_acts_on_odometry_stamped_within_max_extrapolation_only(context:
     now = [50.0]
     planner.now = lambda: now[0]   # type: ignore[method-assign]  # the test's clock
     try:
-        planner.on_obstacles(convert.obstacles_to_marker_array([]))
+        planner.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         planner.on_goal(convert.point_to_pose_stamped(GOAL))
-        planner.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.8)))
+        planner.inputs.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.8)))
         planner.on_control()
-        assert planner.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
-        planner.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.7)))
+        assert planner.reports.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
+        planner.inputs.on_odom(convert.state_to_odometry(START, convert.seconds_to_stamp(49.7)))
         planner.on_control()
-        _, message, reason = planner.status()
+        _, message, reason = planner.reports.status()
         assert message == 'stale' and reason.startswith('odometry stale: stamped 0.30 s ago'), reason
         assert np.all(planner.last_command == 0.0)
-        planner.on_odom(convert.state_to_odometry(START))   # unset stamp: as old as since it arrived
+        planner.inputs.on_odom(convert.state_to_odometry(START))   # unset stamp: as old as since it arrived
         now[0] = 50.2
         planner.on_control()
-        assert planner.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
+        assert planner.reports.status()[1] == 'kinematic' and np.any(planner.last_command != 0.0)
         now[0] = 50.3
         planner.on_control()
-        assert planner.status()[1] == 'stale'
+        assert planner.reports.status()[1] == 'stale'
     finally:
         planner.destroy_node()
 

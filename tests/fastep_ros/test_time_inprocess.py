@@ -117,7 +117,7 @@ def test_after_a_clock_jump_the_plant_goes_on_and_the_planner_never_acts_on_a_po
         clock.set_ros_time_override(Time(nanoseconds=int(round(t * 1e9)), clock_type=clock.clock_type))
     try:
         world = World.from_obstacles([0, 0, 20, 20], [Circle((10.0, 10.0), 1.5)])
-        planner.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
+        planner.inputs.on_obstacles(convert.obstacles_to_marker_array(world.obstacle_list))
         planner_at(1.0)
         planner.on_goal(convert.point_to_pose_stamped((18.0, 10.5)))
         assert plant.advance(1.0) and plant.advance(3.0)
@@ -126,14 +126,14 @@ def test_after_a_clock_jump_the_plant_goes_on_and_the_planner_never_acts_on_a_po
         plant.publish()
         assert convert.stamp_to_seconds(sent[-1].header.stamp) == far
         planner_at(3.02)
-        planner.on_odom(sent[-1])   # odometry from the far time, at the planner's old time
+        planner.inputs.on_odom(sent[-1])   # odometry from the far time, at the planner's old time
         planner.on_control()
-        assert planner.status()[1] == 'stale' and 'ahead of this node\'s clock' in planner.status()[2]
+        assert planner.reports.status()[1] == 'stale' and 'ahead of this node\'s clock' in planner.reports.status()[2]
         planner_at(far)
-        planner.on_odom(sent[-1])
+        planner.inputs.on_odom(sent[-1])
         planner_at(3.04)   # the clock went back after the odometry came
         planner.on_control()
-        assert planner.status()[1] == 'stale' and 'clock went back' in planner.status()[2]
+        assert planner.reports.status()[1] == 'stale' and 'clock went back' in planner.reports.status()[2]
         assert plant.advance(3.04), 'back at the old time the plant goes on'
         assert plant.tick is not None and abs(plant.tick * plant.step - 3.04) < 1e-9
         plant.on_cmd_vel(convert.command_to_twist(np.array([1.0, 0.0]), 'point_mass'))
@@ -141,9 +141,9 @@ def test_after_a_clock_jump_the_plant_goes_on_and_the_planner_never_acts_on_a_po
         plant.publish()
         assert convert.stamp_to_seconds(sent[-1].header.stamp) == 3.5
         planner_at(3.5)
-        planner.on_odom(sent[-1])
+        planner.inputs.on_odom(sent[-1])
         planner.on_control()
-        assert planner.status()[1] in ('kinematic', 'avoiding'), planner.status()
+        assert planner.reports.status()[1] in ('kinematic', 'avoiding'), planner.reports.status()
     finally:
         planner.destroy_node()
         plant.destroy_node()

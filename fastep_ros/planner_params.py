@@ -1,0 +1,93 @@
+"""The planner node's parameters, one table: every PlannerParams field (Table 1 of the paper and the rest, tunable),
+then the node's own, then the lifecycle's `autostart`. PlannerNode declares them in this order in one loop; the
+reference pages (fastep_ros.reference) show what the declarations give.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import fields
+
+from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, algorithm_name
+from fastep_core.planning.params import PlannerParams
+from fastep_core.scenario import MODELS
+from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, Param
+from fastep_ros.lifecycle import AUTOSTART
+from msg_tools import convert, interface
+
+__all__ = ['PARAMETERS', 'TUNABLE']
+
+_DEFAULTS = PlannerParams()
+
+PARAMETERS: tuple[Param, ...] = (
+    *(Param.of_field(f, getattr(_DEFAULTS, f.name)) for f in fields(PlannerParams)),
+    Param('algorithm', DEFAULT_ALGORITHM, 'planner: ' + ', '.join(f'{a} ({algorithm_name(a)})' for a in ALGORITHMS),
+          constraints=' | '.join(ALGORITHMS)),
+    Param('model', 'point_mass', 'robot model: ' + ' | '.join(MODELS), constraints=' | '.join(MODELS)),
+    Param('robot_radius', 0.5, 'safety radius: centre-to-obstacle-surface distance that counts as collision (m)',
+          constraints='> 0'),
+    Param('length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)'),
+    Param('trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)'),
+    Param('hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)'),
+    Param('seed', 0, 'seed of the swarm\'s random numbers'),
+    Param('seed_stream', -1, 'if >= 0: use stream k of SeedSequence(seed).spawn, as fastep-sim does for the k-th '
+          'robot of a scenario; -1: default_rng(seed)'),
+    Param('control_rate_hz', 20.0, 'control ticks per second of the node clock (1 / dt of the in-process '
+          'simulator)', value_range=RATE_RANGE, unit=' Hz', read_only=False),
+    Param('odom_timeout', 1.0, 'odometry older than this (s, node clock) is stale: the robot is stopped',
+          constraints='> 0', read_only=False),
+    Param('clock_timeout', 3.0, 'on simulated time: no /clock for this many wall seconds is a warning on status '
+          'and /diagnostics, and the robot is stopped', value_range=PERIOD_RANGE, unit=' s', read_only=False),
+    Param('use_stamped_cmd_vel', False, 'publish cmd_vel as TwistStamped, not Twist'),
+    Param('other_robot_radius', 0.0, 'safety radius assumed for other robots (m); 0: the radius each announces (its '
+          'footprint), robot_radius until it is heard', value_range=(0.0, math.inf), read_only=False),
+    Param('other_robot_timeout', 3.0, 'another robot whose odometry has not come for this long (s, node clock) is '
+          'stale (status `stale`); from odom_timeout on it is avoided where last seen, widened by its last speed '
+          'times up to this long', constraints='> 0'),
+    Param('max_extrapolation', 0.25, 'latency compensation: odometry (own and other robots\') is predicted forward '
+          'from its stamp to the control time by at most this much (s); own odometry stamped longer ago is stale: '
+          'the robot is held still; 0 disables both', value_range=(0.0, math.inf), read_only=False),
+    Param('workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map'),
+    Param('laser_mount', None, '[x (m), y (m), yaw (rad)]: where the scanner sits in base_link, for scans in a '
+          'frame of their own (the static transform base_link -> the scan\'s frame; /tf_static is not read here); '
+          'empty: scans must be in base_link'),
+    Param('obstacle_source', 'markers', 'where the obstacles come from: markers (the /obstacles MarkerArray of '
+          'fastep-map: circles and walls) | map (the occupied cells of the /map OccupancyGrid, as Nav2\'s '
+          'map_server publishes it: their outline, as walls)', constraints='markers | map'),
+    Param('scan_noise', 0.01, 'standard deviation of the laser\'s range noise (m), which a LaserScan does not '
+          'carry: the perception of `scan` clusters and fits with it', value_range=(0.0, 1.0), unit=' m'),
+    Param('occupied_threshold', convert.OCCUPIED_THRESHOLD, 'with obstacle_source map: a cell is occupied from this '
+          'value (0-100) on; unknown cells (-1) are free (map_server\'s occupied_thresh 0.65)', value_range=(1, 100)),
+    Param('frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans'),
+    Param('odom_frame_id', '', 'the robot\'s odometry frame (REP-105); empty: <ns>/odom (root namespace: odom). '
+          'Odometry in it or in frame_id is taken, in any other frame refused'),
+    Param('localization_topic', '', 'localization pose topic (geometry_msgs/PoseWithCovarianceStamped, the map pose '
+          'of base_link, e.g. amcl_pose) giving map -> odom; empty: map -> odom is the identity (simulation)'),
+    Param('goal_frames_from_tf', True, 'follow /tf (polled, taken when used) to move goals given in other frames '
+          '(odom, base_link) into map; false: only /tf_static is followed (fastep-launch, whose goals are in map: '
+          'every plant publishes /tf at its rate)'),
+    Param('map_to_odom_from_tf', False, 'take map -> odom from /tf and /tf_static (AMCL and slam_toolbox publish it) '
+          'at each control tick; localization_topic, when set, is taken instead'),
+    Param('lock_step', False, 'on simulated time: act once per own odometry stamp, when the other robots\' odometry '
+          '(and the scan) of that time are in, and stamp cmd_vel with it, so a graph steps like fastep-sim '
+          '(fastep-launch sets it; needs use_stamped_cmd_vel and plants in lock step)'),
+    Param('planning_thread', True, 'plan on a thread of its own, so that the control loop never waits for planning '
+          '(it drives on the newest plan, guarded every tick); false: every control tick plans, the clock of a '
+          'simulation waiting for it. Lock step plans on the tick (unless realtime)'),
+    Param('exclusive_cmd_vel', True, 'another publisher on cmd_vel (a second planner started in this namespace, a '
+          'teleop) stops this planner\'s commands after one zero: status ERROR `conflict` until it is gone; false: '
+          'command anyway', read_only=False),
+    Param('stop_on_failure', True, 'follow_waypoints: a waypoint that fails ends the goal (ABORTED, '
+          'TASK_EXECUTOR_FAILED), as Nav2\'s waypoint follower by default; false: it is missed and the robot goes on '
+          'to the next', read_only=False),
+    Param('realtime', False, 'in lock step, plan on the planning thread as on wall time: a pass\'s plan reaches the '
+          'control loop when it is done, the simulated clock going on meanwhile (fastep-launch --realtime: planning '
+          'latency counted; not deterministic)'),
+    Param('max_plan_age', 2.0, 'a plan older than this (s, node clock) is not driven on: the robot stops, status '
+          'ERROR, until a planning pass ends (planning_thread)', value_range=(0.1, 60.0), unit=' s',
+          read_only=False),
+    AUTOSTART,
+)
+
+TUNABLE = tuple(param.name for param in PARAMETERS if not param.read_only)
+"""What changes while the node runs (fastep_ros.parameters.DynamicParameters); the rest is what it was built with."""
