@@ -234,7 +234,9 @@ class Obstacles:
         t = np.minimum(np.maximum(along, 0.0), 1.0)
         segment = norm(ax - t * abx, ay - t * aby)
         if end_slack is not None:   # beyond an end by more than the slack: not this segment's point
-            slack = (end_slack if np.ndim(end_slack) == 0 else np.asarray(end_slack)[k]) * np.sqrt(self._inv_length2[k])
+            with np.errstate(invalid='ignore'):   # +inf times a point-segment's 0: nan, which bounds nothing either
+                slack = (end_slack if np.ndim(end_slack) == 0 else np.asarray(end_slack)[k]) * \
+                    np.sqrt(self._inv_length2[k])
             segment = np.where((along < -slack) | (along > 1.0 + slack), np.inf, segment)
         out[point[np.concatenate([circle, segment]) < within]] = True
         return out

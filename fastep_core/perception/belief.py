@@ -154,6 +154,7 @@ class Perception:
         # The beams' directions once for every cast of this scan; each beam's nearest believed surface from the
         # cast that finds what the scan sees through (_in_front's, while that drops nothing).
         directions = fan_directions(pose_array[2], scan.angle_min, scan.angle_increment, len(scan.ranges))
+        surfaces: FloatArray | None
         through, surfaces = seen_through_and_nearest(scan, pose_array, believed, directions)
         if through.any():
             surfaces = None
@@ -162,18 +163,19 @@ class Perception:
             self.map_items = [o for o in self.map_items if id(o) not in gone]
             self.seen_items = [o for o in self.seen_items if id(o) not in gone]
             changed = True
+            believed = self._obstacles('believed')
         points, beams = scan_points(scan, pose_array)
         self.returns = points   # all of them: the guard's (planning/guard.py)
         centres = np.array([o.position for o in others], dtype=float).reshape(-1, 2)
         radii = np.array([o.radius for o in others], dtype=float)
         # New: what no robot or mover explains, and no believed still obstacle either, unless it lies well in front
         # of the believed surface on its beam (a surface the belief lacks).
-        believed, on_map = self._obstacles('believed'), self._obstacles('map')
+        on_map = self._obstacles('map')
         if math.isfinite(believed.scale):   # the map's and the seen obstacles in one query
             still = explained_by_belief(points, believed, len(on_map.starts))
         else:
             still = explained(points, self._obstacles('seen'), NO_CENTRES, NO_RADII, map_obstacles=on_map)
-        still &= ~self._in_front(scan, pose_array, points, beams, directions, surfaces)
+        still &= ~self._in_front(scan, pose_array, points, beams, believed, directions, surfaces)
         new = ~still & ~explained(points, NO_OBSTACLES, centres, radii)
         points, beams = points[new], beams[new]
         labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
@@ -229,13 +231,12 @@ class Perception:
         self.recent.add(scan, pose_array)
         return self.belief
 
-    def _in_front(self, scan: Scan, pose: FloatArray, points: FloatArray, beams: IntArray,
+    def _in_front(self, scan: Scan, pose: FloatArray, points: FloatArray, beams: IntArray, believed: Obstacles,
                   directions: FanDirections, nearest: FloatArray | None) -> NDArray[np.bool_]:
         """Which returns lie IN_FRONT or more in front of every believed still obstacle on their beam: a surface
         the belief lacks, nearer than what it has there (a cluster of poles fitted a little small, a wall a little
         behind its bumps, a map obstacle drawn where it is not). They are new, however near a believed surface.
-        nearest: fusion.nearest_surfaces of the believed obstacles, when known."""
-        believed = self._obstacles('believed')
+        believed: self._obstacles('believed'); nearest: fusion.nearest_surfaces of them, when known."""
         out = np.zeros(len(points), dtype=bool)
         if not len(believed) or not len(points):
             return out
