@@ -358,8 +358,8 @@ class Perception:
     def _add_walls(self, starts: FloatArray, ends: FloatArray) -> None:
         """Believe in this scan's wall pieces: each extends a collinear believed wall it continues, else is added.
         The believed walls' ends are gathered once (a table kept up to date as pieces extend or join them), and
-        which of them each piece may continue (_wall_candidates) found for all pieces at once: the walls a piece
-        before extended or added since are tried by the exact test alone (the candidates only spare it work)."""
+        which of them each piece may continue (_wall_candidates) found for all pieces at once; the walls a piece
+        before extended or added since by _may_continue, the same test on one wall in floats."""
         walls = [(k, item) for k, item in enumerate(self.seen_items) if isinstance(item, Segment)]
         index = [k for k, _ in walls]
         table: FloatArray = np.array([(item.start, item.end) for _, item in walls], dtype=np.float64).reshape(-1, 2, 2)
@@ -369,7 +369,9 @@ class Perception:
         for new, candidates in zip(pieces, maybe):
             rows = np.flatnonzero(candidates).tolist()
             if stale:
-                rows = sorted(stale.union(rows))
+                piece = new.tolist()
+                rows = sorted({row for row in rows if row not in stale} |
+                              {row for row in stale if self._may_continue(piece, table[row].tolist())})
             for row in rows:
                 a, b = table[row, 0], table[row, 1]
                 run = b - a
@@ -395,6 +397,26 @@ class Perception:
                 index.append(len(self.seen_items) - 1)
                 stale.add(len(table))
                 table = np.concatenate([table, new[None]])
+
+    @staticmethod
+    def _may_continue(piece: list[list[float]], wall: list[list[float]]) -> bool:
+        """_wall_candidates for one piece and one wall ((start, end) each), in Python floats: its unit vector and
+        distances off the line are the exact test's own operations; along the wall a sum of two products where
+        the exact test has a dot product (which may round differently: MERGE_MARGIN covers it)."""
+        (ax, ay), (bx, by) = wall
+        rx, ry = bx - ax, by - ay
+        length = math.hypot(rx, ry)
+        if length <= 0.0:
+            return False     # the exact test skips such a wall
+        ux, uy = rx / length, ry / length
+        (px, py), (qx, qy) = piece
+        off_p, off_q = abs(ux * (py - ay) - uy * (px - ax)), abs(ux * (qy - ay) - uy * (qx - ax))
+        along_p, along_q = ux * (px - ax) + uy * (py - ay), ux * (qx - ax) + uy * (qy - ay)
+        margin = MERGE_GAP + MERGE_MARGIN
+        if math.isnan(off_p) or math.isnan(off_q) or math.isnan(along_p) or math.isnan(along_q):
+            return True      # as _wall_candidates: a nan lets a wall through
+        return not (max(off_p, off_q) > MERGE_TOLERANCE + MERGE_MARGIN or max(along_p, along_q) < -margin or
+                    min(along_p, along_q) > length + margin)
 
     @staticmethod
     def _wall_candidates(pieces: FloatArray, table: FloatArray) -> NDArray[np.bool_]:

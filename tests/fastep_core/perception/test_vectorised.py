@@ -10,6 +10,7 @@ import pytest
 from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment
+from fastep_core.perception.belief import MERGE_GAP, MERGE_TOLERANCE, Perception
 from fastep_core.perception.fusion import (
     END_SLACK,
     EXPLAINED,
@@ -22,6 +23,7 @@ from fastep_core.perception.fusion import (
 )
 from fastep_core.perception.shapes import cluster_sums, extend_ends
 from fastep_core.sensing.laser import LaserSpec, Scan, fan_directions, fan_hits, scan
+from fastep_core.world import World
 
 FloatArray = NDArray[np.float64]
 SEEDS = range(20)
@@ -134,3 +136,62 @@ def test_explained_by_belief_is_explained_by_the_seen_and_the_map(seed: int) -> 
              for s, v in zip(believed.items[believed.n_circles:], slack)]
     circles = Obstacles(believed.items[:believed.n_circles]).near(points, EXPLAINED)
     assert np.array_equal(believed.near(points, EXPLAINED, slack), np.logical_or.reduce([circles, *alone]))
+
+
+def add_walls_reference(seen: list[Obstacle], starts: FloatArray, ends: FloatArray) -> list[Obstacle]:
+    """Perception._add_walls as it was: each piece's candidate walls found anew on the table as it is."""
+    seen = list(seen)
+    walls = [(k, item) for k, item in enumerate(seen) if isinstance(item, Segment)]
+    index = [k for k, _ in walls]
+    table = np.array([(item.start, item.end) for _, item in walls], dtype=np.float64).reshape(-1, 2, 2)
+    for new in np.stack([starts, ends], axis=1):
+        for row in np.flatnonzero(Perception._wall_candidates(new[None], table)[0]):
+            a, b = table[row, 0], table[row, 1]
+            run = b - a
+            length = math.hypot(run[0], run[1])
+            if length <= 0.0:
+                continue
+            unit = run / length
+            offset = new - a
+            off_line = np.abs(unit[0] * offset[:, 1] - unit[1] * offset[:, 0])
+            along = offset @ unit
+            if off_line.max() > MERGE_TOLERANCE or along.max() < -MERGE_GAP or along.min() > length + MERGE_GAP:
+                continue
+            low, high = min(0.0, float(along.min())), max(length, float(along.max()))
+            p, q = a + low * unit, a + high * unit
+            seen[index[row]] = Segment((float(p[0]), float(p[1])), (float(q[0]), float(q[1])))
+            table[row] = (p, q)
+            break
+        else:
+            seen.append(Segment((float(new[0, 0]), float(new[0, 1])), (float(new[1, 0]), float(new[1, 1]))))
+            index.append(len(seen) - 1)
+            table = np.concatenate([table, new[None]])
+    return seen
+
+
+@pytest.mark.parametrize('seed', range(40))
+def test_add_walls_is_the_piece_by_piece_loop(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    # Pieces along a few lines (so that they continue each other and believed walls), some off them.
+    lines = [(rng.uniform(-5.0, 5.0, 2), rng.uniform(-math.pi, math.pi)) for _ in range(3)]
+
+    def piece() -> FloatArray:
+        origin, angle = lines[int(rng.integers(len(lines)))]
+        u = np.array([math.cos(angle), math.sin(angle)])
+        s = float(rng.uniform(-4.0, 4.0))
+        off = np.array([-u[1], u[0]]) * float(rng.choice([0.0, 0.01, 0.2]))
+        return np.stack([origin + s * u + off, origin + (s + float(rng.uniform(0.0, 1.0))) * u + off])
+
+    seen: list[Obstacle] = [Circle((0.0, 0.0), 0.5)]
+    seen += [Segment(tuple(p[0]), tuple(p[1])) for p in (piece() for _ in range(int(rng.integers(0, 6))))]
+    pieces = np.array([piece() for _ in range(int(rng.integers(1, 8)))])
+    perception = Perception(LaserSpec(), World((-10.0, -10.0, 10.0, 10.0)))
+    perception.seen_items = list(seen)
+    perception._add_walls(pieces[:, 0], pieces[:, 1])
+    assert perception.seen_items == add_walls_reference(seen, pieces[:, 0], pieces[:, 1])
+    # _may_continue: _wall_candidates' verdict for one piece and one wall.
+    table = np.array([(s.start, s.end) for s in perception.seen_items if isinstance(s, Segment)]).reshape(-1, 2, 2)
+    for new in pieces:
+        expected = Perception._wall_candidates(new[None], table)[0]
+        assert [Perception._may_continue(new.tolist(), wall.tolist()) for wall in table] == \
+            [bool(e) and float(np.hypot(*(w[1] - w[0]))) > 0.0 for e, w in zip(expected, table)]
