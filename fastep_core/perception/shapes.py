@@ -2,20 +2,16 @@
 
 Circles: the algebraic least-squares fit of Kasa (1976, "A circle fitting procedure and its error analysis",
 IEEE Trans. Instrum. Meas. 25): minimise sum (x^2 + y^2 + D x + E y + F)^2 over D, E, F, a 3 x 3 linear system
-per cluster; the sums of every cluster come from one np.bincount each and the systems are solved together.
-Centre (-D/2, -E/2), radius sqrt(cx^2 + cy^2 - F). A cluster is a circle when it has MIN_CIRCLE_POINTS points,
-the fit's RMS residual is within the scan's noise plus CIRCLE_RESIDUAL, the radius is at most MAX_CIRCLE_RADIUS,
-the chord from its first to its last point is at least MIN_ARC radii (an arc of 60 degrees or more: a few
-points at the edge of the range fit any circle), the centre lies beyond the points as the scanner sees them
-(a convex surface facing it) and no beam of the scan passes through the disc (a slightly bent wall fits a circle
-of metres that reaches into space the scan shows free).
-Walls: every other cluster of at least MIN_POINTS points that comes within `wall_range` of the scanner becomes
-a polyline by Douglas-Peucker simplification (Douglas and Peucker 1973) with tolerance WALL_TOLERANCE (or 3
-noise sigmas), each piece a segment moved toward the scanner to its nearest return (so that a return found in
-front of a believed wall later is something new, perception/belief.py), the polyline's two ends extended by
-the gap between beams there (`beam_gap` radians: the wall ends somewhere before the next beam). Farther ones
-wait: the robot will see them better as it comes nearer (a circle that enters the range shows its nearest few
-points first, which are no wall).
+per cluster, every cluster's sums from one np.bincount (cluster_sums) and the systems solved together. Centre
+(-D/2, -E/2), radius sqrt(cx^2 + cy^2 - F). A circle has MIN_CIRCLE_POINTS points, an RMS residual within the
+noise plus CIRCLE_RESIDUAL, a radius at most MAX_CIRCLE_RADIUS, a chord from first to last point of MIN_ARC radii
+or more (60 degrees of arc: a few points at the edge of the range fit any circle), its centre beyond the points
+as the scanner sees them (a convex surface facing it), and no beam of the scan through the disc (a slightly bent
+wall fits a circle of metres reaching into space the scan shows free). Walls: every other cluster of MIN_POINTS
+points or more within `wall_range` of the scanner becomes a Douglas-Peucker polyline (Douglas and Peucker 1973;
+tolerance WALL_TOLERANCE or 3 noise sigmas), each piece moved toward the scanner to its nearest return (a return
+in front of a believed wall is something new, belief.py), both ends extended by the gap between beams there
+(`beam_gap` radians: extend_ends). Farther ones wait: a circle entering the range shows its nearest points first.
 """
 
 from __future__ import annotations
