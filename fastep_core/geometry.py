@@ -197,14 +197,14 @@ class Obstacles:
             self._scale = scale
         return scale
 
-    def near(self, points: ArrayLike, within: float, end_slack: float | None = None) -> NDArray[np.bool_]:
+    def near(self, points: ArrayLike, within: float, end_slack: float | FloatArray | None = None) -> NDArray[np.bool_]:
         """clearance(points) < within for points (m, 2), the same answer bit for bit, without the m x n matrix of
         distances: only the (point, obstacle) pairs where the point lies in the obstacle's bounding box grown by
         `within` (and a rounding margin) can be that close, and only their distances are computed, each with the
         same arithmetic as distances(). Points sorted by x find each obstacle's candidates by binary search.
 
         end_slack: a segment counts only for the points whose foot on its line lies within the segment or at most
-        this far beyond an end (None: any, as clearance counts them)."""
+        this far beyond an end (None: any, as clearance counts them; one per segment, +inf for any, or for all)."""
         p = np.asarray(points, dtype=float).reshape(-1, 2)
         out = np.zeros(len(p), dtype=bool)
         if not len(p) or not len(self):
@@ -234,7 +234,9 @@ class Obstacles:
         t = np.minimum(np.maximum(along, 0.0), 1.0)
         segment = norm(ax - t * abx, ay - t * aby)
         if end_slack is not None:   # beyond an end by more than the slack: not this segment's point
-            slack = end_slack * np.sqrt(self._inv_length2[k])
+            with np.errstate(invalid='ignore'):   # +inf times a point-segment's 0: nan, which bounds nothing either
+                slack = (end_slack if np.ndim(end_slack) == 0 else np.asarray(end_slack)[k]) * \
+                    np.sqrt(self._inv_length2[k])
             segment = np.where((along < -slack) | (along > 1.0 + slack), np.inf, segment)
         out[point[np.concatenate([circle, segment]) < within]] = True
         return out

@@ -22,13 +22,20 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment, point_segment_distance
-from fastep_core.perception.fusion import EXPLAINED, explained, seen_through
+from fastep_core.perception.fusion import (
+    EXPLAINED,
+    explained,
+    explained_by_belief,
+    nearest_surfaces,
+    seen_through_and_nearest,
+    seen_through_circles,
+)
 from fastep_core.perception.segmentation import scan_points, segment
 from fastep_core.perception.shapes import shapes
 from fastep_core.perception.tracking import Tracker, TrackParams
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.recovery import RecentScans
-from fastep_core.sensing.laser import LaserSpec, Scan, fan_hits
+from fastep_core.sensing.laser import FanDirections, LaserSpec, Scan, fan_directions
 from fastep_core.world import World
 
 __all__ = ['FITTED_THROUGH', 'FREE_MARGIN', 'IN_FRONT', 'MERGE_GAP', 'MERGE_REACH', 'MERGE_TOLERANCE', 'MOVER_DISTANCE',
@@ -144,29 +151,38 @@ class Perception:
         pose_array = np.asarray(pose, dtype=float)[:3]
         changed = False
         believed = self._obstacles('believed')
-        through = seen_through(scan, pose_array, believed)
+        # The beams' directions once for every cast of this scan; each beam's nearest believed surface from the
+        # cast that finds what the scan sees through (_in_front's, while that drops nothing).
+        directions = fan_directions(pose_array[2], scan.angle_min, scan.angle_increment, len(scan.ranges))
+        surfaces: FloatArray | None
+        through, surfaces = seen_through_and_nearest(scan, pose_array, believed, directions)
         if through.any():
+            surfaces = None
             gone = {id(item) for item, drop in zip(believed.items, through) if drop}
             self.dropped += [o for o in self.map_items if id(o) in gone]
             self.map_items = [o for o in self.map_items if id(o) not in gone]
             self.seen_items = [o for o in self.seen_items if id(o) not in gone]
             changed = True
+            believed = self._obstacles('believed')
         points, beams = scan_points(scan, pose_array)
         self.returns = points   # all of them: the guard's (planning/guard.py)
         centres = np.array([o.position for o in others], dtype=float).reshape(-1, 2)
         radii = np.array([o.radius for o in others], dtype=float)
         # New: what no robot or mover explains, and no believed still obstacle either, unless it lies well in front
         # of the believed surface on its beam (a surface the belief lacks).
-        still = explained(points, self._obstacles('seen'), NO_CENTRES, NO_RADII, map_obstacles=self._obstacles('map'))
-        still &= ~self._in_front(scan, pose_array, points, beams)
+        on_map = self._obstacles('map')
+        if math.isfinite(believed.scale):   # the map's and the seen obstacles in one query
+            still = explained_by_belief(points, believed, len(on_map.starts))
+        else:
+            still = explained(points, self._obstacles('seen'), NO_CENTRES, NO_RADII, map_obstacles=on_map)
+        still &= ~self._in_front(scan, pose_array, points, beams, believed, directions, surfaces)
         new = ~still & ~explained(points, NO_OBSTACLES, centres, radii)
         points, beams = points[new], beams[new]
         labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
 
         def seen_free(circle_centres: FloatArray, circle_radii: FloatArray) -> NDArray[np.bool_]:
-            circles = Obstacles([Circle((float(c[0]), float(c[1])), float(r))
-                                 for c, r in zip(circle_centres, circle_radii)])
-            return seen_through(scan, pose_array, circles, max(FITTED_THROUGH, 3.0 * self.spec.noise))
+            return seen_through_circles(scan, pose_array, circle_centres, circle_radii,
+                                        max(FITTED_THROUGH, 3.0 * self.spec.noise), directions)
 
         found = shapes(points, beams, labels, pose_array[:2], self.spec.noise, WALL_RANGE * self.spec.range,
                        abs(scan.angle_increment), seen_free)
@@ -215,20 +231,17 @@ class Perception:
         self.recent.add(scan, pose_array)
         return self.belief
 
-    def _in_front(self, scan: Scan, pose: FloatArray, points: FloatArray, beams: IntArray) -> NDArray[np.bool_]:
+    def _in_front(self, scan: Scan, pose: FloatArray, points: FloatArray, beams: IntArray, believed: Obstacles,
+                  directions: FanDirections, nearest: FloatArray | None) -> NDArray[np.bool_]:
         """Which returns lie IN_FRONT or more in front of every believed still obstacle on their beam: a surface
         the belief lacks, nearer than what it has there (a cluster of poles fitted a little small, a wall a little
-        behind its bumps, a map obstacle drawn where it is not). They are new, however near a believed surface."""
-        believed = self._obstacles('believed')
+        behind its bumps, a map obstacle drawn where it is not). They are new, however near a believed surface.
+        believed: self._obstacles('believed'); nearest: fusion.nearest_surfaces of them, when known."""
         out = np.zeros(len(points), dtype=bool)
         if not len(believed) or not len(points):
             return out
-        circles = believed.n_circles
-        beam, _, expected = fan_hits(pose[:2], pose[2], scan.angle_min, scan.angle_increment, len(scan.ranges),
-                                     believed.centers[:circles], believed.radii[:circles], believed.starts,
-                                     believed.ends)
-        nearest = np.full(len(scan.ranges), np.inf)
-        np.minimum.at(nearest, beam, np.where(expected > 0.0, expected, np.inf))
+        if nearest is None:
+            nearest = nearest_surfaces(scan, pose, believed, directions)
         out = scan.ranges[beams] < nearest[beams] - max(IN_FRONT, 4.0 * self.spec.noise)
         return out
 
@@ -344,12 +357,22 @@ class Perception:
 
     def _add_walls(self, starts: FloatArray, ends: FloatArray) -> None:
         """Believe in this scan's wall pieces: each extends a collinear believed wall it continues, else is added.
-        The believed walls' ends are gathered once (a table kept up to date as pieces extend or join them)."""
+        The believed walls' ends are gathered once (a table kept up to date as pieces extend or join them), and
+        which of them each piece may continue (_wall_candidates) found for all pieces at once; the walls a piece
+        before extended or added since by _may_continue, the same test on one wall in floats."""
         walls = [(k, item) for k, item in enumerate(self.seen_items) if isinstance(item, Segment)]
         index = [k for k, _ in walls]
         table: FloatArray = np.array([(item.start, item.end) for _, item in walls], dtype=np.float64).reshape(-1, 2, 2)
-        for new in np.stack([starts, ends], axis=1):
-            for row in np.flatnonzero(self._wall_candidates(new[None], table)[0]):
+        pieces = np.stack([starts, ends], axis=1)
+        maybe = self._wall_candidates(pieces, table)
+        stale: set[int] = set()     # rows changed or added since `maybe`
+        for new, candidates in zip(pieces, maybe):
+            rows = np.flatnonzero(candidates).tolist()
+            if stale:
+                piece = new.tolist()
+                rows = sorted({row for row in rows if row not in stale} |
+                              {row for row in stale if self._may_continue(piece, table[row].tolist())})
+            for row in rows:
                 a, b = table[row, 0], table[row, 1]
                 run = b - a
                 length = math.hypot(run[0], run[1])
@@ -366,12 +389,34 @@ class Perception:
                 p, q = a + low * unit, a + high * unit
                 self.seen_items[index[row]] = Segment((float(p[0]), float(p[1])), (float(q[0]), float(q[1])))
                 table[row] = (p, q)
+                stale.add(row)
                 break
             else:
                 self.seen_items.append(Segment((float(new[0, 0]), float(new[0, 1])),
                                                (float(new[1, 0]), float(new[1, 1]))))
                 index.append(len(self.seen_items) - 1)
+                stale.add(len(table))
                 table = np.concatenate([table, new[None]])
+
+    @staticmethod
+    def _may_continue(piece: list[list[float]], wall: list[list[float]]) -> bool:
+        """_wall_candidates for one piece and one wall ((start, end) each), in Python floats: its unit vector and
+        distances off the line are the exact test's own operations; along the wall a sum of two products where
+        the exact test has a dot product (which may round differently: MERGE_MARGIN covers it)."""
+        (ax, ay), (bx, by) = wall
+        rx, ry = bx - ax, by - ay
+        length = math.hypot(rx, ry)
+        if length <= 0.0:
+            return False     # the exact test skips such a wall
+        ux, uy = rx / length, ry / length
+        (px, py), (qx, qy) = piece
+        off_p, off_q = abs(ux * (py - ay) - uy * (px - ax)), abs(ux * (qy - ay) - uy * (qx - ax))
+        along_p, along_q = ux * (px - ax) + uy * (py - ay), ux * (qx - ax) + uy * (qy - ay)
+        margin = MERGE_GAP + MERGE_MARGIN
+        if math.isnan(off_p) or math.isnan(off_q) or math.isnan(along_p) or math.isnan(along_q):
+            return True      # as _wall_candidates: a nan lets a wall through
+        return not (max(off_p, off_q) > MERGE_TOLERANCE + MERGE_MARGIN or max(along_p, along_q) < -margin or
+                    min(along_p, along_q) > length + margin)
 
     @staticmethod
     def _wall_candidates(pieces: FloatArray, table: FloatArray) -> NDArray[np.bool_]:

@@ -9,10 +9,10 @@ believed obstacles the scan sees through.
   surface the beam would reach within range_max - SEE_THROUGH count (beyond, the beam says nothing), and the
   obstacle is shrunk by SEE_THROUGH first (circles' radii, segments' ends: grazing beams say nothing); a beam
   with no reading (NaN: a dark or glass surface, an error) says nothing either, +inf (no return within range)
-  that its whole length is free. An
-  obstacle contradicted by at least SEE_THROUGH_BEAMS beams of one scan is not where the map says (a misplaced
-  obstacle's ghost, or a mover perception once took for a still obstacle). Vectorised: each obstacle against
-  the beams that can meet it (laser.fan_hits, the same distances as all beams x all obstacles).
+  that its whole length is free. An obstacle contradicted by at least SEE_THROUGH_BEAMS beams of one scan is not
+  where the map says (a misplaced obstacle's ghost, or a mover perception once took for a still obstacle).
+  Vectorised: each obstacle against the beams that can meet it (laser.fan_hits, the same distances as all beams x
+  all obstacles); seen_through_and_nearest also gives each beam's nearest believed surface from the same call.
 """
 
 from __future__ import annotations
@@ -20,10 +20,12 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.geometry import Obstacles
-from fastep_core.sensing.laser import Scan, fan_hits
+from fastep_core.geometry import Obstacles, norm
+from fastep_core.sensing.laser import FanDirections, Scan, fan_hits
 
-__all__ = ['END_SLACK', 'EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'explained', 'seen_through']
+__all__ = ['END_SLACK', 'EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'explained', 'explained_by_belief',
+           'nearest_surfaces',
+           'seen_through', 'seen_through_and_nearest', 'seen_through_circles']
 
 FloatArray = NDArray[np.float64]
 
@@ -61,31 +63,110 @@ def explained(points: FloatArray, obstacles: Obstacles, centres: FloatArray, rad
     return out
 
 
-def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles, through: float = SEE_THROUGH) -> NDArray[np.bool_]:
+def explained_by_belief(points: FloatArray, believed: Obstacles, map_segments: int,
+                        tolerance: float = EXPLAINED) -> NDArray[np.bool_]:
+    """explained(points, seen, no circles, tolerance, map_obstacles=on_map) in one query of believed = Obstacles(map's
+    items + seen items), whose first `map_segments` segments are the map's: those with END_SLACK, the rest without
+    (+inf). The same answer when every obstacle is finite (Obstacles.near: each pair's own arithmetic)."""
+    out = np.zeros(len(points), dtype=bool)
+    if not len(points) or not len(believed):
+        return out
+    slack = np.full(len(believed.starts), np.inf)
+    slack[:map_segments] = END_SLACK
+    near: NDArray[np.bool_] = believed.near(points, tolerance, slack)
+    return near
+
+
+def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles, through: float = SEE_THROUGH,
+                 directions: FanDirections | None = None) -> NDArray[np.bool_]:
     """Which believed obstacles (circles first, as Obstacles orders them) this scan from pose sees through;
     `through`: SEE_THROUGH (module docstring), or less for a shape fitted to this very scan, whose surface is
-    known to the noise."""
-    out = np.zeros(len(obstacles), dtype=bool)
+    known to the noise. `directions`: the scan's laser.fan_directions from pose, when made already."""
     if not len(obstacles):
-        return out
+        return np.zeros(0, dtype=bool)
+    return _seen_through(scan, pose, obstacles.distances(pose[:2]), obstacles.centers, obstacles.radii,
+                         obstacles.starts, obstacles.ends, through, directions, False)[0]
+
+
+def seen_through_circles(scan: Scan, pose: FloatArray, centres: FloatArray, radii: FloatArray,
+                         through: float = SEE_THROUGH, directions: FanDirections | None = None) -> NDArray[np.bool_]:
+    """seen_through of the circles (centres (k, 2), radii (k,)) as Obstacles of them, from the arrays themselves."""
+    if not len(radii):
+        return np.zeros(0, dtype=bool)
+    distances = norm(pose[0] - centres[:, 0], pose[1] - centres[:, 1]) - radii    # Obstacles.distances' arithmetic
+    return _seen_through(scan, pose, distances, centres, radii, _NO_POINTS, _NO_POINTS, through, directions, False)[0]
+
+
+def nearest_surfaces(scan: Scan, pose: FloatArray, obstacles: Obstacles,
+                     directions: FanDirections | None = None) -> FloatArray:
+    """Each beam's distance to the nearest surface of the obstacles it meets ahead (+inf: none)."""
+    nearest = np.full(len(scan.ranges), np.inf)
+    circles = obstacles.n_circles
+    beam, _, expected = fan_hits(pose[:2], pose[2], scan.angle_min, scan.angle_increment, len(scan.ranges),
+                                 obstacles.centers[:circles], obstacles.radii[:circles], obstacles.starts,
+                                 obstacles.ends, directions)
+    np.minimum.at(nearest, beam, np.where(expected > 0.0, expected, np.inf))
+    return nearest
+
+
+def seen_through_and_nearest(scan: Scan, pose: FloatArray, obstacles: Obstacles,
+                             directions: FanDirections | None = None) -> tuple[NDArray[np.bool_], FloatArray]:
+    """seen_through(scan, pose, obstacles) and nearest_surfaces(scan, pose, obstacles), bit for bit, from one
+    fan_hits call: each obstacle cast once shrunk (seen_through's) and once as it is (fan_hits casts each one
+    on its own beams, so its pairs are those of a call of its own)."""
+    if not len(obstacles):
+        return np.zeros(0, dtype=bool), np.full(len(scan.ranges), np.inf)
+    through, nearest = _seen_through(scan, pose, obstacles.distances(pose[:2]), obstacles.centers, obstacles.radii,
+                                     obstacles.starts, obstacles.ends, SEE_THROUGH, directions, True)
+    assert nearest is not None
+    return through, nearest
+
+
+_NO_POINTS = np.zeros((0, 2))
+
+
+def _seen_through(scan: Scan, pose: FloatArray, distances: FloatArray, centres: FloatArray, radii: FloatArray,
+                  starts: FloatArray, ends: FloatArray, through: float, directions: FanDirections | None,
+                  surfaces: bool) -> tuple[NDArray[np.bool_], FloatArray | None]:
+    """seen_through of the circles and segments (distances: Obstacles.distances from pose), and with `surfaces`
+    nearest_surfaces too, the obstacles as they are cast in the same fan_hits call after the shrunk ones."""
+    n_circles = len(radii)
+    out = np.zeros(n_circles + len(starts), dtype=bool)
     reach = scan.range_max
-    candidates = np.flatnonzero(obstacles.distances(pose[:2]) < reach - through)
-    if not len(candidates):
-        return out
-    circles = candidates[candidates < obstacles.n_circles]
-    segments = candidates[candidates >= obstacles.n_circles] - obstacles.n_circles
+    candidates = np.flatnonzero(distances < reach - through)
+    if not len(candidates) and not surfaces:
+        return out, None
+    circles = candidates[candidates < n_circles]
+    segments = candidates[candidates >= n_circles] - n_circles
     # Shrunk by the margin (a circle's radius, a segment's ends): a beam grazing an edge that perception or the
     # map drew a little too large says nothing.
-    radii = obstacles.radii[circles]
-    radii = radii - np.minimum(through, 0.5 * radii)
-    starts, ends = obstacles.starts[segments], obstacles.ends[segments]
-    run = ends - starts
+    shrunk = radii[circles]
+    shrunk = shrunk - np.minimum(through, 0.5 * shrunk)
+    low, high = starts[segments], ends[segments]
+    run = high - low
     length = np.maximum(np.hypot(run[:, 0], run[:, 1]), 1e-12)
     cut = (np.minimum(through, 0.25 * length) / length)[:, None] * run
+    cast_centres, cast_radii, cast_starts, cast_ends = centres[circles], shrunk, low + cut, high - cut
+    if surfaces:
+        cast_centres, cast_radii = np.concatenate([cast_centres, centres]), np.concatenate([cast_radii, radii])
+        cast_starts, cast_ends = np.concatenate([cast_starts, starts]), np.concatenate([cast_ends, ends])
     # Only the (beam, candidate) pairs where the beam can meet the candidate: any other pair is a miss.
     beam, candidate, expected = fan_hits(pose[:2], pose[2], scan.angle_min, scan.angle_increment, len(scan.ranges),
-                                         obstacles.centers[circles], radii, starts + cut, ends - cut)
-    measured = np.nan_to_num(scan.ranges, nan=-np.inf)[beam]   # no reading (nan) sees through nothing
+                                         cast_centres, cast_radii, cast_starts, cast_ends, directions)
+    nearest = None
+    if surfaces:
+        shrunk_circles, cast_circles = len(circles), len(circles) + n_circles
+        mine = (candidate < shrunk_circles) | ((candidate >= cast_circles) &
+                                               (candidate < cast_circles + len(segments)))
+        theirs = ~mine
+        nearest = np.full(len(scan.ranges), np.inf)
+        whole = expected[theirs]
+        np.minimum.at(nearest, beam[theirs], np.where(whole > 0.0, whole, np.inf))
+        beam, expected = beam[mine], expected[mine]
+        candidate = candidate[mine]
+        candidate = np.where(candidate < shrunk_circles, candidate, candidate - n_circles)
+    # A beam with no reading (nan) sees through nothing: nan > x is false.
+    measured = scan.ranges[beam]
     passed = (expected > 0.0) & (expected < reach - through) & (measured > expected + through)
     out[candidates] = np.bincount(candidate[passed], minlength=len(candidates)) >= SEE_THROUGH_BEAMS
-    return out
+    return out, nearest

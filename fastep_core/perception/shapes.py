@@ -2,20 +2,16 @@
 
 Circles: the algebraic least-squares fit of Kasa (1976, "A circle fitting procedure and its error analysis",
 IEEE Trans. Instrum. Meas. 25): minimise sum (x^2 + y^2 + D x + E y + F)^2 over D, E, F, a 3 x 3 linear system
-per cluster; the sums of every cluster come from one np.bincount each and the systems are solved together.
-Centre (-D/2, -E/2), radius sqrt(cx^2 + cy^2 - F). A cluster is a circle when it has MIN_CIRCLE_POINTS points,
-the fit's RMS residual is within the scan's noise plus CIRCLE_RESIDUAL, the radius is at most MAX_CIRCLE_RADIUS,
-the chord from its first to its last point is at least MIN_ARC radii (an arc of 60 degrees or more: a few
-points at the edge of the range fit any circle), the centre lies beyond the points as the scanner sees them
-(a convex surface facing it) and no beam of the scan passes through the disc (a slightly bent wall fits a circle
-of metres that reaches into space the scan shows free).
-Walls: every other cluster of at least MIN_POINTS points that comes within `wall_range` of the scanner becomes
-a polyline by Douglas-Peucker simplification (Douglas and Peucker 1973) with tolerance WALL_TOLERANCE (or 3
-noise sigmas), each piece a segment moved toward the scanner to its nearest return (so that a return found in
-front of a believed wall later is something new, perception/belief.py), the polyline's two ends extended by
-the gap between beams there (`beam_gap` radians: the wall ends somewhere before the next beam). Farther ones
-wait: the robot will see them better as it comes nearer (a circle that enters the range shows its nearest few
-points first, which are no wall).
+per cluster, every cluster's sums from one np.bincount (cluster_sums) and the systems solved together. Centre
+(-D/2, -E/2), radius sqrt(cx^2 + cy^2 - F). A circle has MIN_CIRCLE_POINTS points, an RMS residual within the
+noise plus CIRCLE_RESIDUAL, a radius at most MAX_CIRCLE_RADIUS, a chord from first to last point of MIN_ARC radii
+or more (60 degrees of arc: a few points at the edge of the range fit any circle), its centre beyond the points
+as the scanner sees them (a convex surface facing it), and no beam of the scan through the disc (a slightly bent
+wall fits a circle of metres reaching into space the scan shows free). Walls: every other cluster of MIN_POINTS
+points or more within `wall_range` of the scanner becomes a Douglas-Peucker polyline (Douglas and Peucker 1973;
+tolerance WALL_TOLERANCE or 3 noise sigmas), each piece moved toward the scanner to its nearest return (a return
+in front of a believed wall is something new, belief.py), both ends extended by the gap between beams there
+(`beam_gap` radians: extend_ends). Farther ones wait: a circle entering the range shows its nearest points first.
 """
 
 from __future__ import annotations
@@ -28,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 __all__ = ['CIRCLE_RESIDUAL', 'MAX_CIRCLE_RADIUS', 'MIN_ARC', 'MIN_CIRCLE_POINTS', 'MIN_POINTS', 'WALL_TOLERANCE',
-           'Shapes', 'fit_circles', 'polyline', 'shapes']
+           'Shapes', 'cluster_sums', 'extend_ends', 'fit_circles', 'polyline', 'shapes']
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -57,20 +53,25 @@ class Shapes:
     ends: FloatArray
 
 
+def cluster_sums(labels: IntArray, weights: FloatArray, n_clusters: int) -> FloatArray:
+    """Each row of weights (w, n) summed per cluster (w, n_clusters): np.bincount(labels, weights=row) of every
+    row from one bincount call (each bin's sum taken in the points' order, as bincount of the row alone does)."""
+    rows = len(weights)
+    keys = (labels[None, :] + n_clusters * np.arange(rows)[:, None]).ravel()
+    sums: FloatArray = np.bincount(keys, weights=weights.ravel(), minlength=rows * n_clusters).astype(float, copy=False)
+    return sums.reshape(rows, n_clusters)
+
+
 def fit_circles(points: FloatArray, labels: IntArray, n_clusters: int) -> tuple[FloatArray, FloatArray, FloatArray]:
     """Kasa fits of every cluster: centres (k, 2), radii (k,) and RMS residuals (k,); nan where singular."""
-    def total(w: FloatArray) -> FloatArray:
-        out: FloatArray = np.bincount(labels, weights=w, minlength=n_clusters).astype(float, copy=False)
-        return out
-
     n: FloatArray = np.bincount(labels, minlength=n_clusters).astype(float)
     # Each cluster about its own mean: the normal equations stay well conditioned far from the map's origin.
-    mean = np.column_stack([total(points[:, 0]), total(points[:, 1])]) / np.maximum(n, 1.0)[:, None]
+    mean = cluster_sums(labels, points.T, n_clusters).T / np.maximum(n, 1.0)[:, None]
     local = points - mean[labels]
     x, y = local[:, 0], local[:, 1]
     z = x * x + y * y
-    sx, sy, sxx, syy, sxy = total(x), total(y), total(x * x), total(y * y), total(x * y)
-    sz, sxz, syz = total(z), total(x * z), total(y * z)
+    sx, sy, sxx, syy, sxy, sz, sxz, syz = cluster_sums(labels, np.stack([x, y, x * x, y * y, x * y, z, x * z, y * z]),
+                                                       n_clusters)
     # Normal equations of min sum (z + D x + E y + F)^2: A [D, E, F] = -[sxz, syz, sz].
     a = np.stack([sxx, sxy, sx, sxy, syy, sy, sx, sy, n], -1).reshape(-1, 3, 3)
     b = -np.stack([sxz, syz, sz], -1)
@@ -81,7 +82,8 @@ def fit_circles(points: FloatArray, labels: IntArray, n_clusters: int) -> tuple[
     centres = -0.5 * solution[:, :2]
     radii = np.sqrt(np.maximum((centres ** 2).sum(axis=1) - solution[:, 2], 0.0))
     radial = np.hypot(x - centres[labels, 0], y - centres[labels, 1]) - radii[labels]
-    rms = np.sqrt(total(np.where(np.isnan(radial), np.inf, radial ** 2)) / np.maximum(n, 1.0))   # singular: inf
+    squares = np.where(np.isnan(radial), np.inf, radial ** 2)
+    rms = np.sqrt(np.bincount(labels, weights=squares, minlength=n_clusters) / np.maximum(n, 1.0))   # singular: inf
     return centres + mean, radii, rms
 
 
@@ -141,6 +143,22 @@ def _in_front_of(points: FloatArray, first: IntArray, a: FloatArray, b: FloatArr
     return a + shift, b + shift
 
 
+def extend_ends(vertices: FloatArray, first: IntArray, last: IntArray, origin: FloatArray,
+                beam_gap: float) -> FloatArray:
+    """Polylines (vertices (v, 2), polyline k from first[k] to last[k], two vertices or more) with both ends
+    extended by the gap between beams there (beam_gap radians at the end's distance from origin): the wall goes
+    on somewhere between its last return and the next beam (at 5 m and 1 degree, 9 cm), so the robot does not
+    cut the true end. Each polyline's first end, then its last (of two vertices: from the first, extended)."""
+    out = vertices.copy()
+    for end, inner in ((first, first + 1), (last, last - 1)):
+        run = out[end] - out[inner]
+        length = np.hypot(run[:, 0], run[:, 1])
+        grow = length > 0.0
+        reach = np.hypot(out[end, 0] - origin[0], out[end, 1] - origin[1]) * beam_gap
+        out[end[grow]] = out[end[grow]] + run[grow] * (reach[grow] / length[grow])[:, None]
+    return out
+
+
 def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatArray, noise: float = 0.0,
            wall_range: float = math.inf, beam_gap: float = 0.0,
            seen_free: Callable[[FloatArray, FloatArray], NDArray[np.bool_]] | None = None) -> Shapes:
@@ -174,22 +192,18 @@ def shapes(points: FloatArray, beams: IntArray, labels: IntArray, origin: FloatA
             index = np.roll(index, -(int(jumps[0]) + 1))
         ordered = points[index]
         kept = polyline(ordered, max(WALL_TOLERANCE, 3.0 * noise))
-        vertices = ordered[kept].copy()
-        # The wall goes on somewhere between its last return and the next beam: extend each end by the gap
-        # between beams there (at 5 m and 1 degree, 9 cm), so the robot does not cut the true end.
-        for end, inner in ((0, 1), (-1, -2)):
-            run = vertices[end] - vertices[inner]
-            length = float(np.hypot(*run))
-            if length > 0.0:
-                reach = float(np.hypot(*(vertices[end] - origin))) * beam_gap
-                vertices[end] = vertices[end] + run * (reach / length)
         walls.append(ordered)
-        vertices_of.append(vertices)
+        vertices_of.append(ordered[kept])
         firsts.append(count + np.asarray(kept[:-1], dtype=np.int64))
         count += len(ordered)
     if not walls:
         return Shapes(centres[circle], radii[circle], np.zeros((0, 2)), np.zeros((0, 2)))
-    starts, ends = _in_front_of(np.concatenate(walls), np.concatenate(firsts),
-                                np.concatenate([v[:-1] for v in vertices_of]),
-                                np.concatenate([v[1:] for v in vertices_of]), origin)
+    vertices = np.concatenate(vertices_of)
+    last = np.cumsum([len(v) for v in vertices_of]) - 1            # each polyline's last vertex in `vertices`
+    first = np.concatenate([[0], last[:-1] + 1])
+    vertices = extend_ends(vertices, first, last, origin, beam_gap)
+    inner = np.ones(len(vertices), dtype=bool)
+    inner[last] = False                                             # a piece from each vertex but the last
+    starts, ends = _in_front_of(np.concatenate(walls), np.concatenate(firsts), vertices[inner],
+                                vertices[np.roll(inner, 1)], origin)
     return Shapes(centres[circle], radii[circle], starts, ends)

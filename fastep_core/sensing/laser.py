@@ -24,8 +24,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ['DEFAULT_BEAMS', 'DEFAULT_FOV', 'DEFAULT_NOISE', 'DEFAULT_RANGE', 'FULL_TURN_TOLERANCE', 'MAX_BEAMS',
-           'NEAR', 'WAY_BEAMS', 'WAY_DISTANCE', 'LaserSpec', 'Scan', 'beam_angles', 'cast', 'fan_hits',
-           'hit_distances', 'main', 'way_problem']
+           'NEAR', 'WAY_BEAMS', 'WAY_DISTANCE', 'FanDirections', 'LaserSpec', 'Scan', 'beam_angles', 'cast',
+           'fan_directions', 'fan_hits', 'hit_distances', 'main', 'way_problem']
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -258,9 +258,20 @@ def _beam_windows(low: FloatArray, width: FloatArray, every: NDArray[np.bool_], 
 _TURNS = np.array([0.0, 2.0 * math.pi])
 
 
+FanDirections = tuple[FloatArray, FloatArray, FloatArray]
+"""A fan's beams: their angles (map frame), cosines and sines (fan_directions)."""
+
+
+def fan_directions(heading: float, angle_min: float, increment: float, beams: int) -> FanDirections:
+    """fan_hits' beams: their angles (map frame) and the angles' cosines and sines, for `directions`."""
+    angles: FloatArray = heading + (angle_min + increment * np.arange(beams, dtype=float))
+    return angles, np.cos(angles), np.sin(angles)
+
+
 def fan_hits(origin: ArrayLike, heading: float, angle_min: float, increment: float, beams: int,
              circles: ArrayLike | None = None, radii: ArrayLike | None = None, starts: ArrayLike | None = None,
-             ends: ArrayLike | None = None) -> tuple[IntArray, IntArray, FloatArray]:
+             ends: ArrayLike | None = None,
+             directions: FanDirections | None = None) -> tuple[IntArray, IntArray, FloatArray]:
     """hit_distances of a scan's beams (at heading + angle_min + increment k, k < beams: Scan.angles() turned by
     the heading) as (beam, obstacle, distance) triples, only for the pairs where the beam can meet the obstacle:
     every pair left out is a miss (+inf in hit_distances), and every distance given is hit_distances' own for
@@ -270,10 +281,11 @@ def fan_hits(origin: ArrayLike, heading: float, angle_min: float, increment: flo
     direction +- asin(r / distance), a segment's arc between its ends), so only the beams in that window, and one
     more on each side for rounding, are cast. An obstacle within NEAR of the origin (a segment: of its line) is
     cast on every beam, so are all obstacles when increment is not > 0. Obstacles are numbered circles first.
+    `directions`: fan_directions(heading, angle_min, increment, beams), made once for several calls on one scan.
     """
-    angles = heading + (angle_min + increment * np.arange(beams, dtype=float))
+    angles, dx, dy = directions if directions is not None else fan_directions(heading, angle_min, increment, beams)
     o, a, centres, r, a_ends, b_ends = _inputs(origin, angles, circles, radii, starts, ends)
-    return _fan_hits(o, a, np.cos(a), np.sin(a), increment, centres, r, a_ends, b_ends)
+    return _fan_hits(o, a, dx, dy, increment, centres, r, a_ends, b_ends)
 
 
 def _fan_hits(o: FloatArray, a: FloatArray, dx: FloatArray, dy: FloatArray, increment: float, centres: FloatArray,
