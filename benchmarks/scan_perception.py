@@ -1,16 +1,14 @@
 """Benchmark: perception of one 720-beam 270-degree scan, as a robot's planner does it, and the phantoms it sees.
 
 Each case drives a robot along its exact shortest path at 1 m/s with a 720-beam 270-degree laser (10 m, noise
-0.01 m) scanning the TRUE world at 20 Hz and times Perception.update (fastep_core/perception/belief.py) on every
-scan, the robot planning in a map it was given: `dense_clutter_laser`, the first worlds of the dense-clutter
-family (a Jackal-class base at 2 m/s through 0.075 m cylinders; nothing on the map), each run by the simulator with
-FAStep-Route; the robot harness's worlds (fastep_testing/robot_worlds.py), the laser 0.25 m ahead of the base's
-centre, the map a 0.05 m occupancy grid read as the planner node reads /map (msg_tools.convert.
-occupancy_grid_obstacles: the occupied cells' outline); `floor`, 60 m x 40 m of 44 rooms off two corridors (doors
-1 m), rasterised the same way, from a room on the first corridor to one on the second.
+0.01 m) scanning the true world at 20 Hz, and times Perception.update on every scan, the robot planning in a map
+it was given: `dense_clutter_laser`, the first worlds of the dense-clutter family, each driven by FAStep-Route
+(nothing on the map); the robot harness's worlds, the laser 0.25 m ahead of the base's centre and the map a 0.05 m
+occupancy grid read as the planner node reads /map; `floor`, 60 m x 40 m of 44 rooms off two corridors.
 Per case: scans, median, p99 and max wall time per scan (ms), the p99 of its thread CPU time (what a loaded
 machine's preemptions leave out), and the phantoms: every world is still, so each track perception called a mover
-is one (distinct tracks, and the most at once). Issue 31's target: p99 <= 2 ms.
+is one (distinct tracks, and the most at once). Target: p99 <= 2 ms.
+
 Run: `.venv/bin/python -m benchmarks.scan_perception [--clutter-worlds N] [--cases NAME ...]`.
 """
 

@@ -1,17 +1,15 @@
 """Shapes of scan clusters: a circle fitted to each cluster at once, and straight walls for those no circle fits.
 
-Circles: the algebraic least-squares fit of Kasa (1976, "A circle fitting procedure and its error analysis",
-IEEE Trans. Instrum. Meas. 25): minimise sum (x^2 + y^2 + D x + E y + F)^2 over D, E, F, a 3 x 3 linear system
-per cluster, every cluster's sums from one np.bincount (cluster_sums) and the systems solved together. Centre
-(-D/2, -E/2), radius sqrt(cx^2 + cy^2 - F). A circle has MIN_CIRCLE_POINTS points, an RMS residual within the
-noise plus CIRCLE_RESIDUAL, a radius at most MAX_CIRCLE_RADIUS, a chord from first to last point of MIN_ARC radii
-or more (60 degrees of arc: a few points at the edge of the range fit any circle), its centre beyond the points
-as the scanner sees them (a convex surface facing it), and no beam of the scan through the disc (a slightly bent
-wall fits a circle of metres reaching into space the scan shows free). Walls: every other cluster of MIN_POINTS
-points or more within `wall_range` of the scanner becomes a Douglas-Peucker polyline (Douglas and Peucker 1973;
-tolerance WALL_TOLERANCE or 3 noise sigmas), each piece moved toward the scanner to its nearest return (a return
-in front of a believed wall is something new, belief.py), both ends extended by the gap between beams there
-(`beam_gap` radians: extend_ends). Farther ones wait: a circle entering the range shows its nearest points first.
+Circles: the algebraic least-squares fit of Kasa (1976, IEEE Trans. Instrum. Meas. 25): minimise
+sum (x^2 + y^2 + D x + E y + F)^2 over D, E, F, a 3 x 3 linear system per cluster, all clusters' sums from one
+np.bincount (cluster_sums) and the systems solved together; centre (-D/2, -E/2), radius sqrt(cx^2 + cy^2 - F).
+A circle needs MIN_CIRCLE_POINTS points, an RMS residual within the noise plus CIRCLE_RESIDUAL, a radius of at
+most MAX_CIRCLE_RADIUS, an arc of 60 degrees or more (a few points at the edge of the range fit any circle), its
+centre beyond the points as the scanner sees them, and no beam of the scan through the disc (a slightly bent wall
+fits a circle of metres reaching into space the scan shows free). Walls: every other cluster of MIN_POINTS points
+within `wall_range` becomes a Douglas-Peucker polyline (tolerance WALL_TOLERANCE or 3 noise sigmas), each piece
+moved to its nearest return, both ends extended by the gap between beams there (extend_ends). Farther clusters
+wait: a circle entering the range shows its nearest points first.
 """
 
 from __future__ import annotations

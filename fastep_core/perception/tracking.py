@@ -1,20 +1,16 @@
 """Tracks of circular obstacles over time: a constant-velocity Kalman filter per track, data association by
 the Hungarian method with a chi-square gate, and track birth, confirmation and deletion.
 
-Which filter: a small numpy Kalman filter written here (no library; filterpy would fit, but is unmaintained
-since 2018 and one 4-state model does not need it). All tracks are filtered at once as arrays (n, 4) and
-(n, 4, 4). The model is the discrete white-noise-acceleration constant-velocity model of Bar-Shalom, Li and
-Kirubarajan (2001, "Estimation with Applications to Tracking and Navigation", section 6.3.2): state
-[x, y, vx, vy], F = [[I, dt I], [0, I]], Q = q [[dt^4/4 I, dt^3/2 I], [dt^3/2 I, dt^2 I]], measurement of the
-position z = H s + v with H = [I 0] and R = r^2 I. The equations (ibid. section 5.2; Thrun, Burgard and Fox
-2005, "Probabilistic Robotics", table 3.1):
-    predict: s = F s, P = F P F^T + Q
-    update:  S = H P H^T + R, K = P H^T S^-1, s = s + K (z - H s), P = (I - K H) P.
-Association: the cost of pairing track i with detection j is the Mahalanobis distance d^2 = y^T S^-1 y of the
-innovation y = z_j - H s_i; pairs beyond the 99 % chi-square gate of 2 degrees of freedom (9.21), or farther
-than GATE_DISTANCE apart, are not allowed; scipy.optimize.linear_sum_assignment picks the pairing of least total
-cost among the allowed ones. Unpaired detections start tentative tracks; a track seen CONFIRM_HITS times is
-confirmed; a track not seen for MAX_COAST seconds is deleted. Nothing here draws random numbers.
+A small numpy Kalman filter (filterpy would fit, but is unmaintained since 2018 and one 4-state model does not
+need it), all tracks filtered at once as arrays (n, 4) and (n, 4, 4). The model is the discrete
+white-noise-acceleration constant-velocity model (Bar-Shalom, Li and Kirubarajan 2001, section 6.3.2): state
+[x, y, vx, vy], F = [[I, dt I], [0, I]], Q = q [[dt^4/4 I, dt^3/2 I], [dt^3/2 I, dt^2 I]], position measured
+with H = [I 0], R = r^2 I; predict and update as in Thrun, Burgard and Fox (2005), table 3.1.
+Association: the cost of pairing track i with detection j is the Mahalanobis distance of the innovation; pairs
+beyond the 99 % chi-square gate of 2 degrees of freedom (9.21), or farther than GATE_DISTANCE apart, are not
+allowed; scipy.optimize.linear_sum_assignment picks the pairing of least total cost. Unpaired detections start
+tentative tracks; a track seen CONFIRM_HITS times is confirmed; one not seen for MAX_COAST seconds is deleted.
+Nothing here draws random numbers.
 """
 
 from __future__ import annotations
