@@ -202,8 +202,8 @@ def u_trap_scenario_data(seed: int, model: str = 'point_mass') -> dict[str, Any]
 def circle_field_data(seed: int, circles: tuple[int, int] = CIRCLES) -> dict[str, Any]:
     """A solvable 50 x 50 m field of `circles` (low, high) circles of radius 0.5-2.5 m placed uniformly, one
     point mass whose start and goal are uniform in [3, 47]^2 and at least 35 m apart; circles too close to the
-    start or goal dropped. Its generator is seeded 10_000 + seed (the clutter research's worlds, 0-15, stay
-    what docs/clutter_research.md measured); same seed, same world."""
+    start or goal dropped. Its generator is seeded 10_000 + seed (seeds 0-15: the worlds benchmarks.clutter_diagnosis
+    measured the activation policy on, docs/architecture.md); same seed, same world."""
     rng = np.random.default_rng(10_000 + seed)
     margin = PlannerParams().clearance_margin
     for _ in range(_ATTEMPTS):

@@ -27,7 +27,7 @@ __all__ = ['ALGORITHMS', 'ALGORITHM_NAMES', 'DEFAULT_ALGORITHM', 'NAVIGATORS', '
            'algorithm_name', 'check_drives', 'drives', 'make_navigator', 'make_robot']
 
 NAVIGATORS: dict[str, type[Navigator]] = {
-    'fastep': FAStepKinematic,   # the paper's algorithm, with the activation policy of docs/clutter_research.md
+    'fastep': FAStepKinematic,   # the paper's algorithm, with the activation policy of docs/architecture.md
     'fastep_paper': FAStepPaper,  # the paper's algorithm with its literal activation policy
     'aco': ACOKinematic,         # the paper's baseline
     'optimal': OptimalKinematic,  # the exact shortest path, driven by the same controller (a reference)

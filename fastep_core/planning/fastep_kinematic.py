@@ -24,8 +24,8 @@ __all__ = ['FAStepKinematic', 'FAStepPaper']
 class FAStepKinematic(Navigator):
     """Algorithm 1: kinematics to the goal; the Stepping Ahead Firefly swarm only when something blocks the way.
 
-    When the swarm runs is decided by the activation policy of docs/clutter_research.md, on by default:
-    `plan_horizon` (plan only once the blocker is within the step the swarm could take) and `stuck_steps` (a
+    When the swarm runs is decided by the activation policy, on by default (docs/architecture.md, "When the swarm
+    runs"): `plan_horizon` (plan only once the blocker is within the step the swarm could take) and `stuck_steps` (a
     step that ends where the robot already is starts the trap escape instead of being planned again every tick).
     Neither changes a step (eq. 3-10) or the controller (eq. 12-13); `FAStepPaper` is the paper's literal policy.
     """

@@ -126,7 +126,7 @@ class PlannerParams:
     trap_timeout: float = _p(20.0, 'trap escape: no progress_distance (near the goal: half the distance) closer '
                                    'to the goal in this many seconds starts an escape along the exact shortest '
                                    'path (s); 0 disables', 0.0)
-    # FAStep-Kinematic's activation policy (issue 12 "Clutter"; docs/clutter_research.md): when the swarm runs.
+    # FAStep-Kinematic's activation policy (docs/architecture.md, "When the swarm runs"): when the swarm runs.
     # Both 0 is the paper's literal policy (the 'fastep_paper' algorithm ignores them).
     plan_horizon: float = _p(2.0, 'FAStep-Kinematic plans a step only when the straight run to the goal is blocked '
                                   'within this many metres (the step it could take); farther blockers are driven '

@@ -1,4 +1,4 @@
-"""FAStep-Kinematic's activation policy (plan_horizon, stuck_steps, waypoint_lead; docs/clutter_research.md).
+"""FAStep-Kinematic's activation policy (plan_horizon, stuck_steps, waypoint_lead; docs/architecture.md).
 
 `fastep` runs plan_horizon = 2 m and stuck_steps = 1 by default; `fastep_paper` is the paper's literal policy
 (it ignores all three). These tests show what each switch changes against the paper's policy.
