@@ -15,6 +15,7 @@ the tracked movers beside the other robots, yielding to them as to any mover (fa
 
 from __future__ import annotations
 
+import importlib
 from typing import Sequence
 
 import numpy as np
@@ -27,16 +28,23 @@ from fastep_core.planning.recovery import RecentScans
 from fastep_core.world import World
 from msg_tools import convert
 
-__all__ = ['TRACK_TIMEOUT', 'ScanPerception']
+__all__ = ['PASS_IMPORTS', 'TRACK_TIMEOUT', 'ScanPerception']
 
 FloatArray = NDArray[np.float64]
 TRACK_TIMEOUT = 1.0   # seconds (node clock) after the last scan the tracked movers are still avoided
+# What planning passes import on first use (the tracker of the first scan: scipy.optimize, ~0.3 s; a
+# tractor-trailer's manoeuvre: scipy.sparse.csgraph), imported when the node makes its perception, before its
+# control timer runs: on the planning thread, loading them held the GIL and the control tick waited for it
+# (up to 0.3 s on a loaded machine, docs/real_time.md).
+PASS_IMPORTS = ('scipy.optimize', 'scipy.sparse.csgraph')
 
 
 class ScanPerception:
     """One planner's perception over its scans (module docstring)."""
 
     def __init__(self, noise: float) -> None:
+        for name in PASS_IMPORTS:
+            importlib.import_module(name)
         self.noise = noise
         self.perception: Perception | None = None
         self.spec_key: tuple[float, float, int] | None = None   # the scanner the perception was made for

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import json
+import subprocess
+import sys
+import textwrap
 import threading
 import time
 from typing import Any, Callable
@@ -289,3 +293,57 @@ def test_a_new_goal_is_not_driven_to_on_the_last_goal_s_plan(context: Any) -> No
         assert node.planning is not None and node.planning.plan is None   # braking until the new goal's plan
     finally:
         node.destroy_node()
+
+
+# Run in a process of its own: this one has imported most of scipy already.
+FIRST_SCAN = textwrap.dedent("""
+    import json, math, os, sys, threading, time
+    import rclpy
+    from rclpy.parameter import Parameter
+    from rclpy.signals import SignalHandlerOptions
+    from sensor_msgs.msg import LaserScan
+    from fastep_core.geometry import Circle
+    from fastep_ros.planner import PlannerNode
+    from fastep_testing.graph import free_domain
+    from msg_tools import convert
+
+    os.environ['ROS_AUTOMATIC_DISCOVERY_RANGE'] = 'LOCALHOST'
+    context = rclpy.Context()
+    rclpy.init(args=[], context=context, domain_id=free_domain(), signal_handler_options=SignalHandlerOptions.NO)
+    node = PlannerNode(context=context, parameter_overrides=[
+        Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0]), Parameter('model', value='diff_drive')])
+    imported = []
+
+    class Watch:   # every module imported from now on, and on which thread
+        def find_spec(self, name, path=None, target=None):
+            imported.append([threading.current_thread().name, name])
+            return None
+    sys.meta_path.insert(0, Watch())
+    node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 16.0), 1.0)]))
+    node.on_goal(convert.point_to_pose_stamped((18.0, 10.0)))
+    for tick in range(5):
+        stamp = convert.seconds_to_stamp(node.now())
+        node.on_odom(convert.state_to_odometry([2.0, 10.0, 0.0], stamp))
+        scan = LaserScan(angle_min=-2.35, angle_max=2.35, angle_increment=4.7 / 719, range_min=0.05,
+                         range_max=10.0, ranges=[3.0 + 0.5 * math.sin(i / 40.0) for i in range(720)])
+        scan.header.stamp, scan.header.frame_id = stamp, 'base_link'
+        node.on_scan(scan)
+        node.on_control()
+        deadline = time.monotonic() + 30.0
+        while node.plan_tick != node.control_count or node.planning.pass_started is not None:
+            assert time.monotonic() < deadline, 'no pass'
+            time.sleep(0.002)
+    print(json.dumps({'scans': node.scan_perception.scans, 'imported': imported}))
+    node.destroy_node()
+    rclpy.try_shutdown(context=context)
+""")
+
+
+def test_the_first_scan_s_pass_imports_nothing_the_node_did_not_import_when_made() -> None:
+    """A module loaded on the planning thread holds the GIL while it loads: the tracker's scipy.optimize, imported
+    with the first scan, held a control tick up for 0.3 s (docs/real_time.md). The node imports it when made."""
+    done = subprocess.run([sys.executable, '-c', FIRST_SCAN], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    result = json.loads(done.stdout.strip().splitlines()[-1])
+    assert result['scans'] >= 1   # the passes perceived the scans
+    assert result['imported'] == []
