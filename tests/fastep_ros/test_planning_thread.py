@@ -319,21 +319,21 @@ FIRST_SCAN = textwrap.dedent("""
             imported.append([threading.current_thread().name, name])
             return None
     sys.meta_path.insert(0, Watch())
-    node.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 16.0), 1.0)]))
+    node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 16.0), 1.0)]))
     node.on_goal(convert.point_to_pose_stamped((18.0, 10.0)))
     for tick in range(5):
         stamp = convert.seconds_to_stamp(node.now())
-        node.on_odom(convert.state_to_odometry([2.0, 10.0, 0.0], stamp))
+        node.inputs.on_odom(convert.state_to_odometry([2.0, 10.0, 0.0], stamp))
         scan = LaserScan(angle_min=-2.35, angle_max=2.35, angle_increment=4.7 / 719, range_min=0.05,
                          range_max=10.0, ranges=[3.0 + 0.5 * math.sin(i / 40.0) for i in range(720)])
         scan.header.stamp, scan.header.frame_id = stamp, 'base_link'
-        node.on_scan(scan)
+        node.inputs.on_scan(scan)
         node.on_control()
         deadline = time.monotonic() + 30.0
         while node.plan_tick != node.control_count or node.planning.pass_started is not None:
             assert time.monotonic() < deadline, 'no pass'
             time.sleep(0.002)
-    print(json.dumps({'scans': node.scan_perception.scans, 'imported': imported}))
+    print(json.dumps({'scans': node.inputs.scan_perception.scans, 'imported': imported}))
     node.destroy_node()
     rclpy.try_shutdown(context=context)
 """)
