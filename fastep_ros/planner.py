@@ -384,6 +384,11 @@ class PlannerNode(LifecycleNode):
         return value if configured <= 0.0 else min(configured, value)
 
     # ------------------------------------------------------------------------------------------- helpers
+    @property
+    def ros(self) -> LifecycleNode:
+        """The node as rclpy sees it: what the members create their subscriptions and publishers on."""
+        return self
+
     def now(self) -> float:
         return self.get_clock().now().nanoseconds * 1e-9
 

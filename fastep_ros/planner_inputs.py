@@ -10,31 +10,32 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any, Callable, Sequence
+from typing import Any, Callable, Protocol, Sequence
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
+from rclpy.node import Node
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import LaserScan
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.perception.belief import heading
+from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
 from fastep_ros.common import StartupError
 from fastep_ros.latched import LatchedSubscription
-from fastep_ros.live_tf import LOCALIZATION_QOS
+from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
 from fastep_ros.lock_step import STAMP_EPS
 from fastep_ros.perception import ScanPerception
+from fastep_ros.planning_thread import PlanningThread
+from fastep_ros.robots import RobotFollower
 from msg_tools import convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
-if TYPE_CHECKING:
-    from fastep_ros.planner import PlannerNode
-
-__all__ = ['Body', 'PlannerInputs']
+__all__ = ['Body', 'PlannerInputs', 'PlannerNodeView']
 
 
 @dataclass(frozen=True)
@@ -47,18 +48,48 @@ class Body:
     hitch_offset: float
 
 
+class _StatusPublisher(Protocol):
+    def publish(self, force: bool = False, at: float | None = None) -> None: ...
+
+
+class PlannerNodeView(Protocol):
+    """What the inputs read of their planner node (fastep_ros.planner.PlannerNode); `ros`: the node itself."""
+
+    frame_id: str
+    base_frame_id: str
+    model: str
+    radius: float
+    odom_timeout: float
+    max_extrapolation: float
+    navigator: Navigator | None
+    planning: PlanningThread[Any, Any] | None
+    robots: RobotFollower
+    tf: TfListener
+    last_command: np.ndarray
+
+    @property
+    def ros(self) -> Node: ...
+    @property
+    def reports(self) -> _StatusPublisher: ...
+    def now(self) -> float: ...
+    def locked(self) -> bool: ...
+    def stamp(self) -> Any: ...
+    def lock_try(self) -> None: ...
+    def update_world(self) -> None: ...
+
+
 class PlannerInputs:
     """What the planner node (fastep_ros.planner.PlannerNode) hears, with the robot's state it makes of it: the
     node's `inputs`. Its handlers are the subscriptions' callbacks; the rest of the node is read through `node`."""
 
-    def __init__(self, node: PlannerNode, values: dict[str, Any]) -> None:
+    def __init__(self, node: PlannerNodeView, values: dict[str, Any]) -> None:
         self.node = node
         # What it was built with (the parameters of fastep_ros.planner_params).
         self.obstacle_source: str = values['obstacle_source']
         self.occupied_threshold: int = values['occupied_threshold']
         self.localization_topic: str = values['localization_topic']
         self.map_to_odom_from_tf: bool = values['map_to_odom_from_tf']
-        self.odom_frame_id: str = values['odom_frame_id'] or frames.odom_frame(node.get_namespace())
+        self.odom_frame_id: str = values['odom_frame_id'] or frames.odom_frame(node.ros.get_namespace())
         workspace, laser_mount = values['workspace'], values['laser_mount']
         self.workspace_param: tuple[float, float, float, float] | None = tuple(workspace) if workspace else None
         if laser_mount and (len(laser_mount) != 3 or not all(math.isfinite(v) for v in laser_mount)):
@@ -96,29 +127,29 @@ class PlannerInputs:
         """The subscriptions (and the belief's publisher), once the node has its own publishers."""
         node = self.node
         # Taken as bytes (frames.stamped_pose): once a tick, and an Odometry message costs ~50 us to build.
-        self.odom_sub = node.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST, raw=True)
+        self.odom_sub = node.ros.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST, raw=True)
         self.own_odom_topic: str = self.odom_sub.topic_name
         if node.model == 'tractor_trailer':
-            node.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
+            node.ros.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
         # The latched world, subscribed again if a new publisher's message does not come (fastep_ros.latched).
         self.world_subs: list[LatchedSubscription] = []
         if self.obstacle_source == 'markers':
-            self.world_subs.append(LatchedSubscription(node, MarkerArray, interface.OBSTACLES, self.on_obstacles,
+            self.world_subs.append(LatchedSubscription(node.ros, MarkerArray, interface.OBSTACLES, self.on_obstacles,
                                                        offered_qos(interface.OBSTACLES)))
         if self.workspace_param is None or self.obstacle_source == 'map':
-            self.world_subs.append(LatchedSubscription(node, OccupancyGrid, interface.MAP, self.on_map,
+            self.world_subs.append(LatchedSubscription(node.ros, OccupancyGrid, interface.MAP, self.on_map,
                                                        offered_qos(interface.MAP)))
         if self.localization_topic:
             # Best available durability: AMCL offers amcl_pose transient-local (then its last pose comes at once);
             # a volatile publisher matches too, without incompatible-QoS warnings.
-            sub = node.create_subscription(PoseWithCovarianceStamped, self.localization_topic, self.on_localization,
-                                           LOCALIZATION_QOS)
+            sub = node.ros.create_subscription(PoseWithCovarianceStamped, self.localization_topic,
+                                               self.on_localization, LOCALIZATION_QOS)
             self.localization_topic = sub.topic_name
-        node.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
+        node.ros.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
         # Any LaserScan on `scan` (sensor-data QoS: a best-effort subscription matches reliable publishers too):
         # the planner perceives with it (fastep_ros.perception) and shows its belief on `tracked_obstacles`.
-        self.scan_sub = node.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
-        self.tracked_pub = node.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
+        self.scan_sub = node.ros.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
+        self.tracked_pub = node.ros.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
 
     def movers_stale(self, t: float) -> bool:
         """Whether the known movers are older than odom_timeout (the map node stopped or stalled), or stamped
@@ -138,10 +169,10 @@ class PlannerInputs:
             went, back = [n for n in names if n not in self._stale_logged], \
                 [n for n in self._stale_logged if n not in names]
             if went:
-                self.node.get_logger().warning(f'stale: {", ".join(went)}; avoided where last seen, the reach widening '
-                                          f'at the last speed known, until fresh data comes')
+                self.node.ros.get_logger().warning(f'stale: {", ".join(went)}; avoided where last seen, the reach '
+                                                   f'widening at the last speed known, until fresh data comes')
             if back:
-                self.node.get_logger().info(f'fresh again: {", ".join(back)}')
+                self.node.ros.get_logger().info(f'fresh again: {", ".join(back)}')
             self._stale_logged = names
         return stale
 
@@ -150,7 +181,7 @@ class PlannerInputs:
         try:
             self.obstacles = convert.marker_array_to_obstacles(msg)
         except ValueError as exc:
-            self.node.get_logger().error(f'ignoring /obstacles: {exc}')
+            self.node.ros.get_logger().error(f'ignoring /obstacles: {exc}')
             return
         self.node.update_world()
 
@@ -160,7 +191,7 @@ class PlannerInputs:
             obstacles = (convert.occupancy_grid_obstacles(msg, self.occupied_threshold)
                          if self.obstacle_source == 'map' else None)
         except ValueError as exc:
-            self.node.get_logger().error(f'ignoring /map: {exc}')
+            self.node.ros.get_logger().error(f'ignoring /map: {exc}')
             return
         self.map_workspace = workspace
         if obstacles is not None:   # obstacle_source map: the occupied cells' outline (msg_tools.convert)
@@ -179,7 +210,7 @@ class PlannerInputs:
                                  f'robot\'s odom frame {self.odom_frame_id!r} (parameters frame_id, odom_frame_id)')
         except ValueError as exc:
             self.odom_problem = f'odometry rejected: {exc}'
-            self.node.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
+            self.node.ros.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
             return
         now = self.node.now()
         # In lock step odometry is of its stamp's time: the start state (stamped 0) is heard again once time runs.
@@ -199,7 +230,7 @@ class PlannerInputs:
                 raise ValueError(f'frame {msg.header.frame_id!r} is not the map frame {self.node.frame_id!r}')
             pose = frames.odometry_pose(msg)
         except ValueError as exc:
-            self.node.get_logger().warning(f'localization pose ignored: {exc}', throttle_duration_sec=5.0)
+            self.node.ros.get_logger().warning(f'localization pose ignored: {exc}', throttle_duration_sec=5.0)
             return
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         self.map_from_odom.add_localization(stamp if stamp > 0.0 else self.node.now(), pose)
@@ -220,7 +251,7 @@ class PlannerInputs:
             self.trailer = convert.trailer_yaw(msg)
         except ValueError as exc:
             self.odom_problem = f'trailer pose rejected: {exc}'
-            self.node.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
+            self.node.ros.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
             return
         self.trailer_stamp = convert.stamp_to_seconds(msg.header.stamp)
         self.node.lock_try()
@@ -238,7 +269,7 @@ class PlannerInputs:
         try:
             movers = convert.marker_array_to_movers(msg)
         except ValueError as exc:
-            self.node.get_logger().warning(f'ignoring /movers: {exc}', throttle_duration_sec=5.0)
+            self.node.ros.get_logger().warning(f'ignoring /movers: {exc}', throttle_duration_sec=5.0)
             return
         # Every marker after the leading DELETEALL carries the map node's stamp; unset: when it came.
         stamp = convert.stamp_to_seconds(msg.markers[1].header.stamp) if len(msg.markers) > 1 else 0.0
@@ -290,7 +321,7 @@ class PlannerInputs:
         mount, problem = self.scanner_mount(msg.header.frame_id)
         if mount is None:
             self.scan_problem = problem
-            self.node.get_logger().warning(problem, throttle_duration_sec=5.0)
+            self.node.ros.get_logger().warning(problem, throttle_duration_sec=5.0)
             return
         if mount != frames.IDENTITY:
             pose = frames.compose(pose, mount)   # the scanner's pose: where its beams start, along its zero angle
@@ -301,7 +332,7 @@ class PlannerInputs:
             belief = self.scan_perception.update(msg, taken, pose, self.world, told)
         except ValueError as exc:
             self.scan_problem = f'scan ignored: {exc}'
-            self.node.get_logger().warning(self.scan_problem, throttle_duration_sec=5.0)
+            self.node.ros.get_logger().warning(self.scan_problem, throttle_duration_sec=5.0)
             return
         # A scanner that cannot see the robot's way (too narrow, too sparse) is used all the same (every return is
         # an obstacle to the guard), and said so on status.
@@ -309,7 +340,7 @@ class PlannerInputs:
                             mount[2], self.node.radius)
         self.scan_problem = f'the scan cannot see the robot\'s way: {blind}' if blind else ''
         if blind:
-            self.node.get_logger().warning(self.scan_problem, throttle_duration_sec=60.0)
+            self.node.ros.get_logger().warning(self.scan_problem, throttle_duration_sec=60.0)
         nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
         nav.guard_check.scan_points = self.scan_perception.returns      # and the beams' ends are obstacles
         nav.from_scans = True

@@ -9,20 +9,23 @@ publisher, /diagnostics, what was last published and the control loop's timings 
 from __future__ import annotations
 
 import collections
-from typing import TYPE_CHECKING, Any
+from typing import Any, Protocol
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticStatus
+from rclpy.node import Node
 
-from fastep_core.planning.navigator import Mode
+from fastep_core.planning.navigator import Mode, Navigator
 from fastep_ros.diagnostics import Diagnostics, Task
+from fastep_ros.lifecycle import Lifecycle
+from fastep_ros.planner_inputs import PlannerInputs
+from fastep_ros.planning_thread import PlanningThread
+from fastep_ros.robots import RobotFollower
+from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, interface
 from msg_tools.interface import offered_qos
 
-if TYPE_CHECKING:
-    from fastep_ros.planner import PlannerNode
-
-__all__ = ['CONTROL_TIMES', 'RATE_SHORTFALL', 'RATE_WINDOW', 'STATUS_MESSAGES', 'PlannerReports']
+__all__ = ['CONTROL_TIMES', 'RATE_SHORTFALL', 'RATE_WINDOW', 'STATUS_MESSAGES', 'PlannerNodeView', 'PlannerReports']
 
 # Every `status` message the planner says (PlannerReports.status), its levels and what it means: the reference's
 # status page (fastep_ros.reference) is made from it, and a test checks that status() says nothing else.
@@ -47,16 +50,44 @@ CONTROL_TIMES = 200      # control callbacks (10 s at 20 Hz) whose wall times st
 RATE_SHORTFALL = 0.9     # an achieved rate below this share of control_rate_hz is a missed rate (WARN)
 
 
+class PlannerNodeView(Protocol):
+    """What the reports read of their planner node (fastep_ros.planner.PlannerNode); `ros`: the node itself."""
+
+    algorithm: str
+    goal: tuple[float, float] | None
+    goal_refused: str
+    hold: str
+    plan_problem: str
+    clock_problem: str
+    cmd_conflict: str
+    exclusive_cmd_vel: bool
+    control_rate_hz: float
+    odom_timeout: float
+    control_count: int
+    plan_tick: int
+    navigator: Navigator | None
+    planning: PlanningThread[Any, Any] | None
+    inputs: PlannerInputs
+    robots: RobotFollower
+    sim_time: SimTimeWatch
+    lifecycle: Lifecycle
+    cmd_pub: Any
+
+    @property
+    def ros(self) -> Node: ...
+    def now(self) -> float: ...
+
+
 class PlannerReports:
     """Status and /diagnostics of the planner node (fastep_ros.planner.PlannerNode's `reports`), with the control
     loop's timings they carry."""
 
-    def __init__(self, node: PlannerNode) -> None:
+    def __init__(self, node: PlannerNodeView) -> None:
         self.node = node
         self.control_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
         self.control_cpu_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
         self.control_stamps: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)   # node times
-        self.status_pub = node.create_publisher(DiagnosticStatus, interface.STATUS, offered_qos(interface.STATUS))
+        self.status_pub = node.ros.create_publisher(DiagnosticStatus, interface.STATUS, offered_qos(interface.STATUS))
         self.cmd_vel_readers = 0   # cmd_vel's matched readers when status last told them
         self.diagnostics: Diagnostics | None = None   # made once the node's clock is watched (make_diagnostics)
         # What was last published.
@@ -64,7 +95,7 @@ class PlannerReports:
         self._status_since = 0.0
 
     def make_diagnostics(self) -> None:
-        self.diagnostics = Diagnostics(self.node)
+        self.diagnostics = Diagnostics(self.node.ros)
 
     def changed(self) -> None:
         """What status tells changed: the next publish sends it."""
@@ -215,7 +246,7 @@ class PlannerReports:
         values['planning_ms'] = self.planning_ms()
         # Sent as its bytes (msg_tools.cdr): convert.make_status's message (~0.4 ms of CPU to build and convert for
         # the middleware at 16 robots), not built. The level is one of DiagnosticStatus' byte constants.
-        self.status_pub.publish(cdr.diagnostic_status_cdr(level[0], self.node.get_namespace(), message, '',
+        self.status_pub.publish(cdr.diagnostic_status_cdr(level[0], self.node.ros.get_namespace(), message, '',
                                                           convert.status_values(values)))
 
 

@@ -17,20 +17,19 @@ from __future__ import annotations
 
 import math
 import time
-from typing import TYPE_CHECKING, Sequence
+from typing import Protocol, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.planning.mode import Mode
 from fastep_core.planning.others import OtherRobot, robot_arrays
+from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.step import StepProblem, StepRun, step_run
+from fastep_core.planning.yielding import Yielding
 from fastep_core.world import World
 
-if TYPE_CHECKING:   # navigator.py imports this module
-    from fastep_core.planning.navigator import Navigator
-
-__all__ = ['PENDING_FOR', 'RETRY_AFTER', 'StepPlanning', 'plan_next_step', 'start_step']
+__all__ = ['PENDING_FOR', 'RETRY_AFTER', 'StepPlanner', 'StepPlanning', 'plan_next_step', 'start_step']
 
 FloatArray = NDArray[np.float64]
 
@@ -99,7 +98,34 @@ class StepPlanning:
         self.retry_at = t + RETRY_AFTER
 
 
-def plan_next_step(nav: Navigator, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
+class StepPlanner(Protocol):
+    """What a navigator (navigator.py) gives and keeps for its step of a tick."""
+
+    goal: FloatArray | None
+    world: World
+    params: PlannerParams
+    radius: float
+    rng: np.random.Generator
+    yielding: Yielding
+    steps: StepPlanning
+    step_method: str
+    activations: int
+    plan_time: float
+    mode: Mode
+    reason: str
+    waypoint: FloatArray | None
+    cost: float
+    plan: list[FloatArray]
+    _ticks: int
+    _last_t: float | None
+
+    @property
+    def clearance(self) -> float: ...
+    def step_budget(self) -> int | None: ...
+    def step_target(self) -> FloatArray: ...
+
+
+def plan_next_step(nav: StepPlanner, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
     """The navigator's step of this tick (eq. 3-10): its waypoint; None (and a status reason) when no feasible step
     exists, or when the step is finished on the next tick (`deferred`; the navigator drives on meanwhile)."""
     assert nav.goal is not None
@@ -133,7 +159,7 @@ def plan_next_step(nav: Navigator, position: FloatArray, others: Sequence[OtherR
     return step.waypoint
 
 
-def start_step(nav: Navigator, position: FloatArray, others: Sequence[OtherRobot]) -> StepRun:
+def start_step(nav: StepPlanner, position: FloatArray, others: Sequence[OtherRobot]) -> StepRun:
     """The step problem of this tick (eq. 10 toward the navigator's step_target, the robots as they are and as
     yielding predicts them) and its swarm run, keeping right of the robots ahead unless the rule gave up last tick
     (then this plan continues that activation)."""
