@@ -14,18 +14,32 @@ zero command, timers off); cleanup calls `cleanup`. A transition the current sta
 
 from __future__ import annotations
 
-from typing import Any, Callable
+from typing import Any, Callable, TypeVar
 
 from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
 
 from fastep_ros.common import Param
 
-__all__ = ['AUTOSTART', 'Lifecycle', 'ManagedNode']
+__all__ = ['AUTOSTART', 'Lifecycle', 'ManagedNode', 'transitions_to_member']
 
 AUTOSTART = Param('autostart', True, 'configure and activate at start; false: stay unconfigured (no commands) until '
                   'a lifecycle manager drives the node (change_state: configure, activate, deactivate, cleanup, '
                   'shutdown)')
+
+TRANSITIONS = ('on_configure', 'on_activate', 'on_deactivate', 'on_cleanup', 'on_shutdown', 'on_error')
+NodeClass = TypeVar('NodeClass', bound=type[LifecycleNode])
+
+
+def transitions_to_member(cls: NodeClass) -> NodeClass:
+    """Class decorator: rclpy's transition callbacks of a LifecycleNode (on_configure, on_activate, ...: rclpy
+    calls the node's methods of those names) handed to the node's `lifecycle` member."""
+    for name in TRANSITIONS:
+        def transition(self: Any, state: LifecycleState, name: str = name) -> TransitionCallbackReturn:
+            return getattr(self.lifecycle, name)(state)
+        transition.__name__ = transition.__qualname__ = name
+        setattr(cls, name, transition)
+    return cls
 
 
 class Lifecycle:
@@ -103,6 +117,7 @@ class Lifecycle:
         return LifecycleNode.on_error(self.node, state)
 
 
+@transitions_to_member
 class ManagedNode(LifecycleNode):
     """A LifecycleNode whose transitions (its `lifecycle` member) call activate / deactivate / cleanup of the
     subclass."""
@@ -132,22 +147,3 @@ class ManagedNode(LifecycleNode):
 
     def cleanup(self) -> None:
         """Forget what the run built up (back to unconfigured)."""
-
-    # rclpy's transition callbacks: the member's.
-    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_configure(state)
-
-    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_activate(state)
-
-    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_deactivate(state)
-
-    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_cleanup(state)
-
-    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_shutdown(state)
-
-    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_error(state)

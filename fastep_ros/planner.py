@@ -26,7 +26,7 @@ import numpy as np
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
-from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.lifecycle import LifecycleNode
 from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float64
 
@@ -50,7 +50,7 @@ from fastep_ros.common import (
     shown,
 )
 from fastep_ros.goals import GoalSubscription
-from fastep_ros.lifecycle import Lifecycle
+from fastep_ros.lifecycle import Lifecycle, transitions_to_member
 from fastep_ros.live_tf import TfListener
 from fastep_ros.lock_step import LockStep
 from fastep_ros.navigate_actions import NavigateActions
@@ -100,6 +100,7 @@ def stream_rng(seed: int, stream: int) -> np.random.Generator:
     return np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(stream,)))
 
 
+@transitions_to_member
 class PlannerNode(LifecycleNode):
     """One robot's navigator (fastep_core) between its odometry and its cmd_vel. Its members: `inputs` (what it
     hears, fastep_ros.planner_inputs), `reports` (what it tells of itself, fastep_ros.planner_status), `lock` (lock
@@ -261,25 +262,6 @@ class PlannerNode(LifecycleNode):
                 self.on_goal(goal)
             self.reports.publish()
         self.change(adopt)
-
-    # rclpy's transition callbacks: the lifecycle member's.
-    def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_configure(state)
-
-    def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_activate(state)
-
-    def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_deactivate(state)
-
-    def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_cleanup(state)
-
-    def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_shutdown(state)
-
-    def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
-        return self.lifecycle.on_error(state)
 
     def change(self, work: Callable[[], Any]) -> None:
         """Change the navigator: between two passes on the planning thread, or at once without one."""
