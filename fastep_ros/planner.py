@@ -109,7 +109,7 @@ class PlannerNode(LifecycleNode):
 
     def __init__(self, node_name: str = 'planner', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        # Its transitions (fastep_ros.lifecycle): rclpy calls on_configure, on_activate, ... below, the member's.
+        # Its transitions (fastep_ros.lifecycle): rclpy calls on_configure, on_activate, ..., handed to the member.
         self.lifecycle = Lifecycle(self, self.activate, self.deactivate, self.cleanup)
         clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         values = declare_table(self, PARAMETERS)
