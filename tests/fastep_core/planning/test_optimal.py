@@ -331,3 +331,39 @@ def test_the_grid_decides_every_edge_as_the_full_distance_matrix_does(seed):
     expected = inside & (world.obstacles.path_clearance(P, Q) >= clearance - TOL)
     assert 0 < expected.sum() < inside.sum()
     assert np.array_equal(problem.edges_free(P, Q), expected)
+
+
+def _cell_outlines(occupied, cell):
+    """Each occupied cell as its four sides: corners shared by up to eight walls, most blocked all round."""
+    walls = []
+    for row, col in zip(*np.nonzero(occupied)):
+        x0, y0, x1, y1 = col * cell, row * cell, (col + 1) * cell, (row + 1) * cell
+        corners = [(x0, y0), (x1, y0), (x1, y1), (x0, y1)]
+        walls += [Segment(corners[k], corners[(k + 1) % 4]) for k in range(4)]
+    return walls
+
+
+@pytest.mark.parametrize('seed', range(6))
+def test_leaving_out_caps_blocked_all_round_finds_the_same_path(seed, monkeypatch):
+    """The search leaves out a corner's repeated caps and the caps no point of which is free. On worlds of
+    rasterised blobs (most caps left out) it must find the very path the search with every cap finds."""
+    from fastep_core.planning import optimal
+    rng = np.random.default_rng(seed)
+    blobs = rng.random((12, 16)) < 0.22
+    blobs[:2, :2] = blobs[-2:, -2:] = False        # room round the start and the goal
+    w = World((0.0, 0.0, 16.0, 12.0), tuple(_cell_outlines(blobs, 1.0)) +
+              (Circle((float(rng.uniform(4, 12)), float(rng.uniform(3, 9))), 0.3),))
+    start, goal, r = (0.5, 0.5), (15.5, 11.5), float(rng.uniform(0.15, 0.45))
+    fewer = shortest_path(w, start, goal, r)
+    kept = []
+    original = optimal._Problem._add_caps
+    monkeypatch.setattr(optimal._Problem, '_add_caps',
+                        lambda self, caps: (kept.append(len(caps)), self.circles.extend(caps)))
+    every = shortest_path(w, start, goal, r)
+    monkeypatch.setattr(optimal._Problem, '_add_caps', original)
+    assert kept and len(optimal._Problem(w, r, r).circles) < kept[0] / 3
+    assert (fewer is None) == (every is None)
+    if every is not None:
+        assert fewer is not None
+        assert fewer.length == every.length
+        assert np.array_equal(fewer.points, every.points)
