@@ -7,12 +7,12 @@ believed obstacles the scan sees through.
 - Seen through: a believed obstacle is contradicted by a beam that reads farther than the obstacle's surface
   on that beam by more than SEE_THROUGH (the beam passed where the obstacle should be). Only obstacles whose
   surface the beam would reach within range_max - SEE_THROUGH count (beyond, the beam says nothing), and the
-  obstacle is shrunk by SEE_THROUGH first (circles' radii, segments' ends: grazing beams say nothing); a beam
-  with no reading (NaN: a dark or glass surface, an error) says nothing either, +inf (no return within range)
-  that its whole length is free. An obstacle contradicted by at least SEE_THROUGH_BEAMS beams of one scan is not
-  where the map says (a misplaced obstacle's ghost, or a mover perception once took for a still obstacle).
-  Vectorised: each obstacle against the beams that can meet it (laser.fan_hits, the same distances as all beams x
-  all obstacles); seen_through_and_nearest also gives each beam's nearest believed surface from the same call.
+  obstacle is shrunk by SEE_THROUGH first (circles' radii, segments' ends: grazing beams say nothing), and a
+  wall's beam must cross its WALL_BAND side to side alongside it; a beam with no reading (NaN) says nothing,
+  +inf (no return within range) that its whole length is free. An obstacle contradicted by SEE_THROUGH_BEAMS
+  beams of one scan or more is not where the map says (a misplaced obstacle's ghost, or a mover perception once
+  took for a still obstacle).
+  Vectorised (laser.fan_hits); seen_through_and_nearest also gives each beam's nearest believed surface.
 """
 
 from __future__ import annotations
@@ -23,11 +23,12 @@ from numpy.typing import NDArray
 from fastep_core.geometry import Obstacles, norm
 from fastep_core.sensing.laser import FanDirections, Scan, fan_hits
 
-__all__ = ['END_SLACK', 'EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'explained', 'explained_by_belief',
-           'nearest_surfaces',
-           'seen_through', 'seen_through_and_nearest', 'seen_through_circles']
+__all__ = ['END_SLACK', 'EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'WALL_BAND', 'explained',
+           'explained_by_belief', 'nearest_surfaces', 'seen_through', 'seen_through_and_nearest',
+           'seen_through_circles']
 
 FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.int64]
 
 END_SLACK = 0.03
 """Metres beyond a believed wall's end within which a scan point is still that wall (the range noise along a
@@ -43,6 +44,11 @@ SEE_THROUGH = 0.3
 """Metres a reading must exceed a believed surface on its beam to contradict it."""
 SEE_THROUGH_BEAMS = 3
 """Beams of one scan that must see through an obstacle before it is dropped."""
+WALL_BAND = EXPLAINED
+"""Metres on each side of a believed wall where its true surface may lie (a /map's outline is a cell off the truth,
+a fitted wall a few cm): a beam sees through the wall only when it crosses this band from side to side alongside
+the wall. Before, a beam grazing a /map outline a cell off the true wall saw through it: a laser in a doorway
+dropped a furnished office's corridor walls along the whole /map (robot harness, office)."""
 
 
 def explained(points: FloatArray, obstacles: Obstacles, centres: FloatArray, radii: FloatArray,
@@ -125,6 +131,32 @@ def seen_through_and_nearest(scan: Scan, pose: FloatArray, obstacles: Obstacles,
 _NO_POINTS = np.zeros((0, 2))
 
 
+def _across_band(pose: FloatArray, scan: Scan, beam: IntArray, wall: IntArray, measured: FloatArray,
+                 starts: FloatArray, units: FloatArray, lengths: FloatArray,
+                 directions: FanDirections | None) -> NDArray[np.bool_]:
+    """Which beams that read past a believed wall (wall: its index in starts, units and lengths, the walls' start
+    points, unit directions and lengths) crossed the wall's WALL_BAND from side to side alongside the wall: a true
+    surface within the band along the wall would have stopped them. A beam that starts or ends inside the band, or
+    crosses it beyond an end of the wall (round a corner the truth may have), says nothing."""
+    if directions is None:
+        angles = pose[2] + scan.angle_min + scan.angle_increment * beam.astype(float)
+        cos, sin = np.cos(angles), np.sin(angles)
+    else:
+        cos, sin = directions[1][beam], directions[2][beam]
+    u = units[wall]
+    across = np.abs(u[:, 0] * sin - u[:, 1] * cos)             # the sine of the angle between beam and wall
+    along = u[:, 0] * cos + u[:, 1] * sin
+    rel_x, rel_y = pose[0] - starts[wall, 0], pose[1] - starts[wall, 1]
+    offset = np.abs(u[:, 0] * rel_y - u[:, 1] * rel_x)         # the scanner's distance from the wall's line
+    at = u[:, 0] * rel_x + u[:, 1] * rel_y                     # ... and where it lies along the wall
+    with np.errstate(divide='ignore', invalid='ignore'):
+        enter, leave = (offset - WALL_BAND) / across, (offset + WALL_BAND) / across   # along the beam
+    first, last = at + enter * along, at + leave * along       # along the wall
+    crossed: NDArray[np.bool_] = (offset >= WALL_BAND) & (measured >= leave) & \
+        (np.minimum(first, last) >= 0.0) & (np.maximum(first, last) <= lengths[wall])
+    return crossed
+
+
 def _seen_through(scan: Scan, pose: FloatArray, distances: FloatArray, centres: FloatArray, radii: FloatArray,
                   starts: FloatArray, ends: FloatArray, through: float, directions: FanDirections | None,
                   surfaces: bool) -> tuple[NDArray[np.bool_], FloatArray | None]:
@@ -168,5 +200,9 @@ def _seen_through(scan: Scan, pose: FloatArray, distances: FloatArray, centres: 
     # A beam with no reading (nan) sees through nothing: nan > x is false.
     measured = scan.ranges[beam]
     passed = (expected > 0.0) & (expected < reach - through) & (measured > expected + through)
+    walls = passed & (candidate >= len(circles))
+    if walls.any():
+        passed[walls] = _across_band(pose, scan, beam[walls], candidate[walls] - len(circles), measured[walls],
+                                     low, run / length[:, None], length, directions)
     out[candidates] = np.bincount(candidate[passed], minlength=len(candidates)) >= SEE_THROUGH_BEAMS
     return out, nearest

@@ -38,6 +38,36 @@ def test_a_misplaced_map_obstacle_is_seen_through_and_a_true_one_is_not() -> Non
     assert through.tolist() == [False, True, False, False, True]
 
 
+def _outline(x0: float, x1: float, y: float, cell: float = 0.05) -> list[Segment]:
+    """A /map's outline of a thin wall along y from x0 to x1 lying on a cell border: a cell on each side of it."""
+    return [Segment((x0, y - cell), (x1, y - cell)), Segment((x0, y + cell), (x1, y + cell)),
+            Segment((x0, y - cell), (x0, y + cell)), Segment((x1, y - cell), (x1, y + cell))]
+
+
+def test_a_map_outline_a_cell_off_its_wall_is_not_seen_through_from_a_doorway() -> None:
+    """A laser in a doorway of a thin wall (inside the band of the /map's outline a cell either side of it) reads
+    far along the wall, past the outline's long sides: that says nothing of them, the wall lies within a cell."""
+    pose = np.array([3.2, 7.02, 0.0])
+    s = scan(SPEC, pose, np.random.default_rng(0), starts=[(3.6, 7.0), (3.2, 10.0)], ends=[(9.0, 7.0), (9.0, 10.0)])
+    outline = _outline(3.6, 9.0, 7.0)
+    through = seen_through(s, pose, Obstacles(outline))
+    assert not through[:2].any()
+    # The same outline 0.5 m off the true wall (misplaced) is seen through from there.
+    assert seen_through(s, pose, Obstacles(_outline(3.6, 9.0, 6.5)))[1]
+
+
+def test_a_beam_grazing_an_outline_round_the_true_corner_does_not_see_through_it() -> None:
+    """A box the /map draws a cell too large: beams from the side pass just beyond the true corner, through the
+    outline's extra cell, at a grazing angle. They cross its band beyond the wall's end: no evidence."""
+    pose = np.array([3.05, 4.5, 0.0])
+    box = [(4.35, 4.75), (4.85, 4.75), (4.85, 5.25), (4.35, 5.25)]
+    fine = LaserSpec(10.0, 1.5 * np.pi, 720, 0.01)     # the robot harness's: a quarter degree between beams
+    s = scan(fine, pose, np.random.default_rng(0), starts=box, ends=box[1:] + box[:1])
+    drawn = Segment((4.35, 4.7), (4.85, 4.7))        # its near side, a cell off
+    assert not seen_through(s, pose, Obstacles([drawn])).any()
+    assert seen_through(s, pose, Obstacles([Segment((4.0, 3.0), (5.5, 3.0))])).all()   # where nothing is: a ghost
+
+
 def test_an_obstacle_behind_another_is_not_seen_through() -> None:
     pose = np.zeros(3)
     s = scan(SPEC, pose, np.random.default_rng(0), circles=[(3.0, 0.0)], radii=[1.0])
