@@ -2,6 +2,7 @@
 
     python -m benchmarks.scale robots [--counts 10 20 40 100] [--seed 0] [--max-sim-time 300]
     python -m benchmarks.scale obstacles [--counts 200 500 1000] [--side 50] [--seed 0]
+    python -m benchmarks.scale maps [--worlds office ...]
 
 robots: one in-process `simulate` (what `fastep-sim` runs) of N point-mass robots in a square world of side
 max(50, 10 sqrt(N)) m with N / 2 random circles, fixed seeds. Prints wall and CPU time, simulated time,
@@ -10,6 +11,10 @@ arrivals and collisions per N.
 obstacles: the exact shortest path (fastep_core.planning.optimal.shortest_path) from (2, 2) to the far corner
 through N random circles in a square of side --side. Prints wall and CPU time, peak traced memory
 (tracemalloc), the size of the search graph and the path length.
+
+maps: the exact shortest path from start to goal of the robot harness's worlds (fastep_testing/robot_worlds.py)
+in their 0.05 m /map as the planner node reads it (the occupied cells' outline), clearance radius + margin: the
+circles the search keeps (each corner's cap once, none blocked all round) against every wall end's cap, in one run.
 
 Wall times depend on the machine's load: the script prints the load average to go with the numbers.
 """
@@ -108,6 +113,37 @@ def bench_obstacles(counts: list[int], side: float, seed: int) -> None:
     print(load_text())
 
 
+def bench_maps(names: list[str]) -> None:
+    from benchmarks.scan_perception import grid_map
+    from fastep_core.planning import optimal
+    from fastep_testing.robot_worlds import WORLDS
+    print(load_text())
+    print(f'{"world":>14} {"walls":>6} {"caps":>9} {"circles":>8} {"wall s":>8} {"every cap s":>12} {"ratio":>6} '
+          f'{"same path":>9}')
+    kept = optimal._Problem._add_caps
+    for name in names:
+        scenario = WORLDS[name]
+        robot = scenario.robots[0]
+        world = grid_map(scenario)
+        clearance = robot.radius + scenario.planner.clearance_margin
+        times, paths, circles = [], [], []
+        for every in (False, True):
+            if every:   # the search as it was: every wall end's cap
+                optimal._Problem._add_caps = lambda self, caps: self.circles.extend(caps)  # type: ignore[method-assign]  # the comparison
+            try:
+                start = time.perf_counter()
+                paths.append(shortest_path(world, robot.start[:2], robot.goal, clearance))
+                times.append(time.perf_counter() - start)
+                circles.append(len(optimal._Problem(world, clearance, clearance).circles))
+            finally:
+                optimal._Problem._add_caps = kept  # type: ignore[method-assign]  # restored
+        same = paths[0] is not None and paths[1] is not None and np.array_equal(paths[0].points, paths[1].points)
+        walls = len(world.obstacle_list)
+        print(f'{name:>14} {walls:>6} {circles[1]:>9} {circles[0]:>8} {times[0]:>8.3f} {times[1]:>12.3f} '
+              f'{times[1] / times[0]:>6.1f} {str(same):>9}', flush=True)
+    print(load_text())
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog='python -m benchmarks.scale', description=__doc__.splitlines()[0])
     sub = p.add_subparsers(dest='what', required=True)
@@ -121,9 +157,14 @@ def main(argv: list[str] | None = None) -> int:
     obstacles.add_argument('--counts', type=int, nargs='+', default=[200, 500, 1000])
     obstacles.add_argument('--side', type=float, default=50.0)
     obstacles.add_argument('--seed', type=int, default=0)
+    maps = sub.add_parser('maps', help="the exact path across the robot harness's worlds' /map outlines")
+    maps.add_argument('--worlds', nargs='+', default=['open_room', 'behind_wall', 'unmapped_box', 'thin_cylinders',
+                                                      'office'])
     args = p.parse_args(argv)
     if args.what == 'robots':
         bench_robots(args.counts, args.seed, args.max_sim_time, args.min_approach_speed)
+    elif args.what == 'maps':
+        bench_maps(args.worlds)
     else:
         bench_obstacles(args.counts, args.side, args.seed)
     return 0
