@@ -21,6 +21,7 @@ from sensor_msgs.msg import LaserScan
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.perception.belief import heading
+from fastep_core.planning.guard import ScanReturns
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.sensing.laser import way_problem
@@ -342,7 +343,8 @@ class PlannerInputs:
         if blind:
             self.node.ros.get_logger().warning(self.scan_problem, throttle_duration_sec=60.0)
         nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
-        nav.guard_check.scan_points = self.scan_perception.returns      # and the beams' ends are obstacles
+        # and the beams' ends are obstacles
+        nav.guard_check.scan_points = ScanReturns(self.scan_perception.returns, state, nav.radius)
         nav.from_scans = True
         if self.node.planning is not None:
             nav.seen = self.scan_perception.recent.seen()   # where the robot may back up (planning/control.py)

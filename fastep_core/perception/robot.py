@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from fastep_core.dynamic_world import DynamicWorld
 from fastep_core.perception.belief import Belief, Perception, heading, perception_margin, sensor_generator
+from fastep_core.planning.guard import ScanReturns
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.recovery import RecentScans
@@ -57,7 +58,7 @@ class SensingRobot:
         pose = self.spec.pose_on((float(state[0]), float(state[1]), heading(self.model, state)))   # the scanner's
         scan = self.truth.scan(self.spec, pose, t, self.rng, (centres, radii))
         belief = self.perception.update(t, pose, scan, others)
-        navigator.guard_check.scan_points = self.perception.returns
+        navigator.guard_check.scan_points = ScanReturns(self.perception.returns, state, navigator.radius)
         if belief.world is not navigator.world:
             navigator.world = belief.world
         return [*others, *belief.movers]

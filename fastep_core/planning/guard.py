@@ -29,9 +29,37 @@ from fastep_core.planning.others import OtherRobot, other_arrays
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
-__all__ = ['Guard', 'Stop']
+__all__ = ['NEAR_ROOM', 'Guard', 'ScanReturns', 'Stop']
 
 FloatArray = NDArray[np.float64]
+NEAR_ROOM = 0.5
+"""m: while the robot is within this of where it took a scan, the guard reads only that scan's returns near there."""
+
+
+class ScanReturns:
+    """A scan's returns (map frame) as the guard reads them: all of them, and those within the robot's radius and
+    NEAR_ROOM of where the robot was when it took the scan (made once per scan, on the planning pass). While the
+    robot is within NEAR_ROOM of there, no other return comes within its radius, and the nearest one to it is
+    either among those or farther than anything that would stop it: the same decisions from a few dozen points.
+
+    Why: the control tick checks the returns two or three times. On a whole scan (720 points) each numpy call lets
+    the GIL go (numpy does from 500 elements), and the control thread then waits up to a switch interval for the
+    planning thread to give it back: most of the control tick's wall time in the robot harness (py-spy)."""
+
+    def __init__(self, points: FloatArray, position: FloatArray, radius: float) -> None:
+        self.points = np.asarray(points, dtype=float).reshape(-1, 2)
+        self.centre = (float(position[0]), float(position[1]))
+        self.radius = radius
+        reach = np.hypot(self.points[:, 0] - self.centre[0], self.points[:, 1] - self.centre[1])
+        self.near: FloatArray = self.points[reach <= radius + NEAR_ROOM + 1e-6]   # 1e-6: rounding, in its favour
+
+    def around(self, a: FloatArray, b: FloatArray, radius: float) -> FloatArray:
+        """The returns to measure positions a and b against, for a robot of this radius."""
+        cx, cy = self.centre
+        if radius == self.radius and math.hypot(float(a[0]) - cx, float(a[1]) - cy) <= NEAR_ROOM and \
+                math.hypot(float(b[0]) - cx, float(b[1]) - cy) <= NEAR_ROOM:
+            return self.near
+        return self.points
 
 
 class Stop(str, Enum):
@@ -49,7 +77,7 @@ class Guard:
         # Kept beyond the radius from obstacle surfaces: 0 on a map that is the truth; a robot that plans in what
         # its scans show (fastep_core/perception) keeps PERCEPTION_MARGIN, as its surfaces are known only that well.
         self.obstacle_margin = 0.0
-        self.scan_points: FloatArray | None = None   # the latest scan's returns, map frame (None: no laser)
+        self.scan_points: ScanReturns | None = None   # the latest scan's returns (None: no laser)
         self.stop: Stop | None = None   # why the last refused command was refused ...
         self.reason = ''                # ... in words, for the status
         # A disc of the world known to be obstacle-free: any point within (clearance - radius) of a point whose
@@ -71,7 +99,8 @@ class Guard:
             if then < keep and then < float(obstacles.clearance(position)):
                 return self._refuse(command, Stop.OBSTACLE, 'stopped: an obstacle is within the robot radius ahead')
             self._free = (world, after, then - keep)
-        points = self.scan_points
+        returns = self.scan_points
+        points = None if returns is None else returns.around(position, after, self.radius)
         if points is not None and len(points):
             then_points = float(np.min(np.hypot(points[:, 0] - after[0], points[:, 1] - after[1])))
             if then_points < self.radius and \

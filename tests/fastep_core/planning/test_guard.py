@@ -7,7 +7,7 @@ import numpy as np
 from fastep_core.geometry import Circle
 from fastep_core.kinematics import PointMass
 from fastep_core.planning import OtherRobot, PlannerParams, make_navigator
-from fastep_core.planning.guard import Guard, Stop
+from fastep_core.planning.guard import Guard, ScanReturns, Stop
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World
 
@@ -100,8 +100,31 @@ def test_the_guard_stops_short_of_a_laser_return_the_belief_lacks_and_lets_the_r
     guard, state = Guard(PointMass(), 0.5, PlannerParams()), np.array([5.0, 5.0])
     step = np.array([2.0, 0.0])                               # 0.1 m in one tick: ends 0.3 m from the return
     assert guard.check(EMPTY, state, step, 0.05, []) is step
-    guard.scan_points = np.array([[5.4, 5.0], [9.0, 9.0]])
+    guard.scan_points = ScanReturns(np.array([[5.4, 5.0], [9.0, 9.0]]), state, 0.5)
     assert np.all(guard.check(EMPTY, state, step, 0.05, []) == 0.0) and guard.stop is Stop.OBSTACLE
     assert 'laser' in guard.reason
     away = np.array([-2.0, 0.0])
     assert guard.check(EMPTY, state, away, 0.05, []) is away
+
+
+def test_the_returns_near_where_the_scan_was_taken_give_every_decision_all_of_them_give():
+    """The guard reads only the returns near where the robot took the scan while it is within NEAR_ROOM of there
+    (fewer numbers on the control tick): every stop and every go must be what all the returns decide."""
+    from fastep_core.planning.guard import NEAR_ROOM
+    rng = np.random.default_rng(7)
+    model, radius = PointMass(), 0.4
+    decided = {True: 0, False: 0}
+    for _ in range(2000):
+        taken_at = rng.uniform(5.0, 15.0, 2)
+        points = taken_at + rng.uniform(-2.0, 2.0, (40, 2))   # sparse: the one return that decides is often far
+        returns = ScanReturns(points, taken_at, radius)
+        assert 0 < len(returns.near) < len(points)
+        state = taken_at + rng.uniform(-1.2, 1.2, 2) * NEAR_ROOM
+        command = rng.uniform(-2.0, 2.0, 2)
+        near, whole = Guard(model, radius, PlannerParams()), Guard(model, radius, PlannerParams())
+        near.scan_points = returns
+        whole.scan_points = ScanReturns(points, taken_at + 100.0, radius)   # far from here: all of them
+        stopped = near.check(EMPTY, state, command, 0.05, []) is not command
+        assert stopped == (whole.check(EMPTY, state, command, 0.05, []) is not command)
+        decided[stopped] += 1
+    assert min(decided.values()) > 20
