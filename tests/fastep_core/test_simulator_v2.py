@@ -83,8 +83,8 @@ def test_margins_measure_movers_at_the_same_instants() -> None:
 def test_crossing_movers_builtin() -> None:
     """fastep yields to the mover and arrives clear of the truth. aco used to crawl (about 460 s for 40 m) and sat
     in the mover's lane when it came back; with the approach-speed floor (min_approach_speed, docs/approach_speed.md)
-    and its scanner's tracks it now crosses clear of it in this world. Planning against motion in general is issue
-    13's item 4 (docs/dynamic_world.md: movers still hit robots in the random crossing-movers family)."""
+    and its scanner's tracks it now crosses clear of it in this world. The random crossing-movers family is
+    docs/dynamic_world.md's ("Measured: the v2 families")."""
     scenario = load_scenario('crossing_movers')
     for seed in range(3):
         robot = simulate(scenario, 'fastep', seed).robots[0]
