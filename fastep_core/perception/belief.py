@@ -155,7 +155,8 @@ class Perception:
         # cast that finds what the scan sees through (_in_front's, while that drops nothing).
         directions = fan_directions(pose_array[2], scan.angle_min, scan.angle_increment, len(scan.ranges))
         surfaces: FloatArray | None
-        through, surfaces = seen_through_and_nearest(scan, pose_array, believed, directions)
+        map_walls = len(self._obstacles('map').starts)   # believed: the map's items first, so its walls first
+        through, surfaces = seen_through_and_nearest(scan, pose_array, believed, directions, map_walls)
         if through.any():
             surfaces = None
             gone = {id(item) for item, drop in zip(believed.items, through) if drop}

@@ -52,6 +52,8 @@ def test_a_map_outline_a_cell_off_its_wall_is_not_seen_through_from_a_doorway() 
     outline = _outline(3.6, 9.0, 7.0)
     through = seen_through(s, pose, Obstacles(outline))
     assert not through[:2].any()
+    # Walls perception fitted itself get no band: those beams see through them.
+    assert seen_through(s, pose, Obstacles(outline), map_walls=0)[:2].any()
     # The same outline 0.5 m off the true wall (misplaced) is seen through from there.
     assert seen_through(s, pose, Obstacles(_outline(3.6, 9.0, 6.5)))[1]
 
