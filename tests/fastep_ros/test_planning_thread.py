@@ -347,3 +347,29 @@ def test_the_first_scan_s_pass_imports_nothing_the_node_did_not_import_when_made
     result = json.loads(done.stdout.strip().splitlines()[-1])
     assert result['scans'] >= 1   # the passes perceived the scans
     assert result['imported'] == []
+
+
+def test_a_node_process_freezes_what_start_up_made_before_it_spins(monkeypatch) -> None:
+    """The collector's full passes over a planner's start-up objects took 25 ms, holding the GIL (a control tick
+    waits that long): a node's process moves them out of the collector's sight before it spins."""
+    import gc
+
+    from rclpy.node import Node
+
+    from fastep_ros import common
+    from fastep_testing.graph import free_domain
+    frozen = []
+
+    def spin(nodes, executor):
+        frozen.append(gc.get_freeze_count())
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(common, '_spin', spin)
+    monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
+    monkeypatch.setenv('ROS_DOMAIN_ID', str(free_domain()))
+    gc.unfreeze()
+    try:
+        assert common._run_node(lambda: Node('frozen'), []) == 0
+    finally:
+        gc.unfreeze()
+    assert frozen and frozen[0] > 1000
