@@ -43,7 +43,7 @@ class ScanReturns:
     either among those or farther than anything that would stop it: the same decisions from a few dozen points.
 
     Why: the control tick checks the returns two or three times. On a whole scan (720 points) each numpy call lets
-    the GIL go (numpy does from 500 elements), and the control thread then waits up to a switch interval for the
+    the GIL go (numpy does above 500 elements), and the control thread then waits up to a switch interval for the
     planning thread to give it back: most of the control tick's wall time in the robot harness (py-spy)."""
 
     def __init__(self, points: FloatArray, position: FloatArray, radius: float) -> None:
