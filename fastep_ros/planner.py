@@ -82,6 +82,7 @@ class PlanSnapshot:
     state: np.ndarray
     others: list[OtherRobot]
     scan: LaserScan | None
+    velocity: np.ndarray | None = None   # what the base measurably did (odometry's twist), None: not known
 
 
 def same_heading(heading: float | str | None, kept: float | None) -> bool:
@@ -586,7 +587,7 @@ class PlannerNode(LifecycleNode):
                 self.hold = problem
             else:
                 self.hold = ''
-                command = self.navigate(nav, t, state, self.inputs.other_robots(t))
+                command = self.navigate(nav, t, state, self.inputs.other_robots(t), self.inputs.velocity())
         self.publish_command(command, at)
         self.last_command = command
         if self.actions is not None:
@@ -612,10 +613,11 @@ class PlannerNode(LifecycleNode):
         self.hold = problem
         if state is None:
             return control.stop(t, period)
+        velocity = self.inputs.velocity()
         told = self.inputs.told_others(t)
         scan, self.inputs.latest_scan = self.inputs.latest_scan, None
         self.control_count += 1
-        self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan))
+        self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan, velocity))
         plan = self.planning.plan
         # Age in control periods since the tick it was planned from: a simulated clock may jump between two ticks.
         age = (self.control_count - self.plan_tick) / self.control_rate_hz
@@ -624,10 +626,10 @@ class PlannerNode(LifecycleNode):
                 self.get_logger().error(f'planning stalled: the newest plan is {age:.2f} s old (max_plan_age '
                                         f'{self.max_plan_age:g} s); stopped until a pass ends')
             self.plan_problem = f'planning stalled: plan {age:.2f} s old (max_plan_age {self.max_plan_age:g} s)'
-            return control.stop(t, period)
+            return control.stop(t, period, velocity)
         self.plan_problem = ''
         try:
-            return control.command(t, state, told, plan, period)
+            return control.command(t, state, told, plan, period, velocity)
         except Exception as exc:  # a fault of the control tick stops this robot, never the node
             if not self.fault_logged:
                 self.get_logger().error(f'control fault: {exc}\n{traceback.format_exc()}')
@@ -645,14 +647,16 @@ class PlannerNode(LifecycleNode):
         if snapshot.scan is not None:
             self.inputs.perceive(snapshot.scan, t, state=state, told=snapshot.others)
         tracked = self.inputs.scan_perception.movers(t)
-        command = self.navigate(nav, t, state, [*snapshot.others, *tracked])
+        command = self.navigate(nav, t, state, [*snapshot.others, *tracked], snapshot.velocity)
         self.plan_tick = snapshot.tick
         return Plan.of(nav, t, command, tracked)
 
-    def navigate(self, nav: Navigator, t: float, state: np.ndarray, others: list[OtherRobot]) -> np.ndarray:
-        """The navigator's update; a fault of the planner fails its goal and stops this robot, never the node."""
+    def navigate(self, nav: Navigator, t: float, state: np.ndarray, others: list[OtherRobot],
+                 velocity: np.ndarray | None) -> np.ndarray:
+        """The navigator's update (velocity: what the base measurably does); a fault of the planner fails its goal
+        and stops this robot, never the node."""
         try:
-            command = nav.update(t, state, others)
+            command = nav.update(t, state, others, velocity)
             if not np.all(np.isfinite(command)):
                 raise FloatingPointError(f'command {command.tolist()} is not finite')
             return command

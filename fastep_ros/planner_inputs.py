@@ -395,6 +395,22 @@ class PlannerInputs:
             state = self.node.navigator.model.integrate(state, self.node.last_command, lag)
         return state, ''
 
+    def velocity(self) -> np.ndarray | None:
+        """What the base measurably does, from the odometry `state` last took (its twist, in the model's command form:
+        a point mass's (vx, vy) turned into the map frame, a diff_drive's (v, omega)); None where it is not
+        known (no odometry, a twist that is not finite, a tractor-trailer, whose twist is not its command)."""
+        if self.odom is None or self.node.model == 'tractor_trailer':
+            return None
+        x, y, z = self.odom.twist
+        if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):
+            return None
+        if self.node.model == 'point_mass':
+            if self.body_yaw == 0.0:
+                return np.array([x, y])
+            c, s = math.cos(self.body_yaw), math.sin(self.body_yaw)
+            return np.array([c * x - s * y, s * x + c * y])
+        return np.array([x, z])
+
     def scanner_mount(self, frame: str) -> tuple[frames.Pose2D | None, str]:
         """Where a scan in `frame` was taken on the robot: base_link (or no frame) is the reference point; any other
         frame is the scanner's own, mounted at laser_mount; None and why when that is not given."""

@@ -35,7 +35,8 @@ STATUS_MESSAGES: tuple[tuple[str, str, str], ...] = (
                         '(the reason says which); no commands while the world is missing'),
     ('idle', 'OK', 'no goal: none given yet, or cancelled (the reason says so)'),
     ('kinematic', 'OK / WARN', 'driving to the goal (or the route vertex in sight) by the kinematic controller; '
-                               'WARN while inputs are stale (kept where last seen) or a newer goal was refused'),
+                               'WARN while inputs are stale (kept where last seen), a newer goal was refused, or '
+                               'the base tracks worse than configured (its braking measured from odometry)'),
     ('avoiding', 'OK / WARN', 'driving to a swarm waypoint, escaping a trap, manoeuvring or yielding to a mover; '
                               'WARN as for kinematic'),
     ('arrived', 'OK', 'the goal is reached (within goal_tolerance, and facing its heading if it has one)'),
@@ -47,6 +48,7 @@ STATUS_MESSAGES: tuple[tuple[str, str, str], ...] = (
 
 RATE_WINDOW = 2.0        # s of node time over which the control loop's achieved rate is measured
 CONTROL_TIMES = 200      # control callbacks (10 s at 20 Hz) whose wall times status' control_ms sums up
+BASE_SHORT = 'the base tracks worse than configured'
 RATE_SHORTFALL = 0.9     # an achieved rate below this share of control_rate_hz is a missed rate (WARN)
 
 
@@ -145,6 +147,10 @@ class PlannerReports:
         if stale:
             kept = f'stale: {", ".join(name for name, _ in stale)} (kept where last seen, the reach widening)'
             return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {kept}' if nav.reason else kept
+        weak = nav.response.problem()
+        if weak:
+            slower = f'{BASE_SHORT}: {weak} (stops planned with what it measured)'
+            return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {slower}' if nav.reason else slower
         return DiagnosticStatus.OK, mode.value, nav.reason
 
     def control_rate(self) -> float | None:
@@ -287,4 +293,11 @@ class PlannerReports:
             'reason': 'kept where last seen, the reach widening at the last speed known, until fresh data comes',
             **{name: f'{age:.1f} s old' for name, age in stale}}) if stale else \
             Task('others', DiagnosticStatus.OK, 'fresh', {'robots': ' '.join(self.node.robots.fleet.names(t))})
-        return [*tasks, control, odometry, others, clock]
+        nav = self.node.navigator
+        weak = '' if nav is None else nav.response.problem()
+        base = Task('base', DiagnosticStatus.WARN if weak else DiagnosticStatus.OK,
+                    'tracks worse than configured' if weak else 'as configured', {
+                        'reason': weak,
+                        'braking': '' if nav is None else round(nav.response.braking, 3),
+                        'turn_braking': '' if nav is None else round(nav.response.turn_braking, 3)})
+        return [*tasks, control, odometry, base, others, clock]

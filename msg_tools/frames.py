@@ -243,6 +243,7 @@ class StampedPose:
     frame_id: str
     stamp: float
     pose: Pose2D   # x, y, yaw
+    twist: tuple[float, float, float] = (0.0, 0.0, 0.0)   # linear.x, linear.y, angular.z in the child frame
 
 
 def stamped_pose(msg: Any) -> StampedPose:
@@ -259,8 +260,11 @@ def stamped_pose(msg: Any) -> StampedPose:
             if not (math.isfinite(x) and math.isfinite(y)):
                 raise ValueError('position is not finite')   # odometry_pose's checks and words
             sec, nanosec = cdr.header_stamp(msg)
-            return StampedPose(cdr.header_frame_id(msg), sec + nanosec * 1e-9, (x, y, convert.yaw_of(qx, qy, qz, qw)))
-    return StampedPose(msg.header.frame_id, convert.stamp_to_seconds(msg.header.stamp), odometry_pose(msg))
+            return StampedPose(cdr.header_frame_id(msg), sec + nanosec * 1e-9, (x, y, convert.yaw_of(qx, qy, qz, qw)),
+                               (fields[6], fields[7], fields[8]))
+    twist = msg.twist.twist
+    return StampedPose(msg.header.frame_id, convert.stamp_to_seconds(msg.header.stamp), odometry_pose(msg),
+                       (float(twist.linear.x), float(twist.linear.y), float(twist.angular.z)))
 
 
 def transform_stamped(parent: str, child: str, pose: Pose2D, stamp: Time) -> TransformStamped:

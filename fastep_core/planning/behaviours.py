@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.kinematics.model import Controller, RobotModel
+from fastep_core.planning.base_response import BaseResponse
 from fastep_core.planning.escape import ESCAPING, TrapEscape
 from fastep_core.planning.exact_path import parked_world
 from fastep_core.planning.guard import Guard
@@ -34,12 +35,13 @@ from fastep_core.planning.step_planning import StepPlanning
 from fastep_core.planning.yielding import Yield
 from fastep_core.world import World
 
-__all__ = ['ROTATING', 'HoldBreaker', 'PathCheck', 'Steering', 'Tick', 'algorithm', 'arrival', 'back_up',
+__all__ = ['ROTATING', 'STOPPING', 'HoldBreaker', 'PathCheck', 'Steering', 'Tick', 'algorithm', 'arrival', 'back_up',
            'backing_up', 'drive_manoeuvre', 'drive_on', 'escape', 'follow_escape', 'manoeuvre', 'progress_check',
-           'stand_clear', 'start_escape', 'start_manoeuvre', 'trap_check', 'trapped', 'turn_to_heading']
+           'stand_clear', 'start_escape', 'start_manoeuvre', 'stopped', 'trap_check', 'trapped', 'turn_to_heading']
 
 FloatArray = NDArray[np.float64]
 ROTATING = 'rotating to the goal heading'
+STOPPING = 'stopping at the goal'
 
 
 @dataclass(frozen=True)
@@ -53,6 +55,7 @@ class Tick:
     position: FloatArray           # state[:2]
     others: Sequence[OtherRobot]   # with finite positions
     distance: float                # to the goal
+    velocity: FloatArray           # what the base does now, measured (the model's command form), finite
 
 
 class Steering(Protocol):
@@ -81,6 +84,7 @@ class Steering(Protocol):
     backup: BackUp
     manoeuvring: ManoeuvreDriver | None
     guard_check: Guard
+    response: BaseResponse
     steps: StepPlanning
     yield_kind: str
     _target: FloatArray | None
@@ -111,12 +115,18 @@ class Steering(Protocol):
 
 # ------------------------------------------------------------------------------------------- the behaviours
 def arrival(nav: Steering, now: Tick) -> FloatArray | None:
-    """Within goal_tolerance: turn to the goal's heading, if there is one to turn to, else arrived."""
+    """Within goal_tolerance: turn to the goal's heading, if there is one to turn to; else arrived once stopped
+    (the measured speed and turn rate within trans_ and rot_stopped_velocity, Nav2's stopped goal checker), braking
+    there until then. A robot carried out of goal_tolerance drives back to the goal (the behaviours after this)."""
     if not now.distance <= nav.params.goal_tolerance:
         return None
     nav.waypoint, nav.cost, nav._target = None, 0.0, None
     turn = turn_to_heading(nav, now.state, now.dt)
     if turn is None:
+        if not stopped(nav, now.velocity):
+            nav.mode, nav.reason = Mode.KINEMATIC, STOPPING
+            nav.progress.made_progress(now.t)
+            return np.zeros(2)
         nav.mode, nav.reason = Mode.ARRIVED, 'goal reached'
         return np.zeros(2)
     nav.mode, nav.reason = Mode.KINEMATIC, ROTATING
@@ -215,9 +225,18 @@ def drive_on(nav: Steering, now: Tick, target: FloatArray | None, drive_on_defer
 
 
 # ---------------------------------------------------------------------------------------- what they use
+def stopped(nav: Steering, velocity: FloatArray) -> bool:
+    """Is the robot standing, as measured (trans_stopped_velocity, rot_stopped_velocity)?"""
+    p = nav.params
+    if nav.model.holonomic:
+        return math.hypot(float(velocity[0]), float(velocity[1])) <= p.trans_stopped_velocity
+    return abs(float(velocity[0])) <= p.trans_stopped_velocity and abs(float(velocity[1])) <= p.rot_stopped_velocity
+
+
 def turn_to_heading(nav: Steering, state: FloatArray, dt: float) -> FloatArray | None:
     """At the goal's position: the turn in place toward the goal's heading, within the turn rate and its
-    acceleration from the last command; None when there is nothing to turn (no heading, a robot without one
+    acceleration from the last command, and no faster than stops within the heading at the turn braking the base
+    has shown (planning/base_response.py); None when there is nothing to turn (no heading, a robot without one
     or that cannot turn in place, params.goal_heading 0, or facing it within yaw_goal_tolerance)."""
     p = nav.params
     if nav.goal_heading is None or not p.goal_heading or nav.model.holonomic or \
@@ -229,6 +248,11 @@ def turn_to_heading(nav: Steering, state: FloatArray, dt: float) -> FloatArray |
     omega = p.turn_gain * error
     if p.max_turn_rate > 0.0:
         omega = max(-p.max_turn_rate, min(p.max_turn_rate, omega))
+    braking = nav.response.turn_braking
+    if braking > 0.0:
+        # Within the yaw tolerance at the end: a turn rate that brakes to a stop over the rest of the error.
+        within = math.sqrt(2.0 * braking * max(abs(error) - 0.5 * p.yaw_goal_tolerance, 0.0))
+        omega = max(-within, min(within, omega))
     last = getattr(nav.controller, 'last', None)
     if last is not None and p.max_turn_acceleration > 0.0:
         step = p.max_turn_acceleration * dt

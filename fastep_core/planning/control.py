@@ -1,11 +1,14 @@
 """The control loop's bounded tick: drive on the latest plan while planning runs elsewhere.
 
-A planning pass (`Navigator.update`: exact paths, escapes, manoeuvres, the swarm) can take seconds, and a
-robot's clock does not stop meanwhile. `ControlTick.command` turns the latest `Plan` into this tick's command
-from the robot's current state in well under a millisecond: the controller toward the plan's target (or the
-plan's own command), then yielding to movers and the guard against the newest robots, looking as far ahead as
-the robot needs to brake; then the velocity smoother (planning/smoother.py) and, for a steered robot backing up,
-its swept disc checked against the world and the free space recent scans saw. Nav2 splits its planner and
+A planning pass (`Navigator.update`: exact paths, escapes, manoeuvres, the swarm) can take seconds, and a robot's
+clock does not stop meanwhile. `ControlTick.command` turns the latest `Plan` into this tick's command from the
+robot's current state in well under a millisecond: the controller toward the plan's target (or the plan's own
+command), then yielding to movers and the guard against the newest robots, looking as far ahead as the robot needs
+to brake; then the velocity smoother (planning/smoother.py) and, for a steered robot backing up, its swept disc
+checked against the world and the free space recent scans saw. Closed loop: given the velocity odometry measured,
+the smoother ramps from it when the base is not doing what it was told, the guard looks as far ahead as the faster
+of command and base takes to stop, braking no harder than the base has shown it can, and every command sent is
+compared with what the base did (the navigator's BaseResponse, which this tick feeds). Nav2 splits its planner and
 controller servers, and ends with its velocity_smoother, for the same reasons.
 
 Used by the planner node's control timer while a thread plans (fastep_ros/planner.py) and by `fastep-sim
@@ -22,6 +25,7 @@ from typing import Callable, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from fastep_core.planning.base_response import speed_of
 from fastep_core.planning.guard import Guard
 from fastep_core.planning.navigator import Mode, Navigator, SpeedLaw
 from fastep_core.planning.others import OtherRobot
@@ -77,8 +81,11 @@ class ControlTick:
         # The pass's guard looks as far ahead as this one does (retune: Navigator.braking): a stricter control tick
         # held robots for good while the pass, its own guard letting them go, never saw the hold (nor broke it).
         self.navigator = navigator
+        navigator.response_fed_elsewhere = True   # the commands sent are this tick's, not the pass's
+        self.response = navigator.response
         self.smoother = VelocitySmoother.for_model(navigator.model, navigator.params)
         self._last_t: float | None = None
+        self._measured: FloatArray | None = None   # the velocity measured at this tick, if given
         self.retune()
 
     def retune(self) -> None:
@@ -96,11 +103,13 @@ class ControlTick:
         self.reason = ''        # why this tick's command differs from the plan's ('' when it does not)
 
     def command(self, t: float, state: FloatArray, others: Sequence[OtherRobot], plan: Plan | None,
-                dt: float) -> FloatArray:
-        """This tick's command on `plan` (a stop without one, or when it is not under way), smoothed."""
+                dt: float, velocity: FloatArray | None = None) -> FloatArray:
+        """This tick's command on `plan` (a stop without one, or when it is not under way), smoothed. velocity:
+        what the base measurably does (odometry's twist, the model's command form); None: what it was told."""
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
         self.smoother.period = dt
+        self._measured = self._feedback(velocity)
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
         before = self.smoother.velocity.copy()
         sent = self.smoother.smooth(wanted, elapsed, emergency)
@@ -113,10 +122,25 @@ class ControlTick:
             movers = [] if plan is None else plan.movers_at(t)
             if self._guarded(world, state, sent, dt, [*others, *movers]) is not sent:
                 self.reason = self.guard.reason
-                self.smoother.velocity = before
+                self.smoother.take_back(before)
                 sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
-        self._tell(sent)
+        self._sent(t, sent)
         return sent
+
+    def _feedback(self, velocity: FloatArray | None) -> FloatArray | None:
+        """The measured velocity (finite, or None), given to the smoother (its closed loop)."""
+        if velocity is None:
+            return None
+        measured = np.asarray(velocity, dtype=float).reshape(2)
+        if not np.isfinite(measured).all():
+            return None
+        self.smoother.feedback(measured)
+        return measured
+
+    def _sent(self, t: float, sent: FloatArray) -> None:
+        """`sent` goes to the base: the controller hears it, the base's response is measured against it."""
+        self._tell(sent)
+        self.response.observe(t, self.smoother.velocity if self._measured is None else self._measured, sent)
 
     def reset(self, velocity: FloatArray) -> None:
         """What the robot does now (a stop sent past the control tick): the smoother and the controller ramp from it."""
@@ -129,19 +153,24 @@ class ControlTick:
         return self.guard.check(world, state, command, self._ahead(dt), others)
 
     def _ahead(self, dt: float) -> float:
-        """How far ahead (s) the guard looks: a tick, and the time to brake at emergency_deceleration from the
-        robot's speed (half of it: braking distance v^2 / 2a at speed v)."""
-        braking = self.smoother.emergency_deceleration
-        speed = math.hypot(*self.smoother.velocity) if self.model.holonomic else abs(float(self.smoother.velocity[0]))
+        """How far ahead (s) the guard looks: a tick, and the time to brake from the robot's speed (the faster of
+        the smoother's and the measured one) at emergency_deceleration, or at what the base has shown it brakes at
+        if that is less (half of it: braking distance v^2 / 2a at speed v)."""
+        braking = self.response.stop_within(self.smoother.emergency_deceleration)
+        holonomic = bool(self.model.holonomic)
+        speed = speed_of(self.smoother.velocity, holonomic)
+        if self._measured is not None:
+            speed = max(speed, speed_of(self._measured, holonomic))
         return dt + (0.5 * speed / braking if braking > 0.0 else 0.0)
 
-    def stop(self, t: float, dt: float) -> FloatArray:
+    def stop(self, t: float, dt: float, velocity: FloatArray | None = None) -> FloatArray:
         """A stop the control loop must make without a plan to judge by (a robot held still): braking at
-        emergency_deceleration from what the robot does."""
+        emergency_deceleration from what the robot does (velocity: as measured, None: as told)."""
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
+        self._measured = self._feedback(velocity)
         sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
-        self._tell(sent)
+        self._sent(t, sent)
         return sent
 
     def _unsmoothed(self, t: float, state: FloatArray, others: Sequence[OtherRobot], plan: Plan | None,

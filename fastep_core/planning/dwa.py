@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from fastep_core.errors import ParameterError
 from fastep_core.geometry import point_segment_distance, segment_segment_distance
 from fastep_core.kinematics.model import Controller, RobotModel
+from fastep_core.planning.base_response import off_commands
 from fastep_core.planning.navigator import FloatArray, Mode, Navigator
 from fastep_core.planning.others import OtherRobot, other_arrays
 from fastep_core.planning.params import PlannerParams
@@ -62,6 +63,7 @@ class DynamicWindow(Navigator):
             raise ParameterError(f'dwa drives holonomic robots and unicycles (point_mass, diff_drive) only, '
                                  f'not a {type(model).__name__}')
         self.unicycle = not model.holonomic   # samples (v, omega) and rolls out arcs (module docstring)
+        self.holonomic_window = bool(model.holonomic)
         self.check_params(self.params)
         self.velocity = np.zeros(2)   # the command last sent: the centre of the next dynamic window
         self.escapes_traps = bool(self.params.dwa_escape)
@@ -75,10 +77,14 @@ class DynamicWindow(Navigator):
         super().retune(params, controller)
         self.escapes_traps = bool(params.dwa_escape)
 
-    def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
+    def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = (),
+               velocity: FloatArray | None = None) -> FloatArray:
         if self._last_t is not None and t - self._last_t > 2.0 * self.params.dt:
             self.velocity = np.zeros(2)   # ticks were missed (a planner node holding a robot): start from rest
-        command = super().update(t, state, others)
+        if velocity is not None and np.isfinite(velocity).all() and \
+                off_commands(np.asarray(velocity, dtype=float), (self.velocity,), self.holonomic_window):
+            self.velocity = np.array(velocity, dtype=float)   # the window is centred on what the base does
+        command = super().update(t, state, others, velocity)
         # Whatever was sent (a guarded stop, zeros at the goal) is the velocity the next window starts from.
         self.velocity = np.array(command[:2], dtype=float)
         if self.failed and self.reason.startswith('failed to make progress') and LOCAL_MINIMUM not in self.reason:

@@ -284,7 +284,7 @@ class FAStepRoute(FAStepKinematic):
             return None
         return RouteSpeed(route.stacked, route.rest, route.index, vertex, self._aim, goal.copy(),
                           vertex is route.vertices[-1], self.radius, self.params, self.world,
-                          bool(self.model.holonomic), route.clearance_at)
+                          bool(self.model.holonomic), route.clearance_at, self.response.braking)
 
     def speed_allowed(self, position: FloatArray, dt: float) -> float:
         """RouteSpeed.allowed of the route as it is now (max_speed, or what the way allows: the module's "Speed")."""

@@ -19,6 +19,7 @@ from numpy.typing import NDArray
 from fastep_core.errors import GoalError
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning import behaviours, step_planning
+from fastep_core.planning.base_response import BaseResponse, speed_of
 from fastep_core.planning.behaviours import ROTATING, HoldBreaker, PathCheck, Tick
 from fastep_core.planning.detection import RunDetector
 from fastep_core.planning.escape import TrapEscape
@@ -83,11 +84,17 @@ class Navigator:
         # The guard's stop brakes at this (m/s^2) where a control loop smooths the commands (planning/control.py):
         # the guard looks the braking distance further ahead. 0: a stop is immediate, as in lock step.
         self.braking = 0.0
+        # What the base has shown it does (odometry against the commands): stops are planned no harder than that.
+        # Fed by whoever sends the commands: `update` in lock step, the control loop's ControlTick otherwise.
+        self.response = BaseResponse(bool(model.holonomic), p.max_acceleration, p.max_turn_acceleration)
+        self.response_fed_elsewhere = False
+        self._last_command = np.zeros(2)   # the command `update` returned last
         # Whether the world is what the robot's laser shows (fastep_core/perception): a belief that can be wrong
         # for a moment, so no path in it holds the robot a while before the goal fails (fail_no_path).
         self.from_scans = False
         self.no_path = NoPathHold()
         self._speed = 0.0   # of the last command (m/s)
+        self._measured_speed = 0.0   # of the base, as measured at the last tick (m/s)
         self._last_t: float | None = None
         self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
         self._ticks = 0                           # control ticks so far
@@ -196,6 +203,7 @@ class Navigator:
         self.trap.distance, self.trap.timeout = params.progress_distance, params.trap_timeout
         self.detector.forget()   # answers cached with the old sensing range and margin
         self.backup.speed = backup_speed(params)
+        self.response.retune(params.max_acceleration, params.max_turn_acceleration)
         if controller is not None:
             # The new controller hears what the robot got, starting with what it does now: told nothing, a diff_drive
             # controller's ramp started from rest every tick (0.13 m/s at 20 Hz after any parameter change).
@@ -225,13 +233,16 @@ class Navigator:
         self._target = None
 
     # ------------------------------------------------------------- the loop
-    def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
-        """One control tick: returns the command for the model (zeros when stopped).
+    def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = (),
+               velocity: FloatArray | None = None) -> FloatArray:
+        """One control tick: returns the command for the model (zeros when stopped). velocity: what the base
+        measurably does now (odometry's twist, in the model's command form); None: the last command returned.
 
         A controller with acceleration limits (diff_drive) is told the command the robot got, whatever chose it
         (the controller, the guard's stop, a recovery): its next command starts from there.
         """
-        command = self.tick(t, state, others)
+        measured = self._last_command if velocity is None else np.asarray(velocity, dtype=float).reshape(2)
+        command = self.tick(t, state, others, measured)
         # Standing still: every component 0 (NaN counts as moving, as for np.any; this runs every tick, where
         # np.any on two numbers cost as much as the guard's obstacle test).
         if not self.yield_kind and self.mode in (Mode.KINEMATIC, Mode.AVOIDING) and \
@@ -239,17 +250,20 @@ class Navigator:
             command = self.stand_clear(state, others)
         if self._applied is not None:
             self._applied(command)
-        self._speed = math.hypot(float(command[0]), float(command[1])) if self.model.holonomic else \
-            abs(float(command[0]))
+        self._speed = speed_of(command, self.model.holonomic)
+        if not self.response_fed_elsewhere:
+            self.response.observe(t, measured, command)
+        self._last_command = np.array(command, dtype=float)
         return command
 
     def stand_clear(self, state: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
         """A robot standing still that a mover would run into gets out of its way (planning/behaviours.py)."""
         return behaviours.stand_clear(self, state, others)
 
-    def tick(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = ()) -> FloatArray:
+    def tick(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = (),
+             velocity: FloatArray | None = None) -> FloatArray:
         """The command of one control tick (`update` without telling the controller): the first behaviour that
-        answers (planning/behaviours.py), in this order of priority."""
+        answers (planning/behaviours.py), in this order of priority. velocity: as measured (None: standing)."""
         self.yield_kind = ''   # what yielding to movers did this tick (planning/yielding.py), '' for nothing
         self.driven = None
         self._ticks += 1
@@ -264,8 +278,12 @@ class Navigator:
         position = state[:2]
         if not (isinstance(others, OtherRobots) and others.finite):
             others = [o for o in others if math.isfinite(o.position[0]) and math.isfinite(o.position[1])]
+        measured = np.zeros(2) if velocity is None else velocity
+        if not np.isfinite(measured).all():
+            measured = self._last_command
+        self._measured_speed = speed_of(measured, self.model.holonomic)
         now = Tick(self._ticks, t, dt, state, position, others,
-                   math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]))
+                   math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]), measured)
         for behaviour in (behaviours.arrival, self.path_check, behaviours.progress_check, behaviours.trap_check,
                           behaviours.manoeuvre, behaviours.backing_up, self.hold_breaker, behaviours.escape):
             command = behaviour(self, now)
@@ -362,12 +380,18 @@ class Navigator:
     def guard(self, state: FloatArray, command: FloatArray, dt: float,
               others: Sequence[OtherRobot]) -> FloatArray:
         """Stop instead of moving into an obstacle or within reach of another robot (planning/guard.py)."""
-        if self.braking > 0.0:   # its stops brake (planning/control.py): look as far ahead as that takes
-            dt += 0.5 * self._speed / self.braking
+        braking = self.stop_deceleration()
+        if braking > 0.0:   # its stops brake: look as far ahead as that takes, from the faster of command and base
+            dt += 0.5 * max(self._speed, self._measured_speed) / braking
         guarded = self.guard_check.check(self.world, state, command, dt, others)
         if guarded is not command:
             self.reason = self.guard_check.reason
         return guarded
+
+    def stop_deceleration(self) -> float:
+        """What the guard's stop brakes at: `braking` (emergency_deceleration where a control loop smooths the
+        commands, 0 for immediate in lock step), but no harder than the base has shown it can (BaseResponse)."""
+        return self.response.stop_within(self.braking)
 
     # --------------------------------------------------- paths and traps
     def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:

@@ -110,6 +110,11 @@ class PlannerParams:
     yaw_goal_tolerance: float = _p(0.25, 'a goal with a heading (diff_drive) counts as reached once the robot, within '
                                          'goal_tolerance of it, faces it within this angle (rad; Nav2\'s default)',
                                    1e-3, 3.1416)
+    trans_stopped_velocity: float = _p(0.25, 'a goal counts as reached only once the robot\'s measured speed '
+                                             '(odometry) is at most this; until then it brakes at the goal (m/s; '
+                                             'Nav2\'s stopped goal checker and its default)', 1e-4)
+    rot_stopped_velocity: float = _p(0.25, '... and its measured turn rate at most this (rad/s; Nav2\'s default)',
+                                     1e-4)
     regulated_speed: int = _p(1, 'FAStep-Route drives its route at the speed the way allows: max_speed, slowing only '
                                  'to stop at the goal and to take a bend at the vertex ahead at max_acceleration, and '
                                  'in gaps tighter than radius + clearance_margin (Nav2\'s Regulated Pure Pursuit is '

@@ -209,6 +209,7 @@ class RouteSpeed:
     world: World
     holonomic: bool
     clearance_at: tuple[float, float, float] | None   # a clearance known at a point (x, y, clearance)
+    braking: float                        # what stops are planned at: max_acceleration or what the base showed
 
     def regulate(self, state: FloatArray, command: FloatArray, dt: float,
                  last: FloatArray | None = None) -> FloatArray:
@@ -223,13 +224,14 @@ class RouteSpeed:
         return command if speed <= allowed else command * (allowed / speed)
 
     def allowed(self, position: FloatArray, dt: float) -> float:
-        """The speed the way allows at position: max_speed, braking at max_acceleration to stop at the goal and to
-        take the bend at the vertex aimed at, and less in a gap tighter than radius + clearance_margin; never below
-        min_approach_speed (or what reaches the goal in a tick) short of the goal, nothing past it."""
+        """The speed the way allows at position: max_speed, braking at `braking` (max_acceleration, or less where the
+        base has shown less: planning/base_response.py) to stop at the goal and to take the bend at the vertex aimed
+        at, and less in a gap tighter than radius + clearance_margin; never below min_approach_speed (or what
+        reaches the goal in a tick) short of the goal, nothing past it."""
         p, vertex, goal = self.params, self.vertex, self.goal
         x, y = float(position[0]), float(position[1])
         top = p.max_speed if p.max_speed > 0.0 else math.inf
-        braking = p.max_acceleration if p.max_acceleration > 0.0 else math.inf
+        braking = self.braking if self.braking > 0.0 else math.inf
         ahead = (float(vertex[0]) - x, float(vertex[1]) - y)
         gap = math.hypot(*ahead)
         if self.at_goal:

@@ -12,17 +12,26 @@ pause of any length the base ramps from what it is doing (the last command sent,
 `reset`), never jumps. A limit lowered below the current speed is reached braking at max_acceleration, as Nav2
 does. Only the guard's emergency stop (`emergency=True`) brakes harder, at emergency_deceleration (its turn
 braking scaled alike). 0 for any limit means unlimited; a command that is not finite is a stop.
+
+Closed loop (Nav2's CLOSED_LOOP feedback): `feedback` gives it the velocity odometry measured. While that lies
+within FEEDBACK_BOUND of the last command, or is exactly one of the last FEEDBACK_COMMANDS (odometry a command or
+two behind on a graph; planning/base_response.py), the base does what it is told and the ramp goes on from the last
+command;
+otherwise (a heavy base coasting faster than its command, a base behind a ramp it cannot follow) the ramp starts
+from the measured velocity. A base that does exactly what it is told never moves the ramp off its commands.
 """
 
 from __future__ import annotations
 
 import math
+from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from fastep_core.kinematics.model import RobotModel
+from fastep_core.planning.base_response import FEEDBACK_COMMANDS, off_commands
 from fastep_core.planning.params import PlannerParams
 
 __all__ = ['VelocitySmoother']
@@ -53,6 +62,7 @@ class VelocitySmoother:
     emergency_deceleration: float = 0.0
     period: float = 0.05
     velocity: FloatArray = field(default_factory=_zeros)
+    sent: deque[FloatArray] = field(default_factory=lambda: deque(maxlen=FEEDBACK_COMMANDS))
 
     @classmethod
     def for_model(cls, model: RobotModel, params: PlannerParams) -> VelocitySmoother:
@@ -76,6 +86,27 @@ class VelocitySmoother:
         command ramps from it. Not finite: standing still."""
         v = np.asarray(velocity, dtype=float).reshape(2)
         self.velocity = v.copy() if np.isfinite(v).all() else np.zeros(2)
+        self.sent.clear()
+
+    def take_back(self, velocity: FloatArray) -> None:
+        """The last smoothed command was not sent: the base's velocity is `velocity` again."""
+        if self.sent:
+            self.sent.pop()
+        self.velocity = velocity
+
+    def feedback(self, measured: ArrayLike | None) -> bool:
+        """The velocity odometry measured (None: not known): the ramp starts from it when the base is not doing what
+        the recent commands asked (module docstring). True if it does now."""
+        if measured is None:
+            return False
+        m = np.asarray(measured, dtype=float).reshape(2)
+        if not np.isfinite(m).all():
+            return False
+        if not off_commands(m, self.sent or (self.velocity,), self.holonomic):
+            return False
+        self.velocity = m.copy()
+        self.sent.clear()
+        return True
 
     def cap(self, command: ArrayLike) -> FloatArray:
         """The command within the speed limits, scaled down by one factor (the direction or curvature stays)."""
@@ -128,4 +159,5 @@ class VelocitySmoother:
                 share = min(share, turn * window / abs(change[1]))
         sent = wanted if share >= 1.0 else self.velocity + share * change
         self.velocity = sent.copy()
+        self.sent.append(self.velocity)
         return sent

@@ -1,0 +1,177 @@
+"""What the base has shown it does: the rate at which it changes speed and turn rate, measured from odometry.
+
+A planner's stopping distances come from its acceleration limits, and a base that cannot keep to them (a heavy robot
+on weak motors, a diff_drive_controller with lower limits of its own, a slippery floor) overshoots every stop
+planned with them. `BaseResponse` compares each control period's command with the velocity odometry measured at the
+end of it. An interval counts as a measurement when the command asked for at least the configured rate of change
+(the velocity smoother's ramp does, as do its stops) and the base ended off what its recent commands asked
+(`off_commands`: by more than FEEDBACK_BOUND): the base changed as fast as it could,
+and what it achieved is what it can do. A run of such intervals lasting RUN_TIME gives a rate (change of speed over
+time, the run's first interval left out: a servo's onset); the latest run of each kind (braking, accelerating) is
+kept. A base that does what it is told (every kinematic plant) never falls short, so its estimate stays the
+configured limit, and it is never above it.
+
+`braking` is what stopping distances use (the guard's look-ahead, FAStep-Route's approach to its goal, the turn to a
+goal's heading): the braking measured, or, before the base has braked hard, the acceleration measured (motors that
+cannot speed a base up quickly rarely stop it quickly), or the configured limit. Nav2 has no such estimate: its
+velocity_smoother's CLOSED_LOOP feedback (planning/smoother.py) is the anchor for taking odometry over commands.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Sequence
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = ['FEEDBACK_BOUND', 'FEEDBACK_COMMANDS', 'RUN_TIME', 'WEAK_SHARE', 'AxisResponse', 'BaseResponse',
+           'off_commands', 'speed_of']
+
+FloatArray = NDArray[np.float64]
+FEEDBACK_BOUND = (0.05, 0.1)   # m/s (a point mass: each component), rad/s: within this of a command, it was done
+FEEDBACK_COMMANDS = 3          # the commands a measured velocity may be behind
+EXACT = 1e-9                   # m/s, rad/s: a velocity this near a command is that command, as applied
+RUN_TIME = 0.2                 # s: the least time of a run of saturated intervals that makes a measurement
+WEAK_SHARE = 0.8               # status says the base tracks worse than configured below this share of a limit
+LONGEST_INTERVAL = 0.5         # s: a gap between observations longer than this (a pause) measures nothing
+DEMANDED = 0.8                 # an interval measures when its command asked at least this share of the limit
+
+
+@dataclass
+class AxisResponse:
+    """One axis (the speed, or the turn rate): the rates measured in its latest runs, by kind."""
+
+    braking: float | None = None         # rate (per s) of the latest braking run, None: not measured yet
+    accelerating: float | None = None
+    _kind: str = ''                      # the run under way: 'braking', 'accelerating' or '' (none)
+    _change: float = 0.0                 # achieved change over the run so far (its first interval left out)
+    _time: float = 0.0
+    _intervals: int = 0
+
+    def interval(self, demand: float, achieved: float, off: bool, dt: float, limit: float) -> None:
+        """One control period: `demand` the change the command asked of the measured velocity (negative: less
+        speed), `achieved` what the base did in the command's direction, `off` whether the base ended off its recent
+        commands, `limit` the configured rate (0: unlimited)."""
+        counts = off and limit > 0.0 and abs(demand) >= DEMANDED * limit * dt
+        kind = ('braking' if demand < 0.0 else 'accelerating') if counts else ''
+        if kind != self._kind:
+            self._kind, self._change, self._time, self._intervals = kind, 0.0, 0.0, 0
+        if not kind:
+            return
+        self._intervals += 1
+        if self._intervals == 1:
+            return   # the onset: a servo's lag, odometry's latency
+        self._change += max(achieved, 0.0)
+        self._time += dt
+        if self._time >= RUN_TIME - 1e-9:
+            setattr(self, kind, self._change / self._time)
+
+    @property
+    def shown(self) -> float | None:
+        """The rate to plan stops with, as measured: braking, else acceleration, None before either."""
+        return self.braking if self.braking is not None else self.accelerating
+
+    def stopping(self, limit: float) -> float:
+        """`shown` within a positive configured `limit`; the limit itself before anything is measured."""
+        shown = self.shown
+        if shown is None:
+            return limit
+        return shown if limit <= 0.0 else min(limit, shown)
+
+
+@dataclass
+class BaseResponse:
+    """A robot's base as measured (module docstring). holonomic: velocities are map-frame (vx, vy) (a point mass);
+    else body-frame (v, omega). `observe` once per command sent, with the velocity measured before it."""
+
+    holonomic: bool
+    max_acceleration: float = 0.0          # the configured limits (PlannerParams; `retune`)
+    max_turn_acceleration: float = 0.0
+    linear: AxisResponse = field(default_factory=AxisResponse)
+    turn: AxisResponse = field(default_factory=AxisResponse)
+    sent: deque[FloatArray] = field(default_factory=lambda: deque(maxlen=FEEDBACK_COMMANDS))
+    _last: tuple[float, FloatArray, FloatArray] | None = None   # (t, measured, command sent then)
+
+    def retune(self, max_acceleration: float, max_turn_acceleration: float) -> None:
+        self.max_acceleration, self.max_turn_acceleration = max_acceleration, max_turn_acceleration
+
+    def observe(self, t: float, measured: ArrayLike | None, sent: ArrayLike) -> None:
+        """At time t the base measured `measured` (None: not known, nothing is learnt) and was sent `sent`."""
+        command = np.asarray(sent, dtype=float).reshape(2)
+        now = None if measured is None else np.asarray(measured, dtype=float).reshape(2)
+        if now is None or not (np.isfinite(now).all() and np.isfinite(command).all() and math.isfinite(t)):
+            self._last = None
+            self.sent.clear()
+            return
+        last, self._last = self._last, (t, now, command)
+        off = off_commands(now, self.sent, self.holonomic)
+        self.sent.append(command)
+        if last is None:
+            return
+        t0, before, held = last
+        dt = t - t0
+        if not 0.0 < dt <= LONGEST_INTERVAL:
+            return
+        if self.holonomic:
+            change = held - before
+            size = math.hypot(float(change[0]), float(change[1]))
+            along = (change / size) if size > 0.0 else np.zeros(2)
+            less = math.hypot(float(held[0]), float(held[1])) < math.hypot(float(before[0]), float(before[1]))
+            self.linear.interval(-size if less else size, float(np.dot(now - before, along)), off, dt,
+                                 self.max_acceleration)
+            return
+        for axis, i, limit in ((self.linear, 0, self.max_acceleration), (self.turn, 1, self.max_turn_acceleration)):
+            wanted = float(held[i] - before[i])
+            less = abs(float(held[i])) < abs(float(before[i]))
+            achieved = (1.0 if wanted >= 0.0 else -1.0) * float(now[i] - before[i])
+            axis.interval(-abs(wanted) if less else abs(wanted), achieved, off, dt, limit)
+
+    @property
+    def braking(self) -> float:
+        """The deceleration (m/s^2) to plan stops with (module docstring), within max_acceleration (0: unlimited)."""
+        return self.linear.stopping(self.max_acceleration)
+
+    @property
+    def turn_braking(self) -> float:
+        """Likewise for the turn rate (rad/s^2); 0 for a point mass or an unlimited configuration."""
+        return 0.0 if self.holonomic else self.turn.stopping(self.max_turn_acceleration)
+
+    def stop_within(self, deceleration: float) -> float:
+        """A stop asked at `deceleration` (the guard's emergency_deceleration; 0: immediate) as the base has shown
+        it brakes: no harder than it measurably did, once it has been seen braking or accelerating."""
+        shown = self.linear.shown
+        if shown is None:
+            return deceleration
+        return shown if deceleration <= 0.0 else min(deceleration, shown)
+
+    def problem(self) -> str:
+        """What status says when the base tracks worse than configured ('' when it does not), with the figures."""
+        parts = []
+        for name, shown, limit, unit, what in (
+                ('braking', self.braking, self.max_acceleration, 'm/s^2', 'max_acceleration'),
+                ('turn braking', self.turn_braking, self.max_turn_acceleration, 'rad/s^2', 'max_turn_acceleration')):
+            if limit > 0.0 and shown < WEAK_SHARE * limit:
+                parts.append(f'{name} {shown:.2g} {unit} measured, {what} {limit:g}')
+        return '; '.join(parts)
+
+
+def speed_of(velocity: FloatArray, holonomic: bool) -> float:
+    """The speed of a velocity in a model's command form: the norm of (vx, vy), else |v| of (v, omega)."""
+    return math.hypot(float(velocity[0]), float(velocity[1])) if holonomic else abs(float(velocity[0]))
+
+
+def off_commands(measured: FloatArray, recent: Sequence[FloatArray], holonomic: bool) -> bool:
+    """Is the measured velocity off the last of the recent commands by more than FEEDBACK_BOUND, and none of them
+    exactly (a plant that applies its commands as given, its odometry a command or two behind on a graph)? Without
+    commands: no. Why not within the range they span: a base that cannot follow a ramp stays within it."""
+    if not recent:
+        return False
+    last = recent[-1]
+    bound = (FEEDBACK_BOUND[0], FEEDBACK_BOUND[0]) if holonomic else FEEDBACK_BOUND
+    m0, m1 = float(measured[0]), float(measured[1])
+    if abs(m0 - float(last[0])) <= bound[0] and abs(m1 - float(last[1])) <= bound[1]:
+        return False
+    return not any(abs(m0 - float(c[0])) <= EXACT and abs(m1 - float(c[1])) <= EXACT for c in recent)
