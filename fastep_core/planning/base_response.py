@@ -37,6 +37,7 @@ EXACT = 1e-9                   # m/s, rad/s: a velocity this near a command is t
 RUN_TIME = 0.2                 # s: the least time of a run of saturated intervals that makes a measurement
 WEAK_SHARE = 0.8               # status says the base tracks worse than configured below this share of a limit
 LONGEST_INTERVAL = 0.5         # s: a gap between observations longer than this (a pause) measures nothing
+LEAST_RATE = 0.05              # m/s^2, rad/s^2: the least rate a measurement gives
 DEMANDED = 0.8                 # an interval measures when its command asked at least this share of the limit
 
 
@@ -67,7 +68,8 @@ class AxisResponse:
         self._change += max(achieved, 0.0)
         self._time += dt
         if self._time >= RUN_TIME - 1e-9:
-            setattr(self, kind, self._change / self._time)
+            # Never 0: 0 is "unlimited" to every limit; a base that does not move at all is planned with LEAST_RATE.
+            setattr(self, kind, max(self._change / self._time, LEAST_RATE))
 
     @property
     def shown(self) -> float | None:
