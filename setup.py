@@ -51,6 +51,7 @@ setup(
         'tqdm==4.70.1',
         'foxglove-sdk==0.30.3',
         'rosbags>=0.10',
+        'mujoco==4.0.0',   # fastep_core/dynamics: physics plants (a robot's `dynamics:`)
     ],
     extras_require={'ros-wheels': ROS_WHEELS,
                     # fastep-bench / fastep-tune --cluster (fastep_core.cluster): Dask's distributed scheduler

@@ -1,9 +1,10 @@
 """Scenario files (formats v1 and v2, YAML): a workspace, its obstacles, the robots and optional planner overrides.
 
-Format v2 adds moving circles, obstacles missing from the map, misplaced ones, a robot's laser and the
-`diff_drive` model; every v1 file loads and means what it did. `Scenario.world` is the true world of the still
-obstacles; `Scenario.obstacle_specs` lists every obstacle with its v2 keys, and fastep_core/dynamic_world.py
-turns them into the truth over time and the planner's map.
+Format v2 adds moving circles, obstacles missing from the map, misplaced ones, a robot's laser, the
+`diff_drive` model and its `dynamics` (a base with mass: fastep_core/dynamics); every v1 file loads and means
+what it did. `Scenario.world` is the true world of the still obstacles; `Scenario.obstacle_specs` lists every
+obstacle with its v2 keys, and fastep_core/dynamic_world.py turns them into the truth over time and the
+planner's map.
 
 A scenario is loaded from a path or a built-in name (``fastep_core/scenarios/*.yaml``), parsed with PyYAML's
 safe loader within bounds (:mod:`fastep_core.bounded_yaml`), and validated strictly (values read through
@@ -31,6 +32,7 @@ import yaml
 from fastep_core import bounded_yaml
 from fastep_core import yaml_checks as check
 from fastep_core.dynamic_world import Motion, ObstacleSpec
+from fastep_core.dynamics.params import BaseDynamics, dynamics_data, robot_dynamics
 from fastep_core.errors import GoalError, ParameterError, ScenarioError
 from fastep_core.geometry import Circle, Obstacle, Segment, point_segment_distance
 from fastep_core.kinematics.tractor_trailer import wrap_angle
@@ -52,7 +54,7 @@ _START_LENGTH = {'point_mass': 2, 'tractor_trailer': 4, 'diff_drive': 3}
 _START_FORM = {2: '[x, y]', 3: '[x, y, theta]', 4: '[x, y, theta0, theta1]'}
 _TOP_KEYS = ('name', 'description', 'workspace', 'obstacles', 'robots', 'planner')
 _ROBOT_KEYS = ('name', 'model', 'start', 'goal', 'radius')
-_OPTIONAL_ROBOT_KEYS = ('sensor',)
+_OPTIONAL_ROBOT_KEYS = ('sensor', 'dynamics')
 _SENSOR_KEYS = ('range', 'fov', 'beams', 'noise', 'mount')
 _OBSTACLE_EXTRAS = ('motion', 'known', 'position_sigma')   # v2: beside the shape key of an obstacle entry
 _MOTION_KEYS = ('waypoints', 'speed')
@@ -81,6 +83,7 @@ class RobotSpec:
     hitch_offset: float = 0.0     # tractor_trailer only: c in eq. 13 (m)
     sensor: LaserSpec | None = None   # v2: a planar laser scanner at the reference point
     goal_heading: float | None = None  # v2, diff_drive: the heading to end in (radians; goal [x, y, theta])
+    dynamics: BaseDynamics | None = None   # v2, diff_drive: a base with mass (a physics plant); None: kinematic
 
 
 @dataclass(frozen=True)
@@ -268,6 +271,8 @@ def _robot(value: Any, path: str) -> RobotSpec:
     robot = RobotSpec(name=name, model=model, start=start, goal=goal, goal_heading=heading,
                       radius=check.positive(data['radius'], f'{path}.radius'),
                       sensor=_sensor(data['sensor'], f'{path}.sensor') if 'sensor' in data else None,
+                      dynamics=robot_dynamics(data['dynamics'], f'{path}.dynamics', model)
+                      if 'dynamics' in data else None,
                       **_tractor_dimensions(data, path))
     if model == 'tractor_trailer':
         _check_tractor_radius(robot, path)
@@ -486,6 +491,8 @@ def scenario_data(scenario: Scenario) -> dict[str, Any]:
             item['sensor'] = {'range': robot.sensor.range, 'fov': robot.sensor.fov, 'beams': robot.sensor.beams,
                               'noise': robot.sensor.noise,
                               **({'mount': list(robot.sensor.mount)} if any(robot.sensor.mount) else {})}
+        if robot.dynamics is not None:
+            item['dynamics'] = dynamics_data(robot.dynamics)
         robots.append(item)
     defaults = PlannerParams()
     planner = {name: getattr(scenario.planner, name) for name in PlannerParams.names()

@@ -11,6 +11,13 @@ obstacles are absent from everything a planner is given, unless a robot's own `s
 robot scans the truth every tick and plans in what it believes (fastep_core/perception/robot.py). Collisions
 and min_clearance are judged against the truth: every still obstacle where it is, every mover where it is at
 each step's time.
+
+Each robot has a plant (fastep_core/dynamics/plant.py): its kinematic model integrated as commanded, or, for a
+robot whose spec has `dynamics`, a differential-drive base with mass in MuJoCo behind its own controller. A
+planner is given the plant's TRUE pose as its state (as a perfect localizer would give it) and the plant's
+measured velocity (its odometry's twist) before the tick's command; trajectories, path length and collisions are
+the true state's; the other robots see its true map-frame velocity. A kinematic plant's measured velocity is the
+command it last applied, so kinematic runs are what they were before plants, bit for bit.
 """
 
 from __future__ import annotations
@@ -24,6 +31,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.dynamic_world import DynamicWorld, map_generator
+from fastep_core.dynamics.plant import Plant, make_plant, odometry_generator
 from fastep_core.errors import GoalError
 from fastep_core.metrics import trajectory_margins
 from fastep_core.perception.belief import Belief
@@ -130,6 +138,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     senses = [None if spec.sensor is None else SensingRobot(spec.sensor, spec.model, i, truth, nav, seed)
               for i, (spec, nav) in enumerate(zip(specs, navigators))]
     states = [np.array(spec.start, dtype=float) for spec in specs]
+    plants: list[Plant] = [make_plant(spec.model, nav.model, state, spec.dynamics,
+                                      None if spec.dynamics is None else odometry_generator(seed, i))
+                           for i, (spec, nav, state) in enumerate(zip(specs, navigators, states))]
     velocities = [np.zeros(2) for _ in specs]
     runs = [RobotRun(spec.name, spec.model) for spec in specs]
     latencies = [PlanLatency(realtime) for _ in specs] if realtime is not None else None
@@ -181,9 +192,10 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 continue
             start = time.perf_counter()
             sense = senses[i]
+            measured = plants[i].measured_velocity()   # the odometry's twist, before this tick's command
             if latencies is None or controls is None:
                 seen = views[i] if sense is None else sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
-                commands.append(nav.update(t, states[i], seen))
+                commands.append(nav.update(t, states[i], seen, velocity=measured))
             else:
                 latency = latencies[i]
                 latency.take(t)
@@ -194,7 +206,7 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                         nav.seen = sense.recent.seen()   # backing up only where its scans saw free space
                     plan = Plan.of(nav, t, nav.update(t, states[i], seen), seen[len(views[i]):])
                     latency.submit(plan, t, time.perf_counter() - start)
-                commands.append(controls[i].command(t, states[i], views[i], latency.plan, dt))
+                commands.append(controls[i].command(t, states[i], views[i], latency.plan, dt, velocity=measured))
             runs[i].compute_time += time.perf_counter() - start
             if mode(i) is Mode.ARRIVED:
                 runs[i].reached, runs[i].sim_time = True, t
@@ -207,10 +219,11 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             if not active[i]:
                 continue
             start = time.perf_counter()
-            model = nav.model
-            new_state = model.integrate(states[i], commands[i], dt)
-            # The others see it as its odometry tells on the graph: the twist it drives at, along its new heading.
-            velocities[i] = model.velocity(new_state, commands[i])
+            plant = plants[i]
+            plant.step(commands[i], dt)
+            new_state = plant.state
+            # The others see it as it truly moves (kinematic: the twist it drives at, along its new heading).
+            velocities[i] = plant.velocity()
             runs[i].compute_time += time.perf_counter() - start
             runs[i].path_length += float(np.hypot(*(new_state[:2] - states[i][:2])))
             states[i] = new_state

@@ -35,6 +35,7 @@ PYTHON_KEYS = {
     'lz4': 'python3-lz4',
     'rosbags': 'python3-rosbags-pip',
     'foxglove': 'python3-foxglove-sdk-pip',
+    'mujoco': 'python3-mujoco-pip',
 }
 
 # Imported only for an optional extra of setup.py, so no exec_depend: a robot never needs them.
@@ -81,7 +82,7 @@ def test_package_xml_exec_depends_are_exactly_the_runtime_imports() -> None:
 def test_rosdep_yaml_defines_the_keys_rosdistro_lacks_for_debian_and_ubuntu() -> None:
     rules = yaml.safe_load((ROOT / 'rosdep.yaml').read_text())
     assert set(rules) == {'python3-mcap-pip', 'python3-zstandard', 'python3-lz4', 'python3-rosbags-pip',
-                          'python3-foxglove-sdk-pip'}
+                          'python3-foxglove-sdk-pip', 'python3-mujoco-pip'}
     assert set(rules) <= package_xml_keys('exec_depend')
     assert all({'debian', 'ubuntu'} <= set(rule) for rule in rules.values())
 

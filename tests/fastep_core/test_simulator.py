@@ -165,9 +165,9 @@ def test_a_robot_that_arrived_is_seen_standing_still(monkeypatch):
         if spec.name == 'far':
             update = navigator.update
 
-            def recording(t, state, others=()):
+            def recording(t, state, others=(), velocity=None):
                 seen.append((t, [(o.name, tuple(o.velocity)) for o in others]))
-                return update(t, state, others)
+                return update(t, state, others, velocity=velocity)
             navigator.update = recording
         return navigator
 
