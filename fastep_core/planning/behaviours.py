@@ -1,13 +1,13 @@
 """The behaviours of a navigator's control tick, in the order `Navigator.tick` asks them (first answer wins).
 
 Each takes the navigator and the tick (`Tick`) and returns the tick's command (the tick ends there) or None (the
-next one is asked): `arrival`, `PathCheck` (a goal nothing reaches fails), `progress_check`, `trap_check` (starts
-an escape or a manoeuvre and goes on), `manoeuvre`, `backing_up`, `HoldBreaker` (a step round a robot the guard
-holds this one for), `escape` (along the exact path out of a trap) and `algorithm` (the algorithm's
-`choose_target`); the last three drive to their target (`drive_on`), guarded in the navigator's drive_to.
-Why a list: a reader sees in one place what has priority over what, and each behaviour keeps its own state.
-The parts they use: progress.py, escape.py, manoeuvre_driver.py, recovery.py, step_planning.py; `Steering` is
-what they need of the navigator (navigator.py), named here so that neither module imports the other.
+next one is asked): `arrival`, `back_to_goal` (a goal overshot, backed up to), `PathCheck` (a goal nothing reaches
+fails), `progress_check`, `trap_check` (starts an escape or a manoeuvre and goes on), `manoeuvre`, `backing_up`,
+`HoldBreaker` (a step round a robot the guard holds this one for), `escape` (along the exact path out of a trap) and
+`algorithm` (the algorithm's `choose_target`); the last three drive to their target (`drive_on`), guarded in the
+navigator's drive_to. Why a list: a reader sees in one place what has priority over what, and each behaviour keeps
+its own state. The parts they use: progress.py, escape.py, manoeuvre_driver.py, recovery.py, step_planning.py;
+`Steering` is what they need of the navigator (navigator.py), named here so that neither module imports the other.
 """
 
 from __future__ import annotations
@@ -35,13 +35,16 @@ from fastep_core.planning.step_planning import StepPlanning
 from fastep_core.planning.yielding import Yield
 from fastep_core.world import World
 
-__all__ = ['ROTATING', 'STOPPING', 'HoldBreaker', 'PathCheck', 'Steering', 'Tick', 'algorithm', 'arrival', 'back_up',
-           'backing_up', 'drive_manoeuvre', 'drive_on', 'escape', 'follow_escape', 'manoeuvre', 'progress_check',
-           'stand_clear', 'start_escape', 'start_manoeuvre', 'stopped', 'trap_check', 'trapped', 'turn_to_heading']
+__all__ = ['RETURNING', 'RETURN_RANGE', 'ROTATING', 'STOPPING', 'HoldBreaker', 'PathCheck', 'Steering', 'Tick',
+           'algorithm', 'arrival', 'back_up', 'back_to_goal', 'backing_up', 'drive_manoeuvre', 'drive_on',
+           'escape', 'follow_escape', 'manoeuvre', 'progress_check', 'stand_clear', 'start_escape',
+           'start_manoeuvre', 'stopped', 'trap_check', 'trapped', 'turn_to_heading']
 
 FloatArray = NDArray[np.float64]
 ROTATING = 'rotating to the goal heading'
 STOPPING = 'stopping at the goal'
+RETURNING = 'backing up to the goal it overshot'
+RETURN_RANGE = 1.0   # m: a goal overshot by at most this, behind the robot, is backed up to, not turned round for
 
 
 @dataclass(frozen=True)
@@ -85,6 +88,7 @@ class Steering(Protocol):
     manoeuvring: ManoeuvreDriver | None
     guard_check: Guard
     response: BaseResponse
+    at_goal: bool
     steps: StepPlanning
     yield_kind: str
     _target: FloatArray | None
@@ -121,6 +125,7 @@ def arrival(nav: Steering, now: Tick) -> FloatArray | None:
     if not now.distance <= nav.params.goal_tolerance:
         return None
     nav.waypoint, nav.cost, nav._target = None, 0.0, None
+    nav.at_goal = True
     turn = turn_to_heading(nav, now.state, now.dt)
     if turn is None:
         if not stopped(nav, now.velocity):
@@ -225,6 +230,34 @@ def drive_on(nav: Steering, now: Tick, target: FloatArray | None, drive_on_defer
 
 
 # ---------------------------------------------------------------------------------------- what they use
+def back_to_goal(nav: Steering, now: Tick) -> FloatArray | None:
+    """A goal the robot reached and was carried past (a base that braked later than planned), now behind it within
+    RETURN_RANGE: a robot that turns in place and reverses backs straight up to it, steering to keep it astern, at a
+    speed that stops there at the braking the base has shown (within max_reverse_speed), instead of turning round
+    (a loop) for a few centimetres. Guarded as every command; in the control loop a laser robot backs up only into
+    space its scans saw free (control.py)."""
+    model, p = nav.model, nav.params
+    if not nav.at_goal or now.distance > RETURN_RANGE or model.holonomic or not model.reverses or \
+            not model.turns_in_place or model.trailer or len(now.state) < 3 or nav.goal is None:
+        return None
+    heading = float(now.state[2])
+    bearing = math.atan2(float(nav.goal[1] - now.position[1]), float(nav.goal[0] - now.position[0])) - heading
+    astern = math.remainder(bearing - math.pi, math.tau)   # 0 with the goal straight behind
+    if abs(astern) >= 0.5 * math.pi:
+        return None   # ahead of the robot: the way there is forward
+    braking = nav.response.braking if nav.response.braking > 0.0 else math.inf
+    speed = min(math.sqrt(2.0 * braking * max(now.distance - 0.5 * p.goal_tolerance, 0.0)),
+                now.distance / now.dt)
+    if p.max_reverse_speed > 0.0:
+        speed = min(speed, p.max_reverse_speed)
+    omega = p.turn_gain * astern
+    if p.max_turn_rate > 0.0:
+        omega = max(-p.max_turn_rate, min(p.max_turn_rate, omega))
+    nav.mode, nav.reason = Mode.KINEMATIC, RETURNING
+    nav.progress.made_progress(now.t)
+    return nav.guard(now.state, np.array([-speed * max(math.cos(astern), 0.0), omega]), now.dt, now.others)
+
+
 def stopped(nav: Steering, velocity: FloatArray) -> bool:
     """Is the robot standing, as measured (trans_stopped_velocity, rot_stopped_velocity)?"""
     p = nav.params

@@ -89,6 +89,7 @@ class Navigator:
         self.response = BaseResponse(bool(model.holonomic), p.max_acceleration, p.max_turn_acceleration)
         self.response_fed_elsewhere = False
         self._last_command = np.zeros(2)   # the command `update` returned last
+        self.at_goal = False   # has the robot been within goal_tolerance of this goal (behaviours.back_to_goal)
         # Whether the world is what the robot's laser shows (fastep_core/perception): a belief that can be wrong
         # for a moment, so no path in it holds the robot a while before the goal fails (fail_no_path).
         self.from_scans = False
@@ -149,6 +150,7 @@ class Navigator:
         self.mode, self.reason = Mode.KINEMATIC, 'goal accepted'
         self.waypoint, self.plan, self.cost, self._target = None, [], 0.0, None
         self.reference, self.path_check.checked, self._committed = None, False, False
+        self.at_goal = False
         self._stuck, self.hold_breaker.broken = 0, -1
         self.steps.new_goal()
         self.no_path.reset()
@@ -284,8 +286,9 @@ class Navigator:
         self._measured_speed = speed_of(measured, self.model.holonomic)
         now = Tick(self._ticks, t, dt, state, position, others,
                    math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]), measured)
-        for behaviour in (behaviours.arrival, self.path_check, behaviours.progress_check, behaviours.trap_check,
-                          behaviours.manoeuvre, behaviours.backing_up, self.hold_breaker, behaviours.escape):
+        for behaviour in (behaviours.arrival, behaviours.back_to_goal, self.path_check, behaviours.progress_check,
+                          behaviours.trap_check, behaviours.manoeuvre, behaviours.backing_up, self.hold_breaker,
+                          behaviours.escape):
             command = behaviour(self, now)
             if command is not None:
                 return command

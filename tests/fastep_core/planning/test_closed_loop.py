@@ -16,7 +16,7 @@ from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.planning import PlannerParams
 from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.base_response import BaseResponse, off_commands
-from fastep_core.planning.behaviours import STOPPING
+from fastep_core.planning.behaviours import RETURNING, STOPPING
 from fastep_core.planning.control import ControlTick, Plan
 from fastep_core.planning.navigator import Mode
 from fastep_core.planning.smoother import VelocitySmoother
@@ -43,17 +43,19 @@ class SlowBase:
 
 
 def drive(limit: float, turn_limit: float, goal: tuple[float, float], heading: float | None = None,
-          wall: float | None = 0.45, closed: bool = True, seconds: float = 30.0) -> dict[str, object]:
+          wall: float | None = 0.45, closed: bool = True, seconds: float = 30.0,
+          start: tuple[float, float, float] = (0.0, 0.0, 0.0), speed: float = 0.0) -> dict[str, object]:
     """fastep_route's defaults, through the control tick (a plan every tick), on a SlowBase from (0, 0, 0) to goal
     with a wall `wall` metres beyond it (centre to wall). closed: the measured velocity is given; else not."""
     obstacles = () if wall is None else (Segment((goal[0] + wall, -3.0), (goal[0] + wall, 3.0)),)
     world = World((-2.0, -4.0, 12.0, 4.0), obstacles)
-    nav = make_navigator('fastep_route', RobotSpec('r1', 'diff_drive', (0.0, 0.0, 0.0), goal, RADIUS), RADIUS,
+    nav = make_navigator('fastep_route', RobotSpec('r1', 'diff_drive', start, goal, RADIUS), RADIUS,
                          world, P, np.random.default_rng(0))
     nav.set_goal(goal, heading=heading)
     control = ControlTick(nav)
-    base = SlowBase(limit, turn_limit, np.zeros(2))
-    state, t, clearance, farthest, modes = np.zeros(3), 0.0, math.inf, -math.inf, []
+    base = SlowBase(limit, turn_limit, np.array([speed, 0.0]))
+    state, t, clearance, farthest, modes = np.array(start), 0.0, math.inf, -math.inf, []
+    headings = []
     while t < seconds:
         measured = base.velocity.copy() if closed else None
         plan = Plan.of(nav, t, nav.update(t, state, [], measured))
@@ -64,10 +66,12 @@ def drive(limit: float, turn_limit: float, goal: tuple[float, float], heading: f
         state = nav.model.integrate(state, base.velocity, DT)
         t += DT
         farthest = max(farthest, float(state[0]))
+        headings.append(float(state[2]))
         if wall is not None:
             clearance = min(clearance, goal[0] + wall - float(state[0]) - RADIUS)
     return {'arrived': modes[-1][0] is Mode.ARRIVED, 'state': state, 'velocity': base.velocity.copy(),
-            'clearance': clearance, 'overshoot': farthest - goal[0], 'modes': modes, 'response': nav.response}
+            'clearance': clearance, 'overshoot': farthest - goal[0], 'modes': modes, 'response': nav.response,
+            'headings': headings}
 
 
 @pytest.mark.parametrize('limit, turn_limit', [(0.8, 1.5), (0.5, 1.5)])
@@ -165,3 +169,13 @@ def test_the_smoother_ramps_from_odometry_when_the_base_is_off_its_commands():
     assert smoother.smooth(np.array([0.0, 0.0]), DT)[0] == pytest.approx(0.9 - 2.5 * DT)
     assert not smoother.feedback(np.array([0.9 - 2.5 * DT, 0.0]))
     assert not smoother.feedback(None) and not smoother.feedback(np.array([math.nan, 0.0]))
+
+
+def test_a_goal_carried_past_is_backed_up_to_not_turned_round_for():
+    """The report: the heavy base overshot open-floor goals and looped back 4-8 times."""
+    run = drive(0.8, 1.5, (5.0, 0.0), wall=None, start=(4.7, 0.0, 0.0), speed=1.0)
+    assert run['overshoot'] > 0.3   # 1 m/s, 0.3 m before the goal, braking at 0.8: it cannot stop in time
+    assert run['arrived']
+    assert any(reason == RETURNING for _, reason, _ in run['modes'])
+    assert max(abs(h) for h in run['headings']) < 0.2   # backed straight up: no turn round
+    assert float(np.linalg.norm(run['state'][:2] - np.array([5.0, 0.0]))) <= P.goal_tolerance
