@@ -19,6 +19,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import importlib
+import json
 import math
 import os
 import signal
@@ -29,6 +30,7 @@ from pathlib import Path
 from typing import Any, Callable, Mapping, NoReturn, Sequence
 
 from fastep_core.cli import Parser, fail, guard, seed, tcp_port, tcp_port_problem
+from fastep_core.dynamics.params import dynamics_data
 from fastep_core.errors import ParameterError, ScenarioError
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, check_drives
 from fastep_core.planning.params import PlannerParams
@@ -149,7 +151,23 @@ def plant_params(spec: RobotSpec, sim_time: bool, params: PlannerParams | None =
     if spec.model == 'diff_drive':
         limits = params or PlannerParams()
         out.update(max_speed=float(limits.max_speed), max_turn_rate=float(limits.max_turn_rate))
+    if spec.dynamics is not None:
+        # A physics base: its wheel odometry drifts, so the true pose goes out as a localizer's (planner_params).
+        out.update(dynamics=dynamics_parameter(spec), ground_truth_topic=GROUND_TRUTH_TOPIC, seed=int(seed),
+                   robot_index=int(index))
     return out
+
+
+GROUND_TRUTH_TOPIC = 'ground_truth'
+"""A physics robot's true pose (relative: <ns>/ground_truth), the localization its planner reads."""
+
+
+def dynamics_parameter(spec: RobotSpec) -> str:
+    """The plant's `dynamics` parameter of a robot: its preset's name, or its mapping as JSON quoted for YAML
+    (a command line's `-p dynamics:=VALUE` is read as YAML: quoted, a mapping stays the string the node parses)."""
+    assert spec.dynamics is not None
+    data = dynamics_data(spec.dynamics)
+    return data if isinstance(data, str) else "'" + json.dumps(data, sort_keys=True) + "'"
 
 
 def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, sim_time: bool,
@@ -172,6 +190,8 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
         out['laser_mount'] = [float(v) for v in spec.sensor.mount]   # its scans come in <ns>/laser
     if spec.model == 'diff_drive' and spec.goal_heading is None:
         out['goal_heading'] = 0   # the goal's orientation is any: the robot stops where it arrives, as in fastep-sim
+    if spec.dynamics is not None:
+        out['localization_topic'] = GROUND_TRUTH_TOPIC   # map -> base_link from the plant's true pose (amcl-like)
     return out
 
 

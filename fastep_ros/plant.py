@@ -11,18 +11,23 @@ start state once cmd_vel has a publisher, because DDS matches the two ends of a 
 must see both ends up (docs/robustness.md, "A loaded machine"). A command's age counts from when it was sent, so a
 command that waited while the plant was descheduled does not act for a fresh cmd_timeout. In lock step the robot
 moves exactly as fastep-sim moves it. Details: docs/guide.md, "The plant node"; frames: docs/frames.md.
+
+With `dynamics` (a diff_drive base with mass: fastep_core/dynamics) it steps a MuJoCo physics plant instead, 500
+physics steps a second behind the base's own controller, and publishes the wheel-encoder odometry on `odom` (a
+pose that drifts in `odom`, the twist measured); `ground_truth_topic` then carries the true pose in `map`
+(geometry_msgs/PoseWithCovarianceStamped), the localizer a planner reads through its `localization_topic`.
 """
 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any, Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Time
 from diagnostic_msgs.msg import DiagnosticStatus
-from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
+from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped, Twist, TwistStamped
 from nav_msgs.msg import Odometry
 from rclpy.clock import Clock, ClockType, ROSClock
 from rclpy.qos import qos_profile_sensor_data
@@ -30,6 +35,8 @@ from rclpy.serialization import deserialize_message
 from sensor_msgs.msg import LaserScan
 
 from fastep_core.dynamic_world import DynamicWorld
+from fastep_core.dynamics.params import dynamics_from_text
+from fastep_core.dynamics.plant import PhysicsPlant, odometry_generator
 from fastep_core.errors import FastepError
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.kinematics.diff_drive import DiffDrive
@@ -130,6 +137,14 @@ class PlantNode(ManagedNode):
         robot_index = declare(self, 'robot_index', 0, 'with a sensor: this robot\'s index in the scenario')
         scan_rate = declare(self, 'scan_rate_hz', 20.0, 'with a sensor: scans per second of integrated time',
                             value_range=(0.1, 1000.0), unit=' Hz')
+        dynamics = declare(self, 'dynamics', '', 'diff_drive: a base with mass, simulated by MuJoCo behind its own '
+                           'controller (fastep_core/dynamics): a preset name (nominal | heavy | limited_controller | '
+                           'slippery) or a YAML/JSON mapping of its fields ({preset: heavy, mass: 45}, a scenario '
+                           'robot\'s `dynamics`); its controller times out commands after cmd_timeout; odom carries '
+                           'its wheel odometry (it drifts). Empty: the kinematic model, integrated as commanded')
+        ground_truth = declare(self, 'ground_truth_topic', '', 'with dynamics: publish the true pose on this topic '
+                               '(geometry_msgs/PoseWithCovarianceStamped in map, with each odometry; a planner\'s '
+                               'localization_topic); empty: not published')
 
         if self.model_name not in MODELS:
             raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model_name!r}')
@@ -155,6 +170,7 @@ class PlantNode(ManagedNode):
         if len(start) != size:
             raise StartupError(f'parameter start must have {size} values for {self.model_name}, got {start}')
         self.state = np.array(start, dtype=float)
+        self.physics = self._physics(dynamics, seed, robot_index)
         self.scanner = self._scanner(sensor, scenario, seed, robot_index, scan_rate)
 
         self.frame_id = frame_id or frames.odom_frame(self.get_namespace())
@@ -178,6 +194,8 @@ class PlantNode(ManagedNode):
         self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
         self.scan_pub = (self.create_publisher(LaserScan, interface.SCAN, qos_profile_sensor_data)
                          if self.scanner is not None else None)
+        self.truth_pub = (self.create_publisher(PoseWithCovarianceStamped, ground_truth, LATEST)
+                          if ground_truth and self.physics is not None else None)
         self.trailer_pub = (self.create_publisher(PoseStamped, interface.TRAILER_POSE,
                                                   offered_qos(interface.TRAILER_POSE))
                             if self.model_name == 'tractor_trailer' else None)
@@ -207,11 +225,26 @@ class PlantNode(ManagedNode):
         # Only the command timeout changes while running: the step is what the odometry of a group of plants
         # lines up on (stamps are whole steps), the start is the start, and the body and the topics are the robot's.
         self.dynamic = DynamicParameters(self, ('cmd_timeout', 'clock_timeout'), self.apply_parameters)
-        self.get_logger().info(f'{self.model_name} at {np.round(self.state, 3).tolist()}, '
+        physics = '' if self.physics is None else f' (physics: {self.physics.dynamics.preset} base)'
+        self.get_logger().info(f'{self.model_name}{physics} at {np.round(self.state, 3).tolist()}, '
                                f'integrating at {self.rate_hz:g} Hz')
         self.start_lifecycle()   # autostart: active at once (fastep_ros.lifecycle)
 
     # ------------------------------------------------------------------------------------------- lifecycle
+    def _physics(self, text: str, seed: int, index: int) -> PhysicsPlant | None:
+        """The physics plant of `dynamics` (None: kinematic); its encoder noise from the run's seed stream index."""
+        try:
+            dynamics = dynamics_from_text(text)
+        except FastepError as exc:
+            raise StartupError(f'parameter {exc}') from None
+        if dynamics is None:
+            return None
+        if self.model_name != 'diff_drive':
+            raise StartupError(f'parameter dynamics is only for model diff_drive, got {self.model_name}')
+        # One timeout: the node's cmd_timeout is the controller's (a stale command is a stop it ramps).
+        dynamics = replace(dynamics, cmd_timeout=self.cmd_timeout)
+        return PhysicsPlant(dynamics, self.state, odometry_generator(max(seed, 0), max(index, 0)))
+
     def _scanner(self, sensor: list[float], source: str, seed: int, index: int, rate: float) -> _Scanner | None:
         """The laser scanner of `sensor` on the true world of `source`; None without a sensor."""
         if not sensor:
@@ -251,6 +284,8 @@ class PlantNode(ManagedNode):
         if cmd_timeout <= 0.0:
             return f'parameter cmd_timeout must be > 0, got {cmd_timeout:g}'
         self.cmd_timeout = cmd_timeout
+        if self.physics is not None:
+            self.physics.controller.dynamics = replace(self.physics.controller.dynamics, cmd_timeout=cmd_timeout)
         self.sim_time.timeout = changes.get('clock_timeout', self.sim_time.timeout)
         return ''
 
@@ -319,6 +354,13 @@ class PlantNode(ManagedNode):
             if self.locked() and not self.command_for(self.tick * self.step):
                 return moved   # the step waits for the command its planner computes at its start
             moved = True
+            physics = self.physics
+            if physics is not None:   # its controller holds the command until cmd_timeout after it was sent
+                physics.set_time(self.tick * self.step)
+                physics.step(None if self.command_time is None else self.command, self.step, self.command_time)
+                self.tick += 1
+                self.state = physics.state
+                continue
             self.tick += 1
             t = self.tick * self.step
             command = self.command
@@ -452,17 +494,24 @@ class PlantNode(ManagedNode):
     def publish(self) -> None:
         """Odometry (and trailer pose) of the state at the integrated time (0 before the first step)."""
         stamp = convert.seconds_to_stamp(0.0 if self.tick is None else max(0.0, self.tick * self.step))
-        if self.model_name == 'tractor_trailer':
+        state = [float(v) for v in self.state]
+        linear: Sequence[float]
+        if self.physics is not None:   # the wheel odometry (drifting), the truth to the localizer stand-in
+            if self.truth_pub is not None:
+                self.truth_pub.publish(self.ground_truth(state, stamp))
+            odom_pose, twist = self.physics.odometry()
+            state = [float(v) for v in odom_pose]
+            linear, angular = (float(twist[0]), 0.0), float(twist[1])
+        elif self.model_name == 'tractor_trailer':
             assert isinstance(self.model, TractorTrailer)
             v, omega = (float(c) for c in self.applied)
-            linear: Sequence[float] = (v, 0.5 * self.model.length * omega)
+            linear = (v, 0.5 * self.model.length * omega)
             angular = omega
         elif isinstance(self.model, DiffDrive):   # what the base executed: (v, omega) saturated
             v, angular = self.model.saturate(self.applied)
             linear = (v, 0.0)
         else:
             linear, angular = (float(self.applied[0]), float(self.applied[1])), 0.0
-        state = [float(v) for v in self.state]
         yaw = state[2] if len(state) > 2 else 0.0
         if not all(math.isfinite(v) for v in (*state, *linear, angular)):
             # Cannot happen with finite commands, but never crash a plant.
@@ -495,6 +544,19 @@ class PlantNode(ManagedNode):
                 pose = scanner.spec.pose_on((float(self.state[0]), float(self.state[1]), yaw))
                 reading = scanner.truth.scan(scanner.spec, pose, t, scanner.rng)
                 self.scan_pub.publish(convert.scan_to_laser_scan(reading, stamp, self.scan_frame_id))
+
+    @staticmethod
+    def ground_truth(state: Sequence[float], stamp: Time) -> PoseWithCovarianceStamped:
+        """The true pose in map, as a localizer reports it (a covariance of 1 mm and 1 mrad: it is exact)."""
+        msg = PoseWithCovarianceStamped()
+        msg.header.stamp = stamp
+        msg.header.frame_id = interface.MAP_FRAME
+        msg.pose.pose.position.x, msg.pose.pose.position.y = float(state[0]), float(state[1])
+        qx, qy, qz, qw = convert.yaw_quaternion(float(state[2]))
+        orientation = msg.pose.pose.orientation
+        orientation.x, orientation.y, orientation.z, orientation.w = qx, qy, qz, qw
+        msg.pose.covariance = [1e-6 if i in (0, 7, 14, 21, 28, 35) else 0.0 for i in range(36)]
+        return msg
 
 
 def main(args: Sequence[str] | None = None) -> int:

@@ -13,9 +13,9 @@ kinematic and physics plants. Nothing imports mujoco until a PhysicsPlant is mad
 from fastep_core.dynamics.controller import BaseController
 from fastep_core.dynamics.mjcf import TIMESTEP, base_mjcf
 from fastep_core.dynamics.odometry import WheelOdometry
-from fastep_core.dynamics.params import PRESETS, BaseDynamics, dynamics_data, parse_dynamics, preset
+from fastep_core.dynamics.params import PRESETS, BaseDynamics, dynamics_data, dynamics_from_text, parse_dynamics, preset
 from fastep_core.dynamics.plant import KinematicPlant, PhysicsPlant, Plant, make_plant, odometry_generator
 
 __all__ = ['PRESETS', 'TIMESTEP', 'BaseController', 'BaseDynamics', 'KinematicPlant', 'PhysicsPlant', 'Plant',
-           'WheelOdometry', 'base_mjcf', 'dynamics_data', 'make_plant', 'odometry_generator', 'parse_dynamics',
-           'preset']
+           'WheelOdometry', 'base_mjcf', 'dynamics_data', 'dynamics_from_text', 'make_plant', 'odometry_generator',
+           'parse_dynamics', 'preset']

@@ -21,7 +21,8 @@ from typing import Any, Mapping
 
 from fastep_core.errors import ParameterError
 
-__all__ = ['PRESETS', 'BaseDynamics', 'dynamics_data', 'parse_dynamics', 'preset']
+__all__ = ['PRESETS', 'BaseDynamics', 'dynamics_data', 'dynamics_from_text', 'parse_dynamics', 'preset',
+           'robot_dynamics']
 
 _shown = reprlib.Repr()
 _shown.maxlevel, _shown.maxlist, _shown.maxdict = 1, 3, 3
@@ -209,3 +210,24 @@ def robot_dynamics(value: Any, path: str, model: str) -> BaseDynamics:
         rest = one_line(str(exc))[len('dynamics'):]
         word = rest.split(' ', 2)[1] if rest.startswith(' ') else ''
         raise Invalid(f'{path}.{rest[1:]}' if word in BaseDynamics.names() else f'{path}{rest}') from None
+
+
+def dynamics_from_text(text: str) -> BaseDynamics | None:
+    """A `dynamics` parameter's value: '' (None: kinematic), a preset name, or a YAML/JSON mapping of fields
+    (`{preset: heavy, mass: 45}`; quoted once more, as a command line's YAML may carry it, is the same).
+    ParameterError with one line otherwise."""
+    import yaml
+
+    from fastep_core import bounded_yaml
+
+    value: Any = text.strip()
+    for _ in range(2):
+        if not isinstance(value, str) or not value or value in PRESETS:
+            break
+        try:
+            value = bounded_yaml.load(value.encode())
+        except yaml.YAMLError as exc:   # the bounds' LimitError is one too
+            raise ParameterError(' '.join(f'dynamics is not a preset name or a YAML mapping: {exc}'.split())) from None
+    if value == '' or value is None:
+        return None
+    return parse_dynamics(value)

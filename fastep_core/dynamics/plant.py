@@ -140,6 +140,10 @@ class PhysicsPlant:
     def time(self) -> float:
         return self.start_time + self._steps * TIMESTEP
 
+    def set_time(self, t: float) -> None:
+        """Put the plant's clock at t (a node's integrated time, where commands' sent times are counted)."""
+        self.start_time = t - self._steps * TIMESTEP
+
     # ------------------------------------------------------------------------------------- Plant
     def step(self, command: FloatArray | None, dt: float, sent: float | None = None) -> None:
         if command is not None:
