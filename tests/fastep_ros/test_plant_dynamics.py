@@ -4,10 +4,12 @@ isolated domain: tests/fastep_ros/conftest.py), its callbacks called directly.""
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 from geometry_msgs.msg import PoseWithCovarianceStamped
 from nav_msgs.msg import Odometry
 from rclpy.parameter import Parameter
@@ -98,3 +100,32 @@ def test_kinematic_by_default(context: Any) -> None:
         assert node.physics is None and node.truth_pub is None
     finally:
         node.destroy_node()
+
+
+def test_launch_gives_a_physics_robot_its_dynamics_and_the_ground_truth_as_localization(context: Any) -> None:
+    """fastep-launch's parameters: the plant's `dynamics` as the command line carries it (read back by the node to
+    the same base), ground_truth_topic, and the planner's localization_topic on it; a kinematic robot has none."""
+    from fastep_core.scenario import parse_scenario
+    from fastep_ros import launch
+    from fastep_ros.processes import ros_value
+
+    robot = {'name': 'd', 'model': 'diff_drive', 'start': [2, 10, 0], 'goal': [18, 12], 'radius': 0.35}
+    scenario = parse_scenario({'workspace': [0, 0, 20, 20], 'robots': [
+        {**robot, 'dynamics': {'preset': 'heavy', 'mass': 45}},
+        {**robot, 'name': 'k', 'start': [2, 5, 0], 'goal': [18, 5]}]})
+    plant = launch.plant_params(scenario.robots[0], True, scenario.planner, seed=4, index=0)
+    assert plant['ground_truth_topic'] == launch.GROUND_TRUTH_TOPIC and plant['seed'] == 4
+    planner = launch.planner_params(scenario, 0, 'fastep_route', 4, True)
+    assert planner['localization_topic'] == launch.GROUND_TRUTH_TOPIC
+    as_ros_reads_it = yaml.safe_load(ros_value(plant['dynamics']))   # `-p dynamics:=VALUE` is YAML
+    node = make(context, model='diff_drive', start=[2.0, 10.0, 0.0], dynamics=as_ros_reads_it)
+    try:
+        assert node.physics is not None
+        expected = scenario.robots[0].dynamics
+        assert expected is not None
+        assert node.physics.dynamics == replace(expected, cmd_timeout=node.cmd_timeout)
+    finally:
+        node.destroy_node()
+    kinematic = launch.plant_params(scenario.robots[1], True, scenario.planner)
+    assert 'dynamics' not in kinematic and 'ground_truth_topic' not in kinematic
+    assert 'localization_topic' not in launch.planner_params(scenario, 1, 'fastep_route', 4, True)
