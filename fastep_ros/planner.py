@@ -82,7 +82,8 @@ class PlanSnapshot:
     state: np.ndarray
     others: list[OtherRobot]
     scan: LaserScan | None
-    velocity: np.ndarray | None = None   # what the base measurably did (odometry's twist), None: not known
+    velocity: np.ndarray | None = None   # what the base measurably did (odometry's twist), None: not known ...
+    measured_at: float | None = None     # ... as of this time (the odometry's stamp)
 
 
 def same_heading(heading: float | str | None, kept: float | None) -> bool:
@@ -587,7 +588,8 @@ class PlannerNode(LifecycleNode):
                 self.hold = problem
             else:
                 self.hold = ''
-                command = self.navigate(nav, t, state, self.inputs.other_robots(t), self.inputs.velocity())
+                command = self.navigate(nav, t, state, self.inputs.other_robots(t), self.inputs.velocity(),
+                                        self.inputs.odom_stamp)
         self.publish_command(command, at)
         self.last_command = command
         if self.actions is not None:
@@ -613,11 +615,11 @@ class PlannerNode(LifecycleNode):
         self.hold = problem
         if state is None:
             return control.stop(t, period)
-        velocity = self.inputs.velocity()
+        velocity, measured_at = self.inputs.velocity(), self.inputs.odom_stamp
         told = self.inputs.told_others(t)
         scan, self.inputs.latest_scan = self.inputs.latest_scan, None
         self.control_count += 1
-        self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan, velocity))
+        self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan, velocity, measured_at))
         plan = self.planning.plan
         # Age in control periods since the tick it was planned from: a simulated clock may jump between two ticks.
         age = (self.control_count - self.plan_tick) / self.control_rate_hz
@@ -626,10 +628,10 @@ class PlannerNode(LifecycleNode):
                 self.get_logger().error(f'planning stalled: the newest plan is {age:.2f} s old (max_plan_age '
                                         f'{self.max_plan_age:g} s); stopped until a pass ends')
             self.plan_problem = f'planning stalled: plan {age:.2f} s old (max_plan_age {self.max_plan_age:g} s)'
-            return control.stop(t, period, velocity)
+            return control.stop(t, period, velocity, measured_at)
         self.plan_problem = ''
         try:
-            return control.command(t, state, told, plan, period, velocity)
+            return control.command(t, state, told, plan, period, velocity, measured_at)
         except Exception as exc:  # a fault of the control tick stops this robot, never the node
             if not self.fault_logged:
                 self.get_logger().error(f'control fault: {exc}\n{traceback.format_exc()}')
@@ -647,16 +649,16 @@ class PlannerNode(LifecycleNode):
         if snapshot.scan is not None:
             self.inputs.perceive(snapshot.scan, t, state=state, told=snapshot.others)
         tracked = self.inputs.scan_perception.movers(t)
-        command = self.navigate(nav, t, state, [*snapshot.others, *tracked], snapshot.velocity)
+        command = self.navigate(nav, t, state, [*snapshot.others, *tracked], snapshot.velocity, snapshot.measured_at)
         self.plan_tick = snapshot.tick
         return Plan.of(nav, t, command, tracked)
 
     def navigate(self, nav: Navigator, t: float, state: np.ndarray, others: list[OtherRobot],
-                 velocity: np.ndarray | None) -> np.ndarray:
-        """The navigator's update (velocity: what the base measurably does); a fault of the planner fails its goal
-        and stops this robot, never the node."""
+                 velocity: np.ndarray | None, measured_at: float | None) -> np.ndarray:
+        """The navigator's update (velocity: what the base measurably does, as of measured_at); a fault of the
+        planner fails its goal and stops this robot, never the node."""
         try:
-            command = nav.update(t, state, others, velocity)
+            command = nav.update(t, state, others, velocity, measured_at)
             if not np.all(np.isfinite(command)):
                 raise FloatingPointError(f'command {command.tolist()} is not finite')
             return command

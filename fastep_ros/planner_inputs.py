@@ -36,7 +36,10 @@ from fastep_ros.robots import RobotFollower
 from msg_tools import convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
-__all__ = ['Body', 'PlannerInputs', 'PlannerNodeView']
+__all__ = ['TWIST_CHECKS', 'TWIST_SLACK', 'Body', 'PlannerInputs', 'PlannerNodeView']
+
+TWIST_SLACK = 0.2   # m/s: a pose may move this much faster than its odometry's twist says (noise, latency)
+TWIST_CHECKS = 3    # odometry messages in a row beyond it: the twist is not the base's velocity
 
 
 @dataclass(frozen=True)
@@ -109,6 +112,8 @@ class PlannerInputs:
         self.odom_problem = ''
         self.odom_heard = 0           # own odometry messages taken
         self.odom_lag = 0.0
+        self.twist_problem = ''        # why the odometry's twist is not the base's velocity ('' when it is)
+        self._twist_disagrees = 0      # odometry messages in a row whose twist their poses contradict
         self.map_from_odom = frames.MapFromOdom()
         self.body_yaw = 0.0   # map-frame heading of base_link at the last state: turns map commands into body ones
         self.trailer: float | None = None
@@ -214,6 +219,7 @@ class PlannerInputs:
             self.node.ros.get_logger().warning(self.odom_problem, throttle_duration_sec=5.0)
             return
         now = self.node.now()
+        self.check_twist(odom)
         # In lock step odometry is of its stamp's time: the start state (stamped 0) is heard again once time runs.
         self.odom, self.odom_received, self.odom_problem = odom, min(now, stamp) if self.node.locked() else now, ''
         self.odom_stamp = stamp if stamp > 0.0 else self.odom_received
@@ -395,11 +401,34 @@ class PlannerInputs:
             state = self.node.navigator.model.integrate(state, self.node.last_command, lag)
         return state, ''
 
+    def check_twist(self, odom: frames.StampedPose) -> None:
+        """Does a new odometry's twist agree with how far its pose moved since the last one? A driver that leaves
+        the twist zero (or wrong) would make the closed loop hold the robot to a creep: after TWIST_CHECKS messages
+        in a row whose poses moved more than TWIST_SLACK faster than their twists say, the twist is not used and
+        status says so (`twist_problem`)."""
+        last = self.odom
+        if last is None or odom.frame_id != last.frame_id or not odom.stamp > last.stamp:
+            return
+        dt = odom.stamp - last.stamp
+        moved = math.hypot(odom.pose[0] - last.pose[0], odom.pose[1] - last.pose[1]) / dt
+        said = math.hypot(odom.twist[0], odom.twist[1])
+        if not math.isfinite(said):
+            return
+        self._twist_disagrees = self._twist_disagrees + 1 if moved > said + TWIST_SLACK else 0
+        if self._twist_disagrees >= TWIST_CHECKS and not self.twist_problem:
+            self.twist_problem = (f'odometry twist {said:.2f} m/s while its pose moves at {moved:.2f} m/s: not used '
+                                  f'(commands ramp from the last command, stops from the configured limits)')
+            self.node.ros.get_logger().warning(self.twist_problem)
+        elif self._twist_disagrees == 0 and self.twist_problem:
+            self.twist_problem = ''
+            self.node.ros.get_logger().info('odometry twist agrees with its pose again: used')
+
     def velocity(self) -> np.ndarray | None:
         """What the base measurably does, from the odometry `state` last took (its twist, in the model's command form:
         a point mass's (vx, vy) turned into the map frame, a diff_drive's (v, omega)); None where it is not
-        known (no odometry, a twist that is not finite, a tractor-trailer, whose twist is not its command)."""
-        if self.odom is None or self.node.model == 'tractor_trailer':
+        known (no odometry, a twist that is not finite or that its poses contradict, a tractor-trailer, whose
+        twist is not its command)."""
+        if self.odom is None or self.node.model == 'tractor_trailer' or self.twist_problem:
             return None
         x, y, z = self.odom.twist
         if not (math.isfinite(x) and math.isfinite(y) and math.isfinite(z)):

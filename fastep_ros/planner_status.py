@@ -147,6 +147,9 @@ class PlannerReports:
         if stale:
             kept = f'stale: {", ".join(name for name, _ in stale)} (kept where last seen, the reach widening)'
             return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {kept}' if nav.reason else kept
+        if self.node.inputs.twist_problem:
+            problem = self.node.inputs.twist_problem
+            return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {problem}' if nav.reason else problem
         weak = nav.response.problem()
         if weak:
             slower = f'{BASE_SHORT}: {weak} (stops planned with what it measured)'

@@ -100,21 +100,28 @@ class BaseResponse:
     def retune(self, max_acceleration: float, max_turn_acceleration: float) -> None:
         self.max_acceleration, self.max_turn_acceleration = max_acceleration, max_turn_acceleration
 
-    def observe(self, t: float, measured: ArrayLike | None, sent: ArrayLike) -> None:
-        """At time t the base measured `measured` (None: not known, nothing is learnt) and was sent `sent`."""
+    def observe(self, t: float, measured: ArrayLike | None, sent: ArrayLike, measured_at: float | None = None) -> None:
+        """At time t the base was sent `sent`, having measured `measured` (None: not known, nothing is learnt) at
+        `measured_at` (None: t). A measurement no newer than the last one (odometry slower than the control loop,
+        or not coming) measures nothing; the command sent is then the one in effect until the next."""
         command = np.asarray(sent, dtype=float).reshape(2)
         now = None if measured is None else np.asarray(measured, dtype=float).reshape(2)
-        if now is None or not (np.isfinite(now).all() and np.isfinite(command).all() and math.isfinite(t)):
+        at = t if measured_at is None else measured_at
+        if now is None or not (np.isfinite(now).all() and np.isfinite(command).all() and math.isfinite(at)):
             self._last = None
             self.sent.clear()
             return
-        last, self._last = self._last, (t, now, command)
+        if self._last is not None and at <= self._last[0]:
+            self._last = (self._last[0], self._last[1], command)
+            self.sent.append(command)
+            return
+        last, self._last = self._last, (at, now, command)
         off = off_commands(now, self.sent, self.holonomic)
         self.sent.append(command)
         if last is None:
             return
         t0, before, held = last
-        dt = t - t0
+        dt = at - t0
         if not 0.0 < dt <= LONGEST_INTERVAL:
             return
         if self.holonomic:
@@ -154,7 +161,8 @@ class BaseResponse:
         parts = []
         for name, shown, limit, unit, what in (
                 ('braking', self.braking, self.max_acceleration, 'm/s^2', 'max_acceleration'),
-                ('turn braking', self.turn_braking, self.max_turn_acceleration, 'rad/s^2', 'max_turn_acceleration')):
+                ('turn braking', self.turn_braking, 0.0 if self.holonomic else self.max_turn_acceleration, 'rad/s^2',
+                 'max_turn_acceleration')):
             if limit > 0.0 and shown < WEAK_SHARE * limit:
                 parts.append(f'{name} {shown:.2g} {unit} measured, {what} {limit:g}')
         return '; '.join(parts)

@@ -85,7 +85,9 @@ class ControlTick:
         self.response = navigator.response
         self.smoother = VelocitySmoother.for_model(navigator.model, navigator.params)
         self._last_t: float | None = None
-        self._measured: FloatArray | None = None   # the velocity measured at this tick, if given
+        self._measured: FloatArray | None = None   # the velocity measured at this tick, if given ...
+        self._measured_at = 0.0                    # ... as of this time
+        self._fed_at: float | None = None          # the newest measurement the smoother was given
         self.retune()
 
     def retune(self) -> None:
@@ -103,13 +105,14 @@ class ControlTick:
         self.reason = ''        # why this tick's command differs from the plan's ('' when it does not)
 
     def command(self, t: float, state: FloatArray, others: Sequence[OtherRobot], plan: Plan | None,
-                dt: float, velocity: FloatArray | None = None) -> FloatArray:
+                dt: float, velocity: FloatArray | None = None, measured_at: float | None = None) -> FloatArray:
         """This tick's command on `plan` (a stop without one, or when it is not under way), smoothed. velocity:
-        what the base measurably does (odometry's twist, the model's command form); None: what it was told."""
+        what the base measurably does (odometry's twist, the model's command form) as of `measured_at` (its stamp;
+        None: t); None: what it was told."""
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
         self.smoother.period = dt
-        self._measured = self._feedback(velocity)
+        self._measured = self._feedback(velocity, t if measured_at is None else measured_at)
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
         before = self.smoother.velocity.copy()
         sent = self.smoother.smooth(wanted, elapsed, emergency)
@@ -127,20 +130,27 @@ class ControlTick:
         self._sent(t, sent)
         return sent
 
-    def _feedback(self, velocity: FloatArray | None) -> FloatArray | None:
-        """The measured velocity (finite, or None), given to the smoother (its closed loop)."""
+    def _feedback(self, velocity: FloatArray | None, at: float) -> FloatArray | None:
+        """The measured velocity (finite, or None), given to the smoother (its closed loop) when it is newer than
+        the last one given (odometry slower than the control loop repeats itself: an old twist is not the base now)."""
+        self._measured_at = at
         if velocity is None:
             return None
         measured = np.asarray(velocity, dtype=float).reshape(2)
         if not np.isfinite(measured).all():
             return None
-        self.smoother.feedback(measured)
+        if self._fed_at is None or at > self._fed_at:
+            self._fed_at = at
+            self.smoother.feedback(measured)
         return measured
 
     def _sent(self, t: float, sent: FloatArray) -> None:
         """`sent` goes to the base: the controller hears it, the base's response is measured against it."""
         self._tell(sent)
-        self.response.observe(t, self.smoother.velocity if self._measured is None else self._measured, sent)
+        if self._measured is None:
+            self.response.observe(t, self.smoother.velocity, sent)   # as told: nothing is learnt
+        else:
+            self.response.observe(t, self._measured, sent, self._measured_at)
 
     def reset(self, velocity: FloatArray) -> None:
         """What the robot does now (a stop sent past the control tick): the smoother and the controller ramp from it."""
@@ -163,12 +173,13 @@ class ControlTick:
             speed = max(speed, speed_of(self._measured, holonomic))
         return dt + (0.5 * speed / braking if braking > 0.0 else 0.0)
 
-    def stop(self, t: float, dt: float, velocity: FloatArray | None = None) -> FloatArray:
+    def stop(self, t: float, dt: float, velocity: FloatArray | None = None,
+             measured_at: float | None = None) -> FloatArray:
         """A stop the control loop must make without a plan to judge by (a robot held still): braking at
-        emergency_deceleration from what the robot does (velocity: as measured, None: as told)."""
+        emergency_deceleration from what the robot does (velocity: as measured at measured_at, None: as told)."""
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
-        self._measured = self._feedback(velocity)
+        self._measured = self._feedback(velocity, t if measured_at is None else measured_at)
         sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
         self._sent(t, sent)
         return sent

@@ -236,9 +236,10 @@ class Navigator:
 
     # ------------------------------------------------------------- the loop
     def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = (),
-               velocity: FloatArray | None = None) -> FloatArray:
+               velocity: FloatArray | None = None, measured_at: float | None = None) -> FloatArray:
         """One control tick: returns the command for the model (zeros when stopped). velocity: what the base
-        measurably does now (odometry's twist, in the model's command form); None: the last command returned.
+        measurably does now (odometry's twist, in the model's command form), measured at `measured_at` (its stamp;
+        None: t); None: the last command returned.
 
         A controller with acceleration limits (diff_drive) is told the command the robot got, whatever chose it
         (the controller, the guard's stop, a recovery): its next command starts from there.
@@ -254,7 +255,7 @@ class Navigator:
             self._applied(command)
         self._speed = speed_of(command, self.model.holonomic)
         if not self.response_fed_elsewhere:
-            self.response.observe(t, measured, command)
+            self.response.observe(t, measured, command, measured_at)
         self._last_command = np.array(command, dtype=float)
         return command
 

@@ -229,15 +229,17 @@ class Base:
 
     def __init__(self, node: PlannerNode) -> None:
         self.node, self.now, self.state = node, 100.0, np.array([1.0, 10.0, 0.0])
+        self.v = self.omega = 0.0   # what it drives at, as its odometry's twist says
         node.now = lambda: self.now   # type: ignore[method-assign]  # the test's clock
         node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
         node.on_goal(convert.point_to_pose_stamped((95.0, 10.0)))   # far: the law's speed (gain x distance) is higher
 
     def tick(self) -> float:
         node = self.node
-        node.inputs.on_odom(convert.state_to_odometry(self.state, convert.seconds_to_stamp(self.now)))
+        node.inputs.on_odom(convert.state_to_odometry(self.state, convert.seconds_to_stamp(self.now),
+                                                      linear=(self.v, 0.0), angular=self.omega))
         node.on_control()
-        v, omega = (float(c) for c in node.last_command)
+        v, omega = self.v, self.omega = float(node.last_command[0]), float(node.last_command[1])
         self.state = self.state + 0.05 * np.array([v * np.cos(self.state[2]), v * np.sin(self.state[2]), omega])
         self.now += 0.05
         # The pass on this tick's snapshot ends before the next tick (50 ms of a robot's time; here, at once).

@@ -179,3 +179,8 @@ def test_a_goal_carried_past_is_backed_up_to_not_turned_round_for():
     assert any(reason == RETURNING for _, reason, _ in run['modes'])
     assert max(abs(h) for h in run['headings']) < 0.2   # backed straight up: no turn round
     assert float(np.linalg.norm(run['state'][:2] - np.array([5.0, 0.0]))) <= P.goal_tolerance
+
+
+def test_a_point_mass_has_no_turn_to_report():
+    response = BaseResponse(True, 2.5, 3.2)
+    assert response.turn_braking == 0.0 and response.problem() == ''
