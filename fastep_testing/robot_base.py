@@ -12,6 +12,11 @@ with the system clock, ray-cast on the TRUE world of `scenario` (fastep_core.dyn
 latched, rasterised at `map_resolution` from the world the planner may know (`known: false` obstacles left out).
 It records what it took and did: each command's arrival (steady seconds) and value, and its state and applied
 velocity at every integration step, written to `record` (numpy .npz) when the node stops.
+
+A scenario robot with `dynamics` (docs/scenarios.md) is a base with mass instead (fastep_core/dynamics: MuJoCo
+behind its own diff_drive_controller, which times commands out after `cmd_timeout`): the odometry's twist is its
+wheel encoders', its pose the true one (a localizer's job, done perfectly), and the record's velocity the true
+body-frame (v, omega).
 """
 
 from __future__ import annotations
@@ -29,6 +34,7 @@ from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import LaserScan
 
 from fastep_core.dynamic_world import DynamicWorld, map_generator
+from fastep_core.dynamics import PhysicsPlant
 from fastep_core.errors import FastepError
 from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.scenario import load_scenario
@@ -77,6 +83,9 @@ class BaseNode(Node):
         self.step = 1.0 / rate
         self.steady = Clock(clock_type=ClockType.STEADY_TIME)
         self.t = time.monotonic()          # integrated up to (steady seconds)
+        dynamics = scenario.robots[0].dynamics
+        self.physics = None if dynamics is None else \
+            PhysicsPlant(dynamics, self.state, np.random.default_rng(seed), start_time=self.t)
         self.command = np.zeros(2)
         self.command_time = -math.inf
         self.commands: list[tuple[float, float, float]] = []          # (arrival, v, omega)
@@ -103,9 +112,15 @@ class BaseNode(Node):
             dt = min(self.step, now - self.t)
             stale = self.t - self.command_time > self.cmd_timeout
             command = np.zeros(2) if stale else self.command
-            self.state = self.model.integrate(self.state, command, dt)
+            if self.physics is None:
+                self.state = self.model.integrate(self.state, command, dt)
+                self.t += dt
+                self.track.append((self.t, *self.state, *command))
+                continue
+            self.physics.step(self.command, dt, self.command_time)   # its controller times the command out
+            self.state = self.physics.state
             self.t += dt
-            self.track.append((self.t, *self.state, *command))
+            self.track.append((self.t, *self.state, *self.physics.body_twist()))
 
     def on_cmd_vel(self, msg: Twist) -> None:
         now = time.monotonic()
@@ -125,6 +140,8 @@ class BaseNode(Node):
         self.advance(time.monotonic())
         stamp = self.get_clock().now().to_msg()
         x, y, theta, v, omega = self.track[-1][1:]
+        if self.physics is not None:
+            v, omega = (float(c) for c in self.physics.measured_velocity())
         self.odom_pub.publish(cdr.odometry_cdr((stamp.sec, stamp.nanosec), self.odom_frame, self.base_frame, (x, y),
                                                convert.yaw_quaternion(theta), (v, 0.0), omega))
 

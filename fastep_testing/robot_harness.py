@@ -22,7 +22,7 @@ import subprocess
 import sys
 import tempfile
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Callable, Sequence
 
@@ -30,6 +30,7 @@ import numpy as np
 import yaml
 
 from fastep_core.dynamic_world import DynamicWorld
+from fastep_core.dynamics import PRESETS, preset
 from fastep_core.metrics import trajectory_margins
 from fastep_core.scenario import Scenario, scenario_data
 from fastep_testing import robot_measures as measures
@@ -59,6 +60,9 @@ class HarnessResult:
     collided: bool = False            # the base's true track came within the radius of a true obstacle
     min_clearance: float = math.nan   # m, against the truth (negative: a collision)
     final_distance: float = math.nan  # m, the base's true position at the end to the goal
+    arrival_speed: float = math.nan   # m/s, the base's true speed when `arrived` was heard
+    arrival_turn_rate: float = math.nan   # rad/s, likewise
+    dynamics: str = ''                # the physics base's preset ('' kinematic)
     commands: int = 0                 # cmd_vel messages taken by the base during the run
     gaps_over_015: int = 0
     gaps_over_2_periods: int = 0
@@ -101,12 +105,16 @@ def _cpu(pid: int) -> float:
 
 def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 90.0, start_timeout: float = 60.0,
               max_speed: float = 1.0, seed: int = 0, algorithm: str = '', log_dir: Path | None = None,
-              laser_mount: tuple[float, float, float] = (0.0, 0.0, 0.0)) -> HarnessResult:
+              laser_mount: tuple[float, float, float] = (0.0, 0.0, 0.0), dynamics: str = '') -> HarnessResult:
     """One run of a harness world (a robot_worlds name or a Scenario with one diff-drive robot); see the module
     docstring. Every process it starts is stopped before it returns. Logs go to log_dir (default: a temporary
     folder, removed). laser_mount: where the laser sits on the base (x, y, yaw); the planner is told it
-    (parameter laser_mount) when it is off the centre."""
+    (parameter laser_mount) when it is off the centre. dynamics: a physics base of that preset
+    (fastep_core/dynamics) in place of the robot's own (the kinematic one, unless the scenario gives dynamics)."""
     scenario = harness_world(scenario) if isinstance(scenario, str) else scenario
+    if dynamics:
+        scenario = replace(scenario, robots=(replace(scenario.robots[0], dynamics=preset(dynamics)),
+                                             *scenario.robots[1:]))
     if log_dir is None:
         with tempfile.TemporaryDirectory(prefix='fastep-harness-') as tmp:
             result = run_world(scenario, laser=laser, timeout=timeout, start_timeout=start_timeout,
@@ -118,7 +126,8 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     robot = scenario.robots[0]
     mount = tuple(float(v) for v in laser_mount)
     result = HarnessResult(scenario.name, laser, load=os.getloadavg(), log_dir=str(log_dir),
-                           laser_mount=(mount[0], mount[1], mount[2]))
+                           laser_mount=(mount[0], mount[1], mount[2]),
+                           dynamics='' if robot.dynamics is None else robot.dynamics.preset)
     world_file, record = log_dir / 'world.yaml', log_dir / 'base.npz'
     world_file.write_text(yaml.safe_dump(scenario_data(scenario)))
     record.unlink(missing_ok=True)
@@ -264,6 +273,9 @@ def judge(result: HarnessResult, scenario: Scenario, commands: np.ndarray, track
     result.min_clearance = float(margins.overall[0])
     result.collided = result.min_clearance < 0.0
     result.final_distance = float(math.hypot(track[-1, 1] - robot.goal[0], track[-1, 2] - robot.goal[1]))
+    if arrived_at is not None:
+        row = track[max(int(np.searchsorted(track[:, 0], arrived_at)) - 1, 0)]
+        result.arrival_speed, result.arrival_turn_rate = abs(float(row[4])), abs(float(row[5]))
     run = commands[(commands[:, 0] >= began) & (commands[:, 0] <= end + TAIL)]
     result.commands = len(run)
     # A silence at either end of the run counts too.
@@ -340,9 +352,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     run.add_argument('--json', type=Path, help='write the result here')
     run.add_argument('--laser-mount', type=float, nargs=3, default=(0.0, 0.0, 0.0), metavar=('X', 'Y', 'YAW'),
                      help='where the laser sits on the base (m, m, rad)')
+    run.add_argument('--dynamics', default='', choices=('', *PRESETS),
+                     help='a physics base of this preset (fastep_core/dynamics) in place of the kinematic one')
     options = parser.parse_args(args)
     result = run_world(options.world, laser=not options.no_laser, timeout=options.timeout,
-                       algorithm=options.algorithm, log_dir=options.log_dir, laser_mount=tuple(options.laser_mount))
+                       algorithm=options.algorithm, log_dir=options.log_dir, laser_mount=tuple(options.laser_mount),
+                       dynamics=options.dynamics)
     text = json.dumps(asdict(result), indent=1)
     print(text)
     if options.json:
