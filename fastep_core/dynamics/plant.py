@@ -162,7 +162,8 @@ class PhysicsPlant:
             self._until_control -= n
             self._steps += n
         self.state = self._true_state()
-        self.odom.update(self._angles(), self.time - before)
+        if self.time > before:   # no physics step, no new encoder reading (a twist of 0 / 0 s is not a stop)
+            self.odom.update(self._angles(), self.time - before)
 
     def measured_velocity(self) -> FloatArray:
         return self.odom.twist.copy()
