@@ -16,7 +16,9 @@ Each robot has a plant (fastep_core/dynamics/plant.py): its kinematic model inte
 robot whose spec has `dynamics`, a differential-drive base with mass in MuJoCo behind its own controller. A
 planner is given the plant's TRUE pose as its state (as a perfect localizer would give it) and the plant's
 measured velocity (its odometry's twist) before the tick's command; trajectories, path length and collisions are
-the true state's; the other robots see its true map-frame velocity. A kinematic plant's measured velocity is the
+the true state's; the other robots see its true map-frame velocity. A robot with mass goes through the control loop
+as on a robot (fastep_core/planning/control.py: the velocity smoother, closed on its odometry), with or without
+realtime; without, its plan is each tick's own. A kinematic plant's measured velocity is the
 command it last applied, so kinematic runs are what they were before plants, bit for bit.
 """
 
@@ -145,6 +147,10 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     runs = [RobotRun(spec.name, spec.model) for spec in specs]
     latencies = [PlanLatency(realtime) for _ in specs] if realtime is not None else None
     controls = [ControlTick(nav) for nav in navigators] if realtime is not None else None
+    # A robot with mass is driven as on a robot: each tick's plan through the control loop (smoother, guard,
+    # closed loop on its odometry: planning/control.py), the clock still waiting for the plan in lock step.
+    smoothed = [ControlTick(nav) if realtime is None and spec.dynamics is not None else None
+                for nav, spec in zip(navigators, specs)]
     for run, latency in zip(runs, latencies or ()):
         run.realtime = latency
     for nav, spec, run, state in zip(navigators, specs, runs, states):
@@ -193,7 +199,14 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             start = time.perf_counter()
             sense = senses[i]
             measured = plants[i].measured_velocity()   # the odometry's twist, before this tick's command
-            if latencies is None or controls is None:
+            control = smoothed[i]
+            if control is not None:
+                seen = views[i] if sense is None else sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
+                if sense is not None:
+                    nav.seen = sense.recent.seen()
+                plan = Plan.of(nav, t, nav.update(t, states[i], seen, velocity=measured), seen[len(views[i]):])
+                commands.append(control.command(t, states[i], views[i], plan, dt, velocity=measured))
+            elif latencies is None or controls is None:
                 seen = views[i] if sense is None else sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
                 commands.append(nav.update(t, states[i], seen, velocity=measured))
             else:
@@ -204,7 +217,7 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                         sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
                     if sense is not None:
                         nav.seen = sense.recent.seen()   # backing up only where its scans saw free space
-                    plan = Plan.of(nav, t, nav.update(t, states[i], seen), seen[len(views[i]):])
+                    plan = Plan.of(nav, t, nav.update(t, states[i], seen, velocity=measured), seen[len(views[i]):])
                     latency.submit(plan, t, time.perf_counter() - start)
                 commands.append(controls[i].command(t, states[i], views[i], latency.plan, dt, velocity=measured))
             runs[i].compute_time += time.perf_counter() - start

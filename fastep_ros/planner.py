@@ -628,7 +628,7 @@ class PlannerNode(LifecycleNode):
                 self.get_logger().error(f'planning stalled: the newest plan is {age:.2f} s old (max_plan_age '
                                         f'{self.max_plan_age:g} s); stopped until a pass ends')
             self.plan_problem = f'planning stalled: plan {age:.2f} s old (max_plan_age {self.max_plan_age:g} s)'
-            return control.stop(t, period, velocity, measured_at)
+            return control.stop(t, period, velocity, measured_at, state)
         self.plan_problem = ''
         try:
             return control.command(t, state, told, plan, period, velocity, measured_at)

@@ -12,9 +12,11 @@ kept. A base that does what it is told (every kinematic plant) never falls short
 configured limit, and it is never above it.
 
 `braking` is what stopping distances use (the guard's look-ahead, FAStep-Route's approach to its goal, the turn to a
-goal's heading): the braking measured, or, before the base has braked hard, the acceleration measured (motors that
-cannot speed a base up quickly rarely stop it quickly), or the configured limit. Nav2 has no such estimate: its
-velocity_smoother's CLOSED_LOOP feedback (planning/smoother.py) is the anchor for taking odometry over commands.
+goal's heading): the braking measured, or, before the base has braked hard, UNSEEN_BRAKING of the acceleration
+measured (motors that cannot speed a base up quickly rarely stop it quickly, and on a slippery floor a braking
+base's weight leaves its driven wheels: 1.3 m/s^2 braking after 2.0 accelerating, fastep_core/dynamics), or the
+configured limit. Nav2 has no such estimate: its velocity_smoother's CLOSED_LOOP feedback (planning/smoother.py) is
+the anchor for taking odometry over commands.
 """
 
 from __future__ import annotations
@@ -38,6 +40,7 @@ RUN_TIME = 0.2                 # s: the least time of a run of saturated interva
 WEAK_SHARE = 0.8               # status says the base tracks worse than configured below this share of a limit
 LONGEST_INTERVAL = 0.5         # s: a gap between observations longer than this (a pause) measures nothing
 LEAST_RATE = 0.05              # m/s^2, rad/s^2: the least rate a measurement gives
+UNSEEN_BRAKING = 0.6           # braking assumed, before any is measured, as a share of the acceleration measured
 DEMANDED = 0.8                 # an interval measures when its command asked at least this share of the limit
 
 
@@ -73,8 +76,12 @@ class AxisResponse:
 
     @property
     def shown(self) -> float | None:
-        """The rate to plan stops with, as measured: braking, else acceleration, None before either."""
-        return self.braking if self.braking is not None else self.accelerating
+        """The rate to plan stops with, as measured: braking, else UNSEEN_BRAKING of the acceleration (a base
+        seen only speeding up slower than configured may brake slower still: its weight leaves the driven wheels
+        as it brakes), None before either."""
+        if self.braking is not None:
+            return self.braking
+        return None if self.accelerating is None else max(UNSEEN_BRAKING * self.accelerating, LEAST_RATE)
 
     def stopping(self, limit: float) -> float:
         """`shown` within a positive configured `limit`; the limit itself before anything is measured."""
@@ -96,6 +103,38 @@ class BaseResponse:
     turn: AxisResponse = field(default_factory=AxisResponse)
     sent: deque[FloatArray] = field(default_factory=lambda: deque(maxlen=FEEDBACK_COMMANDS))
     _last: tuple[float, FloatArray, FloatArray] | None = None   # (t, measured, command sent then)
+    _pose: tuple[float, FloatArray] | None = None   # (t, state) of the last `slide`
+    _slid: FloatArray | None = None    # the velocity the poses showed over the last interval, when faster
+
+    def slide(self, at: float, measured: FloatArray, state: FloatArray) -> FloatArray:
+        """The velocity to act on at `at`: the measured one (odometry's twist), unless the robot's poses (its state,
+        localized) moved at a speed more than FEEDBACK_BOUND from it since the last call: then what they show (wheels
+        that spin or slow on a slippery floor while the base slides: encoders do not see it). A kinematic plant's
+        poses move as its twist says (a steered robot's chord is a little shorter than its arc), so for it this is
+        the twist itself."""
+        pose = np.asarray(state, dtype=float)
+        last = self._pose
+        if last is None or at > last[0]:
+            self._pose = (at, pose.copy())
+        if last is not None and at > last[0] and at - last[0] <= LONGEST_INTERVAL and len(pose) >= 2:
+            dt = at - last[0]
+            moved = (pose[:2] - last[1][:2]) / dt
+            if self.holonomic:
+                apart = math.hypot(float(moved[0] - measured[0]), float(moved[1] - measured[1]))
+                self._slid = moved if apart > FEEDBACK_BOUND[0] else None
+            else:
+                along = float(moved[0]) * math.cos(float(pose[2])) + float(moved[1]) * math.sin(float(pose[2]))
+                self._slid = np.array([along, 0.0]) if abs(along - float(measured[0])) > FEEDBACK_BOUND[0] else None
+        elif last is None or at - last[0] > LONGEST_INTERVAL:
+            self._slid = None
+        return self.corrected(measured)
+
+    def corrected(self, measured: FloatArray) -> FloatArray:
+        """`measured` with the slide the last `slide` found (its turn rate kept), if any."""
+        slid = self._slid
+        if slid is None:
+            return measured
+        return slid.copy() if self.holonomic else np.array([float(slid[0]), float(measured[1])])
 
     def retune(self, max_acceleration: float, max_turn_acceleration: float) -> None:
         self.max_acceleration, self.max_turn_acceleration = max_acceleration, max_turn_acceleration

@@ -112,7 +112,7 @@ class ControlTick:
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
         self.smoother.period = dt
-        self._measured = self._feedback(velocity, t if measured_at is None else measured_at)
+        self._measured = self._feedback(velocity, t if measured_at is None else measured_at, state)
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
         before = self.smoother.velocity.copy()
         sent = self.smoother.smooth(wanted, elapsed, emergency)
@@ -130,19 +130,22 @@ class ControlTick:
         self._sent(t, sent)
         return sent
 
-    def _feedback(self, velocity: FloatArray | None, at: float) -> FloatArray | None:
-        """The measured velocity (finite, or None), given to the smoother (its closed loop) when it is newer than
-        the last one given (odometry slower than the control loop repeats itself: an old twist is not the base now)."""
+    def _feedback(self, velocity: FloatArray | None, at: float, state: FloatArray) -> FloatArray | None:
+        """The measured velocity (finite, or None), given to the smoother (its closed loop) when it is newer than the
+        last one given (odometry slower than the control loop repeats itself: an old twist is not the base now);
+        returned with a slide its poses show (BaseResponse.slide), for the guard, arrival and the braking measured."""
         self._measured_at = at
         if velocity is None:
             return None
         measured = np.asarray(velocity, dtype=float).reshape(2)
-        if not np.isfinite(measured).all():
+        position = np.asarray(state, dtype=float)
+        if not (np.isfinite(measured).all() and np.isfinite(position).all()):
             return None
         if self._fed_at is None or at > self._fed_at:
             self._fed_at = at
+            # The wheels' own velocity: what the base's controller follows (a slide's would ask the wheels for more).
             self.smoother.feedback(measured)
-        return measured
+        return self.response.slide(at, measured, position)
 
     def _sent(self, t: float, sent: FloatArray) -> None:
         """`sent` goes to the base: the controller hears it, the base's response is measured against it."""
@@ -174,12 +177,13 @@ class ControlTick:
         return dt + (0.5 * speed / braking if braking > 0.0 else 0.0)
 
     def stop(self, t: float, dt: float, velocity: FloatArray | None = None,
-             measured_at: float | None = None) -> FloatArray:
+             measured_at: float | None = None, state: FloatArray | None = None) -> FloatArray:
         """A stop the control loop must make without a plan to judge by (a robot held still): braking at
         emergency_deceleration from what the robot does (velocity: as measured at measured_at, None: as told)."""
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
-        self._measured = self._feedback(velocity, t if measured_at is None else measured_at)
+        self._measured = None if state is None else \
+            self._feedback(velocity, t if measured_at is None else measured_at, state)
         sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
         self._sent(t, sent)
         return sent

@@ -245,6 +245,11 @@ class Navigator:
         (the controller, the guard's stop, a recovery): its next command starts from there.
         """
         measured = self._last_command if velocity is None else np.asarray(velocity, dtype=float).reshape(2)
+        if np.isfinite(measured).all() and np.isfinite(state).all():
+            # A slide the wheels do not see shows in the poses (BaseResponse.slide); where a control loop measures,
+            # the slide it found last.
+            measured = self.response.corrected(measured) if self.response_fed_elsewhere else \
+                self.response.slide(t if measured_at is None else measured_at, measured, state)
         command = self.tick(t, state, others, measured)
         # Standing still: every component 0 (NaN counts as moving, as for np.any; this runs every tick, where
         # np.any on two numbers cost as much as the guard's obstacle test).

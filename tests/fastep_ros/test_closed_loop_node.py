@@ -60,15 +60,16 @@ def test_a_planner_told_the_twist_stops_a_slow_braking_base_before_the_wall(cont
         if twist:
             assert node.navigator.mode.value == 'arrived' and clearance > 0.1 and float(state[0]) < 5.1
             assert abs(float(velocity[0])) <= node.params.trans_stopped_velocity
-            assert any('the base tracks worse than configured: braking 0.8 m/s^2 measured, max_acceleration 2.5'
+            # Seen speeding up at 0.8: stops planned at 0.6 of that until it has braked hard.
+            assert any('the base tracks worse than configured: braking 0.48 m/s^2 measured, max_acceleration 2.5'
                        in reason for reason in said)
             base = {task.task: task for task in node.reports.diagnostic_tasks()}['base']
-            assert base.level == DiagnosticStatus.WARN and base.values['braking'] == pytest.approx(0.8, rel=0.05)
+            assert base.level == DiagnosticStatus.WARN and base.values['braking'] == pytest.approx(0.48, rel=0.05)
         else:
-            # A twist of zeros while the robot moves: the base looks as if it never sped up. It is planned with the
-            # least rate, status says so, and the robot never meets the wall.
-            assert clearance > 0.0
-            assert any('the base tracks worse than configured: braking 0.05 m/s^2 measured' in r for r in said)
+            # A twist of zeros while the robot moves: not the base's velocity. Status says so; the robot drives on
+            # what its poses show and stops at its goal all the same.
+            assert node.navigator.mode.value == 'arrived' and clearance > 0.1
+            assert any('odometry twist 0.00 m/s while its pose moves at' in reason for reason in said)
     finally:
         node.destroy_node()
 
