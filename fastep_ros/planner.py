@@ -589,7 +589,7 @@ class PlannerNode(LifecycleNode):
             else:
                 self.hold = ''
                 command = self.navigate(nav, t, state, self.inputs.other_robots(t), self.inputs.velocity(),
-                                        self.inputs.odom_stamp)
+                                        self.inputs.odom_stamp, self.inputs.odometry_state())
         self.publish_command(command, at)
         self.last_command = command
         if self.actions is not None:
@@ -615,7 +615,7 @@ class PlannerNode(LifecycleNode):
         self.hold = problem
         if state is None:
             return control.stop(t, period)
-        velocity, measured_at = self.inputs.velocity(), self.inputs.odom_stamp
+        velocity, measured_at, pose = self.inputs.velocity(), self.inputs.odom_stamp, self.inputs.odometry_state()
         told = self.inputs.told_others(t)
         scan, self.inputs.latest_scan = self.inputs.latest_scan, None
         self.control_count += 1
@@ -628,10 +628,10 @@ class PlannerNode(LifecycleNode):
                 self.get_logger().error(f'planning stalled: the newest plan is {age:.2f} s old (max_plan_age '
                                         f'{self.max_plan_age:g} s); stopped until a pass ends')
             self.plan_problem = f'planning stalled: plan {age:.2f} s old (max_plan_age {self.max_plan_age:g} s)'
-            return control.stop(t, period, velocity, measured_at, state)
+            return control.stop(t, period, velocity, measured_at, pose)
         self.plan_problem = ''
         try:
-            return control.command(t, state, told, plan, period, velocity, measured_at)
+            return control.command(t, state, told, plan, period, velocity, measured_at, pose)
         except Exception as exc:  # a fault of the control tick stops this robot, never the node
             if not self.fault_logged:
                 self.get_logger().error(f'control fault: {exc}\n{traceback.format_exc()}')
@@ -649,16 +649,17 @@ class PlannerNode(LifecycleNode):
         if snapshot.scan is not None:
             self.inputs.perceive(snapshot.scan, t, state=state, told=snapshot.others)
         tracked = self.inputs.scan_perception.movers(t)
-        command = self.navigate(nav, t, state, [*snapshot.others, *tracked], snapshot.velocity, snapshot.measured_at)
+        command = self.navigate(nav, t, state, [*snapshot.others, *tracked], snapshot.velocity, snapshot.measured_at,
+                                None)
         self.plan_tick = snapshot.tick
         return Plan.of(nav, t, command, tracked)
 
     def navigate(self, nav: Navigator, t: float, state: np.ndarray, others: list[OtherRobot],
-                 velocity: np.ndarray | None, measured_at: float | None) -> np.ndarray:
-        """The navigator's update (velocity: what the base measurably does, as of measured_at); a fault of the
-        planner fails its goal and stops this robot, never the node."""
+                 velocity: np.ndarray | None, measured_at: float | None, pose: np.ndarray | None) -> np.ndarray:
+        """The navigator's update (velocity: what the base measurably does, as of measured_at, with the odometry's
+        own pose then); a fault of the planner fails its goal and stops this robot, never the node."""
         try:
-            command = nav.update(t, state, others, velocity, measured_at)
+            command = nav.update(t, state, others, velocity, measured_at, pose)
             if not np.all(np.isfinite(command)):
                 raise FloatingPointError(f'command {command.tolist()} is not finite')
             return command

@@ -401,6 +401,16 @@ class PlannerInputs:
             state = self.node.navigator.model.integrate(state, self.node.last_command, lag)
         return state, ''
 
+    def odometry_state(self) -> np.ndarray | None:
+        """The state of the odometry `state` last took, in its own frame, at its stamp: measured, not predicted
+        forward (what shows the base sliding where the twist does not: BaseResponse.slide)."""
+        if self.odom is None:
+            return None
+        try:
+            return convert.pose_to_state(self.odom.pose, self.node.model, self.trailer)
+        except ValueError:
+            return None
+
     def check_twist(self, odom: frames.StampedPose) -> None:
         """Does a new odometry's twist agree with how far its pose moved since the last one? A driver that leaves
         the twist zero (or wrong) would make the closed loop hold the robot to a creep: after TWIST_CHECKS messages

@@ -71,8 +71,8 @@ def _worlds() -> dict[str, Scenario]:
     return {w.name: w for w in (
         _scenario('open_room', 'an empty 10 m x 6 m room, 7 m straight ahead', (10.0, 6.0), [],
                   (1.5, 3.0, 0.0), (8.5, 3.0)),
-        _scenario('wall_ahead', 'a 9 m x 6 m room, the goal 6.95 m straight ahead and 0.45 m before its far wall',
-                  (9.0, 6.0), [], (1.5, 3.0, 0.0), (8.45, 3.0)),
+        _scenario('wall_ahead', 'a 9 m x 6 m room, the goal 7.45 m straight ahead and 0.45 m before its far wall',
+                  (9.0, 6.0), [], (1.0, 3.0, 0.0), (8.45, 3.0)),
         _scenario('behind_wall', 'a 14 m x 10 m room halved by a wall with a 2.5 m gap at the bottom; the goal is '
                   'behind it', (14.0, 10.0), [{'segment': {'start': [7.0, 2.6], 'end': [7.0, 9.9]}}],
                   (3.0, 6.0, 0.0), (11.0, 6.0)),

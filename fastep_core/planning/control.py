@@ -105,14 +105,17 @@ class ControlTick:
         self.reason = ''        # why this tick's command differs from the plan's ('' when it does not)
 
     def command(self, t: float, state: FloatArray, others: Sequence[OtherRobot], plan: Plan | None,
-                dt: float, velocity: FloatArray | None = None, measured_at: float | None = None) -> FloatArray:
+                dt: float, velocity: FloatArray | None = None, measured_at: float | None = None,
+                pose: FloatArray | None = None) -> FloatArray:
         """This tick's command on `plan` (a stop without one, or when it is not under way), smoothed. velocity:
         what the base measurably does (odometry's twist, the model's command form) as of `measured_at` (its stamp;
-        None: t); None: what it was told."""
+        None: t); None: what it was told. pose: the odometry's own pose then (default: state; a state predicted
+        forward with the command would show the command, not the base)."""
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
         self.smoother.period = dt
-        self._measured = self._feedback(velocity, t if measured_at is None else measured_at, state)
+        self._measured = self._feedback(velocity, t if measured_at is None else measured_at,
+                                        state if pose is None else pose)
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
         before = self.smoother.velocity.copy()
         sent = self.smoother.smooth(wanted, elapsed, emergency)
@@ -177,13 +180,14 @@ class ControlTick:
         return dt + (0.5 * speed / braking if braking > 0.0 else 0.0)
 
     def stop(self, t: float, dt: float, velocity: FloatArray | None = None,
-             measured_at: float | None = None, state: FloatArray | None = None) -> FloatArray:
+             measured_at: float | None = None, pose: FloatArray | None = None) -> FloatArray:
         """A stop the control loop must make without a plan to judge by (a robot held still): braking at
-        emergency_deceleration from what the robot does (velocity: as measured at measured_at, None: as told)."""
+        emergency_deceleration from what the robot does (velocity: as measured at measured_at with the odometry's
+        pose then; None: as told)."""
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
-        self._measured = None if state is None else \
-            self._feedback(velocity, t if measured_at is None else measured_at, state)
+        self._measured = None if pose is None else \
+            self._feedback(velocity, t if measured_at is None else measured_at, pose)
         sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
         self._sent(t, sent)
         return sent

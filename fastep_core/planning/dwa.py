@@ -78,13 +78,14 @@ class DynamicWindow(Navigator):
         self.escapes_traps = bool(params.dwa_escape)
 
     def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = (),
-               velocity: FloatArray | None = None, measured_at: float | None = None) -> FloatArray:
+               velocity: FloatArray | None = None, measured_at: float | None = None,
+               pose: FloatArray | None = None) -> FloatArray:
         if self._last_t is not None and t - self._last_t > 2.0 * self.params.dt:
             self.velocity = np.zeros(2)   # ticks were missed (a planner node holding a robot): start from rest
         if velocity is not None and np.isfinite(velocity).all() and \
                 off_commands(np.asarray(velocity, dtype=float), (self.velocity,), self.holonomic_window):
             self.velocity = np.array(velocity, dtype=float)   # the window is centred on what the base does
-        command = super().update(t, state, others, velocity, measured_at)
+        command = super().update(t, state, others, velocity, measured_at, pose)
         # Whatever was sent (a guarded stop, zeros at the goal) is the velocity the next window starts from.
         self.velocity = np.array(command[:2], dtype=float)
         if self.failed and self.reason.startswith('failed to make progress') and LOCAL_MINIMUM not in self.reason:

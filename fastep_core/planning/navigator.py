@@ -236,10 +236,12 @@ class Navigator:
 
     # ------------------------------------------------------------- the loop
     def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = (),
-               velocity: FloatArray | None = None, measured_at: float | None = None) -> FloatArray:
+               velocity: FloatArray | None = None, measured_at: float | None = None,
+               pose: FloatArray | None = None) -> FloatArray:
         """One control tick: returns the command for the model (zeros when stopped). velocity: what the base
         measurably does now (odometry's twist, in the model's command form), measured at `measured_at` (its stamp;
-        None: t); None: the last command returned.
+        None: t); None: the last command returned. pose: the odometry's own pose then, in its frame (default: state),
+        which shows a slide the twist does not (BaseResponse.slide).
 
         A controller with acceleration limits (diff_drive) is told the command the robot got, whatever chose it
         (the controller, the guard's stop, a recovery): its next command starts from there.
@@ -248,8 +250,9 @@ class Navigator:
         if np.isfinite(measured).all() and np.isfinite(state).all():
             # A slide the wheels do not see shows in the poses (BaseResponse.slide); where a control loop measures,
             # the slide it found last.
+            at = t if measured_at is None else measured_at
             measured = self.response.corrected(measured) if self.response_fed_elsewhere else \
-                self.response.slide(t if measured_at is None else measured_at, measured, state)
+                self.response.slide(at, measured, state if pose is None else pose)
         command = self.tick(t, state, others, measured)
         # Standing still: every component 0 (NaN counts as moving, as for np.any; this runs every tick, where
         # np.any on two numbers cost as much as the guard's obstacle test).

@@ -93,6 +93,14 @@ def test_the_worlds_are_one_diff_drive_robot_and_open_room_is_the_shortest() -> 
     assert not WORLDS['unmapped_box'].is_static   # the box is in the truth, not on the map
 
 
+def test_a_heavy_base_on_wall_time_stops_at_a_goal_before_a_wall() -> None:
+    """The report: a 40 kg base on weak motors arrived at 0.9 m/s and hit the wall 0.45 m behind its goal."""
+    result = run_world('wall_ahead', dynamics='heavy', timeout=90.0, start_timeout=90.0)
+    assert result.arrived, result
+    assert not result.collided and result.min_clearance > 0.0, result
+    assert result.final_distance < 0.2 and result.arrival_speed < 0.5, result
+
+
 def test_the_planner_drives_the_wall_time_base_to_the_goal_of_the_shortest_world() -> None:
     result = run_world('open_room', timeout=90.0, start_timeout=90.0)
     assert result.arrived, result
