@@ -55,11 +55,14 @@ class AxisResponse:
     _time: float = 0.0
     _intervals: int = 0
 
-    def interval(self, demand: float, achieved: float, off: bool, dt: float, limit: float) -> None:
-        """One control period: `demand` the change the command asked of the measured velocity (negative: less
-        speed), `achieved` what the base did in the command's direction, `off` whether the base ended off its recent
-        commands, `limit` the configured rate (0: unlimited)."""
-        counts = off and limit > 0.0 and abs(demand) >= DEMANDED * limit * dt
+    def interval(self, demand: float, achieved: float, off: bool, dt: float, limit: float,
+                 window: float | None = None) -> None:
+        """One control period of dt seconds: `demand` the change the command asked of the measured velocity
+        (negative: less speed), `achieved` what the base did in the command's direction, `off` whether the base
+        ended off its recent commands, `limit` the configured rate (0: unlimited), `window` the most time one
+        command's change is spread over (the smoother's period; None: dt): a late tick asks no more than that."""
+        span = dt if window is None else min(dt, window)
+        counts = off and limit > 0.0 and abs(demand) >= DEMANDED * limit * span
         kind = ('braking' if demand < 0.0 else 'accelerating') if counts else ''
         if kind != self._kind:
             self._kind, self._change, self._time, self._intervals = kind, 0.0, 0.0, 0
@@ -99,6 +102,7 @@ class BaseResponse:
     holonomic: bool
     max_acceleration: float = 0.0          # the configured limits (PlannerParams; `retune`)
     max_turn_acceleration: float = 0.0
+    period: float | None = None            # the control period, the most a command's ramp spans (None: any)
     linear: AxisResponse = field(default_factory=AxisResponse)
     turn: AxisResponse = field(default_factory=AxisResponse)
     sent: deque[FloatArray] = field(default_factory=lambda: deque(maxlen=FEEDBACK_COMMANDS))
@@ -169,13 +173,13 @@ class BaseResponse:
             along = (change / size) if size > 0.0 else np.zeros(2)
             less = math.hypot(float(held[0]), float(held[1])) < math.hypot(float(before[0]), float(before[1]))
             self.linear.interval(-size if less else size, float(np.dot(now - before, along)), off, dt,
-                                 self.max_acceleration)
+                                 self.max_acceleration, self.period)
             return
         for axis, i, limit in ((self.linear, 0, self.max_acceleration), (self.turn, 1, self.max_turn_acceleration)):
             wanted = float(held[i] - before[i])
             less = abs(float(held[i])) < abs(float(before[i]))
             achieved = (1.0 if wanted >= 0.0 else -1.0) * float(now[i] - before[i])
-            axis.interval(-abs(wanted) if less else abs(wanted), achieved, off, dt, limit)
+            axis.interval(-abs(wanted) if less else abs(wanted), achieved, off, dt, limit, self.period)
 
     @property
     def braking(self) -> float:

@@ -113,7 +113,7 @@ class ControlTick:
         forward with the command would show the command, not the base)."""
         elapsed = dt if self._last_t is None or not t > self._last_t else t - self._last_t
         self._last_t = t
-        self.smoother.period = dt
+        self.smoother.period = self.response.period = dt
         self._measured = self._feedback(velocity, t if measured_at is None else measured_at,
                                         state if pose is None else pose)
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)

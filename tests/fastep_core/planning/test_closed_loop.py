@@ -216,3 +216,15 @@ def test_the_control_tick_judges_slides_by_the_odometry_pose_not_the_state_predi
         control.command(t, state, [], plan, DT, twist, t, pose)
         assert nav.response.corrected(twist) is twist   # no slide: the base does what its odometry says
         pose = pose + np.array([0.5 * DT, 0.0, 0.0])
+
+
+def test_late_ticks_still_measure_a_base_that_cannot_follow_its_ramp():
+    """On a busy machine ticks come late: the smoother still ramps at most one period's change per command, and the
+    base was measured only when the check allowed for it (a heavy base taken at 2.5 m/s^2 drove into the wall)."""
+    response = BaseResponse(False, 2.5, 3.2, period=DT)
+    velocity, t = 0.0, 0.0
+    for _ in range(12):
+        command = velocity + 2.5 * DT   # the closed-loop ramp from what the base does
+        response.observe(t, np.array([velocity, 0.0]), np.array([command, 0.0]))
+        velocity, t = velocity + 0.8 * 0.09, t + 0.09   # 90 ms ticks; the base accelerates at 0.8
+    assert response.linear.accelerating == pytest.approx(0.8)
