@@ -38,6 +38,7 @@ setup(
         (f'share/{PACKAGE}', ['package.xml']),
         (f'share/{PACKAGE}/scenarios', glob('fastep_core/scenarios/*.yaml')),
         (f'share/{PACKAGE}/config', glob('config/*.yaml')),
+        (f'share/{PACKAGE}/launch', glob('launch/*.launch.py')),   # ros2 launch fastep_ros planner.launch.py
     ],
     python_requires='>=3.11',
     install_requires=([] if ros_installed() else ROS_WHEELS) + [

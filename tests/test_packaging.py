@@ -53,7 +53,7 @@ def console_scripts() -> list[str]:
 def third_party_imports() -> set[str]:
     """Top-level names of every module the product imports (anywhere in a file), less the stdlib and itself."""
     names: set[str] = set()
-    for package in PRODUCT:
+    for package in (*PRODUCT, 'launch'):   # launch/: the installed launch files
         for path in (ROOT / package).rglob('*.py'):
             for node in ast.walk(ast.parse(path.read_text(), str(path))):
                 if isinstance(node, ast.Import):
@@ -64,7 +64,8 @@ def third_party_imports() -> set[str]:
 
 
 def is_ros_package(name: str) -> bool:
-    return name in {'rclpy', 'tf2_ros', 'launch', 'launch_ros'} or name.endswith(('_msgs', '_interfaces', '_srvs'))
+    return (name in {'rclpy', 'tf2_ros', 'launch', 'launch_ros', 'ament_index_python'}
+            or name.endswith(('_msgs', '_interfaces', '_srvs')))
 
 
 def package_xml_keys(tag: str) -> set[str]:
@@ -165,6 +166,9 @@ def test_colcon_build_installs_every_console_script_where_ros2_run_looks(colcon_
     installed = sorted(p.name for p in lib.iterdir() if p.is_file() and os.access(p, os.X_OK))
     assert installed == console_scripts()
     assert (colcon_install / PACKAGE / 'share' / PACKAGE / 'package.xml').is_file()
+    # Where `ros2 launch fastep_ros planner.launch.py` finds it (the share folder), with the params it defaults to.
+    assert (colcon_install / PACKAGE / 'share' / PACKAGE / 'launch' / 'planner.launch.py').is_file()
+    assert (colcon_install / PACKAGE / 'share' / PACKAGE / 'config' / 'planner.yaml').is_file()
 
 
 # `ros2 run PKG EXE ARGS` (ros2run's logic, without the ros2 CLI): the prefix from the ament index, then
