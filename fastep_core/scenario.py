@@ -1,7 +1,8 @@
 """Scenario files (formats v1 and v2, YAML): a workspace, its obstacles, the robots and optional planner overrides.
 
 Format v2 adds moving circles, obstacles missing from the map, misplaced ones, a robot's laser, the
-`diff_drive` model and its `dynamics` (a base with mass: fastep_core/dynamics); every v1 file loads and means
+`diff_drive` model and its `dynamics` (a base with mass: fastep_core/dynamics) and `footprint` (its real outline:
+fastep_core/footprint.py); every v1 file loads and means
 what it did. `Scenario.world` is the true world of the still obstacles; `Scenario.obstacle_specs` lists every
 obstacle with its v2 keys, and fastep_core/dynamic_world.py turns them into the truth over time and the
 planner's map.
@@ -34,6 +35,7 @@ from fastep_core import yaml_checks as check
 from fastep_core.dynamic_world import Motion, ObstacleSpec
 from fastep_core.dynamics.params import BaseDynamics, dynamics_data, robot_dynamics
 from fastep_core.errors import GoalError, ParameterError, ScenarioError
+from fastep_core.footprint import Footprint
 from fastep_core.geometry import Circle, Obstacle, Segment, point_segment_distance
 from fastep_core.kinematics.tractor_trailer import wrap_angle
 from fastep_core.planning.params import PlannerParams
@@ -54,7 +56,7 @@ _START_LENGTH = {'point_mass': 2, 'tractor_trailer': 4, 'diff_drive': 3}
 _START_FORM = {2: '[x, y]', 3: '[x, y, theta]', 4: '[x, y, theta0, theta1]'}
 _TOP_KEYS = ('name', 'description', 'workspace', 'obstacles', 'robots', 'planner')
 _ROBOT_KEYS = ('name', 'model', 'start', 'goal', 'radius')
-_OPTIONAL_ROBOT_KEYS = ('sensor', 'dynamics')
+_OPTIONAL_ROBOT_KEYS = ('sensor', 'dynamics', 'footprint')
 _SENSOR_KEYS = ('range', 'fov', 'beams', 'noise', 'mount')
 _OBSTACLE_EXTRAS = ('motion', 'known', 'position_sigma')   # v2: beside the shape key of an obstacle entry
 _MOTION_KEYS = ('waypoints', 'speed')
@@ -84,6 +86,7 @@ class RobotSpec:
     sensor: LaserSpec | None = None   # v2: a planar laser scanner at the reference point
     goal_heading: float | None = None  # v2, diff_drive: the heading to end in (radians; goal [x, y, theta])
     dynamics: BaseDynamics | None = None   # v2, diff_drive: a base with mass (a physics plant); None: kinematic
+    footprint: Footprint | None = None   # v2, diff_drive: the real outline in the robot frame; radius covers it
 
 
 @dataclass(frozen=True)
@@ -255,9 +258,39 @@ def _tractor_dimensions(data: Mapping[str, Any], path: str) -> dict[str, float]:
     return dims
 
 
+def _footprint(value: Any, path: str, model: str) -> Footprint:
+    """A robot's outline: [[x, y], ...] in its frame, counter-clockwise (clockwise is reordered), base_link inside.
+    Only a diff_drive robot has one: a point mass has no heading to turn it by, and a tractor-trailer's body is
+    its length and width."""
+    if model != 'diff_drive':
+        raise check.Invalid(f'{path} is only valid for model diff_drive (a robot with a heading), not {model}')
+    if not isinstance(value, list):
+        raise check.Invalid(f'{path} must be a list of [x, y] vertices, got {check.show(value)}')
+    vertices = [check.point(p, f'{path}[{i}]') for i, p in enumerate(value)]
+    try:
+        return Footprint.parse(vertices, what=path)
+    except ValueError as exc:
+        raise check.Invalid(str(exc)) from None
+
+
+def _radius(data: Mapping[str, Any], path: str, footprint: Footprint | None) -> float:
+    """The safety radius: as given, or with a footprint and no radius the footprint's circumscribed one (what the
+    planners keep clear wherever they need a circle); a given radius must cover the footprint."""
+    if 'radius' not in data:
+        if footprint is None:
+            raise check.Invalid(f'{path}: missing required key \'radius\' (or a footprint)')
+        return footprint.radius
+    radius = check.positive(data['radius'], f'{path}.radius')
+    if footprint is not None and not footprint.holds(radius):
+        raise check.Invalid(f'{path}.radius {radius:g} m is below the footprint\'s circumscribed radius '
+                            f'{footprint.radius:.6g} m (its farthest vertex from base_link)')
+    return radius
+
+
 def _robot(value: Any, path: str) -> RobotSpec:
     data = check.mapping(value, path)
-    check.keys(data, path, _ROBOT_KEYS + _TRACTOR_KEYS + _OPTIONAL_ROBOT_KEYS, _ROBOT_KEYS)
+    required = tuple(key for key in _ROBOT_KEYS if key != 'radius' or 'footprint' not in data)
+    check.keys(data, path, _ROBOT_KEYS + _TRACTOR_KEYS + _OPTIONAL_ROBOT_KEYS, required)
     name = _robot_name(data['name'], f'{path}.name')
     model = _model(data['model'], f'{path}.model')
     if model != 'tractor_trailer':
@@ -268,8 +301,9 @@ def _robot(value: Any, path: str) -> RobotSpec:
     start = check.numbers(data['start'], f'{path}.start', n, _START_FORM[n])
     start = start[:2] + tuple(_heading(theta) for theta in start[2:])
     goal, heading = _goal(data['goal'], f'{path}.goal', model)
+    footprint = _footprint(data['footprint'], f'{path}.footprint', model) if 'footprint' in data else None
     robot = RobotSpec(name=name, model=model, start=start, goal=goal, goal_heading=heading,
-                      radius=check.positive(data['radius'], f'{path}.radius'),
+                      radius=_radius(data, path, footprint), footprint=footprint,
                       sensor=_sensor(data['sensor'], f'{path}.sensor') if 'sensor' in data else None,
                       dynamics=robot_dynamics(data['dynamics'], f'{path}.dynamics', model)
                       if 'dynamics' in data else None,
@@ -361,13 +395,24 @@ def _description(value: Any) -> str:
 # ----------------------------------------------------------------------------------------------- placement
 
 def _check_placement(world: World, robots: Sequence[RobotSpec]) -> None:
-    """Starts and goals lie inside the workspace, clear of obstacles by each robot's radius."""
+    """Starts and goals lie inside the workspace, clear of obstacles by each robot's radius; a robot with a
+    footprint by its outline instead, at the start's heading and at the goal's (its circle where the goal has
+    none: it may arrive facing any way)."""
     for i, robot in enumerate(robots):
-        for what, point in (('start', robot.start[:2]), ('goal', robot.goal)):
+        footprint = robot.footprint
+        for what, point, heading in (('start', robot.start[:2], robot.start[2] if len(robot.start) > 2 else None),
+                                     ('goal', robot.goal, robot.goal_heading)):
             try:
-                world.check_point(point, robot.radius, what=what)
+                world.check_point(point, 0.0 if footprint is not None and heading is not None else robot.radius,
+                                  what=what)
             except GoalError as exc:
                 raise check.Invalid(f'robots[{i}] ({robot.name}): {exc}') from None
+            if footprint is not None and heading is not None:
+                clearance = float(footprint.clearance([point[0], point[1], heading], world.obstacles))
+                if clearance < 0.0:
+                    raise check.Invalid(f'robots[{i}] ({robot.name}): {what} ({point[0]:g}, {point[1]:g}) is '
+                                        f'occupied: its footprint at heading {heading:g} overlaps an obstacle by '
+                                        f'{-clearance:.3g} m')
 
 
 def _check_pairs(robots: Sequence[RobotSpec]) -> None:
@@ -493,6 +538,8 @@ def scenario_data(scenario: Scenario) -> dict[str, Any]:
                               **({'mount': list(robot.sensor.mount)} if any(robot.sensor.mount) else {})}
         if robot.dynamics is not None:
             item['dynamics'] = dynamics_data(robot.dynamics)
+        if robot.footprint is not None:
+            item['footprint'] = robot.footprint.to_list()
         robots.append(item)
     defaults = PlannerParams()
     planner = {name: getattr(scenario.planner, name) for name in PlannerParams.names()

@@ -27,7 +27,7 @@ from fastep_core.planning.navigator import Mode
 from fastep_core.scenario import RobotSpec, Scenario
 from fastep_core.simulator import Run, Tick, simulate
 from msg_tools import convert, frames
-from msg_tools.footprint import base_frame, circle_footprint
+from msg_tools.footprint import base_frame, circle_footprint, polygon_footprint
 from msg_tools.interface import (
     CLOCK,
     CMD_VEL,
@@ -93,8 +93,10 @@ class SimRecorder:
             self._add(0.0, robot_topic(spec.name, GOAL_POSE),
                       convert.point_to_pose_stamped(spec.goal, stamp, MAP_FRAME))
             self._odom(spec, 0.0, np.array(spec.start, dtype=float), np.zeros(2))
-            self._add(0.0, robot_topic(spec.name, FOOTPRINT),   # as each live planner announces its robot
-                      circle_footprint(spec.radius, base_frame(f'/{spec.name}'), stamp))
+            frame = base_frame(f'/{spec.name}')   # as each live planner announces its robot: its outline, or circle
+            self._add(0.0, robot_topic(spec.name, FOOTPRINT),
+                      circle_footprint(spec.radius, frame, stamp) if spec.footprint is None else
+                      polygon_footprint(spec.footprint.vertices, frame, stamp))
             goal = (float(spec.goal[0]), float(spec.goal[1]))
             state.plan = (goal,)
             self._add(0.0, robot_topic(spec.name, PLAN), convert.waypoints_to_path([goal], stamp, MAP_FRAME))
