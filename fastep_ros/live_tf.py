@@ -15,6 +15,7 @@ from rclpy.node import Node
 from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
 
 from msg_tools import frames
+from msg_tools.tf_buffer import TfBuffer
 
 __all__ = ['LOCALIZATION_QOS', 'TfBroadcaster', 'TfListener']
 
@@ -63,22 +64,24 @@ class TfBroadcaster:
 
 
 class TfListener:
-    """What /tf and /tf_static say, in a frames.TfTree, for lookups (the planner's goals in other frames); nothing
-    where tf2_msgs is missing. /tf_static is subscribed to (latched, rare); /tf is polled, taken when a lookup
-    needs it: every robot's odometry transform at 50 Hz, N times N on a graph, costs no executor wake-up."""
+    """What /tf and /tf_static say, in a msg_tools.tf_buffer.TfBuffer, for lookups (the planner's goals in other
+    frames, map -> odom, where its scans were taken); nothing where tf2_msgs is missing. /tf_static is subscribed
+    to (latched, rare); /tf is polled, taken when a lookup needs it: every robot's odometry transform at 50 Hz, N
+    times N on a graph, costs no executor wake-up. Lookups take what /tf brought into the buffer: call them on
+    the executor's thread only (a planning thread reads what they returned)."""
 
     def __init__(self, node: Node, message_class: Callable[[], type | None] = frames.tf_message_class,
                  dynamic: bool = True) -> None:
         """`dynamic`: follow /tf too (else /tf_static only)."""
         from fastep_ros.polled import PolledSubscription, polled
-        self.tree = frames.TfTree()
+        self.tree = TfBuffer()
         self.dynamic: PolledSubscription | None = None
         cls = message_class()
         if cls is None:
             return
         static = QoSProfile(history=HistoryPolicy.KEEP_LAST, depth=100, reliability=ReliabilityPolicy.RELIABLE,
                             durability=DurabilityPolicy.TRANSIENT_LOCAL)
-        node.create_subscription(cls, frames.TF_STATIC, self.take, static)
+        node.create_subscription(cls, frames.TF_STATIC, self.take_static, static)
         if not dynamic:
             return
         self.dynamic = polled(node, cls, frames.TF, _DYNAMIC)
@@ -86,15 +89,29 @@ class TfListener:
             node.create_subscription(cls, frames.TF, self.take, _DYNAMIC)
 
     def take(self, msg: Any) -> None:
-        """A TFMessage into the tree."""
+        """A /tf TFMessage into the buffer."""
         self.tree.add(msg.transforms)
 
-    def lookup(self, target: str, source: str) -> frames.Pose2D | None:
-        """The newest pose of frame `source` in frame `target` (after taking what /tf brought), or None."""
+    def take_static(self, msg: Any) -> None:
+        """A /tf_static TFMessage into the buffer: its transforms hold at every time."""
+        self.tree.add(msg.transforms, static=True)
+
+    def poll(self) -> None:
+        """Take what /tf brought since the last lookup."""
         if self.dynamic is not None:
             for msg in self.dynamic.take_all():
                 self.take(msg)
+
+    def lookup(self, target: str, source: str) -> frames.Pose2D | None:
+        """The newest pose of frame `source` in frame `target` (after taking what /tf brought), or None."""
+        self.poll()
         return self.tree.lookup(target, source)
+
+    def lookup_at(self, target: str, source: str, stamp: float | None) -> frames.Pose2D:
+        """The pose of frame `source` in frame `target` at `stamp` (s; None: the newest), after taking what /tf
+        brought; TfUnavailable (one line) when there is none."""
+        self.poll()
+        return self.tree.lookup_at(target, source, stamp)
 
     def destroy(self) -> None:
         if self.dynamic is not None:

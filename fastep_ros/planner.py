@@ -27,7 +27,6 @@ from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
 from rclpy.lifecycle import LifecycleNode
-from sensor_msgs.msg import LaserScan
 from std_msgs.msg import Float64
 
 from fastep_core.errors import GoalError, ParameterError
@@ -60,6 +59,7 @@ from fastep_ros.planner_params import PARAMETERS, TUNABLE
 from fastep_ros.planner_status import PlannerReports
 from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower, robot_name
+from fastep_ros.sensors import PlacedScan
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
 from msg_tools.interface import RELIABLE, offered_qos
@@ -81,7 +81,7 @@ class PlanSnapshot:
     tick: int                # the control tick's number
     state: np.ndarray
     others: list[OtherRobot]
-    scan: LaserScan | None
+    scan: PlacedScan | None
     velocity: np.ndarray | None = None   # what the base measurably did (odometry's twist), None: not known ...
     measured_at: float | None = None     # ... as of this time (the odometry's stamp)
 
@@ -328,6 +328,9 @@ class PlannerNode(LifecycleNode):
             self.control_rate_hz = changes['control_rate_hz']
             self.control_timer.timer_period_ns = int(round(1e9 / self.control_rate_hz))
         self.sim_time.timeout = changes.get('clock_timeout', self.sim_time.timeout)
+        scans = self.inputs.scans
+        scans.timeout, scans.tolerance = changes.get('scan_timeout', scans.timeout), \
+            changes.get('transform_tolerance', scans.tolerance)
         self.reports.changed()
         return ''
 
@@ -527,9 +530,9 @@ class PlannerNode(LifecycleNode):
         inputs = {robot.name: robot.stamp for robot in self.robots.fleet.fresh(now)}
         if self.model == 'tractor_trailer':
             inputs['trailer_pose'] = self.inputs.trailer_stamp   # the state of its time is odometry and trailer pose
-        if self.inputs.scan_sub.get_publisher_count() > 0:
-            inputs['scan'] = -math.inf if self.inputs.pending_scan is None else \
-                convert.stamp_to_seconds(self.inputs.pending_scan.header.stamp)
+        self.inputs.retry_scans(now)
+        if self.inputs.scan_sub is not None and self.inputs.scan_sub.get_publisher_count() > 0:
+            inputs['scan'] = -math.inf if self.inputs.pending_scan is None else self.inputs.pending_scan.stamp
         wall = self.wall_clock.now().nanoseconds * 1e-9
         if lock.late(stamp, inputs, wall):
             return
@@ -545,7 +548,7 @@ class PlannerNode(LifecycleNode):
         if scan is not None and self.planning is not None:
             self.inputs.latest_scan = scan   # perceived by the next planning pass (realtime)
         elif scan is not None:
-            self.inputs.perceive(scan, t, at=t)
+            self.inputs.perceive(self.inputs.where(scan), t, at=t)
         self.on_control(t)
 
     @quiet_at_stop
@@ -583,9 +586,13 @@ class PlannerNode(LifecycleNode):
         if self.planning is not None:
             command = self.drive_on_plan(t)
         elif nav is not None:
+            if not self.locked():
+                self.inputs.retry_scans(t)
             state, problem = self.inputs.state(t)
             if state is None:
                 self.hold = problem
+            elif self.inputs.scans.hold(t)[1]:
+                self.hold = ''   # held for its scans: status `blind` (fastep_ros.sensors)
             else:
                 self.hold = ''
                 command = self.navigate(nav, t, state, self.inputs.other_robots(t), self.inputs.velocity(),
@@ -616,8 +623,14 @@ class PlannerNode(LifecycleNode):
         if state is None:
             return control.stop(t, period)
         velocity, measured_at, pose = self.inputs.velocity(), self.inputs.odom_stamp, self.inputs.odometry_state()
+        if not self.locked():
+            self.inputs.retry_scans(t)
+        if self.inputs.scans.hold(t)[1]:
+            return control.stop(t, period, velocity, measured_at, pose)   # blind: status says why
         told = self.inputs.told_others(t)
         scan, self.inputs.latest_scan = self.inputs.latest_scan, None
+        if scan is not None:
+            scan = self.inputs.where(scan)   # odometry and TF read here, not on the planning thread
         self.control_count += 1
         self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan, velocity, measured_at))
         plan = self.planning.plan
@@ -809,6 +822,7 @@ class PlannerNode(LifecycleNode):
                                   'odometry and timers restart on this clock')
         inputs = self.inputs
         inputs.odom, inputs.odom_received, inputs.odom_stamp, inputs.odom_problem = None, -math.inf, -math.inf, ''
+        inputs.scans.restart(t)
         for robot in self.robots.fleet.robots.values():
             if robot.received > -math.inf:   # kept where last heard, as if heard now: still avoided
                 robot.received = robot.stamp = t

@@ -26,13 +26,13 @@ from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
-from fastep_ros.common import StartupError
 from fastep_ros.latched import LatchedSubscription
 from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
 from fastep_ros.lock_step import STAMP_EPS
 from fastep_ros.perception import ScanPerception
 from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower
+from fastep_ros.sensors import PlacedScan, ScanSource
 from msg_tools import convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
@@ -94,12 +94,11 @@ class PlannerInputs:
         self.localization_topic: str = values['localization_topic']
         self.map_to_odom_from_tf: bool = values['map_to_odom_from_tf']
         self.odom_frame_id: str = values['odom_frame_id'] or frames.odom_frame(node.ros.get_namespace())
-        workspace, laser_mount = values['workspace'], values['laser_mount']
+        workspace = values['workspace']
         self.workspace_param: tuple[float, float, float, float] | None = tuple(workspace) if workspace else None
-        if laser_mount and (len(laser_mount) != 3 or not all(math.isfinite(v) for v in laser_mount)):
-            raise StartupError(f'parameter laser_mount must be [x, y, yaw], three finite numbers, got {laser_mount}')
-        self.laser_mount: frames.Pose2D | None = \
-            (float(laser_mount[0]), float(laser_mount[1]), float(laser_mount[2])) if laser_mount else None
+        # Where each scan was taken (laser_mount, else TF) and whether the robot may drive on them: on the executor.
+        self.scans = ScanSource(values, node.base_frame_id, interface.SCAN, node.now(),
+                                lambda target, source, stamp: node.tf.lookup_at(target, source, stamp))
         # The world: /obstacles and /map.
         self.obstacles: list[Any] | None = None
         self.map_workspace: tuple[float, float, float, float] | None = None
@@ -125,9 +124,9 @@ class PlannerInputs:
         self._stale_logged: list[str] = []   # what stale_inputs last said was stale
         # Scans: perceived (fastep_ros.perception) and the belief shown on `tracked_obstacles`.
         self.scan_perception = ScanPerception(values['scan_noise'])
-        self.pending_scan: LaserScan | None = None   # lock step: the newest scan, perceived when acted on
-        self.latest_scan: LaserScan | None = None    # with the planning thread: perceived by the next pass
-        self.scan_problem = ''
+        self.pending_scan: PlacedScan | None = None   # lock step: the newest scan, perceived when acted on
+        self.latest_scan: PlacedScan | None = None    # with the planning thread: perceived by the next pass
+        self.seen_problem = ''   # what perception said of the last scan it took ('' when nothing)
 
     def subscribe(self) -> None:
         """The subscriptions (and the belief's publisher), once the node has its own publishers."""
@@ -154,7 +153,10 @@ class PlannerInputs:
         node.ros.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
         # Any LaserScan on `scan` (sensor-data QoS: a best-effort subscription matches reliable publishers too):
         # the planner perceives with it (fastep_ros.perception) and shows its belief on `tracked_obstacles`.
-        self.scan_sub = node.ros.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
+        self.scan_sub = None if not self.scans.followed else \
+            node.ros.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
+        if self.scan_sub is not None:
+            self.scans.topic = self.scan_sub.topic_name
         self.tracked_pub = node.ros.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
 
     def movers_stale(self, t: float) -> bool:
@@ -299,21 +301,56 @@ class PlannerInputs:
         return [OtherRobot(m.name, m.position, (0.0, 0.0), m.radius + math.hypot(*m.velocity) * age, mover=True)
                 for m in self.known_movers]
 
-    def on_scan(self, msg: LaserScan) -> None:
-        """Fold a scan into what the robot believes (in lock step: when the planner acts on its time)."""
-        if self.node.locked():
-            self.pending_scan = msg
-            self.node.lock_try()
-        elif self.node.planning is not None:
-            self.latest_scan = msg   # perceived by the next planning pass, off the control path
-        else:
-            self.perceive(msg, self.node.now())
+    @property
+    def laser_mount(self) -> frames.Pose2D | None:
+        return self.scans.laser_mount
 
-    def perceive(self, msg: LaserScan, t: float, at: float | None = None, state: np.ndarray | None = None,
+    @property
+    def scan_problem(self) -> str:
+        """Why the last scan was not used, or what perception said of it ('' when nothing)."""
+        return self.scans.problem or self.seen_problem
+
+    def on_scan(self, msg: LaserScan) -> None:
+        """A scan: placed on the robot (fastep_ros.sensors, here on the executor), then folded into what the robot
+        believes (in lock step: when the planner acts on its time; with the planning thread: by its next pass)."""
+        placed = self.scans.take(msg, self.node.now())
+        if placed is None:
+            if self.scans.problem:
+                self.node.ros.get_logger().warning(self.scans.problem, throttle_duration_sec=5.0)
+            return
+        self.use_scan(placed)
+
+    def retry_scans(self, t: float) -> None:
+        """Control tick (lock step: its try): a scan that waited for its transform, used once it has come."""
+        if self.scans.pending:
+            placed = self.scans.retry(t)
+            if placed is not None:
+                self.use_scan(placed, act=False)
+            elif self.scans.problem and not self.scans.pending:
+                self.node.ros.get_logger().warning(self.scans.problem, throttle_duration_sec=5.0)
+
+    def use_scan(self, placed: PlacedScan, act: bool = True) -> None:
+        """A placed scan to perception; `act`: in lock step, try to act on its time now."""
+        if self.node.locked():
+            self.pending_scan = placed
+            if act:
+                self.node.lock_try()
+        elif self.node.planning is not None:
+            self.latest_scan = placed   # perceived by the next planning pass, off the control path
+        else:
+            self.perceive(self.where(placed), self.node.now())
+
+    def where(self, placed: PlacedScan) -> PlacedScan:
+        """The scan with the robot's map pose at its stamp (executor: the odometry and TF are read here)."""
+        stamp = placed.stamp
+        return placed.at(self.pose_at(stamp)) if stamp > 0.0 else placed
+
+    def perceive(self, placed: PlacedScan, t: float, at: float | None = None, state: np.ndarray | None = None,
                  told: Sequence[OtherRobot] | None = None) -> None:
-        """Fold a scan into what the robot believes at node time t; the navigator plans in the belief from then on.
-        `at`: the time it was taken (lock step: the tick's), else its stamp; `state`: the robot's at t (default: as
-        the odometry gives it now)."""
+        """Fold a placed scan into what the robot believes at node time t; the navigator plans in the belief from
+        then on. `at`: the time it was taken (lock step: the tick's), else its stamp; `state`: the robot's at t
+        (default: as the odometry gives it now). May run on the planning thread: it reads only what it is handed
+        and the perception's own state (TF and odometry were read when the scan was placed, `where`)."""
         nav = self.node.navigator
         if nav is None or self.world is None:
             return   # no map yet: nothing to fuse the scan with
@@ -321,15 +358,11 @@ class PlannerInputs:
             state, _ = self.state(t)
         if state is None:
             return   # where the scan was taken from is not known
-        stamp = convert.stamp_to_seconds(msg.header.stamp)
+        msg, mount = placed.msg, placed.mount
+        stamp = placed.stamp
         pose = (float(state[0]), float(state[1]), heading(self.node.model, state))
         if at is None and stamp > 0.0:
-            pose = self.pose_at(stamp) or pose   # where the robot was when the scan was taken
-        mount, problem = self.scanner_mount(msg.header.frame_id)
-        if mount is None:
-            self.scan_problem = problem
-            self.node.ros.get_logger().warning(problem, throttle_duration_sec=5.0)
-            return
+            pose = placed.robot_pose or pose   # where the robot was when the scan was taken
         if mount != frames.IDENTITY:
             pose = frames.compose(pose, mount)   # the scanner's pose: where its beams start, along its zero angle
         if told is None:   # the robots and movers the robot is told of (a planning pass hands its snapshot's)
@@ -338,16 +371,16 @@ class PlannerInputs:
             taken = at if at is not None else stamp if stamp > 0.0 else t
             belief = self.scan_perception.update(msg, taken, pose, self.world, told)
         except ValueError as exc:
-            self.scan_problem = f'scan ignored: {exc}'
-            self.node.ros.get_logger().warning(self.scan_problem, throttle_duration_sec=5.0)
+            self.seen_problem = f'scan ignored: {exc}'
+            self.node.ros.get_logger().warning(self.seen_problem, throttle_duration_sec=5.0)
             return
         # A scanner that cannot see the robot's way (too narrow, too sparse) is used all the same (every return is
         # an obstacle to the guard), and said so on status.
         blind = way_problem(msg.angle_min, msg.angle_max, msg.angle_increment, len(msg.ranges), msg.range_max,
                             mount[2], self.node.radius)
-        self.scan_problem = f'the scan cannot see the robot\'s way: {blind}' if blind else ''
+        self.seen_problem = f'the scan cannot see the robot\'s way: {blind}' if blind else ''
         if blind:
-            self.node.ros.get_logger().warning(self.scan_problem, throttle_duration_sec=60.0)
+            self.node.ros.get_logger().warning(self.seen_problem, throttle_duration_sec=60.0)
         nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
         # and the beams' ends are obstacles
         nav.guard_check.scan_points = ScanReturns(self.scan_perception.returns, state, nav.radius)
@@ -449,16 +482,6 @@ class PlannerInputs:
             c, s = math.cos(self.body_yaw), math.sin(self.body_yaw)
             return np.array([c * x - s * y, s * x + c * y])
         return np.array([x, z])
-
-    def scanner_mount(self, frame: str) -> tuple[frames.Pose2D | None, str]:
-        """Where a scan in `frame` was taken on the robot: base_link (or no frame) is the reference point; any other
-        frame is the scanner's own, mounted at laser_mount; None and why when that is not given."""
-        if frame in ('', self.node.base_frame_id, 'base_link'):
-            return frames.IDENTITY, ''
-        if self.laser_mount is None:
-            return None, (f'scan ignored: its frame {frame!r} is not {self.node.base_frame_id!r} and parameter '
-                          f'laser_mount (where that frame sits in base_link) is not set')
-        return self.laser_mount, ''
 
     def pose_at(self, stamp: float) -> tuple[float, float, float] | None:
         """The robot's map pose (x, y, the scanner's heading) at `stamp`, interpolated from its odometry; None when

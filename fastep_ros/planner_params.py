@@ -13,6 +13,7 @@ from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_ros.common import PERIOD_RANGE, RATE_RANGE, Param
 from fastep_ros.lifecycle import AUTOSTART
+from fastep_ros.sensors import MOUNT_MARGIN, SCAN_MODES
 from msg_tools import convert, interface
 
 __all__ = ['PARAMETERS', 'TUNABLE']
@@ -48,9 +49,19 @@ PARAMETERS: tuple[Param, ...] = (
           'from its stamp to the control time by at most this much (s); own odometry stamped longer ago is stale: '
           'the robot is held still; 0 disables both', value_range=(0.0, math.inf), read_only=False),
     Param('workspace', None, '[xmin, ymin, xmax, ymax] (m); empty: the extent of /map'),
-    Param('laser_mount', None, '[x (m), y (m), yaw (rad)]: where the scanner sits in base_link, for scans in a '
-          'frame of their own (the static transform base_link -> the scan\'s frame; /tf_static is not read here); '
-          'empty: scans must be in base_link'),
+    Param('laser_mount', None, '[x (m), y (m), yaw (rad)]: where the scanner sits in base_link, for robots without '
+          'TF: scans in a frame of their own are placed there; empty: from /tf_static and /tf at each scan\'s stamp '
+          '(base_link -> the scan\'s frame, as robot_state_publisher publishes it). A mount farther from base_link '
+          f'than robot_radius (or the footprint) plus {MOUNT_MARGIN:g} m is refused'),
+    Param('scan_mode', 'auto', 'how the planner depends on `scan`: auto (scans are required once one has been '
+          'heard: scans that cannot be used hold the robot still, status `blind`) | required (from the start) | '
+          'ignored (not subscribed: the robot drives on its map alone)', constraints=' | '.join(SCAN_MODES)),
+    Param('scan_timeout', 1.0, 'required scans: none usable for this long (s, node clock) holds the robot still; '
+          'a scan stamped farther than this from the node clock is stale', value_range=(0.05, 60.0), unit=' s',
+          read_only=False),
+    Param('transform_tolerance', 0.3, 'how long a scan waits for the transform of its stamp to come on /tf (s, '
+          'node clock) before it is given up, as Nav2\'s transform_tolerance', value_range=(0.0, 10.0), unit=' s',
+          read_only=False),
     Param('obstacle_source', 'markers', 'where the obstacles come from: markers (the /obstacles MarkerArray of '
           'fastep-map: circles and walls) | map (the occupied cells of the /map OccupancyGrid, as Nav2\'s '
           'map_server publishes it: their outline, as walls)', constraints='markers | map'),

@@ -44,6 +44,11 @@ STATUS_MESSAGES: tuple[tuple[str, str, str], ...] = (
     ('stale', 'WARN / ERROR', 'held still: own odometry missing, old, rejected or not finite, or the clock stands '
                               'still (WARN); planning stalled, the plan older than max_plan_age (ERROR)'),
     ('conflict', 'ERROR', 'another node publishes on cmd_vel: not commanding (exclusive_cmd_vel)'),
+    ('blind', 'WARN / ERROR', 'held still for its scans (scan_mode): scans come but cannot be used (no transform '
+                              'places them, stamped too far from the clock, not a scanner\'s, a mount outside the '
+                              'robot) or stopped coming (ERROR, also while idle when the scans that come cannot be '
+                              'used); the first scans waiting for their transform (WARN, scan_timeout); the reason '
+                              'names the cause'),
 )
 
 RATE_WINDOW = 2.0        # s of node time over which the control loop's achieved rate is measured
@@ -134,12 +139,18 @@ class PlannerReports:
             return DiagnosticStatus.ERROR, mode.value, nav.reason
         if self.node.plan_problem and mode in (Mode.KINEMATIC, Mode.AVOIDING):
             return DiagnosticStatus.ERROR, 'stale', self.node.plan_problem
+        scans = self.node.inputs.scans
+        level, blind = scans.hold(self.node.now())
         if mode in (Mode.IDLE, Mode.ARRIVED):
+            if blind and scans.problem and level == DiagnosticStatus.ERROR:
+                return level, 'blind', blind   # scans come and cannot be used: said before a goal is given
             return DiagnosticStatus.OK, mode.value, nav.reason
         if self.node.hold:
             if self.node.hold.startswith('waiting'):
                 return DiagnosticStatus.WARN, 'waiting', self.node.hold
             return DiagnosticStatus.WARN, 'stale', self.node.hold
+        if blind:
+            return level, 'blind', blind
         if self.node.goal_refused and self.node.goal is not None:
             return DiagnosticStatus.WARN, mode.value, f'{self.node.goal_refused}; still driving to ' \
                                                      f'({self.node.goal[0]:g}, {self.node.goal[1]:g})'
@@ -297,10 +308,24 @@ class PlannerReports:
             **{name: f'{age:.1f} s old' for name, age in stale}}) if stale else \
             Task('others', DiagnosticStatus.OK, 'fresh', {'robots': ' '.join(self.node.robots.fleet.names(t))})
         nav = self.node.navigator
+        scan = self.scan_task(t)
         weak = '' if nav is None else nav.response.problem()
         base = Task('base', DiagnosticStatus.WARN if weak else DiagnosticStatus.OK,
                     'tracks worse than configured' if weak else 'as configured', {
                         'reason': weak,
                         'braking': '' if nav is None else round(nav.response.braking, 3),
                         'turn_braking': '' if nav is None else round(nav.response.turn_braking, 3)})
-        return [*tasks, control, odometry, base, others, clock]
+        return [*tasks, control, odometry, scan, base, others, clock]
+
+    def scan_task(self, t: float) -> Task:
+        """/diagnostics' `scan`: whether the robot may drive on its scans (fastep_ros.sensors), and why not."""
+        scans = self.node.inputs.scans
+        level, why = scans.hold(t)
+        values = {'reason': why or scans.problem, 'topic': scans.topic, 'mode': scans.mode, 'heard': scans.heard,
+                  'perceived': self.node.inputs.scan_perception.scans}
+        if why:
+            return Task('scan', level, 'blind' if level == DiagnosticStatus.ERROR else 'waiting', values)
+        if not scans.required():
+            return Task('scan', DiagnosticStatus.OK, 'ignored' if not scans.followed else 'not required', values)
+        return Task('scan', DiagnosticStatus.WARN if scans.problem else DiagnosticStatus.OK,
+                    'usable' if not scans.problem else 'some unusable', values)

@@ -32,6 +32,7 @@ __all__ = [
     'TfTree',
     'base_frame',
     'body_velocity', 'compose', 'frame_name', 'inverse', 'odom_frame', 'odometry_pose', 'odometry_transforms',
+    'planar_transform',
     'stamped_pose', 'state_in_frame', 'static_map_to_odom', 'tf_message_cdr', 'tf_message_class', 'trailer_frame',
     'transform_stamped',
 ]
@@ -85,6 +86,19 @@ def inverse(a: Pose2D) -> Pose2D:
     return (-c * a[0] - s * a[1], s * a[0] - c * a[1], _wrap(-a[2]))
 
 
+def planar_transform(t: Any) -> tuple[str, str, Pose2D] | None:
+    """(parent, child, the child's planar pose in the parent) of a geometry_msgs/TransformStamped; None when a
+    frame is missing, the frames are one, or it is not finite."""
+    parent, child = t.header.frame_id.lstrip('/'), t.child_frame_id.lstrip('/')
+    q, v = t.transform.rotation, t.transform.translation
+    norm = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w
+    if not parent or not child or parent == child or not (math.isfinite(norm) and norm > 0.0):
+        return None
+    yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
+    pose = (float(v.x), float(v.y), yaw)
+    return (parent, child, pose) if all(math.isfinite(c) for c in pose) else None
+
+
 class TfTree:
     """The newest transform of every edge of a TF tree, in the plane (x, y, yaw of each child frame in its parent),
     from /tf and /tf_static messages; lookup composes along the tree, as tf2's lookups at the latest time do.
@@ -99,16 +113,10 @@ class TfTree:
     def add(self, transforms: Sequence[Any]) -> None:
         """geometry_msgs/TransformStamped messages (a TFMessage's transforms)."""
         for t in transforms:
-            parent, child = t.header.frame_id.lstrip('/'), t.child_frame_id.lstrip('/')
-            q, v = t.transform.rotation, t.transform.translation
-            norm = q.x * q.x + q.y * q.y + q.z * q.z + q.w * q.w
-            if not parent or not child or parent == child or not (math.isfinite(norm) and norm > 0.0):
+            edge = planar_transform(t)
+            if edge is None or edge[1] in self._ancestors(edge[0]):
                 continue
-            yaw = math.atan2(2.0 * (q.w * q.z + q.x * q.y), 1.0 - 2.0 * (q.y * q.y + q.z * q.z))
-            pose = (float(v.x), float(v.y), yaw)
-            if not all(math.isfinite(c) for c in pose) or child in self._ancestors(parent):
-                continue
-            self.parents[child] = (parent, pose)
+            self.parents[edge[1]] = (edge[0], edge[2])
 
     def _ancestors(self, frame: str) -> list[str]:
         chain = [frame]
