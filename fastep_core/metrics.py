@@ -6,6 +6,12 @@ reference point to an obstacle surface, or to a moving circle where it was at th
 against another robot the smallest centre distance minus both radii. Negative means the discs touched (a
 collision), inf that there was nothing to measure against.
 
+A robot with a footprint (fastep_core/footprint.py) is judged by its outline instead of its disc against the
+obstacles and movers: the polygon placed at each sample's pose (its track then has the heading as a fourth
+column), the signed distance from it to an obstacle's surface (negative where they overlap, an obstacle wholly
+inside included). Against another robot it stays its circle (its radius: with a footprint, at least the
+circumscribed one), conservative.
+
 Robot against robot is compared at the union of both robots' sample times, each position interpolated linearly
 between samples and held before the first and after the last. With equal sample times (the in-process simulator,
 plants on one simulated clock) this compares exactly the sampled positions.
@@ -19,6 +25,7 @@ from typing import Protocol, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from fastep_core.footprint import Footprint
 from fastep_core.geometry import Obstacles
 
 __all__ = ['Margins', 'MovingCircles', 'positions_at', 'trajectory_margins']
@@ -88,25 +95,50 @@ def _mover_clearance(movers: MovingCircles, rows: FloatArray) -> float:
     return best
 
 
+def _footprint_mover_clearance(footprint: Footprint, movers: MovingCircles, rows: FloatArray) -> float:
+    """Smallest signed distance from a footprint placed at a track's poses (rows t, x, y, heading) to the movers
+    where they are at the same instants (chunked like _min_clearance)."""
+    best = np.inf
+    for k in range(0, len(rows), CHUNK):
+        part = rows[k:k + CHUNK]
+        best = min(best, float(footprint.circle_distances(part[:, 1:4], movers.positions(part[:, 0]),
+                                                          movers.radii).min()))
+    return best
+
+
 def trajectory_margins(tracks: Sequence[ArrayLike], radii: ArrayLike, obstacles: Obstacles,
-                       movers: MovingCircles | None = None) -> Margins:
+                       movers: MovingCircles | None = None,
+                       footprints: Sequence[Footprint | None] | None = None) -> Margins:
     """The margins of each robot along its track.
 
-    tracks[i]: robot i's samples as rows (t, x, y, ...) in time order (further columns, e.g. headings, are
-    ignored; a robot may have no samples); radii[i]: its radius. movers: moving circles (v2), measured at each
-    of a robot's sample times and counted with the obstacles.
+    tracks[i]: robot i's samples as rows (t, x, y, ...) in time order (further columns are ignored, but for a
+    robot with a footprint the fourth is its heading; a robot may have no samples); radii[i]: its radius.
+    movers: moving circles (v2), measured at each of a robot's sample times and counted with the obstacles.
+    footprints[i]: robot i's outline, judged against obstacles and movers in place of its disc (None: its disc).
     """
     rows = [_rows(track) for track in tracks]
     radius = np.asarray(radii, dtype=float).reshape(-1)
     if len(radius) != len(rows):
         raise ValueError(f'{len(rows)} tracks but {len(radius)} radii')
+    outlines = list(footprints) if footprints is not None else [None] * len(rows)
+    if len(outlines) != len(rows):
+        raise ValueError(f'{len(rows)} tracks but {len(outlines)} footprints')
     to_obstacles = np.full(len(rows), np.inf)
     to_robots = np.full(len(rows), np.inf)
     for i, mine in enumerate(rows):
-        if len(mine) and len(obstacles):
-            to_obstacles[i] = _min_clearance(obstacles, mine[:, 1:3]) - radius[i]
-        if len(mine) and movers is not None and len(movers):
-            to_obstacles[i] = min(to_obstacles[i], _mover_clearance(movers, mine) - radius[i])
+        footprint = outlines[i]
+        if footprint is not None and len(mine):
+            if mine.shape[1] < 4:
+                raise ValueError(f'track {i} has a footprint but no heading: rows (t, x, y, heading) needed')
+            if len(obstacles):
+                to_obstacles[i] = float(footprint.clearance(mine[:, 1:4], obstacles).min())
+            if movers is not None and len(movers):
+                to_obstacles[i] = min(to_obstacles[i], _footprint_mover_clearance(footprint, movers, mine))
+        else:
+            if len(mine) and len(obstacles):
+                to_obstacles[i] = _min_clearance(obstacles, mine[:, 1:3]) - radius[i]
+            if len(mine) and movers is not None and len(movers):
+                to_obstacles[i] = min(to_obstacles[i], _mover_clearance(movers, mine) - radius[i])
         for j in range(i + 1, len(rows)):
             if not len(mine) or not len(rows[j]):
                 continue

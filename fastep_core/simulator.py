@@ -20,13 +20,17 @@ the true state's; the other robots see its true map-frame velocity. A robot with
 as on a robot (fastep_core/planning/control.py: the velocity smoother, closed on its odometry), with or without
 realtime; without, its plan is each tick's own. A kinematic plant's measured velocity is the
 command it last applied, so kinematic runs are what they were before plants, bit for bit.
+
+`pose_error` (off by default): each robot with a sensor is localized off the truth (perception/uncertainty.py,
+PoseError: a seeded offset and drift, each robot its own); its navigator is given the estimate as its state and its
+scans are placed there, while the plant, the scans themselves and every judgement stay the truth's.
 """
 
 from __future__ import annotations
 
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -38,6 +42,7 @@ from fastep_core.errors import GoalError
 from fastep_core.metrics import trajectory_margins
 from fastep_core.perception.belief import Belief
 from fastep_core.perception.robot import SensingRobot
+from fastep_core.perception.uncertainty import PoseError
 from fastep_core.planning.algorithms import make_navigator
 from fastep_core.planning.control import ControlTick, Plan, PlanLatency
 from fastep_core.planning.navigator import Mode, Navigator
@@ -113,7 +118,8 @@ class Tick:
 
 
 def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
-             observer: Callable[[Tick], None] | None = None, realtime: float | None = None) -> Run:
+             observer: Callable[[Tick], None] | None = None, realtime: float | None = None,
+             pose_error: PoseError | None = None) -> Run:
     """Run every robot of the scenario until each has arrived, failed, or max_sim_time has passed.
 
     realtime (FACTOR, >= 0): planning is not free. A planning pass (perception of the scan and Navigator.update)
@@ -122,9 +128,12 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     (fastep_core/planning/control.py), as the planner node does. Not deterministic: it depends on the machine.
     None (the default): the clock waits for the planner, every tick plans, same seed same run.
 
+    pose_error: robots with a sensor localized off the truth (module docstring); None: at the truth.
+
     min_clearance is the smallest margin a robot kept (fastep_core.metrics.trajectory_margins): distance from
-    its reference point to the nearest obstacle surface minus its radius, or to another robot's centre minus
-    both radii, measured at every robot's position after each step; negative means it collided.
+    its reference point to the nearest obstacle surface minus its radius (a robot with a footprint: from its
+    outline placed at its pose), or to another robot's centre minus both radii, measured at every robot's
+    position after each step; negative means it collided.
     """
     params = scenario.planner
     world = scenario.world                     # the true still world
@@ -137,7 +146,9 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     navigators = [make_navigator(algorithm, spec, spec.radius, planner_world, params, np.random.default_rng(s))
                   for spec, s in zip(specs, streams)]
     # Robots with a sensor scan the truth each tick and plan in what they believe (fastep_core/perception).
-    senses = [None if spec.sensor is None else SensingRobot(spec.sensor, spec.model, i, truth, nav, seed)
+    errors = [None if pose_error is None or spec.sensor is None else replace(pose_error, robot=i)
+              for i, spec in enumerate(specs)]
+    senses = [None if spec.sensor is None else SensingRobot(spec.sensor, spec.model, i, truth, nav, seed, errors[i])
               for i, (spec, nav) in enumerate(zip(specs, navigators))]
     states = [np.array(spec.start, dtype=float) for spec in specs]
     plants: list[Plant] = [make_plant(spec.model, nav.model, state, spec.dynamics,
@@ -167,6 +178,8 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     name_rank = [by_name.index(k) for k in range(len(specs))]          # each robot's place in that order
     step_times: list[float] = []               # every robot's position after each step, for the margins
     step_positions: list[FloatArray] = []
+    posed = [i for i, spec in enumerate(specs) if spec.footprint is not None]   # judged by their outline
+    step_headings: list[list[float]] = []      # ... and their headings
 
     def mode(i: int) -> Mode:
         """Where robot i stands: its navigator's mode, or with realtime the mode of the plan it drives on."""
@@ -198,28 +211,33 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 continue
             start = time.perf_counter()
             sense = senses[i]
+            error = errors[i]
+            state = states[i] if error is None else error.estimate(states[i])   # where it believes it is
+            estimate = None if error is None else state
             measured = plants[i].measured_velocity()   # the odometry's twist, before this tick's command
             control = smoothed[i]
             if control is not None:
-                seen = views[i] if sense is None else sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
+                seen = views[i] if sense is None else \
+                    sense.sense(nav, t, states[i], views[i], robots[:len(specs)], estimate)
                 if sense is not None:
                     nav.seen = sense.recent.seen()
-                plan = Plan.of(nav, t, nav.update(t, states[i], seen, velocity=measured), seen[len(views[i]):])
-                commands.append(control.command(t, states[i], views[i], plan, dt, velocity=measured))
+                plan = Plan.of(nav, t, nav.update(t, state, seen, velocity=measured), seen[len(views[i]):])
+                commands.append(control.command(t, state, views[i], plan, dt, velocity=measured))
             elif latencies is None or controls is None:
-                seen = views[i] if sense is None else sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
-                commands.append(nav.update(t, states[i], seen, velocity=measured))
+                seen = views[i] if sense is None else \
+                    sense.sense(nav, t, states[i], views[i], robots[:len(specs)], estimate)
+                commands.append(nav.update(t, state, seen, velocity=measured))
             else:
                 latency = latencies[i]
                 latency.take(t)
                 if latency.idle:   # the next pass starts on this tick's state
                     seen = views[i] if sense is None else \
-                        sense.sense(nav, t, states[i], views[i], robots[:len(specs)])
+                        sense.sense(nav, t, states[i], views[i], robots[:len(specs)], estimate)
                     if sense is not None:
                         nav.seen = sense.recent.seen()   # backing up only where its scans saw free space
-                    plan = Plan.of(nav, t, nav.update(t, states[i], seen, velocity=measured), seen[len(views[i]):])
+                    plan = Plan.of(nav, t, nav.update(t, state, seen, velocity=measured), seen[len(views[i]):])
                     latency.submit(plan, t, time.perf_counter() - start)
-                commands.append(controls[i].command(t, states[i], views[i], latency.plan, dt, velocity=measured))
+                commands.append(controls[i].command(t, state, views[i], latency.plan, dt, velocity=measured))
             runs[i].compute_time += time.perf_counter() - start
             if mode(i) is Mode.ARRIVED:
                 runs[i].reached, runs[i].sim_time = True, t
@@ -263,12 +281,18 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                               None if sense is None else sense.belief))
         step_times.append(t_next)
         step_positions.append(np.array([s[:2] for s in states]))
+        if posed:
+            step_headings.append([float(states[i][2]) for i in posed])
 
     # Robots that have stopped (arrived, failed) keep their place among the others.
     times = np.array(step_times)
     positions = np.array(step_positions).reshape(len(times), len(specs), 2)
-    margins = trajectory_margins([np.column_stack([times, positions[:, i]]) for i in range(len(specs))],
-                                 [spec.radius for spec in specs], world.obstacles, truth.movers).overall
+    tracks = [np.column_stack([times, positions[:, i]]) for i in range(len(specs))]
+    headings = np.array(step_headings).reshape(len(times), len(posed))
+    for k, i in enumerate(posed):   # rows (t, x, y, heading): the outline placed at each step's pose
+        tracks[i] = np.column_stack([tracks[i], headings[:, k]])
+    margins = trajectory_margins(tracks, [spec.radius for spec in specs], world.obstacles, truth.movers,
+                                 [spec.footprint for spec in specs] if posed else None).overall
     for i, (nav, run) in enumerate(zip(navigators, runs)):
         run.min_clearance = float(margins[i])
         run.collided = bool(margins[i] < 0.0)

@@ -65,3 +65,41 @@ def test_many_samples_are_measured_in_chunks_with_the_same_result() -> None:
     track = np.column_stack([t, 20.0 * t / 100.0, 1.0 + np.sin(t)])
     expected = float(obstacles.clearance(track[:, 1:3]).min()) - 0.5
     assert trajectory_margins([track], [0.5], obstacles).obstacles[0] == expected
+
+
+def test_a_robot_with_a_footprint_is_judged_by_its_outline_at_each_heading() -> None:
+    from fastep_core.footprint import Footprint
+
+    box = Footprint.parse([[0.254, 0.215], [-0.254, 0.215], [-0.254, -0.215], [0.254, -0.215]])
+    # A cylinder 0.3 m from base_link along the box's diagonal: clear of the 0.22 m circle, inside the box's corner.
+    obstacles = Obstacles([Circle((0.3 * math.cos(0.7), 0.3 * math.sin(0.7)), 0.05)])
+    corner = [[0.0, 0.0, 0.0, 0.0]]
+    side = [[0.0, 0.0, 0.0, math.pi / 2]]
+    as_circle = trajectory_margins([corner], [0.22], obstacles)
+    as_box = trajectory_margins([corner, side], [box.radius, box.radius], obstacles, footprints=[box, box])
+    assert as_circle.obstacles[0] > 0.0 and as_box.obstacles[0] < 0.0
+    assert as_box.obstacles[0] == pytest.approx(float(box.clearance([0.0, 0.0, 0.0], obstacles)))
+    assert as_box.obstacles[1] == pytest.approx(0.3 * math.cos(0.7) - 0.215 - 0.05)
+    # Robot against robot stays the circles (their radii).
+    assert as_box.robots == pytest.approx([-2 * box.radius] * 2)
+    # Circle robots beside one with a footprint: what they were without it.
+    mixed = trajectory_margins([[[0.0, 3.0, 0.0]], corner], [0.22, box.radius], obstacles, footprints=[None, box])
+    alone = trajectory_margins([[[0.0, 3.0, 0.0]]], [0.22], obstacles)
+    assert mixed.obstacles[0] == alone.obstacles[0]
+    with pytest.raises(ValueError, match='no heading'):
+        trajectory_margins([[[0.0, 0.0, 0.0]]], [box.radius], obstacles, footprints=[box])
+    with pytest.raises(ValueError, match='1 tracks but 2 footprints'):
+        trajectory_margins([corner], [box.radius], obstacles, footprints=[box, None])
+
+
+def test_a_footprint_meets_the_movers_where_they_are() -> None:
+    from fastep_core.dynamic_world import DynamicWorld, Motion, ObstacleSpec
+    from fastep_core.footprint import Footprint
+
+    box = Footprint.parse([[0.254, 0.215], [-0.254, 0.215], [-0.254, -0.215], [0.254, -0.215]])
+    # A mover of radius 0.1 passing from (2, 0) toward (-2, 0) at 1 m/s: at t = 1.6 its centre is at x = 0.4.
+    movers = DynamicWorld((-5.0, -5.0, 5.0, 5.0), [ObstacleSpec(Circle((2.0, 0.0), 0.1),
+                                                                Motion(((-2.0, 0.0),), 1.0))]).movers
+    track = [[1.6, 0.0, 0.0, 0.0], [1.6, 0.0, 0.0, math.pi / 2]]
+    margins = trajectory_margins([track[:1], track[1:]], [box.radius] * 2, NONE, movers, footprints=[box, box])
+    assert margins.obstacles == pytest.approx([0.4 - 0.254 - 0.1, 0.4 - 0.215 - 0.1])

@@ -91,3 +91,27 @@ def test_crossing_movers_builtin() -> None:
         assert robot.reached and not robot.collided and robot.min_clearance > 0.5, (seed, robot.status)
     robot = simulate(scenario, 'aco', 0).robots[0]
     assert robot.reached and not robot.collided, robot.status
+
+
+def test_a_robot_with_a_footprint_is_judged_by_its_outline_at_every_step() -> None:
+    from fastep_core.footprint import Footprint
+    from fastep_core.simulator import Tick
+
+    box = [[0.254, 0.215], [-0.254, 0.215], [-0.254, -0.215], [0.254, -0.215]]
+    data = {'workspace': [0, 0, 8, 4], 'obstacles': [{'circle': {'center': [4.0, 2.6], 'radius': 0.2}}],
+            'robots': [{'name': 'r1', 'model': 'diff_drive', 'start': [1.0, 2.0, 0.0], 'goal': [7.0, 2.0],
+                        'footprint': box}]}
+    scenario = parse_scenario(data)
+    poses: list[np.ndarray] = []
+
+    def observe(tick: Tick) -> None:
+        poses.append(np.array(tick.state[:3]))
+
+    run = simulate(scenario, 'fastep_route', seed=0, observer=observe)
+    robot = run.robots[0]
+    footprint = Footprint.parse(box)
+    assert robot.reached and not robot.collided
+    assert robot.min_clearance == float(footprint.clearance(np.array(poses), scenario.world.obstacles).min())
+    # Its disc would have kept less: the box is narrower than its circumscribed circle.
+    disc = float(scenario.world.obstacles.clearance(np.array(poses)[:, :2]).min()) - footprint.radius
+    assert robot.min_clearance > disc
