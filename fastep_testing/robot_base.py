@@ -7,7 +7,8 @@ Unlike fastep-plant (lock step, one clock for the graph), nothing waits for anyo
 is, no limits (a base does what it is told; zero after `cmd_timeout` without a command, as ros2_control's
 diff_drive_controller does), publishes `odom` (`odom` -> `base_link`, the pose in map coordinates: map -> odom
 is the identity) at `odom_rate_hz` and a laser's LaserScan on `scan` (base_link, or <ns>/laser for a laser at
-`laser_mount` off the centre) at `scan_rate_hz`, both stamped
+`laser_mount` off the centre, or `laser_frame`; base_link -> it on /tf_static with `laser_tf`) at `scan_rate_hz`,
+both stamped
 with the system clock, ray-cast on the TRUE world of `scenario` (fastep_core.dynamic_world), and /map once,
 latched, rasterised at `map_resolution` from the world the planner may know (`known: false` obstacles left out).
 It records what it took and did: each command's arrival (steady seconds) and value, and its state and applied
@@ -62,6 +63,10 @@ class BaseNode(Node):
         laser = declare(self, 'laser', DEFAULT_LASER, 'the laser: [range (m), fov (rad), beams, noise (m)]')
         mount = declare(self, 'laser_mount', [0.0, 0.0, 0.0], 'where the laser sits on the base: [x (m), y (m), '
                         'yaw (rad)] in base_link; off the centre its scans are in <ns>/laser')
+        laser_frame = declare(self, 'laser_frame', '', 'the frame its scans are in; empty: base_link, or <ns>/laser '
+                              'off the centre')
+        laser_tf = declare(self, 'laser_tf', False, 'publish base_link -> the scans\' frame (at laser_mount) on '
+                           '/tf_static, as robot_state_publisher does')
         resolution = declare(self, 'map_resolution', 0.05, '/map cell size (m)', constraints='> 0')
         seed = declare(self, 'seed', 0, 'seed of the laser noise and of the map errors')
         self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'no cmd_vel for this long (s): the base stops',
@@ -93,7 +98,13 @@ class BaseNode(Node):
         self.scan_cpu: list[float] = []                                # seconds per cast and publish
         self.odom_frame = frames.odom_frame(self.get_namespace())
         self.base_frame = frames.base_frame(self.get_namespace())
-        self.scan_frame = frames.frame_name(self.get_namespace(), 'laser') if any(self.spec.mount) else self.base_frame
+        self.scan_frame = laser_frame or \
+            (frames.frame_name(self.get_namespace(), 'laser') if any(self.spec.mount) else self.base_frame)
+        if laser_tf:
+            from fastep_ros.live_tf import TfBroadcaster
+            self.tf = TfBroadcaster(self)
+            self.tf.send_static([frames.transform_stamped(self.base_frame, self.scan_frame, self.spec.mount,
+                                                          self.get_clock().now().to_msg())])
 
         self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
         self.scan_pub = self.create_publisher(LaserScan, interface.SCAN, qos_profile_sensor_data)

@@ -105,12 +105,16 @@ def _cpu(pid: int) -> float:
 
 def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 90.0, start_timeout: float = 60.0,
               max_speed: float = 1.0, seed: int = 0, algorithm: str = '', log_dir: Path | None = None,
-              laser_mount: tuple[float, float, float] = (0.0, 0.0, 0.0), dynamics: str = '') -> HarnessResult:
+              laser_mount: tuple[float, float, float] = (0.0, 0.0, 0.0), dynamics: str = '', laser_frame: str = '',
+              laser_tf: bool = True) -> HarnessResult:
     """One run of a harness world (a robot_worlds name or a Scenario with one diff-drive robot); see the module
     docstring. Every process it starts is stopped before it returns. Logs go to log_dir (default: a temporary
     folder, removed). laser_mount: where the laser sits on the base (x, y, yaw); the planner is told it
     (parameter laser_mount) when it is off the centre. dynamics: a physics base of that preset
-    (fastep_core/dynamics) in place of the robot's own (the kinematic one, unless the scenario gives dynamics)."""
+    (fastep_core/dynamics) in place of the robot's own (the kinematic one, unless the scenario gives dynamics).
+    laser_frame: the base scans in this frame and publishes base_link -> it on /tf_static (unless not laser_tf),
+    and the planner is not told laser_mount: it takes the mount from TF, as on a ROS robot (without the transform
+    it is never `idle` with scans: the goal is sent once it is `blind`)."""
     scenario = harness_world(scenario) if isinstance(scenario, str) else scenario
     if dynamics:
         scenario = replace(scenario, robots=(replace(scenario.robots[0], dynamics=preset(dynamics)),
@@ -119,7 +123,8 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
         with tempfile.TemporaryDirectory(prefix='fastep-harness-') as tmp:
             result = run_world(scenario, laser=laser, timeout=timeout, start_timeout=start_timeout,
                                max_speed=max_speed, seed=seed, algorithm=algorithm, log_dir=Path(tmp),
-                               laser_mount=laser_mount)
+                               laser_mount=laser_mount, laser_frame=laser_frame,
+                               laser_tf=laser_tf)
             result.log_dir = ''
             return result
     log_dir.mkdir(parents=True, exist_ok=True)
@@ -137,11 +142,12 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     ros = ['--ros-args', '--log-level', os.environ.get('FASTEP_TEST_LOG_LEVEL', 'warn')]
     base_cmd = [sys.executable, '-m', 'fastep_testing.robot_harness', 'base', *ros, '-p',
                 f'scenario:={world_file}', '-p', f'record:={record}', '-p', f'seed:={seed}',
-                '-p', f'scan_rate_hz:={20.0 if laser else 0.0}', '-p', f'laser_mount:={list(mount)!r}']
+                '-p', f'scan_rate_hz:={20.0 if laser else 0.0}', '-p', f'laser_mount:={list(mount)!r}'] + \
+        (['-p', f'laser_frame:={laser_frame}', '-p', f'laser_tf:={str(laser_tf).lower()}'] if laser_frame else [])
     planner_cmd = [*_planner_command(), *ros, '-p', 'obstacle_source:=map', '-p', 'model:=diff_drive',
                    '-p', f'robot_radius:={robot.radius!r}', '-p', f'max_speed:={float(max_speed)!r}',
                    '-p', f'seed:={seed}'] + (['-p', f'algorithm:={algorithm}'] if algorithm else []) + \
-                  (['-p', f'laser_mount:={list(mount)!r}'] if any(mount) else [])
+                  (['-p', f'laser_mount:={list(mount)!r}'] if any(mount) and not laser_frame else [])
     procs: dict[str, subprocess.Popen[bytes]] = {}
     helper: Helper | None = None
     statuses: list[tuple[float, dict[str, Any]]] = []
@@ -152,7 +158,8 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
         procs['base'] = _start(base_cmd, env, log_dir / 'base.log')
         procs['planner'] = _start(planner_cmd, env, log_dir / 'planner.log')
         helper = _status_helper(domain, statuses, beliefs)
-        helper.spin_until(lambda: _ready(statuses, laser) or _dead(procs), start_timeout,
+        placed = not laser_frame or laser_tf   # the planner can use its scans
+        helper.spin_until(lambda: _ready(statuses, laser, placed) or _dead(procs), start_timeout,
                           lambda: f'the planner to be idle with odometry (last status: {_last(statuses) or "none"})')
         if _dead(procs):
             raise RuntimeError(f'a process ended at the start: {_exits(procs)}')
@@ -227,8 +234,11 @@ def _goal_sender(helper: Helper, goal: tuple[float, float], timeout: float,
     return again
 
 
-def _ready(statuses: list[tuple[float, dict[str, Any]]], laser: bool) -> bool:
-    """The planner is idle, has the world and has heard odometry (and scans, with the laser)."""
+def _ready(statuses: list[tuple[float, dict[str, Any]]], laser: bool, placed: bool = True) -> bool:
+    """The planner is idle, has the world and has heard odometry (and scans, with the laser); with scans it cannot
+    place, blind (and has heard odometry)."""
+    if not placed:
+        return _last(statuses) == 'blind' and _count(statuses[-1][1], 'odom_heard') > 0
     if _last(statuses) != 'idle':
         return False
     status = statuses[-1][1]

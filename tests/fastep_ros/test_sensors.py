@@ -162,15 +162,13 @@ def test_scans_that_stop_coming_or_are_not_scans_hold_the_robot(context: Any) ->
         state, _, speeds, _ = drive(node, (0.0, 0.0, 0.0), 40)
         assert speeds[-1] > 0.5   # under way on its scans
 
-        def broken(k: int) -> None:   # every scan from now on is not one
-            on_scan = node.inputs.scans.take
+        take = node.inputs.scans.take
 
-            def take(msg: Any, now: float) -> Any:
-                msg.angle_increment = 0.0
-                return on_scan(msg, now)
-            node.inputs.scans.take = take   # type: ignore[method-assign]
-        state, _, speeds, _ = drive(node, (0.0, 0.0, 0.0), 60, start=41, state=state, on_tick=lambda k: k == 41 and
-                                    broken(k))
+        def broken(msg: Any, now: float) -> Any:   # every scan from now on is not one
+            msg.angle_increment = 0.0
+            return take(msg, now)
+        node.inputs.scans.take = broken   # type: ignore[method-assign]
+        state, _, speeds, _ = drive(node, (0.0, 0.0, 0.0), 60, start=41, state=state)
         level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.ERROR, 'blind')
         assert reason == 'scan ignored: laser scan angle_increment is 0; held still'
