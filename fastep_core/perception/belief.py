@@ -10,6 +10,12 @@ reports as movers only tracks gone MOVER_DISTANCE into space earlier scans saw f
 OtherRobot('track K', ...). The result is a `Belief`: a World, a new object only when the still obstacles change (so
 planners replan only then), and the tracked movers. No random numbers are drawn here (the scanner's noise is drawn
 by whoever scans). Why shapes and not a grid, and the costmap-like rules: docs/architecture.md, "What a laser shows".
+
+A scan placed at a pose that may be off (`uncertainty`: uncertainty.PoseUncertainty, per Perception or per scan)
+has each return's slack (translation + yaw x range) added where it meets the map: a return within EXPLAINED plus
+its slack of a mapped obstacle is that obstacle (fusion.explained_within), IN_FRONT of one only past its slack too,
+and a mapped obstacle is seen through only past its slack (fusion). With none (the default) perception is what it
+was, bit for bit.
 """
 
 from __future__ import annotations
@@ -23,9 +29,11 @@ from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle, Obstacle, Obstacles, Segment, point_segment_distance
 from fastep_core.perception.fusion import (
+    END_SLACK,
     EXPLAINED,
     explained,
     explained_by_belief,
+    explained_within,
     nearest_surfaces,
     seen_through_and_nearest,
     seen_through_circles,
@@ -33,6 +41,7 @@ from fastep_core.perception.fusion import (
 from fastep_core.perception.segmentation import scan_points, segment
 from fastep_core.perception.shapes import shapes
 from fastep_core.perception.tracking import Tracker, TrackParams
+from fastep_core.perception.uncertainty import NO_UNCERTAINTY, PoseUncertainty
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.recovery import RecentScans
 from fastep_core.sensing.laser import FanDirections, LaserSpec, Scan, fan_directions
@@ -130,8 +139,10 @@ class Belief:
 class Perception:
     """One robot's perception over a run: its belief, its tracker, the map it started from."""
 
-    def __init__(self, spec: LaserSpec, map_world: World, track_params: TrackParams | None = None) -> None:
+    def __init__(self, spec: LaserSpec, map_world: World, track_params: TrackParams | None = None,
+                 uncertainty: PoseUncertainty = NO_UNCERTAINTY) -> None:
         self.spec = spec
+        self.uncertainty = uncertainty   # of the poses scans are placed at, unless a scan brings its own
         self.map_world = map_world
         self.map_items: list[Obstacle] = list(map_world.obstacle_list)
         self.seen_items: list[Obstacle] = []
@@ -145,18 +156,24 @@ class Perception:
         self.world = map_world
         self.belief = Belief(0.0, map_world, tuple(self.map_items), (), (), (), np.zeros((0, 2)))
 
-    def update(self, t: float, pose: Sequence[float], scan: Scan, others: Sequence[OtherRobot] = ()) -> Belief:
+    def update(self, t: float, pose: Sequence[float], scan: Scan, others: Sequence[OtherRobot] = (),
+               uncertainty: PoseUncertainty | None = None) -> Belief:
         """Fold one scan taken at pose (x, y, heading) into the belief (module docstring); others: the other
-        robots (odometry) and known movers as the robot is told of them."""
+        robots (odometry) and known movers as the robot is told of them; uncertainty: of this pose (None: the
+        Perception's)."""
         pose_array = np.asarray(pose, dtype=float)[:3]
+        told = self.uncertainty if uncertainty is None else uncertainty
+        tolerant = None if told.none or not self.map_items else told
         changed = False
         believed = self._obstacles('believed')
         # The beams' directions once for every cast of this scan; each beam's nearest believed surface from the
         # cast that finds what the scan sees through (_in_front's, while that drops nothing).
         directions = fan_directions(pose_array[2], scan.angle_min, scan.angle_increment, len(scan.ranges))
         surfaces: FloatArray | None
-        map_walls = len(self._obstacles('map').starts)   # believed: the map's items first, so its walls first
-        through, surfaces = seen_through_and_nearest(scan, pose_array, believed, directions, map_walls)
+        on_map = self._obstacles('map')
+        map_walls = len(on_map.starts)   # believed: the map's items first, so its walls (and circles) first
+        through, surfaces = seen_through_and_nearest(scan, pose_array, believed, directions, map_walls, tolerant,
+                                                     on_map.n_circles)
         if through.any():
             surfaces = None
             gone = {id(item) for item, drop in zip(believed.items, through) if drop}
@@ -176,7 +193,11 @@ class Perception:
             still = explained_by_belief(points, believed, len(on_map.starts))
         else:
             still = explained(points, self._obstacles('seen'), NO_CENTRES, NO_RADII, map_obstacles=on_map)
-        still &= ~self._in_front(scan, pose_array, points, beams, believed, directions, surfaces)
+        if tolerant is not None:   # within its slack of a mapped surface: that surface, off by the pose's error
+            slack = tolerant.slack(scan.ranges[beams])
+            maybe = ~still
+            still[maybe] = explained_within(points[maybe], on_map, EXPLAINED + slack[maybe], END_SLACK + slack[maybe])
+        still &= ~self._in_front(scan, pose_array, points, beams, believed, directions, surfaces, tolerant)
         new = ~still & ~explained(points, NO_OBSTACLES, centres, radii)
         points, beams = points[new], beams[new]
         labels = segment(scan, points, beams, self.spec.noise, self.spec.full_turn)
@@ -233,17 +254,26 @@ class Perception:
         return self.belief
 
     def _in_front(self, scan: Scan, pose: FloatArray, points: FloatArray, beams: IntArray, believed: Obstacles,
-                  directions: FanDirections, nearest: FloatArray | None) -> NDArray[np.bool_]:
+                  directions: FanDirections, nearest: FloatArray | None,
+                  uncertainty: PoseUncertainty | None = None) -> NDArray[np.bool_]:
         """Which returns lie IN_FRONT or more in front of every believed still obstacle on their beam: a surface
         the belief lacks, nearer than what it has there (a cluster of poles fitted a little small, a wall a little
         behind its bumps, a map obstacle drawn where it is not). They are new, however near a believed surface.
-        believed: self._obstacles('believed'); nearest: fusion.nearest_surfaces of them, when known."""
+        believed: self._obstacles('believed'); nearest: fusion.nearest_surfaces of them, when known.
+        With `uncertainty`, not a return within IN_FRONT plus its slack of a mapped surface: placed from a pose that
+        is off, a mapped wall's return lies up to its slack beside the wall, and along a grazing beam that is
+        metres in front of it (the slack over the sine of the incidence), so the test is the return's distance
+        from the mapped surface, not along its beam."""
         out = np.zeros(len(points), dtype=bool)
         if not len(believed) or not len(points):
             return out
         if nearest is None:
             nearest = nearest_surfaces(scan, pose, believed, directions)
-        out = scan.ranges[beams] < nearest[beams] - max(IN_FRONT, 4.0 * self.spec.noise)
+        margin = max(IN_FRONT, 4.0 * self.spec.noise)
+        out = scan.ranges[beams] < nearest[beams] - margin
+        if uncertainty is not None and out.any():
+            slack = uncertainty.slack(scan.ranges[beams[out]])
+            out[out] = ~explained_within(points[out], self._obstacles('map'), margin + slack, END_SLACK + slack)
         return out
 
     def _came_into_free_space(self, points: FloatArray, centres: FloatArray, radii: FloatArray) -> NDArray[np.bool_]:

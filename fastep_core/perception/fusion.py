@@ -13,6 +13,10 @@ believed obstacles the scan sees through.
   beams of one scan or more is not where the map says (a misplaced obstacle's ghost, or a mover perception once
   took for a still obstacle).
   Vectorised (laser.fan_hits); seen_through_and_nearest also gives each beam's nearest believed surface.
+- Pose uncertainty (uncertainty.PoseUncertainty: the scan placed at a pose that may be off): a return may lie its
+  slack (translation + yaw x range) beside a mapped surface and still be it (explained_within), and a beam sees
+  through a mapped obstacle only past its slack too (circles shrunk, walls' ends cut and their band widened by it).
+  Only the map's obstacles: what this robot saw was placed from its own poses, off by the same error.
 """
 
 from __future__ import annotations
@@ -21,10 +25,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import Obstacles, norm
+from fastep_core.perception.uncertainty import PoseUncertainty
 from fastep_core.sensing.laser import FanDirections, Scan, fan_hits
 
 __all__ = ['END_SLACK', 'EXPLAINED', 'SEE_THROUGH', 'SEE_THROUGH_BEAMS', 'WALL_BAND', 'explained',
-           'explained_by_belief', 'nearest_surfaces', 'seen_through', 'seen_through_and_nearest',
+           'explained_by_belief', 'explained_within', 'nearest_surfaces', 'seen_through', 'seen_through_and_nearest',
            'seen_through_circles']
 
 FloatArray = NDArray[np.float64]
@@ -85,6 +90,36 @@ def explained_by_belief(points: FloatArray, believed: Obstacles, map_segments: i
     return near
 
 
+def explained_within(points: FloatArray, obstacles: Obstacles, within: FloatArray,
+                     end_slack: FloatArray) -> NDArray[np.bool_]:
+    """Which points (n, 2) lie within their own `within` (n,) of an obstacle's surface (or inside it), a segment
+    counting only for points whose foot lies at most their `end_slack` (n,) beyond its ends: explained with a
+    tolerance per point (a return's pose slack). Obstacles.near at the largest tolerance finds the few points that
+    may be; their distances to every obstacle, with near's arithmetic, decide."""
+    out = np.zeros(len(points), dtype=bool)
+    if not len(points) or not len(obstacles):
+        return out
+    maybe = np.flatnonzero(obstacles.near(points, float(within.max()), float(end_slack.max())))
+    if not len(maybe):
+        return out
+    p, tolerance, slack = points[maybe], within[maybe, None], end_slack[maybe, None]
+    hit = np.zeros(len(maybe), dtype=bool)
+    if obstacles.n_circles:
+        gap = norm(p[:, None, 0] - obstacles.centers[:, 0], p[:, None, 1] - obstacles.centers[:, 1]) - obstacles.radii
+        hit |= (gap < tolerance).any(axis=1)
+    if len(obstacles.starts):
+        starts, run = obstacles.starts, obstacles.ends - obstacles.starts
+        inv_length2 = np.where((run * run).sum(axis=1) > 0.0, 1.0 / np.maximum((run * run).sum(axis=1), 1e-300), 0.0)
+        ax, ay = p[:, None, 0] - starts[:, 0], p[:, None, 1] - starts[:, 1]
+        along = (ax * run[:, 0] + ay * run[:, 1]) * inv_length2
+        t = np.minimum(np.maximum(along, 0.0), 1.0)
+        distance = norm(ax - t * run[:, 0], ay - t * run[:, 1])
+        beyond = slack * np.sqrt(inv_length2)          # the end slack in the segment's parameter
+        hit |= ((distance < tolerance) & (along >= -beyond) & (along <= 1.0 + beyond)).any(axis=1)
+    out[maybe] = hit
+    return out
+
+
 def seen_through(scan: Scan, pose: FloatArray, obstacles: Obstacles, through: float = SEE_THROUGH,
                  directions: FanDirections | None = None, map_walls: int | None = None) -> NDArray[np.bool_]:
     """Which believed obstacles (circles first, as Obstacles orders them) this scan from pose sees through;
@@ -120,16 +155,19 @@ def nearest_surfaces(scan: Scan, pose: FloatArray, obstacles: Obstacles,
 
 
 def seen_through_and_nearest(scan: Scan, pose: FloatArray, obstacles: Obstacles,
-                             directions: FanDirections | None = None,
-                             map_walls: int | None = None) -> tuple[NDArray[np.bool_], FloatArray]:
+                             directions: FanDirections | None = None, map_walls: int | None = None,
+                             uncertainty: PoseUncertainty | None = None,
+                             map_circles: int = 0) -> tuple[NDArray[np.bool_], FloatArray]:
     """seen_through(scan, pose, obstacles, map_walls=map_walls) and nearest_surfaces(scan, pose, obstacles), bit for
     bit, from one fan_hits call: each obstacle cast once shrunk (seen_through's) and once as it is (fan_hits casts
-    each one on its own beams, so its pairs are those of a call of its own)."""
+    each one on its own beams, so its pairs are those of a call of its own). `uncertainty`: of the pose, for the
+    map's obstacles (the first `map_circles` circles and `map_walls` walls; module docstring)."""
     if not len(obstacles):
         return np.zeros(0, dtype=bool), np.full(len(scan.ranges), np.inf)
     walls = len(obstacles.starts) if map_walls is None else map_walls
     through, nearest = _seen_through(scan, pose, obstacles.distances(pose[:2]), obstacles.centers, obstacles.radii,
-                                     obstacles.starts, obstacles.ends, SEE_THROUGH, directions, True, walls)
+                                     obstacles.starts, obstacles.ends, SEE_THROUGH, directions, True, walls,
+                                     uncertainty, map_circles)
     assert nearest is not None
     return through, nearest
 
@@ -139,11 +177,12 @@ _NO_POINTS = np.zeros((0, 2))
 
 def _across_band(pose: FloatArray, scan: Scan, beam: IntArray, wall: IntArray, measured: FloatArray,
                  starts: FloatArray, units: FloatArray, lengths: FloatArray,
-                 directions: FanDirections | None) -> NDArray[np.bool_]:
+                 directions: FanDirections | None, band: float | FloatArray = WALL_BAND) -> NDArray[np.bool_]:
     """Which beams that read past a believed wall (wall: its index in starts, units and lengths, the walls' start
-    points, unit directions and lengths) crossed the wall's WALL_BAND from side to side alongside the wall: a true
-    surface within the band along the wall would have stopped them. A beam that starts or ends inside the band, or
-    crosses it beyond an end of the wall (round a corner the truth may have), says nothing."""
+    points, unit directions and lengths) crossed the wall's band (WALL_BAND, or one per beam) from side to side
+    alongside the wall: a true surface within the band along the wall would have stopped them. A beam that starts
+    or ends inside the band, or crosses it beyond an end of the wall (round a corner the truth may have), says
+    nothing."""
     if directions is None:
         angles = pose[2] + scan.angle_min + scan.angle_increment * beam.astype(float)
         cos, sin = np.cos(angles), np.sin(angles)
@@ -156,23 +195,42 @@ def _across_band(pose: FloatArray, scan: Scan, beam: IntArray, wall: IntArray, m
     offset = np.abs(u[:, 0] * rel_y - u[:, 1] * rel_x)         # the scanner's distance from the wall's line
     at = u[:, 0] * rel_x + u[:, 1] * rel_y                     # ... and where it lies along the wall
     with np.errstate(divide='ignore', invalid='ignore'):
-        enter, leave = (offset - WALL_BAND) / across, (offset + WALL_BAND) / across   # along the beam
+        enter, leave = (offset - band) / across, (offset + band) / across   # along the beam
     first, last = at + enter * along, at + leave * along       # along the wall
-    crossed: NDArray[np.bool_] = (offset >= WALL_BAND) & (measured >= leave) & \
+    crossed: NDArray[np.bool_] = (offset >= band) & (measured >= leave) & \
         (np.minimum(first, last) >= 0.0) & (np.maximum(first, last) <= lengths[wall])
     return crossed
 
 
 def _seen_through(scan: Scan, pose: FloatArray, distances: FloatArray, centres: FloatArray, radii: FloatArray,
                   starts: FloatArray, ends: FloatArray, through: float, directions: FanDirections | None,
-                  surfaces: bool, map_walls: int = 0) -> tuple[NDArray[np.bool_], FloatArray | None]:
+                  surfaces: bool, map_walls: int = 0, uncertainty: PoseUncertainty | None = None,
+                  map_circles: int = 0) -> tuple[NDArray[np.bool_], FloatArray | None]:
     """seen_through of the circles and segments (distances: Obstacles.distances from pose), and with `surfaces`
     nearest_surfaces too, the obstacles as they are cast in the same fan_hits call after the shrunk ones. The first
-    `map_walls` segments are the map's (WALL_BAND)."""
+    `map_walls` segments are the map's (WALL_BAND), and with `uncertainty` the first `map_circles` circles and those
+    walls are shrunk by their slack too (module docstring)."""
     n_circles = len(radii)
     out = np.zeros(n_circles + len(starts), dtype=bool)
     reach = scan.range_max
     candidates = np.flatnonzero(distances < reach - through)
+    tolerant = uncertainty is not None and not uncertainty.none
+    extra = np.zeros(len(distances))    # each map obstacle's slack (tolerant)
+    if tolerant:
+        assert uncertainty is not None
+        # A map obstacle's slack at its nearest point (a lower bound along it): one that shrinks to nothing, the
+        # scan cannot see through at this uncertainty.
+        mapped = np.concatenate([np.arange(min(map_circles, n_circles)), n_circles + np.arange(map_walls)])
+        extra[mapped] = uncertainty.slack(np.maximum(distances[mapped], 0.0))
+        keep = np.ones(len(candidates), dtype=bool)
+        is_circle = candidates < n_circles
+        keep[is_circle] = radii[candidates[is_circle]] - np.minimum(through, 0.5 * radii[candidates[is_circle]]) > \
+            extra[candidates[is_circle]]
+        wall = candidates[~is_circle] - n_circles
+        run_of = ends[wall] - starts[wall]
+        keep[~is_circle] = np.hypot(run_of[:, 0], run_of[:, 1]) - \
+            2.0 * np.minimum(through, 0.25 * np.hypot(run_of[:, 0], run_of[:, 1])) > 2.0 * extra[candidates[~is_circle]]
+        candidates = candidates[keep]
     if not len(candidates) and not surfaces:
         return out, None
     circles = candidates[candidates < n_circles]
@@ -185,6 +243,9 @@ def _seen_through(scan: Scan, pose: FloatArray, distances: FloatArray, centres: 
     run = high - low
     length = np.maximum(np.hypot(run[:, 0], run[:, 1]), 1e-12)
     cut = (np.minimum(through, 0.25 * length) / length)[:, None] * run
+    if tolerant:
+        shrunk = shrunk - extra[circles]
+        cut = cut + (extra[n_circles + segments] / length)[:, None] * run
     cast_centres, cast_radii, cast_starts, cast_ends = centres[circles], shrunk, low + cut, high - cut
     if surfaces:
         cast_centres, cast_radii = np.concatenate([cast_centres, centres]), np.concatenate([cast_radii, radii])
@@ -211,7 +272,15 @@ def _seen_through(scan: Scan, pose: FloatArray, distances: FloatArray, centres: 
     walls = passed & (candidate >= len(circles))
     walls[walls] = segments[candidate[walls] - len(circles)] < map_walls
     if walls.any():
-        passed[walls] = _across_band(pose, scan, beam[walls], candidate[walls] - len(circles), measured[walls],
-                                     low, run / length[:, None], length, directions)
+        band: float | FloatArray = WALL_BAND
+        reading = measured[walls]
+        if tolerant:
+            assert uncertainty is not None
+            band = WALL_BAND + uncertainty.slack(expected[walls])
+            # No return within range (+inf) shows the beam free to its range, not beyond: along a grazing beam the
+            # band's far side may lie farther (a heading a degree off puts a parallel wall's returns there).
+            reading = np.minimum(reading, reach)
+        passed[walls] = _across_band(pose, scan, beam[walls], candidate[walls] - len(circles), reading,
+                                     low, run / length[:, None], length, directions, band)
     out[candidates] = np.bincount(candidate[passed], minlength=len(candidates)) >= SEE_THROUGH_BEAMS
     return out, nearest
