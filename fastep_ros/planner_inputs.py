@@ -114,6 +114,7 @@ class PlannerInputs:
         self.twist_problem = ''        # why the odometry's twist is not the base's velocity ('' when it is)
         self._twist_disagrees = 0      # odometry messages in a row whose twist their poses contradict
         self.map_from_odom = frames.MapFromOdom()
+        self.localization_problem = ''   # why the last localization pose was ignored ('' when it was taken)
         self.body_yaw = 0.0   # map-frame heading of base_link at the last state: turns map commands into body ones
         self.trailer: float | None = None
         self.trailer_stamp = -math.inf
@@ -239,8 +240,10 @@ class PlannerInputs:
                 raise ValueError(f'frame {msg.header.frame_id!r} is not the map frame {self.node.frame_id!r}')
             pose = frames.odometry_pose(msg)
         except ValueError as exc:
-            self.node.ros.get_logger().warning(f'localization pose ignored: {exc}', throttle_duration_sec=5.0)
+            self.localization_problem = f'localization pose ignored: {exc}'
+            self.node.ros.get_logger().warning(self.localization_problem, throttle_duration_sec=5.0)
             return
+        self.localization_problem = ''
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         self.map_from_odom.add_localization(stamp if stamp > 0.0 else self.node.now(), pose)
 
@@ -410,7 +413,8 @@ class PlannerInputs:
         transform = self.map_to_odom()
         if transform is None:
             source = self.localization_topic or '/tf'
-            return None, f'waiting for localization on {source} (map -> {self.odom_frame_id})'
+            why = f': {self.localization_problem}' if self.localization_problem else ''
+            return None, f'waiting for localization on {source} (map -> {self.odom_frame_id}){why}'
         try:
             state = frames.state_in_frame(transform, convert.pose_to_state(self.odom.pose, self.node.model,
                                                                            self.trailer))

@@ -220,3 +220,23 @@ def test_a_scan_waits_for_the_transform_of_its_stamp_within_the_tolerance() -> N
                                       convert.seconds_to_stamp(1.5), frame_id='turret')
     assert source.take(late, 1.5) is None and source.retry(1.7) is None and source.pending
     assert source.retry(1.9) is None and not source.pending and 'not yet available' in source.problem   # given up
+
+
+def test_a_localization_that_only_sends_poses_it_cannot_take_is_waited_for_naming_why(context: Any) -> None:
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    node = PlannerNode(context=context, namespace='/r1', parameter_overrides=[
+        Parameter('planning_thread', value=False), Parameter('localization_topic', value='amcl_pose'),
+        Parameter('workspace', value=[0.0, 0.0, 24.0, 20.0])])
+    try:
+        start(node)
+        node.inputs.on_odom(convert.state_to_odometry([3.0, 10.0], frame_id='r1/odom', child_frame_id='r1/base_link'))
+        pose = PoseWithCovarianceStamped()
+        pose.header.frame_id = 'r1/odom'   # not a map pose
+        node.inputs.on_localization(pose)
+        node.on_control()
+        assert node.reports.status() == (DiagnosticStatus.WARN, 'waiting', (
+            "waiting for localization on /r1/amcl_pose (map -> r1/odom): localization pose ignored: frame "
+            "'r1/odom' is not the map frame 'map'"))
+        assert not node.last_command.any()
+    finally:
+        node.destroy_node()
