@@ -310,8 +310,8 @@ class PlannerInputs:
 
     @property
     def scan_problem(self) -> str:
-        """Why the last scan was not used, or what perception said of it ('' when nothing)."""
-        return self.scans.problem or self.seen_problem
+        """Why the last scan was not used (or waits), or what perception said of it ('' when nothing)."""
+        return self.scans.problem or self.scans.waiting or self.seen_problem
 
     def on_scan(self, msg: LaserScan) -> None:
         """A scan: placed on the robot (fastep_ros.sensors, here on the executor), then folded into what the robot

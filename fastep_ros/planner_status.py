@@ -321,8 +321,8 @@ class PlannerReports:
         """/diagnostics' `scan`: whether the robot may drive on its scans (fastep_ros.sensors), and why not."""
         scans = self.node.inputs.scans
         level, why = scans.hold(t)
-        values = {'reason': why or scans.problem, 'topic': scans.topic, 'mode': scans.mode, 'heard': scans.heard,
-                  'perceived': self.node.inputs.scan_perception.scans}
+        values = {'reason': why or scans.problem or scans.waiting, 'topic': scans.topic, 'mode': scans.mode,
+                  'heard': scans.heard, 'perceived': self.node.inputs.scan_perception.scans}
         if why:
             return Task('scan', level, 'blind' if level == DiagnosticStatus.ERROR else 'waiting', values)
         if not scans.required():

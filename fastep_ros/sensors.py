@@ -111,6 +111,7 @@ class ScanSource:
         self.first_heard = -math.inf   # node times: the first scan heard, the last one placed
         self.last_usable = -math.inf
         self.problem = ''              # why the newest scan was not used ('' when it was)
+        self.waiting = ''              # what the scans waiting for their transform wait for ('' when none waits)
         self.pending: list[tuple[LaserScan, float]] = []   # (scan, when it came): waiting for their transform
 
     @property
@@ -123,7 +124,7 @@ class ScanSource:
         self.started = now
         self.first_heard = now if self.heard else -math.inf
         self.last_usable = -math.inf
-        self.pending = []
+        self.pending, self.waiting = [], ''
 
     def take(self, msg: LaserScan, now: float) -> PlacedScan | None:
         """A scan that came: placed, or None (waiting for its transform, or not usable: `problem` says why)."""
@@ -147,17 +148,20 @@ class ScanSource:
     def retry(self, now: float) -> PlacedScan | None:
         """The newest waiting scan whose transform has come (the older ones are dropped), or None; scans that
         waited longer than transform_tolerance are given up, `problem` saying why."""
+        newer = ''   # what the newer scans, still waiting, wait for
         for i in range(len(self.pending) - 1, -1, -1):
             msg, came = self.pending[i]
             mount, why = self.mount(msg)
             if mount is not None:
                 del self.pending[:i + 1]
-                self.problem, self.last_usable = '', now
+                self.problem, self.waiting, self.last_usable = '', newer, now
                 return PlacedScan(msg, mount)
-            self.problem = why
             if now - came > self.tolerance:
                 del self.pending[:i + 1]   # given up, and every older one
+                self.problem, self.waiting = why, newer
                 return None
+            newer = newer or why
+        self.waiting = newer
         return None
 
     def mount(self, msg: LaserScan) -> tuple[frames.Pose2D | None, str]:
@@ -191,9 +195,9 @@ class ScanSource:
             return level, f'no scan on {self.topic} (scan_mode required): held still'
         waiting = self.last_usable == -math.inf and now - self.first_heard <= self.timeout
         if waiting:
-            return DiagnosticStatus.WARN, f'waiting for a usable scan: {self.problem or "none placed yet"}'
-        if self.problem:
-            return DiagnosticStatus.ERROR, f'{self.problem}; held still'
+            return DiagnosticStatus.WARN, f'waiting for a usable scan: {self.problem or self.waiting or "none yet"}'
+        if self.problem or self.waiting:
+            return DiagnosticStatus.ERROR, f'{self.problem or self.waiting}; held still'
         since = 'ever' if self.last_usable == -math.inf else f'for {now - self.last_usable:.2f} s'
         return DiagnosticStatus.ERROR, f'scans stale: none usable {since} (scan_timeout {self.timeout:g} s); ' \
                                        f'held still'

@@ -212,10 +212,11 @@ def test_a_scan_waits_for_the_transform_of_its_stamp_within_the_tolerance() -> N
     buffer.add([frames.transform_stamped('base_link', 'turret', (0.1, 0.0, 0.0), convert.seconds_to_stamp(0.9))])
     msg = convert.scan_to_laser_scan(scan(SPEC, (0.0, 0.0, 0.0), np.random.default_rng(0)),
                                      convert.seconds_to_stamp(1.0), frame_id='turret')
-    assert source.take(msg, 1.0) is None and 'not yet available' in source.problem and source.pending
+    assert source.take(msg, 1.0) is None and 'not yet available' in source.waiting and source.pending
+    assert source.problem == ''   # waiting is not given up
     buffer.add([frames.transform_stamped('base_link', 'turret', (0.1, 0.0, 0.2), convert.seconds_to_stamp(1.1))])
     placed = source.retry(1.1)
-    assert placed is not None and placed.mount == pytest.approx((0.1, 0.0, 0.1)) and source.problem == ''
+    assert placed is not None and placed.mount == pytest.approx((0.1, 0.0, 0.1)) and source.waiting == ''
     late = convert.scan_to_laser_scan(scan(SPEC, (0.0, 0.0, 0.0), np.random.default_rng(0)),
                                       convert.seconds_to_stamp(1.5), frame_id='turret')
     assert source.take(late, 1.5) is None and source.retry(1.7) is None and source.pending
@@ -238,5 +239,52 @@ def test_a_localization_that_only_sends_poses_it_cannot_take_is_waited_for_namin
             "waiting for localization on /r1/amcl_pose (map -> r1/odom): localization pose ignored: frame "
             "'r1/odom' is not the map frame 'map'"))
         assert not node.last_command.any()
+    finally:
+        node.destroy_node()
+
+
+def test_a_moving_mount_on_tf_is_taken_at_each_scans_stamp(context: Any) -> None:
+    """A turret on /tf (base_link -> turret turning at 1 rad/s, 0.1 m ahead): each scan is placed at the turret's
+    pose of its stamp, the transform of a later stamp waited for."""
+    node = make(context, model='diff_drive', robot_radius=0.3)
+    clock: Any = node.get_clock()
+    poses: list[tuple[float, ...]] = []
+    update = node.inputs.scan_perception.update
+
+    def kept(msg: Any, t: float, pose: Any, *args: Any) -> Any:
+        poses.append(tuple(pose))
+        return update(msg, t, pose, *args)
+    node.inputs.scan_perception.update = kept   # type: ignore[method-assign]
+    try:
+        node.inputs.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
+        reading = scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0))
+        for k in range(1, 6):
+            t = k * DT
+            clock.set_ros_time_override(Time(nanoseconds=int(round(t * 1e9)), clock_type=clock.clock_type))
+            node.inputs.on_odom(convert.state_to_odometry([3.0, 10.0, 0.0], convert.seconds_to_stamp(t)))
+            node.tf.take(TFMessage(transforms=[frames.transform_stamped(
+                'base_link', 'turret', (0.1, 0.0, t - DT), convert.seconds_to_stamp(t - DT))]))
+            node.inputs.on_scan(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(t - 0.5 * DT),
+                                                           frame_id='turret'))
+        # Each scan waits for the turret's next transform (it comes with the next tick), the last still waits.
+        assert len(poses) == 4
+        for k, pose in enumerate(poses, start=1):
+            assert pose == pytest.approx((3.1, 10.0, (k - 0.5) * DT), abs=1e-6)   # the turret's yaw at the stamp
+        assert node.inputs.scans.pending and 'not yet available' in node.inputs.scans.waiting
+    finally:
+        node.destroy_node()
+
+
+def test_a_scan_stamped_far_from_the_clock_is_not_used(context: Any) -> None:
+    node = make(context)
+    try:
+        clock: Any = node.get_clock()
+        clock.set_ros_time_override(Time(nanoseconds=10 * 10**9, clock_type=clock.clock_type))
+        start(node)
+        node.inputs.on_odom(convert.state_to_odometry([3.0, 10.0], convert.seconds_to_stamp(10.0)))
+        node.inputs.on_scan(convert.scan_to_laser_scan(scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0)),
+                                                       convert.seconds_to_stamp(6.8)))
+        assert node.inputs.scan_problem == 'scan ignored: stamped 3.20 s ago (scan_timeout 1 s)'
+        assert node.inputs.scan_perception.scans == 0
     finally:
         node.destroy_node()
