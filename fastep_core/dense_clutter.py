@@ -5,9 +5,12 @@ cellular automaton (a cell is filled when at least BIRTH of its 8 neighbours are
 SURVIVE) into walls and pockets; a corridor CORRIDOR cells wide is then cut through it along a random walk from the
 start's side to the goal's, so a way a few robot widths wide exists. The robot (a differential-drive base of
 radius 0.22 m, up to 2 m/s, a 270-degree 720-beam laser) starts in a box closed on three sides below the field and
-its goal lies 10 m ahead, beyond it. Two families: `dense_clutter` (the cylinders on the map) and
-`dense_clutter_laser` (only in the laser: known: false). Same seed, same world; solvable from the truth (every
-world is checked with exact_path.solvable, and drawn again, from the next draws of the same Generator, if not).
+its goal lies 10 m ahead, beyond it. Three families: `dense_clutter` (the cylinders on the map),
+`dense_clutter_laser` (only in the laser: known: false) and `dense_clutter_jackal` (dense_clutter_laser's worlds,
+seed for seed, with the robot declared as what BARN drives: a Jackal's 0.508 m x 0.430 m box, JACKAL_FOOTPRINT,
+its radius the box's circumscribed 0.333 m). Same seed, same world; solvable from the truth for the 0.22 m circle
+(every world is checked with exact_path.solvable, and drawn again, from the next draws of the same Generator, if
+not); the Jackal's worlds are not checked again for its larger circle, so they stay dense_clutter_laser's.
 """
 
 from __future__ import annotations
@@ -22,14 +25,15 @@ from scipy.ndimage import convolve
 from fastep_core.planning.exact_path import solvable
 from fastep_core.scenario import parse_scenario
 
-__all__ = ['CELL', 'DENSE_FAMILIES', 'ROBOT_RADIUS', 'dense_clutter_data']
+__all__ = ['CELL', 'DENSE_FAMILIES', 'JACKAL_FOOTPRINT', 'MAX_SPEED', 'ROBOT_RADIUS', 'dense_clutter_data']
 
-DENSE_FAMILIES: tuple[str, ...] = ('dense_clutter', 'dense_clutter_laser')
+DENSE_FAMILIES: tuple[str, ...] = ('dense_clutter', 'dense_clutter_laser', 'dense_clutter_jackal')
 CELL = 0.15             # m: a cell of the field, and a cylinder's diameter
 COLUMNS, ROWS = 30, 30  # the field: 4.5 m across, 4.5 m deep
 FIELD_Y = 2.0           # m: where the field begins, beyond the start box
 AHEAD = 10.0            # m from the start to the goal
 ROBOT_RADIUS = 0.22     # a Jackal-class base
+JACKAL_FOOTPRINT = ((0.254, 0.215), (-0.254, 0.215), (-0.254, -0.215), (0.254, -0.215))   # m, base_link centred
 MAX_SPEED = 2.0
 SENSOR: dict[str, Any] = {'range': 10.0, 'fov': round(1.5 * math.pi, 9), 'beams': 720, 'noise': 0.01}
 FILL = (0.40, 0.55)     # share of cells filled at first, drawn per world
@@ -55,8 +59,9 @@ def _field(rng: np.random.Generator) -> NDArray[np.bool_]:
     return cells
 
 
-def dense_clutter_data(seed: int, on_map: bool = True) -> dict[str, Any]:
-    """The scenario mapping of dense-clutter world `seed` (the cylinders on the map, or only in the laser)."""
+def dense_clutter_data(seed: int, on_map: bool = True, footprint: bool = False) -> dict[str, Any]:
+    """The scenario mapping of dense-clutter world `seed` (the cylinders on the map, or only in the laser), the
+    robot a 0.22 m circle or (footprint) the Jackal's box: the same world either way."""
     rng = np.random.default_rng(70_000 + seed)
     width = COLUMNS * CELL
     start = [round(width / 2.0, 3), 1.0, round(np.pi / 2.0, 6)]
@@ -71,10 +76,15 @@ def dense_clutter_data(seed: int, on_map: bool = True) -> dict[str, Any]:
         centres = np.column_stack([(columns + 0.5) * CELL, FIELD_Y + (rows + 0.5) * CELL])
         cylinders = [{'circle': {'center': [round(float(x), 3), round(float(y), 3)], 'radius': CELL / 2.0},
                       **({} if on_map else {'known': False})} for x, y in centres]
-        data = {'workspace': [0.0, 0.0, round(width, 3), round(height, 3)], 'obstacles': [*box, *cylinders],
-                'robots': [{'name': 'r1', 'model': 'diff_drive', 'start': start, 'goal': goal,
-                            'radius': ROBOT_RADIUS, 'sensor': dict(SENSOR)}],
-                'planner': {'max_speed': MAX_SPEED}}
+        data: dict[str, Any] = {
+            'workspace': [0.0, 0.0, round(width, 3), round(height, 3)], 'obstacles': [*box, *cylinders],
+            'robots': [{'name': 'r1', 'model': 'diff_drive', 'start': start, 'goal': goal, 'radius': ROBOT_RADIUS,
+                        'sensor': dict(SENSOR)}],
+            'planner': {'max_speed': MAX_SPEED}}
         if solvable(parse_scenario(data)):   # its world is the truth, known or not
+            if footprint:
+                robot = data['robots'][0]
+                del robot['radius']
+                robot['footprint'] = [list(v) for v in JACKAL_FOOTPRINT]
             return data
     raise RuntimeError(f'no solvable dense-clutter world in {_ATTEMPTS} draws for seed {seed}')

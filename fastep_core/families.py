@@ -42,7 +42,8 @@ FAMILY_NAMES: dict[str, str] = {'circle_field': 'circle fields', 'circles_walls'
                                 'diff_drive_robots': 'diff drive: 1-4 robots', 'crossing_movers': 'crossing movers',
                                 'unknown_obstacles': 'unknown obstacles', 'misplaced_obstacles': 'misplaced obstacles',
                                 'dynamic_mix': 'movers + unknown + misplaced, 2-4 robots',
-                                'dense_clutter': 'dense clutter', 'dense_clutter_laser': 'dense clutter, laser only'}
+                                'dense_clutter': 'dense clutter', 'dense_clutter_laser': 'dense clutter, laser only',
+                                'dense_clutter_jackal': 'dense clutter, laser only, Jackal box'}
 """What tables and figures call each family."""
 
 

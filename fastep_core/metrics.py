@@ -28,7 +28,7 @@ from numpy.typing import ArrayLike, NDArray
 from fastep_core.footprint import Footprint
 from fastep_core.geometry import Obstacles
 
-__all__ = ['Margins', 'MovingCircles', 'positions_at', 'trajectory_margins']
+__all__ = ['Margins', 'MovingCircles', 'barn_score', 'positions_at', 'trajectory_margins']
 
 FloatArray = NDArray[np.float64]
 CHUNK = 16_384   # points per obstacles.clearance call: bounds the (points x obstacles) distance matrix
@@ -147,3 +147,11 @@ def trajectory_margins(tracks: Sequence[ArrayLike], radii: ArrayLike, obstacles:
             to_robots[i] = min(to_robots[i], gap - radius[i] - radius[j])
             to_robots[j] = min(to_robots[j], gap - radius[j] - radius[i])
     return Margins(to_obstacles, to_robots)
+
+
+def barn_score(arrived: bool, collided: bool, traversal_time: float | None, optimal_time: float) -> float:
+    """The BARN challenge's score of one run: success x OT / clip(AT, 2 OT, 8 OT), OT the optimal path length over
+    the maximum speed, AT the traversal time (s); 0 for a run that did not arrive or collided. At most 0.5."""
+    if not arrived or collided or traversal_time is None or not optimal_time > 0.0:
+        return 0.0
+    return optimal_time / float(np.clip(traversal_time, 2.0 * optimal_time, 8.0 * optimal_time))

@@ -292,7 +292,7 @@ def random_family_data(family: str, seed: int) -> dict[str, Any]:
     elif family in DYNAMIC_FAMILIES:
         data = dynamic_family_data(family, seed)
     elif family in DENSE_FAMILIES:
-        data = dense_clutter_data(seed, on_map=family == 'dense_clutter')
+        data = dense_clutter_data(seed, on_map=family == 'dense_clutter', footprint=family == 'dense_clutter_jackal')
     else:
         raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
     return {**data, 'name': f'{family}_{seed}'}

@@ -45,3 +45,17 @@ def test_fastep_route_crosses_a_laser_only_field_without_touching_a_cylinder() -
     scenario = parse_scenario(random_family_data('dense_clutter_laser', 1_000_001))
     robot = simulate(scenario, 'fastep_route', 0).robots[0]
     assert robot.reached and not robot.collided
+
+
+@pytest.mark.parametrize('seed', [1_000_000, 1_000_003])
+def test_the_jackal_family_is_the_laser_familys_world_with_the_jackals_box(seed: int) -> None:
+    from fastep_core.dense_clutter import JACKAL_FOOTPRINT
+    from fastep_core.footprint import Footprint
+
+    laser, jackal = random_family_data('dense_clutter_laser', seed), random_family_data('dense_clutter_jackal', seed)
+    assert jackal['obstacles'] == laser['obstacles'] and jackal['workspace'] == laser['workspace']
+    assert jackal['planner'] == laser['planner']
+    (robot,) = parse_scenario(jackal).robots
+    assert robot.footprint == Footprint.parse(JACKAL_FOOTPRINT)
+    assert robot.radius == pytest.approx(math.hypot(0.254, 0.215))   # planned with the circumscribed circle
+    assert robot.start == parse_scenario(laser).robots[0].start and robot.sensor is not None

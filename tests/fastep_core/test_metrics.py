@@ -103,3 +103,13 @@ def test_a_footprint_meets_the_movers_where_they_are() -> None:
     track = [[1.6, 0.0, 0.0, 0.0], [1.6, 0.0, 0.0, math.pi / 2]]
     margins = trajectory_margins([track[:1], track[1:]], [box.radius] * 2, NONE, movers, footprints=[box, box])
     assert margins.obstacles == pytest.approx([0.4 - 0.254 - 0.1, 0.4 - 0.215 - 0.1])
+
+
+def test_the_barn_score_clips_the_traversal_time_between_two_and_eight_optimal_times() -> None:
+    from fastep_core.metrics import barn_score
+
+    assert barn_score(True, False, 7.0, 5.0) == 0.5                 # faster than 2 OT counts as 2 OT
+    assert barn_score(True, False, 12.5, 5.0) == pytest.approx(0.4)
+    assert barn_score(True, False, 100.0, 5.0) == pytest.approx(1 / 8)
+    assert barn_score(True, True, 7.0, 5.0) == 0.0 == barn_score(False, False, None, 5.0)
+    assert barn_score(True, False, 7.0, math.nan) == 0.0
