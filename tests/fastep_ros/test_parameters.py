@@ -247,8 +247,9 @@ def test_the_example_params_file_configures_a_planner_with_every_parameter_known
                        cli_args=['--ros-args', '--params-file', str(ROOT / 'config' / 'planner.yaml')])
     try:
         assert unknown_overrides(node) == []
-        assert (node.algorithm, node.model, node.radius, node.inputs.obstacle_source, node.inputs.laser_mount) == \
-            ('fastep_route', 'diff_drive', 0.22, 'map', (0.0, 0.0, 0.0))
+        assert (node.algorithm, node.model, node.radius, node.inputs.obstacle_source, node.inputs.scans.mode) == \
+            ('fastep_route', 'diff_drive', 0.22, 'map', 'required')
+        assert node.inputs.laser_mount is None   # the laser's place comes from TF
         assert node.inputs.localization_topic == '/r1/amcl_pose' and node.params.max_speed == 0.5
     finally:
         node.destroy_node()
