@@ -21,7 +21,7 @@ was, bit for bit.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Sequence
 
 import numpy as np
@@ -49,8 +49,8 @@ from fastep_core.world import World
 
 __all__ = ['FITTED_THROUGH', 'FREE_MARGIN', 'IN_FRONT', 'MERGE_GAP', 'MERGE_REACH', 'MERGE_TOLERANCE', 'MOVER_DISTANCE',
            'MOVER_FREE_POINTS', 'PERCEPTION_MARGIN', 'RECENT_SCANS', 'SENSOR_STREAM', 'STANDING_SHIFT', 'STILL_SPEED',
-           'STILL_TIME', 'WALL_RANGE', 'Belief', 'Perception', 'heading', 'perception_margin', 'sensor_generator',
-           'track_name']
+           'STILL_TIME', 'WALL_RANGE', 'Belief', 'BelievedWorld', 'Perception', 'heading', 'perception_margin',
+           'sensor_generator', 'track_name']
 
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.int64]
@@ -121,6 +121,16 @@ def heading(model: str, state: Sequence[float] | FloatArray) -> float:
     """The scanner's heading (docs/scenarios.md, sensor): a point mass looks along +x; the others along theta
     (state[2])."""
     return 0.0 if model == 'point_mass' else float(state[2])
+
+
+@dataclass(frozen=True)
+class BelievedWorld(World):
+    """The World a robot with a sensor plans in, knowing which of its obstacles the laser showed (`seen_obstacles`,
+    the rest are the map's) and the map it started from (`map_obstacles`, those a scan saw through too): what a
+    failure names (planning/exact_path.in_the_way)."""
+
+    seen_obstacles: tuple[Obstacle, ...] = field(default=(), compare=False)
+    map_obstacles: tuple[Obstacle, ...] = field(default=(), compare=False)
 
 
 @dataclass(frozen=True)
@@ -240,7 +250,8 @@ class Perception:
         if changed and tuple(map(id, items)) != tuple(map(id, self.world.obstacle_list)):
             # A new World only when what it holds changed (not for a standing circle made still, the same one):
             # planners replan on a new one.
-            self.world = World(self.map_world.workspace, items)
+            self.world = BelievedWorld(self.map_world.workspace, items, items[len(self.map_items):],
+                                       self.map_world.obstacle_list)
         moving = np.flatnonzero(tracker.confirmed & tracker.moved)
         movers = tuple(OtherRobot(track_name(int(tracker.ids[k])),
                                   (float(tracker.states[k, 0]), float(tracker.states[k, 1])),

@@ -16,7 +16,7 @@ from typing import TYPE_CHECKING, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.geometry import Circle
+from fastep_core.geometry import Circle, Obstacles
 from fastep_core.planning.optimal import OptimalPath, PathPiece, shortest_path
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
@@ -26,7 +26,7 @@ if TYPE_CHECKING:   # scenario.py imports planning (params): only for the annota
     from fastep_core.scenario import Scenario
 
 __all__ = ['BACK_OUT', 'BLOCKED_RETRY', 'PARKED_SPEED', 'PATH_SPACING', 'TURN_ROOM', 'NoPathHold', 'backed_out',
-           'blocked_reason', 'exact_path', 'no_path_reason', 'parked_world', 'robot_path', 'solvable']
+           'blocked_reason', 'exact_path', 'in_the_way', 'no_path_reason', 'parked_world', 'robot_path', 'solvable']
 
 FloatArray = NDArray[np.float64]
 PATH_SPACING = 0.25   # metres between exact-path vertices along arcs (escape paths, the optimal reference)
@@ -133,22 +133,41 @@ def robot_path(world: World, others: Sequence[OtherRobot], position: FloatArray,
 def blocked_reason(world: World, position: FloatArray, goal: FloatArray, radius: float, waited: float,
                    timeout: float) -> str:
     """The status of a robot holding because what it believes has no way to the goal (Navigator.fail_no_path),
-    naming what is in the way: the first obstacle within the radius of the straight run to the goal (else the
-    one nearest the goal)."""
+    naming what is in the way (in_the_way)."""
+    return (f'blocked: no way to the goal in what the laser shows; in the way: '
+            f'{in_the_way(world, position, goal, radius)}; planning again ({waited:.1f} of {timeout:g} s)')
+
+
+def in_the_way(world: World, position: FloatArray, goal: FloatArray, radius: float) -> str:
+    """The first obstacle within the radius of the straight run to the goal (else the one nearest the goal): its
+    place and size, and for one the laser showed (a World perception made, perception.belief.BelievedWorld: its
+    `seen_obstacles` are those, `map_obstacles` the map it started from) how far it lies from the map's obstacles: a
+    wall seen a few centimetres beside a mapped one is the localization's error, one far from any a thing the map
+    lacks."""
     start, end = np.asarray(position, dtype=float)[:2], np.asarray(goal, dtype=float)[:2]
     steps = int(min(max(math.ceil(math.dist(start, end) / 0.1), 1), 1000))
     run = start + np.linspace(0.0, 1.0, steps + 1)[:, None] * (end - start)
-    what = 'nothing known'
-    if len(world.obstacles):
-        distances = world.obstacles.distances(run)                        # (points, obstacles)
-        hit = np.flatnonzero(distances.min(axis=1) < radius)
-        row = int(hit[0]) if len(hit) else len(run) - 1
-        item = world.obstacles.items[int(np.argmin(distances[row]))]
-        what = (f'a circle of radius {item.radius:.2f} m at ({item.center[0]:.2f}, {item.center[1]:.2f})'
-                if isinstance(item, Circle) else
-                f'a wall from ({item.start[0]:.2f}, {item.start[1]:.2f}) to ({item.end[0]:.2f}, {item.end[1]:.2f})')
-    return (f'blocked: no way to the goal in what the laser shows; in the way: {what}; planning again '
-            f'({waited:.1f} of {timeout:g} s)')
+    if not len(world.obstacles):
+        return 'nothing known'
+    distances = world.obstacles.distances(run)                        # (points, obstacles)
+    hit = np.flatnonzero(distances.min(axis=1) < radius)
+    row = int(hit[0]) if len(hit) else len(run) - 1
+    item = world.obstacles.items[int(np.argmin(distances[row]))]
+    what = (f'a circle of radius {item.radius:.2f} m at ({item.center[0]:.2f}, {item.center[1]:.2f})'
+            if isinstance(item, Circle) else
+            f'a wall from ({item.start[0]:.2f}, {item.start[1]:.2f}) to ({item.end[0]:.2f}, {item.end[1]:.2f})')
+    seen = getattr(world, 'seen_obstacles', None)
+    if seen is None:
+        return what
+    if not any(item is o for o in seen):
+        return f'{what}, on the map'
+    mapped = Obstacles(getattr(world, 'map_obstacles', ()))
+    if not len(mapped):
+        return f'{what}, seen by the laser'
+    ends = [item.center] if isinstance(item, Circle) else [item.start, item.end]
+    gap = max(float(mapped.clearance(np.array(ends, dtype=float)).max()), 0.0)
+    return f'{what}, seen by the laser, {"its centre" if isinstance(item, Circle) else "its ends up to"} ' \
+        f'{gap:.2f} m from the nearest obstacle of the map'
 
 
 class NoPathHold:
@@ -184,9 +203,12 @@ class NoPathHold:
         return t - since
 
 
-def no_path_reason(radius: float, position: FloatArray, goal: FloatArray) -> str:
-    return (f'no valid path: nothing keeps the robot radius {radius:g} m from the obstacles and the '
-            f'border between ({position[0]:.3g}, {position[1]:.3g}) and the goal ({goal[0]:.3g}, {goal[1]:.3g})')
+def no_path_reason(radius: float, position: FloatArray, goal: FloatArray, world: World | None = None) -> str:
+    """The failure of a goal with no path; `world`: what the robot believes, for one that plans in what its laser
+    shows, to name what is in the way (in_the_way)."""
+    reason = (f'no valid path: nothing keeps the robot radius {radius:g} m from the obstacles and the '
+              f'border between ({position[0]:.3g}, {position[1]:.3g}) and the goal ({goal[0]:.3g}, {goal[1]:.3g})')
+    return reason if world is None else f'{reason}; in the way: {in_the_way(world, position, goal, radius)}'
 
 
 def solvable(scenario: Scenario) -> bool:

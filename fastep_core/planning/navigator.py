@@ -177,7 +177,7 @@ class Navigator:
         assert self.goal is not None
         waited = self.no_path.waited(self._last_t or 0.0, self.params.blocked_timeout, self.from_scans)
         if waited is None:
-            self.fail(no_path_reason(self.radius, position, self.goal))
+            self.fail(no_path_reason(self.radius, position, self.goal, self.world if self.from_scans else None))
             return
         self.waypoint, self._target, self.cost, self.path_check.checked = None, None, 0.0, False
         self.reason = blocked_reason(self.world, position, self.goal, self.radius, waited, self.params.blocked_timeout)
