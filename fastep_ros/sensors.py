@@ -35,7 +35,7 @@ __all__ = ['MOUNT_MARGIN', 'PENDING', 'SCAN_MODES', 'PlacedScan', 'ScanSource', 
 
 SCAN_MODES = ('auto', 'required', 'ignored')
 MOUNT_MARGIN = 0.1   # m: a laser may sit this far beyond the robot's extent (a bumper, a mast), no farther
-PENDING = 5          # scans waiting for their transform at once, at most (the oldest is given up first)
+PENDING = 5          # scans waiting for their transform at once, at most (the oldest is dropped first)
 CREEP = 0.0          # m/s: how fast a robot held for its scans moves (it does not)
 
 
@@ -113,6 +113,7 @@ class ScanSource:
         self.problem = ''              # why the newest scan was not used ('' when it was)
         self.waiting = ''              # what the scans waiting for their transform wait for ('' when none waits)
         self.pending: list[tuple[LaserScan, float]] = []   # (scan, when it came): waiting for their transform
+        self.unplaced_since = math.inf   # when the first scan came of those not placed since the last one was
 
     @property
     def followed(self) -> bool:
@@ -124,7 +125,7 @@ class ScanSource:
         self.started = now
         self.first_heard = now if self.heard else -math.inf
         self.last_usable = -math.inf
-        self.pending, self.waiting = [], ''
+        self.pending, self.waiting, self.unplaced_since = [], '', math.inf
 
     def take(self, msg: LaserScan, now: float) -> PlacedScan | None:
         """A scan that came: placed, or None (waiting for its transform, or not usable: `problem` says why)."""
@@ -142,7 +143,8 @@ class ScanSource:
             self.problem = f'scan ignored: stamped {when} (scan_timeout {self.timeout:g} s)'
             return None
         self.pending.append((msg, now))
-        del self.pending[:-PENDING]
+        del self.pending[:-PENDING]   # at 20 Hz, 0.25 s of scans: a transform that late is given up by time
+        self.unplaced_since = min(self.unplaced_since, now)
         return self.retry(now)
 
     def retry(self, now: float) -> PlacedScan | None:
@@ -155,12 +157,17 @@ class ScanSource:
             if mount is not None:
                 del self.pending[:i + 1]
                 self.problem, self.waiting, self.last_usable = '', newer, now
+                self.unplaced_since = self.pending[0][1] if self.pending else math.inf
                 return PlacedScan(msg, mount)
             if now - came > self.tolerance:
                 del self.pending[:i + 1]   # given up, and every older one
                 self.problem, self.waiting = why, newer
                 return None
             newer = newer or why
+        if newer and now - self.unplaced_since > self.tolerance:
+            # No scan placed for longer than a transform may lag (the oldest waiting were dropped, PENDING).
+            self.problem, self.waiting = newer, ''
+            return None
         self.waiting = newer
         return None
 

@@ -288,3 +288,17 @@ def test_a_scan_stamped_far_from_the_clock_is_not_used(context: Any) -> None:
         assert node.inputs.scan_perception.scans == 0
     finally:
         node.destroy_node()
+
+
+def test_scans_at_20_hz_that_tf_never_places_are_given_up_after_the_tolerance() -> None:
+    """More scans wait than are kept (PENDING): the wait is timed from the first scan not placed, not per scan."""
+    from msg_tools.tf_buffer import TfBuffer
+    values = {'scan_mode': 'auto', 'laser_mount': None, 'robot_radius': 0.3, 'transform_tolerance': 0.32,
+              'scan_timeout': 1.0}
+    source = ScanSource(values, 'base_link', 'scan', 0.0, TfBuffer().lookup_at)
+    reading = scan(SPEC, (0.0, 0.0, 0.0), np.random.default_rng(0))
+    for k in range(1, 9):   # 0.05 .. 0.40 s
+        t = k * DT
+        source.take(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(t), frame_id='base_laser'), t)
+        assert (source.problem == '') == (t - DT < 0.32), t   # the first came at 0.05 s
+    assert "'base_laser'" in source.problem and source.hold(1.2)[0] == DiagnosticStatus.ERROR
