@@ -26,7 +26,7 @@ from typing import Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-__all__ = ['MAX_SLACK', 'NO_UNCERTAINTY', 'SIGMAS', 'OdometryDrift', 'PoseError', 'PoseUncertainty']
+__all__ = ['MAX_SLACK', 'NO_DRIFT', 'NO_UNCERTAINTY', 'SIGMAS', 'OdometryDrift', 'PoseError', 'PoseUncertainty']
 
 FloatArray = NDArray[np.float64]
 
@@ -101,6 +101,9 @@ class OdometryDrift:
         return PoseUncertainty(self.translation * s + 0.5 * self.yaw * s * s, self.yaw * s)
 
 
+NO_DRIFT = OdometryDrift()
+
+
 @dataclass
 class PoseError:
     """A simulated localization off the truth (fastep_core/simulator.py): a constant `offset` (dx, dy, dyaw) plus
@@ -111,7 +114,7 @@ class PoseError:
     nothing, perception as without a PoseError)."""
 
     offset: tuple[float, float, float] = (0.0, 0.0, 0.0)
-    drift: OdometryDrift = OdometryDrift()
+    drift: OdometryDrift = NO_DRIFT
     seed: int = 0
     told: PoseUncertainty | None = None
     told_drift: OdometryDrift | None = None

@@ -15,7 +15,7 @@ from fastep_core.perception.belief import Belief, BelievedWorld, Perception
 from fastep_core.perception.fusion import END_SLACK, EXPLAINED, explained_within
 from fastep_core.perception.uncertainty import MAX_SLACK, OdometryDrift, PoseError, PoseUncertainty
 from fastep_core.planning.algorithms import make_navigator
-from fastep_core.planning.exact_path import shortest_path
+from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import RobotSpec, parse_scenario
 from fastep_core.sensing.laser import LaserSpec, scan
@@ -27,7 +27,7 @@ DOOR = 0.6                    # m: a doorway in a wall across the way, 0.16 m wi
 LEFT, RIGHT = 10.0 - DOOR / 2, 10.0 + DOOR / 2
 WALLS = [Segment((0.0, 5.0), (LEFT, 5.0)), Segment((RIGHT, 5.0), (20.0, 5.0)),
          Segment((LEFT, 5.0), (LEFT, 5.3)), Segment((RIGHT, 5.0), (RIGHT, 5.3))]
-MAP = World((0.0, 0.0, 20.0, 10.0), WALLS)
+MAP = World((0.0, 0.0, 20.0, 10.0), tuple(WALLS))
 OFFSET = (0.03, -0.02, math.radians(1.0))      # a localizer 3.6 cm and a degree off ...
 DRIFT = OdometryDrift(0.002, math.radians(0.02))   # ... and odometry drifting 0.2 % and 0.02 degree per metre
 TOLD = PoseUncertainty(0.04, math.radians(1.2))
