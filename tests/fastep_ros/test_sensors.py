@@ -302,3 +302,14 @@ def test_scans_at_20_hz_that_tf_never_places_are_given_up_after_the_tolerance() 
         source.take(convert.scan_to_laser_scan(reading, convert.seconds_to_stamp(t), frame_id='base_laser'), t)
         assert (source.problem == '') == (t - DT < 0.32), t   # the first came at 0.05 s
     assert "'base_laser'" in source.problem and source.hold(1.2)[0] == DiagnosticStatus.ERROR
+
+
+def test_a_footprint_sets_how_far_the_robot_reaches() -> None:
+    from fastep_ros.sensors import check_laser_mount, robot_reach
+    pytest.importorskip('fastep_core.footprint')
+    values = {'robot_radius': 0.22, 'footprint': '[[0.25, 0.2], [-0.25, 0.2], [-0.25, -0.2], [0.25, -0.2]]'}
+    reach, what = robot_reach(values)
+    assert reach == pytest.approx(math.hypot(0.25, 0.2)) and what == "the footprint's circumscribed radius"
+    assert check_laser_mount([0.4, 0.0, 0.0], values) == (0.4, 0.0, 0.0)   # within 0.32 + 0.1 m
+    with pytest.raises(StartupError, match="outside the robot \\(the footprint's circumscribed radius 0.32"):
+        check_laser_mount([0.5, 0.0, 0.0], values)
