@@ -178,6 +178,9 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
                            'control_rate_hz': 1.0 / scenario.planner.dt, 'use_sim_time': sim_time,
                            # Its goals are in map: no planner follows /tf (every plant's 50 Hz, N x N on a graph).
                            'goal_frames_from_tf': False}
+    if spec.footprint is not None:
+        # Nav2's form "[[x, y], ...]", quoted: `-p footprint:=VALUE` is read as YAML, and a list is not a string.
+        out['footprint'] = "'" + json.dumps(spec.footprint.to_list()) + "'"
     if sim_time:
         out.update(lock_step=True, use_stamped_cmd_vel=True)   # exact lock step (fastep_ros.lock_step)
         if realtime:

@@ -59,7 +59,7 @@ from fastep_ros.planner_params import PARAMETERS, TUNABLE
 from fastep_ros.planner_status import PlannerReports
 from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower, robot_name
-from fastep_ros.sensors import PlacedScan
+from fastep_ros.sensors import PlacedScan, declared_footprint
 from fastep_ros.sim_time import SimTimeWatch
 from msg_tools import cdr, convert, frames, interface
 from msg_tools.interface import RELIABLE, offered_qos
@@ -120,6 +120,9 @@ class PlannerNode(LifecycleNode):
         except ParameterError as exc:
             raise StartupError(str(exc)) from None
         self.algorithm, self.model, self.radius = values['algorithm'], values['model'], values['robot_radius']
+        self.footprint = declared_footprint(values)   # the outline, where the robot is not a circle
+        if self.footprint is not None:
+            self.radius = self.footprint.radius
         length, trailer_length, hitch_offset = values['length'], values['trailer_length'], values['hitch_offset']
         self.seed, self.seed_stream = values['seed'], values['seed_stream']
         self.control_rate_hz, self.odom_timeout = values['control_rate_hz'], values['odom_timeout']
@@ -178,7 +181,8 @@ class PlannerNode(LifecycleNode):
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
         self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
                                     lambda: self.reports.publish(force=True),
-                                    on_odometry=self.lock_try if self.lock_step else None)
+                                    on_odometry=self.lock_try if self.lock_step else None,
+                                    outline=None if self.footprint is None else self.footprint.vertices)
         # Goals in other frames: resolved through /tf and /tf_static (fastep_ros.live_tf).
         self.tf = TfListener(self, dynamic=goal_frames or self.inputs.map_to_odom_from_tf)
         # Nav2's speed limits (a speed filter, a fleet manager): the robot's max_speed capped by the newest.

@@ -27,6 +27,10 @@ PARAMETERS: tuple[Param, ...] = (
     Param('model', 'point_mass', 'robot model: ' + ' | '.join(MODELS), constraints=' | '.join(MODELS)),
     Param('robot_radius', 0.5, 'safety radius: centre-to-obstacle-surface distance that counts as collision (m)',
           constraints='> 0'),
+    Param('footprint', '', 'the robot\'s outline in base_link, in Nav2\'s form "[[x, y], [x, y], ...]" (m; either '
+          'turning order; base_link inside it); empty or "[]": the circle of robot_radius. A diff_drive only; it '
+          'replaces robot_radius, which becomes its circumscribed radius: collisions are checked with the outline, '
+          'and it is what the robot announces on `footprint`'),
     Param('length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)'),
     Param('trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)'),
     Param('hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)'),

@@ -27,7 +27,7 @@ from rclpy.serialization import deserialize_message
 from fastep_core.planning.others import OtherRobot
 from fastep_ros.polled import PolledSubscription, polled
 from msg_tools import cdr, convert, interface
-from msg_tools.footprint import base_frame, circle_footprint, footprint_radius
+from msg_tools.footprint import base_frame, circle_footprint, footprint_radius, polygon_footprint
 from msg_tools.interface import LATEST, offered_qos
 
 if TYPE_CHECKING:
@@ -214,9 +214,10 @@ class RobotFollower:
 
     def __init__(self, node: Node, own_radius: float, override_radius: float, timeout: float,
                  still_after: float, now: Callable[[], float], on_change: Callable[[], None],
-                 on_odometry: Callable[[], None] | None = None) -> None:
+                 on_odometry: Callable[[], None] | None = None, outline: Any = None) -> None:
         """on_odometry: called after each odometry message taken, which then comes in a callback (lock step: a
-        planner waits for the others' odometry of a time), not polled."""
+        planner waits for the others' odometry of a time), not polled; outline: the robot's footprint vertices
+        (N, 2) in base_link, announced instead of the circle of own_radius."""
         self.node = node
         self.own_radius = own_radius
         self.override_radius = override_radius
@@ -231,8 +232,9 @@ class RobotFollower:
         self.subscriptions: dict[str, list[Any]] = {}
         self.footprint_pub = node.create_publisher(PolygonStamped, interface.FOOTPRINT,
                                                    offered_qos(interface.FOOTPRINT))
-        self.footprint_pub.publish(circle_footprint(own_radius, base_frame(node.get_namespace()),
-                                                    node.get_clock().now().to_msg()))
+        frame, stamp = base_frame(node.get_namespace()), node.get_clock().now().to_msg()
+        self.footprint_pub.publish(circle_footprint(own_radius, frame, stamp) if outline is None else
+                                   polygon_footprint(outline, frame, stamp))
 
     def radius(self, robot: Robot) -> float:
         if self.override_radius > 0.0:

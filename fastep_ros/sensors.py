@@ -26,12 +26,13 @@ from typing import Any, Callable
 from diagnostic_msgs.msg import DiagnosticStatus
 from sensor_msgs.msg import LaserScan
 
+from fastep_core.footprint import Footprint
 from fastep_ros.common import StartupError
 from msg_tools import convert, frames
 from msg_tools.tf_buffer import TfUnavailable
 
-__all__ = ['MOUNT_MARGIN', 'PENDING', 'SCAN_MODES', 'PlacedScan', 'ScanSource', 'check_laser_mount', 'mount_problem',
-           'robot_reach']
+__all__ = ['MOUNT_MARGIN', 'PENDING', 'SCAN_MODES', 'PlacedScan', 'ScanSource', 'check_laser_mount',
+           'declared_footprint', 'mount_problem', 'robot_reach']
 
 SCAN_MODES = ('auto', 'required', 'ignored')
 MOUNT_MARGIN = 0.1   # m: a laser may sit this far beyond the robot's extent (a bumper, a mast), no farther
@@ -59,14 +60,26 @@ class PlacedScan:
 def robot_reach(values: dict[str, Any]) -> tuple[float, str]:
     """How far the robot reaches from base_link (m), and what says so: the circumscribed radius of a `footprint`
     parameter where there is one, else robot_radius."""
-    footprint = values.get('footprint')
-    if footprint:
-        try:
-            from fastep_core.footprint import Footprint  # type: ignore[import-not-found, unused-ignore]
-            return float(Footprint.parse(footprint).radius), 'the footprint\'s circumscribed radius'
-        except (ImportError, ValueError):
-            pass   # no footprint here, or one the planner refuses itself
+    outline = declared_footprint(values)
+    if outline is not None:
+        return outline.radius, 'the footprint\'s circumscribed radius'
     return float(values['robot_radius']), 'robot_radius'
+
+
+def declared_footprint(values: dict[str, Any]) -> Footprint | None:
+    """The `footprint` parameter's outline, None where it is empty (Nav2's "[]" too): the circle of robot_radius;
+    StartupError in one line for one that is not an outline or is on a model without a heading."""
+    text = str(values.get('footprint') or '').strip()
+    if text in ('', '[]'):
+        return None
+    try:
+        outline = Footprint.parse(text, what='parameter footprint')
+    except ValueError as exc:
+        raise StartupError(str(exc)) from None
+    if values.get('model', 'diff_drive') != 'diff_drive':
+        raise StartupError(f'parameter footprint is for a diff_drive (it turns with the robot\'s heading); a '
+                           f'{values.get("model")} is a circle of robot_radius')
+    return outline
 
 
 def mount_problem(mount: frames.Pose2D, reach: float, what: str) -> str:

@@ -1,0 +1,88 @@
+"""The planner's `footprint` parameter (Nav2's form): the robot's outline, what it announces and what it is refused."""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import pytest
+from geometry_msgs.msg import PolygonStamped
+from rclpy.executors import SingleThreadedExecutor
+
+from fastep_core.scenario import parse_scenario
+from fastep_ros.common import StartupError
+from fastep_ros.launch import planner_params
+from fastep_ros.planner import PlannerNode
+from msg_tools import interface
+
+JACKAL = '[[0.254, 0.215], [-0.254, 0.215], [-0.254, -0.215], [0.254, -0.215]]'
+
+
+def make(context: Any, *args: str) -> PlannerNode:
+    return PlannerNode(context=context, namespace='/r1',
+                       cli_args=['--ros-args', '-p', 'model:=diff_drive', '-p', 'planning_thread:=false', *args])
+
+
+def announced(context: Any, node: PlannerNode) -> PolygonStamped:
+    """The footprint the node published (latched: a late subscriber gets it)."""
+    heard: list[PolygonStamped] = []
+    listener = node.create_subscription(PolygonStamped, '/r1/footprint', heard.append,
+                                        interface.offered_qos(interface.FOOTPRINT))
+    executor = SingleThreadedExecutor(context=context)
+    executor.add_node(node)
+    try:
+        for _ in range(200):
+            if heard:
+                break
+            executor.spin_once(timeout_sec=0.05)
+    finally:
+        executor.remove_node(node)
+        node.destroy_subscription(listener)
+    assert heard, 'no footprint announced'
+    return heard[-1]
+
+
+def test_a_footprint_in_nav2s_form_is_the_outline_the_robot_announces(context: Any) -> None:
+    node = make(context, '-p', f'footprint:="{JACKAL}"', '-p', 'robot_radius:=0.22')
+    try:
+        assert node.footprint is not None and node.footprint.to_list()[0] == [0.254, 0.215]
+        assert node.radius == pytest.approx(math.hypot(0.254, 0.215))   # robot_radius gives way to the outline
+        points = [(round(p.x, 3), round(p.y, 3)) for p in announced(context, node).polygon.points]
+        assert sorted(points) == sorted([(0.254, 0.215), (-0.254, 0.215), (-0.254, -0.215), (0.254, -0.215)])
+    finally:
+        node.destroy_node()
+
+
+@pytest.mark.parametrize('value', ['""', '"[]"'])
+def test_an_empty_footprint_is_the_circle_of_robot_radius(context: Any, value: str) -> None:
+    node = make(context, '-p', f'footprint:={value}', '-p', 'robot_radius:=0.3')
+    try:
+        assert node.footprint is None and node.radius == 0.3
+        assert len(announced(context, node).polygon.points) == 16   # Nav2's circle of 16 points
+    finally:
+        node.destroy_node()
+
+
+@pytest.mark.parametrize(('args', 'words'), [
+    (('-p', 'footprint:="[[0.2, 0.2], [-0.2, 0.2]]"'), 'parameter footprint'),
+    (('-p', 'footprint:="[[1, 1], [2, 1], [2, 2], [1, 2]]"'), 'parameter footprint'),   # base_link outside it
+    (('-p', 'footprint:="[[0.2, 0.2], [nan, 0.2], [0.0, -0.2]]"'), 'parameter footprint'),
+    (('-p', f'footprint:="{JACKAL}"', '-p', 'model:=point_mass'), 'diff_drive'),
+])
+def test_a_footprint_that_is_no_outline_is_refused_in_one_line(context: Any, args: tuple[str, ...],
+                                                                words: str) -> None:
+    with pytest.raises(StartupError) as error:
+        make(context, *args)
+    assert words in str(error.value) and '\n' not in str(error.value)
+
+
+def test_fastep_launch_hands_a_scenario_footprint_to_its_planner(context: Any) -> None:
+    scenario = parse_scenario({'workspace': [0, 0, 10, 10], 'robots': [
+        {'name': 'r1', 'model': 'diff_drive', 'start': [2, 5, 0.0], 'goal': [8, 5],
+         'footprint': [[0.254, 0.215], [-0.254, 0.215], [-0.254, -0.215], [0.254, -0.215]]}]})
+    value = planner_params(scenario, 0, 'fastep_route', 1, sim_time=False)['footprint']
+    node = make(context, '-p', f'footprint:={value}')   # as fastep-launch's command line passes it
+    try:
+        assert node.footprint == scenario.robots[0].footprint
+    finally:
+        node.destroy_node()
