@@ -189,8 +189,10 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
         out.update(length=float(spec.length), trailer_length=float(spec.trailer_length),
                    hitch_offset=float(spec.hitch_offset))
     out.update(_planner_overrides(scenario.planner))
-    if spec.sensor is not None and any(spec.sensor.mount):
-        out['laser_mount'] = [float(v) for v in spec.sensor.mount]   # its scans come in <ns>/laser
+    if spec.sensor is not None:
+        out['scan_mode'] = 'required'   # its plant scans: a robot whose scans stop or cannot be used is held
+        if any(spec.sensor.mount):
+            out['laser_mount'] = [float(v) for v in spec.sensor.mount]   # its scans come in <ns>/laser
     if spec.model == 'diff_drive' and spec.goal_heading is None:
         out['goal_heading'] = 0   # the goal's orientation is any: the robot stops where it arrives, as in fastep-sim
     if spec.dynamics is not None:

@@ -169,6 +169,8 @@ def test_launch_passes_a_mounted_laser_to_the_plant_and_the_planner(tmp_path: Pa
     assert plant['sensor'][4:] == pytest.approx([0.2, 0.0, 0.1])
     planner = launch.planner_params(scenario, index, 'fastep_route', 0, True)
     assert planner['laser_mount'] == pytest.approx([0.2, 0.0, 0.1])
+    assert planner['scan_mode'] == 'required'   # its scans stopping or unusable hold it, from the start
+    assert 'scan_mode' not in launch.planner_params(scenario, 1 - index, 'fastep_route', 0, True)   # no laser
 
 
 def test_a_plant_with_a_mounted_laser_scans_from_the_mount_in_its_own_frame(context: Any, tmp_path: Path) -> None:
