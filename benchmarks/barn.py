@@ -45,6 +45,7 @@ __all__ = ['DECLARATIONS', 'BarnRun', 'judged_run', 'main']
 DECLARATIONS = {'circle': 'dense_clutter_laser', 'footprint': 'dense_clutter_jackal'}
 """How the robot is declared -> the family whose worlds declare it so (the same worlds)."""
 BOX = Footprint.parse(JACKAL_FOOTPRINT)
+SLOW = 0.5   # m/s: below this a step counts to its reason's slow time (crawling, backing up, stopped, escaping)
 
 
 @dataclass(frozen=True)
@@ -63,6 +64,7 @@ class BarnRun:
     score: float
     status: str
     wall_time: float            # seconds this run took here
+    slow_time: dict[str, float]   # seconds below SLOW m/s, by the navigator's reason (where time goes)
 
 
 def _scenario(declared: str, world: int) -> Scenario:
@@ -76,9 +78,14 @@ def judged_run(declared: str, world: int, realtime: float | None = 1.0, algorith
     scenario = _scenario(declared, world)
     (spec,) = scenario.robots
     rows: list[list[float]] = []
+    slow: dict[str, float] = {}
+    step = scenario.planner.dt
 
     def observe(tick: Tick) -> None:
         rows.append([tick.t, float(tick.state[0]), float(tick.state[1]), float(tick.state[2])])
+        if abs(float(tick.command[0])) < SLOW:
+            reason = tick.navigator.reason.split(';')[0][:60]
+            slow[reason] = slow.get(reason, 0.0) + step
 
     started = time.perf_counter()
     run = simulate(scenario, algorithm, seed, observer=observe, realtime=realtime)
@@ -90,18 +97,24 @@ def judged_run(declared: str, world: int, realtime: float | None = 1.0, algorith
     path = shortest_path(scenario.world, spec.start[:2], spec.goal, ROBOT_RADIUS)
     optimal = float('nan') if path is None else path.length / scenario.planner.max_speed
     return BarnRun(world, declared, robot.reached, box < 0.0, circle < 0.0, box, circle, robot.sim_time, optimal,
-                   barn_score(robot.reached, box < 0.0, robot.sim_time, optimal), robot.status, wall)
+                   barn_score(robot.reached, box < 0.0, robot.sim_time, optimal), robot.status, wall,
+                   {k: round(v, 2) for k, v in sorted(slow.items(), key=lambda kv: -kv[1])})
 
 
 def _summary(runs: list[BarnRun]) -> dict[str, object]:
     scores = np.array([r.score for r in runs])
+    slow: dict[str, float] = {}
+    for r in runs:
+        for reason, seconds in r.slow_time.items():
+            slow[reason] = slow.get(reason, 0.0) + seconds
     return {'runs': len(runs), 'arrived': sum(r.arrived for r in runs),
             'touched_by_box': sum(r.touched_by_box for r in runs),
             'touched_by_circle': sum(r.touched_by_circle for r in runs),
             'mean_score': float(scores.mean()) if len(scores) else float('nan'),
             'median_at_over_ot': float(np.median([r.traversal_time / r.optimal_time for r in runs
                                                   if r.traversal_time is not None] or [float('nan')])),
-            'worst_box_clearance': min((r.box_clearance for r in runs), default=float('nan'))}
+            'worst_box_clearance': min((r.box_clearance for r in runs), default=float('nan')),
+            'slow_time': {k: round(v, 2) for k, v in sorted(slow.items(), key=lambda kv: -kv[1])}}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -134,6 +147,11 @@ def main(argv: list[str] | None = None) -> int:
     for declared, s in summaries.items():
         print(f'| {declared} | {s["arrived"]}/{s["runs"]} | {s["touched_by_box"]} | {s["touched_by_circle"]} | '
               f'{s["mean_score"]:.3f} | {s["median_at_over_ot"]:.2f} | {s["worst_box_clearance"]:+.3f} |')
+    for declared, s in summaries.items():
+        slow_time = s['slow_time']
+        assert isinstance(slow_time, dict)
+        print(f'{declared}: seconds below {SLOW} m/s by reason: ' +
+              '; '.join(f'{k} {v:.1f}' for k, v in list(slow_time.items())[:6]))
     if args.json:
         args.json.write_text(json.dumps({'realtime': realtime, 'algorithm': args.algorithm, 'summaries': summaries,
                                          'runs': {d: [asdict(r) for r in rs] for d, rs in runs.items()}},

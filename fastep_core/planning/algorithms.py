@@ -11,6 +11,7 @@ from typing import Protocol
 import numpy as np
 
 from fastep_core.errors import ParameterError
+from fastep_core.footprint import Footprint
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
 from fastep_core.kinematics.diff_drive import DiffDrive, DiffDriveController
 from fastep_core.kinematics.model import Controller, RobotModel
@@ -20,6 +21,7 @@ from fastep_core.planning.fastep_kinematic import FAStepKinematic, FAStepPaper
 from fastep_core.planning.fastep_route import FAStepRoute
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.optimal_kinematic import OptimalKinematic
+from fastep_core.planning.outline import body_radius, planning_radius
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
@@ -111,12 +113,24 @@ def check_drives(algorithm: str, model: str, robot: str = '') -> None:
 
 
 def make_navigator(algorithm: str, spec: RobotLike, radius: float, world: World, params: PlannerParams,
-                   rng: np.random.Generator | int | None = None) -> Navigator:
-    """A navigator of the named algorithm (one of ALGORITHMS) for a scenario robot."""
+                   rng: np.random.Generator | int | None = None, footprint: Footprint | None = None) -> Navigator:
+    """A navigator of the named algorithm (one of ALGORITHMS) for a scenario robot.
+
+    footprint: the robot's outline (default: the spec's `footprint`, if it has one; diff_drive only). With one,
+    `radius` (at least its circumscribed radius) is what other robots are kept from, and the navigator plans with
+    outline.planning_radius and guards with the polygon (planning/outline.py); `navigator.footprint` is it.
+    """
     if algorithm not in NAVIGATORS:
         raise ParameterError(f'unknown algorithm {algorithm!r}; choose one of {", ".join(ALGORITHMS)}')
     check_drives(algorithm, spec.model, getattr(spec, 'name', ''))
+    if footprint is None:
+        footprint = getattr(spec, 'footprint', None)
+    if footprint is not None and spec.model != 'diff_drive':
+        raise ParameterError(f'a footprint is for diff_drive robots only; the robot is a {spec.model}')
     model, controller = make_robot(spec, params)
-    navigator = NAVIGATORS[algorithm](model, controller, radius, world, params, rng)
+    planned = radius if footprint is None else planning_radius(footprint, radius)
+    navigator = NAVIGATORS[algorithm](model, controller, planned, world, params, rng)
+    if footprint is not None:
+        navigator.take_footprint(footprint, body_radius(footprint, radius))
     navigator.name = str(getattr(spec, 'name', ''))
     return navigator

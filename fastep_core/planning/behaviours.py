@@ -19,6 +19,7 @@ from typing import Protocol, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
+from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning.base_response import BaseResponse
 from fastep_core.planning.escape import ESCAPING, TrapEscape
@@ -70,6 +71,7 @@ class Steering(Protocol):
     model: RobotModel
     controller: Controller
     radius: float
+    footprint: Footprint | None
     world: World
     path_world: World
     mode: Mode
@@ -359,7 +361,7 @@ def back_up(nav: Steering, state: FloatArray, dt: float, others: Sequence[OtherR
     seen = nav.seen
     free = None if seen is None else (
         lambda command: reverse_free(nav.model, state, nav.radius, command, REVERSE_HORIZON, nav.world, seen,
-                                     (), nav.guard_check.obstacle_margin))
+                                     (), nav.guard_check.obstacle_margin, nav.footprint))
     guarded = nav.backup.drive(state, dt, lambda points: free_room(nav.world, points, others),
                                lambda command: nav.guard(state, command, dt, others), free)
     if nav.backup.looking:

@@ -29,6 +29,7 @@ from fastep_core.planning.base_response import speed_of
 from fastep_core.planning.guard import Guard
 from fastep_core.planning.navigator import Mode, Navigator, SpeedLaw
 from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.outline import inflated
 from fastep_core.planning.recovery import REVERSE_HORIZON, reverse_free
 from fastep_core.planning.smoother import VelocitySmoother
 from fastep_core.world import World
@@ -99,7 +100,7 @@ class ControlTick:
         self._applied: Callable[[FloatArray], None] | None = getattr(self.controller, 'applied', None)
         self._tell(self.smoother.velocity)   # a new controller ramps from what the robot does now
         self.smoother.retune(nav.params)   # its period: each command's dt (command)
-        self.guard = Guard(nav.model, nav.radius, nav.params)
+        self.guard = Guard(nav.model, nav.radius, nav.params, nav.footprint)
         self.yielding = nav._yielding(nav.params)
         self._target: FloatArray | None = None
         self.reason = ''        # why this tick's command differs from the plan's ('' when it does not)
@@ -116,6 +117,7 @@ class ControlTick:
         self.smoother.period = self.response.period = dt
         self._measured = self._feedback(velocity, t if measured_at is None else measured_at,
                                         state if pose is None else pose)
+        others = inflated(others, self.navigator.outline_extra)   # a footprint's circumscribed circle (outline.py)
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
         before = self.smoother.velocity.copy()
         sent = self.smoother.smooth(wanted, elapsed, emergency)
@@ -125,7 +127,7 @@ class ControlTick:
             # What the robot will really do, on its way from its velocity to the command (or to a stop), must pass
             # the guard too: a turn away from a robot, ramped, still heads at it for a tick or two.
             world = self.navigator.world if plan is None else plan.world
-            movers = [] if plan is None else plan.movers_at(t)
+            movers = [] if plan is None else inflated(plan.movers_at(t), self.navigator.outline_extra)
             if self._guarded(world, state, sent, dt, [*others, *movers]) is not sent:
                 self.reason = self.guard.reason
                 self.smoother.take_back(before)
@@ -200,7 +202,7 @@ class ControlTick:
         state = np.asarray(state, dtype=float)
         if plan is None or not plan.under_way or not all(map(math.isfinite, state)):
             return stop, False
-        others = [*others, *plan.movers_at(t)]
+        others = [*others, *inflated(plan.movers_at(t), self.navigator.outline_extra)]
         # Surfaces known only as well as the robot's scans show them (set by the pass's perception).
         self.guard.obstacle_margin = self.navigator.guard_check.obstacle_margin
         self.guard.scan_points = self.navigator.guard_check.scan_points
@@ -230,7 +232,7 @@ class ControlTick:
         seen = self.navigator.seen   # None without a laser: the map is known, and the guard checks it
         if seen is not None and not self.model.holonomic and float(command[0]) < 0.0 and \
                 not reverse_free(self.model, state, self.navigator.radius, command, REVERSE_HORIZON, plan.world,
-                                 seen, (), self.guard.obstacle_margin):
+                                 seen, (), self.guard.obstacle_margin, self.navigator.footprint):
             # Still obstacles and what no scan has seen: the robots, which move, are the guard's (above).
             self.reason = 'stopped: no evidence the space behind is free'
             return stop, True

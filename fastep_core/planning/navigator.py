@@ -17,6 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.errors import GoalError
+from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning import behaviours, step_planning
 from fastep_core.planning.base_response import BaseResponse, speed_of
@@ -29,6 +30,7 @@ from fastep_core.planning.manoeuvre_driver import ManoeuvreDriver
 from fastep_core.planning.mode import Mode
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, OtherRobots, robots_on_run
+from fastep_core.planning.outline import inflated
 from fastep_core.planning.params import PlannerParams
 from fastep_core.planning.progress import ProgressChecker, TrapDetector
 from fastep_core.planning.recovery import BackUp, SeenFree, StopTimer, backup_speed
@@ -54,6 +56,8 @@ class Navigator:
     step_method = 'fastep'   # the optimizer that plans a step (plan_step's `method`)
     escapes_traps = True     # False for a navigator that already follows the exact path
     name = ''                # the robot's name as the other robots know it ('' unknown): ties at passages
+    footprint: Footprint | None = None   # the robot's outline (take_footprint); None: it is its `radius` circle
+    outline_extra = 0.0      # m the other robots are grown by: the circumscribed radius less `radius` (outline.py)
 
     def __init__(self, model: RobotModel, controller: Controller, radius: float, world: World,
                  params: PlannerParams | None = None, rng: np.random.Generator | int | None = None) -> None:
@@ -114,6 +118,13 @@ class Navigator:
         self.backup = BackUp(model, backup_speed(p))
         # A robot that cannot turn in place leaves traps and tight spots by manoeuvres of its own arcs.
         self.manoeuvring = None if model.turns_in_place else ManoeuvreDriver(model, self.radius, p)
+
+    def take_footprint(self, footprint: Footprint, body_radius: float) -> None:
+        """Plan for a robot with this outline: `radius` is then the planning circle (outline.planning_radius), the
+        guard checks the polygon, and other robots are kept from `body_radius` (the circumscribed circle)."""
+        self.footprint = footprint
+        self.guard_check.footprint = footprint
+        self.outline_extra = max(0.0, body_radius - self.radius)
 
     def _yielding(self, p: PlannerParams) -> Yielding:
         return Yielding(self.model, self.radius, p.mover_horizon, 0.5 * p.clearance_margin, p.max_speed,
@@ -253,6 +264,8 @@ class Navigator:
             at = t if measured_at is None else measured_at
             measured = self.response.corrected(measured) if self.response_fed_elsewhere else \
                 self.response.slide(at, measured, state if pose is None else pose)
+        # Other robots and movers grown to the circumscribed circle for a robot with a footprint (outline.py).
+        others = inflated(others, self.outline_extra)
         command = self.tick(t, state, others, measured)
         # Standing still: every component 0 (NaN counts as moving, as for np.any; this runs every tick, where
         # np.any on two numbers cost as much as the guard's obstacle test).

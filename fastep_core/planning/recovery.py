@@ -24,11 +24,13 @@ from typing import Callable, Sequence
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from fastep_core.footprint import Footprint
 from fastep_core.geometry import point_segment_distance
 from fastep_core.kinematics.model import RobotModel
 from fastep_core.kinematics.tractor_trailer import hitch_angle
 from fastep_core.planning.guard import Stop
 from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.outline import predicted_poses
 from fastep_core.planning.params import PlannerParams
 from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, Scan
 from fastep_core.world import World
@@ -244,11 +246,14 @@ def swept_centres(model: RobotModel, state: FloatArray, command: FloatArray, hor
 
 def reverse_free(model: RobotModel, state: FloatArray, radius: float, command: FloatArray, horizon: float,
                  world: World, seen: SeenFree | None = None, others: Sequence[OtherRobot] = (),
-                 margin: float = 0.0) -> bool:
+                 margin: float = 0.0, footprint: Footprint | None = None) -> bool:
     """May the robot drive `command` (a reverse move, or any) for `horizon` seconds? Its disc of `radius` swept
     along the path must keep radius + margin from every obstacle surface, other robot and the workspace border
     (or, where it is nearer already, come no nearer), and, given `seen`, lie in the free space recent scans saw
-    (the robot's own disc where it stands counts as free). Without `seen` (no laser) the map alone decides."""
+    (the robot's own disc where it stands counts as free). Without `seen` (no laser) the map alone decides.
+    A robot with a `footprint` (a diff_drive; `radius` its planning circle, planning/outline.py): the polygon
+    placed along the motion must also keep `margin` from every obstacle surface (or come no nearer), and its
+    vertices lie in the free space seen, so backing up or turning does not swing the box's rear into a post."""
     state = np.asarray(state, dtype=float)
     c = np.asarray(command, dtype=float)
     if not (np.isfinite(state).all() and np.isfinite(c).all() and horizon >= 0.0):
@@ -271,11 +276,24 @@ def reverse_free(model: RobotModel, state: FloatArray, radius: float, command: F
         now_gap = np.hypot(*(where - here).T) - radii
         if (gap < np.minimum(keep, now_gap) - 1e-9).any():
             return False
+    poses = None
+    if footprint is not None:
+        poses = predicted_poses(model, state, c, horizon, footprint.radius)
+        if len(world.obstacles):
+            outline = footprint.clearance(poses, world.obstacles)
+            if float(outline[1:].min()) < min(margin, float(outline[0])) - 1e-9:
+                return False
     if seen is None:
         return True
     # The evidence: the disc's centre and rings about every centre of the path, in space the beams passed.
     points = (centres[:, None, :] + keep * FOOTPRINT[None]).reshape(-1, 2)
     standing = np.hypot(*(points - here).T) <= radius + 1e-9
+    if poses is not None and footprint is not None:
+        # ... and the outline's vertices at every pose; those of the box where it stands count as free.
+        corners = footprint.placed(poses[:, 0], poses[:, 1], poses[:, 2])
+        standing = np.concatenate([standing, np.ones(corners.shape[1], dtype=bool),
+                                   np.zeros((len(poses) - 1) * corners.shape[1], dtype=bool)])
+        points = np.concatenate([points, corners.reshape(-1, 2)])
     return bool((standing | seen.covers(points)).all())
 
 
