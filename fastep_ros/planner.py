@@ -253,7 +253,7 @@ class PlannerNode(LifecycleNode):
             self.inputs.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
             if self.navigator is None:
                 self.navigator = nav = make_navigator(self.algorithm, self.body, self.radius, world, self.params,
-                                                      self.rng)
+                                                      self.rng, footprint=self.footprint)
                 nav.name = robot_name(self.get_namespace())   # as the other robots' planners name it
                 if self.planning is not None:
                     self.planning.drop_plan()

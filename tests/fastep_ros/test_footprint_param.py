@@ -10,10 +10,11 @@ from geometry_msgs.msg import PolygonStamped
 from rclpy.executors import SingleThreadedExecutor
 
 from fastep_core.scenario import parse_scenario
+from fastep_core.world import World
 from fastep_ros.common import StartupError
 from fastep_ros.launch import planner_params
 from fastep_ros.planner import PlannerNode
-from msg_tools import interface
+from msg_tools import convert, interface
 
 JACKAL = '[[0.254, 0.215], [-0.254, 0.215], [-0.254, -0.215], [0.254, -0.215]]'
 
@@ -43,10 +44,12 @@ def announced(context: Any, node: PlannerNode) -> PolygonStamped:
 
 
 def test_a_footprint_in_nav2s_form_is_the_outline_the_robot_announces(context: Any) -> None:
-    node = make(context, '-p', f'footprint:="{JACKAL}"', '-p', 'robot_radius:=0.22')
+    node = make(context, '-p', f'footprint:="{JACKAL}"', '-p', 'robot_radius:=0.22', '-p', 'obstacle_source:=map')
     try:
         assert node.footprint is not None and node.footprint.to_list()[0] == [0.254, 0.215]
         assert node.radius == pytest.approx(math.hypot(0.254, 0.215))   # robot_radius gives way to the outline
+        node.inputs.on_map(convert.world_to_occupancy_grid(World.from_obstacles([0, 0, 10, 10], []), 0.5))
+        assert node.navigator is not None and node.navigator.footprint == node.footprint   # guarded by the outline
         points = [(round(p.x, 3), round(p.y, 3)) for p in announced(context, node).polygon.points]
         assert sorted(points) == sorted([(0.254, 0.215), (-0.254, 0.215), (-0.254, -0.215), (0.254, -0.215)])
     finally:
