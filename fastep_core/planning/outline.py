@@ -30,7 +30,7 @@ __all__ = ['CORNER_SPACING', 'FOOTPRINT_MARGIN', 'MAX_POSES', 'body_radius', 'in
            'predicted_poses']
 
 FloatArray = NDArray[np.float64]
-FOOTPRINT_MARGIN = 0.01
+FOOTPRINT_MARGIN = 0.02
 """m beyond the inscribed radius: the planning circle's slack for a box that does not head exactly along its way
 (the controller's heading error on a curve); the guard's polygon check keeps the rest."""
 CORNER_SPACING = 0.02
