@@ -177,7 +177,9 @@ def planner_params(scenario: Scenario, index: int, algorithm: str, seed: int, si
                            'seed': int(seed), 'seed_stream': index,
                            'control_rate_hz': 1.0 / scenario.planner.dt, 'use_sim_time': sim_time,
                            # Its goals are in map: no planner follows /tf (every plant's 50 Hz, N x N on a graph).
-                           'goal_frames_from_tf': False}
+                           'goal_frames_from_tf': False,
+                           # A simulated robot's pose is the truth (a physics base's: its true pose), as in fastep-sim.
+                           'localization_tolerance': [0.0, 0.0], 'odometry_drift': [0.0, 0.0]}
     if spec.footprint is not None:
         # Nav2's form "[[x, y], ...]", quoted: `-p footprint:=VALUE` is read as YAML, and a list is not a string.
         out['footprint'] = "'" + json.dumps(spec.footprint.to_list()) + "'"

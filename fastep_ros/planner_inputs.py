@@ -21,11 +21,13 @@ from sensor_msgs.msg import LaserScan
 from visualization_msgs.msg import MarkerArray
 
 from fastep_core.perception.belief import heading
+from fastep_core.perception.uncertainty import OdometryDrift, PoseUncertainty
 from fastep_core.planning.guard import ScanReturns
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
+from fastep_ros.common import StartupError
 from fastep_ros.latched import LatchedSubscription
 from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
 from fastep_ros.lock_step import STAMP_EPS
@@ -40,6 +42,14 @@ __all__ = ['TWIST_CHECKS', 'TWIST_SLACK', 'Body', 'PlannerInputs', 'PlannerNodeV
 
 TWIST_SLACK = 0.2   # m/s: a pose may move this much faster than its odometry's twist says (noise, latency)
 TWIST_CHECKS = 3    # odometry messages in a row beyond it: the twist is not the base's velocity
+
+
+def _pair(values: dict[str, Any], name: str) -> tuple[float, float]:
+    """A parameter of two finite numbers >= 0 (StartupError in one line otherwise)."""
+    value = values[name]
+    if len(value) != 2 or not all(math.isfinite(v) and v >= 0.0 for v in value):
+        raise StartupError(f'parameter {name} must be two finite numbers >= 0, got {list(value)}')
+    return float(value[0]), float(value[1])
 
 
 @dataclass(frozen=True)
@@ -124,7 +134,10 @@ class PlannerInputs:
         self.movers_received = -math.inf
         self._stale_logged: list[str] = []   # what stale_inputs last said was stale
         # Scans: perceived (fastep_ros.perception) and the belief shown on `tracked_obstacles`.
-        self.scan_perception = ScanPerception(values['scan_noise'])
+        tolerance, drift = (_pair(values, name) for name in ('localization_tolerance', 'odometry_drift'))
+        self.localization_sigmas: float = values['localization_sigmas']
+        self.scan_perception = ScanPerception(values['scan_noise'], PoseUncertainty(*tolerance), OdometryDrift(*drift))
+        self._tf_map_to_odom: frames.Pose2D | None = None   # the last map -> odom TF gave (a new one: localized)
         self.pending_scan: PlacedScan | None = None   # lock step: the newest scan, perceived when acted on
         self.latest_scan: PlacedScan | None = None    # with the planning thread: perceived by the next pass
         self.seen_problem = ''   # what perception said of the last scan it took ('' when nothing)
@@ -246,6 +259,8 @@ class PlannerInputs:
         self.localization_problem = ''
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         self.map_from_odom.add_localization(stamp if stamp > 0.0 else self.node.now(), pose)
+        # Its covariance bounds the pose the scans are placed at, and the odometry's drift starts again from it.
+        self.scan_perception.localized(list(msg.pose.covariance), self.localization_sigmas)
 
     def map_to_odom(self) -> frames.Pose2D | None:
         """map -> odom of the odometry last taken (None: not known yet, the robot holds still): from the
@@ -255,7 +270,12 @@ class PlannerInputs:
         if self.localization_topic:
             return self.map_from_odom.transform
         if self.map_to_odom_from_tf:
-            return self.node.tf.lookup(self.node.frame_id, self.odom_frame_id)
+            transform = self.node.tf.lookup(self.node.frame_id, self.odom_frame_id)
+            if transform is not None and transform != self._tf_map_to_odom:
+                # A localizer's new correction (TF carries no covariance): the odometry's drift starts again.
+                self._tf_map_to_odom = transform
+                self.scan_perception.localized(None)
+            return transform
         return frames.IDENTITY
 
     def on_trailer(self, msg: PoseStamped) -> None:

@@ -71,6 +71,15 @@ PARAMETERS: tuple[Param, ...] = (
           'map_server publishes it: their outline, as walls)', constraints='markers | map'),
     Param('scan_noise', 0.01, 'standard deviation of the laser\'s range noise (m), which a LaserScan does not '
           'carry: the perception of `scan` clusters and fits with it', value_range=(0.0, 1.0), unit=' m'),
+    Param('localization_tolerance', [0.03, 0.02], '[translation (m), yaw (rad)]: how far the robot\'s map pose '
+          'may be off besides what the localization pose\'s covariance says: a surface the laser sees within that '
+          '(turned into metres at each return\'s range) of a mapped obstacle is that obstacle, not a new one; '
+          '[0, 0]: the pose is the truth (simulation)'),
+    Param('odometry_drift', [0.01, 0.002], '[translation (m per m), yaw (rad per m)]: how far the odometry may '
+          'drift per metre driven since the last localization pose (since the start without one): added to '
+          'localization_tolerance, growing as the robot drives'),
+    Param('localization_sigmas', 3.0, 'the localization pose\'s covariance bounds the pose this many standard '
+          'deviations out', value_range=(0.0, 10.0)),
     Param('occupied_threshold', convert.OCCUPIED_THRESHOLD, 'with obstacle_source map: a cell is occupied from this '
           'value (0-100) on; unknown cells (-1) are free (map_server\'s occupied_thresh 0.65)', value_range=(1, 100)),
     Param('frame_id', interface.MAP_FRAME, 'frame of goals, waypoints and plans'),

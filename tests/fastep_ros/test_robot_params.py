@@ -1,4 +1,5 @@
-"""The planner's `footprint` parameter (Nav2's form): the robot's outline, what it announces and what it is refused."""
+"""The planner parameters that describe the robot as it is: its outline (`footprint`, Nav2's form), and how far its
+pose may be off (`localization_tolerance`, `odometry_drift`, a localization pose's covariance)."""
 
 from __future__ import annotations
 
@@ -89,3 +90,30 @@ def test_fastep_launch_hands_a_scenario_footprint_to_its_planner(context: Any) -
         assert node.footprint == scenario.robots[0].footprint
     finally:
         node.destroy_node()
+
+
+def test_the_pose_tolerances_reach_perception_and_a_localization_pose_bounds_them(context: Any) -> None:
+    """localization_tolerance and odometry_drift as perception takes them; amcl_pose's covariance adds its bound
+    and starts the drift again."""
+    from geometry_msgs.msg import PoseWithCovarianceStamped
+    node = make(context, '-p', 'localization_tolerance:=[0.05, 0.01]', '-p', 'odometry_drift:=[0.02, 0.0]',
+                '-p', 'localization_topic:=amcl_pose')
+    try:
+        perception = node.inputs.scan_perception
+        assert (perception.uncertainty.translation, perception.uncertainty.yaw) == (0.05, 0.01)
+        perception.driven = 10.0
+        assert perception.pose_uncertainty().translation == pytest.approx(0.05 + 0.2)
+        msg = PoseWithCovarianceStamped()
+        msg.header.frame_id = 'map'
+        msg.pose.pose.orientation.w = 1.0
+        msg.pose.covariance[0] = msg.pose.covariance[7] = 0.01 ** 2   # 1 cm in x and y
+        node.inputs.on_localization(msg)
+        assert perception.driven == 0.0
+        assert perception.pose_uncertainty().translation == pytest.approx(0.05 + 3 * 0.01)   # 3 sigmas
+    finally:
+        node.destroy_node()
+
+
+def test_a_pose_tolerance_that_is_no_pair_of_numbers_is_refused(context: Any) -> None:
+    with pytest.raises(StartupError, match='parameter odometry_drift must be two finite numbers >= 0'):
+        make(context, '-p', 'odometry_drift:=[0.01, -1.0]')
