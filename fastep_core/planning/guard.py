@@ -33,7 +33,7 @@ from numpy.typing import NDArray
 from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import RobotModel
 from fastep_core.planning.others import OtherRobot, other_arrays
-from fastep_core.planning.outline import predicted_poses
+from fastep_core.planning.outline import outline_clearance, predicted_poses
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
 
@@ -154,7 +154,7 @@ class Guard:
         if len(obstacles) and (free is None or free[0] is not world or
                                float(np.max(np.hypot(positions[:, 0] - free[1][0],
                                                      positions[:, 1] - free[1][1]))) >= free[2]):
-            clearances = footprint.clearance(poses, obstacles)
+            clearances = outline_clearance(footprint, poses, obstacles, keep)
             then = float(clearances[1:].min())
             if then < keep and then < float(clearances[0]):
                 return 'stopped: an obstacle is within the robot outline ahead'

@@ -23,11 +23,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.footprint import Footprint
+from fastep_core.geometry import Obstacles
 from fastep_core.kinematics.model import RobotModel
 from fastep_core.planning.others import OtherRobot
 
-__all__ = ['CORNER_SPACING', 'FOOTPRINT_MARGIN', 'MAX_POSES', 'body_radius', 'inflated', 'planning_radius',
-           'predicted_poses']
+__all__ = ['CORNER_SPACING', 'FOOTPRINT_MARGIN', 'MAX_POSES', 'body_radius', 'inflated', 'outline_clearance',
+           'planning_radius', 'predicted_poses']
 
 FloatArray = NDArray[np.float64]
 FOOTPRINT_MARGIN = 0.02
@@ -74,3 +75,23 @@ def predicted_poses(model: RobotModel, state: FloatArray, command: FloatArray, h
     chord = v * t * np.sinc(turn / (2.0 * math.pi))   # np.sinc(x) = sin(pi x) / (pi x): sinc of turn / 2
     middle = theta + 0.5 * turn
     return np.column_stack([x0 + chord * np.cos(middle), y0 + chord * np.sin(middle), theta + turn])
+
+
+def outline_clearance(footprint: Footprint, poses: FloatArray, obstacles: Obstacles, keep: float) -> FloatArray:
+    """The footprint's signed clearance at each of `poses` (n, 3) (the first where the robot is) to the obstacles
+    that can come within `keep` of it along them: shape (n,), inf where none can. An obstacle whose surface lies
+    beyond the circumscribed radius + keep + the poses' farthest reach from the first is kept from at every pose
+    (the outline lies within the radius of base_link), so it changes no decision made by comparing these with
+    `keep` and with each other below keep; the rest, a handful in clutter, are measured exactly."""
+    here = poses[0, :2]
+    travel = float(np.max(np.hypot(poses[:, 0] - here[0], poses[:, 1] - here[1])))
+    near = obstacles.distances(here) <= footprint.radius + travel + max(keep, 0.0) + 1e-6
+    circles, walls = near[:obstacles.n_circles], near[obstacles.n_circles:]
+    out = np.full(len(poses), np.inf)
+    if circles.any():
+        out = np.minimum(out, footprint.circle_distances(poses, obstacles.centers[circles],
+                                                         obstacles.radii[circles]).min(axis=-1))
+    if walls.any():
+        out = np.minimum(out, footprint.segment_distances(poses, obstacles.starts[walls],
+                                                          obstacles.ends[walls]).min(axis=-1))
+    return out

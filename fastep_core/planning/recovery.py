@@ -30,7 +30,7 @@ from fastep_core.kinematics.model import RobotModel
 from fastep_core.kinematics.tractor_trailer import hitch_angle
 from fastep_core.planning.guard import Stop
 from fastep_core.planning.others import OtherRobot
-from fastep_core.planning.outline import predicted_poses
+from fastep_core.planning.outline import outline_clearance, predicted_poses
 from fastep_core.planning.params import PlannerParams
 from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, Scan
 from fastep_core.world import World
@@ -280,7 +280,7 @@ def reverse_free(model: RobotModel, state: FloatArray, radius: float, command: F
     if footprint is not None:
         poses = predicted_poses(model, state, c, horizon, footprint.radius)
         if len(world.obstacles):
-            outline = footprint.clearance(poses, world.obstacles)
+            outline = outline_clearance(footprint, poses, world.obstacles, margin)
             if float(outline[1:].min()) < min(margin, float(outline[0])) - 1e-9:
                 return False
     if seen is None:
