@@ -106,7 +106,7 @@ def _cpu(pid: int) -> float:
 def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 90.0, start_timeout: float = 60.0,
               max_speed: float = 1.0, seed: int = 0, algorithm: str = '', log_dir: Path | None = None,
               laser_mount: tuple[float, float, float] = (0.0, 0.0, 0.0), dynamics: str = '', laser_frame: str = '',
-              laser_tf: bool = True) -> HarnessResult:
+              laser_tf: bool = True, planner_params: dict[str, Any] | None = None) -> HarnessResult:
     """One run of a harness world (a robot_worlds name or a Scenario with one diff-drive robot); see the module
     docstring. Every process it starts is stopped before it returns. Logs go to log_dir (default: a temporary
     folder, removed). laser_mount: where the laser sits on the base (x, y, yaw); the planner is told it
@@ -114,7 +114,8 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     (fastep_core/dynamics) in place of the robot's own (the kinematic one, unless the scenario gives dynamics).
     laser_frame: the base scans in this frame and publishes base_link -> it on /tf_static (unless not laser_tf),
     and the planner is not told laser_mount: it takes the mount from TF, as on a ROS robot (without the transform
-    it is never `idle` with scans: the goal is sent once it is `blind`)."""
+    it is never `idle` with scans: the goal is sent once it is `blind`). planner_params: more of the planner's
+    parameters (name: value as `-p name:=value` takes it)."""
     scenario = harness_world(scenario) if isinstance(scenario, str) else scenario
     if dynamics:
         scenario = replace(scenario, robots=(replace(scenario.robots[0], dynamics=preset(dynamics)),
@@ -147,7 +148,8 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     planner_cmd = [*_planner_command(), *ros, '-p', 'obstacle_source:=map', '-p', 'model:=diff_drive',
                    '-p', f'robot_radius:={robot.radius!r}', '-p', f'max_speed:={float(max_speed)!r}',
                    '-p', f'seed:={seed}'] + (['-p', f'algorithm:={algorithm}'] if algorithm else []) + \
-                  (['-p', f'laser_mount:={list(mount)!r}'] if any(mount) and not laser_frame else [])
+                  (['-p', f'laser_mount:={list(mount)!r}'] if any(mount) and not laser_frame else []) + \
+                  [arg for name, value in (planner_params or {}).items() for arg in ('-p', f'{name}:={value}')]
     procs: dict[str, subprocess.Popen[bytes]] = {}
     helper: Helper | None = None
     statuses: list[tuple[float, dict[str, Any]]] = []
