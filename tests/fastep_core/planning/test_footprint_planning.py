@@ -6,7 +6,9 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
+import pytest
 
+from fastep_core.errors import ParameterError
 from fastep_core.footprint import Footprint
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics.diff_drive import DiffDrive
@@ -107,3 +109,28 @@ def test_a_box_robot_passes_a_gap_its_circumscribed_circle_does_not_fit() -> Non
     # The same robot as its circumscribed circle finds no way through.
     circled = simulate(parse_scenario(_gap_world(radius=BOX.radius)), 'fastep_route', 0).robots[0]
     assert not circled.reached
+
+
+def test_the_returns_near_where_the_scan_was_taken_give_the_outline_every_decision_all_of_them_give() -> None:
+    """ScanReturns.around_outline: while the robot is near where it took the scan, only the returns within the
+    circumscribed radius and NEAR_ROOM of there are measured; the guard decides as with every return."""
+    rng = np.random.default_rng(4)
+    points = AT[:2] + rng.uniform(-3.0, 3.0, (720, 2))
+    points = points[np.hypot(*(points - AT[:2]).T) > 0.30]   # none inside the box where it stands
+    empty = World.from_obstacles([0, 0, 10, 10], [])
+    near, every = Guard(MODEL, 0.235, PlannerParams(), BOX), Guard(MODEL, 0.235, PlannerParams(), BOX)
+    near.scan_points = ScanReturns(points, AT[:2], 0.235)
+    every.scan_points = ScanReturns(points, AT[:2] + 100.0, 0.235)   # taken far off: every return is measured
+    assert len(near.scan_points.around_outline(AT[None, :2], BOX.radius)) < len(points) // 4
+    decisions = []
+    for v, omega in rng.uniform([-0.5, -2.0], [2.0, 2.0], (40, 2)):
+        command = np.array([v, omega])
+        decisions.append(near.check(empty, AT, command, 0.2, []) is command)
+        assert decisions[-1] == (every.check(empty, AT, command, 0.2, []) is command)
+    assert any(decisions) and not all(decisions)
+
+
+def test_a_footprint_is_for_a_diff_drive_robot_only() -> None:
+    spec = RobotSpec('r1', 'point_mass', (1.0, 1.0), (9.0, 1.0), 0.5)
+    with pytest.raises(ParameterError, match='diff_drive robots only'):
+        make_navigator('fastep', spec, 0.5, BESIDE, PlannerParams(), 0, footprint=BOX)
