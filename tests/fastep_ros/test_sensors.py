@@ -167,7 +167,7 @@ def test_scans_that_stop_coming_or_are_not_scans_hold_the_robot(context: Any) ->
         def broken(msg: Any, now: float) -> Any:   # every scan from now on is not one
             msg.angle_increment = 0.0
             return take(msg, now)
-        node.inputs.scans.take = broken   # type: ignore[method-assign]
+        node.inputs.scans.take = broken   # type: ignore[method-assign]  # a stand-in: every scan malformed
         state, _, speeds, _ = drive(node, (0.0, 0.0, 0.0), 60, start=41, state=state)
         level, message, reason = node.reports.status()
         assert (level, message) == (DiagnosticStatus.ERROR, 'blind')
@@ -254,7 +254,7 @@ def test_a_moving_mount_on_tf_is_taken_at_each_scans_stamp(context: Any) -> None
     def kept(msg: Any, t: float, pose: Any, *args: Any) -> Any:
         poses.append(tuple(pose))
         return update(msg, t, pose, *args)
-    node.inputs.scan_perception.update = kept   # type: ignore[method-assign]
+    node.inputs.scan_perception.update = kept   # type: ignore[method-assign]  # a stand-in recording the poses
     try:
         node.inputs.on_obstacles(convert.obstacles_to_marker_array([KNOWN]))
         reading = scan(SPEC, (3.0, 10.0, 0.0), np.random.default_rng(0))
