@@ -1,6 +1,6 @@
 """The BARN score on dense clutter: the Jackal declared as a 0.22 m circle, or with its real box, judged by the box.
 
-    python -m benchmarks.barn [--worlds 25] [--realtime [FACTOR]] [--algorithm fastep_route] [--seed 0]
+    python -m benchmarks.barn [--worlds 25] [--first 0] [--realtime [FACTOR]] [--algorithm fastep_route] [--seed 0]
                               [--json FILE]
 
 World k is world FAMILY_SEED0 + k of `dense_clutter_laser` (the robot a 0.22 m circle) and of
@@ -119,7 +119,8 @@ def _summary(runs: list[BarnRun]) -> dict[str, object]:
 
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog='barn', description=__doc__.splitlines()[0])
-    p.add_argument('--worlds', type=int, default=25, help='worlds 0..N-1 of the families (default 25)')
+    p.add_argument('--worlds', type=int, default=25, help='worlds FIRST..FIRST+N-1 of the families (default 25)')
+    p.add_argument('--first', type=int, default=0, help='the first world (default 0; e.g. 25: worlds not tuned on)')
     p.add_argument('--realtime', type=realtime_factor, nargs='?', const=1.0, default=1.0, metavar='FACTOR',
                    help='planning latency counted, x FACTOR (default 1.0); --lock-step for none')
     p.add_argument('--lock-step', action='store_true', help='the clock waits for the planner (no latency)')
@@ -131,7 +132,7 @@ def main(argv: list[str] | None = None) -> int:
     realtime = None if args.lock_step else args.realtime
     print(f'load average at start: {" ".join(f"{v:.2f}" for v in os.getloadavg())}', flush=True)
     runs: dict[str, list[BarnRun]] = {d: [] for d in args.declared}
-    for world in range(args.worlds):
+    for world in range(args.first, args.first + args.worlds):
         for declared in args.declared:
             r = judged_run(declared, world, realtime, args.algorithm, args.seed)
             runs[declared].append(r)

@@ -1,8 +1,9 @@
 """A robot's real outline: a polygon in its own frame (base_link), as Nav2's costmap parameter `footprint` gives it.
 
-fastep plans with circles (the route's clearance, the swarm's constraints, the guard); a robot with a footprint
-is planned with its circumscribed circle about base_link (`Footprint.radius`, conservative) and judged against
-the world with the polygon itself, placed at each pose (`Footprint.clearance`).
+A robot with a footprint is planned as Nav2 plans one (fastep_core/planning/outline.py): its route and swarm with
+the inscribed circle plus a margin, the guard and backing up with the polygon placed along the predicted motion,
+other robots kept from its circumscribed circle (`Footprint.radius`); it is judged against the world with the
+polygon itself, placed at each pose (`Footprint.clearance`).
 
 The rules (`Footprint.parse`, and every Footprint made): at least 3 vertices, finite, a non-zero area, no edge
 touching another but its neighbours, and base_link strictly inside. Nav2 does not ask the last, fastep does: its
