@@ -1,5 +1,6 @@
 """What fastep-launch says and writes after a run (fastep_ros.launch): a line per robot (arrived or not, the path
-measured from its odometry, the time, the smallest clearance kept, judged against the true world), and --json /
+measured from its odometry, the time, the smallest clearance kept, judged against the true world, by its outline
+where it has a footprint), and --json /
 --plot as fastep-sim writes them."""
 
 from __future__ import annotations
@@ -23,9 +24,12 @@ def _min_clearance(scenario: Scenario, robots: dict[str, RobotLive]) -> dict[str
     """Smallest margin each robot kept (negative: collided), from its odometry, to the obstacles and the other
     robots (fastep_core.metrics; with simulated time every plant stamps odometry on the same grid)."""
     movers = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs).movers   # a v2 world's, over time
-    margins = trajectory_margins([[row[:3] for row in robot.rows] for robot in robots.values()],
+    # A robot with a footprint (a diff drive: its rows carry the heading) is judged by its outline at each pose.
+    footprints = [robot.spec.footprint for robot in robots.values()]
+    margins = trajectory_margins([[row[:4] if outline is not None else row[:3] for row in robot.rows]
+                                  for robot, outline in zip(robots.values(), footprints)],
                                  [robot.spec.radius for robot in robots.values()], scenario.world.obstacles,
-                                 movers if len(movers) else None)
+                                 movers if len(movers) else None, footprints)
     return {name: float(margin) for name, margin in zip(robots, margins.overall)}
 
 

@@ -197,6 +197,8 @@ def scenario_metadata(scenario: Scenario) -> dict[str, str]:
         out[metadata_key('goal', r.name)] = ','.join(f'{v:g}' for v in r.goal)
         if r.model == 'tractor_trailer':
             out[metadata_key('length', r.name)] = f'{r.length:g}'
+        if r.footprint is not None:   # judged by its outline (fastep-report)
+            out[metadata_key('footprint', r.name)] = json.dumps(r.footprint.to_list())
     if not scenario.is_static:
         # A format-v2 world: the whole scenario (JSON of fastep_core.scenario.scenario_data), so a report judges
         # the run against the truth (movers over time, obstacles missing from or misplaced on the map), not

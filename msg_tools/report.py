@@ -30,6 +30,7 @@ from numpy.typing import NDArray
 from fastep_core.cli import Parser, fail, guard
 from fastep_core.dynamic_world import Movers, ObstacleSpec
 from fastep_core.errors import FastepError
+from fastep_core.footprint import Footprint
 from fastep_core.geometry import Circle, Obstacles
 from fastep_core.metrics import Margins, trajectory_margins
 from msg_tools.cdr import float64_field, odometry_fields, twist_fields
@@ -74,6 +75,18 @@ def _radius(run: RecordedRun, robot: RobotRecord, default: float) -> tuple[float
                 if value is not None:
                     return value, 'status', problem
     return default, 'default', problem
+
+
+def _footprint(run: RecordedRun, name: str) -> tuple[Footprint | None, str]:
+    """The robot's outline from the metadata (None: a disc), and a problem with it or ''."""
+    key = metadata_key('footprint', name)
+    text = run.metadata.get(key)
+    if not text:
+        return None, ''
+    try:
+        return Footprint.parse(text, what=key), ''
+    except ValueError as exc:
+        return None, f'{exc}: judged as a disc'
 
 
 def _int(text: Any) -> int | None:
@@ -137,10 +150,11 @@ def _mover_clearance(movers: Movers, rows: FloatArray) -> float:
 
 
 def judge(tracks: Sequence[FloatArray], radii: Sequence[float], obstacles: Obstacles,
-          specs: Sequence[ObstacleSpec] = ()) -> Margins:
+          specs: Sequence[ObstacleSpec] = (), outlines: Sequence[tuple[Footprint, FloatArray] | None] = ()) -> Margins:
     """fastep_core.metrics.trajectory_margins(tracks, radii, obstacles, movers of specs), the same numbers, in
     bounded memory: obstacles and movers are measured against at most JUDGE_ELEMENTS pairs at a time (that
-    function holds 16,384 samples x every obstacle or mover at once)."""
+    function holds 16,384 samples x every obstacle or mover at once). outlines[i]: robot i's footprint and the
+    heading of each of its samples, judged against the still obstacles in place of its disc (movers: its disc)."""
     kept = trajectory_margins(tracks, radii, Obstacles(), None)   # robot against robot: linear in the samples
     groups = _mover_groups(specs)
     to_obstacles = kept.obstacles.copy()
@@ -148,7 +162,11 @@ def judge(tracks: Sequence[FloatArray], radii: Sequence[float], obstacles: Obsta
         rows = np.asarray(track, dtype=float).reshape(len(track), -1) if len(track) else np.zeros((0, 3))
         if not len(rows):
             continue
-        if len(obstacles):
+        outline = outlines[i] if i < len(outlines) else None
+        if len(obstacles) and outline is not None:
+            footprint, headings = outline
+            to_obstacles[i] = float(footprint.clearance(np.column_stack([rows[:, 1:3], headings]), obstacles).min())
+        elif len(obstacles):
             to_obstacles[i] = _still_clearance(obstacles, rows[:, 1:3]) - radii[i]
         for movers in groups:
             to_obstacles[i] = min(to_obstacles[i], _mover_clearance(movers, rows) - radii[i])
@@ -178,7 +196,15 @@ def metrics(run: RecordedRun, default_radius: float = DEFAULT_RADIUS) -> dict[st
         # and a mover at 0.5 m/s moves 9 cm in 0.17 s.
         obstacles, specs = truth.world.obstacles, truth.obstacle_specs   # the world: every still obstacle
         tracks = [np.array(r.odom_stamped, dtype=float).reshape(-1, 3) for r in run.robots.values()]
-    kept = judge(tracks, [float(r.radius or 0.0) for r in run.robots.values()], obstacles, specs)
+    # A robot the scenario gives a footprint is judged by its outline at each odometry's heading.
+    outlines: list[tuple[Footprint, FloatArray] | None] = []
+    for name, robot in run.robots.items():
+        footprint, problem = _footprint(run, name)
+        if problem:
+            notes.append(problem)
+        outlines.append((footprint, np.array(robot.yaw, dtype=float))
+                        if footprint is not None and len(robot.yaw) == len(robot.odom) else None)
+    kept = judge(tracks, [float(r.radius or 0.0) for r in run.robots.values()], obstacles, specs, outlines)
     for k, (name, robot) in enumerate(run.robots.items()):
         odom = arrays[name]
         xy = odom[:, 1:3]

@@ -117,3 +117,19 @@ def test_the_pose_tolerances_reach_perception_and_a_localization_pose_bounds_the
 def test_a_pose_tolerance_that_is_no_pair_of_numbers_is_refused(context: Any) -> None:
     with pytest.raises(StartupError, match='parameter odometry_drift must be two finite numbers >= 0'):
         make(context, '-p', 'odometry_drift:=[0.01, -1.0]')
+
+
+def test_fastep_launch_judges_a_footprint_robot_by_its_outline_at_each_heading() -> None:
+    """A 0.7 x 0.5 m box driving past a wall 0.3 m to its side: clear by its outline (0.05 m), where its
+    circumscribed circle (0.43 m) would have been 0.13 m inside the wall; turned across, the box itself touches."""
+    from fastep_ros.launch_report import _min_clearance
+    from fastep_ros.monitor import RobotLive
+    box = [[0.35, 0.25], [-0.35, 0.25], [-0.35, -0.25], [0.35, -0.25]]
+    scenario = parse_scenario({'workspace': [0, 0, 10, 10],
+                               'obstacles': [{'segment': {'start': [0.0, 5.3], 'end': [10.0, 5.3]}}],
+                               'robots': [{'name': 'r1', 'model': 'diff_drive', 'start': [1, 5, 0.0],
+                                           'goal': [9, 5, 0.0], 'footprint': box}]})
+    along = RobotLive(scenario.robots[0], rows=[[0.1 * k, 1.0 + 0.5 * k, 5.0, 0.0] for k in range(10)])
+    assert _min_clearance(scenario, {'r1': along})['r1'] == pytest.approx(0.05)
+    across = RobotLive(scenario.robots[0], rows=[[0.0, 1.0, 5.0, 0.0], [0.1, 1.0, 5.0, math.pi / 2]])
+    assert _min_clearance(scenario, {'r1': across})['r1'] == pytest.approx(-0.05)
