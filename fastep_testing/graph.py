@@ -72,16 +72,24 @@ on (its discovery port is free) is released to the other processes. Three worker
 leaving 40 of the 100 to whichever needs them."""
 
 
+PARTICIPANTS_CHECKED = 10
+"""Participants per domain whose discovery ports are checked: the first one's port alone missed a graph whose first
+participant (a helper, the first node up) had gone while the others still ran, and a test on the reused domain
+saw a `/planner` not its own (CI, 2026-12-02)."""
+
+
 def _port_free(domain: int) -> bool:
-    """Is the discovery port of a domain's first DDS participant (7410 + 250 d) unbound, i.e. nobody on it?"""
-    sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
-    try:
-        sock.bind(('0.0.0.0', 7410 + 250 * domain))
-        return True
-    except OSError:
-        return False
-    finally:
-        sock.close()
+    """Are the discovery ports of a domain's first PARTICIPANTS_CHECKED DDS participants (7410 + 250 d + 2 p, RTPS's
+    well-known unicast ports) unbound, i.e. nobody on it?"""
+    for participant in range(PARTICIPANTS_CHECKED):
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            sock.bind(('0.0.0.0', 7410 + 250 * domain + 2 * participant))
+        except OSError:
+            return False
+        finally:
+            sock.close()
+    return True
 
 
 def _lock(domain: int) -> Any:
