@@ -34,7 +34,7 @@ from fastep_core.scenario import Scenario, load_scenario, parse_scenario
 from fastep_core.simulator import Run, simulate
 
 if TYPE_CHECKING:
-    from fastep_core.cluster import ClusterSpec, Engine
+    from fastep_core.cluster import BatchIncomplete, ClusterSpec, Engine
 
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
@@ -185,7 +185,8 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     workers <= 1 runs in this process. `progress`: a progress bar titled `label` on stderr, None when stderr
     is a terminal, True always, False never (fastep_core.cli.progress_bar). `cluster` (fastep_core.cluster:
     'local:N', a scheduler address, or an open Engine) runs the tasks there instead, `workers` unused; the
-    records are the same.
+    records are the same. A cluster that can run no more (no worker left in time, no scheduler) raises
+    cluster.BatchIncomplete, its `done` the records made (sorted), its `missing` the tasks without any.
     """
     if runs < 1:
         raise ParameterError(f'runs must be >= 1, got {runs}')
@@ -198,14 +199,18 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     frozen = tuple(sorted((overrides or {}).items()))
     job = functools.partial(run_task, overrides=frozen, realtime=realtime)
     out: list[Record] = []
+    incomplete: BatchIncomplete | None = None
     with progress_bar(len(every), label, progress) as bar:
         if cluster is not None:
-            from fastep_core.cluster import Engine, open_cluster  # Dask only when a cluster is asked for
+            from fastep_core.cluster import BatchIncomplete, Engine, open_cluster  # Dask only when asked for
             with contextlib.ExitStack() as stack:
                 engine = cluster if isinstance(cluster, Engine) else stack.enter_context(open_cluster(cluster))
-                for records in engine.map_unordered(job, todo, name=label):
-                    out.extend(records)
-                    bar.update()
+                try:
+                    for records in engine.map_unordered(job, todo, name=label):
+                        out.extend(records)
+                        bar.update()
+                except BatchIncomplete as exc:   # the cluster is gone: the runs done still count, sorted below
+                    incomplete = exc
         elif workers <= 1 or len(every) == 1:
             for task in todo:
                 out.extend(job(task))
@@ -217,6 +222,9 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
                     bar.update()
     rows = {(s, a): i for i, (s, a) in enumerate((s, a) for s in scenarios for a in algorithms)}
     out.sort(key=lambda r: (rows[(r.scenario, r.algorithm)], r.seed, r.robot))
+    if incomplete is not None:
+        incomplete.done = out
+        raise incomplete
     return out
 
 

@@ -220,7 +220,7 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 seen = views[i] if sense is None else \
                     sense.sense(nav, t, states[i], views[i], robots[:len(specs)], estimate)
                 if sense is not None:
-                    nav.seen = sense.recent.seen()
+                    nav.take_perception(replace(nav.guard_inputs, seen=sense.recent.seen()))
                 plan = Plan.of(nav, t, nav.update(t, state, seen, velocity=measured), seen[len(views[i]):])
                 commands.append(control.command(t, state, views[i], plan, dt, velocity=measured))
             elif latencies is None or controls is None:
@@ -233,8 +233,8 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 if latency.idle:   # the next pass starts on this tick's state
                     seen = views[i] if sense is None else \
                         sense.sense(nav, t, states[i], views[i], robots[:len(specs)], estimate)
-                    if sense is not None:
-                        nav.seen = sense.recent.seen()   # backing up only where its scans saw free space
+                    if sense is not None:   # backing up only where its scans saw free space
+                        nav.take_perception(replace(nav.guard_inputs, seen=sense.recent.seen()))
                     plan = Plan.of(nav, t, nav.update(t, state, seen, velocity=measured), seen[len(views[i]):])
                     latency.submit(plan, t, time.perf_counter() - start)
                 commands.append(controls[i].command(t, state, views[i], latency.plan, dt, velocity=measured))

@@ -169,6 +169,20 @@ def declare_table(node: Node, table: Sequence[Param]) -> dict[str, Any]:
     return {param.name: param.declare(node) for param in table}
 
 
+def table_values(node: Node, table: Sequence[Param]) -> dict[str, Any]:
+    """The values the parameters of `table` (declared) have now, by name: what a managed node's configure builds
+    from, a value set while it was unconfigured included (rclpy checked its type and range). One that is not finite
+    is a StartupError with one line, as at declaration."""
+    values = {}
+    for param in table:
+        value = node.get_parameter(param.name).value
+        if isinstance(value, float) and not math.isfinite(value) or \
+                isinstance(value, list) and not all(math.isfinite(v) for v in value if isinstance(v, float)):
+            raise StartupError(f'parameter {param.name} must be finite, got {value}')
+        values[param.name] = value
+    return values
+
+
 def check_range(name: str, value: float, low: float, high: float, unit: str = '') -> None:
     """A StartupError (one line, exit 2) unless low <= value <= high."""
     if not low <= value <= high:
@@ -183,6 +197,13 @@ class ClockGuard:
     CLOCK_JUMP_LIMIT ahead of the last one, is taken only once the next message confirms it (comes at or after
     it, within the limit): a lone message far off (sec = 2^31 - 1) is ignored, while a clock that really
     restarts or jumps (a replay started from another time) costs one message. Each is a throttled warning.
+
+    Before each time is taken, the node's timers on that clock are repaired (repair_timers): rclpy's EventsExecutor
+    calls a timer on simulated time twice for one period when the next /clock time comes while its call is still
+    queued (timers_manager.cpp queues a call at each look that finds the timer due, without looking whether one is
+    queued already, and rcl_timer_call moves the timer a period on at each call), and the timer then skips the period
+    after. In lock step a plant whose integration timer skipped a period never publishes that period's odometry (the
+    clock waits for it): the graph stood LOCK_WAIT (5 s) and went on without it, "lock step: nothing stamped ...".
     """
 
     def __init__(self, node: Node, deliver: Callable[[Any], None]) -> None:
@@ -191,6 +212,7 @@ class ClockGuard:
         self.heard: float | None = None     # time.monotonic() of the last message taken (sim_time.SimTimeWatch)
         self.last: float | None = None      # seconds of the last time taken
         self.pending: float | None = None   # a jump waiting for its confirmation
+        self.skipped = 0                    # timers put back by repair_timers (they would have skipped a period)
 
     def __call__(self, msg: Any) -> None:
         sec, nanosec = int(msg.clock.sec), int(msg.clock.nanosec)
@@ -208,7 +230,25 @@ class ClockGuard:
             return
         self.last = t
         self.heard = time.monotonic()
+        self.repair_timers()
         self.deliver(msg)
+
+    def repair_timers(self) -> None:
+        """Put back each timer of the node's clock that was called once too often: a timer due next more than one
+        period ahead of the time now. A timer called when due is next due within a period (rcl_timer_call moves it a
+        period on, then skips the periods missed), a reset one a period from now, and time only goes on; only a
+        call of a timer that was not due (the EventsExecutor's second call of one period) puts it further. A reset
+        makes it due a period from now: the period it was going to skip. Called before the new time is taken, so
+        the executor's look at that time finds the timer due once."""
+        clock = self.node.get_clock()
+        for timer in self.node.timers:
+            if timer.clock is not clock:
+                continue   # a timer on another clock (wall time, steady time): /clock does not move it
+            period = timer.timer_period_ns
+            until = timer.time_until_next_call()   # None: cancelled
+            if period > 0 and until is not None and until > period:
+                timer.reset()
+                self.skipped += 1
 
     def warn(self, text: str) -> None:
         self.node.get_logger().warning(text, throttle_duration_sec=5.0)
@@ -218,13 +258,14 @@ class RepeatedLine:
     """A log line that may come often (a goal per message: goals at 1 kHz wrote 130 MB of log an hour): at most
     one per `period` wall seconds; the next one says how many were left out meanwhile."""
 
-    def __init__(self, log: Callable[[str], None], period: float = 1.0) -> None:
-        self.log, self.period = log, period
+    def __init__(self, log: Callable[[str], None], period: float = 1.0,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.log, self.period, self.clock = log, period, clock
         self.last = -math.inf
         self.left_out = 0
 
     def __call__(self, text: str) -> None:
-        now = time.monotonic()
+        now = self.clock()
         if now - self.last < self.period:
             self.left_out += 1
             return
@@ -232,6 +273,33 @@ class RepeatedLine:
             text += f' ({self.left_out} more such line{"s" if self.left_out > 1 else ""} left out before it)'
         self.log(text)
         self.last, self.left_out = now, 0
+
+
+class LatestLine:
+    """A log line about a setting that may change with every message (a speed limit: 6,788 lines in 10 s): a change
+    is said at once when no line was said in the last `period` wall seconds; the changes within the period are
+    counted, and the newest is said once it is over (`flush`, which a timer calls), as the latest of how many."""
+
+    def __init__(self, log: Callable[[str], None], period: float,
+                 clock: Callable[[], float] = time.monotonic) -> None:
+        self.log, self.period, self.clock = log, period, clock
+        self.said_at = -math.inf     # clock() of the last line
+        self.pending: str | None = None   # the newest change not said yet
+        self.changes = 0             # changes since the last line
+
+    def __call__(self, text: str) -> None:
+        self.pending, self.changes = text, self.changes + 1
+        self.flush()
+
+    def flush(self) -> None:
+        """Say the newest change if one is unsaid and the period since the last line is over."""
+        now = self.clock()
+        if self.pending is None or now - self.said_at < self.period:
+            return
+        text = self.pending if self.changes == 1 else \
+            f'{self.pending} (the latest of {self.changes} changes since the line before)'
+        self.log(text)
+        self.said_at, self.pending, self.changes = now, None, 0
 
 
 def shown(text: str, limit: int = 60) -> str:

@@ -13,8 +13,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from diagnostic_msgs.msg import DiagnosticArray, DiagnosticStatus, KeyValue
+from rclpy.lifecycle import LifecycleNode
 from rclpy.node import Node
 
+from fastep_ros.lifecycle import destroy_publisher
 from msg_tools.interface import RELIABLE
 
 __all__ = ['DIAGNOSTICS', 'Diagnostics', 'Task', 'level_name']
@@ -49,11 +51,13 @@ def _text(value: Any) -> str:
 
 
 class Diagnostics:
-    """The node's /diagnostics publisher."""
+    """The node's /diagnostics publisher (`managed`: a lifecycle publisher, on only while its node is active)."""
 
-    def __init__(self, node: Node) -> None:
+    def __init__(self, node: Node, managed: bool = False) -> None:
         self.node = node
-        self.publisher = node.create_publisher(DiagnosticArray, DIAGNOSTICS, RELIABLE)
+        self.publisher = node.create_lifecycle_publisher(DiagnosticArray, DIAGNOSTICS, RELIABLE) \
+            if managed and isinstance(node, LifecycleNode) else node.create_publisher(DiagnosticArray, DIAGNOSTICS,
+                                                                                      RELIABLE)
         self.prefix = node.get_fully_qualified_name().lstrip('/')
         namespace = node.get_namespace().strip('/')
         self.hardware_id = namespace or node.get_name()
@@ -67,3 +71,7 @@ class Diagnostics:
             status.values = [KeyValue(key=str(k), value=_text(v)) for k, v in task.values.items()]
             array.status.append(status)
         self.publisher.publish(array)
+
+    def destroy(self) -> None:
+        """Destroy the publisher."""
+        destroy_publisher(self.node, self.publisher)

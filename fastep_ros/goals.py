@@ -131,6 +131,10 @@ class GoalSubscription:
         self.catch_up.heard_goal()
         self.callback(msg)
 
+    def destroy(self) -> None:
+        """Destroy the subscription (the one made last)."""
+        self.node.destroy_subscription(self.subscription)
+
     def on_incompatible(self, info: Any) -> None:
         """A volatile publisher met the transient-local subscription (between two looks): become volatile now.
         Any other incompatibility (a best-effort publisher: goals are taken reliably) is warned about."""

@@ -88,3 +88,7 @@ class LatchedSubscription:
     def on_message(self, msg: Any) -> None:
         self.arrivals.heard(time.monotonic())
         self.callback(msg)
+
+    def destroy(self) -> None:
+        """Destroy the subscription (the one made last)."""
+        self.node.destroy_subscription(self.subscription)

@@ -1,90 +1,212 @@
 """Managed (lifecycle) nodes that Nav2's lifecycle manager can drive, autostarting by default.
 
 The planner and the plant are rclpy.lifecycle.LifecycleNode subclasses (rclpy 7.1.6, Jazzy), offering the lifecycle
-services nav2_lifecycle_manager calls (`<node>/change_state`, `get_state`, ...) and `<node>/transition_event`. A
-node builds everything in its constructor (a bad parameter is a one-line exit 2, no lifecycle involved) and ends it
-with `Lifecycle.start`: `autostart` true (the default) configures and activates at once, as a plain node; false
-stands unconfigured and inactive until a lifecycle manager (or `ros2 lifecycle set`) drives it.
+services nav2_lifecycle_manager calls (`<node>/change_state`, `get_state`, ...) and `<node>/transition_event`. They
+keep Nav2's order (nav2_controller's controller_server, ros2/demos' lifecycle talker):
 
-`Lifecycle` is the member that does it (the planner's `lifecycle`; ManagedNode, the plant's base, holds one):
-configure succeeds; activate calls the node's `activate`; deactivate, shutdown and an error call `deactivate` (a
-zero command, timers off); cleanup calls `cleanup`. A transition the current state does not have is answered
-`success: false` (and logged); the node carries on in its state.
+- the constructor declares the parameters (a bad one is a one-line exit 2 at once) and nothing else that talks to
+  the graph, then calls `Lifecycle.start`: `autostart` true (the default) configures and activates at once, as a
+  plain node; false stands unconfigured, with nothing made, until a lifecycle manager (or `ros2 lifecycle set`)
+  drives it;
+- configure makes everything from the parameters' values then (subscriptions, publishers, timers, servers,
+  threads); a value found bad there is a FAILURE with one log line (with autostart: the one-line exit 2);
+- activate switches the lifecycle publishers on (LifecycleNode.on_activate), then the node's timers;
+- deactivate sends what stops the robot while the publishers are still on, then switches them and the timers off;
+- cleanup releases everything configure made, so the next configure builds afresh; shutdown and an error release
+  it too, from any state.
+
+`Lifecycle` is the member that does it (the planner's `lifecycle`; ManagedNode, the plant's base, holds one): its
+owner's on_configure, on_activate, ... are this member's, calling the node's `configure`, `activate`,
+`deactivate` and `cleanup`. It knows the node's state from the transitions the node went through, and answers a
+transition the current state does not have `success: false` (logged): rclpy 7.1.6 raises it out of the
+change_state service callback, which ends the process.
 """
 
 from __future__ import annotations
 
+import traceback
 from typing import Any, Callable, TypeVar
 
-from rclpy.impl.implementation_singleton import rclpy_implementation as _rclpy
+from lifecycle_msgs.msg import Transition
+from lifecycle_msgs.srv import ChangeState
 from rclpy.lifecycle import LifecycleNode, LifecycleState, TransitionCallbackReturn
+from rclpy.lifecycle.publisher import LifecyclePublisher
+from rclpy.node import Node
 
-from fastep_ros.common import Param
+from fastep_ros.common import Param, StartupError
 
-__all__ = ['AUTOSTART', 'Lifecycle', 'ManagedNode', 'transitions_to_member']
+__all__ = ['AUTOSTART', 'Lifecycle', 'ManagedNode', 'destroy_publisher', 'transitions_to_member']
 
-AUTOSTART = Param('autostart', True, 'configure and activate at start; false: stay unconfigured (no commands) until '
-                  'a lifecycle manager drives the node (change_state: configure, activate, deactivate, cleanup, '
-                  'shutdown)')
+AUTOSTART = Param('autostart', True, 'configure and activate at start; false: stay unconfigured (nothing subscribed, '
+                  'published or timed) until a lifecycle manager drives the node (change_state: configure, activate, '
+                  'deactivate, cleanup, shutdown)')
 
 TRANSITIONS = ('on_configure', 'on_activate', 'on_deactivate', 'on_cleanup', 'on_shutdown', 'on_error')
 NodeClass = TypeVar('NodeClass', bound=type[LifecycleNode])
 
+# The primary state a transition callback leaves the node in when it returns SUCCESS, and when it returns FAILURE
+# (rcl_lifecycle's default state machine); ERROR goes to errorprocessing, on_error's SUCCESS to unconfigured.
+OUTCOMES = {
+    'on_configure': ('inactive', 'unconfigured'),
+    'on_activate': ('active', 'inactive'),
+    'on_deactivate': ('inactive', 'active'),
+    'on_cleanup': ('unconfigured', 'inactive'),
+    'on_shutdown': ('finalized', 'finalized'),
+    'on_error': ('unconfigured', 'finalized'),
+}
+# The transitions each primary state has, by id (a request by label is resolved by rclpy among these).
+VALID = {
+    'unconfigured': (Transition.TRANSITION_CONFIGURE, Transition.TRANSITION_UNCONFIGURED_SHUTDOWN),
+    'inactive': (Transition.TRANSITION_CLEANUP, Transition.TRANSITION_ACTIVATE,
+                 Transition.TRANSITION_INACTIVE_SHUTDOWN),
+    'active': (Transition.TRANSITION_DEACTIVATE, Transition.TRANSITION_ACTIVE_SHUTDOWN),
+}
+
 
 def transitions_to_member(cls: NodeClass) -> NodeClass:
     """Class decorator: rclpy's transition callbacks of a LifecycleNode (on_configure, on_activate, ...: rclpy
-    calls the node's methods of those names) handed to the node's `lifecycle` member."""
+    calls the node's methods of those names) handed to the node's `lifecycle` member, which learns where each
+    left the node. One that raises is logged with its traceback and is an ERROR (rclpy made it one silently)."""
     for name in TRANSITIONS:
         def transition(self: Any, state: LifecycleState, name: str = name) -> TransitionCallbackReturn:
-            return getattr(self.lifecycle, name)(state)
+            try:
+                result = getattr(self.lifecycle, name)(state)
+            except Exception as exc:  # noqa: BLE001  the lifecycle goes on to errorprocessing, the node runs on
+                self.get_logger().error(f'{name} failed: {exc}\n{traceback.format_exc()}')
+                result = TransitionCallbackReturn.ERROR
+            self.lifecycle.went(name, result)
+            return result
         transition.__name__ = transition.__qualname__ = name
         setattr(cls, name, transition)
     return cls
 
 
-class Lifecycle:
-    """A LifecycleNode's transitions, calling `activate` / `deactivate` / `cleanup` of the node; its owner's
-    on_configure, on_activate, ... are this member's (rclpy calls the node's methods of those names)."""
+def destroy_publisher(node: Node, publisher: Any) -> None:
+    """Destroy a publisher; a lifecycle publisher also leaves its node's managed entities (Node.destroy_publisher
+    would leave it there, activated with the node, for ever)."""
+    if isinstance(publisher, LifecyclePublisher) and isinstance(node, LifecycleNode):
+        node.destroy_lifecycle_publisher(publisher)
+    else:
+        node.destroy_publisher(publisher)
 
-    def __init__(self, node: LifecycleNode, activate: Callable[[], None], deactivate: Callable[[], None],
-                 cleanup: Callable[[], None]) -> None:
+
+def forget_destroyed(node: Node) -> None:
+    """Drop the dead references the node's default callback group keeps: rclpy's CallbackGroup.add_entity adds a
+    weak reference for every entity made in it and nothing takes one out when the entity is destroyed, so every
+    configure and cleanup would leave ~50 of them behind."""
+    group = node.default_callback_group
+    group.entities = {ref for ref in group.entities if ref() is not None}
+
+
+class Lifecycle:
+    """A LifecycleNode's transitions, calling `configure` / `activate` / `deactivate` / `cleanup` of the node; its
+    owner's on_configure, on_activate, ... are this member's (rclpy calls the node's methods of those names).
+
+    `configure` raises StartupError (one line) for a value it cannot start with; `cleanup(forget)` releases whatever
+    configure made, also after a configure that failed half-way, and with `forget` drops what the run left (a
+    configure follows); shutdown and destroy_node keep it to be read."""
+
+    def __init__(self, node: LifecycleNode, configure: Callable[[], None], activate: Callable[[], None],
+                 deactivate: Callable[[], None], cleanup: Callable[[bool], None]) -> None:
         self.node = node
-        self.activate, self.deactivate, self.cleanup = activate, deactivate, cleanup
-        self.is_active = False
+        self.configure, self.activate, self.deactivate, self.cleanup = configure, activate, deactivate, cleanup
+        self.state = 'unconfigured'   # the primary state the node's transitions left it in
+        self.is_active = False        # commanding: false from the moment deactivation begins
+        self.built = False            # configure has run (or begun) since the last release
         self.autostart = True
-        service = getattr(node, '_service_change_state', None)
-        if service is not None:
-            service.callback = self._refusing_invalid(service.callback)
+        self._starting = False                       # the constructor's configure (autostart)
+        self._failure: BaseException | None = None   # why it failed: raised by start
+        self._refuse_invalid()
+
+    def _refuse_invalid(self) -> None:
+        """Put the check in front of the node's change_state service (found among its services by type and name)."""
+        name = f'{self.node.get_fully_qualified_name().rstrip("/")}/change_state'
+        for service in self.node.services:
+            if service.srv_type is ChangeState and service.service_name == name:
+                service.callback = self._refusing_invalid(service.callback)
 
     def _refusing_invalid(self, handle: Callable[[Any, Any], Any]) -> Callable[[Any, Any], Any]:
         """change_state's handler answering `success: false` to a transition the current state does not have
-        (configure while active): rclpy raises it out of the service callback, which ended the process."""
+        (configure while active), and to whatever else rclpy would raise out of the service callback."""
         def change_state(request: Any, response: Any) -> Any:
-            try:
-                return handle(request, response)
-            except _rclpy.RCLError as exc:
-                wanted = request.transition.label or str(request.transition.id)
+            transition = request.transition
+            wanted = transition.label or str(transition.id)
+            if transition.label or transition.id in VALID.get(self.state, ()):
+                try:
+                    return handle(request, response)
+                except Exception as exc:  # noqa: BLE001  raised out of the callback, it ended the process
+                    self.node.get_logger().error(f'change_state {wanted} failed in state {self.state}: '
+                                                 f'{str(exc).splitlines()[0] if str(exc) else type(exc).__name__}')
+            else:
                 self.node.get_logger().warning(f'change_state refused: transition {wanted} is not valid in state '
-                                               f'{self.node._state_machine.current_state[1]} '
-                                               f'({str(exc).splitlines()[0] if str(exc) else "rcl error"})')
-                response.success = False
-                return response
+                                               f'{self.state}')
+            response.success = False
+            return response
         return change_state
 
+    def went(self, transition: str, result: TransitionCallbackReturn) -> None:
+        """Where a transition callback's result leaves the node (rcl_lifecycle's state machine)."""
+        success, failure = OUTCOMES[transition]
+        if result == TransitionCallbackReturn.SUCCESS:
+            self.state = success
+        elif result == TransitionCallbackReturn.FAILURE or transition == 'on_error':
+            self.state = failure
+        else:
+            self.state = 'errorprocessing'
+
     def start(self, autostart: bool | None = None) -> None:
-        """The constructor's last step: autostart, or stand inactive until a lifecycle manager drives the node.
+        """The constructor's last step: autostart (configure, then activate; a configure that fails raises its
+        error, a StartupError for a bad value), or stand unconfigured until a lifecycle manager drives the node.
         `autostart` as declared by the node (None: declared here)."""
         self.autostart = AUTOSTART.declare(self.node) if autostart is None else autostart
-        if self.autostart:
-            self.node.trigger_configure()
+        if not self.autostart:
+            return
+        self._starting = True
+        try:
+            configured = self.node.trigger_configure()
+        finally:
+            self._starting = False
+        failure, self._failure = self._failure, None
+        if failure is not None:
+            raise failure
+        if configured == TransitionCallbackReturn.SUCCESS:
             self.node.trigger_activate()
-        else:
+
+    def release(self, forget: bool = True) -> None:
+        """The node's cleanup, once, if configure has made anything since the last."""
+        if self.built:
+            self.built = False
+            self.cleanup(forget)
+            forget_destroyed(self.node)
+
+
+    def stop(self) -> None:
+        """Stop commanding (deactivate) if the node is active."""
+        if self.is_active:
+            self.is_active = False
             self.deactivate()
 
     # rclpy's transition callbacks (LifecycleNode's own: the lifecycle publishers and other managed entities).
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        self.node.get_logger().info('configured')
-        return LifecycleNode.on_configure(self.node, state)
+        self.built = True
+        try:
+            self.configure()
+        except Exception as exc:  # noqa: BLE001  a node that cannot configure stays unconfigured, never ends
+            self.release()
+            if self._starting:
+                self._failure = exc   # raised by start: a StartupError is the one-line exit 2
+            elif isinstance(exc, StartupError):
+                self.node.get_logger().error(f'configure failed: {exc}')
+            else:
+                self.node.get_logger().error(f'configure failed: {exc}\n{traceback.format_exc()}')
+            return TransitionCallbackReturn.FAILURE if isinstance(exc, StartupError) else \
+                TransitionCallbackReturn.ERROR
+        result = LifecycleNode.on_configure(self.node, state)
+        if result == TransitionCallbackReturn.SUCCESS:
+            self.node.get_logger().info('configured')
+        else:
+            self.release()
+        return result
 
     def on_activate(self, state: LifecycleState) -> TransitionCallbackReturn:
         result = LifecycleNode.on_activate(self.node, state)
@@ -95,36 +217,35 @@ class Lifecycle:
         return result
 
     def on_deactivate(self, state: LifecycleState) -> TransitionCallbackReturn:
-        self.is_active = False
-        self.deactivate()
+        self.stop()   # the zero command while the publishers are on: LifecycleNode's switches them off
         self.node.get_logger().info('inactive')
         return LifecycleNode.on_deactivate(self.node, state)
 
     def on_cleanup(self, state: LifecycleState) -> TransitionCallbackReturn:
-        self.cleanup()
+        self.release()
         self.node.get_logger().info('cleaned up: unconfigured')
         return LifecycleNode.on_cleanup(self.node, state)
 
     def on_shutdown(self, state: LifecycleState) -> TransitionCallbackReturn:
-        self.is_active = False
-        self.deactivate()
+        self.stop()
+        self.release(forget=False)   # finalized: nothing is configured again
         self.node.get_logger().info('shut down (finalized)')
         return LifecycleNode.on_shutdown(self.node, state)
 
     def on_error(self, state: LifecycleState) -> TransitionCallbackReturn:
-        self.is_active = False
-        self.deactivate()
+        self.stop()
+        self.release()
         return LifecycleNode.on_error(self.node, state)
 
 
 @transitions_to_member
 class ManagedNode(LifecycleNode):
-    """A LifecycleNode whose transitions (its `lifecycle` member) call activate / deactivate / cleanup of the
-    subclass."""
+    """A LifecycleNode whose transitions (its `lifecycle` member) call configure / activate / deactivate /
+    cleanup of the subclass."""
 
     def __init__(self, node_name: str, **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        self.lifecycle = Lifecycle(self, self.activate, self.deactivate, self.cleanup)
+        self.lifecycle = Lifecycle(self, self.configure, self.activate, self.deactivate, self.cleanup)
 
     @property
     def is_active(self) -> bool:
@@ -135,15 +256,23 @@ class ManagedNode(LifecycleNode):
         return self.lifecycle.autostart
 
     def start_lifecycle(self) -> None:
-        """The constructor's last step: autostart, or stand inactive until a lifecycle manager drives the node."""
+        """The constructor's last step: autostart, or stand unconfigured until a lifecycle manager drives the
+        node."""
         self.lifecycle.start()
 
+    def destroy_node(self) -> None:
+        self.lifecycle.release(forget=False)
+        super().destroy_node()
+
     # What a subclass does.
+    def configure(self) -> None:
+        """Make the subscriptions, publishers and timers (StartupError for a value it cannot start with)."""
+
     def activate(self) -> None:
         """Start commanding (timers on)."""
 
     def deactivate(self) -> None:
         """Stop commanding (a zero command, timers off)."""
 
-    def cleanup(self) -> None:
-        """Forget what the run built up (back to unconfigured)."""
+    def cleanup(self, forget: bool = True) -> None:
+        """Release what configure made (back to unconfigured); `forget`: drop it too (a configure follows)."""

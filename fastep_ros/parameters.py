@@ -42,6 +42,11 @@ class DynamicParameters:
         node.add_pre_set_parameters_callback(self._widen)
         node.add_on_set_parameters_callback(self._on_set)
 
+    def destroy(self) -> None:
+        """Take the callbacks off the node: sets are then only rclpy's checks (its descriptors' ranges)."""
+        self.node.remove_pre_set_parameters_callback(self._widen)
+        self.node.remove_on_set_parameters_callback(self._on_set)
+
     def _declared_type(self, name: str) -> int | None:
         if not self.node.has_parameter(name):
             return None

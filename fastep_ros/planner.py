@@ -10,28 +10,33 @@ come in; cmd_vel, cost, waypoint, plan, status and /diagnostics go out. Planning
 control loop never waits for an exact path, a route or a swarm; a plan older than max_plan_age is not driven on.
 Own odometry older than max_extrapolation is not acted on, because a command guarded at a position the robot has
 left can drive it into an obstacle. In lock step (fastep_ros.lock_step) it acts once per odometry stamp instead.
+It is a managed node in Nav2's order (fastep_ros.lifecycle): the constructor declares the parameters, configure
+makes everything else from them, activate switches it on, deactivate stops the robot, cleanup releases it all.
 Inputs, outputs, status values and timing: docs/guide.md, "The planner node", docs/real_time.md and
 docs/reference/status.md; frames: docs/frames.md; other robots and goals: docs/robots_and_goals.md.
 """
 
 from __future__ import annotations
 
+import functools
 import math
 import time
 import traceback
-from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence, assert_never
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped, Twist, TwistStamped
 from nav_msgs.msg import Path
 from rclpy.clock import Clock, ClockType
 from rclpy.lifecycle import LifecycleNode
+from rclpy.parameter import Parameter
+from rclpy.serialization import serialize_message
 from std_msgs.msg import Float64
 
 from fastep_core.errors import GoalError, ParameterError
 from fastep_core.planning.algorithms import ALGORITHMS, NAVIGATORS, check_drives, make_navigator, make_robot
 from fastep_core.planning.control import ControlTick, Plan
+from fastep_core.planning.limits import LEAST_LIMIT, speed_limited
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
@@ -39,6 +44,7 @@ from fastep_core.scenario import MODELS
 from fastep_core.world import World
 from fastep_ros.common import (
     RATE_RANGE,
+    LatestLine,
     RepeatedLine,
     StartupError,
     check_range,
@@ -47,20 +53,36 @@ from fastep_ros.common import (
     node_main,
     quiet_at_stop,
     shown,
+    table_values,
 )
 from fastep_ros.goals import GoalSubscription
 from fastep_ros.lifecycle import Lifecycle, transitions_to_member
+from fastep_ros.limits import INLINE_WORLD_ITEMS, SPEED_LIMIT_LOG_PERIOD
 from fastep_ros.live_tf import TfListener
 from fastep_ros.lock_step import LockStep
 from fastep_ros.navigate_actions import NavigateActions
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.planner_inputs import Body, PlannerInputs
-from fastep_ros.planner_params import PARAMETERS, TUNABLE
+from fastep_ros.planner_params import PARAMETERS, TUNABLE, control_period, given_names, planner_params
 from fastep_ros.planner_status import PlannerReports
+from fastep_ros.planner_threads import (
+    AdoptWorld,
+    Change,
+    DropGoal,
+    FailGoal,
+    Localized,
+    PassResult,
+    PlanSnapshot,
+    RestartClock,
+    Retune,
+    TakeGoal,
+)
 from fastep_ros.planning_thread import PlanningThread
+from fastep_ros.progress import Way
 from fastep_ros.robots import RobotFollower, robot_name
-from fastep_ros.sensors import PlacedScan, declared_footprint
+from fastep_ros.sensors import declared_footprint
 from fastep_ros.sim_time import SimTimeWatch
+from fastep_ros.world_builder import build as build_world
 from msg_tools import cdr, convert, frames, interface
 from msg_tools.interface import RELIABLE, offered_qos
 
@@ -70,20 +92,7 @@ DISCOVERY_PERIOD = 0.25  # wall seconds between looks at the graph for other rob
 START_PERIOD = 0.05      # ... the first START_LOOKS looks (3 s) every START_PERIOD: a launcher waits for every
 START_LOOKS = 60         # planner to see the others and its cmd_vel's readers (make demo's start waited 0.2-0.5 s)
 HEARTBEAT = 1.0          # wall seconds between re-publications of status, waypoint and plan
-
-
-@dataclass(frozen=True)
-class PlanSnapshot:
-    """What a planning pass plans from: the control tick's time, state and the robots and movers it was told of,
-    and the newest scan not yet perceived."""
-
-    t: float
-    tick: int                # the control tick's number
-    state: np.ndarray
-    others: list[OtherRobot]
-    scan: PlacedScan | None
-    velocity: np.ndarray | None = None   # what the base measurably did (odometry's twist), None: not known ...
-    measured_at: float | None = None     # ... as of this time (the odometry's stamp)
+PLANNING_JOIN = 5.0      # wall seconds cleanup waits at most for the planning pass under way to end
 
 
 def same_heading(heading: float | str | None, kept: float | None) -> bool:
@@ -111,14 +120,53 @@ class PlannerNode(LifecycleNode):
 
     def __init__(self, node_name: str = 'planner', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        # Its transitions (fastep_ros.lifecycle): rclpy calls on_configure, on_activate, ..., handed to the member.
-        self.lifecycle = Lifecycle(self, self.activate, self.deactivate, self.cleanup)
-        clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
+        # Its transitions (fastep_ros.lifecycle): rclpy calls on_configure, on_activate, ..., handed to the member,
+        # which calls configure, activate, deactivate and cleanup below, in Nav2's order.
+        self.lifecycle = Lifecycle(self, self.configure, self.activate, self.deactivate, self.cleanup)
+        self.clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
+        # Declared once, here: a bad parameter (type, range) is a one-line exit 2 at start. Configure reads them.
         values = declare_table(self, PARAMETERS)
+        self.unconfigured()
+        self._made: frozenset[str] = frozenset()   # the attributes configure made: cleanup drops them
+        self.lifecycle.start(values['autostart'])   # autostart: configured and active at once (fastep_ros.lifecycle)
+
+    def unconfigured(self) -> None:
+        """What the planner holds while unconfigured (before configure, after cleanup): nothing to drive with."""
+        self.navigator: Navigator | None = None
+        self.pending_goal: PoseStamped | None = None
+        self.goal_msg: PoseStamped | None = None   # the message of the goal driven to (navigate_actions)
+        self.goal: tuple[float, float] | None = None
+        # Planning off the control path (fastep_ros.planning_thread), unless every tick plans (lock step, or asked).
+        self.planning: PlanningThread[PlanSnapshot, PassResult] | None = None
+        self.control_tick: ControlTick | None = None   # the control loop's part of the navigator, with the thread
+        self.actions: NavigateActions | None = None    # Nav2's action servers, where nav2_msgs is
+
+    # ------------------------------------------------------------------------------------------- lifecycle
+    def configure(self) -> None:
+        """Make everything from the parameters' values now (a value set while unconfigured included), as Nav2's
+        on_configure does: the navigator's setting, the lifecycle publishers, the subscriptions, the planning
+        thread, the timers (made off), the parameter callbacks and the action servers. A value the planner cannot
+        run with is a StartupError (one line); what was made until then is released by cleanup."""
+        before = frozenset(vars(self))
         try:
-            self.params = PlannerParams().with_overrides({name: values[name] for name in PlannerParams.names()})
+            values = table_values(self, PARAMETERS)
+            self.read_parameters(values)
+            self.fresh_state()
+            self.make_outputs()
+            self.make_inputs(values)
+            self.make_control(values)
+            self.make_services()
+        finally:
+            self._made = frozenset(vars(self)) - before
+
+    def read_parameters(self, values: dict[str, Any]) -> None:
+        """What the planner is built with: the parameters, checked; its body, random stream and inputs' setting."""
+        try:
+            self.params = planner_params(values, given_names(self))
         except ParameterError as exc:
             raise StartupError(str(exc)) from None
+        if values['dt'] != self.params.dt:
+            self.set_parameters([Parameter('dt', value=self.params.dt)])   # the dt parameter says the period
         self.algorithm, self.model, self.radius = values['algorithm'], values['model'], values['robot_radius']
         self.footprint = declared_footprint(values)   # the outline, where the robot is not a circle
         if self.footprint is not None:
@@ -126,16 +174,17 @@ class PlannerNode(LifecycleNode):
         length, trailer_length, hitch_offset = values['length'], values['trailer_length'], values['hitch_offset']
         self.seed, self.seed_stream = values['seed'], values['seed_stream']
         self.control_rate_hz, self.odom_timeout = values['control_rate_hz'], values['odom_timeout']
-        clock_timeout, stamped = values['clock_timeout'], values['use_stamped_cmd_vel']
+        stamped = values['use_stamped_cmd_vel']
         other_radius, other_timeout = values['other_robot_radius'], values['other_robot_timeout']
         if not other_timeout > 0.0:
             raise StartupError(f'parameter other_robot_timeout must be > 0, got {other_timeout:g}')
         self.max_extrapolation, self.frame_id = values['max_extrapolation'], values['frame_id']
-        goal_frames, lock_step = values['goal_frames_from_tf'], values['lock_step']
-        threaded, self.exclusive_cmd_vel = values['planning_thread'], values['exclusive_cmd_vel']
+        lock_step = values['lock_step']
+        self.exclusive_cmd_vel = values['exclusive_cmd_vel']
         self.cmd_conflict = ''   # the other publishers on cmd_vel, while there are ('' when there are none)
-        self.stop_on_failure, realtime = values['stop_on_failure'], values['realtime']
+        self.stop_on_failure = values['stop_on_failure']
         self.max_plan_age = values['max_plan_age']
+        self.planning_timeout = values['planning_timeout']
         self._check(length, trailer_length, hitch_offset, other_radius, values['workspace'], values['obstacle_source'])
         self.lock_step = bool(lock_step)
         self.lock = LockStep()   # lock step's bookkeeping (fastep_ros.lock_step)
@@ -146,20 +195,20 @@ class PlannerNode(LifecycleNode):
         # What it hears, and the robot's state made of it (fastep_ros.planner_inputs).
         self.inputs = PlannerInputs(self, values)
 
-        # What the planner decides.
-        self.navigator: Navigator | None = None
-        self.pending_goal: PoseStamped | None = None
-        self.goal_msg: PoseStamped | None = None   # the message of the goal driven to (navigate_actions)
-        self.goal: tuple[float, float] | None = None
-        # Planning off the control path (fastep_ros.planning_thread), unless every tick plans (lock step, or asked).
-        self.planning: PlanningThread[PlanSnapshot, Plan] | None = None
-        self.control_tick: ControlTick | None = None   # the control loop's part of the navigator, with the thread
+    def fresh_state(self) -> None:
+        """What the planner decides, from nothing: a configure after a cleanup starts as the first did."""
         self.plan_problem = ''                         # why the plan is not driven on ('' when it is)
+        # The goal failed on the executor for planning that left no plan for planning_timeout ('' when not), the
+        # goal's message it failed (a goal taken after clears it), the newest pass result seen and since when.
+        self.plan_failed, self._failed_goal = '', None
+        self._result_seen: PassResult | None = None
+        self._fresh_at = -math.inf
         self.control_count = 0                         # control ticks so far
-        self.plan_tick = 0                             # the control tick the newest plan was planned from
+        self._belief_shown: PassResult | None = None   # the pass whose belief tracked_obstacles shows
         self.fault_logged = False
         self.hold = ''  # why the robot is held still although it has a goal ('' when it is not)
-        self.goal_refused = ''  # why the last goal was refused, while the goal before it is driven to
+        self.goal_refused = ''  # why the last goal was refused, while the goal before it is driven to ...
+        self.refused_msg: PoseStamped | None = None   # ... and its message (an action's run knows its own by it)
         self.last_command = np.zeros(2)
         # Goals may come at any rate: their log lines at most once a second (fastep_ros.common.RepeatedLine). A
         # call site of its own for each severity: rclpy refuses two severities from one line of code.
@@ -168,113 +217,205 @@ class PlannerNode(LifecycleNode):
         self._plan_key: tuple[Any, ...] | None = None
         self._target_key: tuple[float, ...] | None = None
 
-        self.cmd_pub = self.create_publisher(TwistStamped if stamped else Twist, interface.CMD_VEL,
-                                             offered_qos(interface.CMD_VEL))
-        self.waypoint_pub = self.create_publisher(PoseStamped, interface.WAYPOINT, offered_qos(interface.WAYPOINT))
-        self.plan_pub = self.create_publisher(Path, interface.PLAN, offered_qos(interface.PLAN))
-        self.cost_pub = self.create_publisher(Float64, interface.COST, offered_qos(interface.COST))
+    def make_outputs(self) -> None:
+        """cmd_vel, waypoint, plan, cost and status: lifecycle publishers (LifecycleNode.on_activate switches them on,
+        on_deactivate off), as /diagnostics' (make_services)."""
+        self.cmd_pub = self.create_lifecycle_publisher(TwistStamped if self.stamped else Twist, interface.CMD_VEL,
+                                                       offered_qos(interface.CMD_VEL))
+        self.waypoint_pub = self.create_lifecycle_publisher(PoseStamped, interface.WAYPOINT,
+                                                            offered_qos(interface.WAYPOINT))
+        self.plan_pub = self.create_lifecycle_publisher(Path, interface.PLAN, offered_qos(interface.PLAN))
+        self.cost_pub = self.create_lifecycle_publisher(Float64, interface.COST, offered_qos(interface.COST))
         self.reports = PlannerReports(self)   # status, /diagnostics, control timings (fastep_ros.planner_status)
+
+    def make_inputs(self, values: dict[str, Any]) -> None:
+        """The subscriptions: the robot's own inputs, goals, the other robots (and this one's footprint), TF, speed
+        limits."""
         self.inputs.subscribe()
         # Goals from anyone (volatile, as RViz and `ros2 topic pub` send them) and from latched publishers
         # (fastep-launch: a planner restarted mid-run gets the goal it was driving to again): fastep_ros.goals.
         self.goal_sub = GoalSubscription(self, self.on_goal)
         # Announces this robot (its footprint) and follows the robots that announce themselves (fastep_ros.robots).
+        other_radius, other_timeout = values['other_robot_radius'], values['other_robot_timeout']
         self.robots = RobotFollower(self, self.radius, other_radius, other_timeout, self.odom_timeout, self.now,
                                     lambda: self.reports.publish(force=True),
                                     on_odometry=self.lock_try if self.lock_step else None,
                                     outline=None if self.footprint is None else self.footprint.vertices)
         # Goals in other frames: resolved through /tf and /tf_static (fastep_ros.live_tf).
-        self.tf = TfListener(self, dynamic=goal_frames or self.inputs.map_to_odom_from_tf)
+        self.tf = TfListener(self, dynamic=values['goal_frames_from_tf'] or self.inputs.map_to_odom_from_tf)
         # Nav2's speed limits (a speed filter, a fleet manager): the robot's max_speed capped by the newest.
         self.configured_max_speed = self.params.max_speed
         self.speed_limit: tuple[bool, float] = (False, 0.0)
+        self.speed_limit_sub: Any = None
+        # A limit may change with every message: its lines at most one a SPEED_LIMIT_LOG_PERIOD, the latest said.
+        self.speed_limit_line = LatestLine(lambda text: self.get_logger().info(text), SPEED_LIMIT_LOG_PERIOD)
         try:
             from nav2_msgs.msg import SpeedLimit
-            self.create_subscription(SpeedLimit, interface.SPEED_LIMIT, self.on_speed_limit, RELIABLE)
+            self.speed_limit_sub = self.create_subscription(SpeedLimit, interface.SPEED_LIMIT, self.on_speed_limit,
+                                                            RELIABLE)
         except ImportError:
             pass   # no nav2_msgs: said once by navigate_actions
-        if threaded and (not self.lock_step or realtime):
+
+    def make_control(self, values: dict[str, Any]) -> None:
+        """The planning thread (where passes run off the control path), the control and wall timers (off until
+        activate), the watch on simulated time."""
+        if values['planning_thread'] and (not self.lock_step or values['realtime']):
             self.planning = PlanningThread(self.plan_pass, self.get_logger().error)
-        self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control_tick)
+        # Made off: activate switches them on, deactivate off again.
+        self.control_timer = self.create_timer(1.0 / self.control_rate_hz, self.on_control_tick,
+                                               autostart=False)
         steady = self.wall_clock = Clock(clock_type=ClockType.STEADY_TIME)
         self.wall_ticks = 0
         self.heartbeat_at = -math.inf   # steady seconds of the last re-publication
-        self.wall_timer = self.create_timer(START_PERIOD, self.on_wall_tick, clock=steady)
+        self.wall_timer = self.create_timer(START_PERIOD, self.on_wall_tick, clock=steady, autostart=False)
         self.discover()
         self.update_world()
-        self.sim_time = SimTimeWatch(self, clock_guard, clock_timeout)
+        self.sim_time = SimTimeWatch(self, self.clock_guard, values['clock_timeout'])
         self.clock_problem = ''   # why this node's time stands still ('' when it does not)
+
+    def make_services(self) -> None:
+        """/diagnostics, the parameter callbacks (tunable while configured) and Nav2's action servers."""
         self.reports.make_diagnostics()
         # Tunable while running (docs/parameters.md); the robot's body, the algorithm, the seed, the topics and
         # frames are what the node was built with and stay read-only.
         self.dynamic = DynamicParameters(self, TUNABLE, self.apply_parameters)
         self.get_logger().info(f'{self.algorithm} planner for a {self.model} of radius {self.radius:g} m, '
                                f'control at {self.control_rate_hz:g} Hz')
-        # Nav2's navigate_to_pose and navigate_through_poses (fastep_ros.navigate_actions), where nav2_msgs is.
+        # Nav2's navigate_to_pose, navigate_through_poses and follow_waypoints (fastep_ros.navigate_actions), where
+        # nav2_msgs is: on the node <name>_navigation, spun on the action thread (fastep_ros.action_thread).
         self.actions = NavigateActions.make(self)
-        self.lifecycle.start(values['autostart'])   # autostart: active at once (fastep_ros.lifecycle)
 
-    # ------------------------------------------------------------------------------------------- lifecycle
     def activate(self) -> None:
-        t = self.now()
-
-        def restart() -> None:
-            if self.navigator is not None:
-                self.navigator.restart_clock(t)   # time spent inactive is no lack of progress
-            if self.planning is not None:
-                self.planning.drop_plan()         # planned before the pause: not driven on after it
-        self.change(restart)
+        """After LifecycleNode.on_activate has switched the publishers on: the navigator's timers restart (time
+        spent inactive is no lack of progress), the timers on."""
+        self.change(RestartClock(self.now()))   # time spent inactive is no lack of progress
+        self._fresh_at = -math.inf              # nor of plans (planning_timeout counts afresh)
         self.control_timer.reset()
+        self.wall_timer.reset()
         self.reports.changed()
 
     def deactivate(self) -> None:
+        """Before LifecycleNode.on_deactivate switches the publishers off: the timers off, a zero cmd_vel (the
+        robot stops), a navigation goal under way aborted, and status `inactive` sent."""
         self.control_timer.cancel()
+        self.wall_timer.cancel()
         self.last_command = np.zeros(2)
         self.publish_command(self.last_command)
+        if self.actions is not None:
+            self.actions.check()   # not active: the run ends, aborted
         self.reports.changed()
+        self.reports.publish(force=True)
 
-    def cleanup(self) -> None:
-        """A fresh navigator: the goal is forgotten (the world, latched, is kept)."""
-        def forget() -> None:
-            self.navigator, self.control_tick, self.goal, self.pending_goal = None, None, None, None
-            if self.planning is not None:
-                self.planning.drop_plan()
-            self.update_world()
-        self.change(forget)
+    def cleanup(self, forget: bool = True) -> None:
+        """Release everything configure made (Nav2's on_cleanup; also shutdown, an error, a configure that failed
+        half-way, destroy_node): the planning thread stopped and joined, then the action thread (joined, its node
+        and the action servers on it destroyed: NavigateActions.destroy), the parameter callbacks, the timers, the
+        subscriptions and the publishers destroyed. `forget` (cleanup, an error, a failed configure): every
+        attribute configure made dropped too, so the next configure builds afresh, with no goal, plan, world,
+        perception, lock step or report of this run; otherwise (shutdown, destroy_node: nothing follows) what the
+        run left is kept to be read."""
+        made = vars(self)
+        planning = self.planning
+        if planning is not None:
+            planning.stop(PLANNING_JOIN)
+            if planning.alive:
+                self.get_logger().warning(f'cleanup: the planning pass under way did not end within {PLANNING_JOIN:g} '
+                                          's; it ends on its own, its plan unused')
+        if self.actions is not None:
+            self.actions.destroy()
+        for member in ('dynamic', 'robots', 'tf', 'goal_sub', 'reports'):
+            if member in made:
+                made[member].destroy()
+        if 'inputs' in made:
+            self.inputs.unsubscribe()
+        for name in ('control_timer', 'wall_timer'):
+            if name in made:
+                self.destroy_timer(made[name])
+        if made.get('speed_limit_sub') is not None:
+            self.destroy_subscription(made['speed_limit_sub'])
+        for name in ('cmd_pub', 'waypoint_pub', 'plan_pub', 'cost_pub'):
+            if name in made:
+                self.destroy_lifecycle_publisher(made[name])
+        if forget:
+            for name in self._made:
+                made.pop(name, None)
+            self._made = frozenset()
+            self.unconfigured()
 
     def update_world(self) -> None:
-        workspace = self.inputs.workspace_param or self.inputs.map_workspace
-        if self.inputs.obstacles is None or workspace is None:
+        """The world of the newest /obstacles and /map (PlannerInputs.world_job), once both have come: built at once
+        when it is small (INLINE_WORLD_ITEMS) or every pass runs on the executor anyway (no planning thread), else
+        on the world builder thread (fastep_ros.world_builder) while the control tick drives on the world before;
+        then adopted (AdoptWorld) by PlannerInputs.take_built."""
+        job = self.inputs.world_job()
+        if job is None:
             return
-        self.inputs.world = world = World.from_obstacles(workspace, self.inputs.obstacles)
-        count = len(self.inputs.obstacles)
-
-        def adopt() -> None:
-            self.inputs.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
-            if self.navigator is None:
-                self.navigator = nav = make_navigator(self.algorithm, self.body, self.radius, world, self.params,
-                                                      self.rng, footprint=self.footprint)
-                nav.name = robot_name(self.get_namespace())   # as the other robots' planners name it
-                if self.planning is not None:
-                    self.planning.drop_plan()
-                    self.control_tick = ControlTick(nav)
-                self.get_logger().info(f'world known: {count} obstacles in {workspace}')
-            else:
-                self.navigator.world = world
-                self.get_logger().info(f'world updated: {count} obstacles')
-            self.reports.changed()   # the obstacle count is part of the status
-            if self.pending_goal is not None:
-                goal, self.pending_goal = self.pending_goal, None
-                self.on_goal(goal)
-            self.reports.publish()
-        self.change(adopt)
-
-    def change(self, work: Callable[[], Any]) -> None:
-        """Change the navigator: between two passes on the planning thread, or at once without one."""
-        if self.planning is None:
-            work()
+        if self.planning is None or job.items(INLINE_WORLD_ITEMS) <= INLINE_WORLD_ITEMS:
+            self.inputs.take_built(build_world(job))
         else:
-            self.planning.call(work)
+            self.inputs.build_later(job)
+
+    def change(self, request: Change) -> None:
+        """Ask the planning side for a change (fastep_ros.planner_threads): applied between two passes on the
+        planning thread, in the order asked, or at once without one."""
+        if self.planning is None:
+            self.apply(request)
+        else:
+            self.planning.call(functools.partial(self.apply, request))
+
+    def apply(self, request: Change) -> None:
+        """A change, on the planning side: the only writer of the navigator, perception and the goal driven to."""
+        if isinstance(request, TakeGoal):
+            self.take_goal(request.msg)
+        elif isinstance(request, DropGoal):
+            # In order with the goals before it: a goal given before the cancel never comes back after it.
+            self.goal, self.goal_msg, self.pending_goal = None, None, None
+            if self.navigator is not None:
+                self.navigator.cancel(request.reason)
+            if self.planning is not None:
+                self.planning.drop_plan()
+        elif isinstance(request, FailGoal):
+            if self.navigator is not None:
+                self.navigator.fail(request.reason)
+        elif isinstance(request, AdoptWorld):
+            self.adopt_world(request.world, request.count)
+        elif isinstance(request, Retune):
+            nav = self.navigator
+            if nav is not None:
+                nav.retune(request.params, make_robot(self.body, request.params)[1])
+                if self.planning is not None:
+                    self.control_tick = ControlTick(nav)
+        elif isinstance(request, Localized):
+            self.inputs.scan_perception.localized(None if request.covariance is None else list(request.covariance),
+                                                  request.sigmas)
+        elif isinstance(request, RestartClock):
+            if self.navigator is not None:
+                self.navigator.restart_clock(request.t)
+            if self.planning is not None:
+                self.planning.drop_plan()   # planned before the pause, or on the other clock: not driven on
+        else:
+            assert_never(request)
+
+    def adopt_world(self, world: World, count: int) -> None:
+        """AdoptWorld: the first world makes the navigator (and its control tick), a later one replaces its map."""
+        self.inputs.world = world   # the map perception fuses scans with: the planning side's, as the navigator
+        self.inputs.scan_perception.reset()   # a new map: what the scans showed is believed afresh on it
+        if self.navigator is None:
+            self.navigator = nav = make_navigator(self.algorithm, self.body, self.radius, world, self.params,
+                                                  self.rng, footprint=self.footprint)
+            nav.name = robot_name(self.get_namespace())   # as the other robots' planners name it
+            if self.planning is not None:
+                self.planning.drop_plan()
+                self.control_tick = ControlTick(nav)
+            self.get_logger().info(f'world known: {count} obstacles in {world.workspace}')
+        else:
+            self.navigator.world = world
+            self.inputs.world_info(f'world updated: {count} obstacles')   # at most one line a WORLD_LOG_PERIOD
+        self.reports.changed()   # the obstacle count is part of the status
+        if self.pending_goal is not None:
+            goal, self.pending_goal = self.pending_goal, None
+            self.on_goal(goal)
+        self.reports.publish()
 
     # ------------------------------------------------------------------------------------------- setup
     def _check(self, length: float, trailer_length: float, hitch_offset: float, other_radius: float,
@@ -304,9 +445,20 @@ class PlannerNode(LifecycleNode):
             raise StartupError(f'parameter workspace must be [xmin, ymin, xmax, ymax] with min < max, got {workspace}')
 
     def apply_parameters(self, changes: dict[str, Any]) -> str:
-        """DynamicParameters' apply: check every change, then apply them all to the running node; why not if not."""
+        """DynamicParameters' apply: check every change, then apply them all to the running node; why not if not.
+        The planner's dt follows control_rate_hz (planner_params.control_period): a dt set that disagrees with it is
+        refused; a new rate alone gives dt its new period, and the dt parameter is set to it."""
         planner = {name: value for name, value in changes.items() if name in PlannerParams.names()}
         params = self.params
+        if 'dt' in changes or 'control_rate_hz' in changes:
+            try:
+                period = control_period(changes.get('control_rate_hz', self.control_rate_hz), changes.get('dt'),
+                                        self.params.dt)
+            except ParameterError as exc:
+                return str(exc)
+            planner.pop('dt', None)
+            if 'dt' in changes or period != self.params.dt:
+                planner['dt'] = period
         if planner:
             try:
                 params = self.params.with_overrides(planner)
@@ -320,10 +472,12 @@ class PlannerNode(LifecycleNode):
             if 'max_speed' in planner:   # what the speed limit (speed_limit topic) is taken of
                 self.configured_max_speed = params.max_speed
                 params = params.with_overrides({'max_speed': self.limited_speed()})
-            self.retune(params)
+            if params != self.params or set(planner) != {'dt'}:   # the dt parameter set to the period it has: no change
+                self.retune(params)
         self.odom_timeout = odom_timeout
         self.max_extrapolation = changes.get('max_extrapolation', self.max_extrapolation)
         self.max_plan_age = changes.get('max_plan_age', self.max_plan_age)
+        self.planning_timeout = changes.get('planning_timeout', self.planning_timeout)
         self.exclusive_cmd_vel = changes.get('exclusive_cmd_vel', self.exclusive_cmd_vel)
         self.stop_on_failure = changes.get('stop_on_failure', self.stop_on_failure)
         self.robots.fleet.still_after = self.odom_timeout
@@ -331,6 +485,8 @@ class PlannerNode(LifecycleNode):
         if 'control_rate_hz' in changes:
             self.control_rate_hz = changes['control_rate_hz']
             self.control_timer.timer_period_ns = int(round(1e9 / self.control_rate_hz))
+            if 'dt' not in changes and self.get_parameter('dt').value != self.params.dt:
+                self.set_parameters([Parameter('dt', value=self.params.dt)])   # the dt parameter says the period
         self.sim_time.timeout = changes.get('clock_timeout', self.sim_time.timeout)
         scans = self.inputs.scans
         scans.timeout, scans.tolerance = changes.get('scan_timeout', scans.timeout), \
@@ -339,40 +495,58 @@ class PlannerNode(LifecycleNode):
         return ''
 
     def retune(self, params: PlannerParams) -> None:
-        """Hand new planner parameters to the navigator between two planning passes."""
-        def retune() -> None:
-            nav = self.navigator
-            if nav is not None:
-                nav.retune(params, make_robot(self.body, params)[1])
-                if self.planning is not None:
-                    self.control_tick = ControlTick(nav)
-        self.change(retune)
+        """Hand new planner parameters to the navigator between two planning passes, in one change: its limits reach
+        the model (which the latency compensation predicts with), the guards, the controller, the route's speed law
+        and, in the control tick rebuilt with them, the velocity smoother, from the next control tick on."""
+        self.change(Retune(params))
         self.params = params
 
     def on_speed_limit(self, msg: Any) -> None:
         """nav2_msgs/SpeedLimit, as Nav2's controller server takes it from its speed filter: a percentage of
-        max_speed, or m/s; 0 lifts it. The robot's max_speed (the parameter, unchanged) is capped by it."""
-        value = float(msg.speed_limit)
-        if not (math.isfinite(value) and value >= 0.0 and (value <= 100.0 or not msg.percentage)):
-            self.get_logger().warning(f'ignoring speed_limit {value}{" %" if msg.percentage else " m/s"}: a limit is '
-                                      f'a finite number >= 0 (a percentage at most 100)', throttle_duration_sec=5.0)
+        max_speed, or m/s; 0 lifts it. The robot's max_speed (the parameter, unchanged) is capped by it, a positive
+        limit always at a positive cap (at least LEAST_LIMIT: limits.speed_limited), in force at once, on status
+        (`speed_limit`) and in the log at most once a SPEED_LIMIT_LOG_PERIOD (the latest change)."""
+        percentage, value = bool(msg.percentage), float(msg.speed_limit)
+        given = f'{value:g}{" %" if percentage else " m/s"}'
+        if not (math.isfinite(value) and value >= 0.0 and (value <= 100.0 or not percentage)):
+            self.get_logger().warning(f'ignoring speed_limit {given}: a limit is a finite number >= 0 (a percentage '
+                                      f'at most 100)', throttle_duration_sec=5.0)
             return
-        self.speed_limit = (bool(msg.percentage), value)
-        speed = self.limited_speed()
+        if percentage and value > 0.0 and self.configured_max_speed <= 0.0:
+            self.get_logger().warning(f'speed_limit {given} caps nothing: max_speed is 0 (unlimited), and a '
+                                      f'percentage of it is no speed; send the limit in m/s', throttle_duration_sec=5.0)
+        speed = self.limited_speed((percentage, value))
         if speed != self.params.max_speed:
-            self.retune(self.params.with_overrides({'max_speed': speed}))
-            self.get_logger().info(f'speed limit: max_speed {speed:g} m/s' if value > 0.0 else
-                                   f'speed limit lifted: max_speed {speed:g} m/s')
+            try:
+                params = self.params.with_overrides({'max_speed': speed})
+                NAVIGATORS[self.algorithm].check_params(params)
+            except ParameterError as exc:   # none known: every positive limit is a cap the navigators take
+                self.get_logger().warning(f'ignoring speed_limit {given}: {exc}', throttle_duration_sec=5.0)
+                return
+            self.retune(params)
+            configured = self.configured_max_speed
+            asked = configured * (value / 100.0) if percentage else value   # 0 when it underflows
+            least = '' if asked >= LEAST_LIMIT else \
+                f' (the least cap: {given}{f" of {configured:g} m/s" if percentage else ""} is less)'
+            self.speed_limit_line(f'speed limit: max_speed {speed:g} m/s{least}' if value > 0.0 else
+                                  f'speed limit lifted: max_speed {speed:g} m/s')
+        if (percentage, value) != self.speed_limit:
+            self.reports.changed()   # the cap is on status
+        self.speed_limit = (percentage, value)
 
-    def limited_speed(self) -> float:
-        """max_speed as configured, capped by the speed limit (0: unlimited, as max_speed 0 means)."""
+    def limited_speed(self, limit: tuple[bool, float] | None = None) -> float:
+        """max_speed as configured, capped by the speed limit kept or `limit` ((percentage, value); 0: unlimited, as
+        max_speed 0 means): a positive limit at a positive cap (limits.speed_limited)."""
+        percentage, value = self.speed_limit if limit is None else limit
+        return speed_limited(self.configured_max_speed, value, percentage)
+
+    def speed_cap(self) -> float | None:
+        """The cap (m/s) the speed limit kept puts on max_speed, as status' `speed_limit` says it; None without
+        one (none, lifted, or a percentage of an unlimited max_speed)."""
         percentage, value = self.speed_limit
-        configured = self.configured_max_speed
-        if value <= 0.0:
-            return configured
-        if percentage:
-            return configured * value / 100.0 if configured > 0.0 else configured
-        return value if configured <= 0.0 else min(configured, value)
+        if value <= 0.0 or (percentage and self.configured_max_speed <= 0.0):
+            return None
+        return self.limited_speed()
 
     # ------------------------------------------------------------------------------------------- helpers
     @property
@@ -397,7 +571,7 @@ class PlannerNode(LifecycleNode):
 
     def on_goal(self, msg: PoseStamped) -> None:
         resolved, _ = self.goal_in_map(msg)   # in a frame TF does not resolve: refused by take_goal, saying so
-        self.change(lambda: self.take_goal(resolved))
+        self.change(TakeGoal(resolved))
 
     def goal_in_map(self, msg: PoseStamped) -> tuple[PoseStamped, str]:
         """The goal in the map frame: as it is when given there; from any other frame /tf and /tf_static resolve
@@ -441,14 +615,14 @@ class PlannerNode(LifecycleNode):
                 raise GoalError(problem)
             self.navigator.set_goal(point, self.now(), None if isinstance(heading, str) else heading)
         except GoalError as exc:
-            self.goal_refused = f'goal ({point[0]:g}, {point[1]:g}) refused: {exc}'
+            self.goal_refused, self.refused_msg = f'goal ({point[0]:g}, {point[1]:g}) refused: {exc}', msg
             self.goal_warning(self.goal_refused)
             if self.goal is None or nav.mode not in (Mode.KINEMATIC, Mode.AVOIDING):
                 self.goal = None
                 nav.fail(f'goal refused: {exc}')
             # else the goal under way stays: a bad goal must not stop a robot driving to a good one
         else:
-            self.goal_refused = ''
+            self.goal_refused, self.refused_msg = '', None
             self.goal = (float(point[0]), float(point[1]))
             self.goal_msg = msg
             if self.planning is not None:
@@ -481,13 +655,7 @@ class PlannerNode(LifecycleNode):
 
     def drop_goal(self, reason: str) -> None:
         """Forget the goal (a cancel): the robot brakes to a stop within its limits, status idle with `reason`."""
-        def drop() -> None:
-            if self.navigator is not None:
-                self.navigator.cancel(reason)
-            if self.planning is not None:
-                self.planning.drop_plan()
-        self.goal, self.goal_msg, self.pending_goal = None, None, None
-        self.change(drop)
+        self.change(DropGoal(reason))
 
     def goal_heading_of(self, msg: PoseStamped) -> float | str | None:
         """The heading a goal asks a robot that turns in place to end in (its orientation's yaw; None for other
@@ -510,15 +678,8 @@ class PlannerNode(LifecycleNode):
         self.robots.take()
 
     def destroy_node(self) -> None:
-        actions = getattr(self, 'actions', None)   # not made when the node failed to start
-        if actions is not None:
-            actions.destroy()
-        tf = getattr(self, 'tf', None)
-        if tf is not None:
-            tf.destroy()
-        if self.planning is not None:
-            self.planning.stop()
-        self.robots.destroy()
+        # What configure made (cleanup: the planning thread joined first), if anything; its values stay to be read.
+        self.lifecycle.release(forget=False)
         super().destroy_node()
 
     # ------------------------------------------------------------------------------------------- lock step
@@ -552,7 +713,9 @@ class PlannerNode(LifecycleNode):
         if scan is not None and self.planning is not None:
             self.inputs.latest_scan = scan   # perceived by the next planning pass (realtime)
         elif scan is not None:
-            self.inputs.perceive(self.inputs.where(scan), t, at=t)
+            belief = self.inputs.perceive(self.inputs.where(scan), t, at=t)
+            if belief is not None:
+                self.inputs.show_belief(belief)
         self.on_control(t)
 
     @quiet_at_stop
@@ -636,10 +799,17 @@ class PlannerNode(LifecycleNode):
         if scan is not None:
             scan = self.inputs.where(scan)   # odometry and TF read here, not on the planning thread
         self.control_count += 1
-        self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan, velocity, measured_at))
-        plan = self.planning.plan
+        self.planning.submit(PlanSnapshot(t, self.control_count, state, told, scan, velocity, measured_at,
+                                          control.response.shown()))
+        result = self.planning.plan   # read once: the plan with the tick it was planned from and its belief
+        plan = None if result is None else result.plan
+        if result is not None and result.belief is not None and result is not self._belief_shown:
+            self._belief_shown = result
+            self.inputs.tracked_pub.publish(result.belief)   # serialized by the pass: publishing costs no more
         # Age in control periods since the tick it was planned from: a simulated clock may jump between two ticks.
-        age = (self.control_count - self.plan_tick) / self.control_rate_hz
+        age = 0.0 if result is None else (self.control_count - result.tick) / self.control_rate_hz
+        if self.planning_stalled(t, result):
+            return control.stop(t, period, velocity, measured_at, pose)
         if plan is not None and plan.under_way and age > self.max_plan_age:
             if not self.plan_problem:
                 self.get_logger().error(f'planning stalled: the newest plan is {age:.2f} s old (max_plan_age '
@@ -653,23 +823,58 @@ class PlannerNode(LifecycleNode):
             if not self.fault_logged:
                 self.get_logger().error(f'control fault: {exc}\n{traceback.format_exc()}')
                 self.fault_logged = True
-            reason = f'control fault: {exc}'
-            self.change(lambda: nav.fail(reason))
+            self.change(FailGoal(f'control fault: {exc}'))
             return control.stop(t, period)
 
-    def plan_pass(self, snapshot: PlanSnapshot) -> Plan | None:
-        """One planning pass on the planning thread: perceive the newest scan, then the navigator's update."""
+    def planning_stalled(self, t: float, result: PassResult | None) -> bool:
+        """Has planning left no plan for planning_timeout while a goal is under way (no pass result new since: a
+        pass that never ends)? Then the goal fails here, on the executor (`plan_failed`: status `failed`, an action
+        goal aborted), and on the planning side once the pass ends (FailGoal); True while it is failed so."""
+        if result is not self._result_seen or self._fresh_at == -math.inf:
+            self._result_seen, self._fresh_at = result, t   # a pass ended (or a goal dropped its plan): fresh
+        if self.plan_failed:
+            if self.goal_msg is self._failed_goal:
+                return True
+            self.plan_failed, self._failed_goal, self._fresh_at = '', None, t   # a goal taken since
+        nav = self.navigator
+        under_way = nav is not None and self.goal is not None and nav.mode in (Mode.KINEMATIC, Mode.AVOIDING)
+        if not under_way:
+            self._fresh_at = t
+            return False
+        stalled = t - self._fresh_at
+        if self.planning_timeout <= 0.0 or stalled < self.planning_timeout:
+            return False
+        self.plan_failed = f'planning timed out: no plan for {stalled:.1f} s (planning_timeout ' \
+                           f'{self.planning_timeout:g} s)'
+        self._failed_goal = self.goal_msg
+        self.get_logger().error(f'{self.plan_failed}; the goal fails')
+        self.change(FailGoal(self.plan_failed))   # applied on the planning side when the pass under way ends
+        self.reports.changed()
+        return True
+
+    def plan_pass(self, snapshot: PlanSnapshot) -> PassResult | None:
+        """One planning pass on the planning thread: perceive the newest scan, then the navigator's update; the plan
+        leaves with the tick it was planned from and the belief to show (published by the executor)."""
         nav = self.navigator
         if nav is None:
             return None
         t, state = snapshot.t, snapshot.state
-        if snapshot.scan is not None:
+        if snapshot.response is not None:
+            nav.take_response(snapshot.response)   # the base as measured when the snapshot was taken
+        belief = None if snapshot.scan is None else \
             self.inputs.perceive(snapshot.scan, t, state=state, told=snapshot.others)
+        # Its markers made and serialized here, published by the executor (building them took ~0.6 ms of a tick).
+        shown = None if belief is None else serialize_message(self.inputs.belief_markers(belief))
         tracked = self.inputs.scan_perception.movers(t)
         command = self.navigate(nav, t, state, [*snapshot.others, *tracked], snapshot.velocity, snapshot.measured_at,
                                 None)
-        self.plan_tick = snapshot.tick
-        return Plan.of(nav, t, command, tracked)
+        return PassResult(Plan.of(nav, t, command, tracked), snapshot.tick, shown, Way.of(nav))
+
+    @property
+    def plan_tick(self) -> int:
+        """The control tick the newest plan was planned from (0: none yet)."""
+        result = None if self.planning is None else self.planning.plan
+        return 0 if result is None else result.tick
 
     def navigate(self, nav: Navigator, t: float, state: np.ndarray, others: list[OtherRobot],
                  velocity: np.ndarray | None, measured_at: float | None, pose: np.ndarray | None) -> np.ndarray:
@@ -777,6 +982,7 @@ class PlannerNode(LifecycleNode):
         if heartbeat:
             self.heartbeat_at = now
         self.check_clock()
+        self.speed_limit_line.flush()   # the newest speed-limit change, once its period is over
         found = self.discover() | self.check_cmd_vel()
         self.goal_sub.look()
         for sub in self.inputs.world_subs:
@@ -830,12 +1036,8 @@ class PlannerNode(LifecycleNode):
         for robot in self.robots.fleet.robots.values():
             if robot.received > -math.inf:   # kept where last heard, as if heard now: still avoided
                 robot.received = robot.stamp = t
-        def restart() -> None:
-            if self.navigator is not None:
-                self.navigator.restart_clock(t)
-            if self.planning is not None:
-                self.planning.drop_plan()   # planned on the other clock
-        self.change(restart)
+        self.change(RestartClock(t))
+        self._fresh_at = -math.inf   # planning_timeout counts afresh on this clock
         self.last_command = np.zeros(2)
         self.publish_command(self.last_command)
         self.clock_problem = self.sim_time.problem()   # the silence counts from the switch

@@ -8,6 +8,7 @@ loop): it makes the subscriptions, owns what they bring and the state made of it
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Callable, Protocol, Sequence
@@ -15,33 +16,41 @@ from typing import Any, Callable, Protocol, Sequence
 import numpy as np
 from geometry_msgs.msg import PoseStamped, PoseWithCovarianceStamped
 from nav_msgs.msg import OccupancyGrid, Odometry
-from rclpy.node import Node
+from rclpy.clock import Clock, ClockType
+from rclpy.lifecycle import LifecycleNode
 from rclpy.qos import qos_profile_sensor_data
 from sensor_msgs.msg import LaserScan
 from visualization_msgs.msg import MarkerArray
 
-from fastep_core.perception.belief import heading
+from fastep_core.perception.belief import Belief, heading
 from fastep_core.perception.uncertainty import OdometryDrift, PoseUncertainty
 from fastep_core.planning.guard import ScanReturns
+from fastep_core.planning.guard_inputs import GuardInputs
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
-from fastep_ros.common import StartupError
+from fastep_ros.common import RepeatedLine, StartupError
 from fastep_ros.latched import LatchedSubscription
+from fastep_ros.limits import LOCALIZATION_EXTENT_MAX, LOCALIZATION_MARGIN, TF_LOCALIZER_INTERVAL
 from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
 from fastep_ros.lock_step import STAMP_EPS
 from fastep_ros.perception import ScanPerception
+from fastep_ros.planner_threads import AdoptWorld, Change, Localized
 from fastep_ros.planning_thread import PlanningThread
 from fastep_ros.robots import RobotFollower
 from fastep_ros.sensors import PlacedScan, ScanSource
+from fastep_ros.world_builder import BuiltWorld, WorldBuilder, WorldJob
 from msg_tools import convert, frames, interface
 from msg_tools.interface import LATEST, offered_qos
 
-__all__ = ['TWIST_CHECKS', 'TWIST_SLACK', 'Body', 'PlannerInputs', 'PlannerNodeView']
+__all__ = ['TWIST_CHECKS', 'TWIST_SLACK', 'WORLD_LOG_PERIOD', 'WORLD_POLL', 'Body', 'PlannerInputs',
+           'PlannerNodeView']
 
 TWIST_SLACK = 0.2   # m/s: a pose may move this much faster than its odometry's twist says (noise, latency)
 TWIST_CHECKS = 3    # odometry messages in a row beyond it: the twist is not the base's velocity
+WORLD_LOG_PERIOD = 10.0   # wall s between "world updated" lines (SLAM republishes its map every few seconds) ...
+WORLD_POLL = 0.05         # ... and between the executor's looks for a world built off the control path
 
 
 def _pair(values: dict[str, Any], name: str) -> tuple[float, float]:
@@ -64,6 +73,7 @@ class Body:
 
 class _StatusPublisher(Protocol):
     def publish(self, force: bool = False, at: float | None = None) -> None: ...
+    def changed(self) -> None: ...
 
 
 class PlannerNodeView(Protocol):
@@ -82,7 +92,7 @@ class PlannerNodeView(Protocol):
     last_command: np.ndarray
 
     @property
-    def ros(self) -> Node: ...
+    def ros(self) -> LifecycleNode: ...
     @property
     def reports(self) -> _StatusPublisher: ...
     def now(self) -> float: ...
@@ -90,6 +100,7 @@ class PlannerNodeView(Protocol):
     def stamp(self) -> Any: ...
     def lock_try(self) -> None: ...
     def update_world(self) -> None: ...
+    def change(self, request: Change) -> None: ...
 
 
 class PlannerInputs:
@@ -114,6 +125,19 @@ class PlannerInputs:
         self.map_workspace: tuple[float, float, float, float] | None = None
         self.occupied: Callable[[Sequence[float]], bool] | None = None   # obstacle_source map: is a point occupied
         self.world: World | None = None
+        # Worlds built off the control path (fastep_ros.world_builder): what came and is not adopted yet (the
+        # newest of each), the newest job's number, and why the last message was refused or coarsened.
+        self.pending_grid: convert.GridCopy | None = None
+        self.pending_markers: MarkerArray | None = None
+        self.world_generation = 0
+        self.world_problem = ''
+        self._world_warned = ''
+        self.builder: WorldBuilder | None = None
+        self.world_timer: Any = None
+        # Worlds may come at any rate (SLAM: every few seconds): their lines at most once a WORLD_LOG_PERIOD.
+        self.world_info = RepeatedLine(lambda text: node.ros.get_logger().info(text), WORLD_LOG_PERIOD)
+        self.world_warning = RepeatedLine(lambda text: node.ros.get_logger().warning(text), WORLD_LOG_PERIOD)
+        self.world_error = RepeatedLine(lambda text: node.ros.get_logger().error(text), WORLD_LOG_PERIOD)
         # The robot's own odometry, localization and trailer pose.
         self.odom: frames.StampedPose | None = None
         self.odom_received = -math.inf
@@ -125,6 +149,9 @@ class PlannerInputs:
         self._twist_disagrees = 0      # odometry messages in a row whose twist their poses contradict
         self.map_from_odom = frames.MapFromOdom()
         self.localization_problem = ''   # why the last localization pose was ignored ('' when it was taken)
+        # Why the map -> odom in use is not the localizer's newest (its newest put the robot off the map; the last
+        # one taken is kept): said on status while the robot drives on it ('' when the newest is used).
+        self.localization_refused = ''
         self.body_yaw = 0.0   # map-frame heading of base_link at the last state: turns map commands into body ones
         self.trailer: float | None = None
         self.trailer_stamp = -math.inf
@@ -138,18 +165,23 @@ class PlannerInputs:
         self.localization_sigmas: float = values['localization_sigmas']
         self.scan_perception = ScanPerception(values['scan_noise'], PoseUncertainty(*tolerance), OdometryDrift(*drift))
         self._tf_map_to_odom: frames.Pose2D | None = None   # the last map -> odom TF gave (a new one: localized)
+        self._tf_taken: tuple[frames.Pose2D, float] | None = None   # the last one taken (not refused), its stamp
+        self.tf_problem = ''   # why map -> odom from TF is not used ('' when it is, or none came)
         self.pending_scan: PlacedScan | None = None   # lock step: the newest scan, perceived when acted on
         self.latest_scan: PlacedScan | None = None    # with the planning thread: perceived by the next pass
         self.seen_problem = ''   # what perception said of the last scan it took ('' when nothing)
 
     def subscribe(self) -> None:
-        """The subscriptions (and the belief's publisher), once the node has its own publishers."""
+        """The subscriptions (and the belief's lifecycle publisher), once the node has its own publishers; made by
+        the node's configure, destroyed by its cleanup (unsubscribe)."""
         node = self.node
         # Taken as bytes (frames.stamped_pose): once a tick, and an Odometry message costs ~50 us to build.
         self.odom_sub = node.ros.create_subscription(Odometry, interface.ODOM, self.on_odom, LATEST, raw=True)
         self.own_odom_topic: str = self.odom_sub.topic_name
+        self.subscriptions: list[Any] = [self.odom_sub]   # the plain ones (world_subs renew their own)
         if node.model == 'tractor_trailer':
-            node.ros.create_subscription(PoseStamped, interface.TRAILER_POSE, self.on_trailer, LATEST)
+            self.subscriptions.append(node.ros.create_subscription(PoseStamped, interface.TRAILER_POSE,
+                                                                   self.on_trailer, LATEST))
         # The latched world, subscribed again if a new publisher's message does not come (fastep_ros.latched).
         self.world_subs: list[LatchedSubscription] = []
         if self.obstacle_source == 'markers':
@@ -164,14 +196,34 @@ class PlannerInputs:
             sub = node.ros.create_subscription(PoseWithCovarianceStamped, self.localization_topic,
                                                self.on_localization, LOCALIZATION_QOS)
             self.localization_topic = sub.topic_name
-        node.ros.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST)
+            self.subscriptions.append(sub)
+        self.subscriptions.append(node.ros.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST))
         # Any LaserScan on `scan` (sensor-data QoS: a best-effort subscription matches reliable publishers too):
         # the planner perceives with it (fastep_ros.perception) and shows its belief on `tracked_obstacles`.
         self.scan_sub = None if not self.scans.followed else \
             node.ros.create_subscription(LaserScan, interface.SCAN, self.on_scan, qos_profile_sensor_data)
         if self.scan_sub is not None:
             self.scans.topic = self.scan_sub.topic_name
-        self.tracked_pub = node.ros.create_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
+            self.subscriptions.append(self.scan_sub)
+        self.tracked_pub = node.ros.create_lifecycle_publisher(MarkerArray, interface.TRACKED_OBSTACLES, LATEST)
+
+    def unsubscribe(self) -> None:
+        """Destroy what subscribe made (the node's cleanup; after a subscribe that failed half-way too)."""
+        ros, made = self.node.ros, vars(self)
+        builder = made.get('builder')
+        if builder is not None:
+            builder.stop()   # a build under way ends on its own (a daemon thread), its world unused
+            self.builder = None
+        if made.get('world_timer') is not None:
+            ros.destroy_timer(self.world_timer)
+            self.world_timer = None
+        for sub in made.get('world_subs', []):
+            sub.destroy()
+        for each in made.get('subscriptions', []):
+            ros.destroy_subscription(each)
+        if 'tracked_pub' in made:
+            ros.destroy_lifecycle_publisher(self.tracked_pub)
+        self.world_subs, self.subscriptions, self.scan_sub = [], [], None
 
     def movers_stale(self, t: float) -> bool:
         """Whether the known movers are older than odom_timeout (the map node stopped or stalled), or stamped
@@ -200,26 +252,87 @@ class PlannerInputs:
 
     # ------------------------------------------------------------------------------------------- the world
     def on_obstacles(self, msg: MarkerArray) -> None:
-        try:
-            self.obstacles = convert.marker_array_to_obstacles(msg)
-        except ValueError as exc:
-            self.node.ros.get_logger().error(f'ignoring /obstacles: {exc}')
-            return
+        """/obstacles: kept as it came, read into obstacles when the world is built (PlannerNode.update_world)."""
+        self.pending_markers = msg
         self.node.update_world()
 
     def on_map(self, msg: OccupancyGrid) -> None:
+        """/map: its workspace at once; with obstacle_source map its cells copied (at most MAX_GRID_CELLS), the walls
+        made when the world is built (PlannerNode.update_world). A map that cannot be used is refused, the world
+        before kept."""
         try:
             workspace = convert.occupancy_grid_workspace(msg)
-            obstacles = (convert.occupancy_grid_obstacles(msg, self.occupied_threshold)
-                         if self.obstacle_source == 'map' else None)
+            grid = convert.grid_copy(msg) if self.obstacle_source == 'map' else None
         except ValueError as exc:
-            self.node.ros.get_logger().error(f'ignoring /map: {exc}')
+            self.refused(interface.MAP, str(exc))
             return
         self.map_workspace = workspace
-        if obstacles is not None:   # obstacle_source map: the occupied cells' outline (msg_tools.convert)
-            self.obstacles = list(obstacles)
-            self.occupied = convert.occupancy_grid_lookup(msg, self.occupied_threshold)
+        if grid is not None:
+            self.pending_grid = grid
         self.node.update_world()
+
+    def world_job(self) -> WorldJob | None:
+        """A job of the newest inputs (a new generation), or None while the world lacks its obstacles or its
+        workspace."""
+        workspace = self.workspace_param or self.map_workspace
+        by_map = self.obstacle_source == 'map'
+        pending = self.pending_grid if by_map else self.pending_markers
+        if workspace is None or (pending is None and self.obstacles is None):
+            return None
+        self.world_generation += 1   # a result of an earlier job is dropped: this one has the newest of all
+        job = WorldJob(self.world_generation, workspace, interface.MAP if by_map else interface.OBSTACLES,
+                       occupied_threshold=self.occupied_threshold)
+        if pending is None:   # only the workspace changed
+            return dataclasses.replace(job, obstacles=tuple(self.obstacles or ()))
+        return dataclasses.replace(job, grid=self.pending_grid) if by_map else \
+            dataclasses.replace(job, markers=self.pending_markers)
+
+    def build_later(self, job: WorldJob) -> None:
+        """Hand a job to the world builder thread (made at the first); the world timer looks for its result."""
+        if self.builder is None:
+            self.builder = WorldBuilder(self.node.ros.get_logger().error)
+            self.world_timer = self.node.ros.create_timer(WORLD_POLL, self.on_world_timer,
+                                                          clock=Clock(clock_type=ClockType.STEADY_TIME))
+        self.builder.submit(job)
+        self.world_timer.reset()
+
+    def on_world_timer(self) -> None:
+        """A world built off the control path taken; the timer off once nothing is being built."""
+        builder = self.builder
+        if builder is None:
+            return
+        result = builder.take()
+        if result is not None:
+            self.take_built(result)
+        if not builder.busy:
+            self.world_timer.cancel()
+
+    def take_built(self, result: BuiltWorld) -> None:
+        """A built world (or its refusal), if it is of the newest job: adopted (PlannerNode.change(AdoptWorld)),
+        its obstacles counted in status; a result of an older job is dropped (a newer one is on its way)."""
+        if result.generation != self.world_generation:
+            return
+        self.pending_grid = self.pending_markers = None   # in this job: taken, or refused
+        if result.world is None:
+            self.refused(result.source, result.problem)
+            return
+        self.obstacles = list(result.world.obstacle_list)
+        if result.occupied is not None:
+            self.occupied = result.occupied
+        self.world_problem = f'{result.source} {result.problem}' if result.problem else ''
+        if self.world_problem and self.world_problem != self._world_warned:
+            self.world_warning(self.world_problem)
+        self._world_warned = self.world_problem
+        self.node.change(AdoptWorld(result.world, len(self.obstacles)))
+
+    def refused(self, topic: str, problem: str) -> None:
+        """A world message that cannot be used: said once (status, a line), the world before kept."""
+        kept = 'the world before kept' if self.obstacles is not None else 'no world yet'
+        self.world_problem = f'{topic} refused: {problem}; {kept}'
+        if self.world_problem != self._world_warned:
+            self.world_error(self.world_problem)
+        self._world_warned = self.world_problem
+        self.node.reports.changed()
 
     # ------------------------------------------------------------------------------------------- inputs
     def on_odom(self, msg: Odometry | bytes) -> None:
@@ -247,20 +360,60 @@ class PlannerInputs:
         self.node.lock_try()
 
     def on_localization(self, msg: PoseWithCovarianceStamped) -> None:
-        """A map pose of base_link: map -> odom = it o inverse(the odometry at its stamp)."""
+        """A map pose of base_link: map -> odom = it o inverse(the odometry at its stamp). A pose off the map by more
+        than LOCALIZATION_MARGIN is refused (off_map): the last map -> odom taken is kept (none: the robot waits)."""
         try:
             if msg.header.frame_id not in ('', self.node.frame_id):
                 raise ValueError(f'frame {msg.header.frame_id!r} is not the map frame {self.node.frame_id!r}')
             pose = frames.odometry_pose(msg)
         except ValueError as exc:
-            self.localization_problem = f'localization pose ignored: {exc}'
-            self.node.ros.get_logger().warning(self.localization_problem, throttle_duration_sec=5.0)
+            self.refuse_localization(f'localization pose ignored: {exc}')
             return
-        self.localization_problem = ''
+        off = self.off_map(pose)
+        if off:
+            self.refuse_localization(f'localization pose refused: {off}')
+            return
+        self.localization_problem = self.localization_refused = ''
         stamp = convert.stamp_to_seconds(msg.header.stamp)
         self.map_from_odom.add_localization(stamp if stamp > 0.0 else self.node.now(), pose)
-        # Its covariance bounds the pose the scans are placed at, and the odometry's drift starts again from it.
-        self.scan_perception.localized(list(msg.pose.covariance), self.localization_sigmas)
+        # Its covariance bounds the pose the scans are placed at, and the odometry's drift starts again from it:
+        # perception is the planning side's, so between two passes.
+        covariance, sigmas = list(msg.pose.covariance), self.localization_sigmas
+        self.node.change(Localized(tuple(covariance), sigmas))
+
+    def refuse_localization(self, problem: str) -> None:
+        """A localization pose not used: said (status, a throttled line); the last one taken is kept."""
+        changed = problem != self.localization_problem
+        self.localization_problem = problem
+        self.localization_refused = problem if self.map_from_odom.transform is not None else ''
+        self.node.ros.get_logger().warning(problem, throttle_duration_sec=5.0)
+        if changed:
+            self.node.reports.changed()
+
+    def map_bound(self) -> tuple[float, float, float, float] | None:
+        """The map's workspace (xmin, ymin, xmax, ymax) the planner plans in (the workspace parameter, else
+        /map's), None before there is one."""
+        return self.workspace_param or self.map_workspace
+
+    def off_map(self, pose: Sequence[float]) -> str:
+        """Why a map pose of base_link cannot be the robot's: farther than LOCALIZATION_MARGIN outside the map's
+        workspace (before any map: farther than LOCALIZATION_EXTENT_MAX from the map frame's origin), or not
+        finite; '' when it can."""
+        x, y = float(pose[0]), float(pose[1])
+        if not (math.isfinite(x) and math.isfinite(y)):
+            return f'({x:g}, {y:g}) is not finite'
+        bound = self.map_bound()
+        if bound is None:
+            far = math.hypot(x, y)
+            return '' if far <= LOCALIZATION_EXTENT_MAX else \
+                f'({x:g}, {y:g}) is {far:g} m from the map frame\'s origin, farther than any map ' \
+                f'({LOCALIZATION_EXTENT_MAX:g} m)'
+        xmin, ymin, xmax, ymax = bound
+        outside = math.hypot(max(xmin - x, 0.0, x - xmax), max(ymin - y, 0.0, y - ymax))
+        if outside <= LOCALIZATION_MARGIN:
+            return ''
+        return f'({x:g}, {y:g}) is outside the map [{xmin:g}, {xmax:g}] x [{ymin:g}, {ymax:g}] by more than ' \
+               f'{LOCALIZATION_MARGIN:g} m'
 
     def map_to_odom(self) -> frames.Pose2D | None:
         """map -> odom of the odometry last taken (None: not known yet, the robot holds still): from the
@@ -270,13 +423,42 @@ class PlannerInputs:
         if self.localization_topic:
             return self.map_from_odom.transform
         if self.map_to_odom_from_tf:
-            transform = self.node.tf.lookup(self.node.frame_id, self.odom_frame_id)
-            if transform is not None and transform != self._tf_map_to_odom:
-                # A localizer's new correction (TF carries no covariance): the odometry's drift starts again.
-                self._tf_map_to_odom = transform
-                self.scan_perception.localized(None)
-            return transform
+            return self.map_to_odom_tf(self.odom.pose)
         return frames.IDENTITY
+
+    def map_to_odom_tf(self, odometry: frames.Pose2D) -> frames.Pose2D | None:
+        """map -> odom from TF (None: none usable): refused when, composed with the odometry, it puts base_link off
+        the map (off_map; the last one taken is kept), not used when older than transform_tolerance beyond the
+        TF_LOCALIZER_INTERVAL a localizer may take between two transforms (it stopped)."""
+        found = self.node.tf.lookup_stamped(self.node.frame_id, self.odom_frame_id)
+        edge = f'{self.node.frame_id} -> {self.odom_frame_id} from TF'
+        self.tf_problem = self.localization_refused = ''
+        if found is not None:
+            x, y, _ = frames.compose(found[0], odometry)
+            off = self.off_map((x, y))
+            if off:
+                self.tf_problem = f'{self.node.frame_id} -> {self.odom_frame_id} from /tf refused: base_link at {off}'
+                self.node.ros.get_logger().warning(self.tf_problem, throttle_duration_sec=10.0)
+                found = self._tf_taken
+                self.localization_refused = self.tf_problem if found is not None else ''
+            else:
+                self._tf_taken = found
+        transform = None if found is None else found[0]
+        age = -math.inf if found is None else self.node.now() - found[1]
+        tolerance = self.scans.tolerance
+        if age > tolerance + TF_LOCALIZER_INTERVAL:
+            # A localizer that stopped (or a neighbour's old word): not where the robot is now.
+            self.tf_problem = self.tf_problem or \
+                f'{edge} is {age:.1f} s old (transform_tolerance {tolerance:g} s beyond the ' \
+                f'{TF_LOCALIZER_INTERVAL:g} s a localizer may take between two)'
+            self.localization_refused = ''
+            self.node.ros.get_logger().warning(self.tf_problem, throttle_duration_sec=10.0)
+            transform = None
+        if transform is not None and transform != self._tf_map_to_odom:
+            # A localizer's new correction (TF carries no covariance): the odometry's drift starts again.
+            self._tf_map_to_odom = transform
+            self.node.change(Localized(None, self.localization_sigmas))
+        return transform
 
     def on_trailer(self, msg: PoseStamped) -> None:
         try:
@@ -361,7 +543,9 @@ class PlannerInputs:
         elif self.node.planning is not None:
             self.latest_scan = placed   # perceived by the next planning pass, off the control path
         else:
-            self.perceive(self.where(placed), self.node.now())
+            belief = self.perceive(self.where(placed), self.node.now())
+            if belief is not None:
+                self.show_belief(belief)
 
     def where(self, placed: PlacedScan) -> PlacedScan:
         """The scan with the robot's map pose at its stamp (executor: the odometry and TF are read here)."""
@@ -369,18 +553,20 @@ class PlannerInputs:
         return placed.at(self.pose_at(stamp)) if stamp > 0.0 else placed
 
     def perceive(self, placed: PlacedScan, t: float, at: float | None = None, state: np.ndarray | None = None,
-                 told: Sequence[OtherRobot] | None = None) -> None:
+                 told: Sequence[OtherRobot] | None = None) -> Belief | None:
         """Fold a placed scan into what the robot believes at node time t; the navigator plans in the belief from
-        then on. `at`: the time it was taken (lock step: the tick's), else its stamp; `state`: the robot's at t
-        (default: as the odometry gives it now). May run on the planning thread: it reads only what it is handed
-        and the perception's own state (TF and odometry were read when the scan was placed, `where`)."""
+        then on, its guards check the scan's returns at once. `at`: the time it was taken (lock step: the tick's),
+        else its stamp; `state`: the robot's at t (default: as the odometry gives it now). Returns the belief, for
+        the executor to show (show_belief; None: the scan was not perceived). May run on the planning thread: it
+        reads only what it is handed and the planning side's own state (perception, the navigator; TF and odometry
+        were read when the scan was placed, `where`), and publishes nothing."""
         nav = self.node.navigator
         if nav is None or self.world is None:
-            return   # no map yet: nothing to fuse the scan with
+            return None   # no map yet: nothing to fuse the scan with
         if state is None:
             state, _ = self.state(t)
         if state is None:
-            return   # where the scan was taken from is not known
+            return None   # where the scan was taken from is not known
         msg, mount = placed.msg, placed.mount
         stamp = placed.stamp
         pose = (float(state[0]), float(state[1]), heading(self.node.model, state))
@@ -396,7 +582,7 @@ class PlannerInputs:
         except ValueError as exc:
             self.seen_problem = f'scan ignored: {exc}'
             self.node.ros.get_logger().warning(self.seen_problem, throttle_duration_sec=5.0)
-            return
+            return None
         # A scanner that cannot see the robot's way (too narrow, too sparse) is used all the same (every return is
         # an obstacle to the guard), and said so on status.
         blind = way_problem(msg.angle_min, msg.angle_max, msg.angle_increment, len(msg.ranges), msg.range_max,
@@ -404,15 +590,21 @@ class PlannerInputs:
         self.seen_problem = f'the scan cannot see the robot\'s way: {blind}' if blind else ''
         if blind:
             self.node.ros.get_logger().warning(self.seen_problem, throttle_duration_sec=60.0)
-        nav.guard_check.obstacle_margin = self.scan_perception.margin   # its surfaces are known only that well
-        # and the beams' ends are obstacles
-        nav.guard_check.scan_points = ScanReturns(self.scan_perception.returns, state, nav.radius)
-        nav.from_scans = True
-        if self.node.planning is not None:
-            nav.seen = self.scan_perception.recent.seen()   # where the robot may back up (planning/control.py)
-        if belief.world is not nav.world:
-            nav.world = belief.world
-        self.tracked_pub.publish(convert.belief_to_marker_array(belief, self.node.stamp(), self.node.frame_id))
+        # Its surfaces are known only to the margin, the beams' ends are obstacles and, with a control loop of its own
+        # (the planning thread), the robot backs up only where recent scans saw free space: one value, together.
+        seen = None if self.node.planning is None else self.scan_perception.recent.seen()
+        nav.take_perception(GuardInputs(self.scan_perception.margin,
+                                        ScanReturns(self.scan_perception.returns, state, nav.radius), seen),
+                            belief.world)
+        return belief
+
+    def show_belief(self, belief: Belief) -> None:
+        """The belief on `tracked_obstacles` (the executor's: publishers are)."""
+        self.tracked_pub.publish(self.belief_markers(belief))
+
+    def belief_markers(self, belief: Belief) -> MarkerArray:
+        """What `tracked_obstacles` shows of a belief (stamped now)."""
+        return convert.belief_to_marker_array(belief, self.node.stamp(), self.node.frame_id)
 
     # ------------------------------------------------------------------------------------------- the state
     def state(self, t: float) -> tuple[np.ndarray | None, str]:
@@ -433,7 +625,8 @@ class PlannerInputs:
         transform = self.map_to_odom()
         if transform is None:
             source = self.localization_topic or '/tf'
-            why = f': {self.localization_problem}' if self.localization_problem else ''
+            problem = self.localization_problem or self.tf_problem
+            why = f': {problem}' if problem else ''
             return None, f'waiting for localization on {source} (map -> {self.odom_frame_id}){why}'
         try:
             state = frames.state_in_frame(transform, convert.pose_to_state(self.odom.pose, self.node.model,

@@ -1,13 +1,18 @@
 """The planner node's parameters, one table: every PlannerParams field (Table 1 of the paper and the rest, tunable),
 then the node's own, then the lifecycle's `autostart`. PlannerNode declares them in this order in one loop; the
-reference pages (fastep_ros.reference) show what the declarations give.
+reference pages (fastep_ros.reference) show what the declarations give. `planner_params` makes the navigator's
+PlannerParams of their values: its `dt` is the control period, 1 / control_rate_hz.
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import fields
+from typing import Any, Collection, Mapping
 
+from rclpy.node import Node
+
+from fastep_core.errors import ParameterError
 from fastep_core.planning.algorithms import ALGORITHMS, DEFAULT_ALGORITHM, algorithm_name
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
@@ -16,9 +21,12 @@ from fastep_ros.lifecycle import AUTOSTART
 from fastep_ros.sensors import MOUNT_MARGIN, SCAN_MODES
 from msg_tools import convert, interface
 
-__all__ = ['PARAMETERS', 'TUNABLE']
+__all__ = ['PARAMETERS', 'PERIOD_TOLERANCE', 'TUNABLE', 'control_period', 'given_names', 'planner_params']
 
 _DEFAULTS = PlannerParams()
+PERIOD_TOLERANCE = 1e-9
+"""A dt within this relative difference of 1 / control_rate_hz agrees with it (1 / (1 / dt) is dt to rounding)."""
+
 
 PARAMETERS: tuple[Param, ...] = (
     *(Param.of_field(f, getattr(_DEFAULTS, f.name)) for f in fields(PlannerParams)),
@@ -38,7 +46,8 @@ PARAMETERS: tuple[Param, ...] = (
     Param('seed_stream', -1, 'if >= 0: use stream k of SeedSequence(seed).spawn, as fastep-sim does for the k-th '
           'robot of a scenario; -1: default_rng(seed)'),
     Param('control_rate_hz', 20.0, 'control ticks per second of the node clock (1 / dt of the in-process '
-          'simulator)', value_range=RATE_RANGE, unit=' Hz', read_only=False),
+          'simulator); the planner\'s dt, the period its controller, velocity smoother and DWA work with, is '
+          '1 / control_rate_hz', value_range=RATE_RANGE, unit=' Hz', read_only=False),
     Param('odom_timeout', 1.0, 'odometry older than this (s, node clock) is stale: the robot is stopped',
           constraints='> 0', read_only=False),
     Param('clock_timeout', 3.0, 'on simulated time: no /clock for this many wall seconds is a warning on status '
@@ -64,7 +73,10 @@ PARAMETERS: tuple[Param, ...] = (
           'a scan stamped farther than this from the node clock is stale', value_range=(0.05, 60.0), unit=' s',
           read_only=False),
     Param('transform_tolerance', 0.3, 'how long a scan waits for the transform of its stamp to come on /tf (s, '
-          'node clock) before it is given up, as Nav2\'s transform_tolerance', value_range=(0.0, 10.0), unit=' s',
+          'node clock) before it is given up, and how old map -> odom from TF may be beyond the 1 s a localizer may '
+          'take between two (map_to_odom_from_tf: an older one is not used, the robot waits), as Nav2\'s '
+          'transform_tolerance', value_range=(0.0, 10.0),
+          unit=' s',
           read_only=False),
     Param('obstacle_source', 'markers', 'where the obstacles come from: markers (the /obstacles MarkerArray of '
           'fastep-map: circles and walls) | map (the occupied cells of the /map OccupancyGrid, as Nav2\'s '
@@ -110,8 +122,50 @@ PARAMETERS: tuple[Param, ...] = (
     Param('max_plan_age', 2.0, 'a plan older than this (s, node clock) is not driven on: the robot stops, status '
           'ERROR, until a planning pass ends (planning_thread)', value_range=(0.1, 60.0), unit=' s',
           read_only=False),
+    Param('planning_timeout', 10.0, 'a goal under way whose planning has left no plan for this long (s, node clock: '
+          'a pass that does not end, an exact path searched for ever) fails: status ERROR `failed`, an action goal '
+          'ABORTED with Nav2\'s ComputePathToPose TIMEOUT (207), as Nav2\'s progress checker ends a goal that '
+          'makes none; 0: never (planning_thread)', value_range=(0.0, 3600.0), unit=' s', read_only=False),
     AUTOSTART,
 )
 
 TUNABLE = tuple(param.name for param in PARAMETERS if not param.read_only)
 """What changes while the node runs (fastep_ros.parameters.DynamicParameters); the rest is what it was built with."""
+
+
+def control_period(rate_hz: float, dt: float | None = None, kept: float | None = None) -> float:
+    """PlannerParams.dt of a planner controlling at rate_hz: 1 / rate_hz, or `dt` when given (ParameterError, one
+    line naming both, when it disagrees with 1 / rate_hz by more than PERIOD_TOLERANCE), or else `kept` (the dt
+    it has) when that agrees. Why a given or kept dt over 1 / rate_hz: fastep-launch gives the scenario's dt and
+    1 / dt as the rate, and the planner then steps by the very dt fastep-sim steps by."""
+    if not (math.isfinite(rate_hz) and rate_hz > 0.0):
+        return dt if dt is not None else kept if kept is not None else _DEFAULTS.dt   # refused by its own range
+    period = 1.0 / rate_hz
+
+    def agrees(value: float) -> bool:
+        return abs(value - period) <= PERIOD_TOLERANCE * period
+
+    if dt is not None:
+        if not agrees(dt):
+            raise ParameterError(f'parameter dt={dt:g} disagrees with control_rate_hz={rate_hz:g} (1 / '
+                                 f'control_rate_hz = {period:g} s): the control period is one; set dt to '
+                                 f'{period:g} with it, or leave dt out')
+        return dt
+    return kept if kept is not None and agrees(kept) else period
+
+
+def given_names(node: Node) -> frozenset[str]:
+    """The names given to the node at start (`-p name:=value`, a params file, parameter_overrides)."""
+    overrides = getattr(node, '_parameter_overrides', None)   # rclpy keeps them there (a private attribute)
+    return frozenset(overrides) if isinstance(overrides, dict) else frozenset()
+
+
+def planner_params(values: Mapping[str, Any], given: Collection[str] = ()) -> PlannerParams:
+    """The navigator's PlannerParams of the node's parameter values: every field of the same name, dt the control
+    period (control_period of control_rate_hz). The dt value counts as given when its name is in `given` (the
+    names given at start: given_names) or it is not the default; a given dt that disagrees with control_rate_hz
+    raises ParameterError (one line, naming both). Other bad values raise ParameterError as PlannerParams does."""
+    dt = values['dt']
+    explicit = dt if 'dt' in given or dt != _DEFAULTS.dt else None
+    period = control_period(values['control_rate_hz'], explicit, dt)
+    return PlannerParams().with_overrides({**{name: values[name] for name in PlannerParams.names()}, 'dt': period})

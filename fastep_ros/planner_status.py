@@ -13,7 +13,7 @@ from typing import Any, Protocol
 
 import numpy as np
 from diagnostic_msgs.msg import DiagnosticStatus
-from rclpy.node import Node
+from rclpy.lifecycle import LifecycleNode
 
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_ros.diagnostics import Diagnostics, Task
@@ -30,17 +30,22 @@ __all__ = ['CONTROL_TIMES', 'RATE_SHORTFALL', 'RATE_WINDOW', 'STATUS_MESSAGES', 
 # Every `status` message the planner says (PlannerReports.status), its levels and what it means: the reference's
 # status page (fastep_ros.reference) is made from it, and a test checks that status() says nothing else.
 STATUS_MESSAGES: tuple[tuple[str, str, str], ...] = (
-    ('inactive', 'OK', 'lifecycle: not active; no commands are sent (activate to drive)'),
-    ('waiting', 'WARN', 'waiting for the world (/obstacles, /map), for localization, or for a robot in the way '
-                        '(the reason says which); no commands while the world is missing'),
+    ('inactive', 'OK', 'lifecycle: deactivated; sent once as the publishers go off, then nothing is published and no '
+                       'commands are sent (activate to drive)'),
+    ('waiting', 'WARN', 'waiting for the world (/obstacles, /map), for localization (none yet, a map -> odom from '
+                        'TF that stopped, or a localization that puts the robot off the map: "localization pose '
+                        'refused: ..."), or for a robot in the way (the reason says which); no commands while the '
+                        'world or localization is missing'),
     ('idle', 'OK', 'no goal: none given yet, or cancelled (the reason says so)'),
     ('kinematic', 'OK / WARN', 'driving to the goal (or the route vertex in sight) by the kinematic controller; '
-                               'WARN while inputs are stale (kept where last seen), a newer goal was refused, or '
-                               'the base tracks worse than configured (its braking measured from odometry)'),
+                               'WARN while inputs are stale (kept where last seen), a newer goal was refused, a '
+                               'localization off the map was refused (the last pose taken kept), or the base '
+                               'tracks worse than configured (its braking measured from odometry)'),
     ('avoiding', 'OK / WARN', 'driving to a swarm waypoint, escaping a trap, manoeuvring or yielding to a mover; '
                               'WARN as for kinematic'),
     ('arrived', 'OK', 'the goal is reached (within goal_tolerance, and facing its heading if it has one)'),
-    ('failed', 'ERROR', 'the goal failed; the reason says why (the failure reasons below)'),
+    ('failed', 'ERROR', 'the goal failed; the reason says why (the failure reasons below; "planning timed out": '
+                        'no plan for planning_timeout)'),
     ('stale', 'WARN / ERROR', 'held still: own odometry missing, old, rejected or not finite, or the clock stands '
                               'still (WARN); planning stalled, the plan older than max_plan_age (ERROR)'),
     ('conflict', 'ERROR', 'another node publishes on cmd_vel: not commanding (exclusive_cmd_vel)'),
@@ -65,13 +70,13 @@ class PlannerNodeView(Protocol):
     goal_refused: str
     hold: str
     plan_problem: str
+    plan_failed: str
     clock_problem: str
     cmd_conflict: str
     exclusive_cmd_vel: bool
     control_rate_hz: float
     odom_timeout: float
     control_count: int
-    plan_tick: int
     navigator: Navigator | None
     planning: PlanningThread[Any, Any] | None
     inputs: PlannerInputs
@@ -81,8 +86,9 @@ class PlannerNodeView(Protocol):
     cmd_pub: Any
 
     @property
-    def ros(self) -> Node: ...
+    def ros(self) -> LifecycleNode: ...
     def now(self) -> float: ...
+    def speed_cap(self) -> float | None: ...
 
 
 class PlannerReports:
@@ -94,7 +100,9 @@ class PlannerReports:
         self.control_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
         self.control_cpu_times: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)
         self.control_stamps: collections.deque[float] = collections.deque(maxlen=CONTROL_TIMES)   # node times
-        self.status_pub = node.ros.create_publisher(DiagnosticStatus, interface.STATUS, offered_qos(interface.STATUS))
+        # Lifecycle publishers (on while the node is active): made by the node's configure, destroyed by its cleanup.
+        self.status_pub = node.ros.create_lifecycle_publisher(DiagnosticStatus, interface.STATUS,
+                                                              offered_qos(interface.STATUS))
         self.cmd_vel_readers = 0   # cmd_vel's matched readers when status last told them
         self.diagnostics: Diagnostics | None = None   # made once the node's clock is watched (make_diagnostics)
         # What was last published.
@@ -102,7 +110,14 @@ class PlannerReports:
         self._status_since = 0.0
 
     def make_diagnostics(self) -> None:
-        self.diagnostics = Diagnostics(self.node.ros)
+        self.diagnostics = Diagnostics(self.node.ros, managed=True)
+
+    def destroy(self) -> None:
+        """Destroy the publishers of status and /diagnostics."""
+        self.node.ros.destroy_lifecycle_publisher(self.status_pub)
+        if self.diagnostics is not None:
+            self.diagnostics.destroy()
+            self.diagnostics = None
 
     def changed(self) -> None:
         """What status tells changed: the next publish sends it."""
@@ -133,7 +148,10 @@ class PlannerReports:
             missing = [name for name, have in ((interface.OBSTACLES, inputs.obstacles is not None),
                                                (interface.MAP, inputs.workspace_param or inputs.map_workspace))
                        if not have]
-            return DiagnosticStatus.WARN, 'waiting', f'waiting for the world ({" and ".join(missing)})'
+            refused = f'; {inputs.world_problem}' if inputs.world_problem else ''   # a world message refused
+            return DiagnosticStatus.WARN, 'waiting', f'waiting for the world ({" and ".join(missing)}){refused}'
+        if self.node.plan_failed:   # failed by the executor: planning left no plan for planning_timeout
+            return DiagnosticStatus.ERROR, Mode.FAILED.value, self.node.plan_failed
         mode = nav.mode
         if mode is Mode.FAILED:
             return DiagnosticStatus.ERROR, mode.value, nav.reason
@@ -154,6 +172,10 @@ class PlannerReports:
         if self.node.goal_refused and self.node.goal is not None:
             return DiagnosticStatus.WARN, mode.value, f'{self.node.goal_refused}; still driving to ' \
                                                      f'({self.node.goal[0]:g}, {self.node.goal[1]:g})'
+        refused = self.node.inputs.localization_refused   # the localizer's newest put the robot off the map
+        if refused:
+            kept = f'{refused} (the last pose taken is kept)'
+            return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {kept}' if nav.reason else kept
         stale = self.node.inputs.stale_inputs(self.node.now())
         if stale:
             kept = f'stale: {", ".join(name for name, _ in stale)} (kept where last seen, the reach widening)'
@@ -189,9 +211,10 @@ class PlannerReports:
 
     def plan_age(self) -> float:
         """Seconds (control periods) since the tick the plan in use was planned from; 0 without the thread."""
-        if self.node.planning is None or self.node.planning.plan is None:
+        result = None if self.node.planning is None else self.node.planning.plan   # read once: plan and its tick
+        if result is None:
             return 0.0
-        return (self.node.control_count - self.node.plan_tick) / self.node.control_rate_hz
+        return (self.node.control_count - result.tick) / self.node.control_rate_hz
 
     def planning_ms(self) -> str:
         """'p50 / p99 / max' of the recent planning passes in ms ('' without the thread or before a pass)."""
@@ -247,6 +270,8 @@ class PlannerReports:
             'since': self._status_since,
             'odom_lag': self.node.inputs.odom_lag,
             'obstacles': -1 if self.node.inputs.obstacles is None else len(self.node.inputs.obstacles),
+            # A world message refused (the world before kept) or coarsened (a map's cells merged), '' if none.
+            'world_problem': self.node.inputs.world_problem,
             # Who hears cmd_vel (the plant; the clock's lock step): the readers this writer has matched. DDS
             # matches each end on its own, so that the plant's end is matched too is told by ...
             'cmd_vel_readers': self.node.cmd_pub.get_subscription_count(),
@@ -264,6 +289,9 @@ class PlannerReports:
         values['control_hz'] = '' if rate is None else round(rate, 2)
         values['plan_age'] = round(self.plan_age(), 3)
         values['planning_ms'] = self.planning_ms()
+        cap = self.node.speed_cap()
+        if cap is not None:   # m/s: what a speed limit (speed_limit topic) caps max_speed at; absent without one
+            values['speed_limit'] = cap
         # Sent as its bytes (msg_tools.cdr): convert.make_status's message (~0.4 ms of CPU to build and convert for
         # the middleware at 16 robots), not built. The level is one of DiagnosticStatus' byte constants.
         self.status_pub.publish(cdr.diagnostic_status_cdr(level[0], self.node.ros.get_namespace(), message, '',

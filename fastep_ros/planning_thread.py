@@ -80,6 +80,11 @@ class PlanningThread(Generic[Snapshot, PlanT]):
         return threading.current_thread() is self._thread
 
     @property
+    def alive(self) -> bool:
+        """Is the thread still running (a pass under way past stop's timeout)?"""
+        return self._thread.is_alive()
+
+    @property
     def busy_for(self) -> float:
         """Wall seconds the pass under way has run (0 when none is)."""
         started = self.pass_started

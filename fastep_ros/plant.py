@@ -70,6 +70,7 @@ DIAGNOSTICS_PERIOD = 1.0  # wall seconds between /diagnostics arrays
 AT_REST_PERIOD = 0.05   # wall seconds between start-state odometry messages before simulated time starts (a launch
                         # waits for them: the recorder and the planner have matched the odometry)
 LOCK_CHECK_PERIOD = 0.25  # lock step: wall seconds between looks at a step waiting for its command
+TUNABLE = ('cmd_timeout', 'clock_timeout')   # the parameters set at runtime (the rest is the robot's)
 
 
 @dataclass
@@ -84,11 +85,13 @@ class _Scanner:
 
 
 class PlantNode(ManagedNode):
-    """Integrates one robot's model from the commands on cmd_vel; publishes odom (and trailer_pose)."""
+    """Integrates one robot's model from the commands on cmd_vel; publishes odom (and trailer_pose). The constructor
+    declares the parameters and builds the simulated robot (model, state, physics, scanner), which lives as long as
+    the node; configure makes its publishers, subscription and timers, cleanup releases them (fastep_ros.lifecycle)."""
 
     def __init__(self, node_name: str = 'plant', **kwargs: Any) -> None:
         super().__init__(node_name, **kwargs)
-        clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
+        self.clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.model_name = declare(self, 'model', 'point_mass', 'robot model: ' + ' | '.join(MODELS),
                                   constraints=' | '.join(MODELS))
         start = declare(self, 'start', None, 'start state: [x, y] (point_mass), [x, y, theta] (diff_drive) or '
@@ -122,9 +125,8 @@ class PlantNode(ManagedNode):
         self.publish_map_to_odom = declare(self, 'publish_map_to_odom', True, 'publish map -> odom as the identity on '
                                            '/tf_static (simulated odometry does not drift); false when a '
                                            'localization node publishes it')
-        clock_timeout = declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
-                                'seconds is a warning on /diagnostics', value_range=PERIOD_RANGE, unit=' s',
-                                read_only=False)
+        declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
+                'seconds is a warning on /diagnostics', value_range=PERIOD_RANGE, unit=' s', read_only=False)
         sensor = declare(self, 'sensor', None, 'a laser scanner: [range (m), fov (rad), beams, noise (m)] or with '
                          'its mount on the robot [range, fov, beams, noise, x (m), y (m), yaw (rad)] (a scenario '
                          'robot\'s `sensor`); empty: none. It scans the world of `scenario`, the truth; a mounted '
@@ -190,41 +192,10 @@ class PlantNode(ManagedNode):
         self.command_stamp: float | None = None  # lock step: the stamp of the command held, taken while time ran
         self.waiting_since: float | None = None  # lock step: steady seconds the next step began waiting
         self.planner_gone = False                 # lock step: a step waited LOCK_WAIT for its command in vain
-
-        self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
-        self.scan_pub = (self.create_publisher(LaserScan, interface.SCAN, qos_profile_sensor_data)
-                         if self.scanner is not None else None)
-        self.truth_pub = (self.create_publisher(PoseWithCovarianceStamped, ground_truth, LATEST)
-                          if ground_truth and self.physics is not None else None)
-        self.trailer_pub = (self.create_publisher(PoseStamped, interface.TRAILER_POSE,
-                                                  offered_qos(interface.TRAILER_POSE))
-                            if self.model_name == 'tractor_trailer' else None)
-        # rclpy passes (message, MessageInfo) to a callback of two parameters (on either executor: MessageInfoCallback).
-        # Taken as bytes (msg_tools.cdr): a command a lock-step tick, and a TwistStamped costs ~20 us to build.
-        take_cmd_vel: Any = MessageInfoCallback(self._take_cmd_vel)
-        self.cmd_type = TwistStamped if stamped else Twist
-        self.cmd_sub = self.create_subscription(self.cmd_type, interface.CMD_VEL, take_cmd_vel, LATEST, raw=True)
-        self.tf = TfBroadcaster(self)
-        statics = [frames.static_map_to_odom(interface.MAP_FRAME, self.frame_id)] \
-            if self.publish_map_to_odom and self.frame_id != interface.MAP_FRAME else []
-        if self.scan_frame_id != self.child_frame_id and self.scanner is not None:
-            statics.append(frames.transform_stamped(self.child_frame_id, self.scan_frame_id, self.scanner.spec.mount,
-                                                    Time()))
-        if statics:
-            self.tf.send_static(statics)   # one message: /tf_static keeps the last one
-        self.timer = self.create_timer(self.step, self.on_timer)
         self.steady = Clock(clock_type=ClockType.STEADY_TIME)
-        self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick, clock=self.steady)
-        # Lock step: a step that waits for its command is looked at again on wall time (simulated time may hold).
-        self.lock_timer = self.create_timer(LOCK_CHECK_PERIOD, self.on_lock_check, clock=self.steady) \
-            if self.lock_step else None
-        self.sim_time = SimTimeWatch(self, clock_guard, clock_timeout)
-        self.diagnostics = Diagnostics(self)
-        self.diagnostics_timer = self.create_timer(DIAGNOSTICS_PERIOD, self.publish_diagnostics,
-                                                   clock=Clock(clock_type=ClockType.STEADY_TIME))
-        # Only the command timeout changes while running: the step is what the odometry of a group of plants
-        # lines up on (stamps are whole steps), the start is the start, and the body and the topics are the robot's.
-        self.dynamic = DynamicParameters(self, ('cmd_timeout', 'clock_timeout'), self.apply_parameters)
+        self.cmd_type = TwistStamped if stamped else Twist
+        self.ground_truth_topic = ground_truth if self.physics is not None else ''
+
         physics = '' if self.physics is None else f' (physics: {self.physics.dynamics.preset} base)'
         self.get_logger().info(f'{self.model_name}{physics} at {np.round(self.state, 3).tolist()}, '
                                f'integrating at {self.rate_hz:g} Hz')
@@ -269,6 +240,47 @@ class PlantNode(ManagedNode):
         truth = DynamicWorld(scenario.world.workspace, scenario.obstacle_specs)
         return _Scanner(spec, truth, sensor_generator(seed, index), 1.0 / rate)
 
+    def configure(self) -> None:
+        """The publishers, the cmd_vel subscription, TF, the timers (integration off until activate) and the
+        parameter callbacks, with the timeouts' values now (set while unconfigured too). The simulated robot, its
+        state included, is the node's from its construction: a cleanup does not move it."""
+        timeouts = {name: self.get_parameter(name).value for name in TUNABLE}
+        self.odom_pub = self.create_publisher(Odometry, interface.ODOM, offered_qos(interface.ODOM))
+        self.scan_pub = (self.create_publisher(LaserScan, interface.SCAN, qos_profile_sensor_data)
+                         if self.scanner is not None else None)
+        self.truth_pub = (self.create_publisher(PoseWithCovarianceStamped, self.ground_truth_topic, LATEST)
+                          if self.ground_truth_topic else None)
+        self.trailer_pub = (self.create_publisher(PoseStamped, interface.TRAILER_POSE,
+                                                  offered_qos(interface.TRAILER_POSE))
+                            if self.model_name == 'tractor_trailer' else None)
+        # rclpy passes (message, MessageInfo) to a callback of two parameters (on either executor: MessageInfoCallback).
+        # Taken as bytes (msg_tools.cdr): a command a lock-step tick, and a TwistStamped costs ~20 us to build.
+        take_cmd_vel: Any = MessageInfoCallback(self._take_cmd_vel)
+        self.cmd_sub = self.create_subscription(self.cmd_type, interface.CMD_VEL, take_cmd_vel, LATEST, raw=True)
+        self.tf = TfBroadcaster(self)
+        statics = [frames.static_map_to_odom(interface.MAP_FRAME, self.frame_id)] \
+            if self.publish_map_to_odom and self.frame_id != interface.MAP_FRAME else []
+        if self.scan_frame_id != self.child_frame_id and self.scanner is not None:
+            statics.append(frames.transform_stamped(self.child_frame_id, self.scan_frame_id, self.scanner.spec.mount,
+                                                    Time()))
+        if statics:
+            self.tf.send_static(statics)   # one message: /tf_static keeps the last one
+        self.timer = self.create_timer(self.step, self.on_timer, autostart=False)   # on while active
+        self.at_rest_timer = self.create_timer(AT_REST_PERIOD, self.on_at_rest_tick, clock=self.steady)
+        # Lock step: a step that waits for its command is looked at again on wall time (simulated time may hold).
+        self.lock_timer = self.create_timer(LOCK_CHECK_PERIOD, self.on_lock_check, clock=self.steady) \
+            if self.lock_step else None
+        self.sim_time = SimTimeWatch(self, self.clock_guard, timeouts['clock_timeout'])
+        self.diagnostics = Diagnostics(self)
+        self.diagnostics_timer = self.create_timer(DIAGNOSTICS_PERIOD, self.publish_diagnostics,
+                                                   clock=Clock(clock_type=ClockType.STEADY_TIME))
+        # Only the command timeout changes while running: the step is what the odometry of a group of plants
+        # lines up on (stamps are whole steps), the start is the start, and the body and the topics are the robot's.
+        self.dynamic = DynamicParameters(self, TUNABLE, self.apply_parameters)
+        reason = self.apply_parameters(timeouts)
+        if reason:
+            raise StartupError(reason)
+
     def activate(self) -> None:
         if self.tick is not None:   # the robot stood still while inactive: integrate from now on
             self.tick = int(math.floor(self.now() / self.step + 1e-9))
@@ -277,6 +289,26 @@ class PlantNode(ManagedNode):
     def deactivate(self) -> None:
         self.timer.cancel()
         self.command, self.command_time = np.zeros(2), None
+
+    def cleanup(self, forget: bool = True) -> None:
+        """Release what configure made: its timers, subscription, publishers and parameter callbacks (`forget`:
+        dropped too; the simulated robot is the node's, kept)."""
+        made = vars(self)
+        for member in ('dynamic', 'tf', 'diagnostics'):
+            if member in made:
+                made[member].destroy()
+        for name in ('timer', 'at_rest_timer', 'lock_timer', 'diagnostics_timer'):
+            if made.get(name) is not None:
+                self.destroy_timer(made[name])
+        if 'cmd_sub' in made:
+            self.destroy_subscription(made['cmd_sub'])
+        for name in ('odom_pub', 'scan_pub', 'truth_pub', 'trailer_pub'):
+            if made.get(name) is not None:
+                self.destroy_publisher(made[name])
+        if forget:
+            for name in ('dynamic', 'tf', 'diagnostics', 'timer', 'at_rest_timer', 'lock_timer', 'diagnostics_timer',
+                         'cmd_sub', 'odom_pub', 'scan_pub', 'truth_pub', 'trailer_pub', 'sim_time'):
+                made.pop(name, None)
 
     def apply_parameters(self, changes: dict[str, Any]) -> str:
         """DynamicParameters' apply: '' when applied, else why not (nothing changed)."""

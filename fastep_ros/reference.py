@@ -172,7 +172,7 @@ def node_pages(context: Any, tmp: str) -> tuple[str, str, str]:
             rows = sorted({r for r in rows if not r[0].startswith(('`/parameter_events', '`/rosout'))})
             actions = getattr(node, 'actions', None)   # the planner's Nav2 actions (fastep_ros.navigate_actions)
             if actions is not None:
-                rows += [(f'`<ns>/{name}`', 'serves (action)', _type_name(kind),
+                rows += [(f'`<ns>/{name}`', f'serves (action; node `<ns>/{actions.side.name}`)', _type_name(kind),
                           "rclpy's action defaults") for name, kind in actions.served.items()]
             topics += [f'## {executable}', '', '| topic | | type | QoS |', '|---|---|---|---|',
                        *(f'| {name} | {kind} | {kind_type} | {qos} |' for name, kind, kind_type, qos in rows), '']

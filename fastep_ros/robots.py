@@ -33,26 +33,42 @@ from msg_tools.interface import LATEST, offered_qos
 if TYPE_CHECKING:
     from rclpy.node import Node
 
-__all__ = ['GRAPH_CHECK_TICKS', 'GRAPH_SHARED_FOR', 'Fleet', 'Robot', 'RobotFollower', 'announced', 'graph_topics',
-           'namespace_of', 'odometry_reading']
+__all__ = ['GRAPH_CHECK_TICKS', 'GRAPH_SHARED_FOR', 'Fleet', 'Robot', 'RobotFollower', 'announced',
+           'graph_footprint_topics', 'graph_topics', 'namespace_of', 'odometry_reading']
 
 GRAPH_CHECK_TICKS = 8   # the footprint publishers of every known robot are checked every 8th look (2 s)
 GRAPH_SHARED_FOR = 0.15  # wall seconds one process's look at the graph's topics serves its other planners
 
 
-# Per context (a process's DDS participant): when it last looked, and the topics and types it saw.
-_topics_seen: weakref.WeakKeyDictionary[Any, tuple[float, list[tuple[str, list[str]]]]] = weakref.WeakKeyDictionary()
+Topics = list[tuple[str, list[str]]]
+
+# Per context (a process's DDS participant): when it last looked, the topics and types it saw, and of those the
+# footprint topics.
+_topics_seen: weakref.WeakKeyDictionary[Any, tuple[float, Topics, Topics]] = weakref.WeakKeyDictionary()
 
 
-def graph_topics(node: Any) -> list[tuple[str, list[str]]]:
-    """node.get_topic_names_and_types(), shared by the nodes of one process for GRAPH_SHARED_FOR: they share one DDS
-    participant and its view of the graph. Every planner of a graph layout looked 4 times a second, ~1 ms each
-    with 16 robots: 8 % of the process's core, for one answer."""
+def _look(node: Any) -> tuple[float, Topics, Topics]:
     context, now = node.context, time.monotonic()
     seen = _topics_seen.get(context)
     if seen is None or now - seen[0] > GRAPH_SHARED_FOR:
-        seen = _topics_seen[context] = (now, node.get_topic_names_and_types())
-    return seen[1]
+        topics = node.get_topic_names_and_types()
+        footprints = [(t, types) for t, types in topics if t.endswith('/' + interface.FOOTPRINT)]
+        seen = _topics_seen[context] = (now, topics, footprints)
+    return seen
+
+
+def graph_topics(node: Any) -> Topics:
+    """node.get_topic_names_and_types(), shared by the nodes of one process for GRAPH_SHARED_FOR: they share one DDS
+    participant and its view of the graph. Every planner of a graph layout looked 4 times a second, ~1 ms each
+    with 16 robots: 8 % of the process's core, for one answer."""
+    return _look(node)[1]
+
+
+def graph_footprint_topics(node: Any) -> Topics:
+    """The footprint topics of graph_topics(node), picked out once per look for the nodes of the process (each
+    planner went through every topic of the graph at each look: 16 robots' 300 topics, 2.5 % of a process's CPU
+    in lock step)."""
+    return _look(node)[2]
 
 
 def namespace_of(topic: str, leaf: str) -> str | None:
@@ -94,8 +110,9 @@ class Robot:
     stamp: float = 0.0                   # its header stamp
     known: bool = False                  # followed once: avoided from then on (the module docstring)
 
-    @property
+    @functools.cached_property
     def name(self) -> str:
+        # Once: a lock-step planner lists its robots by name at every odometry message (N - 1 a tick).
         return robot_name(self.namespace)
 
     @property
@@ -245,7 +262,7 @@ class RobotFollower:
         """Look at the graph: new robots' footprints, and (every GRAPH_CHECK_TICKS looks, and for new ones) who
         is announced. True if the robots followed changed since the last look (also by odometry going stale)."""
         node = self.node
-        new = self.fleet.candidates(graph_topics(node))
+        new = self.fleet.candidates(graph_footprint_topics(node))
         for namespace in new:
             robot = self.fleet.add(namespace)
             self.subscriptions[namespace] = [node.create_subscription(
@@ -333,9 +350,13 @@ class RobotFollower:
                         self.on_odom(namespace, msg)
 
     def destroy(self) -> None:
-        """Destroy the polled subscriptions (the node does not know them) before the node is destroyed."""
+        """Destroy every subscription (the polled ones too, which the node does not know) and the footprint's
+        publisher: the robot is no longer announced."""
         for subscriptions in self.subscriptions.values():
             for sub in subscriptions:
                 if isinstance(sub, PolledSubscription):
                     sub.destroy()
+                else:
+                    self.node.destroy_subscription(sub)
         self.subscriptions.clear()
+        self.node.destroy_publisher(self.footprint_pub)

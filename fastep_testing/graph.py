@@ -258,6 +258,15 @@ class Helper:
         that judges a run from recorded odometry first waits to hear it (plants at rest publish their start)."""
         self.spin_until(lambda: bool(self.records[topic]), timeout, f'a message on {topic}')
 
+    def wait_recorded_through(self, topic: str, t: float, timeout: float = 60.0) -> None:
+        """Spin until a recorded topic has delivered a message stamped at `t` or later. A node's status can reach
+        this helper before the odometry it judged from does (a busy machine delays this process more than the
+        nodes), so a test that checks where a robot ended first waits for the odometry up to that status's time."""
+        seen = self.records[topic]
+        self.spin_until(lambda: bool(seen) and max(stamp(m) for m in seen[-50:]) >= t, timeout,
+                        lambda: f'a message on {topic} stamped {t:.3f} s or later (last '
+                                f'{stamp(seen[-1]) if seen else "none"})')
+
     def follow_clock(self) -> list[Any]:
         """Subscribe to /clock (a clock started with wait_for_subscribers counting this helper then runs)."""
         from rclpy.qos import QoSProfile, ReliabilityPolicy

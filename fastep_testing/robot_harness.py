@@ -81,6 +81,8 @@ class HarnessResult:
     phantom_movers: int = 0           # distinct tracks the planner called movers (every harness world is still)
     most_movers: int = 0              # the most it called movers at once
     phantom_obstacles: int = 0        # the most still obstacles it believed from its scans where the truth has none
+    planner_rss_mb: float = math.nan       # the planner's resident memory when the goal was sent
+    planner_peak_rss_mb: float = math.nan  # its peak resident memory (VmHWM) at the end of the run
     load: tuple[float, float, float] = (0.0, 0.0, 0.0)   # os.getloadavg() at the start
     log_dir: str = ''
     notes: list[str] = field(default_factory=list)
@@ -106,7 +108,8 @@ def _cpu(pid: int) -> float:
 def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 90.0, start_timeout: float = 60.0,
               max_speed: float = 1.0, seed: int = 0, algorithm: str = '', log_dir: Path | None = None,
               laser_mount: tuple[float, float, float] = (0.0, 0.0, 0.0), dynamics: str = '', laser_frame: str = '',
-              laser_tf: bool = True, planner_params: dict[str, Any] | None = None) -> HarnessResult:
+              laser_tf: bool = True, planner_params: dict[str, Any] | None = None,
+              attacker: Sequence[str] | None = None) -> HarnessResult:
     """One run of a harness world (a robot_worlds name or a Scenario with one diff-drive robot); see the module
     docstring. Every process it starts is stopped before it returns. Logs go to log_dir (default: a temporary
     folder, removed). laser_mount: where the laser sits on the base (x, y, yaw); the planner is told it
@@ -115,7 +118,8 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     laser_frame: the base scans in this frame and publishes base_link -> it on /tf_static (unless not laser_tf),
     and the planner is not told laser_mount: it takes the mount from TF, as on a ROS robot (without the transform
     it is never `idle` with scans: the goal is sent once it is `blind`). planner_params: more of the planner's
-    parameters (name: value as `-p name:=value` takes it)."""
+    parameters (name: value as `-p name:=value` takes it). attacker: a command started beside the two on the
+    same domain (benchmarks.hostile_inputs: a neighbour sending what it should not), stopped first at the end."""
     scenario = harness_world(scenario) if isinstance(scenario, str) else scenario
     if dynamics:
         scenario = replace(scenario, robots=(replace(scenario.robots[0], dynamics=preset(dynamics)),
@@ -125,7 +129,7 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
             result = run_world(scenario, laser=laser, timeout=timeout, start_timeout=start_timeout,
                                max_speed=max_speed, seed=seed, algorithm=algorithm, log_dir=Path(tmp),
                                laser_mount=laser_mount, laser_frame=laser_frame,
-                               laser_tf=laser_tf)
+                               laser_tf=laser_tf, planner_params=planner_params, attacker=attacker)
             result.log_dir = ''
             return result
     log_dir.mkdir(parents=True, exist_ok=True)
@@ -159,6 +163,8 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     try:
         procs['base'] = _start(base_cmd, env, log_dir / 'base.log')
         procs['planner'] = _start(planner_cmd, env, log_dir / 'planner.log')
+        if attacker:
+            procs['attacker'] = _start(list(attacker), env, log_dir / 'attacker.log')
         helper = _status_helper(domain, statuses, beliefs)
         placed = not laser_frame or laser_tf   # the planner can use its scans
         helper.spin_until(lambda: _ready(statuses, laser, placed) or _dead(procs), start_timeout,
@@ -168,6 +174,7 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
         send_goal = _goal_sender(helper, robot.goal, start_timeout, lambda: _last(statuses) == 'idle')
         began = time.monotonic()
         before = {name: _cpu(p.pid) for name, p in procs.items()}
+        result.planner_rss_mb = _memory_mb(procs['planner'].pid, 'VmRSS')
         try:
             helper.spin_until(lambda: send_goal() and _last(statuses, after=began) in DONE or _dead(procs), timeout,
                               'the goal')
@@ -175,6 +182,7 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
             result.notes.append(f'timed out after {timeout:g} s')
         end = time.monotonic()
         after = {name: _cpu(p.pid) for name, p in procs.items()}
+        result.planner_peak_rss_mb = _memory_mb(procs['planner'].pid, 'VmHWM')
         helper.spin_for(TAIL)   # the command that stops the robot at its arrival comes after the status
         if _dead(procs):
             result.notes.append(f'a process ended during the run: {_exits(procs)}')
@@ -185,7 +193,7 @@ def run_world(scenario: Scenario | str, *, laser: bool = True, timeout: float = 
     finally:
         if helper is not None:
             helper.close()
-        for name in ('planner', 'base'):   # the planner first: the base records until it is stopped
+        for name in ('attacker', 'planner', 'base'):   # the planner before the base: it records until stopped
             if name in procs:
                 stop_process(procs[name])
     if record.exists() and not math.isnan(window[0]):
@@ -236,6 +244,17 @@ def _goal_sender(helper: Helper, goal: tuple[float, float], timeout: float,
     return again
 
 
+def _memory_mb(pid: int, field: str) -> float:
+    """VmRSS / VmHWM of a process in MB (/proc/<pid>/status); NaN when it cannot be read."""
+    try:
+        for line in Path(f'/proc/{pid}/status').read_text().splitlines():
+            if line.startswith(field + ':'):
+                return int(line.split()[1]) / 1024.0
+    except (OSError, ValueError, IndexError):
+        pass
+    return math.nan
+
+
 def _ready(statuses: list[tuple[float, dict[str, Any]]], laser: bool, placed: bool = True) -> bool:
     """The planner is idle, has the world and has heard odometry (and scans, with the laser); with scans it cannot
     place, blind (and has heard odometry)."""
@@ -259,7 +278,8 @@ def _last(statuses: list[tuple[float, dict[str, Any]]], after: float = -math.inf
 
 
 def _dead(procs: dict[str, subprocess.Popen[bytes]]) -> bool:
-    return any(p.poll() is not None for p in procs.values())
+    """The base or the planner has ended (an attacker may end when its attack is done)."""
+    return any(p.poll() is not None for name, p in procs.items() if name != 'attacker')
 
 
 def _exits(procs: dict[str, subprocess.Popen[bytes]]) -> str:

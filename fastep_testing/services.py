@@ -7,30 +7,34 @@ import time
 from typing import Any, Callable
 
 from rcl_interfaces.srv import DescribeParameters, GetParameters, ListParameters, SetParameters, SetParametersAtomically
-from rclpy.executors import SingleThreadedExecutor
 from rclpy.parameter import Parameter
+
+from fastep_ros.executors import make_executor
 
 __all__ = ['Services']
 
 
 class Services:
-    """A client of one node's parameter services (what `ros2 param` calls), spinning the node beside it."""
+    """A client of one node's parameter services (what `ros2 param` calls), spinning the node beside it on the
+    executor `executor` (fastep_ros.executors names them)."""
 
-    def __init__(self, context: Any, node: Any) -> None:
+    def __init__(self, context: Any, node: Any, executor: str = 'single') -> None:
         import rclpy
         self.node = node
         self.client = rclpy.create_node('param_client', context=context)
-        self.executor = SingleThreadedExecutor(context=context)
+        self.executor = make_executor(executor, context=context)
         self.executor.add_node(node)
         self.executor.add_node(self.client)
         self.prefix = node.get_fully_qualified_name()
+        self.clients: dict[str, Any] = {}   # one per service, made at its first call
 
     def call(self, kind: type, service: str, request: Any) -> Any:
-        client = self.client.create_client(kind, f'{self.prefix}/{service}')
+        if service not in self.clients:
+            self.clients[service] = self.client.create_client(kind, f'{self.prefix}/{service}')
+        client = self.clients[service]
         assert client.wait_for_service(timeout_sec=10.0), service
         future = client.call_async(request)
         self.executor.spin_until_future_complete(future, timeout_sec=10.0)
-        self.client.destroy_client(client)
         assert future.done(), service
         return future.result()
 

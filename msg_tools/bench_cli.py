@@ -9,7 +9,10 @@ Writes OUT/REPORT.md (Markdown tables), OUT/figures/REPORT_*.png (drawn by msg_t
 OUT/REPORT.json (per-run rows and summaries); prints the Markdown on stdout. The engine is `fastep_core.experiments`
 (the command lives in msg_tools because fastep_core draws nothing); `python -m benchmarks.table2` is the same
 command. --cluster runs the same tasks on a Dask cluster (fastep_core.cluster) with the same records.
-Exit 0 when the runs were made, 2 with one line on stderr for bad input. Options: docs/reference/commands.md.
+Exit 0 when the runs were made, 2 with one line on stderr for bad input (a --cluster that is no Dask scheduler
+among it). A batch on a cluster that can run no more (no worker left within the bound, fastep_core.cluster) ends
+early: the same files with the runs done, a "Runs missing" section and a JSON "missing" list naming the others,
+one line on stderr, exit 1. Options: docs/reference/commands.md.
 """
 
 from __future__ import annotations
@@ -21,11 +24,13 @@ import shlex
 import sys
 import time
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
+
+import numpy as np
 
 from fastep_core import experiments, families
 from fastep_core.cli import MAX_RUNS, MAX_WORKERS, REALTIME_HELP, Parser, count, fail, guard, realtime_factor, seed
-from fastep_core.cluster import CLUSTER_HELP, cluster_spec
+from fastep_core.cluster import CLUSTER_HELP, BatchIncomplete, cluster_spec
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
 from fastep_core.random_scenarios import ALL_FAMILIES, FAMILIES, FAMILY_SEED0
@@ -111,32 +116,76 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
         builtin_names() if args.scenarios == ['all'] else list(dict.fromkeys(args.scenarios))
     for name in scenarios:  # a bad one is a FastepError: one line before any run starts
         load_scenario(name)
-    records = experiments.run_batch(scenarios, args.algorithms, args.runs or 30, args.workers or 2,
-                                    seed0=args.seed,
-                                    progress=True if args.progress else None, label=prog, overrides=overrides,
-                                    realtime=args.realtime, cluster=args.cluster)
+    records, lost = _batch(lambda: experiments.run_batch(
+        scenarios, args.algorithms, args.runs or 30, args.workers or 2, seed0=args.seed,
+        progress=True if args.progress else None, label=prog, overrides=overrides,
+        realtime=args.realtime, cluster=args.cluster))
     optimal = {s: experiments.optimal_lengths(s) for s in scenarios}
     title = 'Table 2 regenerated' if scenarios == list(experiments.TABLE2) else \
         'FAStep-Kinematic, ACO-Kinematic and the optimum'
-    text = experiments.markdown_report(records, optimal, title=title, command=command)
+    text = experiments.markdown_report(records, optimal, title=title, command=command) + _missing_section(lost)
     try:
         args.out.mkdir(parents=True, exist_ok=True)
         report = args.out / f'{report_name}.md'
         report.write_text(text)
         written = [report]
-        if not args.no_figures:
+        if not args.no_figures and records:
             from msg_tools.plots import bench_figures  # matplotlib only when figures are drawn
             written += bench_figures(records, optimal, args.out / 'figures', prefix=report_name)
         if args.json is not None:
             args.json.parent.mkdir(parents=True, exist_ok=True)
-            args.json.write_text(json.dumps({'records': [r.to_json() for r in records], 'optimal': optimal}) + '\n')
+            args.json.write_text(json.dumps({'records': [r.to_json() for r in records], 'optimal': optimal,
+                                             **_missing_json(lost)}) + '\n')
             written.append(args.json)
     except OSError as exc:
         return fail(prog, f'cannot write output: {exc}')
     print(text)
     for path in written:
         print(f'wrote {path}')
-    return 0
+    return _ended(prog, lost)
+
+
+def _batch(run: Callable[[], list[experiments.Record]]) -> tuple[list[experiments.Record], BatchIncomplete | None]:
+    """run()'s records, or those a batch that ended early made and why it ended."""
+    try:
+        return run(), None
+    except BatchIncomplete as lost:
+        return lost.done, lost
+
+
+def _seed_ranges(seeds: list[int]) -> str:
+    """'0-3, 7, 9-10': sorted seeds, runs of consecutive ones as ranges."""
+    ordered = np.unique(np.asarray(seeds, dtype=np.int64))
+    chunks = np.split(ordered, np.flatnonzero(np.diff(ordered) != 1) + 1)
+    return ', '.join(f'{c[0]}' if len(c) == 1 else f'{c[0]}-{c[-1]}' for c in chunks)
+
+
+def _missing_section(lost: BatchIncomplete | None) -> str:
+    """The report's 'Runs missing' section of a batch that ended early ('' for a whole batch)."""
+    if lost is None:
+        return ''
+    seeds: dict[tuple[str, str], list[int]] = {}
+    for source, algorithm, seed_ in lost.missing:
+        seeds.setdefault((source, algorithm), []).append(seed_)
+    which = '; '.join(f'{source} {algorithm} seeds {_seed_ranges(s)}' for (source, algorithm), s in seeds.items())
+    return (f'\n\n### Runs missing\n\nThe batch ended early ({lost.reason}): {len(lost.missing)} of {lost.total} '
+            f'runs did not finish and are in no table above: {which}.\n')
+
+
+def _missing_json(lost: BatchIncomplete | None) -> dict[str, object]:
+    """The JSON's 'missing' runs of a batch that ended early (nothing for a whole batch)."""
+    if lost is None:
+        return {}
+    return {'missing': [{'scenario': s, 'algorithm': a, 'seed': seed_} for s, a, seed_ in lost.missing],
+            'ended_early': lost.reason}
+
+
+def _ended(prog: str, lost: BatchIncomplete | None) -> int:
+    """0 after a whole batch; after one that ended early, its one line on stderr and 1."""
+    if lost is None:
+        return 0
+    print(f'{prog}: error: {lost} (the runs done are written)', file=sys.stderr)
+    return 1
 
 
 def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrides: dict[str, float],
@@ -145,9 +194,10 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
     chosen = list(dict.fromkeys(args.families)) or list(FAMILIES)
     worlds, runs = args.worlds or 30, args.runs or 1
     load_before, wall = families.load_average(), time.perf_counter()
-    records = families.run_families(chosen, args.algorithms, worlds, runs, args.workers or 2, seed0=args.seed,
-                                    progress=True if args.progress else None, label=prog, overrides=overrides,
-                                    realtime=args.realtime, cluster=args.cluster)
+    records, lost = _batch(lambda: families.run_families(
+        chosen, args.algorithms, worlds, runs, args.workers or 2, seed0=args.seed,
+        progress=True if args.progress else None, label=prog, overrides=overrides,
+        realtime=args.realtime, cluster=args.cluster))
     rows = families.rows_of(records)
     wall = time.perf_counter() - wall
     load_after = families.load_average()
@@ -160,7 +210,8 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
              (f' Planner overrides: {", ".join(f"{k}={v:g}" for k, v in overrides.items())}.' if overrides else '') +
              ('' if args.realtime is None else f' Realtime x{args.realtime:g}: planning latency counted '
               '(fastep-sim --realtime), so runs differ from machine to machine.')]
-    text = families.markdown_report(rows, command=command, notes=notes, worst_of=args.worst_of)
+    text = families.markdown_report(rows, command=command, notes=notes, worst_of=args.worst_of) + \
+        _missing_section(lost)
     summary = families.summarise(rows)
     try:
         args.out.mkdir(parents=True, exist_ok=True)
@@ -172,9 +223,10 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
             'command': command, 'families': chosen, 'worlds': worlds, 'runs': runs, 'algorithms': args.algorithms,
             'overrides': overrides, 'workers': args.workers, 'cluster': args.cluster and str(args.cluster),
             'realtime': args.realtime, 'wall_time': wall, 'load_average': [load_before, load_after],
-            'summary': [s.to_json() for s in summary], 'rows': [r.to_json() for r in rows]}, indent=1) + '\n')
+            'summary': [s.to_json() for s in summary], 'rows': [r.to_json() for r in rows], **_missing_json(lost)},
+            indent=1) + '\n')
         written = [report, out_json]
-        if not args.no_figures:
+        if not args.no_figures and rows:
             from msg_tools.plots import family_figures  # matplotlib only when figures are drawn
             written += family_figures(rows, args.out / 'figures', prefix=report_name, overrides=overrides,
                                       worst_of=args.worst_of)
@@ -183,7 +235,7 @@ def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrid
     print(text)
     for path in written:
         print(f'wrote {path}')
-    return 0
+    return _ended(prog, lost)
 
 
 if __name__ == '__main__':

@@ -30,13 +30,17 @@ from visualization_msgs.msg import Marker, MarkerArray
 
 from fastep_core.geometry import Circle, Obstacle, Segment
 from fastep_core.planning.others import OtherRobot
-from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, LaserSpec, Scan
+from fastep_core.sensing.laser import FULL_TURN_TOLERANCE, MAX_BEAMS, LaserSpec, Scan
 from msg_tools.occupancy_grid import (
     DEFAULT_RESOLUTION,
     MAX_GRID_CELLS,
     OCCUPIED_THRESHOLD,
+    GridCopy,
+    GridWalls,
+    grid_copy,
     grid_resolution,
     grid_shape,
+    grid_walls,
     occupancy_grid_lookup,
     occupancy_grid_obstacles,
     occupancy_grid_workspace,
@@ -48,9 +52,10 @@ if TYPE_CHECKING:   # perception (scipy) is imported only by nodes that perceive
 
 __all__ = [
     'DEFAULT_RESOLUTION', 'LEVELS', 'MAX_GRID_CELLS', 'MOVERS_NS', 'MOVER_VELOCITIES_NS', 'OCCUPIED_THRESHOLD',
-    'TRACKS_NS', 'TRACK_VELOCITIES_NS', 'belief_to_marker_array', 'command_to_twist', 'command_twist_values',
-    'diagnostic_to_dict',
-    'grid_resolution', 'grid_shape', 'laser_scan_to_scan', 'laser_spec', 'make_status', 'marker_array_to_movers',
+    'TRACKS_NS', 'TRACK_VELOCITIES_NS', 'GridCopy', 'GridWalls', 'belief_to_marker_array', 'command_to_twist',
+    'command_twist_values', 'diagnostic_to_dict',
+    'grid_copy', 'grid_resolution', 'grid_shape', 'grid_walls', 'laser_scan_to_scan', 'laser_spec', 'make_status',
+    'marker_array_to_movers',
     'marker_array_to_obstacles', 'movers_to_marker_array', 'obstacles_to_marker_array', 'occupancy_grid_lookup',
     'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'odometry_position', 'odometry_to_state',
     'odometry_velocity', 'path_to_waypoints', 'point_to_pose_stamped', 'pose_stamped_to_point', 'pose_to_state',
@@ -391,12 +396,14 @@ def laser_scan_to_scan(msg: LaserScan, time: float = 0.0) -> Scan:
     """The Scan of any sensor_msgs/LaserScan, readings as REP-117 means them: +inf (nothing within range: the
     beam's whole length is free) stays +inf; NaN, -inf and readings below range_min or beyond range_max are no
     measurement and become NaN (they neither mark nor clear anything: a beam that missed a dark or glass surface
-    does not make the map's obstacle there go away). ValueError (one line) for no ranges, non-finite angles or
-    range limits, a zero increment, or range_max <= range_min."""
+    does not make the map's obstacle there go away). ValueError (one line) for no ranges or more than MAX_BEAMS,
+    non-finite angles or range limits, a zero increment, or range_max <= range_min."""
     fields = (msg.angle_min, msg.angle_max, msg.angle_increment, msg.range_min, msg.range_max)
     _finite(fields, 'laser scan')
     if not len(msg.ranges):
         raise ValueError('laser scan has no ranges')
+    if len(msg.ranges) > MAX_BEAMS:   # what perception could not take, refused before the copy
+        raise ValueError(f'laser scan has {len(msg.ranges)} ranges, more than {MAX_BEAMS} (a planar lidar\'s most)')
     if msg.angle_increment == 0.0:
         raise ValueError('laser scan angle_increment is 0')
     if not 0.0 <= msg.range_min < msg.range_max:

@@ -28,7 +28,8 @@ from msg_tools import cdr, convert
 from msg_tools.ros2_profile import qos_dict
 
 __all__ = [
-    'IDENTITY', 'TF', 'TF_QOS', 'TF_STATIC', 'TF_STATIC_QOS', 'TF_TYPE', 'MapFromOdom', 'Pose2D', 'StampedPose',
+    'IDENTITY', 'TF', 'TF_QOS', 'TF_STATIC', 'TF_STATIC_QOS', 'TF_TYPE', 'MapFromOdom', 'OdometryHistory', 'Pose2D',
+    'StampedPose',
     'TfTree',
     'base_frame',
     'body_velocity', 'compose', 'frame_name', 'inverse', 'odom_frame', 'odometry_pose', 'odometry_transforms',
@@ -171,48 +172,35 @@ def body_velocity(velocity: Sequence[float] | np.ndarray, heading: float) -> tup
 
 # ----------------------------------------------------------------------------------------------- map -> odom
 
-class MapFromOdom:
-    """map -> odom of one robot: from localization poses (map pose of base_link, stamped) and the odometry.
+@dataclass(frozen=True)
+class OdometryHistory:
+    """The recent odometry poses of one robot, by stamp: one immutable value, replaced whole when a pose is added,
+    so a reader on another thread always sees stamps and poses of one moment paired."""
 
-    add_odometry keeps the recent odometry poses (by stamp); add_localization sets map->odom = localization o
-    inverse(the odometry pose nearest to the localization's stamp). A localization pose that comes before any
-    odometry waits for the first odometry. transform is None until one was computed: the robot's map pose is not
-    known then.
-    """
+    stamps: tuple[float, ...] = ()
+    poses: tuple[Pose2D, ...] = ()
 
-    def __init__(self, keep: int = 400) -> None:
-        self.keep = keep                    # odometry poses kept (20 s at the plant's 20 Hz odometry)
-        self.stamps: list[float] = []
-        self.poses: list[Pose2D] = []
-        self.pending: tuple[float, Pose2D] | None = None
-        self.transform: Pose2D | None = None
-        self.localizations = 0              # localization poses turned into a transform
-
-    def add_odometry(self, stamp: float, pose: Pose2D) -> None:
+    def added(self, stamp: float, pose: Pose2D, keep: int) -> OdometryHistory:
+        """This history with (stamp, pose) appended, at most `keep` poses; a stamp before the newest (a restarted
+        clock) starts it afresh: what was kept belongs to another run."""
         if self.stamps and stamp < self.stamps[-1]:
-            # Time went back (a restarted clock): what was kept belongs to another run.
-            self.stamps.clear()
-            self.poses.clear()
-        self.stamps.append(stamp)
-        self.poses.append(pose)
-        if len(self.stamps) > self.keep:
-            del self.stamps[0], self.poses[0]
-        if self.pending is not None:
-            pending, self.pending = self.pending, None
-            self.add_localization(*pending)
+            return OdometryHistory((stamp,), (pose,))
+        drop = max(0, len(self.stamps) + 1 - keep)
+        return OdometryHistory((*self.stamps[drop:], stamp), (*self.poses[drop:], pose))
 
-    def odometry_at(self, stamp: float) -> Pose2D | None:
-        """The kept odometry pose whose stamp is nearest to `stamp` (None before any)."""
-        if not self.stamps:
+    def nearest(self, stamp: float) -> Pose2D | None:
+        """The kept pose whose stamp is nearest to `stamp` (None before any)."""
+        stamps = self.stamps
+        if not stamps:
             return None
-        i = bisect.bisect_left(self.stamps, stamp)
-        if i == len(self.stamps) or (i > 0 and stamp - self.stamps[i - 1] <= self.stamps[i] - stamp):
+        i = bisect.bisect_left(stamps, stamp)
+        if i == len(stamps) or (i > 0 and stamp - stamps[i - 1] <= stamps[i] - stamp):
             i -= 1
         return self.poses[i]
 
     def interpolated(self, stamp: float) -> Pose2D | None:
-        """The odometry pose at `stamp`, interpolated between the kept poses around it (linearly, the yaw along the
-        shorter turn); None outside the kept stamps (a scan stamped after the newest odometry, or long ago)."""
+        """The pose at `stamp`, interpolated between the kept poses around it (linearly, the yaw along the shorter
+        turn); None outside the kept stamps (a scan stamped after the newest odometry, or long ago)."""
         stamps = self.stamps
         if not stamps or not stamps[0] <= stamp <= stamps[-1]:
             return None
@@ -222,6 +210,37 @@ class MapFromOdom:
         (t0, a), (t1, b) = (stamps[i - 1], self.poses[i - 1]), (stamps[i], self.poses[i])
         share = (stamp - t0) / (t1 - t0) if t1 > t0 else 1.0
         return (a[0] + share * (b[0] - a[0]), a[1] + share * (b[1] - a[1]), _wrap(a[2] + share * _wrap(b[2] - a[2])))
+
+
+class MapFromOdom:
+    """map -> odom of one robot: from localization poses (map pose of base_link, stamped) and the odometry.
+
+    add_odometry keeps the recent odometry poses (by stamp, an OdometryHistory); add_localization sets map->odom =
+    localization o inverse(the odometry pose nearest to the localization's stamp). A localization pose that comes
+    before any odometry waits for the first odometry. transform is None until one was computed: the robot's map
+    pose is not known then.
+    """
+
+    def __init__(self, keep: int = 400) -> None:
+        self.keep = keep                    # odometry poses kept (20 s at the plant's 20 Hz odometry)
+        self.history = OdometryHistory()
+        self.pending: tuple[float, Pose2D] | None = None
+        self.transform: Pose2D | None = None
+        self.localizations = 0              # localization poses turned into a transform
+
+    def add_odometry(self, stamp: float, pose: Pose2D) -> None:
+        self.history = self.history.added(stamp, pose, self.keep)
+        if self.pending is not None:
+            pending, self.pending = self.pending, None
+            self.add_localization(*pending)
+
+    def odometry_at(self, stamp: float) -> Pose2D | None:
+        """The kept odometry pose whose stamp is nearest to `stamp` (None before any)."""
+        return self.history.nearest(stamp)
+
+    def interpolated(self, stamp: float) -> Pose2D | None:
+        """OdometryHistory.interpolated of the history as it is now."""
+        return self.history.interpolated(stamp)
 
     def add_localization(self, stamp: float, pose: Pose2D) -> None:
         odometry = self.odometry_at(stamp)

@@ -8,18 +8,21 @@ Cells are sized so the grid stays within MAX_GRID_CELLS whatever the workspace; 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass, field
 from typing import Callable, Sequence
 
 import numpy as np
 from builtin_interfaces.msg import Time
 from geometry_msgs.msg import Point, Pose
 from nav_msgs.msg import MapMetaData, OccupancyGrid
+from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle, Obstacles, Segment
 from fastep_core.world import World
 
-__all__ = ['DEFAULT_RESOLUTION', 'MAX_GRID_CELLS', 'OCCUPIED_THRESHOLD', 'grid_resolution', 'grid_shape',
-           'occupancy_grid_lookup', 'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'world_to_occupancy_grid']
+__all__ = ['DEFAULT_RESOLUTION', 'MAX_GRID_CELLS', 'OCCUPIED_THRESHOLD', 'CellLookup', 'GridCopy', 'GridWalls',
+           'grid_copy', 'grid_resolution', 'grid_shape', 'grid_walls', 'occupancy_grid_lookup',
+           'occupancy_grid_obstacles', 'occupancy_grid_workspace', 'world_to_occupancy_grid']
 
 DEFAULT_RESOLUTION = 0.1
 """m: the /map cell size of a workspace small enough (200 m x 200 m) for it; larger ones get coarser cells."""
@@ -157,45 +160,164 @@ def occupancy_grid_obstacles(msg: OccupancyGrid, occupied_threshold: int = OCCUP
     cells (value >= occupied_threshold; unknown, -1, counts as free), as wall segments on the cell borders, each
     run of border along a row or a column one segment. A robot outside an occupied region keeps its distance to
     the region's outline, which is its surface. Vectorised over the cells (a 4000 x 4000 grid: a fraction of a
-    second). ValueError (one line) for a grid whose data does not fill width x height, or bad metadata."""
-    xmin, ymin, _, _ = occupancy_grid_workspace(msg)
-    info = msg.info
-    width, height = int(info.width), int(info.height)
-    data = np.asarray(msg.data, dtype=np.int16)
-    if data.size != width * height:
-        raise ValueError(f'map data has {data.size} cells, width x height is {width} x {height} = {width * height}')
-    if not 1 <= occupied_threshold <= 100:
-        raise ValueError(f'occupied_threshold must be in [1, 100], got {occupied_threshold}')
-    resolution = float(f'{info.resolution:.7g}')
-    occupied = np.pad(data.reshape(height, width) >= occupied_threshold, 1)   # a free border all round
-    # Borders between a row and the one below it (y = ymin + i * resolution), runs along x; and between a
-    # column and the one left of it (x = xmin + j * resolution), runs along y.
-    across_rows = occupied[1:, 1:-1] != occupied[:-1, 1:-1]           # (height + 1, width)
-    across_cols = (occupied[1:-1, 1:] != occupied[1:-1, :-1]).T       # (width + 1, height)
-    out: list[Segment] = []
-    for borders, along_x in ((across_rows, True), (across_cols, False)):
-        padded = np.pad(borders.astype(np.int8), ((0, 0), (1, 1)))
-        step = np.diff(padded, axis=1)
-        line, first = np.nonzero(step == 1)    # row-major: the starts and the ends of each line pair up
-        _, last = np.nonzero(step == -1)
-        fixed = (ymin if along_x else xmin) + line * resolution
-        lo = (xmin if along_x else ymin) + first * resolution
-        hi = (xmin if along_x else ymin) + last * resolution
-        for f, a, b in zip(fixed.tolist(), lo.tolist(), hi.tolist()):
-            out.append(Segment((a, f), (b, f)) if along_x else Segment((f, a), (f, b)))
-    return out
+    second; the walls are Python objects, ~10 us each). ValueError (one line) for a grid whose data does not fill
+    width x height, or bad metadata. No bound on the walls: the planner takes a map through grid_walls."""
+    grid = grid_copy(msg, max_cells=None)
+    _check_threshold(occupied_threshold)
+    return grid_walls(grid, occupied_threshold, max_walls=None).walls
 
 
 def occupancy_grid_lookup(msg: OccupancyGrid,
                           occupied_threshold: int = OCCUPIED_THRESHOLD) -> Callable[[Sequence[float]], bool]:
     """A function telling whether a map point lies in an occupied cell of the grid (outside it: False)."""
+    grid = grid_copy(msg, max_cells=None)
+    _check_threshold(occupied_threshold)
+    return grid_walls(grid, occupied_threshold, max_walls=None).occupied
+
+
+# ------------------------------------------------------------------------------------------ bounded maps
+@dataclass(frozen=True)
+class GridCopy:
+    """An occupancy grid's cells and where they lie, copied out of its message (one copy of width x height bytes:
+    what a node's executor does with a /map before the walls are made elsewhere; grid_copy)."""
+
+    xmin: float
+    ymin: float
+    resolution: float   # m, the float32 rounding of the wire undone
+    width: int
+    height: int
+    data: NDArray[np.int8] = field(repr=False)   # row-major, width x height values (-1 unknown, 0-100)
+
+    @property
+    def cells(self) -> int:
+        return self.width * self.height
+
+    @property
+    def workspace(self) -> tuple[float, float, float, float]:
+        return (self.xmin, self.ymin, round(self.xmin + self.width * self.resolution, 9),
+                round(self.ymin + self.height * self.resolution, 9))
+
+
+def grid_copy(msg: OccupancyGrid, max_cells: int | None = MAX_GRID_CELLS) -> GridCopy:
+    """The grid of a message, its data copied (ValueError in one line for bad metadata, data that does not fill
+    width x height, or more than max_cells cells: refused before anything is copied; None: no bound)."""
     xmin, ymin, _, _ = occupancy_grid_workspace(msg)
     width, height = int(msg.info.width), int(msg.info.height)
-    resolution = float(f'{msg.info.resolution:.7g}')
-    occupied = np.asarray(msg.data, dtype=np.int16).reshape(height, width) >= occupied_threshold
+    if max_cells is not None and width * height > max_cells:
+        raise ValueError(f'{width} x {height} = {width * height:,} cells, more than the {max_cells:,} a map may have')
+    if len(msg.data) != width * height:
+        raise ValueError(f'map data has {len(msg.data)} cells, width x height is {width} x {height} = '
+                         f'{width * height}')
+    data = np.array(msg.data, dtype=np.int8)   # from the message's array.array: one copy of its buffer
+    data.flags.writeable = False
+    return GridCopy(xmin, ymin, float(f'{msg.info.resolution:.7g}'), width, height, data)
 
-    def lookup(point: Sequence[float]) -> bool:
-        col = math.floor((float(point[0]) - xmin) / resolution)
-        row = math.floor((float(point[1]) - ymin) / resolution)
-        return bool(0 <= row < height and 0 <= col < width and occupied[row, col])
-    return lookup
+
+class CellLookup:
+    """Whether a map point lies in an occupied cell of a grid of `cell`-sized cells from (xmin, ymin)."""
+
+    def __init__(self, occupied: NDArray[np.bool_], xmin: float, ymin: float, cell: float) -> None:
+        self.occupied, self.xmin, self.ymin, self.cell = occupied, xmin, ymin, cell
+
+    def __call__(self, point: Sequence[float]) -> bool:
+        col = math.floor((float(point[0]) - self.xmin) / self.cell)
+        row = math.floor((float(point[1]) - self.ymin) / self.cell)
+        height, width = self.occupied.shape
+        return bool(0 <= row < height and 0 <= col < width and self.occupied[row, col])
+
+
+@dataclass(frozen=True)
+class GridWalls:
+    """The walls made of a grid (grid_walls): of its cells as given (merge 1), or of merged cells."""
+
+    walls: list[Segment]
+    occupied: CellLookup   # the cells the walls outline (merged ones where merge > 1)
+    merge: int             # cells merged along each side (1: the grid as given)
+    cell: float            # m: the size of the cells outlined
+    given_walls: int       # walls of the grid as given (more than max_walls when merged)
+    max_walls: int | None  # the bound it was made within
+
+    def coarsened(self, grid: GridCopy) -> str:
+        """What merging did to the grid, in a line ('' when nothing was merged)."""
+        if self.merge == 1:
+            return ''
+        height, width = self.occupied.occupied.shape
+        return (f'coarsened: {grid.width} x {grid.height} cells of {grid.resolution:g} m outline '
+                f'{self.given_walls:,} walls, more than {self.max_walls:,}; merged into {width} x {height} cells of '
+                f'{self.cell:g} m, each occupied where any of its {self.merge} x {self.merge} is '
+                f'({len(self.walls):,} walls)')
+
+
+def _check_threshold(occupied_threshold: int) -> None:
+    if not 1 <= occupied_threshold <= 100:
+        raise ValueError(f'occupied_threshold must be in [1, 100], got {occupied_threshold}')
+
+
+def _borders(occupied: NDArray[np.bool_]) -> tuple[NDArray[np.int8], NDArray[np.int8]]:
+    """Where a border of the occupied cells begins (+1) and ends (-1) along each line: between rows (runs along
+    x), then between columns (runs along y)."""
+    padded = np.pad(occupied, 1)   # a free border all round
+    # Borders between a row and the one below it (y = ymin + i * cell), runs along x; and between a column and
+    # the one left of it (x = xmin + j * cell), runs along y.
+    across_rows = padded[1:, 1:-1] != padded[:-1, 1:-1]           # (height + 1, width)
+    across_cols = (padded[1:-1, 1:] != padded[1:-1, :-1]).T       # (width + 1, height)
+    steps = tuple(np.diff(np.pad(b.view(np.int8), ((0, 0), (1, 1))), axis=1) for b in (across_rows, across_cols))
+    return steps[0], steps[1]
+
+
+def _run_count(occupied: NDArray[np.bool_]) -> int:
+    """The walls the outline of the occupied cells is (no index arrays: a merge is counted before it is made)."""
+    return sum(int(np.count_nonzero(step == 1)) for step in _borders(occupied))
+
+
+def _runs(occupied: NDArray[np.bool_]) -> list[tuple[NDArray[np.intp], NDArray[np.intp], NDArray[np.intp]]]:
+    """The outline of the occupied cells as runs of border, in cells: (line, first, last) for the borders between
+    rows (runs along x) and then between columns (runs along y)."""
+    out = []
+    for step in _borders(occupied):
+        line, first = np.nonzero(step == 1)    # row-major: the starts and the ends of each line pair up
+        _, last = np.nonzero(step == -1)
+        out.append((line, first, last))
+    return out
+
+
+def _merged(occupied: NDArray[np.bool_], merge: int) -> NDArray[np.bool_]:
+    """Blocks of merge x merge cells (from the first row and column; the far edges padded free), each occupied
+    where any of its cells is."""
+    height, width = occupied.shape
+    rows, cols = -(-height // merge), -(-width // merge)
+    padded = np.zeros((rows * merge, cols * merge), dtype=bool)
+    padded[:height, :width] = occupied
+    return np.asarray(padded.reshape(rows, merge, cols, merge).any(axis=(1, 3)))
+
+
+def grid_walls(grid: GridCopy, occupied_threshold: int = OCCUPIED_THRESHOLD,
+               max_walls: int | None = None) -> GridWalls:
+    """The outline of a grid's occupied cells as walls (occupancy_grid_obstacles), at most max_walls of them
+    (None: no bound): beyond it the cells are merged, 2 x 2, 3 x 3, ..., the fewest that fit, a merged cell
+    occupied where any of its cells is, so the walls never leave out an occupied cell (the free space shrinks
+    by less than a merged cell at each wall). Counting the walls of a merge is vectorised (no wall is made
+    until one fits); the walls are clipped to the grid's extent."""
+    occupied = grid.data.reshape(grid.height, grid.width) >= occupied_threshold
+    merge, cells = 1, occupied
+    given = count = _run_count(occupied)
+    while max_walls is not None and count > max_walls and max(cells.shape) > 1:
+        merge += 1
+        cells = _merged(occupied, merge)
+        count = _run_count(cells)
+    runs = _runs(cells)
+    cell = grid.resolution * merge
+    xmin, ymin, xmax, ymax = grid.workspace
+    walls: list[Segment] = []
+    for (line, first, last), along_x in zip(runs, (True, False)):
+        fixed = (ymin if along_x else xmin) + line * cell
+        lo = (xmin if along_x else ymin) + first * cell
+        hi = (xmin if along_x else ymin) + last * cell
+        if merge > 1:   # merged cells at the far edges reach past the grid
+            far, far_along = (ymax, xmax) if along_x else (xmax, ymax)
+            fixed, lo, hi = np.minimum(fixed, far), np.minimum(lo, far_along), np.minimum(hi, far_along)
+        if along_x:
+            walls.extend(Segment((a, f), (b, f)) for f, a, b in zip(fixed.tolist(), lo.tolist(), hi.tolist()))
+        else:
+            walls.extend(Segment((f, a), (f, b)) for f, a, b in zip(fixed.tolist(), lo.tolist(), hi.tolist()))
+    return GridWalls(walls, CellLookup(cells, xmin, ymin, cell), merge, cell, given, max_walls)

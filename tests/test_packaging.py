@@ -39,7 +39,8 @@ PYTHON_KEYS = {
 }
 
 # Imported only for an optional extra of setup.py, so no exec_depend: a robot never needs them.
-OPTIONAL = {'distributed': 'cluster'}   # fastep_core/cluster.py: fastep-bench / fastep-tune --cluster
+# fastep_core/cluster.py (fastep-bench / fastep-tune --cluster): the extra installs dask[distributed].
+OPTIONAL = {'distributed': 'cluster', 'dask': 'cluster'}
 
 
 def console_scripts() -> list[str]:

@@ -10,6 +10,7 @@ scan is still taken from the true pose but placed at the estimate, as a robot wh
 
 from __future__ import annotations
 
+from dataclasses import replace
 from typing import Sequence
 
 import numpy as np
@@ -19,6 +20,7 @@ from fastep_core.dynamic_world import DynamicWorld
 from fastep_core.perception.belief import Belief, Perception, heading, perception_margin, sensor_generator
 from fastep_core.perception.uncertainty import PoseError
 from fastep_core.planning.guard import ScanReturns
+from fastep_core.planning.guard_inputs import GuardInputs
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.recovery import RecentScans
@@ -38,8 +40,7 @@ class SensingRobot:
         self.pose_error = pose_error
         self.rng = sensor_generator(seed, index)
         self.perception = Perception(spec, navigator.world)
-        navigator.guard_check.obstacle_margin = perception_margin(spec)
-        navigator.from_scans = True
+        navigator.take_perception(GuardInputs(perception_margin(spec)))
 
     @property
     def recent(self) -> RecentScans:
@@ -68,7 +69,6 @@ class SensingRobot:
             pose = self.spec.pose_on((float(estimate[0]), float(estimate[1]), turned))
             state, uncertainty = estimate, error.uncertainty()
         belief = self.perception.update(t, pose, scan, others, uncertainty=uncertainty)
-        navigator.guard_check.scan_points = ScanReturns(self.perception.returns, state, navigator.radius)
-        if belief.world is not navigator.world:
-            navigator.world = belief.world
+        returns = ScanReturns(self.perception.returns, state, navigator.radius)
+        navigator.take_perception(replace(navigator.guard_inputs, scan_points=returns), belief.world)
         return [*others, *belief.movers]

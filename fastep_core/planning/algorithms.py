@@ -73,20 +73,22 @@ class RobotLike(Protocol):
 def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Controller]:
     """The kinematic model and controller for a scenario robot ('point_mass', 'tractor_trailer', 'diff_drive').
 
-    A diff_drive's base limits and gains come from the planner parameters (max_speed, max_turn_rate,
-    max_acceleration, max_turn_acceleration, speed_gain, turn_gain; kinematics/diff_drive.py).
+    A diff_drive's base limits come from the planner parameters' limits (max_speed, max_turn_rate,
+    max_acceleration, max_turn_acceleration: `params.limits`), its gains from speed_gain and turn_gain
+    (kinematics/diff_drive.py).
     """
+    limits = params.limits
     if spec.model == 'point_mass':
-        return PointMass(), PointMassController(params.alpha1, params.alpha2, params.max_speed,
+        return PointMass(), PointMassController(params.alpha1, params.alpha2, limits.max_speed,
                                                 params.min_approach_speed)
     if spec.model == 'tractor_trailer':
         model = TractorTrailer(spec.length, spec.trailer_length, spec.hitch_offset)
-        return model, TractorTrailerController(model, params.speed_gain, params.max_speed,
+        return model, TractorTrailerController(model, params.speed_gain, limits.max_speed,
                                                params.min_approach_speed)
     if spec.model == 'diff_drive':
-        return (DiffDrive(params.max_speed, params.max_turn_rate),
-                DiffDriveController(params.speed_gain, params.turn_gain, params.max_speed, params.max_turn_rate,
-                                    params.max_acceleration, params.max_turn_acceleration,
+        return (DiffDrive(limits.max_speed, limits.max_turn_rate),
+                DiffDriveController(params.speed_gain, params.turn_gain, limits.max_speed, limits.max_turn_rate,
+                                    limits.max_acceleration, limits.max_turn_acceleration,
                                     min_speed=params.min_approach_speed))
     raise ParameterError(f'unknown robot model {spec.model!r}')
 

@@ -30,7 +30,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = ['FEEDBACK_BOUND', 'FEEDBACK_COMMANDS', 'RUN_TIME', 'WEAK_SHARE', 'AxisResponse', 'BaseResponse',
-           'off_commands', 'speed_of']
+           'ShownResponse', 'off_commands', 'speed_of']
 
 FloatArray = NDArray[np.float64]
 FEEDBACK_BOUND = (0.05, 0.1)   # m/s (a point mass: each component), rad/s: within this of a command, it was done
@@ -194,10 +194,12 @@ class BaseResponse:
     def stop_within(self, deceleration: float) -> float:
         """A stop asked at `deceleration` (the guard's emergency_deceleration; 0: immediate) as the base has shown
         it brakes: no harder than it measurably did, once it has been seen braking or accelerating."""
-        shown = self.linear.shown
-        if shown is None:
-            return deceleration
-        return shown if deceleration <= 0.0 else min(deceleration, shown)
+        return _stop_within(self.linear.shown, deceleration)
+
+    def shown(self) -> ShownResponse:
+        """What it has measured so far, as one immutable value (for a planning pass on another thread)."""
+        return ShownResponse(self.holonomic, self.braking, self.turn_braking, self.linear.shown,
+                             None if self._slid is None else self._slid.copy())
 
     def problem(self) -> str:
         """What status says when the base tracks worse than configured ('' when it does not), with the figures."""
@@ -209,6 +211,35 @@ class BaseResponse:
             if limit > 0.0 and shown < WEAK_SHARE * limit:
                 parts.append(f'{name} {shown:.2g} {unit} measured, {what} {limit:g}')
         return '; '.join(parts)
+
+
+@dataclass(frozen=True)
+class ShownResponse:
+    """What a BaseResponse had measured at one moment: what a planning pass reads of the base while the control
+    loop that measures it goes on, on another thread (BaseResponse.shown; the same answers as the response then)."""
+
+    holonomic: bool
+    braking: float
+    turn_braking: float
+    linear_shown: float | None     # the braking the base has shown (None: not seen yet)
+    slid: FloatArray | None        # the velocity the poses showed, when faster than the twist said
+
+    def stop_within(self, deceleration: float) -> float:
+        """BaseResponse.stop_within."""
+        return _stop_within(self.linear_shown, deceleration)
+
+    def corrected(self, measured: FloatArray) -> FloatArray:
+        """BaseResponse.corrected."""
+        slid = self.slid
+        if slid is None:
+            return measured
+        return slid.copy() if self.holonomic else np.array([float(slid[0]), float(measured[1])])
+
+
+def _stop_within(shown: float | None, deceleration: float) -> float:
+    if shown is None:
+        return deceleration
+    return shown if deceleration <= 0.0 else min(deceleration, shown)
 
 
 def speed_of(velocity: FloatArray, holonomic: bool) -> float:

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 
 from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import Controller, RobotModel
-from fastep_core.planning.base_response import BaseResponse
+from fastep_core.planning.base_response import BaseResponse, ShownResponse
 from fastep_core.planning.escape import ESCAPING, TrapEscape
 from fastep_core.planning.exact_path import parked_world
 from fastep_core.planning.guard import Guard
@@ -81,7 +81,8 @@ class Steering(Protocol):
     reference: OptimalPath | None
     escapes: int
     escapes_traps: bool
-    seen: SeenFree | None
+    @property
+    def seen(self) -> SeenFree | None: ...
     progress: ProgressChecker
     trap: TrapDetector
     escape: TrapEscape
@@ -90,6 +91,9 @@ class Steering(Protocol):
     manoeuvring: ManoeuvreDriver | None
     guard_check: Guard
     response: BaseResponse
+
+    @property
+    def measured_base(self) -> BaseResponse | ShownResponse: ...
     at_goal: bool
     steps: StepPlanning
     yield_kind: str
@@ -247,7 +251,8 @@ def back_to_goal(nav: Steering, now: Tick) -> FloatArray | None:
     astern = math.remainder(bearing - math.pi, math.tau)   # 0 with the goal straight behind
     if abs(astern) >= 0.5 * math.pi:
         return None   # ahead of the robot: the way there is forward
-    braking = nav.response.braking if nav.response.braking > 0.0 else math.inf
+    shown = nav.measured_base.braking
+    braking = shown if shown > 0.0 else math.inf
     speed = min(math.sqrt(2.0 * braking * max(now.distance - 0.5 * p.goal_tolerance, 0.0)),
                 now.distance / now.dt)
     if p.max_reverse_speed > 0.0:
@@ -283,7 +288,7 @@ def turn_to_heading(nav: Steering, state: FloatArray, dt: float) -> FloatArray |
     omega = p.turn_gain * error
     if p.max_turn_rate > 0.0:
         omega = max(-p.max_turn_rate, min(p.max_turn_rate, omega))
-    braking = nav.response.turn_braking
+    braking = nav.measured_base.turn_braking
     if braking > 0.0:
         # Within the yaw tolerance at the end: a turn rate that brakes to a stop over the rest of the error.
         within = math.sqrt(2.0 * braking * max(abs(error) - 0.5 * p.yaw_goal_tolerance, 0.0))

@@ -84,7 +84,7 @@ class ControlTick:
         self.navigator = navigator
         navigator.response_fed_elsewhere = True   # the commands sent are this tick's, not the pass's
         self.response = navigator.response
-        self.smoother = VelocitySmoother.for_model(navigator.model, navigator.params)
+        self.smoother = VelocitySmoother.for_model(navigator.model, navigator.limits)
         self._last_t: float | None = None
         self._measured: FloatArray | None = None   # the velocity measured at this tick, if given ...
         self._measured_at = 0.0                    # ... as of this time
@@ -92,15 +92,18 @@ class ControlTick:
         self.retune()
 
     def retune(self) -> None:
-        """Take the navigator's parameters and controller afresh (after Navigator.retune)."""
+        """Take the navigator's parameters, limits, model and controller afresh (after Navigator.retune): the
+        smoother, the guard, yielding and FAStep-Route's speed law of the plans it drives on (`_speed_law`) all
+        read the same limits from the next command on."""
         nav = self.navigator
-        nav.braking = nav.params.emergency_deceleration
+        self.limits = limits = nav.limits
+        nav.braking = limits.emergency_deceleration
         self.model = nav.model
         self.controller = copy.deepcopy(nav.controller)
         self._applied: Callable[[FloatArray], None] | None = getattr(self.controller, 'applied', None)
         self._tell(self.smoother.velocity)   # a new controller ramps from what the robot does now
-        self.smoother.retune(nav.params)   # its period: each command's dt (command)
-        self.guard = Guard(nav.model, nav.radius, nav.params, nav.footprint)
+        self.smoother.retune(limits)   # its period: each command's dt (command)
+        self.guard = Guard(nav.model, nav.radius, nav.params, nav.footprint, limits)
         self.yielding = nav._yielding(nav.params)
         self._target: FloatArray | None = None
         self.reason = ''        # why this tick's command differs from the plan's ('' when it does not)
@@ -174,7 +177,7 @@ class ControlTick:
         """How far ahead (s) the guard looks: a tick, and the time to brake from the robot's speed (the faster of
         the smoother's and the measured one) at emergency_deceleration, or at what the base has shown it brakes at
         if that is less (half of it: braking distance v^2 / 2a at speed v)."""
-        braking = self.response.stop_within(self.smoother.emergency_deceleration)
+        braking = self.response.stop_within(self.limits.emergency_deceleration)
         holonomic = bool(self.model.holonomic)
         speed = speed_of(self.smoother.velocity, holonomic)
         if self._measured is not None:
@@ -203,9 +206,10 @@ class ControlTick:
         if plan is None or not plan.under_way or not all(map(math.isfinite, state)):
             return stop, False
         others = [*others, *inflated(plan.movers_at(t), self.navigator.outline_extra)]
-        # Surfaces known only as well as the robot's scans show them (set by the pass's perception).
-        self.guard.obstacle_margin = self.navigator.guard_check.obstacle_margin
-        self.guard.scan_points = self.navigator.guard_check.scan_points
+        # Surfaces known only as well as the robot's scans show them: what the pass's perception made of its latest
+        # scan, read once (one value, replaced whole by the planning side: margin, returns and free space together).
+        perceived = self.navigator.guard_inputs
+        self.guard.obstacle_margin, self.guard.scan_points = perceived.obstacle_margin, perceived.scan_points
 
         def allowed(c: FloatArray) -> bool:
             return self.guard.check(plan.world, state, c, dt, others) is c
@@ -217,7 +221,7 @@ class ControlTick:
                 self._target = target
             command = self.controller.command(state, target, dt)
             if plan.speed is not None:
-                command = plan.speed.regulate(state, command, dt)
+                command = self._speed_law(plan.speed).regulate(state, command, dt)
         else:
             self._target = None
             command = plan.command
@@ -229,7 +233,7 @@ class ControlTick:
         if guarded is not command:
             self.reason = self.guard.reason
             return guarded, True
-        seen = self.navigator.seen   # None without a laser: the map is known, and the guard checks it
+        seen = perceived.seen   # None without a laser: the map is known, and the guard checks it
         if seen is not None and not self.model.holonomic and float(command[0]) < 0.0 and \
                 not reverse_free(self.model, state, self.navigator.radius, command, REVERSE_HORIZON, plan.world,
                                  seen, (), self.guard.obstacle_margin, self.navigator.footprint):
@@ -237,6 +241,13 @@ class ControlTick:
             self.reason = 'stopped: no evidence the space behind is free'
             return stop, True
         return command, False
+
+    def _speed_law(self, law: SpeedLaw) -> SpeedLaw:
+        """A plan's speed law within this tick's limits: a plan made before a runtime change of them is driven on
+        within the new ones (its stops planned at what the base has shown, within the new max_acceleration)."""
+        if law.limits is self.limits or law.limits == self.limits:
+            return law
+        return law.under(self.limits, self.response.braking)
 
     def _tell(self, command: FloatArray) -> None:
         if self._applied is not None:

@@ -80,7 +80,7 @@ class DynamicWindow(Navigator):
     def update(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = (),
                velocity: FloatArray | None = None, measured_at: float | None = None,
                pose: FloatArray | None = None) -> FloatArray:
-        if self._last_t is not None and t - self._last_t > 2.0 * self.params.dt:
+        if self._last_t is not None and t - self._last_t > 2.0 * self.limits.dt:
             self.velocity = np.zeros(2)   # ticks were missed (a planner node holding a robot): start from rest
         if velocity is not None and np.isfinite(velocity).all() and \
                 off_commands(np.asarray(velocity, dtype=float), (self.velocity,), self.holonomic_window):
@@ -132,22 +132,22 @@ class DynamicWindow(Navigator):
 
     def accelerations(self) -> tuple[float, float]:
         """A unicycle's limits on dv/dt (m/s^2) and domega/dt (rad/s^2) (module docstring)."""
-        p = self.params
-        linear = p.max_acceleration if p.max_acceleration > 0.0 else p.dwa_acceleration
-        angular = p.max_turn_acceleration if p.max_turn_acceleration > 0.0 else 2.0 * p.dwa_acceleration
+        p, lim = self.params, self.limits
+        linear = lim.max_acceleration if lim.max_acceleration > 0.0 else p.dwa_acceleration
+        angular = lim.max_turn_acceleration if lim.max_turn_acceleration > 0.0 else 2.0 * p.dwa_acceleration
         return linear, angular
 
     def unicycle_window(self, dt: float) -> FloatArray:
         """A unicycle's samples (n, 2) of (v, omega): a grid over the reachable rectangle, cut to the limits."""
-        p = self.params
+        p, lim = self.params, self.limits
         linear, angular = self.accelerations()
         v0, w0 = float(self.velocity[0]), float(self.velocity[1])
-        v_low, v_high = max(0.0, v0 - linear * dt), min(p.max_speed, v0 + linear * dt)
+        v_low, v_high = max(0.0, v0 - linear * dt), min(lim.max_speed, v0 + linear * dt)
         if v_low > v_high:   # faster than max_speed (a limit lowered at run time): brake toward it
-            v_low = v_high = max(p.max_speed, v0 - linear * dt)
+            v_low = v_high = max(lim.max_speed, v0 - linear * dt)
         w_low, w_high = w0 - angular * dt, w0 + angular * dt
-        if p.max_turn_rate > 0.0:
-            w_low, w_high = max(-p.max_turn_rate, w_low), min(p.max_turn_rate, w_high)
+        if lim.max_turn_rate > 0.0:
+            w_low, w_high = max(-lim.max_turn_rate, w_low), min(lim.max_turn_rate, w_high)
             if w_low > w_high:
                 w_low = w_high = min(max(0.0, w0 - angular * dt), w0 + angular * dt) if w0 > 0 else \
                     max(min(0.0, w0 + angular * dt), w0 - angular * dt)
@@ -177,7 +177,7 @@ class DynamicWindow(Navigator):
 
     def search(self, state: FloatArray, goal: FloatArray, dt: float, others: Sequence[OtherRobot]) -> Choice:
         """One tick of DWA (module docstring, steps 1-4): state is the position (x, y), a unicycle's (x, y, theta)."""
-        p = self.params
+        p, top = self.params, self.limits.max_speed
         position = state[:2]
         if self.unicycle:
             samples = self.unicycle_window(dt)
@@ -192,7 +192,7 @@ class DynamicWindow(Navigator):
         starts, ends = points[:, :-1], points[:, 1:]                 # the rollout's segments (n, k, 2)
 
         # Step 2: the margin each segment keeps (negative: a hit), against obstacles and walls, then robots.
-        reach = p.max_speed * horizon + self.clearance + p.dwa_clearance_cap   # nothing farther can matter
+        reach = top * horizon + self.clearance + p.dwa_clearance_cap   # nothing farther can matter
         static, static_now = self._static_margins(position, starts, ends, points, reach)
         robots, robots_now = self._robot_margins(position, times, points, others, reach)
         hit = (static < 0.0) & (static < static_now)
@@ -205,17 +205,17 @@ class DynamicWindow(Navigator):
 
         # Step 3: admissible if it can stop before the first hit (with none, before the end of the horizon).
         first = np.where(hit.any(axis=1), times[np.argmax(hit, axis=1)], horizon)
-        admissible = (dt + speed / (2.0 * braking) <= first) & (speed <= p.max_speed * (1 + 1e-9))
+        admissible = (dt + speed / (2.0 * braking) <= first) & (speed <= top * (1 + 1e-9))
         count = int(admissible.sum())
         if count == 0:
             return Choice(self._brake(dt), -math.inf, 0, True)
 
         # Step 4: the objective.
-        scale = p.max_speed * horizon
+        scale = top * horizon
         progress = (math.hypot(goal[0] - position[0], goal[1] - position[1]) -
                     np.hypot(goal[0] - points[:, -1, 0], goal[1] - points[:, -1, 1])) / scale
         clearance = np.minimum(margin.min(axis=1), p.dwa_clearance_cap) / p.dwa_clearance_cap
-        score = p.dwa_heading * progress + p.dwa_clearance * clearance + p.dwa_velocity * speed / p.max_speed
+        score = p.dwa_heading * progress + p.dwa_clearance * clearance + p.dwa_velocity * speed / top
         if self.unicycle:
             score = score + self._unicycle_terms(state, goal, samples, points, horizon)
         score = np.where(admissible, score, -np.inf)
@@ -231,7 +231,7 @@ class DynamicWindow(Navigator):
         off = np.abs(np.arctan2(np.sin(bearing - final), np.cos(bearing - final)))
         # Flat within 90 degrees far from the goal, narrowing to nothing at the goal (module docstring).
         left = np.hypot(goal[0] - points[:, -1, 0], goal[1] - points[:, -1, 1])
-        free = 0.5 * math.pi * np.minimum(1.0, left / (p.max_speed * horizon))
+        free = 0.5 * math.pi * np.minimum(1.0, left / (self.limits.max_speed * horizon))
         heading = 1.0 - np.maximum(0.0, off - free) / (math.pi - free)
         cap = p.dwa_clearance_cap
         ahead = points[:, -1] + cap * np.column_stack([np.cos(final), np.sin(final)])

@@ -271,9 +271,9 @@ class FAStepRoute(FAStepKinematic):
         gap = math.hypot(run[0], run[1])
         if gap < 1e-9:
             return vertex
-        p = self.params
+        p, top = self.params, self.limits.max_speed
         gain = min(p.alpha1, p.alpha2) if self.model.holonomic else p.speed_gain
-        lead = p.max_speed / gain if p.max_speed > 0.0 else p.waypoint_lead
+        lead = top / gain if top > 0.0 else p.waypoint_lead
         return vertex if lead <= 0.0 else vertex + run * (lead / gap)
 
     def speed_law(self) -> RouteSpeed | None:
@@ -284,12 +284,12 @@ class FAStepRoute(FAStepKinematic):
             return None
         return RouteSpeed(route.stacked, route.rest, route.index, vertex, self._aim, goal.copy(),
                           vertex is route.vertices[-1], self.radius, self.params, self.world,
-                          bool(self.model.holonomic), route.clearance_at, self.response.braking)
+                          bool(self.model.holonomic), route.clearance_at, self.measured_base.braking, self.limits)
 
     def speed_allowed(self, position: FloatArray, dt: float) -> float:
         """RouteSpeed.allowed of the route as it is now (max_speed, or what the way allows: the module's "Speed")."""
         law = self.speed_law()
-        return self.params.max_speed if law is None else law.allowed(position, dt)
+        return self.limits.max_speed if law is None else law.allowed(position, dt)
 
     # -------------------------------------------------------------- Algorithm 1
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:

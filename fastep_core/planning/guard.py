@@ -32,6 +32,7 @@ from numpy.typing import NDArray
 
 from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import RobotModel
+from fastep_core.planning.limits import Limits
 from fastep_core.planning.others import OtherRobot, other_arrays
 from fastep_core.planning.outline import outline_clearance, predicted_poses
 from fastep_core.planning.params import PlannerParams
@@ -94,8 +95,11 @@ class Guard:
     """Stops any motion into an obstacle or within reach of another robot (see the module docstring)."""
 
     def __init__(self, model: RobotModel, radius: float, params: PlannerParams,
-                 footprint: Footprint | None = None) -> None:
+                 footprint: Footprint | None = None, limits: Limits | None = None) -> None:
+        # The model predicts each command's motion; the limits (params.limits unless given: Navigator.retune hands
+        # model, parameters and limits over together) bound the other robots' speed.
         self.model, self.radius, self.params = model, radius, params
+        self.limits = params.limits if limits is None else limits
         # None: the robot is its circle. With one, other robots come to the guard grown by the circumscribed
         # radius less `radius` (outline.inflated, the navigator's view of them), so they are kept from that circle.
         self.footprint = footprint
@@ -177,8 +181,9 @@ class Guard:
             centres, velocities, radii = other_arrays(others)
             # Another robot moves at most max_speed; a mover (a v2 world) may be faster: its own speed counts then.
             speed = np.hypot(*velocities.T)
-            if self.params.max_speed > 0:
-                speed = np.where(speed > self.params.max_speed, speed, self.params.max_speed)
+            top = self.limits.max_speed
+            if top > 0:
+                speed = np.where(speed > top, speed, top)
             reach = speed * dt + 0.25 * self.params.clearance_margin
             gap_now = np.hypot(*(position - centres).T)
             gap_then = np.hypot(*(after - centres).T)

@@ -20,12 +20,14 @@ from fastep_core.errors import GoalError
 from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning import behaviours, step_planning
-from fastep_core.planning.base_response import BaseResponse, speed_of
+from fastep_core.planning.base_response import BaseResponse, ShownResponse, speed_of
 from fastep_core.planning.behaviours import ROTATING, HoldBreaker, PathCheck, Tick
 from fastep_core.planning.detection import RunDetector
 from fastep_core.planning.escape import TrapEscape
 from fastep_core.planning.exact_path import NoPathHold, blocked_reason, no_path_reason, robot_path
 from fastep_core.planning.guard import Guard
+from fastep_core.planning.guard_inputs import GuardInputs
+from fastep_core.planning.limits import Limits, saturating, with_limits
 from fastep_core.planning.manoeuvre_driver import ManoeuvreDriver
 from fastep_core.planning.mode import Mode
 from fastep_core.planning.optimal import OptimalPath
@@ -43,7 +45,13 @@ FloatArray = NDArray[np.float64]
 
 
 class SpeedLaw(Protocol):
-    """A speed limit on the controller's commands that depends on where the robot is (FAStep-Route's RouteSpeed)."""
+    """A speed limit on the controller's commands that depends on where the robot is (FAStep-Route's RouteSpeed),
+    within the limits it was made with (`under`: the same law within others)."""
+
+    @property
+    def limits(self) -> Limits: ...
+
+    def under(self, limits: Limits, braking: float) -> SpeedLaw: ...
 
     def regulate(self, state: FloatArray, command: FloatArray, dt: float,
                  last: FloatArray | None = None) -> FloatArray: ...
@@ -67,6 +75,9 @@ class Navigator:
         self.radius = float(radius)
         self.world = world
         self.params = p = params or PlannerParams()
+        # The speed and acceleration limits and the control period: one value, handed whole to every part that
+        # reads them (retune).
+        self.limits: Limits = p.limits
         self.rng = rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng)
         self.goal: FloatArray | None = None
         self.goal_heading: float | None = None    # the heading to end in (robots that turn in place), if any
@@ -82,16 +93,21 @@ class Navigator:
         self.path_world = world                   # the world the last exact_path was planned in
         self._target: FloatArray | None = None    # what the controller steers to (identity tells a new one)
         self.driven: FloatArray | None = None     # the target this tick's command was driven to (drive_to), if any
-        # The free space recent scans saw, given where planning runs in real time (planning/control.py): backing up
-        # only into it. None: the map alone, as in lock step.
-        self.seen: SeenFree | None = None
+        # What perception told the guards of the latest scan (take_perception): its margin, its returns and, where
+        # planning runs in real time (planning/control.py), the free space recent scans saw, backing up only into it
+        # (`seen`; None: the map alone, as in lock step).
+        self.guard_inputs = GuardInputs()
         # The guard's stop brakes at this (m/s^2) where a control loop smooths the commands (planning/control.py):
         # the guard looks the braking distance further ahead. 0: a stop is immediate, as in lock step.
         self.braking = 0.0
         # What the base has shown it does (odometry against the commands): stops are planned no harder than that.
         # Fed by whoever sends the commands: `update` in lock step, the control loop's ControlTick otherwise.
-        self.response = BaseResponse(bool(model.holonomic), p.max_acceleration, p.max_turn_acceleration)
+        self.response = BaseResponse(bool(model.holonomic), self.limits.max_acceleration,
+                                     self.limits.max_turn_acceleration)
         self.response_fed_elsewhere = False
+        # Where the response is fed on another thread (the planner node's control tick): what it had measured when the
+        # pass's snapshot was taken (take_response); None: the response itself is read.
+        self.response_taken: ShownResponse | None = None
         self._last_command = np.zeros(2)   # the command `update` returned last
         self.at_goal = False   # has the robot been within goal_tolerance of this goal (behaviours.back_to_goal)
         # Whether the world is what the robot's laser shows (fastep_core/perception): a belief that can be wrong
@@ -108,14 +124,14 @@ class Navigator:
         self.hold_breaker = HoldBreaker()
         self.detector = RunDetector(self.radius)  # what lies on the run to the target, with its proofs
         self._stuck = 0                           # planned steps in a row that ended within waypoint_tolerance
-        self.guard_check = Guard(model, self.radius, p)
+        self.guard_check = Guard(model, self.radius, p, limits=self.limits)
         self.yielding = self._yielding(p)
         self.yield_kind = ''
         self.progress = ProgressChecker(p.progress_distance, p.progress_timeout)
         self.trap = TrapDetector(p.progress_distance, p.trap_timeout)
         self.escape = TrapEscape()
         self.stops = StopTimer()
-        self.backup = BackUp(model, backup_speed(p))
+        self.backup = BackUp(model, backup_speed(self.limits))
         # A robot that cannot turn in place leaves traps and tight spots by manoeuvres of its own arcs.
         self.manoeuvring = None if model.turns_in_place else ManoeuvreDriver(model, self.radius, p)
 
@@ -126,9 +142,37 @@ class Navigator:
         self.guard_check.footprint = footprint
         self.outline_extra = max(0.0, body_radius - self.radius)
 
+    def take_perception(self, inputs: GuardInputs, world: World | None = None) -> None:
+        """Perception's results for one scan: what the guards check against (one value, so the control loop never
+        reads a margin of one scan with the returns of another) and, if given, the world now believed. The robot
+        plans in what its laser shows from now on (`from_scans`)."""
+        self.guard_check.obstacle_margin, self.guard_check.scan_points = inputs.obstacle_margin, inputs.scan_points
+        self.guard_inputs = inputs
+        self.from_scans = True
+        if world is not None and world is not self.world:
+            self.world = world
+
+    def take_response(self, shown: ShownResponse) -> None:
+        """What the base had measurably done when this pass's snapshot was taken (the control loop that measures it
+        runs on another thread and goes on meanwhile): the pass plans its stops with it."""
+        self.response_taken = shown
+
+    @property
+    def measured_base(self) -> BaseResponse | ShownResponse:
+        """What a pass reads of the base's measured response: as taken with the snapshot (take_response), else the
+        response itself (lock step and fastep-sim, where one thread measures and plans)."""
+        taken = self.response_taken
+        return self.response if taken is None else taken
+
+    @property
+    def seen(self) -> SeenFree | None:
+        """The free space the recent scans saw, where the robot may back up (None: the map alone)."""
+        return self.guard_inputs.seen
+
     def _yielding(self, p: PlannerParams) -> Yielding:
-        return Yielding(self.model, self.radius, p.mover_horizon, 0.5 * p.clearance_margin, p.max_speed,
-                        p.max_turn_rate)
+        """Yielding with these parameters, the model and the limits as they are now."""
+        return Yielding(self.model, self.radius, p.mover_horizon, 0.5 * p.clearance_margin, self.limits.max_speed,
+                        self.limits.max_turn_rate)
 
     @property
     def clearance(self) -> float:
@@ -202,22 +246,32 @@ class Navigator:
         """Take new parameters while running (the ROS planner's dynamic parameters).
 
         Every part that reads them sees the new values from the next tick; the goal, the plan and the timers
-        carry on. A new controller (the gains are its own) starts afresh at its first command. Raises
+        carry on. Their limits (`limits`) reach every reader in this one call: the model (`saturating`: the
+        guards and the node's latency compensation predict with it), the guard, yielding, backing up, the base's
+        response, FAStep-Route's speed law and the controller: `controller` (a new one: the gains are its own),
+        or the one it has with the new limits. A new controller starts afresh at its first command, ramping from
+        what the robot got. A control loop of this navigator takes them with ControlTick.retune. Raises
         ParameterError, changing nothing, when this navigator cannot run with them.
         """
         self.check_params(params)
-        self.params = params
+        limits = params.limits
+        if controller is None and limits != self.limits:
+            controller = with_limits(self.controller, limits)
+        elif controller is not None:
+            controller = with_limits(controller, limits)
+        self.params, self.limits = params, limits
+        self.model = saturating(self.model, limits)
         self.steps.pending = None   # an unfinished step plan: planned afresh with the new values
-        self.guard_check.params = params
+        self.guard_check.model, self.guard_check.params, self.guard_check.limits = self.model, params, limits
         self.yielding = self._yielding(params)
-        if self.manoeuvring is not None:
+        if self.manoeuvring is not None:   # a tractor-trailer's: its model does not saturate
             self.manoeuvring.params = params
         self.progress.distance, self.progress.timeout = params.progress_distance, params.progress_timeout
         self.trap.distance, self.trap.timeout = params.progress_distance, params.trap_timeout
         self.detector.forget()   # answers cached with the old sensing range and margin
-        self.backup.speed = backup_speed(params)
-        self.response.retune(params.max_acceleration, params.max_turn_acceleration)
-        if controller is not None:
+        self.backup.model, self.backup.speed = self.model, backup_speed(limits)
+        self.response.retune(limits.max_acceleration, limits.max_turn_acceleration)
+        if controller is not None and controller is not self.controller:
             # The new controller hears what the robot got, starting with what it does now: told nothing, a diff_drive
             # controller's ramp started from rest every tick (0.13 m/s at 20 Hz after any parameter change).
             applied = getattr(controller, 'applied', None)
@@ -240,7 +294,7 @@ class Navigator:
         self.trap.reset(t)
         self.escape.stop()
         self.stops = StopTimer()
-        self.backup = BackUp(self.model, backup_speed(self.params))
+        self.backup = BackUp(self.model, backup_speed(self.limits))
         if self.manoeuvring is not None:
             self.manoeuvring.reset()
         self._target = None
@@ -262,7 +316,7 @@ class Navigator:
             # A slide the wheels do not see shows in the poses (BaseResponse.slide); where a control loop measures,
             # the slide it found last.
             at = t if measured_at is None else measured_at
-            measured = self.response.corrected(measured) if self.response_fed_elsewhere else \
+            measured = self.measured_base.corrected(measured) if self.response_fed_elsewhere else \
                 self.response.slide(at, measured, state if pose is None else pose)
         # Other robots and movers grown to the circumscribed circle for a robot with a footprint (outline.py).
         others = inflated(others, self.outline_extra)
@@ -291,7 +345,7 @@ class Navigator:
         self.yield_kind = ''   # what yielding to movers did this tick (planning/yielding.py), '' for nothing
         self.driven = None
         self._ticks += 1
-        dt = self.params.dt if self._last_t is None or t <= self._last_t else t - self._last_t
+        dt = self.limits.dt if self._last_t is None or t <= self._last_t else t - self._last_t
         self._last_t = t
         if self.goal is None or self.mode in (Mode.ARRIVED, Mode.FAILED):
             return np.zeros(2)
@@ -416,7 +470,7 @@ class Navigator:
     def stop_deceleration(self) -> float:
         """What the guard's stop brakes at: `braking` (emergency_deceleration where a control loop smooths the
         commands, 0 for immediate in lock step), but no harder than the base has shown it can (BaseResponse)."""
-        return self.response.stop_within(self.braking)
+        return self.measured_base.stop_within(self.braking)
 
     # --------------------------------------------------- paths and traps
     def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:

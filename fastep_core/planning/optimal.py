@@ -11,6 +11,9 @@ are tested only against nearby obstacles (ObstacleGrid) and in blocks so memory 
 (fastep_testing/optimal_eager.py checks it); its length is exact. The border margin drops to a start's or goal's own
 distance so it is never excluded; a start or goal within `clearance` of an obstacle has no path (None). The polyline
 replaces arcs by circumscribed polygons (spacing `spacing`) so every chord keeps r, about 1 + delta^2 / 12 longer.
+Only the obstacles that come within r of the shrunk workspace take part (the others block no point of it: a scan
+from an absurd pose leaves walls at 1e300, whose ends round to one point there); a wall of one point is its end
+cap; an obstacle near the workspace with coordinates beyond MAX_COORDINATE is a ParameterError (squares overflow).
 """
 
 from __future__ import annotations
@@ -23,12 +26,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.errors import ParameterError
-from fastep_core.geometry import Circle, Segment, point_segment_distance
+from fastep_core.geometry import Circle, Obstacles, Segment, point_segment_distance
 from fastep_core.planning.obstacle_grid import ObstacleGrid
 from fastep_core.planning.tangent_search import TWO_PI, ArcShape, search, wrap_angle
 from fastep_core.world import World
 
-__all__ = ['OptimalPath', 'PathPiece', 'assemble', 'prepare', 'shortest_path', 'TOL', 'main']
+__all__ = ['MAX_COORDINATE', 'OptimalPath', 'PathPiece', 'assemble', 'prepare', 'shortest_path', 'TOL', 'main']
 
 FloatArray = NDArray[np.float64]
 TOL = 1e-9
@@ -36,6 +39,13 @@ TOL = 1e-9
 _MAX_REFINE = 12          # a chord is split at most 2^12 times when a neighbour is tighter than the bulge
 MAX_ARC_VERTICES = 4096   # an arc's polygon starts with at most this many vertices (a vast circle: coarser)
 MAX_SAMPLES = 1_000_000   # OptimalPath.sample gives at most about this many points per piece
+MAX_COORDINATE = 1e150
+"""Largest |coordinate| (m) of an obstacle near the workspace (its centre, radius, a wall's ends) the exact path
+works with. Its tangent and clearance tests add up to four squared coordinates (differences of them): within 1e150
+that stays below the largest float (1.8e308); beyond, a square is inf, inf - inf is nan and a test that compares it
+is False: a disc of radius 1e200 over the goal counted as free. Beyond it the exact path is a ParameterError (one
+line), not a wrong answer; obstacles that cannot reach the workspace do not take part at all (_reaching), whatever
+their coordinates. (The workspace itself is the scenario's or the map's, bounded where those are read.)"""
 
 
 @dataclass(frozen=True)
@@ -168,16 +178,19 @@ class _Problem:
         self.border = border
         xmin, ymin, xmax, ymax = world.workspace
         self.box = (xmin + border - TOL, ymin + border - TOL, xmax - border + TOL, ymax - border + TOL)
-        circles = [o for o in world.obstacle_list if isinstance(o, Circle)]
-        segments = [o for o in world.obstacle_list if isinstance(o, Segment)]
+        circles, segments, self.obstacles = _reaching(world, self.box, clearance)
+        """What takes part: the obstacles that come within the clearance of the box (_reaching)."""
         self.disc_obstacles = [_Circle(c.center, c.radius + clearance) for c in circles]
         self.segments = segments
         self.circles: list[_Circle] = list(self.disc_obstacles)
         caps = [_Circle(end, clearance) for s in segments for end in (s.start, s.end)]
         coordinates = [abs(v) for v in world.workspace]
-        coordinates += [abs(v) for c in self.circles + caps for v in (*c.center, c.radius)]
-        self.scale = max(coordinates)
+        near = [abs(v) for c in self.circles + caps for v in (*c.center, c.radius)]
+        self.scale = max(coordinates + near)
         """The largest coordinate (m): rounding slack grows with it."""
+        if near and not max(near) <= MAX_COORDINATE:   # nan too
+            raise ParameterError(f'the exact path needs obstacles within {MAX_COORDINATE:g} m of the origin; one '
+                                 f'near the workspace reaches {max(near):g} m')
         self.disc_centers = np.array([d.center for d in self.disc_obstacles], dtype=float).reshape(-1, 2)
         self.disc_radii = np.array([d.radius for d in self.disc_obstacles], dtype=float)
         self.seg_starts = np.array([s.start for s in segments], dtype=float).reshape(-1, 2)
@@ -185,7 +198,7 @@ class _Problem:
         self.blocked: dict[int, Pieces] = {}
         """The blocked angles of each circle an arc was asked of."""
         self._add_caps(caps)
-        self.grid = ObstacleGrid(world.obstacles, self.box, clearance - TOL, self.scale)
+        self.grid = ObstacleGrid(self.obstacles, self.box, clearance - TOL, self.scale)
 
     def _add_caps(self, caps: list[_Circle]) -> None:
         """Add the walls' end caps that can hold a node: each corner once (walls that meet share it), and none
@@ -243,6 +256,8 @@ class _Problem:
             ax, ay = s.start
             ux, uy = s.end[0] - ax, s.end[1] - ay
             L = math.hypot(ux, uy)
+            if L == 0.0:
+                continue   # a wall of one point: its capsule is its end cap, blocked above
             ux, uy = ux / L, uy / L
             nx, ny = -uy, ux
             pn = nx * (cx - ax) + ny * (cy - ay)      # p = c + R e(t): n.(p - a) = pn + R n.e
@@ -278,12 +293,37 @@ class _Problem:
         obstacles near each edge (ObstacleGrid), in blocks of bounded size.
         """
         ok = self.inside(P) & self.inside(Q)
-        if len(self.world.obstacles) and ok.any():
+        if len(self.obstacles) and ok.any():
             idx = np.flatnonzero(ok)
             ok[idx] = self.grid.free(P[idx], Q[idx])
         return ok
 
 
+
+
+def _reaching(world: World, box: tuple[float, float, float, float],
+              clearance: float) -> tuple[list[Circle], list[Segment], Obstacles]:
+    """The world's circles and walls that come within `clearance` of `box` (walls: their bounding box does; a
+    rounding slack more), in their order, and their Obstacles (the world's own when that is all of them): the
+    others block no point of the box, whatever their coordinates."""
+    x0, y0, x1, y1 = box
+    reach = clearance + 1e-3 + 1e-9 * max(abs(x0), abs(y0), abs(x1), abs(y1))
+    o = world.obstacles
+    c, starts, ends = o.centers, o.starts, o.ends
+    with np.errstate(over='ignore', invalid='ignore'):   # far coordinates: an inf distance is beyond any reach
+        outside = np.hypot(np.maximum(np.maximum(x0 - c[:, 0], c[:, 0] - x1), 0.0),
+                           np.maximum(np.maximum(y0 - c[:, 1], c[:, 1] - y1), 0.0))
+        near_circles = outside <= o.radii + reach
+        lo, hi = np.minimum(starts, ends), np.maximum(starts, ends)
+        near_walls = (lo[:, 0] <= x1 + reach) & (hi[:, 0] >= x0 - reach) & (lo[:, 1] <= y1 + reach) & \
+            (hi[:, 1] >= y0 - reach)
+    circles = [ob for ob in world.obstacle_list if isinstance(ob, Circle)]   # Obstacles' order: o.centers'
+    walls = [ob for ob in world.obstacle_list if isinstance(ob, Segment)]
+    if near_circles.all() and near_walls.all():
+        return circles, walls, o
+    circles = [circles[i] for i in np.flatnonzero(near_circles).tolist()]
+    walls = [walls[i] for i in np.flatnonzero(near_walls).tolist()]
+    return circles, walls, Obstacles([*circles, *walls])
 
 
 # ----------------------------------------------------------------------------------------- polyline
@@ -380,7 +420,9 @@ def prepare(world: World, start: Sequence[float] | FloatArray, goal: Sequence[fl
     if walls.min() < 0.0:
         return None
     border = min(clearance, float(walls.min()))
-    if len(world.obstacles) and float(world.obstacles.clearance(np.array([a, b])).min()) < clearance - TOL:
+    with np.errstate(over='ignore', invalid='ignore'):   # an obstacle too far for its square: inf, farther than r
+        near = len(world.obstacles) and float(world.obstacles.clearance(np.array([a, b])).min()) < clearance - TOL
+    if near:
         return None
     return _Problem(world, clearance, border), a, b
 

@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, fields, replace
 from typing import Any, Mapping
 
 from fastep_core.errors import ParameterError
+from fastep_core.planning.limits import LIMIT_NAMES, Limits, limit_problem
 
 __all__ = ['PlannerParams']
 
@@ -122,7 +123,8 @@ class PlannerParams:
     goal_heading: int = _p(1, 'turn in place to a goal\'s heading once at its position (robots that turn in '
                               'place): 1; 0: a goal\'s heading is ignored', 0, 1)
     waypoint_tolerance: float = _p(0.3, 'a waypoint counts as reached within this distance (m)', 1e-4)
-    dt: float = _p(0.05, 'control and integration step (s)', 1e-4, 10.0)
+    dt: float = _p(0.05, 'control and integration step (s); the planner node\'s is its control period, 1 / '
+                         'control_rate_hz (a dt given that disagrees is refused)', 1e-4, 10.0)
     progress_distance: float = _p(0.5, 'progress checker: come this much closer to the goal ... (m)', 0.0)
     progress_timeout: float = _p(120.0, '... within this many seconds, else fail (s); 0 disables', 0.0)
     blocked_timeout: float = _p(10.0, 'a robot planning in what its laser shows and finding no way to the goal there '
@@ -185,10 +187,19 @@ class PlannerParams:
                 raise ParameterError(f'planner parameter {f.name} must be an integer, got {_show(value)}')
             if not low <= value <= high:
                 raise ParameterError(f'planner parameter {f.name}={_show(value)} is outside [{low}, {high}]')
+        for name in LIMIT_NAMES:   # a positive limit is a positive cap: never one that lifts it by underflowing
+            problem = limit_problem(name, getattr(self, name))
+            if problem:
+                raise ParameterError(problem)
         if 0.0 < self.emergency_deceleration < self.max_acceleration:
             raise ParameterError(f'planner parameter emergency_deceleration={self.emergency_deceleration:g} is below '
                                  f'max_acceleration={self.max_acceleration:g}: the emergency stop brakes at least as '
                                  f'hard as any command (set both at once, or 0 for an immediate stop)')
+
+    @property
+    def limits(self) -> Limits:
+        """The speed and acceleration limits and the control period, as the one value every reader takes."""
+        return Limits.of(self)
 
     @classmethod
     def names(cls) -> tuple[str, ...]:

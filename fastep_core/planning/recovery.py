@@ -29,6 +29,7 @@ from fastep_core.geometry import point_segment_distance
 from fastep_core.kinematics.model import RobotModel
 from fastep_core.kinematics.tractor_trailer import hitch_angle
 from fastep_core.planning.guard import Stop
+from fastep_core.planning.limits import Limits
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.outline import outline_clearance, predicted_poses
 from fastep_core.planning.params import PlannerParams
@@ -105,9 +106,9 @@ def free_room(world: World, points: FloatArray, others: Sequence[OtherRobot]) ->
     return room
 
 
-def backup_speed(params: PlannerParams) -> float:
+def backup_speed(limits: Limits | PlannerParams) -> float:
     """The backing-up recovery's speed: BACKUP_SPEED, or max_reverse_speed when that is lower (0: unlimited)."""
-    cap = params.max_reverse_speed
+    cap = limits.max_reverse_speed
     return min(BACKUP_SPEED, cap) if cap > 0.0 else BACKUP_SPEED
 
 

@@ -10,13 +10,14 @@ anchor). FAStep-Route (fastep_route.py) plans routes and drives them.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import Circle, Obstacle, Obstacles
 from fastep_core.planning.escape import ADOPT_REACH  # as far ahead as an escape path is checked
+from fastep_core.planning.limits import Limits
 from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
@@ -210,6 +211,12 @@ class RouteSpeed:
     holonomic: bool
     clearance_at: tuple[float, float, float] | None   # a clearance known at a point (x, y, clearance)
     braking: float                        # what stops are planned at: max_acceleration or what the base showed
+    limits: Limits                        # max_speed and max_acceleration (the navigator's)
+
+    def under(self, limits: Limits, braking: float) -> RouteSpeed:
+        """The same law within other limits (changed at runtime after it was frozen), stops planned at `braking`
+        (what the base has shown, within the new max_acceleration)."""
+        return replace(self, limits=limits, braking=braking)
 
     def regulate(self, state: FloatArray, command: FloatArray, dt: float,
                  last: FloatArray | None = None) -> FloatArray:
@@ -218,9 +225,10 @@ class RouteSpeed:
         the robot got last tick (where a new bend or a tight gap asks for less at once)."""
         allowed = self.allowed(state[:2], dt)
         speed = math.hypot(float(command[0]), float(command[1])) if self.holonomic else abs(float(command[0]))
-        if last is not None and self.params.max_acceleration > 0.0:
+        acceleration = self.limits.max_acceleration
+        if last is not None and acceleration > 0.0:
             before = math.hypot(float(last[0]), float(last[1])) if self.holonomic else abs(float(last[0]))
-            allowed = max(allowed, min(speed, before - self.params.max_acceleration * dt))
+            allowed = max(allowed, min(speed, before - acceleration * dt))
         return command if speed <= allowed else command * (allowed / speed)
 
     def allowed(self, position: FloatArray, dt: float) -> float:
@@ -230,7 +238,7 @@ class RouteSpeed:
         reaches the goal in a tick) short of the goal, nothing past it."""
         p, vertex, goal = self.params, self.vertex, self.goal
         x, y = float(position[0]), float(position[1])
-        top = p.max_speed if p.max_speed > 0.0 else math.inf
+        top = self.limits.max_speed if self.limits.max_speed > 0.0 else math.inf
         braking = self.braking if self.braking > 0.0 else math.inf
         ahead = (float(vertex[0]) - x, float(vertex[1]) - y)
         gap = math.hypot(*ahead)

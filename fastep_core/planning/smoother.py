@@ -7,7 +7,7 @@ where the model has one (diff_drive; commands (v, omega), body frame); a point m
 its norm capped at max_speed and no rear, so no reverse cap. Then the acceleration limits: the command moves from
 the velocity the base has toward the capped one by at most max_acceleration (a point mass: the norm of the change)
 and max_turn_acceleration times the time it is held, along one straight line in command space (Nav2's
-scale_velocities). That time is the time since the last command, capped at one control tick (params.dt): after a
+scale_velocities). That time is the time since the last command, capped at one control tick (`period`): after a
 pause of any length the base ramps from what it is doing (the last command sent, or odometry's twist given to
 `reset`), never jumps. A limit lowered below the current speed is reached braking at max_acceleration, as Nav2
 does. Only the guard's emergency stop (`emergency=True`) brakes harder, at emergency_deceleration (its turn
@@ -32,7 +32,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from fastep_core.kinematics.model import RobotModel
 from fastep_core.planning.base_response import FEEDBACK_COMMANDS, off_commands
-from fastep_core.planning.params import PlannerParams
+from fastep_core.planning.limits import Limits
 
 __all__ = ['VelocitySmoother']
 
@@ -48,38 +48,57 @@ class VelocitySmoother:
     """Speed and acceleration limits on every command of one robot (module docstring).
 
     holonomic: commands are map-frame (vx, vy) (a point mass), else body-frame (v, omega). turn_limited: the
-    model has a turn-rate limit (diff_drive). The limits are PlannerParams' (`for_model`, `retune`); `period` is
-    the control tick, the most time one command's change is spread over. `velocity` is what the base does now.
+    model has a turn-rate limit (diff_drive). `limits` are the navigator's (`for_model`, `retune`), read as they
+    are: a point mass has no reverse or turn limits, only a turn-limited model a turn rate. `period` is the control
+    tick (limits.dt, then each command's: the control loop sets it), the most time one command's change is spread
+    over. `velocity` is what the base does now.
     """
 
     holonomic: bool
     turn_limited: bool = False
-    max_speed: float = 0.0
-    max_reverse_speed: float = 0.0
-    max_turn_rate: float = 0.0
-    max_acceleration: float = 0.0
-    max_turn_acceleration: float = 0.0
-    emergency_deceleration: float = 0.0
+    limits: Limits = field(default_factory=Limits)
     period: float = 0.05
     velocity: FloatArray = field(default_factory=_zeros)
     sent: deque[FloatArray] = field(default_factory=lambda: deque(maxlen=FEEDBACK_COMMANDS))
 
     @classmethod
-    def for_model(cls, model: RobotModel, params: PlannerParams) -> VelocitySmoother:
-        """The smoother of a robot of this model (make_robot's), with the planner parameters' limits."""
+    def for_model(cls, model: RobotModel, limits: Limits) -> VelocitySmoother:
+        """The smoother of a robot of this model (make_robot's), with these limits (PlannerParams.limits)."""
         smoother = cls(bool(model.holonomic), turn_limited=hasattr(model, 'max_turn_rate'))
-        smoother.retune(params)
+        smoother.retune(limits)
         return smoother
 
-    def retune(self, params: PlannerParams) -> None:
+    def retune(self, limits: Limits) -> None:
         """New limits, from the next command on; the base's velocity is kept (it ramps to the new limits)."""
-        self.max_speed = params.max_speed
-        self.max_reverse_speed = 0.0 if self.holonomic else params.max_reverse_speed
-        self.max_turn_rate = params.max_turn_rate if self.turn_limited and not self.holonomic else 0.0
-        self.max_acceleration = params.max_acceleration
-        self.max_turn_acceleration = 0.0 if self.holonomic else params.max_turn_acceleration
-        self.emergency_deceleration = params.emergency_deceleration
-        self.period = params.dt
+        self.limits = limits
+        self.period = limits.dt
+
+    @property
+    def max_speed(self) -> float:
+        return self.limits.max_speed
+
+    @property
+    def max_reverse_speed(self) -> float:
+        """The reverse cap: a point mass has no rear, so none."""
+        return 0.0 if self.holonomic else self.limits.max_reverse_speed
+
+    @property
+    def max_turn_rate(self) -> float:
+        """The turn-rate cap of a turn-limited model (diff_drive), none for the others."""
+        return self.limits.max_turn_rate if self.turn_limited and not self.holonomic else 0.0
+
+    @property
+    def max_acceleration(self) -> float:
+        return self.limits.max_acceleration
+
+    @property
+    def max_turn_acceleration(self) -> float:
+        """A point mass ramps the norm of its velocity change (max_acceleration), no turn."""
+        return 0.0 if self.holonomic else self.limits.max_turn_acceleration
+
+    @property
+    def emergency_deceleration(self) -> float:
+        return self.limits.emergency_deceleration
 
     def reset(self, velocity: ArrayLike) -> None:
         """What the base is doing now, in the model's command form (odometry's twist after a pause, say); the next
@@ -129,7 +148,7 @@ class VelocitySmoother:
         capped: FloatArray = c / over if over > 1.0 else c
         return capped
 
-    def limits(self, emergency: bool = False) -> tuple[float, float]:
+    def accelerations(self, emergency: bool = False) -> tuple[float, float]:
         """(linear, turn) acceleration limits of a command, math.inf for unlimited; the emergency stop's at
         emergency_deceleration, its turn braking scaled by emergency_deceleration / max_acceleration."""
         linear = self.max_acceleration if self.max_acceleration > 0.0 else math.inf
@@ -145,7 +164,7 @@ class VelocitySmoother:
         over min(elapsed, period) seconds (elapsed: since the last command). emergency: it is the guard's stop."""
         wanted = self.cap(command)
         window = min(elapsed, self.period) if elapsed > 0.0 else 0.0   # NaN and negative: no time, no change
-        linear, turn = self.limits(emergency)
+        linear, turn = self.accelerations(emergency)
         change = wanted - self.velocity
         share = 1.0
         if self.holonomic:

@@ -346,7 +346,7 @@ def test_a_planner_on_a_far_seed_stream_starts_at_once_with_fastep_sims_stream(t
             'from fastep_ros.planner import PlannerNode\n'
             'node = PlannerNode(parameter_overrides=[Parameter("seed", value=7), '
             'Parameter("seed_stream", value=2_000_000_000)])\n'
-            'print(node.rng.random())\n'
+            'print("rng", repr(node.rng.random()))\n'
             'node.destroy_node()\n'
             'rclpy.shutdown()\n')
     env = isolated_env(free_domain(), tmp_path / 'roslog')
@@ -361,7 +361,9 @@ def test_a_planner_on_a_far_seed_stream_starts_at_once_with_fastep_sims_stream(t
     expected = np.random.default_rng(np.random.SeedSequence(7).spawn(3)[2]).random()
     from fastep_ros.planner import stream_rng
     assert stream_rng(7, 2).random() == expected, 'the k-th stream is the one fastep-sim gives its k-th robot'
-    assert float(out) == np.random.default_rng(np.random.SeedSequence(7, spawn_key=(2_000_000_000,))).random()
+    # Its line among whatever else the process prints (Fast DDS logs transport errors on stdout).
+    drawn = [float(line.split()[1]) for line in out.splitlines() if line.startswith('rng ')]
+    assert drawn == [np.random.default_rng(np.random.SeedSequence(7, spawn_key=(2_000_000_000,))).random()], out
 
 
 def _foreign_publisher(context: Any, topic: str, msg_type: Any) -> Any:
@@ -445,7 +447,9 @@ def test_a_node_interrupted_while_it_imports_ends_without_a_traceback(tmp_path: 
         _, err = proc.communicate(timeout=30)
     finally:
         stop_process(proc)
-    assert proc.returncode in (0, 130) and 'Traceback' not in err, (proc.returncode, err)
+    # -SIGINT: on a busy machine the signal can come before the interpreter has installed its handler (the
+    # default action ends the process, as a shell's 130 says); still no traceback.
+    assert proc.returncode in (0, 130, -signal.SIGINT) and 'Traceback' not in err, (proc.returncode, err)
 
 
 def test_a_launched_node_stopped_at_any_moment_of_its_imports_exits_0_without_a_traceback(tmp_path: Path) -> None:

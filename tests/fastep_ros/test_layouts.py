@@ -159,7 +159,8 @@ def test_every_layout_runs_the_same_graph_and_exactly_the_run_of_fastep_sim(tmp_
     assert {layout: run['processes'] for layout, run in runs.items()} == {'node': 6, 'robot': 4, 'graph': 1,
                                                                           'cores': min(usable_cores(), 2),
                                                                           'graph events': 1}
-    expected = {'/map', '/clock', '/r1/plant', '/r1/planner', '/r2/plant', '/r2/planner'}
+    expected = {'/map', '/clock', '/r1/plant', '/r1/planner', '/r2/plant', '/r2/planner',
+                '/r1/planner_navigation', '/r2/planner_navigation'}   # each planner's action servers' node
     for layout, run in runs.items():
         assert run['nodes'] == expected, layout
         assert run['topics'] == runs['node']['topics'], (layout, run['topics'] ^ runs['node']['topics'])

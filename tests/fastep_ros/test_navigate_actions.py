@@ -148,11 +148,19 @@ def test_navigate_through_poses_to_pose_preempt_cancel_and_refuse_as_nav2(graph:
 
 
 def test_a_goal_is_rejected_while_the_planner_is_not_active(graph: Graph) -> None:
+    """Configured (its action servers are made by configure, as Nav2's are) but not active: rejected."""
+    from lifecycle_msgs.msg import Transition
+    from lifecycle_msgs.srv import ChangeState
     from nav2_msgs.action import NavigateToPose
     from rclpy.action import ActionClient
     graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', WORLD)))
     graph.start('planner', 'planner', NS, model='point_mass', autostart=False, **FAST)
     h = graph.helper = Helper(graph.domain)
+    change = h.node.create_client(ChangeState, f'{NS}/planner/change_state')
+    h.spin_until(change.service_is_ready, 30.0, 'the lifecycle service')
+    configured = change.call_async(ChangeState.Request(transition=Transition(id=Transition.TRANSITION_CONFIGURE)))
+    h.spin_until(configured.done, 30.0, 'configure')
+    assert configured.result().success
     client = ActionClient(h.node, NavigateToPose, f'{NS}/navigate_to_pose')
     h.spin_until(client.server_is_ready, 30.0, 'the action server')
     assert not send(h, client, NavigateToPose.Goal(pose=pose(18.0, 10.0))).accepted
@@ -243,3 +251,119 @@ def test_a_speed_limit_caps_max_speed_as_nav2_s_speed_filter_sends_it(context: A
         assert node.params.max_speed == pytest.approx(0.7)
     finally:
         node.destroy_node()
+
+
+def start_robot(graph: Graph, **params: Any) -> tuple[Helper, list[Any]]:
+    """Map, plant and planner on WORLD; the helper once the planner knows the world and the odometry is heard."""
+    graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', WORLD)))
+    graph.start('plant', 'plant', NS, model='point_mass', start=[2.0, 10.0])
+    graph.start('planner', 'planner', NS, model='point_mass', **{**FAST, **params})
+    h = graph.helper = Helper(graph.domain)
+    h.record_status(NS)
+    odom = h.record(f'{NS}/odom', Odometry)
+    h.wait_status(NS, lambda s: s['message'] == 'idle', 60.0, 'the planner to know the world')
+    h.wait_heard(f'{NS}/odom')
+    return h, odom
+
+
+def client_for(h: Helper, action: Any, name: str) -> Any:
+    from rclpy.action import ActionClient
+    client = ActionClient(h.node, action, f'{NS}/{name}')
+    h.spin_until(client.server_is_ready, 30.0, f'the {name} server')
+    return client
+
+
+def test_follow_waypoints_misses_every_refused_waypoint_and_the_next_goal_runs(graph: Graph) -> None:
+    """stop_on_failure false and as many waypoints as a goal may have, every one inside the circle: each is a
+    MissedWaypoint with GOAL_OCCUPIED (once each, in order), the goal SUCCEEDS at once, nothing recursed; a valid
+    goal after it is driven to."""
+    from nav2_msgs.action import FollowWaypoints
+
+    from fastep_ros.limits import GOAL_POSES_MAX
+    h, odom = start_robot(graph, stop_on_failure=False)
+    client = client_for(h, FollowWaypoints, 'follow_waypoints')
+    inside = [pose(9.5 + (i % 100) * 0.01, 10.0) for i in range(GOAL_POSES_MAX)]
+    done = result(h, send(h, client, FollowWaypoints.Goal(poses=inside)), 60.0, graph)
+    assert (done.status, done.result.error_code) == (SUCCEEDED, 0), done.result.error_msg
+    missed = done.result.missed_waypoints
+    assert [m.index for m in missed] == list(range(GOAL_POSES_MAX))
+    assert {m.error_code for m in missed} == {206}
+    assert missed[7].goal.pose.position.x == pytest.approx(9.57)
+    after = result(h, send(h, client, FollowWaypoints.Goal(poses=[pose(4.0, 10.0)])), graph=graph)
+    assert (after.status, after.result.error_code, list(after.result.missed_waypoints)) == (SUCCEEDED, 0, [])
+    assert distance(now_xy(h, odom), (4.0, 10.0)) < 0.2
+    log = graph.log('planner')
+    assert 'RecursionError' not in log and 'Traceback' not in log, log[-3000:]
+
+
+def test_a_pose_list_is_refused_whole_before_the_robot_moves(graph: Graph) -> None:
+    """A NaN third pose, and one pose more than a goal may have, end the goal ABORTED at once (the pose and the
+    bound named), for navigate_through_poses and follow_waypoints alike; the robot never moves."""
+    from nav2_msgs.action import FollowWaypoints, NavigateThroughPoses
+
+    from fastep_ros.limits import GOAL_POSES_MAX
+    h, odom = start_robot(graph)
+    through = client_for(h, NavigateThroughPoses, 'navigate_through_poses')
+    waypoints = client_for(h, FollowWaypoints, 'follow_waypoints')
+    start = now_xy(h, odom)
+    first = len(odom)
+
+    def still() -> None:
+        now_xy(h, odom)   # the odometry up to now
+        moved = max(distance(odom_xy(m), start) for m in odom[first:])
+        assert moved < 0.01, f'the robot moved {moved:.3f} m for goals refused'
+
+    poses = [pose(6.0, 13.0), pose(14.0, 13.0), pose(math.nan, 10.0)]
+    nan = result(h, send(h, through, NavigateThroughPoses.Goal(poses=poses)), 30.0, graph)
+    still()
+    assert (nan.status, nan.result.error_code) == (ABORTED, 200)
+    assert 'pose 2' in nan.result.error_msg and 'not finite' in nan.result.error_msg, nan.result.error_msg
+    stopped = result(h, send(h, waypoints, FollowWaypoints.Goal(poses=poses)), 30.0, graph)
+    assert (stopped.status, stopped.result.error_code) == (ABORTED, 601)
+    assert [(m.index, m.error_code) for m in stopped.result.missed_waypoints] == [(2, 200)]
+    assert 'waypoint 2' in stopped.result.error_msg and 'not finite' in stopped.result.error_msg
+
+    too_many = [pose(4.0, 10.0)] * (GOAL_POSES_MAX + 1)
+    for client, action in ((through, NavigateThroughPoses), (waypoints, FollowWaypoints)):
+        long = result(h, send(h, client, action.Goal(poses=too_many)), 30.0, graph)
+        assert (long.status, long.result.error_code) == (ABORTED, 200)
+        assert f'{GOAL_POSES_MAX + 1} poses' in long.result.error_msg, long.result.error_msg
+        assert str(GOAL_POSES_MAX) in long.result.error_msg.replace(f'{GOAL_POSES_MAX + 1}', '')
+
+    h.spin_for(1.0)
+    still()
+
+
+def test_ended_goals_are_released_soon_after_their_result(graph: Graph) -> None:
+    """Goals cancelled as soon as accepted: each result is there at once (CANCELED, or ABORTED for the ones a
+    newer goal preempted), and within a minute the server has forgotten them (a result asked for then is
+    UNKNOWN; the status array lists only the goals since), where rclpy's default keeps them 15 minutes."""
+    from action_msgs.msg import GoalStatus, GoalStatusArray
+    from nav2_msgs.action import NavigateThroughPoses
+    from rclpy.action.client import ClientGoalHandle
+    from rclpy.qos import qos_profile_action_status_default
+    h, _ = start_robot(graph)
+    through = client_for(h, NavigateThroughPoses, 'navigate_through_poses')
+    statuses = h.record(f'{NS}/navigate_through_poses/_action/status', GoalStatusArray,
+                        qos_profile_action_status_default)
+    handles: list[ClientGoalHandle] = []
+    for _ in range(10):
+        handle = send(h, through, NavigateThroughPoses.Goal(poses=[pose(4.0, 10.0 + 0.01 * j) for j in range(100)]))
+        assert handle.accepted
+        cancel = handle.cancel_goal_async()
+        h.spin_until(cancel.done, 30.0, 'the cancel to be answered')
+        handles.append(handle)
+    for handle in handles:
+        assert result(h, handle, 30.0, graph).status in (CANCELED, ABORTED)
+
+    def forgotten(handle: ClientGoalHandle) -> bool:
+        answer = handle.get_result_async()
+        h.spin_until(answer.done, 30.0, 'a result to be answered')
+        return bool(answer.result().status == GoalStatus.STATUS_UNKNOWN)
+    h.spin_until(lambda: all(forgotten(handle) for handle in handles), 60.0, 'the ended goals to be released')
+
+    last = send(h, through, NavigateThroughPoses.Goal(poses=[pose(4.0, 10.0)]))
+    uuid = bytes(last.goal_id.uuid)
+    h.spin_until(lambda: any(bytes(s.goal_info.goal_id.uuid) == uuid for m in statuses[-1:] for s in m.status_list),
+                 30.0, 'the status array with the new goal')
+    assert len(statuses[-1].status_list) == 1, [s.status for s in statuses[-1].status_list]

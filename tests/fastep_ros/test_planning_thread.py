@@ -6,9 +6,7 @@ import json
 import subprocess
 import sys
 import textwrap
-import threading
-import time
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 import pytest
@@ -18,38 +16,9 @@ from rclpy.parameter import Parameter
 from fastep_core.geometry import Circle
 from fastep_ros.planner import PlannerNode
 from fastep_ros.planning_thread import PlanningThread
+from fastep_testing.in_process import ObedientBase, planner_node
+from fastep_testing.planning_gate import WAIT, Gate, wait_for
 from msg_tools import convert
-
-WAIT = 30.0   # s: what a test waits at most for the thread (only a machine under heavy load comes near)
-
-
-def wait_for(condition: Callable[[], bool], what: str) -> None:
-    deadline = time.monotonic() + WAIT
-    while not condition():
-        assert time.monotonic() < deadline, f'{what}: not within {WAIT:g} s'
-        time.sleep(0.002)
-
-
-class Gate:
-    """A pass that waits until the test opens it (and says when it has started)."""
-
-    def __init__(self) -> None:
-        self.open, self.entered = threading.Event(), threading.Event()
-
-    def wait(self) -> None:
-        self.entered.set()
-        assert self.open.wait(WAIT), 'the gate was never opened'
-
-    @classmethod
-    def holding(cls, nav: Any) -> Gate:
-        """A gate every pass of `nav` waits at: a pass that takes as long as the test wants."""
-        gate, update = cls(), nav.update
-
-        def stuck(*args: Any) -> np.ndarray:
-            gate.wait()
-            return update(*args)
-        nav.update = stuck
-        return gate
 
 
 def test_a_change_runs_at_once_while_no_pass_is_under_way() -> None:
@@ -113,8 +82,7 @@ def test_a_fault_in_a_pass_is_logged_and_the_thread_plans_on() -> None:
 # ------------------------------------------------------------------------------------------------ the node
 
 def make(context: Any, **params: Any) -> PlannerNode:
-    overrides = {'workspace': [0.0, 0.0, 20.0, 20.0], **params}
-    return PlannerNode(context=context, parameter_overrides=[Parameter(k, value=v) for k, v in overrides.items()])
+    return planner_node(context, **{'workspace': [0.0, 0.0, 20.0, 20.0], **params})
 
 
 def start_driving(node: PlannerNode) -> None:
@@ -224,34 +192,10 @@ def test_status_and_diagnostics_carry_the_control_loops_deadlines(context: Any) 
         node.destroy_node()
 
 
-class Base:
-    """A diff-drive base in the test's process: it drives the planner's commands, tick by tick, on the test's clock."""
-
-    def __init__(self, node: PlannerNode) -> None:
-        self.node, self.now, self.state = node, 100.0, np.array([1.0, 10.0, 0.0])
-        self.v = self.omega = 0.0   # what it drives at, as its odometry's twist says
-        node.now = lambda: self.now   # type: ignore[method-assign]  # the test's clock
-        node.inputs.on_obstacles(convert.obstacles_to_marker_array([]))
-        node.on_goal(convert.point_to_pose_stamped((95.0, 10.0)))   # far: the law's speed (gain x distance) is higher
-
-    def tick(self) -> float:
-        node = self.node
-        node.inputs.on_odom(convert.state_to_odometry(self.state, convert.seconds_to_stamp(self.now),
-                                                      linear=(self.v, 0.0), angular=self.omega))
-        node.on_control()
-        v, omega = self.v, self.omega = float(node.last_command[0]), float(node.last_command[1])
-        self.state = self.state + 0.05 * np.array([v * np.cos(self.state[2]), v * np.sin(self.state[2]), omega])
-        self.now += 0.05
-        # The pass on this tick's snapshot ends before the next tick (50 ms of a robot's time; here, at once).
-        wait_for(lambda: node.plan_tick == node.control_count and node.planning is not None and
-                 node.planning.pass_started is None, 'the pass')
-        return v
-
-
 def test_every_speed_parameter_set_at_runtime_takes_effect_as_set(context: Any) -> None:
     node = make(context, model='diff_drive', robot_radius=0.3, workspace=[0.0, 0.0, 100.0, 20.0])
     try:
-        base = Base(node)
+        base = ObedientBase(node)
         speeds = [base.tick() for _ in range(30)]
         assert speeds[-1] == pytest.approx(1.0)   # max_speed's default
         for value in (1.0, 0.5, 1.5):   # its own value too: that once left the robot at 0.13 m/s

@@ -75,6 +75,7 @@ def test_reaches_goal_past_an_obstacle(one: Graph) -> None:
     first = len(odom)
     h.send_goal(NS, goal)
     status = h.wait_status(NS, lambda s: s['message'] == 'arrived' and goal_is(goal)(s), ARRIVE, 'arrival')
+    h.wait_recorded_through(f'{NS}/odom', float(status['t']))
     h.spin_for(0.2)
     assert status['level'] == 'ok'
     assert distance(position(h), goal) <= 0.1 + 0.02  # goal_tolerance, plus the last control tick
@@ -94,8 +95,9 @@ def test_goal_changed_mid_run_is_followed(one: Graph) -> None:
     h.send_goal(NS, first_goal)
     h.spin_until(lambda: distance(position(h), START) > 1.5, 60.0, 'the robot to move toward the first goal')
     h.send_goal(NS, second_goal)
-    h.wait_status(NS, lambda s: s['message'] == 'arrived' and goal_is(second_goal)(s), ARRIVE,
-                  'arrival at the second goal')
+    status = h.wait_status(NS, lambda s: s['message'] == 'arrived' and goal_is(second_goal)(s), ARRIVE,
+                           'arrival at the second goal')
+    h.wait_recorded_through(f'{NS}/odom', float(status['t']))
     h.spin_for(0.2)
     assert distance(position(h), second_goal) <= 0.12
     assert min(distance(odom_xy(m), first_goal) for m in odom[first:]) > 3.0, 'it went on to the first goal'

@@ -51,6 +51,8 @@ def test_two_robots_cross_without_collision(tmp_path: Path) -> None:
             final[name] = h.wait_status(f'/{name}', lambda s: s['message'] in ('arrived', 'failed'), 120.0,
                                         f'{name} to finish')
             assert final[name]['message'] == 'arrived', final[name]
+        for name in ROBOTS:
+            h.wait_recorded_through(f'/{name}/odom', float(final[name]['t']))
         h.spin_for(0.2)
 
         tracks = {name: {round(stamp(m), 6): odom_xy(m) for m in h.records[f'/{name}/odom']} for name in ROBOTS}

@@ -357,3 +357,15 @@ def test_a_wall_on_a_border_between_cells_is_on_the_map() -> None:
     assert (mapped.obstacles.clearance(along) <= 0.05).all()
     up = np.column_stack([np.full(20, 3.0), np.linspace(7.1, 8.9, 20)])
     assert (mapped.obstacles.clearance(up) <= 0.05).all()
+
+
+def test_a_scan_of_more_beams_than_any_lidar_is_refused_before_it_is_read() -> None:
+    from sensor_msgs.msg import LaserScan
+
+    from fastep_core.sensing.laser import MAX_BEAMS
+    msg = LaserScan(angle_min=-math.pi, angle_max=math.pi, angle_increment=2 * math.pi / (MAX_BEAMS + 1),
+                    range_min=0.1, range_max=10.0, ranges=[1.0] * (MAX_BEAMS + 1))
+    with pytest.raises(ValueError, match=f'laser scan has {MAX_BEAMS + 1} ranges, more than {MAX_BEAMS}'):
+        convert.laser_scan_to_scan(msg)
+    msg.ranges = [1.0] * MAX_BEAMS
+    assert len(convert.laser_scan_to_scan(msg).ranges) == MAX_BEAMS

@@ -54,12 +54,12 @@ def test_map_from_odom_uses_the_odometry_nearest_to_the_localization_stamp() -> 
     assert m.transform == pytest.approx((4.0, 5.0, 0.0))
     for t in (2.0, 3.0, 4.0):
         m.add_odometry(t, (t, 0.0, 0.0))
-    assert m.stamps == [2.0, 3.0, 4.0]   # only `keep` kept
+    assert m.history.stamps == (2.0, 3.0, 4.0)   # only `keep` kept
     m.add_localization(3.4, (10.0, 0.0, math.pi))   # nearest: the odometry at 3.0
     assert m.transform == pytest.approx((13.0, 0.0, math.pi))
     assert frames.compose(m.transform, (3.0, 0.0, 0.0)) == pytest.approx((10.0, 0.0, math.pi))
     m.add_odometry(0.5, (0.0, 0.0, 0.0))   # time went back: the old odometry is forgotten
-    assert m.stamps == [0.5] and m.localizations == 2
+    assert m.history.stamps == (0.5,) and m.localizations == 2
 
 
 def test_tf_message_cdr_decodes_with_rosbags() -> None:

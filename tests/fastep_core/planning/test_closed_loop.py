@@ -164,7 +164,7 @@ def test_off_commands_allows_an_exact_earlier_command_but_not_a_base_lagging_a_r
 
 
 def test_the_smoother_ramps_from_odometry_when_the_base_is_off_its_commands():
-    smoother = VelocitySmoother.for_model(DiffDrive(P.max_speed, P.max_turn_rate), P)
+    smoother = VelocitySmoother.for_model(DiffDrive(P.max_speed, P.max_turn_rate), P.limits)
     smoother.reset(np.array([0.3, 0.0]))
     assert smoother.smooth(np.array([0.0, 0.0]), DT)[0] == pytest.approx(0.3 - 2.5 * DT)
     assert smoother.feedback(np.array([0.9, 0.0]))   # a heavy base coasting faster than it is told

@@ -163,6 +163,7 @@ def test_commands_ramp_within_the_acceleration_limits_and_the_guards_stop_brakes
 
 
 def test_a_steered_robot_does_not_back_into_space_no_scan_has_seen() -> None:
+    from fastep_core.planning.guard_inputs import GuardInputs
     from fastep_core.planning.recovery import SeenFree
     from fastep_core.sensing.laser import Scan
     nav, state = _navigator('diff_drive')
@@ -174,6 +175,6 @@ def test_a_steered_robot_does_not_back_into_space_no_scan_has_seen() -> None:
     assert control.command(0.0, state, (), plan, 0.05)[0] < 0.0   # no laser: the map alone says the way is free
     # A 270-degree laser facing ahead: the quarter behind the robot is blind.
     scan = Scan(-0.75 * math.pi, 0.75 * math.pi, 1.5 * math.pi / 269, 0.05, 5.0, np.full(270, np.inf))
-    nav.seen = SeenFree.of_scans([(scan, np.array([2.0, 10.0, 0.0]))])
+    nav.take_perception(GuardInputs(seen=SeenFree.of_scans([(scan, np.array([2.0, 10.0, 0.0]))])))
     assert not control.command(0.05, state, (), plan, 0.05).any()
     assert control.reason.startswith('stopped: no evidence')

@@ -22,7 +22,7 @@ MODELS = {'diff_drive': DiffDrive(P.max_speed, P.max_turn_rate), 'tractor_traile
 
 
 def smoother(model: str, **params: float) -> VelocitySmoother:
-    return VelocitySmoother.for_model(MODELS[model], P.with_overrides(params))
+    return VelocitySmoother.for_model(MODELS[model], P.with_overrides(params).limits)
 
 
 def drive(s: VelocitySmoother, command: tuple[float, float], ticks: int, elapsed: float = DT) -> np.ndarray:
@@ -154,7 +154,7 @@ def test_no_time_no_change_and_a_command_that_is_not_finite_is_a_stop():
 def test_a_speed_limit_set_at_runtime_takes_effect_as_set(name, value, command, expect):
     s = smoother('diff_drive')
     drive(s, (1.0, 0.0), 20)
-    s.retune(P.with_overrides({name: value}))
+    s.retune(P.with_overrides({name: value}).limits)
     sent = drive(s, command, 80)
     assert sent[-1] == pytest.approx(expect)
     change = np.diff(np.vstack([[1.0, 0.0], sent]), axis=0)   # reached within the acceleration limits
@@ -171,7 +171,7 @@ def test_a_speed_limit_set_at_runtime_takes_effect_as_set(name, value, command, 
 def test_an_acceleration_limit_set_at_runtime_takes_effect_as_set(name, value, rate):
     s = smoother('diff_drive')
     drive(s, (1.0, 1.0), 40)
-    s.retune(P.with_overrides({name: value}))
+    s.retune(P.with_overrides({name: value}).limits)
     after = s.smooth(np.zeros(2), DT, emergency=name == 'emergency_deceleration')
     # One factor moves both components (the curvature stays), so the tighter limit sets the pace of both.
     assert (1.0 - after) / DT == pytest.approx([rate, rate])
