@@ -115,6 +115,30 @@ def test_tf_cdr_reads_what_rclpy_reads() -> None:
     assert tf_cdr.transform_count(b'\x00\x00\x00\x00' + data[4:]) is None   # big-endian: rclpy's to read
 
 
+def test_a_child_edge_is_found_behind_any_number_of_transforms_whose_parent_is_that_frame() -> None:
+    """map -> odom first, then many odom -> X: each X's header names odom as CDR names the child; all are passed
+    over. Also a child whose first double reads like a string's length and its first character."""
+    import struct
+
+    from geometry_msgs.msg import TransformStamped
+    from rclpy.serialization import serialize_message
+    from tf2_msgs.msg import TFMessage
+    odd = struct.unpack('<d', b'\x05\x00\x00\x00\x41\x00\x43\x3f')[0]
+    for parent in ('m', 'ma', 'map', 'mapp', 'mappp', 'a/map', 'ab/map', 'abc/map'):   # every alignment
+        for x, after in ((1.25, 2000), (odd, 3)):
+            transforms = []
+            for p, c in [(parent, 'odom'), *(('odom', f'r{i}/base_link') for i in range(after))]:
+                t = TransformStamped()
+                t.header.frame_id, t.child_frame_id = p, c
+                t.header.stamp = convert.seconds_to_stamp(3.5)
+                t.transform.rotation.w = 1.0
+                transforms.append(t)
+            transforms[0].transform.translation.x = x
+            found = tf_cdr.read_children(serialize_message(TFMessage(transforms=transforms)), ['odom'])
+            assert found is not None and found['odom'][:3] == (parent, 'odom', 3.5), (parent, found)
+            assert found['odom'][3][0] == x
+
+
 def test_a_message_read_in_part_takes_only_the_needed_frames_and_their_parents() -> None:
     buffer = TfBuffer()
     assert buffer.lookup('map', 'r1/base_link') is None   # asked for before any TF came
