@@ -42,6 +42,7 @@ from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
 from fastep_core.scenario import MODELS
 from fastep_core.world import World
+from fastep_ros.behaviour_actions import behaviour_command, behaviour_plan
 from fastep_ros.common import (
     RATE_RANGE,
     LatestLine,
@@ -55,6 +56,7 @@ from fastep_ros.common import (
     shown,
     table_values,
 )
+from fastep_ros.costmap_services import forget_seen
 from fastep_ros.goals import GoalSubscription
 from fastep_ros.lifecycle import Lifecycle, transitions_to_member
 from fastep_ros.limits import INLINE_WORLD_ITEMS, SPEED_LIMIT_LOG_PERIOD
@@ -70,6 +72,7 @@ from fastep_ros.planner_threads import (
     Change,
     DropGoal,
     FailGoal,
+    ForgetSeen,
     Localized,
     PassResult,
     PlanSnapshot,
@@ -393,6 +396,9 @@ class PlannerNode(LifecycleNode):
                 self.navigator.restart_clock(request.t)
             if self.planning is not None:
                 self.planning.drop_plan()   # planned before the pause, or on the other clock: not driven on
+        elif isinstance(request, ForgetSeen):   # a costmap-clearing service (fastep_ros.costmap_services)
+            request.done(forget_seen(self.inputs.scan_perception.perception, self.navigator, request.centre,
+                                     request.side, request.inside))
         else:
             assert_never(request)
 
@@ -762,8 +768,11 @@ class PlannerNode(LifecycleNode):
                 self.hold = ''   # held for its scans: status `blind` (fastep_ros.sensors)
             else:
                 self.hold = ''
-                command = self.navigate(nav, t, state, self.inputs.other_robots(t), self.inputs.velocity(),
-                                        self.inputs.odom_stamp, self.inputs.odometry_state())
+                others = self.inputs.other_robots(t)
+                behaviour = behaviour_command(self, t, state, others)   # a behaviour under way drives instead
+                command = behaviour if behaviour is not None else \
+                    self.navigate(nav, t, state, others, self.inputs.velocity(), self.inputs.odom_stamp,
+                                  self.inputs.odometry_state())
         self.publish_command(command, at)
         self.last_command = command
         if self.actions is not None:
@@ -817,6 +826,7 @@ class PlannerNode(LifecycleNode):
             self.plan_problem = f'planning stalled: plan {age:.2f} s old (max_plan_age {self.max_plan_age:g} s)'
             return control.stop(t, period, velocity, measured_at, pose)
         self.plan_problem = ''
+        plan = behaviour_plan(self, t, state, told, plan)   # a behaviour under way (spin, backup, ...) drives instead
         try:
             return control.command(t, state, told, plan, period, velocity, measured_at, pose)
         except Exception as exc:  # a fault of the control tick stops this robot, never the node

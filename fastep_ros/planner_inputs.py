@@ -31,6 +31,7 @@ from fastep_core.planning.others import OtherRobot
 from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
 from fastep_ros.common import RepeatedLine, StartupError
+from fastep_ros.initial_pose import InitialPose
 from fastep_ros.latched import LatchedSubscription
 from fastep_ros.limits import LOCALIZATION_EXTENT_MAX, LOCALIZATION_MARGIN, TF_LOCALIZER_INTERVAL
 from fastep_ros.live_tf import LOCALIZATION_QOS, TfListener
@@ -197,6 +198,9 @@ class PlannerInputs:
                                                self.on_localization, LOCALIZATION_QOS)
             self.localization_topic = sub.topic_name
             self.subscriptions.append(sub)
+        # initialpose (BasicNavigator.setInitialPose, RViz): sets map -> odom where the planner has no localizer.
+        self.initial_pose = InitialPose(self)
+        self.subscriptions.append(self.initial_pose.sub)
         self.subscriptions.append(node.ros.create_subscription(MarkerArray, interface.MOVERS, self.on_movers, LATEST))
         # Any LaserScan on `scan` (sensor-data QoS: a best-effort subscription matches reliable publishers too):
         # the planner perceives with it (fastep_ros.perception) and shows its belief on `tracked_obstacles`.
@@ -417,14 +421,16 @@ class PlannerInputs:
 
     def map_to_odom(self) -> frames.Pose2D | None:
         """map -> odom of the odometry last taken (None: not known yet, the robot holds still): from the
-        localization pose topic, else from TF (map_to_odom_from_tf), else the identity (simulation)."""
+        localization pose topic, else from TF (map_to_odom_from_tf), else the identity (simulation) or what an
+        initial pose set."""
         if self.odom is None or self.odom.frame_id == self.node.frame_id:
             return frames.IDENTITY
         if self.localization_topic:
             return self.map_from_odom.transform
         if self.map_to_odom_from_tf:
             return self.map_to_odom_tf(self.odom.pose)
-        return frames.IDENTITY
+        set_by_hand = self.map_from_odom.transform   # an initial pose's (fastep_ros.initial_pose), else none
+        return frames.IDENTITY if set_by_hand is None else set_by_hand
 
     def map_to_odom_tf(self, odometry: frames.Pose2D) -> frames.Pose2D | None:
         """map -> odom from TF (None: none usable): refused when, composed with the odometry, it puts base_link off

@@ -113,9 +113,9 @@ PARAMETERS: tuple[Param, ...] = (
     Param('exclusive_cmd_vel', True, 'another publisher on cmd_vel (a second planner started in this namespace, a '
           'teleop) stops this planner\'s commands after one zero: status ERROR `conflict` until it is gone; false: '
           'command anyway', read_only=False),
-    Param('stop_on_failure', True, 'follow_waypoints: a waypoint that fails ends the goal (ABORTED, '
-          'TASK_EXECUTOR_FAILED), as Nav2\'s waypoint follower by default; false: it is missed and the robot goes on '
-          'to the next', read_only=False),
+    Param('stop_on_failure', False, 'follow_waypoints: true: a waypoint that fails ends the goal (ABORTED, error '
+          'code 0 as Nav2\'s waypoint follower gives it, the waypoint in missed_waypoints with its code); false (as '
+          'in Nav2\'s stock nav2_params.yaml): it is missed and the robot goes on to the next', read_only=False),
     Param('realtime', False, 'in lock step, plan on the planning thread as on wall time: a pass\'s plan reaches the '
           'control loop when it is done, the simulated clock going on meanwhile (fastep-launch --realtime: planning '
           'latency counted; not deterministic)'),

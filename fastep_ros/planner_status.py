@@ -292,6 +292,9 @@ class PlannerReports:
         cap = self.node.speed_cap()
         if cap is not None:   # m/s: what a speed limit (speed_limit topic) caps max_speed at; absent without one
             values['speed_limit'] = cap
+        initial_pose = getattr(self.node.inputs, 'initial_pose', None)   # fastep_ros.initial_pose; absent before one
+        if initial_pose is not None and initial_pose.status:
+            values['initial_pose'] = initial_pose.status
         # Sent as its bytes (msg_tools.cdr): convert.make_status's message (~0.4 ms of CPU to build and convert for
         # the middleware at 16 robots), not built. The level is one of DiagnosticStatus' byte constants.
         self.status_pub.publish(cdr.diagnostic_status_cdr(level[0], self.node.ros.get_namespace(), message, '',

@@ -38,7 +38,7 @@ sends the result (why each call is safe from which thread: fastep_ros/action_thr
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 from geometry_msgs.msg import PoseStamped
@@ -51,8 +51,8 @@ from fastep_core.world import World
 from fastep_ros.progress import Way
 from fastep_ros.sensors import PlacedScan
 
-__all__ = ['ActionGoal', 'AdoptWorld', 'Change', 'DropGoal', 'FailGoal', 'Localized', 'PassResult', 'PlanSnapshot',
-           'RestartClock', 'Retune', 'TakeGoal']
+__all__ = ['ActionGoal', 'AdoptWorld', 'Change', 'DropGoal', 'FailGoal', 'ForgetSeen', 'Localized', 'PassResult',
+           'PlanSnapshot', 'RestartClock', 'Retune', 'TakeGoal']
 
 
 @dataclass(frozen=True)
@@ -150,5 +150,18 @@ class RestartClock:
     t: float
 
 
-Change = TakeGoal | DropGoal | FailGoal | AdoptWorld | Retune | Localized | RestartClock
+@dataclass(frozen=True)
+class ForgetSeen:
+    """Forget what the laser added to the belief (its walls and circles, the tracks) inside the square of side `side`
+    centred at `centre`, axis-aligned in the map frame (`inside` false: outside it; side inf: everywhere), the map's
+    obstacles kept: a Nav2 costmap-clearing service's request (fastep_ros.costmap_services). `done` is told what
+    was forgotten once applied (a costmap_services.Forgotten)."""
+
+    centre: tuple[float, float]
+    side: float
+    inside: bool
+    done: Callable[[Any], None]
+
+
+Change = TakeGoal | DropGoal | FailGoal | AdoptWorld | Retune | Localized | RestartClock | ForgetSeen
 """What the executor asks of the planning side (PlannerNode.change); nothing else changes it."""

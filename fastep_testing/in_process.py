@@ -15,7 +15,7 @@ from fastep_ros.planner import PlannerNode
 from fastep_testing.planning_gate import wait_for
 from msg_tools import convert
 
-__all__ = ['DT', 'ObedientBase', 'TickClock', 'planner_node']
+__all__ = ['DT', 'GoalHandle', 'ObedientBase', 'PointMassBase', 'TickClock', 'planner_node']
 
 DT = 0.05   # s: the control period (control_rate_hz 20)
 
@@ -66,3 +66,46 @@ class ObedientBase:
         wait_for(lambda: node.plan_tick == node.control_count and node.planning is not None and
                  node.planning.pass_started is None, 'the pass')
         return v
+
+
+class PointMassBase:
+    """A point-mass base driving exactly the map-frame velocity it is told, for DT each tick, on the test's clock;
+    the feedback of the action goal under way every tick (the executor sends one every FEEDBACK_PERIOD wall
+    seconds). `path`: where it was at each tick; `speeds`: the speed it drove each tick."""
+
+    def __init__(self, node: PlannerNode, at: Sequence[float]) -> None:
+        self.node, self.now, self.xy, self.v = node, 100.0, np.array(at, dtype=float), np.zeros(2)
+        self.path = [self.xy.copy()]
+        self.speeds: list[float] = []
+        node.now = lambda: self.now   # type: ignore[method-assign]  # the test's clock
+
+    def tick(self) -> None:
+        node = self.node
+        assert node.planning is not None and node.actions is not None
+        count, passes = node.control_count, node.planning.passes
+        node.inputs.on_odom(convert.state_to_odometry([*self.xy, 0.0], convert.seconds_to_stamp(self.now),
+                                                      linear=(float(self.v[0]), float(self.v[1]))))
+        node.on_control()
+        run = node.actions.run
+        if run is not None and run.taken:
+            node.actions.publish_feedback(run, 0.0)
+        self.v = np.array(node.last_command[:2], dtype=float)
+        self.speeds.append(float(np.hypot(*self.v)))
+        self.xy = self.xy + DT * self.v
+        self.path.append(self.xy.copy())
+        self.now += DT
+        if node.control_count > count:   # the pass on this tick's snapshot (one pass a snapshot: none waits)
+            wait_for(lambda: node.planning is not None and node.planning.passes > passes and
+                     node.planning.pass_started is None, 'the pass')
+
+
+class GoalHandle:
+    """What NavigateActions reads and calls of rclpy's ServerGoalHandle: the request, cancel, feedback (each with
+    the base's path index when it was sent)."""
+
+    def __init__(self, request: Any, base: PointMassBase) -> None:
+        self.request, self.base, self.is_cancel_requested = request, base, False
+        self.feedback: list[tuple[int, Any]] = []
+
+    def publish_feedback(self, feedback: Any) -> None:
+        self.feedback.append((len(self.base.path) - 1, feedback))

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from fastep_core.geometry import Circle
-from fastep_testing.in_process import DT, planner_node
+from fastep_testing.in_process import DT, GoalHandle, PointMassBase, planner_node
 from fastep_testing.planning_gate import wait_for
 from msg_tools import convert
 
@@ -22,45 +22,7 @@ START, GOAL = (2.0, 10.0), (18.0, 10.0)
 TICKS = 2000   # 100 s of the test's clock: the drive takes about 20
 
 
-class Handle:
-    """What NavigateActions reads and calls of rclpy's ServerGoalHandle: the request, cancel, feedback."""
-
-    def __init__(self, request: Any, base: PointMass) -> None:
-        self.request, self.base, self.is_cancel_requested = request, base, False
-        self.feedback: list[tuple[int, Any]] = []   # (the base's path index when sent, the feedback)
-
-    def publish_feedback(self, feedback: Any) -> None:
-        self.feedback.append((len(self.base.path) - 1, feedback))
-
-
-class PointMass:
-    """A point-mass base driving exactly the map-frame velocity it is told, for DT each tick."""
-
-    def __init__(self, node: Any) -> None:
-        self.node, self.now, self.xy, self.v = node, 100.0, np.array(START), np.zeros(2)
-        self.path = [self.xy.copy()]
-        node.now = lambda: self.now   # the test's clock
-
-    def tick(self) -> None:
-        node = self.node
-        assert node.planning is not None
-        count, passes = node.control_count, node.planning.passes
-        node.inputs.on_odom(convert.state_to_odometry([*self.xy, 0.0], convert.seconds_to_stamp(self.now),
-                                                      linear=(float(self.v[0]), float(self.v[1]))))
-        node.on_control()
-        run = node.actions.run
-        if run is not None and run.poses is not None and run.taken:
-            node.actions.publish_feedback(run, 0.0)   # every tick (the executor sends one every FEEDBACK_PERIOD)
-        self.v = np.array(node.last_command[:2], dtype=float)
-        self.xy = self.xy + DT * self.v
-        self.path.append(self.xy.copy())
-        self.now += DT
-        if node.control_count > count:   # the pass on this tick's snapshot (one pass a snapshot: none waits)
-            wait_for(lambda: node.planning is not None and node.planning.passes > passes and
-                     node.planning.pass_started is None, 'the pass')
-
-
-def drive(context: Any, kind: str, goal: Any, **params: Any) -> tuple[PointMass, Handle, Any]:
+def drive(context: Any, kind: str, goal: Any, **params: Any) -> tuple[PointMassBase, GoalHandle, Any]:
     """A goal of `kind` driven to its end round a circle on the direct line: the base, the handle, the result."""
     from rclpy.task import Future
 
@@ -68,10 +30,10 @@ def drive(context: Any, kind: str, goal: Any, **params: Any) -> tuple[PointMass,
     node = planner_node(context, workspace=[0.0, 0.0, 20.0, 20.0], model='point_mass', algorithm='fastep_route',
                         robot_radius=0.5, alpha1=1.0, alpha2=1.0, max_speed=1.0, **params)
     try:
-        base = PointMass(node)
+        base = PointMassBase(node, START)
         node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 1.5)]))
         base.tick()
-        handle, done = Handle(goal, base), Future()
+        handle, done = GoalHandle(goal, base), Future()
         node.actions.start(ActionGoal(kind, handle, done, node.actions.epoch), True)
         for _ in range(TICKS):
             if done.done():
@@ -93,7 +55,7 @@ def seconds(duration: Any) -> float:
     return float(duration.sec + duration.nanosec * 1e-9)
 
 
-def check_distances(base: PointMass, handle: Handle, least: float) -> list[tuple[float, float]]:
+def check_distances(base: PointMassBase, handle: GoalHandle, least: float) -> list[tuple[float, float]]:
     """distance_remaining against what is then driven (within 5 % or 0.2 m), never rising; (told, driven) pairs."""
     left = driven_after(base.path)
     pairs = [(float(f.distance_remaining), float(left[i])) for i, f in handle.feedback]
@@ -138,12 +100,12 @@ def test_distance_remaining_through_poses_adds_the_legs_after_the_pose_driven_to
 TIMEOUT = 2.0   # s: planning_timeout of these tests (40 ticks of the test's clock)
 
 
-def stalled_node(context: Any) -> tuple[Any, PointMass, Any]:
+def stalled_node(context: Any) -> tuple[Any, PointMassBase, Any]:
     """A planner whose passes all wait at a gate (planning that never ends) from the next tick on."""
     from fastep_testing.planning_gate import Gate
     node = planner_node(context, workspace=[0.0, 0.0, 20.0, 20.0], model='point_mass', algorithm='fastep_route',
                         robot_radius=0.5, planning_timeout=TIMEOUT)
-    base = PointMass(node)
+    base = PointMassBase(node, START)
     node.inputs.on_obstacles(convert.obstacles_to_marker_array([Circle((10.0, 10.0), 1.5)]))
     base.tick()
     wait_for(lambda: node.planning is not None and node.planning.plan is not None and
@@ -152,14 +114,14 @@ def stalled_node(context: Any) -> tuple[Any, PointMass, Any]:
     return node, base, Gate.holding(node.navigator)
 
 
-def tick_without_passes(base: PointMass) -> None:
+def tick_without_passes(base: PointMassBase) -> None:
     """A control tick while the pass under way does not end (the base stands: the robot is stopped)."""
     base.node.inputs.on_odom(convert.state_to_odometry([*base.xy, 0.0], convert.seconds_to_stamp(base.now)))
     base.node.on_control()
     base.now += DT
 
 
-def ticks_until(base: PointMass, done: Any, most: int) -> int:
+def ticks_until(base: PointMassBase, done: Any, most: int) -> int:
     for k in range(most):
         if done():
             return k
@@ -178,7 +140,7 @@ def test_a_goal_whose_planning_stalls_ends_aborted_with_nav2_s_timeout_within_pl
     from fastep_ros.planner_threads import ActionGoal
     node, base, gate = stalled_node(context)
     try:
-        handle, done = Handle(NavigateToPose.Goal(pose=convert.point_to_pose_stamped(GOAL)), base), Future()
+        handle, done = GoalHandle(NavigateToPose.Goal(pose=convert.point_to_pose_stamped(GOAL)), base), Future()
         if stage == 'taking':
             tick_without_passes(base)
             assert gate.entered.wait(30.0)   # a pass under way that does not end, before the goal comes
@@ -230,12 +192,12 @@ def test_an_unreachable_goal_ends_aborted_no_valid_path(context: Any) -> None:
     node = planner_node(context, workspace=[0.0, 0.0, 20.0, 20.0], model='point_mass', algorithm='fastep_route',
                         robot_radius=0.5, planning_timeout=TIMEOUT)
     try:
-        base = PointMass(node)
+        base = PointMassBase(node, START)
         corners = [(14.0, 8.0), (18.0, 8.0), (18.0, 12.0), (14.0, 12.0)]
         walls = [Segment(corners[i], corners[(i + 1) % 4]) for i in range(4)]
         node.inputs.on_obstacles(convert.obstacles_to_marker_array(walls))
         base.tick()
-        handle, done = Handle(NavigateToPose.Goal(pose=convert.point_to_pose_stamped((16.0, 10.0))), base), Future()
+        handle, done = GoalHandle(NavigateToPose.Goal(pose=convert.point_to_pose_stamped((16.0, 10.0))), base), Future()
         node.actions.start(ActionGoal('navigate_to_pose', handle, done, node.actions.epoch), True)
         for _ in range(int(3 * TIMEOUT / DT)):
             if done.done():
