@@ -214,7 +214,13 @@ DISCOVERY_ENV = ('ROS_AUTOMATIC_DISCOVERY_RANGE', 'ROS_STATIC_PEERS', 'ROS_LOCAL
 
 
 def status_page() -> str:
-    from fastep_ros.navigate_actions import ERROR_CODES, TASK_EXECUTOR_FAILED, UNKNOWN_DRIVING, UNKNOWN_PLANNING
+    from fastep_ros.navigate_actions import (
+        ERROR_CODES,
+        NAVIGATION_TF,
+        UNKNOWN_DRIVING,
+        UNKNOWN_PLANNING,
+        WAYPOINTS_FAILED,
+    )
     from fastep_ros.planner_status import STATUS_MESSAGES
     lines = ['# Status and failure reasons', '',
              'Generated from the planner\'s tables (`python -m fastep_ros.reference`). The planner publishes '
@@ -230,8 +236,10 @@ def status_page() -> str:
              *(f'| {words} | {code} |' for words, code in ERROR_CODES),
              f'| anything else, for a goal refused | {UNKNOWN_PLANNING} (ComputePathToPose UNKNOWN) |',
              f'| anything else, on the way | {UNKNOWN_DRIVING} (FollowPath UNKNOWN) |', '',
-             f'follow_waypoints with stop_on_failure ends at a failed waypoint with {TASK_EXECUTOR_FAILED} '
-             '(TASK_EXECUTOR_FAILED); without, the waypoint goes into missed_waypoints with its code.']
+             f'As Nav2 Jazzy: a navigation goal whose pose TF cannot put in the map frame ends with {NAVIGATION_TF}; '
+             f'follow_waypoints with stop_on_failure ends at a failed waypoint with {WAYPOINTS_FAILED} (the waypoint '
+             'in missed_waypoints with its code); without, the waypoint goes into missed_waypoints and the goal goes '
+             'on. The other servers\' codes: [From Nav2 to fastep](../nav2.md).']
     return '\n'.join(lines)
 
 
