@@ -61,6 +61,8 @@ __all__ = ['ERROR_CODES', 'FEEDBACK_PERIOD', 'FOLLOW_PATH_CODES', 'GivenPath', '
            'error_code', 'follow_path_code', 'navigation_code', 'simplified']
 
 FEEDBACK_PERIOD = 0.1   # wall seconds between feedback messages (Nav2's navigator sends one per tree tick)
+HELD_TIME = 2.0    # s: the ETA's speed is the speed held, smoothed over this long (Nav2's: the odometry's, smoothed)
+HELD_LEAST = 0.2   # of the speed it can hold: the least the ETA takes (a turn in place is not a stop)
 WAY_WAIT = 1.0          # node seconds feedback waits for a pass to plan the way to a new pose (then: the straight run)
 
 # Nav2 Jazzy's error codes (nav2_msgs ComputePathToPose and FollowPath), by what the planner's reason says.
@@ -419,6 +421,9 @@ class Run:
     sent: PoseStamped | None = None    # the pose handed to the planner (identity: the planner took it or not)
     taken: bool = False                # the planner has made `sent` its goal
     sent_at: float = math.nan          # node time `sent` was handed to the planner
+    held: float | None = None          # m/s: the speed held lately, as feedback saw the robot (the ETA's)
+    last_position: tuple[float, float] | None = None
+    last_at: float = -math.inf         # node time of last_position
     result: Any = None
     done: Any = None                   # an rclpy Future, set when the run ends: (terminal state, result)
     ended: list[str] = field(default_factory=list)
@@ -766,11 +771,22 @@ class NavigateActions:
         remaining, planned = self.distance_remaining(run, position)
         if not planned and node.now() - run.sent_at < WAY_WAIT:
             return   # no pass has planned the way to this pose yet (one comes within a tick or two)
-        speed = node.params.max_speed   # the speed it can hold (a speed limit caps it: on_speed_limit)
+        speed = node.params.max_speed   # the most it can hold (a speed limit caps it: on_speed_limit)
         if not speed > 0.0:   # unlimited: the speed driven now, at least 1 m/s
             speed = max(1.0, math.hypot(*node.last_command[:2]) if node.model == 'point_mass' else
                         abs(float(node.last_command[0])))
-        feedback.navigation_time = _duration(Duration, node.now() - run.began)
+        now = node.now()
+        if run.last_position is not None and now > run.last_at:
+            # The speed it holds lately (turns in place, slowing round obstacles, a base slower than told), smoothed
+            # over HELD_TIME; from `speed` at the start.
+            step = now - run.last_at
+            weight = 1.0 - math.exp(-step / HELD_TIME)
+            run.held = speed if run.held is None else run.held
+            run.held += weight * (math.dist(position, run.last_position) / step - run.held)
+        run.last_position, run.last_at = position, now
+        if run.held is not None:
+            speed = min(speed, max(run.held, HELD_LEAST * speed))
+        feedback.navigation_time = _duration(Duration, now - run.began)
         feedback.estimated_time_remaining = _duration(Duration, eta(remaining, speed, node.params.max_acceleration))
         feedback.number_of_recoveries = min(int(nav.escapes + nav.manoeuvres), 32767)
         feedback.distance_remaining = float(remaining)

@@ -54,7 +54,7 @@ def test_a_basic_navigator_script_runs_to_the_end_against_a_fastep_robot(graph: 
                                                                           monkeypatch: pytest.MonkeyPatch) -> None:
     from fastep_ros.navigation_client import NavigationClient
     graph.start('map', 'map_server', scenario=str(write(graph.tmp / 'world.yaml', WORLD)))
-    graph.start('plant', 'plant', NS, model='diff_drive', start=[3.0, 10.0, 0.0])
+    graph.start('plant', 'plant', NS, model='diff_drive', start=[3.0, 10.0, 0.0], max_speed=PARAMS['max_speed'])
     graph.start('planner', 'planner', NS, model='diff_drive', **PARAMS)
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     nav = NavigationClient(namespace=NS, domain_id=graph.domain, server_timeout=60.0)
