@@ -177,7 +177,7 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
     by_name = sorted(range(len(specs)), key=lambda k: specs[k].name)   # robot indices in the order of their names
     name_rank = [by_name.index(k) for k in range(len(specs))]          # each robot's place in that order
     step_times: list[float] = []               # every robot's position after each step, for the margins
-    step_positions: list[FloatArray] = []
+    step_positions: list[list[float]] = []     # (x, y) of robot 0, 1, ... in one row
     posed = [i for i, spec in enumerate(specs) if spec.footprint is not None]   # judged by their outline
     step_headings: list[list[float]] = []      # ... and their headings
 
@@ -256,20 +256,28 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
             # The others see it as it truly moves (kinematic: the twist it drives at, along its new heading).
             velocities[i] = plant.velocity()
             runs[i].compute_time += time.perf_counter() - start
-            runs[i].path_length += float(np.hypot(*(new_state[:2] - states[i][:2])))
+            # Distances in Python floats through np.hypot (math.hypot's last bit can differ, and runs are compared
+            # bit for bit): the same numbers as numpy's arrays gave, without making two arrays for two numbers.
+            values = new_state.tolist()
+            x, y = values[0], values[1]
+            x0, y0 = states[i][:2].tolist()
+            runs[i].path_length += float(np.hypot(x - x0, y - y0))
             states[i] = new_state
             run = runs[i]
             run.cost.append((t_next, nav.cost))
             run.velocity.append((t_next, float(velocities[i][0]), float(velocities[i][1])))
             # Trajectory samples at most SAMPLE_SPACING apart: when the newest point is too far from the
             # last sample, the point before it is sampled first.
-            row = [t_next, *new_state.tolist()]
+            row = [t_next, *values]
             before = pending[i]
-            if np.hypot(*(new_state[:2] - last_sample[i])) > SAMPLE_SPACING and before is not None:
+            sample_x, sample_y = last_sample[i].tolist()
+            gap = np.hypot(x - sample_x, y - sample_y)
+            if gap > SAMPLE_SPACING and before is not None:
                 run.trajectory.append(before)
                 last_sample[i] = np.array(before[1:3])
                 pending[i] = None
-            if np.hypot(*(new_state[:2] - last_sample[i])) >= SAMPLE_SPACING:
+                gap = np.hypot(x - before[1], y - before[2])
+            if gap >= SAMPLE_SPACING:
                 run.trajectory.append(row)
                 last_sample[i] = new_state[:2].copy()
                 pending[i] = None
@@ -280,7 +288,7 @@ def simulate(scenario: Scenario, algorithm: str = 'fastep', seed: int = 0,
                 observer(Tick(t_next, specs[i].name, new_state, commands[i], velocities[i], nav,
                               None if sense is None else sense.belief))
         step_times.append(t_next)
-        step_positions.append(np.array([s[:2] for s in states]))
+        step_positions.append([c for s in states for c in s[:2].tolist()])
         if posed:
             step_headings.append([float(states[i][2]) for i in posed])
 

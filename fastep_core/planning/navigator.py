@@ -20,7 +20,7 @@ from fastep_core.errors import GoalError
 from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import Controller, RobotModel
 from fastep_core.planning import behaviours, step_planning
-from fastep_core.planning.base_response import BaseResponse, ShownResponse, speed_of
+from fastep_core.planning.base_response import BaseResponse, ShownResponse, all_finite, speed_of
 from fastep_core.planning.behaviours import ROTATING, HoldBreaker, PathCheck, Tick
 from fastep_core.planning.detection import RunDetector
 from fastep_core.planning.escape import TrapEscape
@@ -312,7 +312,7 @@ class Navigator:
         (the controller, the guard's stop, a recovery): its next command starts from there.
         """
         measured = self._last_command if velocity is None else np.asarray(velocity, dtype=float).reshape(2)
-        if np.isfinite(measured).all() and np.isfinite(state).all():
+        if all_finite(measured) and all_finite(state):
             # A slide the wheels do not see shows in the poses (BaseResponse.slide); where a control loop measures,
             # the slide it found last.
             at = t if measured_at is None else measured_at
@@ -350,14 +350,14 @@ class Navigator:
         if self.goal is None or self.mode in (Mode.ARRIVED, Mode.FAILED):
             return np.zeros(2)
         state = np.asarray(state, dtype=float)
-        if not all(map(math.isfinite, state)):
+        if not all_finite(state):
             self.reason = 'robot state is not finite; holding still'
             return np.zeros(2)
         position = state[:2]
         if not (isinstance(others, OtherRobots) and others.finite):
             others = [o for o in others if math.isfinite(o.position[0]) and math.isfinite(o.position[1])]
         measured = np.zeros(2) if velocity is None else velocity
-        if not np.isfinite(measured).all():
+        if not all_finite(measured):
             measured = self._last_command
         self._measured_speed = speed_of(measured, self.model.holonomic)
         now = Tick(self._ticks, t, dt, state, position, others,

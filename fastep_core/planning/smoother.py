@@ -31,7 +31,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from fastep_core.kinematics.model import RobotModel
-from fastep_core.planning.base_response import FEEDBACK_COMMANDS, off_commands
+from fastep_core.planning.base_response import FEEDBACK_COMMANDS, all_finite, off_commands
 from fastep_core.planning.limits import Limits
 
 __all__ = ['VelocitySmoother']
@@ -119,7 +119,7 @@ class VelocitySmoother:
         if measured is None:
             return False
         m = np.asarray(measured, dtype=float).reshape(2)
-        if not np.isfinite(m).all():
+        if not all_finite(m):
             return False
         if not off_commands(m, self.sent or (self.velocity,), self.holonomic):
             return False
@@ -130,7 +130,7 @@ class VelocitySmoother:
     def cap(self, command: ArrayLike) -> FloatArray:
         """The command within the speed limits, scaled down by one factor (the direction or curvature stays)."""
         c = np.asarray(command, dtype=float).reshape(2)
-        if not np.isfinite(c).all():
+        if not all_finite(c):
             return np.zeros(2)
         over = 1.0
         if self.holonomic:
