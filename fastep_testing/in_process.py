@@ -15,7 +15,7 @@ from fastep_ros.planner import PlannerNode
 from fastep_testing.planning_gate import wait_for
 from msg_tools import convert
 
-__all__ = ['DT', 'GoalHandle', 'ObedientBase', 'PointMassBase', 'TickClock', 'planner_node']
+__all__ = ['DT', 'GoalHandle', 'LoggedLines', 'ObedientBase', 'PointMassBase', 'TickClock', 'planner_node']
 
 DT = 0.05   # s: the control period (control_rate_hz 20)
 
@@ -109,3 +109,23 @@ class GoalHandle:
 
     def publish_feedback(self, feedback: Any) -> None:
         self.feedback.append((len(self.base.path) - 1, feedback))
+
+
+class LoggedLines:
+    """The node's logger, its info, warning and error lines kept in `lines` as (level, text) (the rest as it was)."""
+
+    def __init__(self, node: PlannerNode) -> None:
+        self.real, self.lines = node.get_logger(), []
+        node.get_logger = lambda: self   # type: ignore[method-assign]  # the test reads what the node logs
+
+    def info(self, text: str, **_: Any) -> None:
+        self.lines.append(('info', text))
+
+    def warning(self, text: str, **_: Any) -> None:
+        self.lines.append(('warning', text))
+
+    def error(self, text: str, **_: Any) -> None:
+        self.lines.append(('error', text))
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.real, name)

@@ -30,7 +30,7 @@ from fastep_ros.costmap_grid import (
     local_window,
 )
 from fastep_ros.planner import PlannerNode
-from fastep_testing.in_process import DT, planner_node
+from fastep_testing.in_process import DT, LoggedLines, planner_node
 from fastep_testing.planning_gate import WAIT, wait_for
 from msg_tools import convert
 
@@ -142,26 +142,6 @@ def test_the_costmap_message_draws_the_tracked_movers_and_is_filled_as_nav2_fill
     assert message.data[cell(window, 6.05, 4.0)] == LETHAL and message.data[cell(window, 4.5, 4.0)] == FREE
 
 
-class Logged:
-    """The node's logger, its info, warning and error lines kept (the rest as it was)."""
-
-    def __init__(self, node: PlannerNode) -> None:
-        self.real, self.lines = node.get_logger(), []
-        node.get_logger = lambda: self   # type: ignore[method-assign]  # the test reads what the node logs
-
-    def info(self, text: str, **_: Any) -> None:
-        self.lines.append(('info', text))
-
-    def warning(self, text: str, **_: Any) -> None:
-        self.lines.append(('warning', text))
-
-    def error(self, text: str, **_: Any) -> None:
-        self.lines.append(('error', text))
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self.real, name)
-
-
 class Robot:
     """A point mass standing at `at` in MAP with ON_MAP and MAP_WALL on its map, its odometry every tick."""
 
@@ -268,7 +248,7 @@ def test_the_local_costmap_is_a_window_round_the_robot_that_follows_it(robot: Ro
 def test_a_request_s_resolution_is_honoured_and_one_too_fine_is_drawn_coarser_and_logged(context: Any) -> None:
     robot = Robot(context, planning_thread=False)
     try:
-        logged = Logged(robot.node)
+        logged = LoggedLines(robot.node)
         coarse = robot.costmap(resolution=0.25)
         assert (coarse.metadata.size_x, coarse.metadata.resolution) == (80, pytest.approx(0.25))
         assert costs_at(coarse, 12.0, 10.0) == LETHAL
@@ -289,7 +269,7 @@ def test_a_request_s_resolution_is_honoured_and_one_too_fine_is_drawn_coarser_an
 def test_the_local_costmap_is_empty_and_says_why_while_the_robot_s_position_is_not_known(context: Any) -> None:
     robot = Robot(context, planning_thread=False)
     try:
-        logged = Logged(robot.node)
+        logged = LoggedLines(robot.node)
         robot.odometry, robot.now = False, robot.now + 10.0   # odometry stale
         local = robot.costmap(LOCAL)
         assert (local.metadata.size_x, local.metadata.size_y, len(local.data)) == (0, 0, 0)
@@ -347,7 +327,7 @@ def test_clear_around_a_pose_in_odom_forgets_only_there_and_the_costmap_shows_it
                                                                                  Time())]))
         before = robot.costmap()
         assert lethal_near(before, 1.5, 10.0) and lethal_near(before, 7.0, 10.0)   # believed
-        logged = Logged(robot.node)
+        logged = LoggedLines(robot.node)
         request = srv.ClearCostmapAroundPose.Request(pose=pose(5.0, 10.0, 'odom'), reset_distance=4.0)
         robot.call(AROUND_POSE, request, tick=robot.quiet)   # (5, 10) in odom: (1.5, 10) in map, FAR's middle
         said = [text for level, text in logged.lines if text.startswith(AROUND_POSE)]
@@ -362,7 +342,7 @@ def test_clear_around_a_pose_in_odom_forgets_only_there_and_the_costmap_shows_it
 def test_clear_around_a_pose_in_a_frame_tf_does_not_resolve_clears_nothing_and_says_so(context: Any) -> None:
     robot = Scanning(context)
     try:
-        logged = Logged(robot.node)
+        logged = LoggedLines(robot.node)
         request = srv.ClearCostmapAroundPose.Request(pose=pose(1.5, 10.0, 'nowhere'), reset_distance=math.inf)
         robot.call(AROUND_POSE, request, tick=robot.quiet)
         assert any(level == 'warning' and "nothing cleared: the pose cannot be put in the map frame: pose frame "

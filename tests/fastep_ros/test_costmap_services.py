@@ -18,7 +18,7 @@ from fastep_core.perception.belief import Perception
 from fastep_core.sensing.laser import LaserSpec, scan
 from fastep_core.world import World
 from fastep_ros.planner import PlannerNode
-from fastep_testing.in_process import DT, planner_node
+from fastep_testing.in_process import DT, LoggedLines, planner_node
 from fastep_testing.planning_gate import WAIT, Gate, wait_for
 from msg_tools import convert
 
@@ -34,23 +34,6 @@ RESET = 6.0   # reset_distance: Nav2's square of side 6 around the robot, [2, 8]
 ENTIRELY_LOCAL, ENTIRELY_GLOBAL = 'local_costmap/clear_entirely_local_costmap', \
     'global_costmap/clear_entirely_global_costmap'
 AROUND, EXCEPT = 'local_costmap/clear_costmap_around_robot', 'local_costmap/clear_costmap_except_region'
-
-
-class Logged:
-    """The node's logger, its info and warning lines kept (the rest as it was)."""
-
-    def __init__(self, node: PlannerNode) -> None:
-        self.real, self.lines = node.get_logger(), []
-        node.get_logger = lambda: self   # type: ignore[method-assign]  # the test reads what the node logs
-
-    def info(self, text: str, **_: Any) -> None:
-        self.lines.append(('info', text))
-
-    def warning(self, text: str, **_: Any) -> None:
-        self.lines.append(('warning', text))
-
-    def __getattr__(self, name: str) -> Any:
-        return getattr(self.real, name)
 
 
 class Scanned:
@@ -140,7 +123,7 @@ def test_clear_entirely_forgets_every_wall_and_track_the_laser_added_and_keeps_t
                                                                                       name: str) -> None:
     node, robot = scanned(context, planning_thread=False)
     try:
-        logged = Logged(node)
+        logged = LoggedLines(node)
         assert call(robot, name, srv.ClearEntireCostmap.Request()) <= 2
         assert believed(node) == {'near': False, 'far': False, 'pole': False, 'map': True}
         perception = node.inputs.scan_perception.perception
@@ -192,7 +175,7 @@ def test_a_wall_across_the_square_s_edge_is_cut_there(inside: bool, kept: tuple[
 def test_a_reset_distance_that_is_not_one_clears_nothing_and_says_so(context: Any, distance: float) -> None:
     node, robot = scanned(context, planning_thread=False)
     try:
-        logged = Logged(node)
+        logged = LoggedLines(node)
         assert call(robot, AROUND, srv.ClearCostmapAroundRobot.Request(reset_distance=distance)) == 0
         assert believed(node) == {'near': True, 'far': True, 'pole': True, 'map': True}
         assert any(level == 'warning' and 'nothing cleared' in text for level, text in logged.lines)
@@ -203,7 +186,7 @@ def test_a_reset_distance_that_is_not_one_clears_nothing_and_says_so(context: An
 def test_around_the_robot_clears_nothing_while_its_position_is_not_known_and_says_so(context: Any) -> None:
     node, robot = scanned(context, planning_thread=False)
     try:
-        logged = Logged(node)
+        logged = LoggedLines(node)
         robot.now += 10.0   # no odometry for longer than odom_timeout: where the robot is is not known
         assert call(robot, AROUND, srv.ClearCostmapAroundRobot.Request(reset_distance=RESET), odometry=False) <= 2
         assert believed(node) == {'near': True, 'far': True, 'pole': True, 'map': True}
@@ -222,7 +205,7 @@ def test_a_service_answers_within_its_bound_while_planning_is_stalled_and_clears
     try:
         robot.tick(wait=False)
         assert gate.entered.wait(WAIT)   # a pass under way that does not end
-        logged = Logged(node)
+        logged = LoggedLines(node)
         services(node).clock = lambda: robot.now   # the wait's clock: the test's
         bound = round(CLEAR_WAIT / DT)
         ticks = call(robot, ENTIRELY_LOCAL, srv.ClearEntireCostmap.Request(), ticks=bound + 5)
