@@ -55,7 +55,7 @@ setup(
         'mujoco==4.0.0',   # fastep_core/dynamics: physics plants (a robot's `dynamics:`)
     ],
     extras_require={'ros-wheels': ROS_WHEELS,
-                    # fastep-bench / fastep-tune --cluster (fastep_core.cluster): Dask's distributed scheduler
+                    # fastep-bench / fastep-tune --cluster (experiments/cluster.py): Dask's distributed scheduler
                     'cluster': ['dask[distributed]>=2026.1'],
                     'test': ['pytest>=8', 'pytest-xdist>=3.8', 'hypothesis>=6.100', 'websockets>=13', 'protobuf>=5',
                              'colcon-core>=0.21', 'colcon-ros>=0.5', 'colcon-python-setup-py>=0.2',
@@ -74,7 +74,7 @@ setup(
             'fastep-container = fastep_ros.container:main',
             'fastep-launch = fastep_ros.launch:cli',
             'fastep-bench = msg_tools.bench_cli:main',
-            'fastep-tune = fastep_core.tuning:main',
+            'fastep-tune = fastep_core.experiments.tuning:main',
             'fastep-record = fastep_ros.recorder:main',
             'fastep-replay = fastep_ros.replay:main',
             'fastep-report = msg_tools.report:main',

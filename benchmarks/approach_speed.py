@@ -17,11 +17,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from fastep_core import experiments, families
-from fastep_core.experiments import Record
+from fastep_core.experiments import batches, families
+from fastep_core.experiments.batches import Record
+from fastep_core.experiments.random_worlds import FAMILIES
 from fastep_core.planning.algorithms import drives
 from fastep_core.planning.params import PlannerParams
-from fastep_core.random_scenarios import FAMILIES
 from fastep_core.scenario import builtin_names, load_scenario
 from fastep_core.simulator import simulate
 
@@ -76,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.per_scenario:
         per_scenario(args.algorithms)
         return 0
-    sets = {'built-in': [s for s in builtin_names() if s not in experiments.TABLE2]}
+    sets = {'built-in': [s for s in builtin_names() if s not in batches.TABLE2]}
     if args.worlds > 0:
         sets['families'] = families.family_sources(list(FAMILIES), args.worlds)
     print('| set | min_approach_speed | planner | arrived | path (m) | sim time (s) | longest (s) | CPU / run (s) |')
@@ -84,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
     for label, sources in sets.items():
         for speed in args.speeds:
             wall = time.time()
-            records = experiments.run_batch(sources, args.algorithms, 1, args.workers,
+            records = batches.run_batch(sources, args.algorithms, 1, args.workers,
                                             overrides={'min_approach_speed': speed})
             print('\n'.join(rows(records, speed, label)), flush=True)
             print(f'<!-- {label} at {speed:g}: {time.time() - wall:.0f} s wall, load {families.load_average():.1f} -->',

@@ -5,7 +5,7 @@
 
 World k is world FAMILY_SEED0 + k of `dense_clutter_laser` (the robot a 0.22 m circle) and of
 `dense_clutter_jackal` (the same world, the robot declared with JACKAL_FOOTPRINT: planned with its circumscribed
-0.333 m circle), obstacles only in the laser (fastep_core/dense_clutter.py). Each run is fastep_core.simulator
+0.333 m circle), obstacles only in the laser (experiments/dense_clutter.py). Each run is fastep_core.simulator
 .simulate with `realtime` (default 1.0: planning time is the robot's time, as fastep-sim --realtime), and every
 step's pose is judged twice against the true world: by the Jackal's box placed at the pose (what Gazebo counts as
 a collision) and by the 0.22 m circle.
@@ -32,11 +32,11 @@ from pathlib import Path
 import numpy as np
 
 from fastep_core.cli import realtime_factor
-from fastep_core.dense_clutter import JACKAL_FOOTPRINT, ROBOT_RADIUS
+from fastep_core.experiments.dense_clutter import JACKAL_FOOTPRINT, ROBOT_RADIUS
+from fastep_core.experiments.random_worlds import FAMILY_SEED0, random_family_data
 from fastep_core.footprint import Footprint
 from fastep_core.metrics import barn_score, trajectory_margins
 from fastep_core.planning.optimal import shortest_path
-from fastep_core.random_scenarios import FAMILY_SEED0, random_family_data
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.simulator import Tick, simulate
 

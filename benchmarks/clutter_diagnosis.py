@@ -2,7 +2,7 @@
 
     python -m benchmarks.clutter_diagnosis --worlds 8 --workers 2 [--algorithms fastep aco] [--out out/clutter.json]
 
-Worlds: `random_scenarios.circle_field_data(seed)`, seeds 0..N-1: 20-35 circles in a 50 x 50 m workspace, one
+Worlds: `random_worlds.circle_field_data(seed)`, seeds 0..N-1: 20-35 circles in a 50 x 50 m workspace, one
 point mass whose start and goal are at least 35 m apart, kept only if the exact planner finds a path; the run
 seed is the world seed. `--world table2_s1` (or any built-in scenario) runs that scenario instead.
 
@@ -25,6 +25,7 @@ from typing import Any, Sequence
 import numpy as np
 import yaml
 
+from fastep_core.experiments.random_worlds import CIRCLES, circle_field_data
 from fastep_core.planning import algorithms
 from fastep_core.planning import step as step_module
 from fastep_core.planning.aco_kinematic import ACOKinematic
@@ -32,7 +33,6 @@ from fastep_core.planning.fastep_kinematic import FAStepKinematic
 from fastep_core.planning.navigator import FloatArray, Mode, Navigator
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.others import OtherRobot
-from fastep_core.random_scenarios import CIRCLES, circle_field_data
 from fastep_core.scenario import builtin_path, parse_scenario
 from fastep_core.simulator import simulate
 

@@ -4,7 +4,7 @@
                              [--algorithm dwa]
 
 Each --config (JSON planner overrides; '{}' is the defaults) runs `dwa` once (it draws no random numbers) on
-table2_s1-s3, case_study_1-2, the given random worlds (fastep_core.random_scenarios, point masses only) and
+table2_s1-s3, case_study_1-2, the given random worlds (fastep_core.experiments.random_worlds, point masses only) and
 U-trap worlds (u_trap_scenario_data seeds 0..N-1), one process. Prints one line per setting: robots arrived
 without collision, collisions, path / exact optimum (mean, worst) and simulated seconds per optimal metre over
 the arrivals, the smallest margin kept, and CPU seconds of the whole setting. How the defaults of the `dwa_*`
@@ -23,9 +23,9 @@ import numpy as np
 
 from fastep_core import cli
 from fastep_core.errors import ParameterError
+from fastep_core.experiments.random_worlds import random_scenario_data, u_trap_scenario_data
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.optimal import shortest_path
-from fastep_core.random_scenarios import random_scenario_data, u_trap_scenario_data
 from fastep_core.scenario import Scenario, load_scenario, parse_scenario
 from fastep_core.simulator import simulate
 

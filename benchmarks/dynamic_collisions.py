@@ -18,8 +18,8 @@ from typing import Any
 import numpy as np
 
 from fastep_core.dynamic_world import DynamicWorld
-from fastep_core.experiments import cached_scenario
-from fastep_core.random_scenarios import family_source
+from fastep_core.experiments.batches import cached_scenario
+from fastep_core.experiments.random_worlds import family_source
 from fastep_core.simulator import Tick, simulate
 
 

@@ -28,8 +28,8 @@ import yaml
 from scipy.stats import mannwhitneyu, wilcoxon
 
 from benchmarks.clutter_diagnosis import circle_field_data
+from fastep_core.experiments.random_worlds import random_scenario_data, u_trap_scenario_data
 from fastep_core.planning.optimal import shortest_path
-from fastep_core.random_scenarios import random_scenario_data, u_trap_scenario_data
 from fastep_core.scenario import builtin_path, parse_scenario
 from fastep_core.simulator import simulate
 

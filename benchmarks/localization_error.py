@@ -22,10 +22,10 @@ from collections import defaultdict
 
 import numpy as np
 
-from fastep_core.experiments import cached_scenario
+from fastep_core.experiments.batches import cached_scenario
+from fastep_core.experiments.random_worlds import FAMILY_SEED0, family_source
 from fastep_core.geometry import Circle, Obstacles
 from fastep_core.perception.uncertainty import OdometryDrift, PoseError, PoseUncertainty
-from fastep_core.random_scenarios import FAMILY_SEED0, family_source
 from fastep_core.simulator import simulate
 
 FAMILIES = ('dense_clutter', 'dense_clutter_laser', 'unknown_obstacles', 'misplaced_obstacles', 'crossing_movers',

@@ -16,7 +16,7 @@ from dataclasses import replace
 import numpy as np
 
 from fastep_core.dynamic_world import DynamicWorld
-from fastep_core.experiments import cached_scenario
+from fastep_core.experiments.batches import cached_scenario
 from fastep_core.simulator import Tick, simulate
 from msg_tools.plots import save, title, yield_figure
 

@@ -26,7 +26,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from fastep_core.cli import Parser, progress_bar
-from fastep_core.experiments import pool_context
+from fastep_core.experiments.batches import pool_context
 from fastep_core.optimize import fastep, firefly
 
 FloatArray = np.ndarray

@@ -18,10 +18,10 @@ import statistics
 from pathlib import Path
 from typing import Any, Sequence
 
-from fastep_core.experiments import cached_scenario
-from fastep_core.families import FAMILY_NAMES
+from fastep_core.experiments.batches import cached_scenario
+from fastep_core.experiments.families import FAMILY_NAMES
+from fastep_core.experiments.random_worlds import family_source
 from fastep_core.planning.algorithms import algorithm_name
-from fastep_core.random_scenarios import family_source
 
 
 def _groups(rows: Sequence[dict[str, Any]]) -> dict[tuple[str, str], list[dict[str, Any]]]:

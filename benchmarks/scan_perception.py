@@ -23,12 +23,12 @@ from typing import Any, Callable, Iterator
 import numpy as np
 
 from fastep_core.dynamic_world import DynamicWorld, map_generator
-from fastep_core.experiments import cached_scenario
+from fastep_core.experiments.batches import cached_scenario
+from fastep_core.experiments.random_worlds import family_source
 from fastep_core.geometry import Segment
 from fastep_core.perception import belief as belief_module
 from fastep_core.perception.belief import Perception
 from fastep_core.planning.optimal import shortest_path
-from fastep_core.random_scenarios import family_source
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.sensing.laser import LaserSpec
 from fastep_core.simulator import simulate

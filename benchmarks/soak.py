@@ -2,8 +2,8 @@
 
     python -m benchmarks.soak --scenarios 500 --workers 2 --out out/soak
 
-Each scenario comes from `fastep_core.random_scenarios` (seed i for scenario i), so a failure is reproduced by
-`python -m fastep_core.random_scenarios I > s.yaml && fastep-sim s.yaml --seed I`. The scenarios of every
+Each scenario comes from `fastep_core.experiments.random_worlds` (seed i for scenario i), so a failure is reproduced by
+`python -m fastep_core.experiments.random_worlds I > s.yaml && fastep-sim s.yaml --seed I`. The scenarios of every
 robot that did not arrive, or collided, are written to OUT/failures/ as YAML. A summary (JSON) goes to
 OUT/soak.json and a short table to stdout.
 """
@@ -21,8 +21,8 @@ from typing import Any
 import yaml
 
 from fastep_core.cli import progress_bar
+from fastep_core.experiments.random_worlds import random_scenario_data
 from fastep_core.planning.algorithms import ALGORITHMS
-from fastep_core.random_scenarios import random_scenario_data
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
 

@@ -1,7 +1,7 @@
 """Benchmark: the paper's Table 2 regenerated, with Mann-Whitney tests, optimality ratios and box plots.
 
 Run: `python -m benchmarks.table2 [--runs N] [--scenarios ...] [--workers 2] [--out docs/]` (the same flags
-as the `fastep-bench` console script; the engine is `fastep_core.experiments`, the CLI `msg_tools.bench_cli`).
+as the `fastep-bench` console script; the engine is `fastep_core.experiments.batches`, the CLI `msg_tools.bench_cli`).
 """
 
 from __future__ import annotations

@@ -20,14 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
+from fastep_core.experiments.random_worlds import random_scenario_data, u_trap_scenario_data
 from fastep_core.planning.algorithms import drives
-from fastep_core.random_scenarios import random_scenario_data, u_trap_scenario_data
 from fastep_core.scenario import Scenario, builtin_names, load_scenario, parse_scenario
 from fastep_core.simulator import simulate
 
 
 def scenario_named(key: str) -> Scenario:
-    """A built-in scenario by name, or 'u_trap:<model>:<seed>' / 'random:<seed>' from random_scenarios."""
+    """A built-in scenario by name, or 'u_trap:<model>:<seed>' / 'random:<seed>' from random_worlds."""
     kind, _, rest = key.partition(':')
     if kind == 'u_trap':
         model, _, seed = rest.partition(':')
@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument('--algorithms', nargs='+', default=['fastep', 'aco'])
     p.add_argument('--scenarios', nargs='+', default=None, help='default: every built-in scenario')
     p.add_argument('--u-traps', type=int, default=0, metavar='N',
-                   help='also U-trap scenarios 0..N-1 of random_scenarios, point mass and tractor-trailer')
+                   help='also U-trap scenarios 0..N-1 of random_worlds, point mass and tractor-trailer')
     p.add_argument('--random', type=int, default=0, metavar='N', help='also random scenarios 0..N-1')
     p.add_argument('--out', type=Path, help='write the table as JSON')
     args = p.parse_args(argv)

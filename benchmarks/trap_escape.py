@@ -2,7 +2,7 @@
 
     python -m benchmarks.trap_escape --scenarios 100 --workers 2 [--models tractor_trailer]
 
-The same scenarios (fastep_core.random_scenarios.u_trap_scenario_data, seeds 0..N-1; point masses and
+The same scenarios (fastep_core.experiments.random_worlds.u_trap_scenario_data, seeds 0..N-1; point masses and
 tractor-trailers) and the same run seeds for both settings; every run is one robot facing a U open towards
 it, with the goal behind the U's back wall. Prints a table and writes out/trap_escape.json.
 """
@@ -16,7 +16,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from typing import Any
 
-from fastep_core.random_scenarios import u_trap_scenario_data
+from fastep_core.experiments.random_worlds import u_trap_scenario_data
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
 

@@ -28,7 +28,8 @@ from numpy.typing import ArrayLike, NDArray
 from fastep_core.footprint import Footprint
 from fastep_core.geometry import Obstacles
 
-__all__ = ['Margins', 'MovingCircles', 'barn_score', 'positions_at', 'trajectory_margins']
+__all__ = ['Margins', 'MovingCircles', 'barn_score', 'mover_clearance', 'obstacle_clearance', 'positions_at',
+           'trajectory_margins']
 
 FloatArray = NDArray[np.float64]
 CHUNK = 16_384   # points per obstacles.clearance call: bounds the (points x obstacles) distance matrix
@@ -69,8 +70,9 @@ def positions_at(track: FloatArray, times: FloatArray) -> FloatArray:
                     axis=-1)
 
 
-def _min_clearance(obstacles: Obstacles, points: FloatArray) -> float:
-    return float(min(obstacles.clearance(points[k:k + CHUNK]).min() for k in range(0, len(points), CHUNK)))
+def obstacle_clearance(obstacles: Obstacles, points: FloatArray, chunk: int = CHUNK) -> float:
+    """Smallest distance from points (n, 2) to the obstacles' surfaces, measured `chunk` points at a time."""
+    return float(min(obstacles.clearance(points[k:k + chunk]).min() for k in range(0, len(points), chunk)))
 
 
 def _closest_approach(a: FloatArray, b: FloatArray) -> float:
@@ -83,12 +85,12 @@ def _closest_approach(a: FloatArray, b: FloatArray) -> float:
     return float(np.hypot(pa[:, 0] - pb[:, 0], pa[:, 1] - pb[:, 1]).min())
 
 
-def _mover_clearance(movers: MovingCircles, rows: FloatArray) -> float:
-    """Smallest distance from a track's points to the movers' centres at the same instants, minus the movers'
-    radii (chunked like _min_clearance)."""
+def mover_clearance(movers: MovingCircles, rows: FloatArray, chunk: int = CHUNK) -> float:
+    """Smallest distance from a track's points (rows t, x, y) to the movers' centres at the same instants, minus
+    the movers' radii, measured `chunk` samples at a time."""
     best = np.inf
-    for k in range(0, len(rows), CHUNK):
-        part = rows[k:k + CHUNK]
+    for k in range(0, len(rows), chunk):
+        part = rows[k:k + chunk]
         centres = movers.positions(part[:, 0])                       # (n, m, 2)
         gap = np.hypot(centres[..., 0] - part[:, 1, None], centres[..., 1] - part[:, 2, None]) - movers.radii
         best = min(best, float(gap.min()))
@@ -97,7 +99,7 @@ def _mover_clearance(movers: MovingCircles, rows: FloatArray) -> float:
 
 def _footprint_mover_clearance(footprint: Footprint, movers: MovingCircles, rows: FloatArray) -> float:
     """Smallest signed distance from a footprint placed at a track's poses (rows t, x, y, heading) to the movers
-    where they are at the same instants (chunked like _min_clearance)."""
+    where they are at the same instants (chunked like obstacle_clearance)."""
     best = np.inf
     for k in range(0, len(rows), CHUNK):
         part = rows[k:k + CHUNK]
@@ -136,9 +138,9 @@ def trajectory_margins(tracks: Sequence[ArrayLike], radii: ArrayLike, obstacles:
                 to_obstacles[i] = min(to_obstacles[i], _footprint_mover_clearance(footprint, movers, mine))
         else:
             if len(mine) and len(obstacles):
-                to_obstacles[i] = _min_clearance(obstacles, mine[:, 1:3]) - radius[i]
+                to_obstacles[i] = obstacle_clearance(obstacles, mine[:, 1:3]) - radius[i]
             if len(mine) and movers is not None and len(movers):
-                to_obstacles[i] = min(to_obstacles[i], _mover_clearance(movers, mine) - radius[i])
+                to_obstacles[i] = min(to_obstacles[i], mover_clearance(movers, mine) - radius[i])
         for j in range(i + 1, len(rows)):
             if not len(mine) or not len(rows[j]):
                 continue

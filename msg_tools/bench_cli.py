@@ -6,11 +6,11 @@ every planner on random world families.
     fastep-bench --families [FAMILY ...] [--worlds 30] [--runs 1] [--algorithms ...] [--seed 0] [--out DIR] ...
 
 Writes OUT/REPORT.md (Markdown tables), OUT/figures/REPORT_*.png (drawn by msg_tools.plots) and, with --families,
-OUT/REPORT.json (per-run rows and summaries); prints the Markdown on stdout. The engine is `fastep_core.experiments`
+OUT/REPORT.json (per-run rows and summaries); prints the Markdown on stdout. The engine is `experiments.batches`
 (the command lives in msg_tools because fastep_core draws nothing); `python -m benchmarks.table2` is the same
-command. --cluster runs the same tasks on a Dask cluster (fastep_core.cluster) with the same records.
+command. --cluster runs the same tasks on a Dask cluster (fastep_core.experiments.cluster) with the same records.
 Exit 0 when the runs were made, 2 with one line on stderr for bad input (a --cluster that is no Dask scheduler
-among it). A batch on a cluster that can run no more (no worker left within the bound, fastep_core.cluster) ends
+among it). A batch on a cluster that can run no more (no worker left within the bound, experiments.cluster) ends
 early: the same files with the runs done, a "Runs missing" section and a JSON "missing" list naming the others,
 one line on stderr, exit 1. Options: docs/reference/commands.md.
 """
@@ -28,12 +28,12 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from fastep_core import experiments, families
 from fastep_core.cli import MAX_RUNS, MAX_WORKERS, REALTIME_HELP, Parser, count, fail, guard, realtime_factor, seed
-from fastep_core.cluster import CLUSTER_HELP, BatchIncomplete, cluster_spec
+from fastep_core.experiments import batches, families
+from fastep_core.experiments.cluster import CLUSTER_HELP, BatchIncomplete, cluster_spec
+from fastep_core.experiments.random_worlds import ALL_FAMILIES, FAMILIES, FAMILY_SEED0
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.planning.params import PlannerParams
-from fastep_core.random_scenarios import ALL_FAMILIES, FAMILIES, FAMILY_SEED0
 from fastep_core.scenario import builtin_names, load_scenario
 
 __all__ = ['main']
@@ -112,18 +112,18 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
         args.workers = 2
     if args.families is not None:
         return _run_families(args, prog, report_name, overrides, command)
-    scenarios = list(experiments.TABLE2) if args.scenarios is None else \
+    scenarios = list(batches.TABLE2) if args.scenarios is None else \
         builtin_names() if args.scenarios == ['all'] else list(dict.fromkeys(args.scenarios))
     for name in scenarios:  # a bad one is a FastepError: one line before any run starts
         load_scenario(name)
-    records, lost = _batch(lambda: experiments.run_batch(
+    records, lost = _batch(lambda: batches.run_batch(
         scenarios, args.algorithms, args.runs or 30, args.workers or 2, seed0=args.seed,
         progress=True if args.progress else None, label=prog, overrides=overrides,
         realtime=args.realtime, cluster=args.cluster))
-    optimal = {s: experiments.optimal_lengths(s) for s in scenarios}
-    title = 'Table 2 regenerated' if scenarios == list(experiments.TABLE2) else \
+    optimal = {s: batches.optimal_lengths(s) for s in scenarios}
+    title = 'Table 2 regenerated' if scenarios == list(batches.TABLE2) else \
         'FAStep-Kinematic, ACO-Kinematic and the optimum'
-    text = experiments.markdown_report(records, optimal, title=title, command=command) + _missing_section(lost)
+    text = batches.markdown_report(records, optimal, title=title, command=command) + _missing_section(lost)
     try:
         args.out.mkdir(parents=True, exist_ok=True)
         report = args.out / f'{report_name}.md'
@@ -145,7 +145,7 @@ def _run(argv: Sequence[str] | None, prog: str) -> int:
     return _ended(prog, lost)
 
 
-def _batch(run: Callable[[], list[experiments.Record]]) -> tuple[list[experiments.Record], BatchIncomplete | None]:
+def _batch(run: Callable[[], list[batches.Record]]) -> tuple[list[batches.Record], BatchIncomplete | None]:
     """run()'s records, or those a batch that ended early made and why it ended."""
     try:
         return run(), None
@@ -190,7 +190,7 @@ def _ended(prog: str, lost: BatchIncomplete | None) -> int:
 
 def _run_families(args: argparse.Namespace, prog: str, report_name: str, overrides: dict[str, float],
                   command: str) -> int:
-    """--families: the family table, its JSON and figures (fastep_core.families)."""
+    """--families: the family table, its JSON and figures (fastep_core.experiments.families)."""
     chosen = list(dict.fromkeys(args.families)) or list(FAMILIES)
     worlds, runs = args.worlds or 30, args.runs or 1
     load_before, wall = families.load_average(), time.perf_counter()

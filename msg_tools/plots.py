@@ -31,12 +31,12 @@ from matplotlib.figure import Figure  # noqa: E402
 from numpy.typing import ArrayLike, NDArray  # noqa: E402
 
 from fastep_core.dynamic_world import DynamicWorld, map_generator  # noqa: E402
-from fastep_core.experiments import METRICS, PAPER, ExamplePaths, Record, example_paths, metric_values  # noqa: E402
-from fastep_core.families import FAMILY_NAMES, worst_runs  # noqa: E402
-from fastep_core.families import Row as FamilyRow  # noqa: E402
+from fastep_core.experiments.batches import METRICS, PAPER, ExamplePaths, Record, example_paths, metric_values  # noqa: E402
+from fastep_core.experiments.families import FAMILY_NAMES, worst_runs  # noqa: E402
+from fastep_core.experiments.families import Row as FamilyRow  # noqa: E402
+from fastep_core.experiments.random_worlds import family_source  # noqa: E402
 from fastep_core.geometry import Circle, Obstacle, Segment  # noqa: E402
 from fastep_core.planning.algorithms import algorithm_name  # noqa: E402
-from fastep_core.random_scenarios import family_source  # noqa: E402
 
 if TYPE_CHECKING:
     from fastep_core.perception.belief import Belief
@@ -409,7 +409,7 @@ def yield_figure(scenario: Scenario, seed: int, rows: ArrayLike, kinds: Sequence
 
 def box_plot_figure(records: Sequence[Record], optimal: Mapping[str, Mapping[str, float | None]],
                     metric: str) -> Figure:
-    """One panel per scenario: a box per planner of `metric` (fastep_core.experiments.metric_values); for path
+    """One panel per scenario: a box per planner of `metric` (fastep_core.experiments.batches.metric_values); for path
     length also the paper's means (red x) and the exact optimum (green dashed)."""
     scenarios = list(dict.fromkeys(r.scenario for r in records))
     algorithms = list(dict.fromkeys(r.algorithm for r in records))
@@ -439,7 +439,7 @@ def box_plot_figure(records: Sequence[Record], optimal: Mapping[str, Mapping[str
 
 def example_paths_figure(examples: Sequence[ExamplePaths]) -> Figure:
     """One panel per scenario: its obstacles, every robot's exact optimal path (green) and one run of every
-    planner (fastep_core.experiments.example_paths)."""
+    planner (fastep_core.experiments.batches.example_paths)."""
     rows, cols = _grid(len(examples))
     fig, axes = plt.subplots(rows, cols, figsize=(5.0 * cols, 5.2 * rows), squeeze=False)
     for ax in axes.flat[len(examples):]:
@@ -478,7 +478,7 @@ def bench_figures(records: Sequence[Record], optimal: Mapping[str, Mapping[str, 
 # ----------------------------------------------------------------------------------------------- families
 
 def family_box_figure(rows: Sequence[FamilyRow], metric: str, label: str, log: bool = False) -> Figure:
-    """One panel per family: a box per planner of `metric`, a field of fastep_core.families.Row (None and nan
+    """One panel per family: a box per planner of `metric`, a field of experiments.families.Row (None and nan
     values left out: path_opt exists only for robots that arrived); cpu_time counted once per run."""
     family_list = list(dict.fromkeys(r.family for r in rows))
     algorithms = list(dict.fromkeys(r.algorithm for r in rows))

@@ -32,7 +32,7 @@ from fastep_core.dynamic_world import Movers, ObstacleSpec
 from fastep_core.errors import FastepError
 from fastep_core.footprint import Footprint
 from fastep_core.geometry import Circle, Obstacles
-from fastep_core.metrics import Margins, trajectory_margins
+from fastep_core.metrics import Margins, mover_clearance, obstacle_clearance, trajectory_margins
 from msg_tools.cdr import float64_field, odometry_fields, twist_fields
 from msg_tools.interface import SCENARIO_DATA, metadata_key
 from msg_tools.mcap_io import open_recording
@@ -129,24 +129,9 @@ def _vertices(spec: ObstacleSpec) -> int:
     return 1 + (len(spec.motion.waypoints) if spec.motion is not None else 0)
 
 
-def _still_clearance(obstacles: Obstacles, points: FloatArray) -> float:
-    """Smallest distance from points (n, 2) to the obstacles' surfaces: at most JUDGE_ELEMENTS pairs at a time."""
-    size = max(1, JUDGE_ELEMENTS // max(1, len(obstacles)))
-    return float(min(obstacles.clearance(points[k:k + size]).min() for k in range(0, len(points), size)))
-
-
-def _mover_clearance(movers: Movers, rows: FloatArray) -> float:
-    """Smallest distance from a track's points (rows t, x, y) to the movers' surfaces at the same instants, as
-    fastep_core.metrics measures it, for at most JUDGE_ELEMENTS (sample, mover segment) pairs at a time."""
-    per_sample = len(movers) * max(1, movers.vertices.shape[1] - 1)
-    size = max(1, JUDGE_ELEMENTS // per_sample)
-    best = math.inf
-    for k in range(0, len(rows), size):
-        part = rows[k:k + size]
-        centres = movers.positions(part[:, 0])                                  # (n, m, 2)
-        gap = np.hypot(centres[..., 0] - part[:, 1, None], centres[..., 1] - part[:, 2, None]) - movers.radii
-        best = min(best, float(gap.min()))
-    return best
+def _mover_chunk(movers: Movers) -> int:
+    """Samples per step so that a step measures at most JUDGE_ELEMENTS (sample, mover segment) pairs."""
+    return max(1, JUDGE_ELEMENTS // (len(movers) * max(1, movers.vertices.shape[1] - 1)))
 
 
 def judge(tracks: Sequence[FloatArray], radii: Sequence[float], obstacles: Obstacles,
@@ -167,9 +152,10 @@ def judge(tracks: Sequence[FloatArray], radii: Sequence[float], obstacles: Obsta
             footprint, headings = outline
             to_obstacles[i] = float(footprint.clearance(np.column_stack([rows[:, 1:3], headings]), obstacles).min())
         elif len(obstacles):
-            to_obstacles[i] = _still_clearance(obstacles, rows[:, 1:3]) - radii[i]
+            chunk = max(1, JUDGE_ELEMENTS // len(obstacles))
+            to_obstacles[i] = obstacle_clearance(obstacles, rows[:, 1:3], chunk) - radii[i]
         for movers in groups:
-            to_obstacles[i] = min(to_obstacles[i], _mover_clearance(movers, rows) - radii[i])
+            to_obstacles[i] = min(to_obstacles[i], mover_clearance(movers, rows, _mover_chunk(movers)) - radii[i])
     return Margins(to_obstacles, kept.robots)
 
 

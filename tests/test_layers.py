@@ -113,11 +113,12 @@ def test_the_cycle_finder_sees_the_navigator_split() -> None:
 
 
 def test_only_the_cluster_module_imports_dask() -> None:
-    """Dask is the optional extra `cluster` (fastep_core/cluster.py): no robot node and no other module may import
-    it, so a robot, and every command but --cluster, runs without it."""
+    """Dask is the optional extra `cluster` (fastep_core/experiments/cluster.py): no robot node and no other module may
+    import it, so a robot, and every command but --cluster, runs without it."""
     wrong = [f'{path.relative_to(ROOT)}:{line}: {name}'
              for package in ('fastep_core', 'msg_tools', 'fastep_ros')
              for path in sorted((ROOT / package).rglob('*.py'))
              for line, name in imported_modules(path)
-             if name.split('.')[0] in ('dask', 'distributed') and path != ROOT / 'fastep_core' / 'cluster.py']
-    assert not wrong, 'imports Dask outside fastep_core/cluster.py:\n' + '\n'.join(wrong)
+             if name.split('.')[0] in ('dask', 'distributed')
+             and path != ROOT / 'fastep_core' / 'experiments' / 'cluster.py']
+    assert not wrong, 'imports Dask outside fastep_core/experiments/cluster.py:\n' + '\n'.join(wrong)

@@ -39,7 +39,7 @@ PYTHON_KEYS = {
 }
 
 # Imported only for an optional extra of setup.py, so no exec_depend: a robot never needs them.
-# fastep_core/cluster.py (fastep-bench / fastep-tune --cluster): the extra installs dask[distributed].
+# fastep_core/experiments/cluster.py (fastep-bench / fastep-tune --cluster): the extra installs dask[distributed].
 OPTIONAL = {'distributed': 'cluster', 'dask': 'cluster'}
 
 

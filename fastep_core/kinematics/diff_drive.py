@@ -25,7 +25,7 @@ from numpy.typing import NDArray
 
 from fastep_core.kinematics.tractor_trailer import wrap_angle
 
-__all__ = ['DRIVE_WITHIN', 'DiffDrive', 'DiffDriveController', 'heading_error']
+__all__ = ['DRIVE_WITHIN', 'DiffDrive', 'DiffDriveController', 'heading_error', 'ramp']
 
 FloatArray = NDArray[np.float64]
 DRIVE_WITHIN = 0.5
@@ -44,6 +44,19 @@ def _clip(value: float, limit: float) -> float:
 def heading_error(state: FloatArray, target: FloatArray) -> float:
     """alpha = bearing to the target minus the heading, in (-pi, pi]."""
     return wrap_angle(math.atan2(target[1] - state[1], target[0] - state[0]) - float(state[2]))
+
+
+def ramp(start: FloatArray, wanted: FloatArray, linear: float, turn: float) -> FloatArray:
+    """A body-frame command (v, omega) moved from `start` toward `wanted` along one straight line in command space,
+    v changing by at most `linear` and omega by at most `turn` (math.inf: no limit): the acceleration limits of one
+    command held for one period. The controller and the velocity smoother (planning/smoother.py) both ramp so."""
+    change = wanted - start
+    share = 1.0
+    if abs(change[0]) > linear:
+        share = linear / abs(change[0])
+    if abs(change[1]) > turn:
+        share = min(share, turn / abs(change[1]))
+    return wanted if share >= 1.0 else start + share * change
 
 
 @dataclass(frozen=True)
@@ -130,14 +143,9 @@ class DiffDriveController:
 
     def command(self, state: FloatArray, target: FloatArray, dt: float) -> FloatArray:
         """The law's command, moved toward from the last applied one within the acceleration limits."""
-        wanted = self.law(state, target, dt)
-        change = wanted - self.last
-        share = 1.0
-        if self.max_acceleration > 0.0 and abs(change[0]) > self.max_acceleration * dt:
-            share = self.max_acceleration * dt / abs(change[0])
-        if self.max_turn_acceleration > 0.0 and abs(change[1]) > self.max_turn_acceleration * dt:
-            share = min(share, self.max_turn_acceleration * dt / abs(change[1]))
-        return wanted if share >= 1.0 else self.last + share * change
+        linear = self.max_acceleration * dt if self.max_acceleration > 0.0 else math.inf
+        turn = self.max_turn_acceleration * dt if self.max_turn_acceleration > 0.0 else math.inf
+        return ramp(self.last, self.law(state, target, dt), linear, turn)
 
 
 def main() -> None:

@@ -30,6 +30,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from fastep_core.kinematics.diff_drive import ramp
 from fastep_core.kinematics.model import RobotModel
 from fastep_core.planning.base_response import FEEDBACK_COMMANDS, all_finite, off_commands
 from fastep_core.planning.limits import Limits
@@ -165,18 +166,13 @@ class VelocitySmoother:
         wanted = self.cap(command)
         window = min(elapsed, self.period) if elapsed > 0.0 else 0.0   # NaN and negative: no time, no change
         linear, turn = self.accelerations(emergency)
-        change = wanted - self.velocity
-        share = 1.0
         if self.holonomic:
+            change = wanted - self.velocity
             size = math.hypot(change[0], change[1])
-            if size > linear * window:
-                share = linear * window / size
+            share = linear * window / size if size > linear * window else 1.0
+            sent = wanted if share >= 1.0 else self.velocity + share * change
         else:
-            if abs(change[0]) > linear * window:
-                share = linear * window / abs(change[0])
-            if abs(change[1]) > turn * window:
-                share = min(share, turn * window / abs(change[1]))
-        sent = wanted if share >= 1.0 else self.velocity + share * change
+            sent = ramp(self.velocity, wanted, linear * window, turn * window)
         self.velocity = sent.copy()
         self.sent.append(self.velocity)
         return sent

@@ -1,4 +1,4 @@
-"""Batches on a Dask cluster (fastep_core.cluster): the records of the process pool, a lost worker costing only its
+"""Batches on a Dask cluster (experiments.cluster): the records of the process pool, a lost worker costing only its
 task, and one-line errors for a bad --cluster. Every cluster is local and closed by its context manager."""
 
 from __future__ import annotations
@@ -14,8 +14,8 @@ from typing import Iterator
 
 import pytest
 
-from fastep_core import experiments, tuning
-from fastep_core.cluster import ClusterError, ClusterSpec, cluster_spec, open_cluster
+from fastep_core.experiments import batches, tuning
+from fastep_core.experiments.cluster import ClusterError, ClusterSpec, cluster_spec, open_cluster
 from msg_tools.bench_cli import main as bench_main
 
 distributed = pytest.importorskip('distributed')
@@ -23,7 +23,7 @@ distributed = pytest.importorskip('distributed')
 TIMES = ('compute_time', 'cpu_time')   # measured, so different in every run of any engine
 
 
-def without_times(records: list[experiments.Record]) -> list[dict[str, object]]:
+def without_times(records: list[batches.Record]) -> list[dict[str, object]]:
     return [{k: v for k, v in dataclasses.asdict(r).items() if k not in TIMES} for r in records]
 
 
@@ -53,8 +53,8 @@ def test_without_dask_the_error_says_what_to_install(monkeypatch: pytest.MonkeyP
 
 def test_a_batch_on_a_local_cluster_gives_the_records_of_the_pool() -> None:
     args = (['table2_s1', 'table2_s3'], ['fastep', 'optimal'], 2)
-    pooled = experiments.run_batch(*args, workers=2)
-    clustered = experiments.run_batch(*args, cluster='local:2')
+    pooled = batches.run_batch(*args, workers=2)
+    clustered = batches.run_batch(*args, cluster='local:2')
     assert [(r.scenario, r.algorithm, r.seed) for r in clustered] == [(r.scenario, r.algorithm, r.seed)
                                                                        for r in pooled]
     assert without_times(clustered) == without_times(pooled)
@@ -79,10 +79,10 @@ def test_a_bounded_window_of_tasks_is_in_flight_and_map_keeps_the_order() -> Non
 class DieOnce:
     """run_task, but the first process to start `victim` dies on the spot (os._exit, as a killed worker would)."""
 
-    def __init__(self, marker: Path, victim: experiments.Task) -> None:
+    def __init__(self, marker: Path, victim: batches.Task) -> None:
         self.marker, self.victim = str(marker), victim
 
-    def __call__(self, task: experiments.Task) -> list[experiments.Record]:
+    def __call__(self, task: batches.Task) -> list[batches.Record]:
         if task == self.victim:
             try:
                 os.close(os.open(self.marker, os.O_CREAT | os.O_EXCL | os.O_WRONLY))
@@ -90,12 +90,12 @@ class DieOnce:
                 pass                # died here once already: run it
             else:
                 os._exit(17)
-        return experiments.run_task(task)
+        return batches.run_task(task)
 
 
 def test_a_lost_worker_costs_only_its_task_which_runs_again(tmp_path: Path) -> None:
     import cloudpickle
-    every = experiments.Tasks(['table2_s3'], ['fastep'], 3)
+    every = batches.Tasks(['table2_s3'], ['fastep'], 3)
     marker = tmp_path / 'died'
     module = sys.modules[DieOnce.__module__]
     cloudpickle.register_pickle_by_value(module)   # the workers cannot import a test module by name
@@ -106,7 +106,7 @@ def test_a_lost_worker_costs_only_its_task_which_runs_again(tmp_path: Path) -> N
         cloudpickle.unregister_pickle_by_value(module)
     assert marker.exists()           # a worker did die in the middle of a task
     out.sort(key=lambda r: (r.seed, r.robot))
-    assert without_times(out) == without_times(experiments.run_batch(['table2_s3'], ['fastep'], 3, workers=1))
+    assert without_times(out) == without_times(batches.run_batch(['table2_s3'], ['fastep'], 3, workers=1))
 
 
 def test_a_tiny_search_on_a_cluster_finds_what_the_pool_finds() -> None:
@@ -135,7 +135,7 @@ def test_fastep_bench_on_a_cluster_writes_the_json_of_the_pool(tmp_path: Path, c
 @pytest.mark.parametrize('args', [['--cluster', 'local:0'], ['--cluster', 'local:abc'],
                                   ['--cluster', 'local:2', '--workers', '2'],
                                   ['--cluster', 'tcp://127.0.0.1:1']])   # nothing listens there: refused
-@pytest.mark.parametrize('command', ['msg_tools.bench_cli', 'fastep_core.tuning'])
+@pytest.mark.parametrize('command', ['msg_tools.bench_cli', 'fastep_core.experiments.tuning'])
 def test_a_bad_cluster_is_one_line(command: str, args: list[str]) -> None:
     tiny = ['--runs', '1', '--scenarios', 'table2_s3', '--algorithms', 'optimal', '--no-figures', '--out', '/nowhere'] \
         if command == 'msg_tools.bench_cli' else ['--popsize', '1', '--maxiter', '1']

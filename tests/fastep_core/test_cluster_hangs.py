@@ -1,4 +1,4 @@
-"""--cluster batches that cannot hang (fastep_core.cluster): a peer that is no Dask scheduler is given up on with one
+"""--cluster batches that cannot hang (experiments.cluster): a peer that is no Dask scheduler is given up on with one
 line and exit 2; a batch whose only worker dies for good ends once no worker came back within the bound, with the
 runs done written, those that did not finish said to be missing, one line and exit 1. The commands run in
 subprocesses with a generous outer timeout: before these bounds, both waited for ever (or for minutes)."""
@@ -18,8 +18,8 @@ from typing import Callable, ContextManager, Iterator
 
 import pytest
 
-from fastep_core import experiments
-from fastep_core.cluster import ClusterError, open_cluster
+from fastep_core.experiments import batches
+from fastep_core.experiments.cluster import ClusterError, open_cluster
 
 distributed = pytest.importorskip('distributed')
 
@@ -65,7 +65,7 @@ def http_listener() -> Iterator[int]:
 
 
 @pytest.mark.parametrize('listener', [silent_listener, http_listener])
-@pytest.mark.parametrize('command', ['msg_tools.bench_cli', 'fastep_core.tuning'])
+@pytest.mark.parametrize('command', ['msg_tools.bench_cli', 'fastep_core.experiments.tuning'])
 def test_a_peer_that_is_no_scheduler_is_one_line_and_exit_2(command: str,
                                                             listener: Callable[[], ContextManager[int]]) -> None:
     tiny = ['--runs', '1', '--scenarios', 'table2_s3', '--algorithms', 'optimal', '--no-figures', '--out', '/nowhere'] \
@@ -83,7 +83,7 @@ def test_a_peer_that_is_no_scheduler_is_one_line_and_exit_2(command: str,
 RUNNER = '''
 import os, sys, time
 from distributed import get_worker
-from fastep_core import experiments
+from fastep_core.experiments import batches
 from msg_tools.bench_cli import main
 
 
@@ -100,12 +100,12 @@ class DieAfter:
             while len(worker.data) and time.monotonic() < deadline:
                 time.sleep(0.05)
             os._exit(17)
-        records = experiments.run_task(task, **kwargs)
+        records = batches.run_task(task, **kwargs)
         open(os.path.join(self.folder, '%s %s %d' % task), 'x').close()
         return records
 
 
-experiments.run_task = DieAfter(sys.argv[1], int(sys.argv[2]))   # pickled by value: it lives in __main__
+batches.run_task = DieAfter(sys.argv[1], int(sys.argv[2]))   # pickled by value: it lives in __main__
 sys.exit(main(sys.argv[3:]))
 '''
 
@@ -114,7 +114,7 @@ def test_a_batch_whose_only_worker_dies_ends_with_the_done_runs_written(tmp_path
     ended = tmp_path / 'ended'
     ended.mkdir()
     out = tmp_path / 'out'
-    every = experiments.tasks(['table2_s3'], ['fastep'], 5)
+    every = batches.tasks(['table2_s3'], ['fastep'], 5)
     # The scheduler of a LocalCluster (in this process) and one worker process without a nanny: killed, it stays
     # dead, as a `dask worker` on another machine that went away.
     with distributed.LocalCluster(n_workers=0, host='127.0.0.1', scheduler_port=0,

@@ -1,4 +1,4 @@
-"""The dense-clutter families (fastep_core/dense_clutter.py): BARN-shaped worlds for a Jackal-class base."""
+"""The dense-clutter families (fastep_core/experiments/dense_clutter.py): BARN-shaped worlds for a Jackal-class base."""
 
 from __future__ import annotations
 
@@ -7,8 +7,8 @@ import math
 import numpy as np
 import pytest
 
-from fastep_core.dense_clutter import CELL, DENSE_FAMILIES, ROBOT_RADIUS, dense_clutter_data
-from fastep_core.random_scenarios import ALL_FAMILIES, FAMILIES, random_family_data, solvable
+from fastep_core.experiments.dense_clutter import CELL, DENSE_FAMILIES, ROBOT_RADIUS, dense_clutter_data
+from fastep_core.experiments.random_worlds import ALL_FAMILIES, FAMILIES, random_family_data, solvable
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
 
@@ -49,7 +49,7 @@ def test_fastep_route_crosses_a_laser_only_field_without_touching_a_cylinder() -
 
 @pytest.mark.parametrize('seed', [1_000_000, 1_000_003])
 def test_the_jackal_family_is_the_laser_familys_world_with_the_jackals_box(seed: int) -> None:
-    from fastep_core.dense_clutter import JACKAL_FOOTPRINT
+    from fastep_core.experiments.dense_clutter import JACKAL_FOOTPRINT
     from fastep_core.footprint import Footprint
 
     laser, jackal = random_family_data('dense_clutter_laser', seed), random_family_data('dense_clutter_jackal', seed)

@@ -1,15 +1,15 @@
-"""The v2 world families (fastep_core/dynamic_families.py) through random_scenarios, as the benchmark loads them."""
+"""The v2 world families (experiments/dynamic_worlds.py) through random_worlds, as the benchmark loads them."""
 
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from fastep_core.dynamic_families import DYNAMIC_FAMILIES
 from fastep_core.dynamic_world import DynamicWorld
-from fastep_core.experiments import cached_scenario
+from fastep_core.experiments.batches import cached_scenario
+from fastep_core.experiments.dynamic_worlds import DYNAMIC_FAMILIES
+from fastep_core.experiments.random_worlds import ALL_FAMILIES, FAMILIES, family_source, random_family_data, solvable
 from fastep_core.geometry import point_segment_distance
-from fastep_core.random_scenarios import ALL_FAMILIES, FAMILIES, family_source, random_family_data, solvable
 from fastep_core.scenario import parse_scenario
 
 

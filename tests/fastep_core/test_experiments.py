@@ -7,9 +7,9 @@ import sys
 import numpy as np
 import pytest
 
-from fastep_core import experiments, tuning
 from fastep_core.errors import ParameterError
-from fastep_core.experiments import Record
+from fastep_core.experiments import batches, tuning
+from fastep_core.experiments.batches import Record
 
 
 def record(algorithm, seed, path, compute, scenario='s', ok=True, robot='r1'):
@@ -25,14 +25,14 @@ def synthetic(n=20, seed=0):
 
 def test_enhancement_is_the_papers_formula():
     # Table 2, scenario 2: path 65.75 -> 59.69 is 9.22 %, time 283.25 -> 154.04 is 45.62 %.
-    assert experiments.enhancement(65.75, 59.69) == pytest.approx(9.22, abs=0.005)
-    assert experiments.enhancement(283.25, 154.04) == pytest.approx(45.62, abs=0.005)
+    assert batches.enhancement(65.75, 59.69) == pytest.approx(9.22, abs=0.005)
+    assert batches.enhancement(283.25, 154.04) == pytest.approx(45.62, abs=0.005)
 
 
 def test_summary_statistics_on_synthetic_records():
     records = [record('fastep', k, p, 0.1) for k, p in enumerate([50.0, 52.0, 54.0])]
     records.append(record('fastep', 3, 999.0, 0.5, ok=False))       # a failed run: no path or time, but compute
-    (s,) = experiments.summarise(records)
+    (s,) = batches.summarise(records)
     assert (s.runs, s.arrived, s.collided) == (4, 3, 0)
     assert s.mean['path_length'] == pytest.approx(52.0)
     assert s.std['path_length'] == pytest.approx(2.0)                 # sample std, ddof = 1
@@ -42,19 +42,19 @@ def test_summary_statistics_on_synthetic_records():
 
 def test_compare_finds_a_clear_difference_and_none_between_equals():
     records = synthetic()
-    c = experiments.compare(records, 's', 'path_length')
+    c = batches.compare(records, 's', 'path_length')
     assert c.a_better and c.p_value < 1e-6
     assert c.enhancement == pytest.approx((52.0 - 50.0) / 52.0 * 100, abs=0.2)
     same = [record('fastep', k, 50.0, 0.1) for k in range(5)] + [record('aco', k, 50.0, 0.1) for k in range(5)]
-    c = experiments.compare(same, 's', 'path_length')
+    c = batches.compare(same, 's', 'path_length')
     assert c.p_value == 1.0 and not c.a_better
-    assert math.isnan(experiments.compare(records, 'other', 'path_length').p_value)
+    assert math.isnan(batches.compare(records, 'other', 'path_length').p_value)
 
 
 def test_markdown_report_has_the_papers_numbers_and_ours():
     records = [Record('table2_s3', r.algorithm, r.seed, 'r1', True, False, r.path_length, r.sim_time,
                       r.compute_time, 0.3, 1, '', r.compute_time) for r in synthetic(5)]
-    text = experiments.markdown_report(records, {'table2_s3': {'r1': 45.51}})
+    text = batches.markdown_report(records, {'table2_s3': {'r1': 45.51}})
     assert '45.73' in text and '48.54' in text and '5.79 %' in text       # the paper's row for scenario 3
     assert '| table2_s3 | r1 | FAStep-Kinematic | 5/5 |' in text
     assert f'{50.0 / 45.51:.3f}'[:4] in text                              # the optimality ratio
@@ -65,7 +65,7 @@ def test_markdown_report_puts_every_planner_against_each_baseline():
     records = [Record('table2_s3', r.algorithm, r.seed, 'r1', True, False, r.path_length, r.sim_time,
                       r.compute_time, 0.3, 1, '', r.compute_time)
                for r in synthetic(8) + [record('dwa', k, 51.0 + rng.normal(0, 0.1), 0.2) for k in range(8)]]
-    text = experiments.markdown_report(records, {'table2_s3': {'r1': 45.51}})
+    text = batches.markdown_report(records, {'table2_s3': {'r1': 45.51}})
     table = text.split('### Every planner against the baselines')[1].split('###')[0]
     assert '| planner | path (m) | vs ACO-Kinematic: enh. | p | vs DWA: enh. | p |' in table
     fastep = next(line for line in table.splitlines() if line.startswith('| table2_s3 | FAStep-Kinematic |'))
@@ -76,7 +76,7 @@ def test_markdown_report_puts_every_planner_against_each_baseline():
 
 
 def test_run_batch_shows_its_progress_on_stderr_when_asked(capsys):
-    records = experiments.run_batch(['table2_s3'], ['optimal'], 1, workers=1, progress=True, label='bench')
+    records = batches.run_batch(['table2_s3'], ['optimal'], 1, workers=1, progress=True, label='bench')
     captured = capsys.readouterr()
     assert len(records) == 1 and captured.out == ''
     assert 'bench' in captured.err and '1/1' in captured.err
@@ -84,12 +84,12 @@ def test_run_batch_shows_its_progress_on_stderr_when_asked(capsys):
 
 def test_run_batch_refuses_zero_runs():
     with pytest.raises(ParameterError, match='runs must be >= 1'):
-        experiments.run_batch(['table2_s3'], ['fastep'], 0)
+        batches.run_batch(['table2_s3'], ['fastep'], 0)
 
 
 def test_run_batch_is_reproducible_and_independent_of_workers():
-    serial = experiments.run_batch(['table2_s3'], ['fastep', 'optimal'], 2, workers=1)
-    pooled = experiments.run_batch(['table2_s3'], ['fastep', 'optimal'], 2, workers=2)
+    serial = batches.run_batch(['table2_s3'], ['fastep', 'optimal'], 2, workers=1)
+    pooled = batches.run_batch(['table2_s3'], ['fastep', 'optimal'], 2, workers=2)
     assert [(r.algorithm, r.seed) for r in serial] == [('fastep', 0), ('fastep', 1), ('optimal', 0)]
     assert [(r.path_length, r.reached) for r in serial] == [(r.path_length, r.reached) for r in pooled]
     assert all(r.ok for r in serial)
@@ -101,8 +101,8 @@ def test_run_batch_is_reproducible_and_independent_of_workers():
                                   ['--train', 'table2_s1', '--test', 'table2_s1'],
                                   ['--test', 'no_such_scenario'], ['--bogus']])
 def test_fastep_tune_bad_input_exits_2_with_one_line(args):
-    done = subprocess.run([sys.executable, '-m', 'fastep_core.tuning', *args], capture_output=True, text=True,
-                          timeout=120)
+    done = subprocess.run([sys.executable, '-m', 'fastep_core.experiments.tuning', *args], capture_output=True,
+                          text=True, timeout=120)
     assert done.returncode == 2
     assert len(done.stderr.strip().splitlines()) == 1 and 'Traceback' not in done.stderr
     assert done.stdout == ''
@@ -134,14 +134,14 @@ def test_a_tiny_search_is_seeded_and_never_worse_than_table_1():
 def test_the_tasks_of_a_batch_are_made_when_asked_for() -> None:
     """Issue "Faults", item 6: `--runs 3000000` built every task first (1.8 GB in 60 s, no result). Tasks is the
     same list, made one task at a time."""
-    from fastep_core.experiments import Tasks
+    from fastep_core.experiments.batches import Tasks
     every = Tasks(['table2_s1', 'application'], ['fastep', 'optimal', 'aco'], 100_000, seed0=5)
     assert len(every) == 2 * (100_000 + 1 + 100_000)
     assert every[0] == ('table2_s1', 'fastep', 5) and every[99_999] == ('table2_s1', 'fastep', 100_004)
     assert every[100_000] == ('table2_s1', 'optimal', 5) and every[100_001] == ('table2_s1', 'aco', 5)
     assert every[-1] == ('application', 'aco', 100_004)
     small = Tasks(['table2_s1', 'application'], ['fastep', 'optimal'], 3, seed0=1)
-    assert list(small) == experiments.tasks(['table2_s1', 'application'], ['fastep', 'optimal'], 3, seed0=1) == [
+    assert list(small) == batches.tasks(['table2_s1', 'application'], ['fastep', 'optimal'], 3, seed0=1) == [
         (s, a, seed) for s in ('table2_s1', 'application') for a, seeds in (('fastep', (1, 2, 3)), ('optimal', (1,)))
         for seed in seeds]
     with pytest.raises(IndexError):

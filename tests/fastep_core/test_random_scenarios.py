@@ -7,9 +7,8 @@ import pytest
 import yaml
 
 from fastep_core.errors import ParameterError
-from fastep_core.experiments import cached_scenario
-from fastep_core.geometry import Circle
-from fastep_core.random_scenarios import (
+from fastep_core.experiments.batches import cached_scenario
+from fastep_core.experiments.random_worlds import (
     FAMILIES,
     FAMILY_SEED0,
     family_source,
@@ -21,6 +20,7 @@ from fastep_core.random_scenarios import (
     solvable,
     u_trap_scenario_data,
 )
+from fastep_core.geometry import Circle
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
 from fastep_core.world import World

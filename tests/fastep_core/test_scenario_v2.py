@@ -237,7 +237,7 @@ def test_fastep_sim_refuses_to_record_a_v2_world(tmp_path: Path, capsys: pytest.
 
 
 def test_scenario_data_is_what_parse_scenario_reads_back_for_every_builtin_and_v2_family() -> None:
-    from fastep_core.random_scenarios import random_family_data
+    from fastep_core.experiments.random_worlds import random_family_data
     from fastep_core.scenario import builtin_names, load_scenario, scenario_data
     scenarios = [load_scenario(name) for name in builtin_names()]
     scenarios += [parse_scenario(random_family_data(family, 1000001))

@@ -188,7 +188,7 @@ def test_diff_drive_robots_held_face_to_face_or_by_a_parked_robot_get_out(world)
     """FAStep-Kinematic's two failures on the diff_drive_robots family (issue 14): a robot held by another
     turned in place between stops, which restarted the recovery clocks (1000015: two robots face to face for
     three minutes); a robot that arrived was seen moving and not planned round (1000019). Both now arrive."""
-    from fastep_core.experiments import cached_scenario
+    from fastep_core.experiments.batches import cached_scenario
 
     scenario = cached_scenario(world)
     run = simulate(scenario, 'fastep', 0)

@@ -313,7 +313,7 @@ def test_a_trapped_tractor_trailer_manoeuvres_out_on_the_live_graph(tmp_path: Pa
     # late on a real graph must not throw it off its planned states for good.
     import yaml
 
-    from fastep_core.random_scenarios import u_trap
+    from fastep_core.experiments.random_worlds import u_trap
     robot = {'name': 'r1', 'model': 'tractor_trailer', 'start': [5, 15, 0.0, 0.0], 'goal': [35, 15], 'radius': 0.6,
              'length': 1.0, 'trailer_length': 1.0, 'width': 0.5}
     data = {'name': 'u_tractor', 'workspace': [0, 0, 40, 30],

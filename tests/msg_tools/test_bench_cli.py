@@ -6,8 +6,8 @@ import sys
 
 import pytest
 
-from fastep_core.families import rows_of, run_families
-from fastep_core.random_scenarios import FAMILIES, FAMILY_SEED0
+from fastep_core.experiments.families import rows_of, run_families
+from fastep_core.experiments.random_worlds import FAMILIES, FAMILY_SEED0
 from msg_tools.bench_cli import main as bench_main
 
 

@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 from matplotlib.patches import Circle as CirclePatch
 
-from fastep_core.experiments import PAPER, Record, example_paths
+from fastep_core.experiments.batches import PAPER, Record, example_paths
 from fastep_core.geometry import Circle, Segment
 from fastep_core.planning.algorithms import ALGORITHMS
 from fastep_core.scenario import load_scenario, parse_scenario

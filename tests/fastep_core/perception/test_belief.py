@@ -138,7 +138,7 @@ def test_a_misplaced_map_wall_does_not_hide_the_true_wall_s_end() -> None:
     sees through it, and the true end's scan points within EXPLAINED of the map wall's end counted as that wall:
     FAStep-Route rounded the map's end and clipped the true one by 17.8 mm. A map wall now explains no point
     beyond its ends (fusion.END_SLACK), and the run is clean."""
-    from fastep_core.experiments import cached_scenario
+    from fastep_core.experiments.batches import cached_scenario
     robot = simulate(cached_scenario('misplaced_obstacles:1000025'), 'fastep_route', 0).robots[0]
     assert robot.reached and not robot.collided and robot.min_clearance > 0.0
 
@@ -146,6 +146,6 @@ def test_a_misplaced_map_wall_does_not_hide_the_true_wall_s_end() -> None:
 def test_rounding_a_seen_wall_s_end_keeps_clear_of_the_true_end() -> None:
     """unknown_obstacles:1000015: FAStep-Route rounded a wall it had seen at the guard's limit, and the belief's end
     was 8 mm short of the truth: a 0.05 mm contact. A robot planning in its scans keeps PERCEPTION_MARGIN."""
-    from fastep_core.experiments import cached_scenario
+    from fastep_core.experiments.batches import cached_scenario
     robot = simulate(cached_scenario('unknown_obstacles:1000015'), 'fastep_route', 0).robots[0]
     assert robot.reached and not robot.collided and robot.min_clearance > 0.0

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from fastep_core.experiments import cached_scenario
+from fastep_core.experiments.batches import cached_scenario
 from fastep_core.geometry import Circle, Obstacles, Segment
 from fastep_core.perception.belief import IN_FRONT, Perception
 from fastep_core.perception.fusion import seen_through

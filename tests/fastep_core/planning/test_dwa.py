@@ -10,7 +10,8 @@ import numpy as np
 import pytest
 
 from fastep_core.errors import ParameterError
-from fastep_core.experiments import drives_scenario, tasks
+from fastep_core.experiments.batches import drives_scenario, tasks
+from fastep_core.experiments.random_worlds import random_scenario, u_trap
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.metrics import Margins, trajectory_margins
@@ -18,7 +19,6 @@ from fastep_core.planning import PlannerParams, make_navigator
 from fastep_core.planning.algorithms import ALGORITHM_NAMES, algorithm_name, check_drives, drives
 from fastep_core.planning.dwa import LOCAL_MINIMUM, DynamicWindow
 from fastep_core.planning.others import OtherRobot
-from fastep_core.random_scenarios import random_scenario, u_trap
 from fastep_core.scenario import RobotSpec, Scenario, load_scenario, parse_scenario
 from fastep_core.simulator import Run, simulate
 from fastep_core.world import World
@@ -148,7 +148,7 @@ def test_dwa_draws_no_random_numbers():
     assert [r.trajectory for r in first.robots] == [r.trajectory for r in second.robots]
 
 
-# Random worlds (fastep_core.random_scenarios, point masses only): seeds 1, 2 and 11 have no trap on any robot's
+# Random worlds (experiments.random_worlds, point masses only): seeds 1, 2 and 11 have no trap on any robot's
 # way (2, 4 and 1 robots); in seed 5 one of three robots meets two circles too close to pass between.
 @pytest.mark.parametrize('seed', [1, 2, 11])
 def test_dwa_reaches_the_goal_safely_in_random_worlds(seed):

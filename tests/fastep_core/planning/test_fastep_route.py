@@ -6,6 +6,7 @@ import math
 import numpy as np
 import pytest
 
+from fastep_core.experiments.random_worlds import random_family_data, u_trap, u_trap_scenario_data
 from fastep_core.geometry import Circle, Segment
 from fastep_core.planning import Mode
 from fastep_core.planning.algorithms import ALGORITHM_NAMES, ALGORITHMS, make_navigator
@@ -13,7 +14,6 @@ from fastep_core.planning.fastep_route import BLOCK_TIME, FAStepRoute
 from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
-from fastep_core.random_scenarios import random_family_data, u_trap, u_trap_scenario_data
 from fastep_core.scenario import RobotSpec, load_scenario, parse_scenario
 from fastep_core.simulator import simulate
 from fastep_core.world import World

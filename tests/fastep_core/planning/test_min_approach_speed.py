@@ -12,7 +12,7 @@ from typing import Any
 
 import pytest
 
-from fastep_core.experiments import TABLE2, cached_scenario
+from fastep_core.experiments.batches import TABLE2, cached_scenario
 from fastep_core.kinematics import PointMassController, TractorTrailerController
 from fastep_core.planning.algorithms import make_robot
 from fastep_core.planning.params import PlannerParams

@@ -6,8 +6,8 @@ import math
 import numpy as np
 import pytest
 
+from fastep_core.experiments.random_worlds import u_trap
 from fastep_core.planning import Mode
-from fastep_core.random_scenarios import u_trap
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
 from msg_tools.sim_cli import main as sim_main

@@ -6,12 +6,12 @@ import math
 import numpy as np
 import pytest
 
+from fastep_core.experiments.random_worlds import u_trap
 from fastep_core.geometry import Circle, Segment
 from fastep_core.planning.exact_path import parked_world
 from fastep_core.planning.optimal import OptimalPath, shortest_path
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
-from fastep_core.random_scenarios import u_trap
 from fastep_core.world import World
 from fastep_testing.optimal_eager import shortest_path_eager
 

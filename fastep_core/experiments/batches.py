@@ -2,7 +2,7 @@
 
 Why pure functions: the paper's Table 2 is the project's main claim, so regenerating it must be one reproducible call
 from `fastep-bench`, `benchmarks/table2.py`, tuning and tests alike. `run_batch` spreads (scenario, algorithm, seed)
-runs over a process pool or a Dask cluster (fastep_core.cluster); every run draws only from its own seed, so records
+runs over a process pool or a Dask cluster (experiments.cluster); every run draws only from its own seed, so records
 (returned sorted) do not depend on the engine, workers or finishing order. `summarise`: mean and sample std (ddof 1)
 per scenario, planner and robot of path length and time to goal (runs that arrived without collision) and compute
 time (all runs). `compare`: two planners on one metric, the paper's enhancement (ACO - FAStep) / ACO * 100 and a
@@ -27,14 +27,14 @@ import numpy as np
 
 from fastep_core.cli import progress_bar
 from fastep_core.errors import ParameterError
+from fastep_core.experiments.random_worlds import parse_family_source, random_family_data
 from fastep_core.planning.algorithms import algorithm_name, drives
 from fastep_core.planning.optimal import OptimalPath, shortest_path
-from fastep_core.random_scenarios import parse_family_source, random_family_data
 from fastep_core.scenario import Scenario, load_scenario, parse_scenario
 from fastep_core.simulator import Run, simulate
 
 if TYPE_CHECKING:
-    from fastep_core.cluster import BatchIncomplete, ClusterSpec, Engine
+    from fastep_core.experiments.cluster import BatchIncomplete, ClusterSpec, Engine
 
 __all__ = [
     'PAPER', 'TABLE2', 'DETERMINISTIC', 'METRICS', 'Record', 'Summary', 'Comparison',
@@ -144,7 +144,7 @@ def drives_scenario(algorithm: str, source: str) -> bool:
 @functools.lru_cache(maxsize=1024)
 def cached_scenario(source: str) -> Scenario:
     """The scenario of a built-in name, a YAML path or a random family world ('u_trap:1000004',
-    random_scenarios.family_source), built once per process (a worker runs many seeds)."""
+    random_worlds.family_source), built once per process (a worker runs many seeds)."""
     family = parse_family_source(source)
     if family is not None and not os.path.exists(source):
         return parse_scenario(random_family_data(*family))
@@ -183,7 +183,7 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     """Simulate every scenario with every algorithm for seeds seed0..seed0+runs-1; records sorted.
 
     workers <= 1 runs in this process. `progress`: a progress bar titled `label` on stderr, None when stderr
-    is a terminal, True always, False never (fastep_core.cli.progress_bar). `cluster` (fastep_core.cluster:
+    is a terminal, True always, False never (fastep_core.cli.progress_bar). `cluster` (fastep_core.experiments.cluster:
     'local:N', a scheduler address, or an open Engine) runs the tasks there instead, `workers` unused; the
     records are the same. A cluster that can run no more (no worker left in time, no scheduler) raises
     cluster.BatchIncomplete, its `done` the records made (sorted), its `missing` the tasks without any.
@@ -202,7 +202,11 @@ def run_batch(scenarios: Sequence[str], algorithms: Sequence[str], runs: int, wo
     incomplete: BatchIncomplete | None = None
     with progress_bar(len(every), label, progress) as bar:
         if cluster is not None:
-            from fastep_core.cluster import BatchIncomplete, Engine, open_cluster  # Dask only when asked for
+            from fastep_core.experiments.cluster import (  # Dask only when asked for
+                BatchIncomplete,
+                Engine,
+                open_cluster,
+            )
             with contextlib.ExitStack() as stack:
                 engine = cluster if isinstance(cluster, Engine) else stack.enter_context(open_cluster(cluster))
                 try:

@@ -1,11 +1,11 @@
 """The families benchmark: every planner on many unseen random worlds of each family, judged against the optimum.
 
 Why: Table 2's three worlds are the ones the paper (and every tuning) looked at. A planner's worth is what it
-does on worlds nobody picked (fastep_core.random_scenarios.FAMILIES). `fastep-bench --families` runs this
+does on worlds nobody picked (fastep_core.experiments.random_worlds.FAMILIES). `fastep-bench --families` runs this
 module; docs/clutter.md shows its tables.
 
 - Worlds: world k of a family is `random_family_data(family, FAMILY_SEED0 + k)`, named 'FAMILY:SEED', solvable
-  by construction; the runs are experiments.run_batch over them, and the records do not depend on the engine or
+  by construction; the runs are batches.run_batch over them, and the records do not depend on the engine or
   the number of workers (only the times in them do).
 - Collisions: the simulator's judgement against the true world (fastep_core.metrics.trajectory_margins).
 - Optimum: per robot, alone, the exact shortest path keeping radius + clearance_margin (docs/optimality.md);
@@ -23,14 +23,14 @@ from typing import TYPE_CHECKING, Any, Sequence
 
 import numpy as np
 
-from fastep_core import experiments
 from fastep_core.errors import ParameterError
-from fastep_core.experiments import Record
+from fastep_core.experiments import batches
+from fastep_core.experiments.batches import Record
+from fastep_core.experiments.random_worlds import ALL_FAMILIES, FAMILY_SEED0, family_source, parse_family_source
 from fastep_core.planning.algorithms import algorithm_name
-from fastep_core.random_scenarios import ALL_FAMILIES, FAMILY_SEED0, family_source, parse_family_source
 
 if TYPE_CHECKING:
-    from fastep_core.cluster import ClusterSpec, Engine
+    from fastep_core.experiments.cluster import ClusterSpec, Engine
 
 __all__ = ['FAMILY_NAMES', 'Row', 'Summary', 'family_sources', 'run_families', 'rows_of', 'summarise',
            'worst_runs', 'markdown_report', 'load_average']
@@ -58,11 +58,11 @@ def run_families(families: Sequence[str], algorithms: Sequence[str], worlds: int
                  cluster: ClusterSpec | Engine | str | None = None) -> list[Record]:
     """Every planner on `worlds` worlds per family, run seeds seed0..seed0+runs-1 (deterministic planners once);
     `realtime`: fastep_core.simulator.simulate's latency factor (None: lock step); `cluster`: run on Dask
-    (experiments.run_batch)."""
+    (batches.run_batch)."""
     for family in families:
         if family not in ALL_FAMILIES:
             raise ParameterError(f'unknown world family {family!r}; choose one of {", ".join(ALL_FAMILIES)}')
-    return experiments.run_batch(family_sources(families, worlds), algorithms, runs, workers, seed0=seed0,
+    return batches.run_batch(family_sources(families, worlds), algorithms, runs, workers, seed0=seed0,
                                  progress=progress, label=label, overrides=overrides, realtime=realtime,
                                  cluster=cluster)
 
@@ -99,7 +99,7 @@ class Row:
 
 def rows_of(records: Sequence[Record]) -> list[Row]:
     """The records of run_families as rows, each with its robot's optimum (computed once per world)."""
-    optimum = {source: experiments.optimal_lengths(source) for source in dict.fromkeys(r.scenario for r in records)}
+    optimum = {source: batches.optimal_lengths(source) for source in dict.fromkeys(r.scenario for r in records)}
     robots = {source: len(lengths) for source, lengths in optimum.items()}
     out = []
     for r in records:

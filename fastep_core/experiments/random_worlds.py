@@ -1,6 +1,6 @@
 """Random solvable scenarios: circles, wall segments and U-shaped traps, 1-4 robots of either model.
 
-    python -m fastep_core.random_scenarios [SEED] [--family FAMILY]     (prints the scenario as YAML)
+    python -m fastep_core.experiments.random_worlds [SEED] [--family FAMILY]     (prints the scenario as YAML)
 
 Why: hand-made scenarios show what their author thought of; a soak over random worlds finds what nobody did (a trap
 the escape cannot leave, robots that deadlock). Each is a scenario mapping (docs/scenarios.md) validated by
@@ -10,7 +10,7 @@ counted as obstacles. A U-trap is three walls round a pocket facing a robot's st
 Families (`FAMILIES`, `random_family_data`; fastep-bench --families, docs/clutter.md): circle_field (one point mass,
 50 x 50 m, 20-35 circles), circles_walls (10-20 circles, 4-10 walls, no traps), u_trap, multi_robot (2-4 robots),
 tractor_trailer, diff_drive_walls and diff_drive_robots (those worlds with differential-drive bases at random
-headings), and the v2 families of dynamic_families.py; the static five run when none is named. Benchmarks use seeds
+headings), and the v2 families of dynamic_worlds.py; the static five run when none is named. Benchmarks use seeds
 FAMILY_SEED0 + k, far above the tests' (0-500), so no test or tuning has seen their worlds.
 """
 
@@ -22,9 +22,9 @@ from typing import Any, Sequence
 import numpy as np
 
 from fastep_core import cli
-from fastep_core.dense_clutter import DENSE_FAMILIES, dense_clutter_data
-from fastep_core.dynamic_families import DYNAMIC_FAMILIES, dynamic_family_data
 from fastep_core.errors import ParameterError
+from fastep_core.experiments.dense_clutter import DENSE_FAMILIES, dense_clutter_data
+from fastep_core.experiments.dynamic_worlds import DYNAMIC_FAMILIES, dynamic_family_data
 from fastep_core.geometry import Circle
 from fastep_core.planning.exact_path import solvable
 from fastep_core.planning.params import PlannerParams
@@ -43,7 +43,7 @@ FAMILIES: tuple[str, ...] = ('circle_field', 'circles_walls', 'u_trap', 'multi_r
                              'diff_drive_walls', 'diff_drive_robots')
 """The static world families of random_family_data, in the order tables list them (the default benchmark)."""
 ALL_FAMILIES: tuple[str, ...] = FAMILIES + DYNAMIC_FAMILIES + DENSE_FAMILIES
-"""Every family random_family_data knows: the static ones, the v2 ones (dynamic_families.py) and dense clutter
+"""Every family random_family_data knows: the static ones, the v2 ones (dynamic_worlds.py) and dense clutter
 (dense_clutter.py)."""
 FAMILY_SEED0 = 1_000_000
 """First world seed of the families benchmark: disjoint from the seeds the tests use."""
@@ -300,7 +300,7 @@ def random_family_data(family: str, seed: int) -> dict[str, Any]:
 
 def family_source(family: str, seed: int) -> str:
     """The source name of a family world, 'FAMILY:SEED' (e.g. 'u_trap:1000004'): what
-    fastep_core.experiments.cached_scenario loads, and what tables and records call it."""
+    fastep_core.experiments.batches.cached_scenario loads, and what tables and records call it."""
     return f'{family}:{seed}'
 
 
@@ -321,7 +321,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     """Print random scenario SEED (default 0), or world SEED of a family, as YAML, ready for `fastep-sim FILE`."""
     import yaml
 
-    prog = 'python -m fastep_core.random_scenarios'
+    prog = 'python -m fastep_core.experiments.random_worlds'
     parser = cli.Parser(prog=prog, description='Print a random solvable scenario as YAML.')
     parser.add_argument('seed', nargs='?', type=cli.seed, default=0, help='scenario seed (default 0)')
     parser.add_argument('--family', choices=ALL_FAMILIES,

@@ -10,7 +10,7 @@ and step_radius in [1, 4] m, the paper's ranges. Table 1's setting is in the ini
 never worse on the training runs; every candidate is scored on the same seeds (common random numbers), so J is a
 fixed function. The result is checked against Table 1 on held-out scenarios and seeds. Default: train on table2_s2,
 table2_s3, case_study_1, seeds 0-1, popsize 5 for 3 generations on 2 workers; held out table2_s1, case_study_2,
-application, open_field, seeds 100-109. --cluster scores each generation on Dask (fastep_core.cluster), same result.
+application, open_field, seeds 100-109. --cluster scores each generation on Dask (experiments.cluster), same result.
 Exit 0 after a search, 2 with one line on stderr for bad input.
 """
 
@@ -31,9 +31,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core import experiments
 from fastep_core.cli import MAX_ITERATIONS, MAX_POPSIZE, MAX_RUNS, MAX_WORKERS, Parser, count, fail, guard, seed
-from fastep_core.cluster import CLUSTER_HELP, ClusterSpec, Engine, cluster_spec, open_cluster
+from fastep_core.experiments import batches
+from fastep_core.experiments.cluster import CLUSTER_HELP, ClusterSpec, Engine, cluster_spec, open_cluster
 from fastep_core.planning.params import PlannerParams
 
 __all__ = ['PARAMETERS', 'PENALTY', 'TRAIN', 'TEST', 'TuningResult', 'cost', 'decode', 'tune', 'evaluate',
@@ -66,7 +66,7 @@ def encode(params: PlannerParams) -> np.ndarray:
     return np.array([params.a, params.b, math.log10(params.c), params.step_radius])
 
 
-def run_cost(records: Sequence[experiments.Record]) -> float:
+def run_cost(records: Sequence[batches.Record]) -> float:
     """Mean of path length + PENALTY per failed robot."""
     return float(np.mean([r.path_length + (0.0 if r.ok else PENALTY) for r in records]))
 
@@ -76,7 +76,7 @@ def cost(x: Sequence[float] | NDArray[np.float64], train: Sequence[str], seeds: 
     """J(x): every training scenario, every seed, in this process."""
     overrides = tuple(sorted(decode(x).items()))
     records = [r for s in train for seed in seeds
-               for r in experiments.run_task((s, algorithm, seed), overrides)]
+               for r in batches.run_task((s, algorithm, seed), overrides)]
     return run_cost(records)
 
 
@@ -96,7 +96,7 @@ def tune(train: Sequence[str] = TRAIN, seeds: Sequence[int] = (0, 1), *, popsize
          workers: int = 2, seed: int = 0, algorithm: str = 'fastep',
          log: Callable[[str], None] | None = None, cluster: ClusterSpec | Engine | str | None = None) -> TuningResult:
     """Differential evolution over PARAMETERS (Table 1 in the initial population); returns the best found.
-    `cluster` (fastep_core.cluster): each generation's candidates are scored there instead of on `workers`
+    `cluster` (fastep_core.experiments.cluster): each generation's candidates are scored there instead of on `workers`
     processes, the same result."""
     from scipy.optimize import Bounds, differential_evolution
     fun = functools.partial(cost, train=tuple(train), seeds=tuple(seeds), algorithm=algorithm)
@@ -119,7 +119,7 @@ def tune(train: Sequence[str] = TRAIN, seeds: Sequence[int] = (0, 1), *, popsize
             engine = cluster if isinstance(cluster, Engine) else stack.enter_context(open_cluster(cluster))
             result = differential_evolution(fun, bounds, workers=functools.partial(engine.map, name=PROG), **kwargs)
     elif workers > 1:
-        with experiments.pool_context().Pool(workers) as pool:
+        with batches.pool_context().Pool(workers) as pool:
             result = differential_evolution(fun, bounds, workers=pool.map, **kwargs)
     else:
         result = differential_evolution(fun, bounds, **kwargs)
@@ -129,14 +129,14 @@ def tune(train: Sequence[str] = TRAIN, seeds: Sequence[int] = (0, 1), *, popsize
 
 
 def evaluate(scenarios: Sequence[str], overrides: dict[str, float] | None, runs: int, seed0: int,
-             workers: int, cluster: ClusterSpec | Engine | str | None = None) -> list[experiments.Record]:
+             workers: int, cluster: ClusterSpec | Engine | str | None = None) -> list[batches.Record]:
     """FAStep-Kinematic runs of the scenarios with planner overrides (None: each scenario's own values)."""
-    return experiments.run_batch(scenarios, ['fastep'], runs, workers, seed0=seed0, overrides=overrides,
+    return batches.run_batch(scenarios, ['fastep'], runs, workers, seed0=seed0, overrides=overrides,
                                  cluster=cluster)
 
 
-def report(result: TuningResult, test: Sequence[str], baseline: Sequence[experiments.Record],
-           tuned: Sequence[experiments.Record], command: str) -> str:
+def report(result: TuningResult, test: Sequence[str], baseline: Sequence[batches.Record],
+           tuned: Sequence[batches.Record], command: str) -> str:
     t1 = PlannerParams()
     lines = ['## Tuning', '', '```', command, '```', '',
              f'Differential evolution, {result.evaluations} candidate evaluations in {result.generations} '
@@ -150,16 +150,16 @@ def report(result: TuningResult, test: Sequence[str], baseline: Sequence[experim
     lines += ['', 'Held-out scenarios (not used in the search), other seeds:', '',
               '| scenario | robot | Table 1 path (m) | tuned path (m) | change | Table 1 arrived | tuned arrived | '
               'Table 1 path / opt. | tuned path / opt. |', '|---|---|---|---|---|---|---|---|---|']
-    sb = {(s.scenario, s.robot): s for s in experiments.summarise(baseline)}
-    st = {(s.scenario, s.robot): s for s in experiments.summarise(tuned)}
+    sb = {(s.scenario, s.robot): s for s in batches.summarise(baseline)}
+    st = {(s.scenario, s.robot): s for s in batches.summarise(tuned)}
     for scenario in test:
-        optimal = experiments.optimal_lengths(scenario)
+        optimal = batches.optimal_lengths(scenario)
         for robot, opt in optimal.items():
             b, t = sb[(scenario, robot)], st[(scenario, robot)]
             pb, pt = b.mean['path_length'], t.mean['path_length']
             change = (pt - pb) / pb * 100 if pb and not math.isnan(pb) and not math.isnan(pt) else math.nan
 
-            def arrived(s: experiments.Summary) -> str:
+            def arrived(s: batches.Summary) -> str:
                 return f'{s.arrived}/{s.runs}' + (f' ({s.collided} collided)' if s.collided else '')
             lines.append(f'| {scenario} | {robot} | {pb:.2f} ± {b.std["path_length"]:.2f} | '
                          f'{pt:.2f} ± {t.std["path_length"]:.2f} | {change:+.2f} % | {arrived(b)} | {arrived(t)} | '
