@@ -13,6 +13,7 @@ import os
 import signal
 import sys
 import time
+import weakref
 from dataclasses import Field, dataclass
 from typing import Any, Callable, Sequence
 
@@ -32,8 +33,8 @@ from fastep_ros.limits import CLOCK_JUMP_LIMIT, PERIOD_RANGE, RATE_RANGE  # re-e
 from fastep_ros.parameters import warn_unknown_overrides
 
 __all__ = ['CLOCK_JUMP_LIMIT', 'GATE_ENV', 'PERIOD_RANGE', 'RATE_RANGE', 'ClockGuard', 'Param', 'StartupError',
-           'check_range', 'declare', 'declare_empty_array', 'declare_strings', 'declare_table', 'guard_clock',
-           'node_main', 'quiet_at_stop']
+           'check_range', 'declare', 'declare_empty_array', 'declare_strings', 'declare_table', 'declared',
+           'guard_clock', 'node_main', 'quiet_at_stop', 'unit_suffix']
 
 
 INT64_MAX = 2**63 - 1
@@ -99,18 +100,37 @@ def declare_strings(node: Node, name: str, description: str) -> list[str]:
     return [str(each) for each in value or [] if each]
 
 
+_DECLARED: weakref.WeakKeyDictionary[Node, dict[str, Param]] = weakref.WeakKeyDictionary()
+
+
+def unit_suffix(unit: str) -> str:
+    """A unit as it follows a number in a message: ' m/s'; '' for none."""
+    return f' {unit.strip()}' if unit.strip() else ''
+
+
+def declared(node: Node) -> dict[str, Param]:
+    """What `declare` was given for each parameter of the node, by name, in declaration order: the unit and the
+    component a descriptor has no field for (the reference pages, fastep_ros.reference, show them)."""
+    return dict(_DECLARED.get(node, {}))
+
+
 def declare(node: Node, name: str, default: Any, description: str, *, read_only: bool = True,
-            constraints: str = '', value_range: tuple[float, float] | None = None, unit: str = '') -> Any:
+            constraints: str = '', value_range: tuple[float, float] | None = None, unit: str = '',
+            component: str = '') -> Any:
     """Declare a statically typed parameter with a description and return its value.
 
     `default` None declares a double array whose default is empty ([]). value_range (low, high) goes into the
     descriptor as integer_range / floating_point_range, which rclpy enforces on every set (the override included:
     a value outside it is a StartupError here, `unit` after the range); constraints is free text beside it.
+    unit: the value's unit ('m/s'; '' for a count or a ratio); component: the part of the node it sets, its
+    section of the reference page (fastep_ros.reference).
     read_only False: the node changes it at runtime (fastep_ros.parameters.DynamicParameters).
     Integers are accepted for doubles; any other wrong type is a StartupError with one line.
     """
+    _DECLARED.setdefault(node, {})[name] = Param(name, default, description, constraints, value_range, unit.strip(),
+                                                 read_only, component)
     if value_range is not None and not constraints:
-        constraints = f'range [{value_range[0]:g}, {value_range[1]:g}]{unit}'
+        constraints = f'range [{value_range[0]:g}, {value_range[1]:g}]{unit_suffix(unit)}'
     descriptor = ParameterDescriptor(name=name, description=description, read_only=read_only,
                                      additional_constraints=constraints)
     if value_range is not None:
@@ -128,8 +148,8 @@ def declare(node: Node, name: str, default: Any, description: str, *, read_only:
             if isinstance(given, (int, float)) and not math.isfinite(given):
                 raise StartupError(f'parameter {name} must be finite, got {given}') from None
             shown = f'{given:g}' if isinstance(given, (int, float)) else str(exc)
-            raise StartupError(f'parameter {name} must be in [{value_range[0]:g}, {value_range[1]:g}]{unit}, '
-                               f'got {shown}') from None
+            raise StartupError(f'parameter {name} must be in [{value_range[0]:g}, {value_range[1]:g}]'
+                               f'{unit_suffix(unit)}, got {shown}') from None
         raise StartupError(f'parameter {name}: {exc}') from None
     except ParameterException as exc:
         kind = _TYPES.get(type(default), Parameter.Type.DOUBLE_ARRAY).name.lower().replace('_', ' ')
@@ -152,16 +172,20 @@ class Param:
     value_range: tuple[float, float] | None = None
     unit: str = ''
     read_only: bool = True
+    component: str = ''   # the part of the node it sets: its section of the reference page
 
     @classmethod
     def of_field(cls, f: Field[Any], default: Any) -> Param:
-        """A dataclass field with `description` and `range` metadata (fastep_core PlannerParams): tunable."""
+        """A dataclass field with `description`, `range`, `unit` and `component` metadata (fastep_core
+        PlannerParams): tunable."""
         low, high = f.metadata['range']
-        return cls(f.name, default, f.metadata['description'], value_range=(low, high), read_only=False)
+        return cls(f.name, default, f.metadata['description'], value_range=(low, high), read_only=False,
+                   unit=f.metadata.get('unit', ''), component=f.metadata.get('component', ''))
 
     def declare(self, node: Node) -> Any:
         return declare(node, self.name, self.default, self.description, read_only=self.read_only,
-                       constraints=self.constraints, value_range=self.value_range, unit=self.unit)
+                       constraints=self.constraints, value_range=self.value_range, unit=self.unit,
+                       component=self.component)
 
 
 def declare_table(node: Node, table: Sequence[Param]) -> dict[str, Any]:
@@ -186,7 +210,7 @@ def table_values(node: Node, table: Sequence[Param]) -> dict[str, Any]:
 def check_range(name: str, value: float, low: float, high: float, unit: str = '') -> None:
     """A StartupError (one line, exit 2) unless low <= value <= high."""
     if not low <= value <= high:
-        raise StartupError(f'parameter {name} must be in [{low:g}, {high:g}]{unit}, got {value:g}')
+        raise StartupError(f'parameter {name} must be in [{low:g}, {high:g}]{unit_suffix(unit)}, got {value:g}')
 
 
 class ClockGuard:

@@ -39,7 +39,7 @@ __all__ = ['AUTOSTART', 'Lifecycle', 'ManagedNode', 'destroy_publisher', 'transi
 
 AUTOSTART = Param('autostart', True, 'configure and activate at start; false: stay unconfigured (nothing subscribed, '
                   'published or timed) until a lifecycle manager drives the node (change_state: configure, activate, '
-                  'deactivate, cleanup, shutdown)')
+                  'deactivate, cleanup, shutdown)', component='node')
 
 TRANSITIONS = ('on_configure', 'on_activate', 'on_deactivate', 'on_cleanup', 'on_shutdown', 'on_error')
 NodeClass = TypeVar('NodeClass', bound=type[LifecycleNode])

@@ -40,16 +40,16 @@ class MapNode(Node):
         super().__init__(node_name, **kwargs)
         guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         source = declare(self, 'scenario', '', 'scenario YAML file or built-in name whose world is published')
-        resolution = declare(self, 'resolution', 0.0, 'occupancy grid cell size (m); 0: 0.1 m, coarser for a '
+        resolution = declare(self, 'resolution', 0.0, 'occupancy grid cell size; 0: 0.1 m, coarser for a '
                              f'workspace that would need more than {convert.MAX_GRID_CELLS:,} cells',
-                             constraints=f'>= 0, at most {convert.MAX_GRID_CELLS:,} cells')
+                             constraints=f'>= 0, at most {convert.MAX_GRID_CELLS:,} cells', unit='m')
         thickness = declare(self, 'segment_thickness', 0.0, 'width a wall (segment) is rasterised with in the '
-                            'occupancy grid (m); 0 means one cell')
+                            'occupancy grid; 0 means one cell', unit='m')
         self.frame_id = declare(self, 'frame_id', interface.MAP_FRAME, 'frame of /obstacles and /map')
         seed = declare(self, 'seed', 0, 'the run\'s seed: a v2 world\'s map errors (position_sigma) are drawn from '
                        'it as fastep-sim draws them')
         movers_rate = declare(self, 'movers_rate_hz', 20.0, 'how often the known movers are published on /movers '
-                              '(node clock)', value_range=(10.0, 1000.0), unit=' Hz')
+                              '(node clock)', value_range=(10.0, 1000.0), unit='Hz')
         if not source:
             raise StartupError('parameter scenario is required (a YAML file or a built-in name)')
         if resolution < 0.0:

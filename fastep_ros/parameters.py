@@ -17,16 +17,24 @@ from __future__ import annotations
 
 import difflib
 import math
+import weakref
 from typing import Any, Callable, Iterable
 
 from rcl_interfaces.msg import ParameterType, SetParametersResult
 from rclpy.node import Node
 from rclpy.parameter import Parameter
 
-__all__ = ['DynamicParameters', 'unknown_overrides', 'warn_unknown_overrides']
+__all__ = ['DynamicParameters', 'runtime_names', 'unknown_overrides', 'warn_unknown_overrides']
 
 Apply = Callable[[dict[str, Any]], str]
 """Validates and applies {name: new value}; returns '' when applied, else why not (then nothing changed)."""
+
+_RUNTIME: weakref.WeakKeyDictionary[Node, frozenset[str]] = weakref.WeakKeyDictionary()
+
+
+def runtime_names(node: Node) -> frozenset[str]:
+    """The parameters the node applies while it runs: those of its DynamicParameters (none without one)."""
+    return _RUNTIME.get(node, frozenset())
 
 
 class DynamicParameters:
@@ -41,11 +49,13 @@ class DynamicParameters:
         self.apply = apply
         node.add_pre_set_parameters_callback(self._widen)
         node.add_on_set_parameters_callback(self._on_set)
+        _RUNTIME[node] = self.names
 
     def destroy(self) -> None:
         """Take the callbacks off the node: sets are then only rclpy's checks (its descriptors' ranges)."""
         self.node.remove_pre_set_parameters_callback(self._widen)
         self.node.remove_on_set_parameters_callback(self._on_set)
+        _RUNTIME.pop(self.node, None)
 
     def _declared_type(self, name: str) -> int | None:
         if not self.node.has_parameter(name):

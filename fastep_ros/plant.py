@@ -93,60 +93,68 @@ class PlantNode(ManagedNode):
         super().__init__(node_name, **kwargs)
         self.clock_guard = guard_clock(self)   # a bad /clock message is ignored, never the end of the node
         self.model_name = declare(self, 'model', 'point_mass', 'robot model: ' + ' | '.join(MODELS),
-                                  constraints=' | '.join(MODELS))
+                                  constraints=' | '.join(MODELS), component='robot')
         start = declare(self, 'start', None, 'start state: [x, y] (point_mass), [x, y, theta] (diff_drive) or '
                         '[x, y, theta0, theta1] (tractor_trailer; metres, radians, map frame = odom frame at the '
-                        'start)')
-        length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L (m)')
-        trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt (m)')
-        hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c (m)')
+                        'start)', unit='m, rad', component='robot')
+        length = declare(self, 'length', 1.0, 'tractor-trailer: tractor mid-axle length L', unit='m', component='robot')
+        trailer_length = declare(self, 'trailer_length', 1.0, 'tractor-trailer: trailer length Lt',
+                                 unit='m', component='robot')
+        hitch_offset = declare(self, 'hitch_offset', 0.0, 'tractor-trailer: hitch offset c',
+                               unit='m', component='robot')
         base = PlannerParams()
-        max_speed = declare(self, 'max_speed', base.max_speed, 'diff_drive: the base\'s speed limit |v| (m/s); 0 '
-                            'means unlimited', constraints='>= 0')
+        max_speed = declare(self, 'max_speed', base.max_speed, 'diff_drive: the base\'s speed limit |v|; 0 '
+                            'means unlimited', constraints='>= 0', unit='m/s', component='robot')
         max_turn_rate = declare(self, 'max_turn_rate', base.max_turn_rate, 'diff_drive: the base\'s turn-rate '
-                                'limit |omega| (rad/s); 0 means unlimited', constraints='>= 0')
+                                'limit |omega|; 0 means unlimited', constraints='>= 0', unit='rad/s', component='robot')
         self.rate_hz = declare(self, 'rate_hz', 50.0, 'integration rate: fixed steps of 1/rate_hz s of the '
-                               'node clock (simulated time with use_sim_time)', value_range=RATE_RANGE, unit=' Hz')
+                               'node clock (simulated time with use_sim_time)', value_range=RATE_RANGE, unit='Hz',
+                               component='node')
         odom_rate = declare(self, 'odom_rate_hz', 0.0, 'odometry messages per second of the node clock, each of the '
                             'step integrated last; 0: one per integration step. Every planner of a graph takes '
                             'every robot\'s odometry: a rate of its own (the planners\' control rate) cuts that '
                             'fan-in without coarsening the integration', value_range=(0.0, RATE_RANGE[1]),
-                            unit=' Hz')
+                            unit='Hz', component='node')
         self.cmd_timeout = declare(self, 'cmd_timeout', 0.5, 'a cmd_vel acts for at most this long after it '
                                    'was sent (its stamp; for a Twist on wall time its DDS source time): stop '
                                    '(zero velocity) when no newer one came (s, node clock)', constraints='> 0',
-                                   read_only=False)
-        stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist')
+                                   read_only=False, unit='s', component='node')
+        stamped = declare(self, 'use_stamped_cmd_vel', False, 'subscribe cmd_vel as TwistStamped, not Twist',
+                          component='node')
         lock_step = declare(self, 'lock_step', False, 'on simulated time: integrate each step with the command '
                             'stamped at its start, waiting for it (rate_hz must be the planner\'s control rate; '
-                            'fastep-launch sets it)')
+                            'fastep-launch sets it)', component='node')
         frame_id = declare(self, 'frame_id', '', 'frame of the odometry pose; empty: <ns>/odom (REP-105; root '
-                           'namespace: odom)')
+                           'namespace: odom)', component='node')
         self.publish_map_to_odom = declare(self, 'publish_map_to_odom', True, 'publish map -> odom as the identity on '
                                            '/tf_static (simulated odometry does not drift); false when a '
-                                           'localization node publishes it')
+                                           'localization node publishes it', component='node')
         declare(self, 'clock_timeout', 3.0, 'on simulated time: no /clock for this many wall '
-                'seconds is a warning on /diagnostics', value_range=PERIOD_RANGE, unit=' s', read_only=False)
+                'seconds is a warning on /diagnostics', value_range=PERIOD_RANGE, unit='s', read_only=False,
+                component='node')
         sensor = declare(self, 'sensor', None, 'a laser scanner: [range (m), fov (rad), beams, noise (m)] or with '
                          'its mount on the robot [range, fov, beams, noise, x (m), y (m), yaw (rad)] (a scenario '
                          'robot\'s `sensor`); empty: none. It scans the world of `scenario`, the truth; a mounted '
-                         'one\'s scans are in <ns>/laser (base_link -> laser on /tf_static where TF is published)')
+                         'one\'s scans are in <ns>/laser (base_link -> laser on /tf_static where TF is published)',
+                         component='sensor')
         scenario = declare(self, 'scenario', '', 'with a sensor: the scenario file or built-in name whose true world '
                            '(every still obstacle, known or not, where it is; every mover where it is at the '
-                           'integrated time) the scanner sees')
+                           'integrated time) the scanner sees', component='sensor')
         seed = declare(self, 'seed', 0, 'with a sensor: the run\'s seed; the scanner\'s noise is drawn from its '
-                       'stream robot_index, as fastep-sim draws it')
-        robot_index = declare(self, 'robot_index', 0, 'with a sensor: this robot\'s index in the scenario')
+                       'stream robot_index, as fastep-sim draws it', component='sensor')
+        robot_index = declare(self, 'robot_index', 0, 'with a sensor: this robot\'s index in the scenario',
+                              component='sensor')
         scan_rate = declare(self, 'scan_rate_hz', 20.0, 'with a sensor: scans per second of integrated time',
-                            value_range=(0.1, 1000.0), unit=' Hz')
+                            value_range=(0.1, 1000.0), unit='Hz', component='sensor')
         dynamics = declare(self, 'dynamics', '', 'diff_drive: a base with mass, simulated by MuJoCo behind its own '
                            'controller (fastep_core/dynamics): a preset name (nominal | heavy | limited_controller | '
                            'slippery) or a YAML/JSON mapping of its fields ({preset: heavy, mass: 45}, a scenario '
                            'robot\'s `dynamics`); its controller times out commands after cmd_timeout; odom carries '
-                           'its wheel odometry (it drifts). Empty: the kinematic model, integrated as commanded')
+                           'its wheel odometry (it drifts). Empty: the kinematic model, integrated as commanded',
+                           component='robot')
         ground_truth = declare(self, 'ground_truth_topic', '', 'with dynamics: publish the true pose on this topic '
                                '(geometry_msgs/PoseWithCovarianceStamped in map, with each odometry; a planner\'s '
-                               'localization_topic); empty: not published')
+                               'localization_topic); empty: not published', component='robot')
 
         if self.model_name not in MODELS:
             raise StartupError(f'parameter model must be one of {", ".join(MODELS)}, got {self.model_name!r}')
@@ -561,7 +569,10 @@ class PlantNode(ManagedNode):
             trailer = convert.trailer_pose(self.state, self.model.trailer_length, self.model.hitch_offset, stamp,
                                            self.frame_id)
             self.trailer_pub.publish(trailer)
-        if self.tf.available:
+        # TF only while someone reads it: what a publisher with no matched reader sends is lost anyway, and the
+        # transforms cost most of this call (a lock-step tick with nobody on /tf: 16 robots' of them, for nothing).
+        tf_pub = self.tf.dynamic_pub
+        if tf_pub is not None and tf_pub.get_subscription_count() > 0:
             odom = convert.state_to_odometry(state, stamp, child_frame_id=self.child_frame_id,
                                              frame_id=self.frame_id, linear=linear, angular=angular)
             self.tf.send(frames.odometry_transforms(odom, trailer, self.trailer_frame_id))

@@ -1,6 +1,9 @@
 """The documentation's reference pages, generated from the code so that they cannot drift from it.
 
-- parameters.md: every node's parameters, from the descriptors the node declares;
+- parameters.md: every node's parameters, from the descriptors the node declares and what fastep_ros.common.declare
+  was given (unit, component), the planner's and the plant's in one table per component (COMPONENTS: a parameter
+  declared without one of its node's components stops the generator); `runtime` from the node's
+  DynamicParameters;
 - topics.md: every node's publishers and subscriptions as the node makes them (name, type, QoS);
 - commands.md: every command line's --help, from its argument parser;
 - status.md: the planner's status messages and failure reasons with their Nav2 error codes;
@@ -22,11 +25,14 @@ import math
 import os
 import sys
 from pathlib import Path
-from typing import Any, Callable, Sequence
+from typing import TYPE_CHECKING, Any, Callable, Sequence
 
 from rcl_interfaces.msg import ParameterDescriptor, ParameterType
 
-__all__ = ['NODES', 'COMMANDS', 'main', 'pages']
+if TYPE_CHECKING:
+    from fastep_ros.common import Param
+
+__all__ = ['COMPONENTS', 'NODES', 'COMMANDS', 'components', 'main', 'pages', 'runtime']
 
 ROBOT_NS = '/r1'
 NODES: tuple[tuple[str, str, str, str, dict[str, Any]], ...] = (
@@ -42,7 +48,7 @@ COMMANDS: tuple[tuple[str, str, str], ...] = (
     # (command, module, function taking argv)
     ('fastep-sim', 'msg_tools.sim_cli', 'main'),
     ('fastep-bench', 'msg_tools.bench_cli', 'main'),
-    ('fastep-tune', 'fastep_core.tuning', 'main'),
+    ('fastep-tune', 'fastep_core.experiments.tuning', 'main'),
     ('fastep-launch', 'fastep_ros.launch', 'main'),
     ('fastep-report', 'msg_tools.report', 'main'),
     ('fastep-replay', 'fastep_ros.replay', 'main'),
@@ -109,6 +115,30 @@ def _type_name(msg_type: Any) -> str:
 
 
 PARAMS_FILE_NODES = {'fastep-planner': 'planner', 'fastep-plant': 'plant'}   # executable: node name
+COMPONENTS: dict[str, tuple[tuple[str, str, str], ...]] = {
+    # executable: its components in page order, (key, title, what they set); every parameter declares one
+    'fastep-planner': (
+        ('node', 'Node', 'frames, topics, rates and timeouts, threads, the lifecycle'),
+        ('robot', 'Robot', 'its model and body, and the other robots'),
+        ('controller', 'Controller', 'the kinematic control laws (eq. 12 / 13, the diff_drive law) and the goal '
+         'checker'),
+        ('safety', 'Safety', 'the speed, turn and acceleration limits the guard and the velocity smoother enforce, '
+         'the emergency stop, the look-ahead at movers'),
+        ('swarm', 'Step planning', 'FAStep\'s firefly swarm (Table 1), its fitness (eq. 10) and when it runs; ACO_R '
+         'for aco'),
+        ('route', 'Route', 'FAStep-Route, driving the shortest path'),
+        ('recovery', 'Recovery', 'the progress checker, the trap escape, a goal that fails'),
+        ('dwa', 'DWA', 'the Dynamic Window Approach (algorithm dwa)'),
+        ('perception', 'Perception', 'obstacle detection, the laser scan and how far the map pose may be off'),
+        ('simulator', 'Simulator only', 'read by fastep-sim (and fastep-launch); the node takes it and does not use '
+         'it'),
+    ),
+    'fastep-plant': (
+        ('node', 'Node', 'frames, topics, rates and timeouts, the lifecycle'),
+        ('robot', 'Robot', 'its model, body, limits and dynamics'),
+        ('sensor', 'Sensor', 'the simulated laser scanner'),
+    ),
+}
 
 
 def _yaml(value: Any) -> str | None:
@@ -126,18 +156,57 @@ def _yaml(value: Any) -> str | None:
     return str(value)
 
 
+def components(executable: str, names: Sequence[str], given: dict[str, Param]) -> dict[str, list[str]]:
+    """The parameters `names` of a node by component key (COMPONENTS of `executable`, in page order), from what
+    their declarations gave (`given`: fastep_ros.common.declared); ValueError naming every parameter declared
+    without one of its node's components."""
+    keys = [key for key, _, _ in COMPONENTS[executable]]
+    missing = [name for name in names if name not in given or given[name].component not in keys]
+    if missing:
+        raise ValueError(f'{executable}: parameter(s) {", ".join(missing)} declared without a component of '
+                         f'{" | ".join(keys)} (component= in the declaration; fastep_ros.reference.COMPONENTS)')
+    return {key: [name for name in names if given[name].component == key] for key in keys}
+
+
+def runtime(executable: str, names: Sequence[str], descriptors: Sequence[ParameterDescriptor],
+            applied: frozenset[str]) -> dict[str, bool]:
+    """Whether each parameter changes while the node runs: writable (not read_only) and applied by the node's
+    DynamicParameters (`applied`: fastep_ros.parameters.runtime_names); ValueError for one that is only one of
+    the two (a set rclpy takes and the node ignores, or one it applies and rclpy refuses)."""
+    odd = [name for name, d in zip(names, descriptors) if (not d.read_only) != (name in applied)]
+    if odd:
+        raise ValueError(f'{executable}: parameter(s) {", ".join(odd)} are writable but not applied at runtime, or '
+                         f'applied but read-only (read_only= in the declaration, DynamicParameters\' names)')
+    return {name: not d.read_only for name, d in zip(names, descriptors)}
+
+
+def _row(name: str, d: ParameterDescriptor, default: Any, unit: str, changes: bool) -> str:
+    return (f'| `{name}` | {TYPE_NAMES.get(d.type, "?")} | {_cell(_value(default))} | {_cell(unit)} | '
+            f'{_cell(_limits(d))} | {"yes" if changes else "no"} | {_cell(d.description)} |')
+
+
+ROW_HEAD = ['| parameter | type | default | unit | range | runtime | description |', '|---|---|---|---|---|---|---|']
+
+
 def node_pages(context: Any, tmp: str) -> tuple[str, str, str]:
     """(parameters.md, topics.md, the params file) of every node of NODES; `tmp`: a folder for what they write
     (the recorder)."""
-    config = ['# Every parameter of fastep-planner and fastep-plant at its default, with its description and range:',
+    from fastep_ros.common import declared
+    from fastep_ros.parameters import runtime_names
+    config = ['# Every parameter of fastep-planner and fastep-plant at its default, by component; above each, its',
+              '# description (range; unit; `runtime` if the running node takes a new value). To start with it:',
               '#   fastep-planner --ros-args -r __ns:=/r1 --params-file config/fastep.yaml',
               '# (ros2 run fastep_ros fastep-planner ... on a ROS install). Change what differs on your robot and',
-              '# delete the rest. Generated from the nodes\' declarations: python -m fastep_ros.reference.']
+              '# delete the rest. Generated from the nodes\' declarations: python -m fastep_ros.reference;',
+              '# docs/reference/parameters.md is the same as tables.']
     params = ['# Node parameters', '',
-              'Generated from the descriptors each node declares (`python -m fastep_ros.reference`); set them with '
-              '`-p name:=value` or `--params-file`. Read-only ones are fixed when the node starts; the others '
-              'change while it runs (docs/parameters.md says how each is applied). A range `[a, b]` is enforced on '
-              'every set.', '']
+              'Generated from what each node declares (`python -m fastep_ros.reference`); set them with '
+              '`-p name:=value` or `--params-file` (config/fastep.yaml holds every parameter of the planner and the '
+              'plant at its default, by component). The planner\'s '
+              'and the plant\'s parameters are in one table per component. **runtime** yes: the running node '
+              'applies a new value at once (`ros2 param set`, rqt); no: the value is fixed when the node starts '
+              '([Parameters, diagnostics, lifecycle](../parameters.md) says how each is applied). A range `[a, b]` '
+              'is enforced on every set; a **unit** list is the unit of each element of an array.', '']
     topics = ['# Topics', '',
               'Generated from the publishers and subscriptions each node makes (`python -m fastep_ros.reference`), '
               'for a robot in namespace `<ns>` (names are relative, so `-r __ns:=/r1` puts them under `/r1`). '
@@ -149,27 +218,41 @@ def node_pages(context: Any, tmp: str) -> tuple[str, str, str]:
         node = _node(module, cls, namespace, needed, context)
         try:
             names = sorted(n for n in node.list_parameters([], 0).names if n not in SKIPPED)
-            params += [f'## {executable}', '', '| parameter | type | default | range | read-only | description |',
-                       '|---|---|---|---|---|---|']
-            for name, descriptor in zip(names, node.describe_parameters(names)):
-                default = DEFAULTS.get((executable, name), node.get_parameter(name).value)
-                params.append(f'| `{name}` | {TYPE_NAMES.get(descriptor.type, "?")} | {_cell(_value(default))} | '
-                              f'{_cell(_limits(descriptor))} | {"yes" if descriptor.read_only else ""} | '
-                              f'{_cell(descriptor.description)} |')
-            params.append('')
+            descriptors = dict(zip(names, node.describe_parameters(names)))
+            given = declared(node)
+            changes = runtime(executable, names, list(descriptors.values()), runtime_names(node))
+            rows_of = {name: _row(name, descriptors[name], DEFAULTS.get((executable, name),
+                                                                        node.get_parameter(name).value),
+                                  given[name].unit if name in given else '', changes[name]) for name in names}
+
+            params += [f'## {executable}', '']
+            grouped = components(executable, names, given) if executable in COMPONENTS else {'': names}
+            titles = {key: (title, what) for key, title, what in COMPONENTS.get(executable, ())}
+            for key, members in grouped.items():
+                if key:
+                    title, what = titles[key]
+                    count = f'{len(members)} parameter{"s" if len(members) != 1 else ""}'
+                    params += [f'### {executable.removeprefix("fastep-")}: {title}', '',
+                               f'{what[0].upper()}{what[1:]}; {count}.', '']
+                params += [*ROW_HEAD, *(rows_of[name] for name in members), '']
             if executable in PARAMS_FILE_NODES:
                 config += ['', f'/**/{PARAMS_FILE_NODES[executable]}:', '  ros__parameters:']
-                for name, descriptor in zip(names, node.describe_parameters(names)):
-                    limits = _limits(descriptor)
-                    config.append(f'    # {" ".join(descriptor.description.split())}'
-                                  f'{f" ({limits})" if limits else ""}{"; read-only" if descriptor.read_only else ""}')
-                    value = _yaml(node.get_parameter(name).value)
-                    config.append(f'    {name}: {value}' if value is not None else f'    # {name}: [] (none)')
-            rows = [(_shown_name(p.topic_name), 'publishes', _type_name(p.msg_type), _qos(p.qos_profile))
-                    for p in node.publishers]
-            rows += [(_shown_name(s.topic_name), 'subscribes', _type_name(s.msg_type), _qos(s.qos_profile))
-                     for s in node.subscriptions]
-            rows = sorted({r for r in rows if not r[0].startswith(('`/parameter_events', '`/rosout'))})
+                for key, members in grouped.items():
+                    title, what = titles[key]
+                    config += ['', f'    # ---- {title}: {what}']
+                    for name in members:
+                        d = descriptors[name]
+                        limits = _limits(d)
+                        unit = given[name].unit
+                        notes = '; '.join(n for n in (limits, unit, 'runtime' if changes[name] else '') if n)
+                        config.append(f'    # {" ".join(d.description.split())}{f" ({notes})" if notes else ""}')
+                        value = _yaml(node.get_parameter(name).value)
+                        config.append(f'    {name}: {value}' if value is not None else f'    # {name}: [] (none)')
+            topics_rows = [(_shown_name(p.topic_name), 'publishes', _type_name(p.msg_type), _qos(p.qos_profile))
+                           for p in node.publishers]
+            topics_rows += [(_shown_name(s.topic_name), 'subscribes', _type_name(s.msg_type), _qos(s.qos_profile))
+                            for s in node.subscriptions]
+            rows = sorted({r for r in topics_rows if not r[0].startswith(('`/parameter_events', '`/rosout'))})
             actions = getattr(node, 'actions', None)   # the planner's Nav2 actions (fastep_ros.navigate_actions)
             if actions is not None:
                 rows += [(f'`<ns>/{name}`', f'serves (action; node `<ns>/{actions.side.name}`)', _type_name(kind),

@@ -5,7 +5,9 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from fastep_ros.reference import PARAMS_FILE, pages
+import pytest
+
+from fastep_ros.reference import COMPONENTS, PARAMS_FILE, components, pages, runtime
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -50,7 +52,13 @@ def test_the_reference_has_every_node_and_command() -> None:
     generated = pages()
     for executable in ('fastep-planner', 'fastep-plant', 'fastep-map', 'fastep-clock', 'fastep-record'):
         assert f'## {executable}' in generated['parameters.md'] and f'## {executable}' in generated['topics.md']
-    assert '| `exclusive_cmd_vel` | bool | `True` |  |  |' in generated['parameters.md']
+    assert '| `exclusive_cmd_vel` | bool | `True` |  |  | yes |' in generated['parameters.md']
+    assert '| `max_speed` | double | `1.0` | m/s | [0, inf] | yes |' in generated['parameters.md']
+    assert '| `frame_id` | string | `\'map\'` |  |  | no |' in generated['parameters.md']
+    for executable, parts in COMPONENTS.items():
+        for _, title, _ in parts:
+            assert f'### {executable.removeprefix("fastep-")}: {title}\n' in generated['parameters.md']
+    assert '    # ---- Safety: ' in generated[PARAMS_FILE]
     assert '| `<ns>/cmd_vel` | publishes | geometry_msgs/msg/Twist | reliable, volatile, depth 10 |' in \
         generated['topics.md']
     for command in ('fastep-sim', 'fastep-bench', 'fastep-tune', 'fastep-launch', 'fastep-report', 'fastep-replay',
@@ -77,3 +85,31 @@ def test_the_status_table_holds_every_message_the_planner_says() -> None:
     said |= {mode.value for mode in Mode}
     assert said == {message for message, _, _ in STATUS_MESSAGES}
     assert 'status.md' in pages() and '| `conflict` | ERROR |' in pages()['status.md']
+
+
+def test_every_planner_and_plant_parameter_declares_one_of_its_nodes_components() -> None:
+    """The planner's table (PlannerParams and the node's own) places every parameter: a new one declared without a
+    component stops the generator (test below), and so make docs."""
+    from fastep_ros.planner_params import PARAMETERS
+    keys = {key for key, _, _ in COMPONENTS['fastep-planner']}
+    assert {param.name: param.component for param in PARAMETERS if param.component not in keys} == {}
+
+
+def test_a_parameter_without_a_component_stops_the_generator() -> None:
+    from fastep_ros.common import Param
+    given = {'rate': Param('rate', 1.0, 'how often', unit='Hz', component='node'), 'gain': Param('gain', 1.0, 'k')}
+    with pytest.raises(ValueError, match='gain declared without a component'):
+        components('fastep-planner', ['gain', 'rate'], given)
+    with pytest.raises(ValueError, match='undeclared'):   # declared past fastep_ros.common.declare: nothing known
+        components('fastep-planner', ['rate', 'undeclared'], given)
+    assert components('fastep-planner', ['rate'], given)['node'] == ['rate']
+
+
+def test_runtime_is_what_the_node_applies_and_rclpy_lets_through() -> None:
+    from rcl_interfaces.msg import ParameterDescriptor
+    writable, fixed = ParameterDescriptor(read_only=False), ParameterDescriptor(read_only=True)
+    assert runtime('n', ['a', 'b'], [writable, fixed], frozenset({'a'})) == {'a': True, 'b': False}
+    with pytest.raises(ValueError, match='b are writable but not applied'):   # a set taken and then ignored
+        runtime('n', ['a', 'b'], [writable, writable], frozenset({'a'}))
+    with pytest.raises(ValueError, match='a are writable'):   # applied, but rclpy refuses every set
+        runtime('n', ['a'], [fixed], frozenset({'a'}))
