@@ -61,7 +61,7 @@ from fastep_ros.goals import GoalSubscription
 from fastep_ros.lifecycle import Lifecycle, transitions_to_member
 from fastep_ros.limits import INLINE_WORLD_ITEMS, SPEED_LIMIT_LOG_PERIOD
 from fastep_ros.live_tf import TfListener
-from fastep_ros.lock_step import LockStep
+from fastep_ros.lock_step import STAMP_EPS, LockStep
 from fastep_ros.navigate_actions import NavigateActions
 from fastep_ros.parameters import DynamicParameters
 from fastep_ros.planner_inputs import Body, PlannerInputs
@@ -387,7 +387,7 @@ class PlannerNode(LifecycleNode):
             if nav is not None:
                 nav.retune(request.params, make_robot(self.body, request.params)[1])
                 if self.planning is not None:
-                    self.control_tick = ControlTick(nav)
+                    self.control_tick = ControlTick(nav, self.inputs.scans.timeout)
         elif isinstance(request, Localized):
             self.inputs.scan_perception.localized(None if request.covariance is None else list(request.covariance),
                                                   request.sigmas)
@@ -412,7 +412,7 @@ class PlannerNode(LifecycleNode):
             nav.name = robot_name(self.get_namespace())   # as the other robots' planners name it
             if self.planning is not None:
                 self.planning.drop_plan()
-                self.control_tick = ControlTick(nav)
+                self.control_tick = ControlTick(nav, self.inputs.scans.timeout)
             self.get_logger().info(f'world known: {count} obstacles in {world.workspace}')
         else:
             self.navigator.world = world
@@ -695,17 +695,30 @@ class PlannerNode(LifecycleNode):
         Called whenever one of them comes, on the control timer, and on the wall timer (inputs given up on)."""
         if not self.locked() or self.inputs.odom is None or not self.lifecycle.is_active:
             return
-        stamp, lock, now = self.inputs.odom_stamp, self.lock, self.now()
+        stamp, lock = self.inputs.odom_stamp, self.lock
+        if stamp <= lock.acted + STAMP_EPS:
+            return   # acted on already (most calls: the other robots' odometry of the tick), no clock read
+        now = self.now()
         if not lock.due(stamp, now):
             return
-        inputs = {robot.name: robot.stamp for robot in self.robots.fleet.fresh(now)}
+        fleet = self.robots.fleet
+        # The steady clock's seconds (CLOCK_MONOTONIC, as the wall clock's), read without building a Time.
+        wall = time.monotonic()
+        blocker = lock.blocker   # the robot waited for at the last look: while it is behind, nothing else counts
+        if blocker is not None and lock.held(blocker.stamp if fleet.is_fresh(blocker, now) else None, stamp, wall):
+            return
+        fresh = fleet.fresh(now)
+        inputs = {robot.name: robot.stamp for robot in fresh}
         if self.model == 'tractor_trailer':
             inputs['trailer_pose'] = self.inputs.trailer_stamp   # the state of its time is odometry and trailer pose
         self.inputs.retry_scans(now)
-        if self.inputs.scan_sub is not None and self.inputs.scan_sub.get_publisher_count() > 0:
+        scan_sub = self.inputs.scan_sub
+        if scan_sub is not None and scan_sub.get_publisher_count() > 0:
             inputs['scan'] = -math.inf if self.inputs.pending_scan is None else self.inputs.pending_scan.stamp
-        wall = self.wall_clock.now().nanoseconds * 1e-9
-        if lock.late(stamp, inputs, wall):
+        late = lock.late(stamp, inputs, wall)
+        if late:
+            # held() looks at a robot's stamp alone, and only without scans (their retry runs here).
+            lock.blocker = next((r for r in fresh if r.name == late[0]), None) if scan_sub is None else None
             return
         if lock.abandoned:
             self.get_logger().warning(f'lock step: nothing stamped {stamp:g} s from {", ".join(lock.abandoned)} '

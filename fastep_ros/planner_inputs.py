@@ -600,7 +600,8 @@ class PlannerInputs:
         # (the planning thread), the robot backs up only where recent scans saw free space: one value, together.
         seen = None if self.node.planning is None else self.scan_perception.recent.seen()
         nav.take_perception(GuardInputs(self.scan_perception.margin,
-                                        ScanReturns(self.scan_perception.returns, state, nav.radius), seen),
+                                        ScanReturns(self.scan_perception.returns, state, nav.radius), seen,
+                                        taken),
                             belief.world)
         return belief
 

@@ -15,6 +15,7 @@ import numpy as np
 from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.lifecycle import LifecycleNode
 
+from fastep_core.planning.control import ControlTick
 from fastep_core.planning.navigator import Mode, Navigator
 from fastep_ros.diagnostics import Diagnostics, Task
 from fastep_ros.lifecycle import Lifecycle
@@ -39,7 +40,9 @@ STATUS_MESSAGES: tuple[tuple[str, str, str], ...] = (
     ('idle', 'OK', 'no goal: none given yet, or cancelled (the reason says so)'),
     ('kinematic', 'OK / WARN', 'driving to the goal (or the route vertex in sight) by the kinematic controller; '
                                'WARN while inputs are stale (kept where last seen), a newer goal was refused, a '
-                               'localization off the map was refused (the last pose taken kept), or the base '
+                               'localization off the map was refused (the last pose taken kept), the control '
+                               'loop acts late and drives slower for it ("speed reduced to ...: the control loop '
+                               'is ... late": its worst recent tick gap, odometry and scan age), or the base '
                                'tracks worse than configured (its braking measured from odometry)'),
     ('avoiding', 'OK / WARN', 'driving to a swarm waypoint, escaping a trap, manoeuvring or yielding to a mover; '
                               'WARN as for kinematic'),
@@ -78,6 +81,7 @@ class PlannerNodeView(Protocol):
     odom_timeout: float
     control_count: int
     navigator: Navigator | None
+    control_tick: ControlTick | None
     planning: PlanningThread[Any, Any] | None
     inputs: PlannerInputs
     robots: RobotFollower
@@ -183,6 +187,10 @@ class PlannerReports:
         if self.node.inputs.twist_problem:
             problem = self.node.inputs.twist_problem
             return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {problem}' if nav.reason else problem
+        control = self.node.control_tick
+        if control is not None and control.slowed:   # a late control loop drives slower (planning/lateness.py)
+            return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {control.slowed}' \
+                if nav.reason and nav.reason != control.slowed else control.slowed
         weak = nav.response.problem()
         if weak:
             slower = f'{BASE_SHORT}: {weak} (stops planned with what it measured)'
@@ -288,6 +296,9 @@ class PlannerReports:
         # The control loop's deadlines: its achieved rate, how old the plan driven on is, how long passes take.
         values['control_hz'] = '' if rate is None else round(rate, 2)
         values['plan_age'] = round(self.plan_age(), 3)
+        control = self.node.control_tick
+        # s the control loop acts later than its stops plan for (worst tick gap, odometry and scan age): it slows.
+        values['late'] = 0.0 if control is None else round(control.lateness.late, 3)
         values['planning_ms'] = self.planning_ms()
         cap = self.node.speed_cap()
         if cap is not None:   # m/s: what a speed limit (speed_limit topic) caps max_speed at; absent without one
@@ -324,12 +335,17 @@ class PlannerReports:
             odometry = Task('odometry', DiagnosticStatus.OK, 'fresh', {'topic': topic, 'lag': self.node.inputs.odom_lag,
                                                                        'heard': self.node.inputs.odom_heard})
         rate, late = self.control_rate(), self.rate_problem()
+        tick = self.node.control_tick
+        slowed = '' if tick is None else tick.slowed   # acting late, the robot drives slower (planning/lateness.py)
         level = DiagnosticStatus.ERROR if self.node.plan_problem else \
-            DiagnosticStatus.WARN if late else DiagnosticStatus.OK
-        control = Task('control', level, 'stalled' if self.node.plan_problem else 'late' if late else 'on time', {
-            'reason': self.node.plan_problem or late, 'rate_hz': '' if rate is None else round(rate, 2),
-            'target_hz': self.node.control_rate_hz, 'tick_ms': self.control_ms(), 'plan_age': round(self.plan_age(), 3),
-            'planning_ms': self.planning_ms()})
+            DiagnosticStatus.WARN if late or slowed else DiagnosticStatus.OK
+        control = Task('control', level, 'stalled' if self.node.plan_problem else 'slowed' if slowed else
+                       'late' if late else 'on time', {
+                           'reason': self.node.plan_problem or slowed or late,
+                           'rate_hz': '' if rate is None else round(rate, 2), 'target_hz': self.node.control_rate_hz,
+                           'tick_ms': self.control_ms(), 'plan_age': round(self.plan_age(), 3),
+                           'planning_ms': self.planning_ms(),
+                           'late': 0.0 if tick is None else round(tick.lateness.late, 3)})
         kind = 'simulated time' if self.node.sim_time.active else 'wall time'
         clock = Task('clock', DiagnosticStatus.WARN if self.node.clock_problem else DiagnosticStatus.OK, kind,
                      {'reason': self.node.clock_problem, 't': t})

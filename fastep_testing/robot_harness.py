@@ -83,6 +83,8 @@ class HarnessResult:
     phantom_obstacles: int = 0        # the most still obstacles it believed from its scans where the truth has none
     planner_rss_mb: float = math.nan       # the planner's resident memory when the goal was sent
     planner_peak_rss_mb: float = math.nan  # its peak resident memory (VmHWM) at the end of the run
+    most_late: float = 0.0            # s: the most lateness the planner's status gave (planning/lateness.py)
+    slowed: int = 0                   # statuses that said the speed was reduced for it
     load: tuple[float, float, float] = (0.0, 0.0, 0.0)   # os.getloadavg() at the start
     log_dir: str = ''
     notes: list[str] = field(default_factory=list)
@@ -266,6 +268,13 @@ def _ready(statuses: list[tuple[float, dict[str, Any]]], laser: bool, placed: bo
     return _count(status, 'odom_heard') > 0 and (not laser or _count(status, 'scans') > 0)
 
 
+def _number(value: Any) -> float:
+    try:
+        return float(value or 0.0)
+    except (TypeError, ValueError):
+        return 0.0
+
+
 def _count(status: dict[str, Any], key: str) -> int:
     try:
         return int(status.get(key, 0) or 0)
@@ -318,6 +327,8 @@ def judge(result: HarnessResult, scenario: Scenario, commands: np.ndarray, track
     result.max_dv_dt, result.max_domega_dt = measures.command_accelerations(run[:, 0], run[:, 1], run[:, 2])
     result.mean_dv_dt, result.mean_domega_dt = measures.command_accelerations(run[:, 0], run[:, 1], run[:, 2],
                                                                                span=SPAN)
+    result.most_late = max((_number(s.get('late')) for s in during), default=0.0)
+    result.slowed = sum('speed reduced' in str(s.get('reason', '')) for s in during)
     wall = [measures.parse_control_ms(str(s.get('control_ms', ''))) for s in during]
     cpu_ms = [measures.parse_control_ms(str(s.get('control_cpu_ms', ''))) for s in during]
     walls = [w for w in wall if w is not None]

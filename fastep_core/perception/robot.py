@@ -70,5 +70,5 @@ class SensingRobot:
             state, uncertainty = estimate, error.uncertainty()
         belief = self.perception.update(t, pose, scan, others, uncertainty=uncertainty)
         returns = ScanReturns(self.perception.returns, state, navigator.radius)
-        navigator.take_perception(replace(navigator.guard_inputs, scan_points=returns), belief.world)
+        navigator.take_perception(replace(navigator.guard_inputs, scan_points=returns, taken=t), belief.world)
         return [*others, *belief.movers]

@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 
 from fastep_core.planning.base_response import all_finite, speed_of
 from fastep_core.planning.guard import Guard
+from fastep_core.planning.lateness import Lateness, stopping_speed
 from fastep_core.planning.navigator import Mode, Navigator, SpeedLaw
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.outline import inflated
@@ -78,7 +79,7 @@ class ControlTick:
     """The per-tick part of a navigator, with its own controller, guard and yielding (the pass runs the originals,
     possibly on another thread)."""
 
-    def __init__(self, navigator: Navigator) -> None:
+    def __init__(self, navigator: Navigator, scan_allowance: float = math.inf) -> None:
         # The pass's guard looks as far ahead as this one does (retune: Navigator.braking): a stricter control tick
         # held robots for good while the pass, its own guard letting them go, never saw the hold (nor broke it).
         self.navigator = navigator
@@ -89,6 +90,11 @@ class ControlTick:
         self._measured: FloatArray | None = None   # the velocity measured at this tick, if given ...
         self._measured_at = 0.0                    # ... as of this time
         self._fed_at: float | None = None          # the newest measurement the smoother was given
+        # How late this loop acts (planning/lateness.py): looked ahead by the guard, and the speed it allows. A scan
+        # the guard checks counts as late once older than scan_allowance (s; the node's scan_timeout).
+        self.lateness = Lateness()
+        self.scan_allowance = scan_allowance
+        self.slowed = ''   # why this tick's speed was reduced for lateness ('' when it was not)
         self.retune()
 
     def retune(self) -> None:
@@ -120,6 +126,7 @@ class ControlTick:
         self.smoother.period = self.response.period = dt
         self._measured = self._feedback(velocity, t if measured_at is None else measured_at,
                                         state if pose is None else pose)
+        self._late(t, dt, None if velocity is None else measured_at)
         others = inflated(others, self.navigator.outline_extra)   # a footprint's circumscribed circle (outline.py)
         wanted, emergency = self._unsmoothed(t, state, others, plan, dt)
         before = self.smoother.velocity.copy()
@@ -155,8 +162,15 @@ class ControlTick:
             self.smoother.feedback(measured)
         return self.response.slide(at, measured, position)
 
+    def _late(self, t: float, dt: float, measured_at: float | None) -> None:
+        """This tick's lateness: its gap since the last, the age of the odometry acted on, the scan's."""
+        taken = self.navigator.guard_inputs.taken
+        self.lateness.tick(t, dt, 0.0 if measured_at is None else t - measured_at,
+                           t - taken - self.scan_allowance if taken > -math.inf else 0.0)
+
     def _sent(self, t: float, sent: FloatArray) -> None:
         """`sent` goes to the base: the controller hears it, the base's response is measured against it."""
+        self.lateness.moving(t, any(c != 0.0 for c in sent.tolist()))
         self._tell(sent)
         if self._measured is None:
             self.response.observe(t, self.smoother.velocity, sent)   # as told: nothing is learnt
@@ -174,15 +188,15 @@ class ControlTick:
         return self.guard.check(world, state, command, self._ahead(dt), others)
 
     def _ahead(self, dt: float) -> float:
-        """How far ahead (s) the guard looks: a tick, and the time to brake from the robot's speed (the faster of
-        the smoother's and the measured one) at emergency_deceleration, or at what the base has shown it brakes at
-        if that is less (half of it: braking distance v^2 / 2a at speed v)."""
+        """How far ahead (s) the guard looks: a tick and the loop's lateness, and the time to brake from the robot's
+        speed (the faster of the smoother's and the measured one) at emergency_deceleration, or at what the base has
+        shown it brakes at if that is less (half of it: braking distance v^2 / 2a at speed v)."""
         braking = self.response.stop_within(self.limits.emergency_deceleration)
         holonomic = bool(self.model.holonomic)
         speed = speed_of(self.smoother.velocity, holonomic)
         if self._measured is not None:
             speed = max(speed, speed_of(self._measured, holonomic))
-        return dt + (0.5 * speed / braking if braking > 0.0 else 0.0)
+        return dt + self.lateness.late + (0.5 * speed / braking if braking > 0.0 else 0.0)
 
     def stop(self, t: float, dt: float, velocity: FloatArray | None = None,
              measured_at: float | None = None, pose: FloatArray | None = None) -> FloatArray:
@@ -193,6 +207,8 @@ class ControlTick:
         self._last_t = t
         self._measured = None if pose is None else \
             self._feedback(velocity, t if measured_at is None else measured_at, pose)
+        self._late(t, dt, None if velocity is None or pose is None else measured_at)
+        self.slowed = ''
         sent = self.smoother.smooth(np.zeros(2), elapsed, emergency=True)
         self._sent(t, sent)
         return sent
@@ -201,10 +217,12 @@ class ControlTick:
                     dt: float) -> tuple[FloatArray, bool]:
         """The tick's command before the smoother, and whether it is the guard's (or the reverse check's) stop."""
         stop = np.zeros(2)
-        self.reason = ''
+        self.reason = self.slowed = ''
         state = np.asarray(state, dtype=float)
         if plan is None or not plan.under_way or not all_finite(state):
             return stop, False
+        late = self.lateness.late
+        horizon = dt + late   # the command holds until a tick that may come this late
         others = [*others, *inflated(plan.movers_at(t), self.navigator.outline_extra)]
         # Surfaces known only as well as the robot's scans show them: what the pass's perception made of its latest
         # scan, read once (one value, replaced whole by the planning side: margin, returns and free space together).
@@ -212,7 +230,7 @@ class ControlTick:
         self.guard.obstacle_margin, self.guard.scan_points = perceived.obstacle_margin, perceived.scan_points
 
         def allowed(c: FloatArray) -> bool:
-            return self.guard.check(plan.world, state, c, dt, others) is c
+            return self.guard.check(plan.world, state, c, horizon, others) is c
 
         target = plan.target
         if target is not None:
@@ -225,6 +243,8 @@ class ControlTick:
         else:
             self._target = None
             command = plan.command
+        if late > 0.0:
+            command = self._within_lateness(state, command, dt, late)
         standing = not any(c != 0.0 for c in command.tolist())
         yielded = self.yielding.check(state, command, others, allowed)
         if yielded.kind and (not standing or yielded.kind == 'evading'):
@@ -241,6 +261,28 @@ class ControlTick:
             self.reason = 'stopped: no evidence the space behind is free'
             return stop, True
         return command, False
+
+    def _within_lateness(self, state: FloatArray, command: FloatArray, dt: float, late: float) -> FloatArray:
+        """`command` no faster than stops, `late` seconds behind its tick, where an on-time robot at max_speed
+        would, and at the goal (planning/lateness.py); scaled whole, so its path stays the same."""
+        speed = speed_of(command, bool(self.model.holonomic))
+        if speed <= 0.0:
+            return command
+        braking = self.response.stop_within(self.limits.max_acceleration)
+        top = self.limits.max_speed
+        allowed = math.inf
+        if top > 0.0:
+            on_time = top * dt + (0.5 * top * top / braking if braking > 0.0 else 0.0)
+            allowed = stopping_speed(on_time, dt + late, braking)
+        goal = self.navigator.goal
+        if goal is not None:
+            allowed = min(allowed, stopping_speed(math.hypot(float(goal[0]) - float(state[0]),
+                                                             float(goal[1]) - float(state[1])), late, braking))
+        if speed <= allowed:
+            return command
+        self.slowed = self.reason = f'speed reduced to {allowed:.2f} m/s: the control loop is ' \
+                                    f'{self.lateness.describe()}'
+        return command * (allowed / speed)
 
     def _speed_law(self, law: SpeedLaw) -> SpeedLaw:
         """A plan's speed law within this tick's limits: a plan made before a runtime change of them is driven on

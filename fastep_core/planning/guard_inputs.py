@@ -9,6 +9,7 @@ replaced whole (Navigator.take_perception), never field by field.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 from fastep_core.planning.guard import ScanReturns
@@ -27,3 +28,4 @@ class GuardInputs:
     obstacle_margin: float = 0.0            # m kept beyond the radius from obstacle surfaces
     scan_points: ScanReturns | None = None  # the latest scan's returns (None: no laser)
     seen: SeenFree | None = None            # where backing up is known free (None: the map alone)
+    taken: float = -math.inf                # when the scan was taken (its stamp; -inf: no scan)

@@ -524,7 +524,8 @@ def test_planner_sends_waypoint_plan_and_status_as_convert_s_messages(context: A
         assert list(values) == [kv.key for kv in status.values] == [
             'reason', 'activations', 'escapes', 'manoeuvres', 'waypoint', 'goal', 'cost', 'others', 'stale',
             'algorithm', 't', 'since', 'odom_lag', 'obstacles', 'world_problem', 'cmd_vel_readers', 'odom_heard',
-            'scans', 'tracks', 'scan_problem', 'control_ms', 'control_cpu_ms', 'control_hz', 'plan_age', 'planning_ms']
+            'scans', 'tracks', 'scan_problem', 'control_ms', 'control_cpu_ms', 'control_hz', 'plan_age', 'late',
+            'planning_ms']
         assert (values['reason'], values['goal'], values['algorithm'], values['obstacles']) == \
             (reason, '8,8', node.algorithm, '1')
         assert values['control_ms'] == '' and values['odom_heard'] == '1'   # the tick under way is not counted yet
