@@ -7,7 +7,8 @@
 Each row runs `python -m fastep_ros.launch SCENARIO --rtf RTF --seed 0 --json ...` with the interpreter and
 PYTHONPATH of this process (so the code under test is the one PYTHONPATH points at: run it with another
 checkout's path to measure that one) and times it from outside: the whole command (what a user waits for),
-start-up (until the launcher says the robots are on their way) and the run (until it reports the last robot).
+start-up (until the launcher says the robots are on their way) and the run (until it reports the last robot),
+and the CPU seconds (user + system) of the command and every process it started.
 RTF is simulated time (the last arrival) over each. `exact` compares every robot with `fastep-sim` of the same
 scenario, algorithm and seed: the arrival time, path length and clearance as --json rounds them, and the
 position at every time both trajectories hold a row (`max |d|`). The load average is read before each row.
@@ -19,6 +20,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import subprocess
 import sys
 import tempfile
@@ -39,6 +41,7 @@ def run(scenario: str, algorithm: str, layout: str, executor: str, rtf: float, r
     if record:
         cmd += ['--record', str(out / f'{layout}_{executor}.mcap')]
     load = os.getloadavg()[0]
+    before = resource.getrusage(resource.RUSAGE_CHILDREN)
     start = time.perf_counter()
     started = finished = None
     proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True,
@@ -51,8 +54,11 @@ def run(scenario: str, algorithm: str, layout: str, executor: str, rtf: float, r
             finished = time.perf_counter() - start if finished is None else finished
     code = proc.wait()
     whole = time.perf_counter() - start
+    after = resource.getrusage(resource.RUSAGE_CHILDREN)
+    # The launcher waits for every node process it starts, so their CPU is in its children's usage.
+    cpu = after.ru_utime + after.ru_stime - before.ru_utime - before.ru_stime
     row: dict[str, Any] = {'layout': layout, 'executor': executor, 'code': code, 'load': round(load, 2),
-                           'whole_s': round(whole, 2)}
+                           'whole_s': round(whole, 2), 'cpu_s': round(cpu, 2)}
     if started is not None and finished is not None and result.is_file():
         robots = json.loads(result.read_text())['runs'][0]['robots']
         simulated = max(r['sim_time'] or 0.0 for r in robots)

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Any, Mapping
 
 __all__ = ['LOCK_WAIT', 'STAMP_EPS', 'AckPacer', 'LockStep']
 
@@ -36,6 +36,7 @@ class LockStep:
     waiting_since: float | None = None    # wall seconds the stamp due began waiting for an input
     gone: dict[str, float] = field(default_factory=dict)   # input given up on -> its stamp then
     abandoned: list[str] = field(default_factory=list)     # the inputs the last call of late() gave up on
+    blocker: Any = None    # the caller's handle on the first input late() waits for (held() looks at it alone)
 
     def due(self, stamp: float, now: float) -> bool:
         """Odometry stamped `stamp` is to be acted on at node time `now`: newer than the last acted on, not ahead
@@ -50,6 +51,7 @@ class LockStep:
             if inputs.get(name, heard) > heard + STAMP_EPS:
                 del self.gone[name]   # it came back
         late = [name for name, heard in inputs.items() if heard < stamp - STAMP_EPS and name not in self.gone]
+        self.blocker = None
         if not late:
             self.waiting_since = None
             return []
@@ -61,6 +63,14 @@ class LockStep:
             self.gone[name] = inputs[name]
         self.abandoned, self.waiting_since = late, None
         return []
+
+    def held(self, heard: float | None, stamp: float, wall: float) -> bool:
+        """Whether `stamp` still waits, from the input late() waited for first alone (its newest stamp `heard`;
+        None when it is no longer an input): still behind and the wait not over, late() would say wait too. A
+        lock-step planner hears N - 1 other robots' odometry a tick, each a call: this spares it building the
+        inputs for all of them each time."""
+        return heard is not None and heard < stamp - STAMP_EPS and self.waiting_since is not None and \
+            wall - self.waiting_since <= self.wait
 
 
 @dataclass
