@@ -26,8 +26,15 @@ if TYPE_CHECKING:
     from fastep_core.experiments.batches import TABLE2, Record, Task, cached_scenario, example_paths, run_batch, tasks
     from fastep_core.experiments.cluster import BatchIncomplete, ClusterError, ClusterSpec, cluster_spec, open_cluster
     from fastep_core.experiments.families import FAMILY_NAMES, rows_of, run_families
-    from fastep_core.experiments.random_worlds import (ALL_FAMILIES, FAMILIES, FAMILY_SEED0, family_source,
-                                                       random_family_data, random_scenario, u_trap)
+    from fastep_core.experiments.random_worlds import (
+        ALL_FAMILIES,
+        FAMILIES,
+        FAMILY_SEED0,
+        family_source,
+        random_family_data,
+        random_scenario,
+        u_trap,
+    )
     from fastep_core.experiments.tuning import tune
 
 _HOMES = {
