@@ -60,7 +60,7 @@ lint-counts: $(STAMP)
 ROUNDS ?= 20
 fuzz: $(STAMP)
 	for i in $$(seq $(ROUNDS)); do HYPOTHESIS_PROFILE=explore $(BIN)/python -m pytest -q -x \
-		tests/fastep_core/test_properties.py tests/fastep_core/planning/test_optimal.py || exit 1; done
+		tests/fastep_core/test_properties.py tests/fastep_core/planning/shortest_path/test_optimal.py || exit 1; done
 
 # Measurements run by hand (minutes, not seconds); results and commands are in docs/benchmarks.md.
 bench: $(STAMP)

@@ -14,8 +14,8 @@ The BARN challenge's score (Perille et al., 2020; Xiao et al., the BARN challeng
 success x OT / clip(AT, 2 OT, 8 OT), with OT the optimal path length over the maximum speed and AT the
 traversal time; a run that does not arrive, or whose box touches anything, scores 0
 (fastep_core.metrics.barn_score). So a run scores at most 0.5 (AT at or below 2 OT). OT here: the exact shortest
-path keeping the 0.22 m circle clear (fastep_core.planning.optimal.shortest_path) at the family's 2 m/s, the
-same for both declarations.
+path keeping the 0.22 m circle clear (fastep_core.planning.shortest_path.optimal.shortest_path) at the family's 2 m/s,
+the same for both declarations.
 Not deterministic with a realtime factor: it depends on the machine and its load.
 """
 
@@ -36,7 +36,7 @@ from fastep_core.experiments.dense_clutter import JACKAL_FOOTPRINT, ROBOT_RADIUS
 from fastep_core.experiments.random_worlds import FAMILY_SEED0, random_family_data
 from fastep_core.footprint import Footprint
 from fastep_core.metrics import barn_score, trajectory_margins
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.shortest_path.optimal import shortest_path
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.simulator import Tick, simulate
 

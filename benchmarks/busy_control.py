@@ -6,7 +6,7 @@ Each run is fastep_testing.robot_harness.run_world (the planner node and a simul
 on wall time, a 720-beam laser) with `--busy` processes spinning on the CPU beside them (the 2-core machine's
 load rises by that many). One row per run: arrival, collision and least clearance against the true world, the
 longest gap between commands at the base, the most lateness the planner's status gave (`late`: its worst recent
-tick gap, odometry and scan age beyond what is due; fastep_core/planning/lateness.py), how many statuses said the
+tick gap, odometry and scan age beyond what is due; fastep_core/planning/safety/lateness.py), how many statuses said the
 speed was reduced for it, and the time to the goal. Targets: no collision in any row; lateness seen and the
 speed reduced where commands came late.
 """

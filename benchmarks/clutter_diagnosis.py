@@ -27,12 +27,12 @@ import yaml
 
 from fastep_core.experiments.random_worlds import CIRCLES, circle_field_data
 from fastep_core.planning import algorithms
-from fastep_core.planning import step as step_module
-from fastep_core.planning.aco_kinematic import ACOKinematic
-from fastep_core.planning.fastep_kinematic import FAStepKinematic
 from fastep_core.planning.navigator import FloatArray, Mode, Navigator
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.navigators.aco_kinematic import ACOKinematic
+from fastep_core.planning.navigators.fastep_kinematic import FAStepKinematic
 from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.shortest_path.optimal import shortest_path
+from fastep_core.planning.swarm import step as step_module
 from fastep_core.scenario import builtin_path, parse_scenario
 from fastep_core.simulator import simulate
 

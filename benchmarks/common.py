@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from fastep_core.planning.step import StepProblem, recorded_step_problems
+from fastep_core.planning.swarm.step import StepProblem, recorded_step_problems
 from fastep_core.scenario import Scenario, load_scenario
 from fastep_core.simulator import simulate
 

@@ -25,7 +25,7 @@ from fastep_core import cli
 from fastep_core.errors import ParameterError
 from fastep_core.experiments.random_worlds import random_scenario_data, u_trap_scenario_data
 from fastep_core.planning.algorithms import ALGORITHMS
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.shortest_path.optimal import shortest_path
 from fastep_core.scenario import Scenario, load_scenario, parse_scenario
 from fastep_core.simulator import simulate
 

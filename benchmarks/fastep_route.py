@@ -29,7 +29,7 @@ from scipy.stats import mannwhitneyu, wilcoxon
 
 from benchmarks.clutter_diagnosis import circle_field_data
 from fastep_core.experiments.random_worlds import random_scenario_data, u_trap_scenario_data
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.shortest_path.optimal import shortest_path
 from fastep_core.scenario import builtin_path, parse_scenario
 from fastep_core.simulator import simulate
 

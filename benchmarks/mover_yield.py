@@ -1,4 +1,4 @@
-"""A robot meeting movers, tick by tick: how often yielding (planning/yielding.py) slowed it down, made it wait
+"""A robot meeting movers, tick by tick: how often yielding (planning/safety/yielding.py) slowed it down, made it wait
 or moved it out of the way, the closest it came to a mover (against the truth), and the figure of it.
 
 Run: `PYTHONPATH=. .venv/bin/python -m benchmarks.mover_yield [SCENARIO] [--algorithm A] [--seed S]

@@ -8,8 +8,8 @@ robots: one in-process `simulate` (what `fastep-sim` runs) of N point-mass robot
 max(50, 10 sqrt(N)) m with N / 2 random circles, fixed seeds. Prints wall and CPU time, simulated time,
 arrivals and collisions per N.
 
-obstacles: the exact shortest path (fastep_core.planning.optimal.shortest_path) from (2, 2) to the far corner
-through N random circles in a square of side --side. Prints wall and CPU time, peak traced memory
+obstacles: the exact shortest path (fastep_core.planning.shortest_path.optimal.shortest_path) from (2, 2) to the far
+corner through N random circles in a square of side --side. Prints wall and CPU time, peak traced memory
 (tracemalloc), the size of the search graph and the path length.
 
 maps: the exact shortest path from start to goal of the robot harness's worlds (fastep_testing/robot_worlds.py)
@@ -31,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from fastep_core.geometry import Circle
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.shortest_path.optimal import shortest_path
 from fastep_core.scenario import parse_scenario
 from fastep_core.simulator import simulate
 from fastep_core.world import World
@@ -115,7 +115,7 @@ def bench_obstacles(counts: list[int], side: float, seed: int) -> None:
 
 def bench_maps(names: list[str]) -> None:
     from benchmarks.scan_perception import grid_map
-    from fastep_core.planning import optimal
+    from fastep_core.planning.shortest_path import optimal
     from fastep_testing.robot_worlds import WORLDS
     print(load_text())
     print(f'{"world":>14} {"walls":>6} {"caps":>9} {"circles":>8} {"wall s":>8} {"every cap s":>12} {"ratio":>6} '

@@ -28,7 +28,7 @@ from fastep_core.experiments.random_worlds import family_source
 from fastep_core.geometry import Segment
 from fastep_core.perception import belief as belief_module
 from fastep_core.perception.belief import Perception
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.shortest_path.optimal import shortest_path
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.sensing.laser import LaserSpec
 from fastep_core.simulator import simulate

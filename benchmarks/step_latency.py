@@ -23,7 +23,7 @@ from benchmarks.common import captured_step_problems, median_ms
 from benchmarks.scale import crowd_scenario_data
 from fastep_core.optimize import OptimizeResult, fastep
 from fastep_core.planning import PlannerParams
-from fastep_core.planning.step import StepProblem
+from fastep_core.planning.swarm.step import StepProblem
 from fastep_core.scenario import parse_scenario
 from fastep_testing.fastep_loop import fastep_loop
 from fastep_testing.step_reference import ReferenceTerms

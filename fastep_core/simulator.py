@@ -70,7 +70,7 @@ class RobotRun:
     min_clearance: float = math.inf
     activations: int = 0
     escapes: int = 0              # trap escapes (planning/navigator.py)
-    manoeuvres: int = 0           # tractor-trailer manoeuvres planned (planning/manoeuvre_search.py), replans included
+    manoeuvres: int = 0           # tractor-trailer manoeuvres planned, replans included (recovery/manoeuvre_search.py)
     status: str = ''
     trajectory: list[list[float]] = field(default_factory=list)
     waypoints: list[list[float]] = field(default_factory=list)

@@ -54,8 +54,8 @@ from fastep_core.planning.limits import Limits
 from fastep_core.planning.mode import Mode
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.outline import inflated, predicted_poses
-from fastep_core.planning.recovery import reverse_free, swept_centres
-from fastep_core.planning.smoother import VelocitySmoother
+from fastep_core.planning.recovery.back_up import reverse_free, swept_centres
+from fastep_core.planning.safety.smoother import VelocitySmoother
 from fastep_core.world import World
 from fastep_ros.companion import PREEMPTED, CompanionServers
 

@@ -40,10 +40,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.errors import GoalError
-from fastep_core.planning.exact_path import BACK_OUT, exact_path, no_path_reason
-from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.outline import planning_radius
 from fastep_core.planning.params import PlannerParams
+from fastep_core.planning.shortest_path.exact_path import BACK_OUT, exact_path, no_path_reason
+from fastep_core.planning.shortest_path.optimal import OptimalPath
 from fastep_core.world import World
 from fastep_ros.companion import CompanionServers
 from fastep_ros.limits import GOAL_POSES_MAX

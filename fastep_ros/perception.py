@@ -15,7 +15,7 @@ localizer) is how far it may be off, and a return within its share of that (tran
 obstacle is that obstacle, not a new one (fastep_core/perception/uncertainty.py).
 
 The planner then plans in the belief (a new World only when the still obstacles believed change) and avoids
-the tracked movers beside the other robots, yielding to them as to any mover (fastep_core/planning/yielding.py);
+the tracked movers beside the other robots, yielding to them as to any mover (fastep_core/planning/safety/yielding.py);
 `tracked_obstacles` (MarkerArray) shows the belief. Tracks older than TRACK_TIMEOUT (no scan) are forgotten.
 """
 
@@ -32,7 +32,7 @@ from sensor_msgs.msg import LaserScan
 from fastep_core.perception.belief import RECENT_SCANS, Belief, Perception, perception_margin
 from fastep_core.perception.uncertainty import NO_DRIFT, NO_UNCERTAINTY, SIGMAS, OdometryDrift, PoseUncertainty
 from fastep_core.planning.others import OtherRobot
-from fastep_core.planning.recovery import RecentScans
+from fastep_core.planning.recovery.back_up import RecentScans
 from fastep_core.world import World
 from msg_tools import convert
 

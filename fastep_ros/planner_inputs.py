@@ -24,10 +24,10 @@ from visualization_msgs.msg import MarkerArray
 
 from fastep_core.perception.belief import Belief, heading
 from fastep_core.perception.uncertainty import OdometryDrift, PoseUncertainty
-from fastep_core.planning.guard import ScanReturns
-from fastep_core.planning.guard_inputs import GuardInputs
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
+from fastep_core.planning.safety.guard import ScanReturns
+from fastep_core.planning.safety.guard_inputs import GuardInputs
 from fastep_core.sensing.laser import way_problem
 from fastep_core.world import World
 from fastep_ros.common import RepeatedLine, StartupError

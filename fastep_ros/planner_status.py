@@ -188,7 +188,7 @@ class PlannerReports:
             problem = self.node.inputs.twist_problem
             return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {problem}' if nav.reason else problem
         control = self.node.control_tick
-        if control is not None and control.slowed:   # a late control loop drives slower (planning/lateness.py)
+        if control is not None and control.slowed:   # a late control loop drives slower (planning/safety/lateness.py)
             return DiagnosticStatus.WARN, mode.value, f'{nav.reason}; {control.slowed}' \
                 if nav.reason and nav.reason != control.slowed else control.slowed
         weak = nav.response.problem()
@@ -336,7 +336,7 @@ class PlannerReports:
                                                                        'heard': self.node.inputs.odom_heard})
         rate, late = self.control_rate(), self.rate_problem()
         tick = self.node.control_tick
-        slowed = '' if tick is None else tick.slowed   # acting late, the robot drives slower (planning/lateness.py)
+        slowed = '' if tick is None else tick.slowed   # acting late, it drives slower (safety/lateness.py)
         level = DiagnosticStatus.ERROR if self.node.plan_problem else \
             DiagnosticStatus.WARN if late or slowed else DiagnosticStatus.OK
         control = Task('control', level, 'stalled' if self.node.plan_problem else 'slowed' if slowed else

@@ -18,7 +18,7 @@ What crosses, each an immutable value replaced whole (one reference swap, atomic
   side's state; the executor reads it (status, actions) and acts only on what a change has done, never ahead of
   it.
 - planning -> executor: a `PassResult` per pass (the plan with the control tick it was planned from, and the
-  belief to show on `tracked_obstacles`), and the navigator's `guard_inputs` (fastep_core.planning.guard:
+  belief to show on `tracked_obstacles`), and the navigator's `guard_inputs` (fastep_core.planning.safety.guard:
   margin, scan returns and free space of one scan), posted as soon as a scan is perceived so the guard checks
   the newest returns while a long pass still runs.
 Publishing is the executor's: a change or a pass on the planning thread leaves what to publish for the next
@@ -43,10 +43,10 @@ from typing import Any, Callable
 import numpy as np
 from geometry_msgs.msg import PoseStamped
 
-from fastep_core.planning.base_response import ShownResponse
 from fastep_core.planning.control import Plan
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
+from fastep_core.planning.safety.base_response import ShownResponse
 from fastep_core.world import World
 from fastep_ros.progress import Way
 from fastep_ros.sensors import PlacedScan

@@ -42,7 +42,7 @@ class Way:
         goal = getattr(navigator, 'goal', None)
         if goal is None:
             return None
-        route = getattr(navigator, 'route', None)   # FAStep-Route's (planning/route.py), None for the others
+        route = getattr(navigator, 'route', None)   # FAStep-Route's (shortest_path/route.py); None: the others
         g = (float(goal[0]), float(goal[1]))
         if route is None or not len(route.stacked):
             return cls(g, np.zeros((0, 2)), np.zeros(0))

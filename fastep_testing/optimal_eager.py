@@ -1,12 +1,12 @@
 """The exact shortest path by building the whole tangent visibility graph: the reference A* is checked against.
 
-This is how fastep_core/planning/optimal.py found its path before the lazy search (planning/tangent_search.py):
-every candidate tangent among all circles is made and tested, every free one and every free arc between
-neighbouring tangent points becomes a Python edge, and Dijkstra (heapq) runs over the whole graph. It exists
-so that tests/fastep_core/planning/test_tangent_search.py can check that the lazy A* finds the same paths
-(length, pieces and polyline, bit for bit) and benchmarks can compare their speed; the product never calls it.
-It shares with optimal.py the problem (inflated circles, free-edge and free-arc tests), the tangents and the
-polyline, so only the graph and its search differ.
+This is how fastep_core/planning/shortest_path/optimal.py found its path before the lazy search
+(planning/shortest_path/tangent_search.py): every candidate tangent among all circles is made and tested, every free one
+and every free arc between neighbouring tangent points becomes a Python edge, and Dijkstra (heapq) runs over the whole
+graph. It exists so that tests/fastep_core/planning/shortest_path/test_tangent_search.py can check that the lazy A*
+finds the same paths (length, pieces and polyline, bit for bit) and benchmarks can compare their speed; the product
+never calls it. It shares with optimal.py the problem (inflated circles, free-edge and free-arc tests), the tangents and
+the polyline, so only the graph and its search differ.
 """
 
 from __future__ import annotations
@@ -18,8 +18,8 @@ from typing import Iterator, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.planning.optimal import OptimalPath, _Problem, assemble, prepare
-from fastep_core.planning.tangent_search import TWO_PI, ArcShape, pair_tangents, wrap_angle
+from fastep_core.planning.shortest_path.optimal import OptimalPath, _Problem, assemble, prepare
+from fastep_core.planning.shortest_path.tangent_search import TWO_PI, ArcShape, pair_tangents, wrap_angle
 from fastep_core.world import World
 
 __all__ = ['shortest_path_eager']

@@ -83,7 +83,7 @@ class HarnessResult:
     phantom_obstacles: int = 0        # the most still obstacles it believed from its scans where the truth has none
     planner_rss_mb: float = math.nan       # the planner's resident memory when the goal was sent
     planner_peak_rss_mb: float = math.nan  # its peak resident memory (VmHWM) at the end of the run
-    most_late: float = 0.0            # s: the most lateness the planner's status gave (planning/lateness.py)
+    most_late: float = 0.0            # s: the most lateness the planner's status gave (planning/safety/lateness.py)
     slowed: int = 0                   # statuses that said the speed was reduced for it
     load: tuple[float, float, float] = (0.0, 0.0, 0.0)   # os.getloadavg() at the start
     log_dir: str = ''

@@ -1,10 +1,11 @@
-"""The step fitness written plainly: the reference `fastep_core.planning.step.StepProblem.terms` is checked against.
+"""The step fitness written plainly: the reference `fastep_core.planning.swarm.step.StepProblem.terms` is checked
+against.
 
-This is eq. 10 and the clearance rule as they read in planning/step.py's docstring, one numpy expression per
+This is eq. 10 and the clearance rule as they read in planning/swarm/step.py's docstring, one numpy expression per
 term over every obstacle and every other robot: StepProblem.terms as it was before it was made fast (main at
 537faf9, its robots-out-of-reach shortcut included). The fast version skips terms it can prove to be exactly
 0.0, reuses what two terms share and writes into fewer temporaries, and must return the same floats bit for
-bit, because the swarm compares them (tests/fastep_core/planning/test_step_terms.py); benchmarks/step_latency.py
+bit, because the swarm compares them (tests/fastep_core/planning/swarm/test_step_terms.py); benchmarks/step_latency.py
 times a step plan with both. The product never calls this module.
 """
 
@@ -14,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from fastep_core.geometry import norm, point_segment_distance
-from fastep_core.planning.step import INFEASIBLE, StepProblem
+from fastep_core.planning.swarm.step import INFEASIBLE, StepProblem
 
 __all__ = ['ReferenceTerms', 'reference_terms']
 

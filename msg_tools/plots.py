@@ -353,7 +353,7 @@ YIELD_COLOURS = {'': 'tab:red', 'yielding': 'tab:orange', 'waiting': 'gold', 'ev
 
 def yield_figure(scenario: Scenario, seed: int, rows: ArrayLike, kinds: Sequence[str], text: str,
                  snapshots: Sequence[float], window: tuple[float, float] | None = None) -> Figure:
-    """A robot meeting movers (planning/yielding.py): left, its path among the obstacles coloured by what
+    """A robot meeting movers (planning/safety/yielding.py): left, its path among the obstacles coloured by what
     yielding did each tick, with the robot and every mover at the same `snapshots` (s, numbered alike);
     right, its speed over time, shaded the same way. rows: (t, x, y, speed) per tick; kinds: per tick, '' (the
     command as planned), 'yielding', 'waiting' or 'evading'; window: the times (s) drawn (default: all)."""

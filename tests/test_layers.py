@@ -108,8 +108,8 @@ def test_no_two_modules_import_each_other() -> None:
 
 def test_the_cycle_finder_sees_the_navigator_split() -> None:
     graph = product_imports()
-    assert 'fastep_core.planning.navigator' in graph['fastep_core.planning.optimal_kinematic']
-    assert 'fastep_core.planning.optimal_kinematic' not in graph['fastep_core.planning.navigator']
+    assert 'fastep_core.planning.navigator' in graph['fastep_core.planning.navigators.optimal_kinematic']
+    assert 'fastep_core.planning.navigators.optimal_kinematic' not in graph['fastep_core.planning.navigator']
 
 
 def test_only_the_cluster_module_imports_dask() -> None:

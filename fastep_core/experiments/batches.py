@@ -29,7 +29,7 @@ from fastep_core.cli import progress_bar
 from fastep_core.errors import ParameterError
 from fastep_core.experiments.random_worlds import parse_family_source, random_family_data
 from fastep_core.planning.algorithms import algorithm_name, drives
-from fastep_core.planning.optimal import OptimalPath, shortest_path
+from fastep_core.planning.shortest_path.optimal import OptimalPath, shortest_path
 from fastep_core.scenario import Scenario, load_scenario, parse_scenario
 from fastep_core.simulator import Run, simulate
 
@@ -367,8 +367,8 @@ def markdown_report(records: Sequence[Record], optimal: dict[str, dict[str, floa
               'arrived without collision, compute time (wall seconds planning and simulating the robot, as '
               'fastep-sim reports it) and CPU time (process CPU seconds of the whole run, not inflated by other '
               'load on the machine) over all runs. "opt." is path length / exact shortest path keeping radius + '
-              'clearance margin (planning/optimal.py: the tangent visibility graph of the inflated obstacles, '
-              'searched with A*).', '']
+              'clearance margin (planning/shortest_path/optimal.py: the tangent visibility graph of the inflated '
+              'obstacles, searched with A*).', '']
     lines += ['| scenario | robot | planner | arrived | path (m) | paper path | path / opt. | '
               'sim time (s) | compute time (s) | CPU time (s) | paper time (s) |',
               '|---|---|---|---|---|---|---|---|---|---|---|']

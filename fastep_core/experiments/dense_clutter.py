@@ -22,7 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.ndimage import convolve
 
-from fastep_core.planning.exact_path import solvable
+from fastep_core.planning.shortest_path.exact_path import solvable
 from fastep_core.scenario import parse_scenario
 
 __all__ = ['CELL', 'DENSE_FAMILIES', 'JACKAL_FOOTPRINT', 'MAX_SPEED', 'ROBOT_RADIUS', 'dense_clutter_data']

@@ -21,8 +21,8 @@ from typing import Any
 import numpy as np
 
 from fastep_core.geometry import Circle, Segment, point_segment_distance
-from fastep_core.planning.exact_path import solvable
 from fastep_core.planning.params import PlannerParams
+from fastep_core.planning.shortest_path.exact_path import solvable
 from fastep_core.scenario import parse_scenario
 from fastep_core.world import World
 

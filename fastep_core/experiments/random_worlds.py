@@ -26,8 +26,8 @@ from fastep_core.errors import ParameterError
 from fastep_core.experiments.dense_clutter import DENSE_FAMILIES, dense_clutter_data
 from fastep_core.experiments.dynamic_worlds import DYNAMIC_FAMILIES, dynamic_family_data
 from fastep_core.geometry import Circle
-from fastep_core.planning.exact_path import solvable
 from fastep_core.planning.params import PlannerParams
+from fastep_core.planning.shortest_path.exact_path import solvable
 from fastep_core.scenario import Scenario, parse_scenario
 from fastep_core.world import World
 

@@ -49,7 +49,7 @@ def heading_error(state: FloatArray, target: FloatArray) -> float:
 def ramp(start: FloatArray, wanted: FloatArray, linear: float, turn: float) -> FloatArray:
     """A body-frame command (v, omega) moved from `start` toward `wanted` along one straight line in command space,
     v changing by at most `linear` and omega by at most `turn` (math.inf: no limit): the acceleration limits of one
-    command held for one period. The controller and the velocity smoother (planning/smoother.py) both ramp so."""
+    command held for one period. The controller and the velocity smoother (planning/safety/smoother.py) both ramp so."""
     change = wanted - start
     share = 1.0
     if abs(change[0]) > linear:

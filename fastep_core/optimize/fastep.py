@@ -102,7 +102,7 @@ def fastep_iterations(fun: VectorisedFunction, bounds: ArrayLike, *, n_fireflies
     The first `next()` validates the arguments and evaluates the initial swarm; each further one runs an
     iteration; StopIteration carries the OptimizeResult (`.value`). The same moves, draws and result as `fastep`
     with the same arguments, however the iterations are spread out: a planner with a time budget per control
-    tick runs a few of them per tick (planning/step.py, StepRun). The objective and the Generator must not be
+    tick runs a few of them per tick (planning/swarm/step.py, StepRun). The objective and the Generator must not be
     used by anything else between the pauses if the run is to equal `fastep`'s.
     """
     _check_swarm_parameters(n_fireflies, max_iter, patience, gamma, beta0, alpha, alpha_damping)

@@ -43,7 +43,7 @@ from fastep_core.perception.shapes import shapes
 from fastep_core.perception.tracking import Tracker, TrackParams
 from fastep_core.perception.uncertainty import NO_UNCERTAINTY, PoseUncertainty
 from fastep_core.planning.others import OtherRobot
-from fastep_core.planning.recovery import RecentScans
+from fastep_core.planning.recovery.back_up import RecentScans
 from fastep_core.sensing.laser import FanDirections, LaserSpec, Scan, fan_directions
 from fastep_core.world import World
 
@@ -193,7 +193,7 @@ class Perception:
             changed = True
             believed = self._obstacles('believed')
         points, beams = scan_points(scan, pose_array)
-        self.returns = points   # all of them: the guard's (planning/guard.py)
+        self.returns = points   # all of them: the guard's (planning/safety/guard.py)
         centres = np.array([o.position for o in others], dtype=float).reshape(-1, 2)
         radii = np.array([o.radius for o in others], dtype=float)
         # New: what no robot or mover explains, and no believed still obstacle either, unless it lies well in front

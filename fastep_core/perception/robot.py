@@ -19,11 +19,11 @@ from numpy.typing import NDArray
 from fastep_core.dynamic_world import DynamicWorld
 from fastep_core.perception.belief import Belief, Perception, heading, perception_margin, sensor_generator
 from fastep_core.perception.uncertainty import PoseError
-from fastep_core.planning.guard import ScanReturns
-from fastep_core.planning.guard_inputs import GuardInputs
 from fastep_core.planning.navigator import Navigator
 from fastep_core.planning.others import OtherRobot
-from fastep_core.planning.recovery import RecentScans
+from fastep_core.planning.recovery.back_up import RecentScans
+from fastep_core.planning.safety.guard import ScanReturns
+from fastep_core.planning.safety.guard_inputs import GuardInputs
 from fastep_core.sensing.laser import LaserSpec
 
 __all__ = ['SensingRobot']

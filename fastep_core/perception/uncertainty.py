@@ -11,7 +11,7 @@ The bound comes from whatever the robot knows of its localization: a fixed toler
 (`from_covariance`: geometry_msgs/PoseWithCovarianceStamped's, SIGMAS standard deviations), and without a localizer
 an odometry drift bound that grows with the distance driven (`OdometryDrift`). Never more than MAX_SLACK per
 return: beyond that the map says little about where the robot is, and a looser match would hide what is really
-new beside the map's obstacles (the guard still stops at every return: planning/guard.py).
+new beside the map's obstacles (the guard still stops at every return: planning/safety/guard.py).
 
 `PoseError` is the simulator's side (fastep_core/simulator.py, off by default): a localization that is off the
 truth by a constant offset and a drift that grows with the distance driven, seeded.

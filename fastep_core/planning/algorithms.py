@@ -15,12 +15,12 @@ from fastep_core.footprint import Footprint
 from fastep_core.kinematics import PointMass, PointMassController, TractorTrailer, TractorTrailerController
 from fastep_core.kinematics.diff_drive import DiffDrive, DiffDriveController
 from fastep_core.kinematics.model import Controller, RobotModel
-from fastep_core.planning.aco_kinematic import ACOKinematic
-from fastep_core.planning.dwa import DynamicWindow
-from fastep_core.planning.fastep_kinematic import FAStepKinematic, FAStepPaper
-from fastep_core.planning.fastep_route import FAStepRoute
 from fastep_core.planning.navigator import Navigator
-from fastep_core.planning.optimal_kinematic import OptimalKinematic
+from fastep_core.planning.navigators.aco_kinematic import ACOKinematic
+from fastep_core.planning.navigators.dwa import DynamicWindow
+from fastep_core.planning.navigators.fastep_kinematic import FAStepKinematic, FAStepPaper
+from fastep_core.planning.navigators.fastep_route import FAStepRoute
+from fastep_core.planning.navigators.optimal_kinematic import OptimalKinematic
 from fastep_core.planning.outline import body_radius, planning_radius
 from fastep_core.planning.params import PlannerParams
 from fastep_core.world import World
@@ -96,8 +96,8 @@ def make_robot(spec: RobotLike, params: PlannerParams) -> tuple[RobotModel, Cont
 ROBOT_MODELS: tuple[str, ...] = ('point_mass', 'tractor_trailer', 'diff_drive')
 """The models make_robot builds (scenario.MODELS names the same)."""
 REFUSED_MODELS: dict[str, frozenset[str]] = {'dwa': frozenset({'tractor_trailer'})}
-"""Robot models an algorithm cannot drive: dwa samples velocities of a point mass or a unicycle (planning/dwa.py),
-not the steering of a tractor-trailer."""
+"""Robot models an algorithm cannot drive: dwa samples velocities of a point mass or a unicycle
+(planning/navigators/dwa.py), not the steering of a tractor-trailer."""
 
 
 def drives(algorithm: str, model: str) -> bool:

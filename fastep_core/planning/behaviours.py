@@ -21,19 +21,19 @@ from numpy.typing import NDArray
 
 from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import Controller, RobotModel
-from fastep_core.planning.base_response import BaseResponse, ShownResponse
-from fastep_core.planning.escape import ESCAPING, TrapEscape
-from fastep_core.planning.exact_path import parked_world
-from fastep_core.planning.guard import Guard
-from fastep_core.planning.manoeuvre_driver import ManoeuvreDriver
 from fastep_core.planning.mode import Mode
-from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.params import PlannerParams
-from fastep_core.planning.progress import ProgressChecker, TrapDetector
-from fastep_core.planning.recovery import REVERSE_HORIZON, BackUp, SeenFree, StopTimer, free_room, reverse_free
-from fastep_core.planning.step_planning import StepPlanning
-from fastep_core.planning.yielding import Yield
+from fastep_core.planning.recovery.back_up import REVERSE_HORIZON, BackUp, SeenFree, StopTimer, free_room, reverse_free
+from fastep_core.planning.recovery.escape import ESCAPING, TrapEscape
+from fastep_core.planning.recovery.manoeuvre_driver import ManoeuvreDriver
+from fastep_core.planning.recovery.progress import ProgressChecker, TrapDetector
+from fastep_core.planning.safety.base_response import BaseResponse, ShownResponse
+from fastep_core.planning.safety.guard import Guard
+from fastep_core.planning.safety.yielding import Yield
+from fastep_core.planning.shortest_path.exact_path import parked_world
+from fastep_core.planning.shortest_path.optimal import OptimalPath
+from fastep_core.planning.swarm.step_planning import StepPlanning
 from fastep_core.world import World
 
 __all__ = ['RETURNING', 'RETURN_RANGE', 'ROTATING', 'STOPPING', 'HoldBreaker', 'PathCheck', 'Steering', 'Tick',
@@ -276,7 +276,7 @@ def stopped(nav: Steering, velocity: FloatArray) -> bool:
 def turn_to_heading(nav: Steering, state: FloatArray, dt: float) -> FloatArray | None:
     """At the goal's position: the turn in place toward the goal's heading, within the turn rate and its
     acceleration from the last command, and no faster than stops within the heading at the turn braking the base
-    has shown (planning/base_response.py); None when there is nothing to turn (no heading, a robot without one
+    has shown (planning/safety/base_response.py); None when there is nothing to turn (no heading, a robot without one
     or that cannot turn in place, params.goal_heading 0, or facing it within yaw_goal_tolerance)."""
     p = nav.params
     if nav.goal_heading is None or not p.goal_heading or nav.model.holonomic or \

@@ -4,7 +4,7 @@ A planning pass (`Navigator.update`: exact paths, escapes, manoeuvres, the swarm
 clock does not stop meanwhile. `ControlTick.command` turns the latest `Plan` into this tick's command from the
 robot's current state in well under a millisecond: the controller toward the plan's target (or the plan's own
 command), then yielding to movers and the guard against the newest robots, looking as far ahead as the robot needs
-to brake; then the velocity smoother (planning/smoother.py) and, for a steered robot backing up, its swept disc
+to brake; then the velocity smoother (planning/safety/smoother.py) and, for a steered robot backing up, its swept disc
 checked against the world and the free space recent scans saw. Closed loop: given the velocity odometry measured,
 the smoother ramps from it when the base is not doing what it was told, the guard looks as far ahead as the faster
 of command and base takes to stop, braking no harder than the base has shown it can, and every command sent is
@@ -25,14 +25,14 @@ from typing import Callable, Sequence
 import numpy as np
 from numpy.typing import NDArray
 
-from fastep_core.planning.base_response import all_finite, speed_of
-from fastep_core.planning.guard import Guard
-from fastep_core.planning.lateness import Lateness, stopping_speed
 from fastep_core.planning.navigator import Mode, Navigator, SpeedLaw
 from fastep_core.planning.others import OtherRobot
 from fastep_core.planning.outline import inflated
-from fastep_core.planning.recovery import REVERSE_HORIZON, reverse_free
-from fastep_core.planning.smoother import VelocitySmoother
+from fastep_core.planning.recovery.back_up import REVERSE_HORIZON, reverse_free
+from fastep_core.planning.safety.base_response import all_finite, speed_of
+from fastep_core.planning.safety.guard import Guard
+from fastep_core.planning.safety.lateness import Lateness, stopping_speed
+from fastep_core.planning.safety.smoother import VelocitySmoother
 from fastep_core.world import World
 
 __all__ = ['ControlTick', 'Plan', 'PlanLatency']
@@ -90,8 +90,8 @@ class ControlTick:
         self._measured: FloatArray | None = None   # the velocity measured at this tick, if given ...
         self._measured_at = 0.0                    # ... as of this time
         self._fed_at: float | None = None          # the newest measurement the smoother was given
-        # How late this loop acts (planning/lateness.py): looked ahead by the guard, and the speed it allows. A scan
-        # the guard checks counts as late once older than scan_allowance (s; the node's scan_timeout).
+        # How late this loop acts (planning/safety/lateness.py): looked ahead by the guard, and the speed it allows. A
+        # scan the guard checks counts as late once older than scan_allowance (s; the node's scan_timeout).
         self.lateness = Lateness()
         self.scan_allowance = scan_allowance
         self.slowed = ''   # why this tick's speed was reduced for lateness ('' when it was not)
@@ -264,7 +264,7 @@ class ControlTick:
 
     def _within_lateness(self, state: FloatArray, command: FloatArray, dt: float, late: float) -> FloatArray:
         """`command` no faster than stops, `late` seconds behind its tick, where an on-time robot at max_speed
-        would, and at the goal (planning/lateness.py); scaled whole, so its path stays the same."""
+        would, and at the goal (planning/safety/lateness.py); scaled whole, so its path stays the same."""
         speed = speed_of(command, bool(self.model.holonomic))
         if speed <= 0.0:
             return command

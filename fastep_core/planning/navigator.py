@@ -19,24 +19,25 @@ from numpy.typing import NDArray
 from fastep_core.errors import GoalError
 from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import Controller, RobotModel
-from fastep_core.planning import behaviours, step_planning
-from fastep_core.planning.base_response import BaseResponse, ShownResponse, all_finite, speed_of
+from fastep_core.planning import behaviours
 from fastep_core.planning.behaviours import ROTATING, HoldBreaker, PathCheck, Tick
-from fastep_core.planning.detection import RunDetector
-from fastep_core.planning.escape import TrapEscape
-from fastep_core.planning.exact_path import NoPathHold, blocked_reason, no_path_reason, robot_path
-from fastep_core.planning.guard import Guard
-from fastep_core.planning.guard_inputs import GuardInputs
 from fastep_core.planning.limits import Limits, saturating, with_limits
-from fastep_core.planning.manoeuvre_driver import ManoeuvreDriver
 from fastep_core.planning.mode import Mode
-from fastep_core.planning.optimal import OptimalPath
 from fastep_core.planning.others import OtherRobot, OtherRobots, robots_on_run
 from fastep_core.planning.outline import inflated
 from fastep_core.planning.params import PlannerParams
-from fastep_core.planning.progress import ProgressChecker, TrapDetector
-from fastep_core.planning.recovery import BackUp, SeenFree, StopTimer, backup_speed
-from fastep_core.planning.yielding import Yield, Yielding
+from fastep_core.planning.recovery.back_up import BackUp, SeenFree, StopTimer, backup_speed
+from fastep_core.planning.recovery.escape import TrapEscape
+from fastep_core.planning.recovery.manoeuvre_driver import ManoeuvreDriver
+from fastep_core.planning.recovery.progress import ProgressChecker, TrapDetector
+from fastep_core.planning.safety.base_response import BaseResponse, ShownResponse, all_finite, speed_of
+from fastep_core.planning.safety.guard import Guard
+from fastep_core.planning.safety.guard_inputs import GuardInputs
+from fastep_core.planning.safety.yielding import Yield, Yielding
+from fastep_core.planning.shortest_path.exact_path import NoPathHold, blocked_reason, no_path_reason, robot_path
+from fastep_core.planning.shortest_path.optimal import OptimalPath
+from fastep_core.planning.swarm import step_planning
+from fastep_core.planning.swarm.detection import RunDetector
 from fastep_core.world import World
 
 __all__ = ['ROTATING', 'Mode', 'Navigator', 'OtherRobot', 'SpeedLaw']
@@ -342,7 +343,7 @@ class Navigator:
              velocity: FloatArray | None = None) -> FloatArray:
         """The command of one control tick (`update` without telling the controller): the first behaviour that
         answers (planning/behaviours.py), in this order of priority. velocity: as measured (None: standing)."""
-        self.yield_kind = ''   # what yielding to movers did this tick (planning/yielding.py), '' for nothing
+        self.yield_kind = ''   # what yielding to movers did this tick (planning/safety/yielding.py), '' for nothing
         self.driven = None
         self._ticks += 1
         dt = self.limits.dt if self._last_t is None or t <= self._last_t else t - self._last_t
@@ -378,7 +379,7 @@ class Navigator:
             self._target = target
         command = self.regulate(state, self.controller.command(state, target, dt), dt)
         self.driven = target
-        # Movers: slow down, wait or get out of the way over the time ahead (planning/yielding.py).
+        # Movers: slow down, wait or get out of the way over the time ahead (planning/safety/yielding.py).
         yielded = self.yield_to_movers(state, command, dt, others)
         self.yield_kind = yielded.kind
         if yielded.kind:
@@ -406,7 +407,7 @@ class Navigator:
 
     def yield_to_movers(self, state: FloatArray, command: FloatArray, dt: float,
                         others: Sequence[OtherRobot]) -> Yield:
-        """planning/yielding.py on this tick's command; a move out of a mover's way must pass the guard."""
+        """planning/safety/yielding.py on this tick's command; a move out of a mover's way must pass the guard."""
         return self.yielding.check(state, command, others,
                                    lambda c: self.guard_check.check(self.world, state, c, dt, others) is c)
 
@@ -418,12 +419,12 @@ class Navigator:
     def blocked(self, position: FloatArray, target: FloatArray, others: Sequence[OtherRobot],
                 sensing_range: float | None = None, horizon: float | None = None) -> bool:
         """Does something within sensing range lie on the straight run to target? (eq. 11 + 'on the way';
-        planning/detection.py, RunDetector.blocked)"""
+        planning/swarm/detection.py, RunDetector.blocked)"""
         return self.detector.blocked(self.world, self.params, position, target, others, sensing_range, horizon)
 
     def plan_next_step(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         """Run the swarm for one waypoint (eq. 3-10); None (and a status reason) when no feasible step exists or
-        the step is finished on a later tick (planning/step_planning.py, plan_next_step)."""
+        the step is finished on a later tick (planning/swarm/step_planning.py, plan_next_step)."""
         return step_planning.plan_next_step(self, position, others)
 
     def step_budget(self) -> int | None:
@@ -458,7 +459,7 @@ class Navigator:
 
     def guard(self, state: FloatArray, command: FloatArray, dt: float,
               others: Sequence[OtherRobot]) -> FloatArray:
-        """Stop instead of moving into an obstacle or within reach of another robot (planning/guard.py)."""
+        """Stop instead of moving into an obstacle or within reach of another robot (planning/safety/guard.py)."""
         braking = self.stop_deceleration()
         if braking > 0.0:   # its stops brake: look as far ahead as that takes, from the faster of command and base
             dt += 0.5 * max(self._speed, self._measured_speed) / braking
@@ -474,8 +475,8 @@ class Navigator:
 
     # --------------------------------------------------- paths and traps
     def exact_path(self, position: FloatArray, others: Sequence[OtherRobot] = ()) -> OptimalPath | None:
-        """The exact shortest path to the goal round obstacles and parked robots (planning/exact_path.py); while
-        blocked (fail_no_path), None without a search until the belief changes or BLOCKED_RETRY s have passed."""
+        """The exact shortest path to the goal round obstacles and parked robots (planning/shortest_path/exact_path.py);
+        while blocked (fail_no_path), None without a search until the belief changes or BLOCKED_RETRY s have passed."""
         assert self.goal is not None
         t = self._last_t or 0.0
         if self.no_path.skip_search(self.world, t):

@@ -26,7 +26,7 @@ class OtherRobot:
     position: tuple[float, float]
     velocity: tuple[float, float] = (0.0, 0.0)
     radius: float = 0.5
-    mover: bool = False   # a moving obstacle that does not plan or give way (planning/yielding.py), not a robot
+    mover: bool = False   # a moving obstacle that does not plan or give way (planning/safety/yielding.py), not a robot
 
 
 class TickArrays:

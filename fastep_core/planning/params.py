@@ -91,13 +91,13 @@ class PlannerParams:
     max_turn_rate: float = _p(2.0, 'diff_drive turn-rate limit |omega|; 0 means unlimited', 0.0,
                               unit='rad/s', component='safety')
     max_acceleration: float = _p(2.5, 'acceleration and braking limit |dv/dt| of the diff_drive controller and of '
-                                      'the velocity smoother (planning/smoother.py; a point mass: of its velocity '
-                                      'vector); 0 means unlimited', 0.0, unit='m/s^2', component='safety')
+                                      'the velocity smoother (planning/safety/smoother.py; a point mass: of its '
+                                      'velocity vector); 0 means unlimited', 0.0, unit='m/s^2', component='safety')
     max_turn_acceleration: float = _p(3.2, 'turn acceleration limit |domega/dt| of the diff_drive controller and of '
                                            'the velocity smoother; 0 means unlimited', 0.0,
                                       unit='rad/s^2', component='safety')
-    # The velocity smoother, the last stage before cmd_vel (planning/smoother.py), and backing up
-    # (planning/recovery.py). The default reverse speed is the backing-up recovery's (BACKUP_SPEED).
+    # The velocity smoother, the last stage before cmd_vel (planning/safety/smoother.py), and backing up
+    # (planning/recovery/back_up.py). The default reverse speed is the backing-up recovery's (BACKUP_SPEED).
     max_reverse_speed: float = _p(0.25, 'a steered robot (diff_drive, tractor_trailer) never reverses faster than '
                                         'this: the velocity smoother caps v >= -max_reverse_speed, and the backing-up '
                                         'recovery moves at 0.25 m/s or this if lower; 0 means unlimited',
@@ -170,7 +170,7 @@ class PlannerParams:
                                     'run to it, so eq. 12 does not slow it down to a crawl as it nears the waypoint '
                                     '(the path is the same straight run; it is reached within waypoint_tolerance as '
                                     'before); 0: aims at the waypoint', 0.0, unit='m', component='controller')
-    # Moving obstacles (a v2 world's movers, tracked obstacles; planning/yielding.py).
+    # Moving obstacles (a v2 world's movers, tracked obstacles; planning/safety/yielding.py).
     mover_horizon: float = _p(3.0, 'each command is checked against where the movers will be over this many seconds '
                                    '(each at its velocity): the robot slows down, waits or gets out of the way '
                                    'instead of driving into a mover\'s path; 0: movers count only where they are, '
@@ -183,7 +183,7 @@ class PlannerParams:
     aco_q: float = _p(0.5, 'ACO_R locality of the search q', 1e-6, component='swarm')
     aco_xi: float = _p(1.0, 'ACO_R pheromone evaporation / spread xi', 1e-6, component='swarm')
     aco_iter: int = _p(30, 'ACO_R iterations per step at most', 1, 10_000, component='swarm')
-    # DWA, the Dynamic Window Approach (Fox, Burgard & Thrun 1997; planning/dwa.py); defaults measured in
+    # DWA, the Dynamic Window Approach (Fox, Burgard & Thrun 1997; planning/navigators/dwa.py); defaults measured in
     # docs/benchmarks.md ("DWA").
     dwa_acceleration: float = _p(1.0, 'DWA acceleration and braking limit: the dynamic window is the disc of '
                                       'velocities within this times the tick of the current one', 1e-3, 100.0,

@@ -125,7 +125,7 @@ def test_the_guard_never_lets_a_tick_end_inside_an_obstacle_or_another_robot(cir
 def test_a_found_manoeuvre_keeps_its_clearance_and_never_folds_the_trailer(circles, origin, heading, hitch):
     from fastep_core.kinematics import TractorTrailer
     from fastep_core.kinematics.tractor_trailer import hitch_angle
-    from fastep_core.planning.manoeuvre_search import HITCH_SLACK, plan_manoeuvre
+    from fastep_core.planning.recovery.manoeuvre_search import HITCH_SLACK, plan_manoeuvre
     world = World.from_obstacles([0, 0, 50, 50], circles)
     keep = 0.65
     assume(float(world.obstacles.clearance(np.array(origin))) >= keep and min(origin) >= keep

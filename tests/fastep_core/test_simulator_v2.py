@@ -35,7 +35,7 @@ def crossing(**changes: Any) -> dict[str, Any]:
 def test_a_known_mover_is_avoided_an_unknown_one_is_not(seed: int) -> None:
     """Known movers reach the planner as moving obstacles ('mover 0'); an unknown one is absent from what it is
     given (this robot has no sensor), so it runs the robot down: judged from the truth. The known one is let
-    pass (planning/yielding.py: the robot slows down for it) with more than the clearance margin to spare."""
+    pass (planning/safety/yielding.py: the robot slows down for it) with more than the clearance margin to spare."""
     seen = simulate(parse_scenario(crossing()), 'fastep', seed).robots[0]
     assert seen.reached and not seen.collided and seen.min_clearance > 0.5
     unseen = simulate(parse_scenario(crossing(known=False)), 'fastep', seed).robots[0]

@@ -252,8 +252,8 @@ def test_backup_toward_a_wall_ends_collision_ahead_and_stops_short_of_it(context
 def test_backup_toward_laser_returns_off_the_map_ends_collision_ahead_short_of_them(context: Any) -> None:
     from nav2_msgs.action import BackUp
 
-    from fastep_core.planning.guard import ScanReturns
-    from fastep_core.planning.guard_inputs import GuardInputs
+    from fastep_core.planning.safety.guard import ScanReturns
+    from fastep_core.planning.safety.guard_inputs import GuardInputs
     # Nothing on the map; the latest scan's returns (as perception leaves them) in a row 1.2 m behind the robot.
     heading = np.array([math.cos(START[2]), math.sin(START[2])])
     across = np.array([-heading[1], heading[0]])

@@ -1,6 +1,6 @@
-"""The planner node closes the loop on odometry's twist (fastep_core/planning/base_response.py): a base that brakes
-slower than it is told stops at its goal before a wall, and status and /diagnostics say what it measured. The node
-is built in this process on a simulated clock and its callbacks called directly; the base is a stand-in that
+"""The planner node closes the loop on odometry's twist (fastep_core/planning/safety/base_response.py): a base that
+brakes slower than it is told stops at its goal before a wall, and status and /diagnostics say what it measured. The
+node is built in this process on a simulated clock and its callbacks called directly; the base is a stand-in that
 reaches its command at most `limit` m/s^2 per tick."""
 
 from __future__ import annotations

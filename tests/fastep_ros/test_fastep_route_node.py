@@ -9,7 +9,7 @@ from diagnostic_msgs.msg import DiagnosticStatus
 from rclpy.parameter import Parameter
 
 from fastep_core.geometry import Circle, Segment
-from fastep_core.planning.fastep_route import FAStepRoute
+from fastep_core.planning.navigators.fastep_route import FAStepRoute
 from fastep_ros.planner import PlannerNode
 from msg_tools import convert
 
@@ -45,7 +45,7 @@ def test_planner_node_follows_the_route_and_replans_when_the_map_changes(context
 
 
 def test_the_navigator_knows_its_robot_by_the_name_the_other_planners_use(context: Any) -> None:
-    """Ties before a one-lane passage go by name (planning/passage.py): the planner names its robot as the
+    """Ties before a one-lane passage go by name (planning/safety/passage.py): the planner names its robot as the
     others' planners name it, its namespace without the slash."""
     node = PlannerNode(context=context, namespace='/r7',
                        parameter_overrides=[Parameter('workspace', value=[0.0, 0.0, 20.0, 20.0])])

@@ -309,8 +309,8 @@ def test_nodes_refuse_bad_parameters_with_one_line(tmp_path: Path, module: str, 
 
 
 def test_a_trapped_tractor_trailer_manoeuvres_out_on_the_live_graph(tmp_path: Path) -> None:
-    # The navigator's manoeuvre (planning/manoeuvre_search.py) replayed through the plant over DDS: commands a tick
-    # late on a real graph must not throw it off its planned states for good.
+    # The navigator's manoeuvre (planning/recovery/manoeuvre_search.py) replayed through the plant over DDS: commands a
+    # tick late on a real graph must not throw it off its planned states for good.
     import yaml
 
     from fastep_core.experiments.random_worlds import u_trap
@@ -642,7 +642,7 @@ robots:
 
 
 def test_two_robots_take_turns_in_a_corridor_on_the_graph_exactly_as_in_fastep_sim(tmp_path: Path) -> None:
-    """The passage rule (planning/passage.py) on the live graph: each planner names its robot by its namespace,
+    """The passage rule (planning/safety/passage.py) on the live graph: each planner names its robot by its namespace,
     as fastep-sim names it, so r2 waits for r1 before the 2.4 m corridor tick for tick as in fastep-sim."""
     scenario = write(tmp_path / 'corridor.yaml', CORRIDOR)
     statuses: dict[str, set[str]] = {}

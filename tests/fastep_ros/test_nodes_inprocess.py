@@ -83,7 +83,7 @@ def test_planner_waits_for_the_world_then_takes_a_pending_goal(context: Any) -> 
 
 
 def test_planner_runs_dwa_and_refuses_it_for_a_tractor_trailer(context: Any) -> None:
-    from fastep_core.planning.dwa import DynamicWindow
+    from fastep_core.planning.navigators.dwa import DynamicWindow
     from fastep_ros.common import StartupError
 
     node = make(PlannerNode, context, algorithm='dwa', workspace=[0.0, 0.0, 10.0, 10.0])

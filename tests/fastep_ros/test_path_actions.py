@@ -13,7 +13,7 @@ import numpy as np
 import pytest
 
 from fastep_core.geometry import Circle, Segment
-from fastep_core.planning.optimal import shortest_path
+from fastep_core.planning.shortest_path.optimal import shortest_path
 from fastep_core.world import World
 from fastep_testing.in_process import DT, TickClock, planner_node
 from fastep_testing.planning_gate import WAIT, wait_for

@@ -13,9 +13,9 @@ import pytest
 
 from fastep_core.geometry import Circle
 from fastep_core.planning.control import ControlTick, Plan
-from fastep_core.planning.guard import ScanReturns
-from fastep_core.planning.guard_inputs import GuardInputs
 from fastep_core.planning.navigator import Mode
+from fastep_core.planning.safety.guard import ScanReturns
+from fastep_core.planning.safety.guard_inputs import GuardInputs
 from fastep_ros.planner import PlannerNode
 from fastep_testing.in_process import TickClock, planner_node
 from fastep_testing.planning_gate import WAIT, Gate, wait_for

@@ -15,8 +15,8 @@ from fastep_core.perception.belief import Belief, BelievedWorld, Perception
 from fastep_core.perception.fusion import END_SLACK, EXPLAINED, explained_within
 from fastep_core.perception.uncertainty import MAX_SLACK, OdometryDrift, PoseError, PoseUncertainty
 from fastep_core.planning.algorithms import make_navigator
-from fastep_core.planning.optimal import shortest_path
 from fastep_core.planning.params import PlannerParams
+from fastep_core.planning.shortest_path.optimal import shortest_path
 from fastep_core.scenario import RobotSpec, parse_scenario
 from fastep_core.sensing.laser import LaserSpec, scan
 from fastep_core.simulator import simulate

@@ -14,7 +14,7 @@ from fastep_core.perception.belief import IN_FRONT, Perception
 from fastep_core.perception.fusion import seen_through
 from fastep_core.perception.segmentation import scan_points, segment
 from fastep_core.perception.shapes import shapes
-from fastep_core.planning.recovery import SeenFree
+from fastep_core.planning.recovery.back_up import SeenFree
 from fastep_core.sensing.laser import LaserSpec, Scan, fan_hits, scan
 from fastep_core.simulator import Tick, simulate
 from fastep_core.world import World

@@ -9,7 +9,7 @@ from fastep_core.errors import FastepError, ParameterError
 from fastep_core.kinematics import PointMass, TractorTrailer
 from fastep_core.planning import ALGORITHMS, PlannerParams, make_navigator
 from fastep_core.planning.algorithms import NAVIGATORS, algorithm_name
-from fastep_core.planning.manoeuvre_driver import ManoeuvreDriver
+from fastep_core.planning.recovery.manoeuvre_driver import ManoeuvreDriver
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World
 

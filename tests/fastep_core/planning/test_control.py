@@ -163,8 +163,8 @@ def test_commands_ramp_within_the_acceleration_limits_and_the_guards_stop_brakes
 
 
 def test_a_steered_robot_does_not_back_into_space_no_scan_has_seen() -> None:
-    from fastep_core.planning.guard_inputs import GuardInputs
-    from fastep_core.planning.recovery import SeenFree
+    from fastep_core.planning.recovery.back_up import SeenFree
+    from fastep_core.planning.safety.guard_inputs import GuardInputs
     from fastep_core.sensing.laser import Scan
     nav, state = _navigator('diff_drive')
     nav.set_goal([18.0, 10.0])

@@ -12,7 +12,7 @@ from fastep_core.experiments.random_worlds import diff_drive_data, u_trap_scenar
 from fastep_core.kinematics.diff_drive import DiffDrive, DiffDriveController
 from fastep_core.planning import PlannerParams, make_navigator
 from fastep_core.planning.algorithms import ALGORITHMS, drives
-from fastep_core.planning.recovery import BACKUP_SPEED, BackUp
+from fastep_core.planning.recovery.back_up import BACKUP_SPEED, BackUp
 from fastep_core.scenario import RobotSpec, parse_scenario
 from fastep_core.simulator import Tick, simulate
 from fastep_core.world import World

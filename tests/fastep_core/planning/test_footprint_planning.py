@@ -14,9 +14,9 @@ from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics.diff_drive import DiffDrive
 from fastep_core.planning import OtherRobot, PlannerParams, make_navigator
 from fastep_core.planning.control import ControlTick
-from fastep_core.planning.guard import Guard, ScanReturns, Stop
 from fastep_core.planning.outline import FOOTPRINT_MARGIN, inflated, planning_radius, predicted_poses
-from fastep_core.planning.recovery import reverse_free
+from fastep_core.planning.recovery.back_up import reverse_free
+from fastep_core.planning.safety.guard import Guard, ScanReturns, Stop
 from fastep_core.scenario import RobotSpec, parse_scenario
 from fastep_core.simulator import simulate
 from fastep_core.world import World

@@ -6,9 +6,10 @@ import pytest
 from fastep_core.errors import GoalError
 from fastep_core.geometry import Circle, Segment
 from fastep_core.kinematics import TractorTrailer
-from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator, manoeuvre_driver
-from fastep_core.planning.exact_path import BLOCKED_RETRY, NoPathHold
-from fastep_core.planning.manoeuvre_search import Manoeuvre
+from fastep_core.planning import FAStepKinematic, Mode, OtherRobot, PlannerParams, make_navigator
+from fastep_core.planning.recovery import manoeuvre_driver
+from fastep_core.planning.recovery.manoeuvre_search import Manoeuvre
+from fastep_core.planning.shortest_path.exact_path import BLOCKED_RETRY, NoPathHold
 from fastep_core.scenario import RobotSpec
 from fastep_core.world import World
 
@@ -170,7 +171,7 @@ def test_a_manoeuvre_that_did_not_help_is_followed_by_one_all_the_way_to_the_goa
 @pytest.fixture
 def rule_gives_up(monkeypatch):
     """Every step plan that keeps right gives up (step.RULE_CALLS spent); the plans made, in order."""
-    from fastep_core.planning import step as step_module
+    from fastep_core.planning.swarm import step as step_module
     plans: list[str] = []
     start = step_module.StepRun.__init__
 

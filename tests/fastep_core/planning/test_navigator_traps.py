@@ -102,8 +102,8 @@ def test_a_robot_a_little_inside_its_radius_has_a_path_that_backs_out_first():
     """A new scan put an obstacle 1 cm nearer than the radius: the path starts where the robot is and leaves the
     obstacle's reach at once; 10 cm inside (more than BACK_OUT) is no robot's way out."""
     from fastep_core.geometry import Circle
-    from fastep_core.planning.exact_path import BACK_OUT, exact_path
     from fastep_core.planning.params import PlannerParams
+    from fastep_core.planning.shortest_path.exact_path import BACK_OUT, exact_path
     from fastep_core.world import World
     world = World.from_obstacles([0, 0, 20, 20], [Circle((5.99, 5.0), 0.5)])
     radius, position, goal = 0.5, np.array([5.0, 5.0]), np.array([15.0, 5.0])

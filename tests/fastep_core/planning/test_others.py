@@ -6,8 +6,8 @@ import numpy as np
 
 from fastep_core.kinematics import PointMass
 from fastep_core.planning import OtherRobot, PlannerParams
-from fastep_core.planning.guard import Guard
 from fastep_core.planning.others import OtherRobots, other_arrays, robot_arrays, robots_on_run
+from fastep_core.planning.safety.guard import Guard
 from fastep_core.world import World
 
 
