@@ -120,7 +120,7 @@ class Tracing:
         blocking = (surface < nav.params.sensing_range) & on_run
         event: dict[str, Any] = {
             't': t, 'x': float(position[0]), 'y': float(position[1]), 'travel0': self._travel,
-            'class': self.classify(position), 'escape': bool(nav.escape.active),
+            'class': self.classify(position), 'escape': bool(nav.escaping),
             'nearest_blocking': float(surface[blocking].min()) if blocking.any() else None,
             'clearance_here': float(surface.min()) if len(surface) else None,
             'waypoint': None if waypoint is None else [float(v) for v in waypoint],
@@ -151,7 +151,7 @@ class Tracing:
         nav: Any = self
         if not self._in_choose:
             return 'hold breaker'
-        if nav.escape.active:
+        if nav.escaping:
             return 'escape'
         if isinstance(self, ACOKinematic):
             return 'aco every step'

@@ -1,6 +1,6 @@
 """What a navigator is doing: the mode the ROS status topic reports (fastep_ros) and the simulator records.
 
-Its own module so that the navigator (navigator.py) and its behaviours (behaviours.py) both name it without
+Its own module so that the navigator (navigator.py) and its behaviours (planning/behaviours/) both name it without
 importing each other.
 """
 

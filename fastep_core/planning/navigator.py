@@ -3,9 +3,8 @@
 A navigator is called once per control tick with the robot's state and the other robots it knows of, and
 returns the command for the robot's kinematic model, in `fastep-sim` and in the ROS planner node alike. The
 algorithms (planning/algorithms.py) differ only in `choose_target`: the point to drive to this tick. Around it
-the behaviours of `tick`, in order of priority (behaviours.py), and on every command yielding to movers
-(yielding.py) and the guard (guard.py). Step planning over ticks is step_planning.py, a step's swarm run step.py,
-detection of what lies on the way detection.py.
+the behaviours of `tick`, in order of priority (planning/behaviours/), and on every command yielding to movers
+and the guard (planning/safety/). When the swarm runs and the step it plans: planning/swarm/.
 """
 
 from __future__ import annotations
@@ -19,15 +18,13 @@ from numpy.typing import NDArray
 from fastep_core.errors import GoalError
 from fastep_core.footprint import Footprint
 from fastep_core.kinematics.model import Controller, RobotModel
-from fastep_core.planning import behaviours
-from fastep_core.planning.behaviours import ROTATING, HoldBreaker, PathCheck, Tick
+from fastep_core.planning.behaviours import ROTATING, Behaviours, Tick, stand_clear
 from fastep_core.planning.limits import Limits, saturating, with_limits
 from fastep_core.planning.mode import Mode
 from fastep_core.planning.others import OtherRobot, OtherRobots, robots_on_run
 from fastep_core.planning.outline import inflated
 from fastep_core.planning.params import PlannerParams
-from fastep_core.planning.recovery.back_up import BackUp, SeenFree, StopTimer, backup_speed
-from fastep_core.planning.recovery.escape import TrapEscape
+from fastep_core.planning.recovery.back_up import SeenFree
 from fastep_core.planning.recovery.manoeuvre_driver import ManoeuvreDriver
 from fastep_core.planning.recovery.progress import ProgressChecker, TrapDetector
 from fastep_core.planning.safety.base_response import BaseResponse, ShownResponse, all_finite, speed_of
@@ -110,7 +107,6 @@ class Navigator:
         # pass's snapshot was taken (take_response); None: the response itself is read.
         self.response_taken: ShownResponse | None = None
         self._last_command = np.zeros(2)   # the command `update` returned last
-        self.at_goal = False   # has the robot been within goal_tolerance of this goal (behaviours.back_to_goal)
         # Whether the world is what the robot's laser shows (fastep_core/perception): a belief that can be wrong
         # for a moment, so no path in it holds the robot a while before the goal fails (fail_no_path).
         self.from_scans = False
@@ -118,11 +114,9 @@ class Navigator:
         self._speed = 0.0   # of the last command (m/s)
         self._measured_speed = 0.0   # of the base, as measured at the last tick (m/s)
         self._last_t: float | None = None
-        self._committed = False                   # follow the waypoint to the end (a step that broke a hold)
+        self.committed = False                    # follow the waypoint to the end (a step that broke a hold)
         self._ticks = 0                           # control ticks so far
         self.steps = step_planning.StepPlanning()   # what step planning carries from tick to tick
-        self.path_check = PathCheck()             # the behaviours that keep state of their own (tick)
-        self.hold_breaker = HoldBreaker()
         self.detector = RunDetector(self.radius)  # what lies on the run to the target, with its proofs
         self._stuck = 0                           # planned steps in a row that ended within waypoint_tolerance
         self.guard_check = Guard(model, self.radius, p, limits=self.limits)
@@ -130,11 +124,8 @@ class Navigator:
         self.yield_kind = ''
         self.progress = ProgressChecker(p.progress_distance, p.progress_timeout)
         self.trap = TrapDetector(p.progress_distance, p.trap_timeout)
-        self.escape = TrapEscape()
-        self.stops = StopTimer()
-        self.backup = BackUp(model, backup_speed(self.limits))
-        # A robot that cannot turn in place leaves traps and tight spots by manoeuvres of its own arcs.
-        self.manoeuvring = None if model.turns_in_place else ManoeuvreDriver(model, self.radius, p)
+        # The tick's behaviours, each with its state (planning/behaviours/): arrival, the checks, the recoveries.
+        self.behaviours = Behaviours(model, self.radius, p, self.limits)
 
     def take_footprint(self, footprint: Footprint, body_radius: float) -> None:
         """Plan for a robot with this outline: `radius` is then the planning circle (outline.planning_radius), the
@@ -170,6 +161,11 @@ class Navigator:
         """The free space the recent scans saw, where the robot may back up (None: the map alone)."""
         return self.guard_inputs.seen
 
+    @property
+    def obstacle_margin(self) -> float:
+        """What the guard keeps from obstacles beyond the robot's outline (perception's margin)."""
+        return self.guard_check.obstacle_margin
+
     def _yielding(self, p: PlannerParams) -> Yielding:
         """Yielding with these parameters, the model and the limits as they are now."""
         return Yielding(self.model, self.radius, p.mover_horizon, 0.5 * p.clearance_margin, self.limits.max_speed,
@@ -185,14 +181,30 @@ class Navigator:
         """The point the robot is driving to now: a waypoint or the goal."""
         return self._target
 
+    def clear_target(self) -> None:
+        """No target: the controller starts afresh at the next one (drive_to)."""
+        self._target = None
+
     @property
     def failed(self) -> bool:
         return self.mode is Mode.FAILED
 
     @property
+    def manoeuvring(self) -> ManoeuvreDriver | None:
+        """A tractor-trailer's manoeuvres (None for a robot that turns in place)."""
+        m = self.behaviours.manoeuvring
+        return None if m is None else m.driver
+
+    @property
     def manoeuvres(self) -> int:
         """Tractor-trailer manoeuvres found (replans included)."""
-        return self.manoeuvring.count if self.manoeuvring is not None else 0
+        m = self.manoeuvring
+        return m.count if m is not None else 0
+
+    @property
+    def escaping(self) -> bool:
+        """Is the robot following the exact path out of a trap?"""
+        return self.behaviours.escaping.escape.active
 
     # ----------------------------------------------------------------- goals
     def set_goal(self, goal: Sequence[float], t: float = 0.0, heading: float | None = None) -> None:
@@ -205,16 +217,13 @@ class Navigator:
         self.goal_heading = None if heading is None else math.atan2(math.sin(heading), math.cos(heading))
         self.mode, self.reason = Mode.KINEMATIC, 'goal accepted'
         self.waypoint, self.plan, self.cost, self._target = None, [], 0.0, None
-        self.reference, self.path_check.checked, self._committed = None, False, False
-        self.at_goal = False
-        self._stuck, self.hold_breaker.broken = 0, -1
+        self.reference, self.committed = None, False
+        self._stuck = 0
+        self.behaviours.new_goal()
         self.steps.new_goal()
         self.no_path.reset()
         self.progress.reset(t)
         self.trap.reset(t)
-        self.escape.stop()
-        if self.manoeuvring is not None:
-            self.manoeuvring.reset()
 
     def cancel(self, reason: str = 'goal canceled') -> None:
         """Drop the goal: idle, no target (the controller's caller brakes to a stop)."""
@@ -235,7 +244,8 @@ class Navigator:
         if waited is None:
             self.fail(no_path_reason(self.radius, position, self.goal, self.world if self.from_scans else None))
             return
-        self.waypoint, self._target, self.cost, self.path_check.checked = None, None, 0.0, False
+        self.waypoint, self._target, self.cost = None, None, 0.0
+        self.behaviours.path_check.checked = False
         self.reason = blocked_reason(self.world, position, self.goal, self.radius, waited, self.params.blocked_timeout)
 
     # ------------------------------------------------------- while running
@@ -265,12 +275,10 @@ class Navigator:
         self.steps.pending = None   # an unfinished step plan: planned afresh with the new values
         self.guard_check.model, self.guard_check.params, self.guard_check.limits = self.model, params, limits
         self.yielding = self._yielding(params)
-        if self.manoeuvring is not None:   # a tractor-trailer's: its model does not saturate
-            self.manoeuvring.params = params
         self.progress.distance, self.progress.timeout = params.progress_distance, params.progress_timeout
         self.trap.distance, self.trap.timeout = params.progress_distance, params.trap_timeout
         self.detector.forget()   # answers cached with the old sensing range and margin
-        self.backup.model, self.backup.speed = self.model, backup_speed(limits)
+        self.behaviours.retune(self.model, params, limits)
         self.response.retune(limits.max_acceleration, limits.max_turn_acceleration)
         if controller is not None and controller is not self.controller:
             # The new controller hears what the robot got, starting with what it does now: told nothing, a diff_drive
@@ -290,14 +298,9 @@ class Navigator:
         """
         self._last_t = None
         self.steps.restart_clock()
-        self.hold_breaker.broken = -1
         self.progress.reset(t)
         self.trap.reset(t)
-        self.escape.stop()
-        self.stops = StopTimer()
-        self.backup = BackUp(self.model, backup_speed(self.limits))
-        if self.manoeuvring is not None:
-            self.manoeuvring.reset()
+        self.behaviours.restart_clock(self.model, self.limits)
         self._target = None
 
     # ------------------------------------------------------------- the loop
@@ -336,13 +339,13 @@ class Navigator:
         return command
 
     def stand_clear(self, state: FloatArray, others: Sequence[OtherRobot]) -> FloatArray:
-        """A robot standing still that a mover would run into gets out of its way (planning/behaviours.py)."""
-        return behaviours.stand_clear(self, state, others)
+        """A robot standing still that a mover would run into gets out of its way (behaviours.driving)."""
+        return stand_clear(self, state, others)
 
     def tick(self, t: float, state: FloatArray, others: Sequence[OtherRobot] = (),
              velocity: FloatArray | None = None) -> FloatArray:
         """The command of one control tick (`update` without telling the controller): the first behaviour that
-        answers (planning/behaviours.py), in this order of priority. velocity: as measured (None: standing)."""
+        answers (planning/behaviours/), in their order of priority. velocity: as measured (None: standing)."""
         self.yield_kind = ''   # what yielding to movers did this tick (planning/safety/yielding.py), '' for nothing
         self.driven = None
         self._ticks += 1
@@ -362,14 +365,9 @@ class Navigator:
             measured = self._last_command
         self._measured_speed = speed_of(measured, self.model.holonomic)
         now = Tick(self._ticks, t, dt, state, position, others,
-                   math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]), measured)
-        for behaviour in (behaviours.arrival, behaviours.back_to_goal, self.path_check, behaviours.progress_check,
-                          behaviours.trap_check, behaviours.manoeuvre, behaviours.backing_up, self.hold_breaker,
-                          behaviours.escape):
-            command = behaviour(self, now)
-            if command is not None:
-                return command
-        return behaviours.algorithm(self, now)
+                   math.hypot(self.goal[0] - position[0], self.goal[1] - position[1]), measured, self.goal,
+                   self.goal_heading, self.world, self.measured_base, getattr(self.controller, 'last', None))
+        return self.behaviours.command(self, now)
 
     def drive_to(self, state: FloatArray, target: FloatArray, t: float, dt: float,
                  others: Sequence[OtherRobot]) -> FloatArray:
@@ -385,13 +383,7 @@ class Navigator:
         if yielded.kind:
             command, self.reason = yielded.command, yielded.reason
         guarded = self.guard(state, command, dt, others)
-        if guarded is command:
-            self.stops.moved(state[:2])
-            return guarded
-        if self.stops.stopped(t, self.guard_check.stop, state[:2]):
-            self._target = None   # the controller starts afresh after the recovery
-            if not (self.manoeuvring is not None and self.start_manoeuvre(state, t, others)):
-                self.backup.start(t)
+        self.behaviours.backing_up.guarded(self, state, t, self.guard_check.stop, guarded is command, others)
         return guarded
 
     def regulate(self, state: FloatArray, command: FloatArray, dt: float) -> FloatArray:
@@ -430,6 +422,11 @@ class Navigator:
     def step_budget(self) -> int | None:
         """Swarm iterations this tick's step plan may run: params.step_iterations, None (to the end) for 0."""
         return self.params.step_iterations or None
+
+    @property
+    def step_pending_tick(self) -> int:
+        """The tick whose step plan is still running (StepPlanning.pending_tick)."""
+        return self.steps.pending_tick
 
     @property
     def step_deferred(self) -> bool:
@@ -488,15 +485,20 @@ class Navigator:
 
     def start_escape(self, position: FloatArray, distance: float, t: float,
                      others: Sequence[OtherRobot] = ()) -> bool:
-        """Leave a trap along the exact shortest path (planning/behaviours.py); False (and failed) if there is none."""
-        return behaviours.start_escape(self, position, distance, t, others)
+        """Leave a trap along the exact shortest path (behaviours.Escaping); False (and failed) if there is none."""
+        assert self.goal is not None
+        return self.behaviours.escaping.start(self, self.world, position, distance, t, others)
 
     # ------------------------------------------------ recoveries
     def start_manoeuvre(self, state: FloatArray, t: float, others: Sequence[OtherRobot]) -> bool:
-        """Search a manoeuvre round the obstacles and parked robots (planning/behaviours.py); True if found."""
-        return behaviours.start_manoeuvre(self, state, t, others)
+        """Search a manoeuvre round the obstacles and parked robots (behaviours.Manoeuvring); True if found."""
+        m = self.behaviours.manoeuvring
+        assert self.goal is not None and m is not None
+        return m.start(self, self.world, self.goal, state, t, others)
 
     def drive_manoeuvre(self, state: FloatArray, t: float, dt: float, distance: float,
                         others: Sequence[OtherRobot]) -> FloatArray | None:
-        """The manoeuvre's command for this tick, guarded; None once it is over (planning/behaviours.py)."""
-        return behaviours.drive_manoeuvre(self, state, t, dt, distance, others)
+        """The manoeuvre's command for this tick, guarded; None once it is over (behaviours.Manoeuvring)."""
+        m = self.behaviours.manoeuvring
+        assert m is not None
+        return m.drive(self, state, t, dt, distance, others)

@@ -108,7 +108,7 @@ class DynamicWindow(Navigator):
         self.plan_time += time.perf_counter() - start
         self.activations += 1
         self.cost = choice.score if math.isfinite(choice.score) else 0.0
-        if self.escape.active:
+        if self.escaping:
             pass   # the status stays the escape's: DWA steers to the exact path's carrot
         elif choice.admissible == 0:
             self.mode, self.reason = Mode.AVOIDING, 'dwa: no admissible velocity; braking'

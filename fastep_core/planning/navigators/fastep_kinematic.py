@@ -44,8 +44,8 @@ class FAStepKinematic(Navigator):
     def choose_target(self, position: FloatArray, others: Sequence[OtherRobot]) -> FloatArray | None:
         assert self.goal is not None
         following = self.keep_waypoint(position, others)     # a waypoint not yet reached
-        self._committed = self._committed and following
-        if self._committed:                                  # a step that broke a hold is driven to its end
+        self.committed = self.committed and following
+        if self.committed:                                  # a step that broke a hold is driven to its end
             return self.waypoint
         if not self.blocked(position, self.goal, others):    # eq. 11: nothing detected on the way
             self.waypoint, self.cost, self.mode, self.reason = None, 0.0, Mode.KINEMATIC, 'way is clear'

@@ -310,8 +310,8 @@ class FAStepRoute(FAStepKinematic):
             return None
         self.note_progress(position, t)
         following = self.keep_waypoint(position, others)     # a swarm waypoint not yet reached
-        self._committed = self._committed and following
-        if self._committed:                                  # a step that broke a hold is driven to its end
+        self.committed = self.committed and following
+        if self.committed:                                  # a step that broke a hold is driven to its end
             return self.waypoint
         if others and self.wait_before_passage(position, t, others):
             return None

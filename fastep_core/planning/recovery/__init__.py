@@ -7,7 +7,7 @@ exact path, backing up, and a tractor-trailer's manoeuvres.
 - `manoeuvre_search`: a tractor-trailer's manoeuvres, a hybrid-A* search over short arcs;
   `manoeuvre_driver` drives one tick by tick.
 
-The order in which a tick asks them is planning/behaviours.py's.
+A tick asks them through planning/behaviours/ (recoveries.py), in its order.
 
 The names below are loaded on first use: importing one module of this package does not import the others.
 """

@@ -338,7 +338,7 @@ def test_with_a_budget_the_robot_stands_while_the_hold_breakers_step_is_planned(
             if nav.step_deferred:
                 pending.append(tuple(command))
             state, t = state + 0.05 * command, t + 0.05
-        assert nav.activations == 1 and nav.waypoint is not None and nav._committed
+        assert nav.activations == 1 and nav.waypoint is not None and nav.committed
         assert all(c == (0.0, 0.0) for c in pending) and (len(pending) > 0) == (budget > 0)
 
 
