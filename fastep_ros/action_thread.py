@@ -70,7 +70,7 @@ from fastep_ros.limits import GOAL_POSES_MAX
 __all__ = ['ActionThread', 'FREEZE_POSES', 'NODE_SUFFIX', 'RELEASE_CHUNK', 'collector_held', 'release_poses']
 
 NODE_SUFFIX = '_navigation'   # the node's name: the planner's and this
-IDLE_WAKE = 1.0               # s: the longest the executor waits when nothing wakes it (a stop never waits for it)
+IDLE_WAKE = 1.0               # s: the longest the executor waits when nothing wakes it (a stop wakes it: stop)
 FLUSH_SPINS = 20              # spins without waiting once stopping: answers posted before the stop go out
 
 
@@ -153,6 +153,10 @@ class ActionThread:
         self.servers: list[Any] = []
         self.inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
         self._stopping = threading.Event()
+        # rclpy's Executor.wake() only makes a waiting spin_once look again: with no callback ready it waits on
+        # until its timeout (a stop took IDLE_WAKE, 0.8 s a planner, at each process's end). A guard condition with
+        # a callback is work: spin_once returns and the loop sees the stop.
+        self._stop_guard = self.node.create_guard_condition(lambda: None)
         self.thread = threading.Thread(target=self._spin, name=self.name, daemon=True)
         self.ident: int | None = None   # the thread's, once it runs (tests)
         self._released = False
@@ -240,6 +244,10 @@ class ActionThread:
         if not self.thread.is_alive() and self.thread.ident is None:   # never started
             self._release()
             return True
-        self.wake()
+        if not self._released:
+            try:
+                self._stop_guard.trigger()
+            except Exception:  # noqa: BLE001  the thread released its node meanwhile (the context shut down)
+                pass
         self.thread.join(timeout)
         return not self.thread.is_alive()

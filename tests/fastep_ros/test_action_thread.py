@@ -126,6 +126,26 @@ def test_the_action_thread_is_made_by_configure_and_joined_by_cleanup(context: A
         services.close()
 
 
+def test_a_stop_ends_the_thread_while_its_executor_waits_with_nothing_to_do(
+        context: Any, monkeypatch: pytest.MonkeyPatch) -> None:
+    """rclpy's Executor.wake() does not end a spin_once that has no callback ready: a stop waited for the idle
+    timeout (0.8 s a planner at every process's end). With that timeout at two minutes, a stop still ends the
+    thread: it is woken, not timed out."""
+    from fastep_ros import action_thread
+    monkeypatch.setattr(action_thread, 'IDLE_WAKE', 120.0)
+    planner = _planner(context, autostart=False)
+    side = action_thread.ActionThread(planner)
+    try:
+        side.start()
+        assert side.thread.is_alive()
+        threading.Event().wait(0.3)   # into its wait: nothing is served, nothing comes
+        assert side.stop(60.0), 'the action thread waited for its idle timeout'
+        assert not side.thread.is_alive()
+    finally:
+        side.stop(1.0)
+        planner.destroy_node()
+
+
 def test_the_collector_is_held_while_any_request_is_taken_and_a_goal_s_poses_are_freed_in_chunks() -> None:
     """collector_held: generation 2's threshold off while any action thread takes a request (nested, as two
     planners' threads in one process may), back as it was after the last; release_poses empties a goal's list."""
