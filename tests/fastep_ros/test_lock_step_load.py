@@ -10,6 +10,7 @@ import json
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 from fastep_core.scenario import load_scenario
 from fastep_core.simulator import simulate
@@ -23,7 +24,8 @@ BUSY = 2                     # processes spinning beside the graph, one a core
 
 def test_sixteen_robots_in_lock_step_beside_busy_processes_run_exactly_like_fastep_sim(tmp_path: Path) -> None:
     scenario = write(tmp_path / 'circle.yaml', circle_yaml(ROBOTS, 5.0, 2.0))
-    reference = simulate(load_scenario(str(scenario)), ALGORITHM, 0).to_json()['robots']
+    run: dict[str, Any] = simulate(load_scenario(str(scenario)), ALGORITHM, 0).to_json()
+    reference: list[dict[str, Any]] = run['robots']
     out = tmp_path / 'run.json'
     env = isolated_env(free_domain(), tmp_path / 'roslog')
     busy = [subprocess.Popen([sys.executable, '-c', 'while True: pass'], stdin=subprocess.DEVNULL)
