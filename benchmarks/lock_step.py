@@ -13,6 +13,12 @@ RTF is simulated time (the last arrival) over each. `exact` compares every robot
 scenario, algorithm and seed: the arrival time, path length and clearance as --json rounds them, and the
 position at every time both trajectories hold a row (`max |d|`). The load average is read before each row.
 --robots N runs benchmarks.graph_scaling's circle of N robots swapping places instead of a scenario.
+
+--targets runs the two runs the project's speed targets name, each recorded, in the launcher's default layout and
+executor, beside `fastep-sim` of the same run (its whole command timed too), and prints each one's real-time
+factor, its target and the launch's wall time over fastep-sim's:
+
+    python -m benchmarks.lock_step --targets     # make demo's launch (>= 20x whole), 16 robots (>= 2x)
 """
 
 from __future__ import annotations
@@ -33,11 +39,14 @@ from fastep_core.simulator import simulate
 from fastep_testing.runs import circle_yaml, compare
 
 
-def run(scenario: str, algorithm: str, layout: str, executor: str, rtf: float, record: bool,
+def run(scenario: str, algorithm: str, layout: str | None, executor: str | None, rtf: float, record: bool,
         out: Path) -> dict[str, Any]:
+    """One fastep-launch row; layout / executor None: the launcher's default."""
     result = out / f'{layout}_{executor}.json'
     cmd = [sys.executable, '-m', 'fastep_ros.launch', scenario, '--algorithm', algorithm, '--rtf', str(rtf),
-           '--seed', '0', '--layout', layout, '--executor', executor, '--no-progress', '--json', str(result)]
+           '--seed', '0', '--no-progress', '--json', str(result)]
+    cmd += ['--layout', layout] if layout is not None else []
+    cmd += ['--executor', executor] if executor is not None else []
     if record:
         cmd += ['--record', str(out / f'{layout}_{executor}.mcap')]
     load = os.getloadavg()[0]
@@ -68,6 +77,46 @@ def run(scenario: str, algorithm: str, layout: str, executor: str, rtf: float, r
     return row
 
 
+def sim_robots(scenario: str, algorithm: str) -> list[dict[str, Any]]:
+    """fastep-sim's robots of the same run (--json's form), the reference of `exact`."""
+    robots: list[dict[str, Any]] = simulate(load_scenario(scenario), algorithm, 0).to_json()['robots']
+    return robots
+
+
+def sim_seconds(scenario: str, algorithm: str, out: Path) -> float:
+    """Wall seconds of the whole `fastep-sim` command of the same run (its own process, as a user runs it)."""
+    start = time.perf_counter()
+    subprocess.run([sys.executable, '-m', 'msg_tools.sim_cli', scenario, '--algorithm', algorithm, '--seed', '0',
+                    '--json', str(out / 'sim.json')], check=True, stdout=subprocess.DEVNULL, stdin=subprocess.DEVNULL)
+    return time.perf_counter() - start
+
+
+TARGETS = (('make demo\'s launch', 'case_study_1', 'fastep', 0, 'rtf_whole', 20.0),
+           ('16 robots swapping places', '', 'fastep_route', 16, 'rtf_run', 2.0))
+
+
+def targets(rtf: float, out: Path) -> list[dict[str, Any]]:
+    """The TARGETS rows: recorded, default layout and executor, beside fastep-sim."""
+    rows = []
+    for label, scenario, algorithm, robots, measure, target in TARGETS:
+        where = out / (scenario or f'circle_{robots}')
+        where.mkdir()
+        if robots:
+            scenario = str(where / f'circle_{robots}.yaml')
+            Path(scenario).write_text(circle_yaml(robots, 20.0, 2.0))
+        reference = sim_robots(scenario, algorithm)
+        row = run(scenario, algorithm, None, None, rtf, True, where)
+        result = where / 'None_None.json'
+        if result.is_file():
+            row['exact'], row['max_d'] = compare(json.loads(result.read_text())['runs'][0]['robots'], reference)
+        row['sim_s'] = round(sim_seconds(scenario, algorithm, where), 2)
+        row.update(run_of=label, target=f'{measure} >= {target:g}', met=row.get(measure, 0.0) >= target,
+                   launch_over_sim=round(row['whole_s'] / row['sim_s'], 2))
+        rows.append(row)
+        print(json.dumps(row), flush=True)
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     p = argparse.ArgumentParser(prog='python -m benchmarks.lock_step', description=__doc__.split('\n')[0])
     p.add_argument('--scenario', default='case_study_1')
@@ -80,13 +129,20 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument('--executors', nargs='+', default=['events', 'single'])
     p.add_argument('--record', action='store_true', help='record each run, as make demo does')
     p.add_argument('--json', type=Path, help='write the rows here')
+    p.add_argument('--targets', action='store_true', help='make demo\'s launch and 16 robots, recorded, beside '
+                   'fastep-sim, against their targets (the other options but --rtf and --json unused)')
     args = p.parse_args(argv)
     out = Path(tempfile.mkdtemp(prefix='lock_step_'))
+    if args.targets:
+        rows = targets(args.rtf, out)
+        if args.json is not None:
+            args.json.write_text(json.dumps({'rtf': args.rtf, 'rows': rows}, indent=1))
+        return 0
     scenario = args.scenario
     if args.robots:
         scenario = str(out / f'circle_{args.robots}.yaml')
         Path(scenario).write_text(circle_yaml(args.robots, 20.0, 2.0, args.step_iterations))
-    reference = simulate(load_scenario(scenario), args.algorithm, 0).to_json()['robots']
+    reference = sim_robots(scenario, args.algorithm)
     rows = []
     for executor in args.executors:
         for layout in args.layouts:
