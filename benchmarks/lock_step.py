@@ -79,7 +79,8 @@ def run(scenario: str, algorithm: str, layout: str | None, executor: str | None,
 
 def sim_robots(scenario: str, algorithm: str) -> list[dict[str, Any]]:
     """fastep-sim's robots of the same run (--json's form), the reference of `exact`."""
-    robots: list[dict[str, Any]] = simulate(load_scenario(scenario), algorithm, 0).to_json()['robots']
+    run: dict[str, Any] = simulate(load_scenario(scenario), algorithm, 0).to_json()
+    robots: list[dict[str, Any]] = run['robots']
     return robots
 
 
