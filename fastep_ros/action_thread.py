@@ -154,8 +154,8 @@ class ActionThread:
         self.inbox: queue.SimpleQueue[Any] = queue.SimpleQueue()
         self._stopping = threading.Event()
         # rclpy's Executor.wake() only makes a waiting spin_once look again: with no callback ready it waits on
-        # until its timeout (a stop took IDLE_WAKE, 0.8 s a planner, at each process's end). A guard condition with
-        # a callback is work: spin_once returns and the loop sees the stop.
+        # until its timeout, and a stop would wait up to IDLE_WAKE. A guard condition with a callback is work:
+        # spin_once returns and the loop sees the stop.
         self._stop_guard = self.node.create_guard_condition(lambda: None)
         self.thread = threading.Thread(target=self._spin, name=self.name, daemon=True)
         self.ident: int | None = None   # the thread's, once it runs (tests)
