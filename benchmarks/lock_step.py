@@ -39,10 +39,22 @@ from fastep_core.simulator import simulate
 from fastep_testing.runs import circle_yaml, compare
 
 
+def result_path(out: Path, layout: str | None, executor: str | None) -> Path:
+    """Where run() has fastep-launch write its --json for `layout` x `executor` (None: the default)."""
+    return out / f'{layout}_{executor}.json'
+
+
+def circle_scenario(out: Path, robots: int, step_iterations: int = 0) -> str:
+    """benchmarks.graph_scaling's circle of `robots` robots swapping places, written in `out`: its path."""
+    scenario = out / f'circle_{robots}.yaml'
+    scenario.write_text(circle_yaml(robots, 20.0, 2.0, step_iterations))
+    return str(scenario)
+
+
 def run(scenario: str, algorithm: str, layout: str | None, executor: str | None, rtf: float, record: bool,
         out: Path) -> dict[str, Any]:
     """One fastep-launch row; layout / executor None: the launcher's default."""
-    result = out / f'{layout}_{executor}.json'
+    result = result_path(out, layout, executor)
     cmd = [sys.executable, '-m', 'fastep_ros.launch', scenario, '--algorithm', algorithm, '--rtf', str(rtf),
            '--seed', '0', '--no-progress', '--json', str(result)]
     cmd += ['--layout', layout] if layout is not None else []
@@ -103,11 +115,10 @@ def targets(rtf: float, out: Path) -> list[dict[str, Any]]:
         where = out / (scenario or f'circle_{robots}')
         where.mkdir()
         if robots:
-            scenario = str(where / f'circle_{robots}.yaml')
-            Path(scenario).write_text(circle_yaml(robots, 20.0, 2.0))
+            scenario = circle_scenario(where, robots)
         reference = sim_robots(scenario, algorithm)
         row = run(scenario, algorithm, None, None, rtf, True, where)
-        result = where / 'None_None.json'
+        result = result_path(where, None, None)
         if result.is_file():
             row['exact'], row['max_d'] = compare(json.loads(result.read_text())['runs'][0]['robots'], reference)
         row['sim_s'] = round(sim_seconds(scenario, algorithm, where), 2)
@@ -141,14 +152,13 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     scenario = args.scenario
     if args.robots:
-        scenario = str(out / f'circle_{args.robots}.yaml')
-        Path(scenario).write_text(circle_yaml(args.robots, 20.0, 2.0, args.step_iterations))
+        scenario = circle_scenario(out, args.robots, args.step_iterations)
     reference = sim_robots(scenario, args.algorithm)
     rows = []
     for executor in args.executors:
         for layout in args.layouts:
             row = run(scenario, args.algorithm, layout, executor, args.rtf, args.record, out)
-            result = out / f'{layout}_{executor}.json'
+            result = result_path(out, layout, executor)
             if result.is_file():
                 row['exact'], row['max_d'] = compare(json.loads(result.read_text())['runs'][0]['robots'], reference)
             rows.append(row)
