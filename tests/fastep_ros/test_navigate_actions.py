@@ -213,6 +213,9 @@ def test_the_navigation_client_drives_a_robot_with_basic_navigator_s_verbs(graph
     monkeypatch.setenv('ROS_AUTOMATIC_DISCOVERY_RANGE', 'LOCALHOST')
     nav = NavigationClient(namespace=NS, domain_id=graph.domain, server_timeout=60.0)
     try:
+        # As BasicNavigator's waitUntilNav2Active: a goal before activation is rejected (at load 10 its servers,
+        # made by configure, were up a while before the planner was active)
+        nav.wait_until_active('planner')
         assert nav.go_to_pose(18.0, 10.0)
         seen = []
         deadline = time.monotonic() + 90.0
