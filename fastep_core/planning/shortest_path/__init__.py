@@ -1,7 +1,7 @@
 """The exact shortest path that keeps a robot's clearance from every obstacle: the reference optimum and the way
 the navigators plan routes and escapes.
 
-- `optimal`: `shortest_path` (the exact optimum, `OptimalPath`); `python -m fastep_core.planning.shortest_path.optimal`.
+- `optimal`: `shortest_path` (the exact optimum, `OptimalPath`); `python -m fastep_core.planning.shortest_path`.
 - `tangent_search`: its search, A* over the tangent visibility graph made lazily.
 - `obstacle_grid`: the spatial index the search asks which obstacles lie near an edge.
 - `exact_path`: the path as a navigator asks for it (the robot's clearance, other robots parked, why none exists).

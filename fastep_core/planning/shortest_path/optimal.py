@@ -439,7 +439,3 @@ def main(argv: Sequence[str] | None = None) -> int:
             text = 'no path' if path is None else f'{path.length:.3f} m ({path.length / line:.4f} x straight line)'
             print(f'{name} {spec.name}: r = {r:g} m, optimal {text}')
     return 0
-
-
-if __name__ == '__main__':
-    raise SystemExit(main())
