@@ -47,22 +47,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from fastep_testing.basic_navigator_world import PARAMS, RADIUS, WORLD
+
 NS = 'r1'
-WORLD = """\
-name: basic_navigator_world
-workspace: [0, 0, 20, 20]
-obstacles:
-  - circle: {center: [9, 10], radius: 1.5}
-  - segment: {start: [15, 2], end: [19, 2]}
-  - segment: {start: [19, 2], end: [19, 6]}
-  - segment: {start: [19, 6], end: [15, 6]}
-  - segment: {start: [15, 6], end: [15, 2]}
-robots:
-  - {name: r1, model: diff_drive, start: [3, 10, 0], goal: [14, 10], radius: 0.4}
-"""
 START = (3.0, 10.0, 0.0)
-DISC, DISC_RADIUS, RADIUS = (9.0, 10.0), 1.5, 0.4
-PARAMS = {'algorithm': 'fastep_route', 'robot_radius': RADIUS, 'max_speed': 1.5, 'planning_timeout': 10.0}
+DISC, DISC_RADIUS = (9.0, 10.0), 1.5   # WORLD's disc
 GOAL_TOLERANCE, YAW_TOLERANCE = 0.1, 0.25   # the planner's defaults (fastep_core/planning/params.py)
 END_SLACK = 0.05            # m / rad beyond those tolerances that an end pose may be off (odometry vs the goal check)
 FEEDBACK_SHARE, FEEDBACK_FLOOR = 0.05, 0.2   # the issue's bound on distance_remaining: 5 % of the route left, or 0.2 m

@@ -13,30 +13,18 @@ from typing import Any
 import numpy as np
 import pytest
 
+from fastep_testing.basic_navigator_world import PARAMS, WORLD
 from fastep_testing.graph import Graph, write
 
 pytest.importorskip('nav2_msgs.action', reason='nav2_msgs is built by make (interfaces/build.sh)')
 
 NS = '/r1'
-WORLD = """\
-name: basic_navigator_world
-workspace: [0, 0, 20, 20]
-obstacles:
-  - circle: {center: [9, 10], radius: 1.5}
-  - segment: {start: [15, 2], end: [19, 2]}
-  - segment: {start: [19, 2], end: [19, 6]}
-  - segment: {start: [19, 6], end: [15, 6]}
-  - segment: {start: [15, 6], end: [15, 2]}
-robots:
-  - {name: r1, model: diff_drive, start: [3, 10, 0], goal: [14, 10], radius: 0.4}
-"""
-PARAMS = {'algorithm': 'fastep_route', 'robot_radius': 0.4, 'max_speed': 1.5, 'planning_timeout': 10.0}
 TASK = 90.0   # s: the longest any task here may take (a drive of ~12 m at 1.5 m/s takes ~10)
 
 
 def run(nav: Any, bound: float = TASK) -> list[Any]:
     """isTaskComplete until done (at most `bound` s), the feedback seen on the way."""
-    seen = []
+    seen: list[Any] = []
     end = time.monotonic() + bound
     while not nav.is_task_complete():
         assert time.monotonic() < end, 'the task did not end'
