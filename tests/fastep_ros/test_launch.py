@@ -658,3 +658,40 @@ def test_two_robots_take_turns_in_a_corridor_on_the_graph_exactly_as_in_fastep_s
         assert robot['reached'] and sim.reached and not robot['collided']
         assert robot['sim_time'] == pytest.approx(sim.sim_time, abs=1e-6)
         assert robot['path_length'] == pytest.approx(sim.path_length, abs=2e-6)
+
+
+def test_the_report_ends_where_the_recording_has_the_run(monkeypatch: pytest.MonkeyPatch,
+                                                          capsys: pytest.CaptureFixture[str]) -> None:
+    """After the run the launcher waits for fastep-record to take the clock a tick past the run's end, as long as
+    its acknowledgements come; the report holds only the rows up to that end (odometry that came in while waiting
+    is after it); a recorder that stops acknowledging is waited for END_WAIT and named in one line."""
+    import fastep_ros.launch as launch
+    from fastep_ros.monitor import RobotLive
+
+    class Graph:
+        def __init__(self, acks: bool) -> None:
+            self.robots = {'r1': RobotLive(load_scenario('case_study_1').robots[0])}
+            self.robots['r1'].rows = [[10.0, 1.0, 2.0]]
+            self.recorder_acked, self.clock, self.acks = 9.0, 10.0, acks
+
+        def spin(self, seconds: float) -> None:   # the lock step goes on: a tick of odometry, the recorder behind
+            self.clock += 0.05
+            self.robots['r1'].rows.append([self.clock, 1.0, 2.0])
+            if self.acks:
+                self.recorder_acked = self.clock - 0.5
+
+        def running(self, label: str) -> bool:
+            return label == 'fastep-record'
+
+    graph = Graph(acks=True)
+    launch._await_recording(graph, graph, 10.0, 0.05)   # type: ignore[arg-type]  # a stand-in for both
+    assert graph.recorder_acked >= 10.05 - 1e-6
+    assert graph.robots['r1'].rows[-1][0] == 10.0 and len(graph.robots['r1'].rows) == 1
+    assert capsys.readouterr().err == ''
+
+    monkeypatch.setattr(launch, 'END_WAIT', 0.1)
+    stuck = Graph(acks=False)
+    launch._await_recording(stuck, stuck, 10.0, 0.05)   # type: ignore[arg-type]  # a stand-in for both
+    err = capsys.readouterr().err
+    assert err.count('\n') == 1 and 'the recording may end before the run' in err and '9.00 s of 10.00 s' in err
+    assert stuck.robots['r1'].rows[-1][0] == 10.0
