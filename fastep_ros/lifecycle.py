@@ -13,7 +13,8 @@ keep Nav2's order (nav2_controller's controller_server, ros2/demos' lifecycle ta
 - activate switches the lifecycle publishers on (LifecycleNode.on_activate), then the node's timers;
 - deactivate sends what stops the robot while the publishers are still on, then switches them and the timers off;
 - cleanup releases everything configure made, so the next configure builds afresh; shutdown and an error release
-  it too, from any state.
+  it too, from any state. Every callback configure made does nothing from the moment cleanup begins (`mute`): an
+  executor may deliver a message it took before the subscription was destroyed.
 
 `Lifecycle` is the member that does it (the planner's `lifecycle`; ManagedNode, the plant's base, holds one): its
 owner's on_configure, on_activate, ... are this member's, calling the node's `configure`, `activate`,
@@ -98,6 +99,32 @@ def forget_destroyed(node: Node) -> None:
     group.entities = {ref for ref in group.entities if ref() is not None}
 
 
+def _ignored(*_: Any) -> None:
+    """What a subscription's or timer's callback becomes once its node is cleaned up."""
+
+
+def _answered_empty(request: Any, response: Any) -> Any:
+    """What a service's callback becomes once its node is cleaned up: the empty response."""
+    return response
+
+
+def callback_entities(node: Node) -> set[Any]:
+    """The node's subscriptions, timers and services: what an executor calls back into."""
+    return {*node.subscriptions, *node.timers, *node.services}
+
+
+def mute(node: Node, kept: set[Any]) -> None:
+    """Make every callback of the node's subscriptions, timers and services not in `kept` do nothing (a service:
+    answer empty), rclpy's /clock subscription (its TimeSource's, made again when use_sim_time is switched on)
+    excepted. An executor may still deliver what it took before an entity was destroyed: at load the EventsExecutor
+    called the planner's odometry callback after its cleanup had dropped what the callback reads (an
+    AttributeError out of the spin, which ends a node process). Executors read `callback` when they call it."""
+    clock, services = getattr(getattr(node, '_time_source', None), '_clock_sub', None), set(node.services)
+    for entity in callback_entities(node) - kept:
+        if entity is not clock:
+            entity.callback = _answered_empty if entity in services else _ignored
+
+
 class Lifecycle:
     """A LifecycleNode's transitions, calling `configure` / `activate` / `deactivate` / `cleanup` of the node; its
     owner's on_configure, on_activate, ... are this member's (rclpy calls the node's methods of those names).
@@ -114,6 +141,7 @@ class Lifecycle:
         self.is_active = False        # commanding: false from the moment deactivation begins
         self.built = False            # configure has run (or begun) since the last release
         self.autostart = True
+        self._kept: set[Any] = set()   # the entities the node had before configure (cleanup mutes the others)
         self._starting = False                       # the constructor's configure (autostart)
         self._failure: BaseException | None = None   # why it failed: raised by start
         self._refuse_invalid()
@@ -176,6 +204,7 @@ class Lifecycle:
         """The node's cleanup, once, if configure has made anything since the last."""
         if self.built:
             self.built = False
+            mute(self.node, self._kept)   # first: nothing configure made acts on what cleanup takes apart
             self.cleanup(forget)
             forget_destroyed(self.node)
 
@@ -188,7 +217,7 @@ class Lifecycle:
 
     # rclpy's transition callbacks (LifecycleNode's own: the lifecycle publishers and other managed entities).
     def on_configure(self, state: LifecycleState) -> TransitionCallbackReturn:
-        self.built = True
+        self.built, self._kept = True, callback_entities(self.node)
         try:
             self.configure()
         except Exception as exc:  # noqa: BLE001  a node that cannot configure stays unconfigured, never ends

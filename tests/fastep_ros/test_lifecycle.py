@@ -91,6 +91,41 @@ def test_a_lifecycle_manager_drives_the_planner(context: Any) -> None:
 
 
 @pytest.mark.parametrize('cls', [PlannerNode, PlantNode])
+def test_what_an_executor_delivers_after_cleanup_does_nothing(context: Any, cls: type) -> None:
+    """An executor may call back a subscription or timer it took before cleanup destroyed it (at load the
+    EventsExecutor called the planner's odometry callback after cleanup: AttributeError, out of the spin). From
+    the moment cleanup begins every callback configure made does nothing, a service's answers empty; the lifecycle
+    services and rclpy's /clock subscription keep theirs, and the next configure's callbacks work."""
+    from msg_tools import cdr
+    params = {'scenario': 'open_field'} if cls is PlantNode else {}
+    node = make(cls, context, autostart=False, use_sim_time=True, **params)
+    services = Services(context, node)
+    try:
+        before = {*node.subscriptions, *node.timers, *node.services}
+        kept = {each: each.callback for each in before}
+        assert services.change_state('configure')
+        made = [each for each in (*node.subscriptions, *node.timers, *node.services) if each not in before]
+        assert any(each in set(node.subscriptions) for each in made) and any(each in set(node.timers) for each in made)
+        taken = {each: each.callback for each in made}
+        assert services.change_state('cleanup')
+        odometry = cdr.odometry_cdr((1, 0), 'odom', 'base_link', (1.0, 1.0), (0.0, 0.0, 0.0, 1.0), (0.0, 0.0), 0.0)
+        for each, callback in taken.items():
+            assert each.callback is not callback
+            if hasattr(each, 'srv_type'):
+                response = each.srv_type.Response()
+                assert each.callback(each.srv_type.Request(), response) is response
+            elif hasattr(each, 'msg_type'):
+                each.callback(odometry if each.raw else each.msg_type())   # as delivered: nothing happens
+            else:
+                each.callback()
+        assert all(each.callback is callback for each, callback in kept.items())
+        assert services.change_state('configure') and services.change_state('activate')
+        assert services.state() == 'active'
+    finally:
+        services.close()
+
+
+@pytest.mark.parametrize('cls', [PlannerNode, PlantNode])
 def test_a_transition_the_state_does_not_have_is_refused_and_the_node_carries_on(context: Any, cls: type) -> None:
     """activate while unconfigured, configure while active: success false, the state as it was (rclpy raised out of
     the service callback, and the process ended: a plant's robot then stopped for good)."""
