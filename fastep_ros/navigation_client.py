@@ -15,7 +15,9 @@
 It talks only Nav2's interfaces (fastep_ros.navigate_actions and its companions on the planner, or Nav2's own
 servers), so a script written with it runs against Nav2 too. Poses are (x, y) or (x, y, yaw) in `frame` (default
 map), or geometry_msgs/PoseStamped; (x, y) asks no heading (a quaternion of zero length, which fastep's planner
-takes for none). is_task_complete spins the client's node for up to `spin` seconds. Every call that waits has a
+takes for none). is_task_complete spins the client's node for up to `spin` seconds; the server's last feedback
+(a spin's whole angle, the distance left at the goal) usually comes in the same spin as the result, so read
+get_feedback once more after is_task_complete says True. Every call that waits has a
 bound (`server_timeout`): a server that never answers is a TimeoutError, never a hang.
 """
 
@@ -188,7 +190,7 @@ class NavigationClient:
         return True
 
     def get_feedback(self) -> Any:
-        """The newest feedback of the task under way (None before the first)."""
+        """The newest feedback of the task (None before the first); after the task ended, its last."""
         return self.feedback
 
     def cancel_task(self, timeout: float = 10.0) -> bool:
