@@ -107,7 +107,10 @@ def test_the_launched_planner_comes_up_in_the_robot_namespace_with_its_params_fi
         status = helper.wait_status('/r7', lambda s: s.get('reason', '').startswith('waiting'), 120.0,
                                     'the planner up and waiting for its inputs')
         assert status['algorithm'] == 'fastep_route', status
-        assert ('planner', '/r7') in helper.node.get_node_names_and_namespaces()
+        # Node names travel on their own discovery topic (ros_discovery_info), not with the status publisher's
+        # endpoint: in CI the status came while the helper's node list still held only itself. Wait for it.
+        helper.spin_until(lambda: ('planner', '/r7') in helper.node.get_node_names_and_namespaces(), 60.0,
+                          'the planner in the graph\'s node list as /r7/planner')
         # The params file's values, asked of the node: config/planner.yaml's base (max_speed 0.5, not 1.0).
         from rclpy.parameter_client import AsyncParameterClient
         client = AsyncParameterClient(helper.node, '/r7/planner')
