@@ -438,18 +438,27 @@ def test_a_node_stops_cleanly_on_sigterm_and_a_second_signal(tmp_path: Path, mod
 
 
 def test_a_node_interrupted_while_it_imports_ends_without_a_traceback(tmp_path: Path) -> None:
+    """The moment is counted from the import of fastep_ros (its handler is then installed), not from the start: at
+    load 15 a fixed 0.3 s from the start fell in the interpreter's own site module ("Fatal Python error:
+    init_import_site", exit 1), which is Python's to handle, not the project's (as the test below says)."""
     env = isolated_env(free_domain(), tmp_path / 'roslog')
+    env['PYTHONPROFILEIMPORTTIME'] = '1'   # a line on stderr as each import ends: when fastep_ros is in
     proc = subprocess.Popen([sys.executable, '-m', 'fastep_ros.planner'], env=env, stdout=subprocess.PIPE,
                             stderr=subprocess.PIPE, text=True, stdin=subprocess.DEVNULL)
     try:
+        assert proc.stderr is not None
+        head = []
+        for line in proc.stderr:
+            head.append(line)
+            if line.rstrip().endswith('| fastep_ros'):
+                break
         time.sleep(0.3)   # importing rclpy, numpy, scipy
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=30)
     finally:
         stop_process(proc)
-    # -SIGINT: on a busy machine the signal can come before the interpreter has installed its handler (the
-    # default action ends the process, as a shell's 130 says); still no traceback.
-    assert proc.returncode in (0, 130, -signal.SIGINT) and 'Traceback' not in err, (proc.returncode, err)
+    err = ''.join(head) + err
+    assert proc.returncode in (0, 130) and 'Traceback' not in err and 'Fatal' not in err, (proc.returncode, err)
 
 
 def test_a_launched_node_stopped_at_any_moment_of_its_imports_exits_0_without_a_traceback(tmp_path: Path) -> None:
